@@ -1,0 +1,368 @@
+"""The scene model: the single, immutable input of both renderers.
+
+Everything here is plain data (frozen dataclasses holding read-only numpy arrays) and has no GL
+import, so the ray tracer can use it without a context.  Geometry is stored in world space, already
+transformed, as triangles; an object made from a primitive also keeps its exact analytic form
+(`Sphere`, `Parallelogram`) for the ray tracer's images.  Mask comparisons always use the triangles
+(see CONVENTIONS.md: "Everything that casts or receives a shadow in a mask comparison is triangles").
+
+Constructors validate their input and raise `SceneError` naming the key and the problem; the file
+loader (`shadowvol.scenefile`) adds the file name.  Colours are linear RGB; images are encoded to
+sRGB only when written.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# Geometric tolerances of the scene model itself (renderer tolerances live with each renderer).
+PARALLEL_TOLERANCE = 1e-9  # |sin| of the angle below which `up` counts as parallel to the view
+MAX_IMAGE_PIXELS = 1 << 26  # 64 Mpixel: beyond this the per-pixel arrays stop being practical
+
+
+class SceneError(ValueError):
+    """Bad scene input: names the file (when known), the key and the problem."""
+
+    def __init__(self, key: str, problem: str, file: str | None = None):
+        self.key, self.problem, self.file = key, problem, file
+        where = f"{file}: " if file else ""
+        super().__init__(f"{where}{key}: {problem}")
+
+    def in_file(self, file: str) -> "SceneError":
+        return SceneError(self.key, self.problem, file)
+
+    def under(self, prefix: str) -> "SceneError":
+        key = f"{prefix}.{self.key}" if self.key else prefix
+        return SceneError(key, self.problem, self.file)
+
+
+def vec(value, key: str, n: int = 3, *, positive: bool = False) -> np.ndarray:
+    """A read-only float64 vector of length `n` from `value`, or a SceneError naming `key`."""
+    try:
+        arr = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SceneError(key, f"expected {n} numbers, got {value!r}") from None
+    if arr.shape != (n,):
+        raise SceneError(key, f"expected {n} numbers, got {value!r}")
+    if not np.all(np.isfinite(arr)):
+        raise SceneError(key, f"non-finite number in {value!r}")
+    if positive and np.any(arr <= 0):
+        raise SceneError(key, f"must be positive, got {value!r}")
+    arr.setflags(write=False)
+    return arr
+
+
+def num(value, key: str, *, low: float | None = None, high: float | None = None,
+        low_open: bool = False) -> float:
+    """A finite float from `value` within [low, high] (low excluded if `low_open`)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise SceneError(key, f"expected a number, got {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise SceneError(key, f"non-finite number {value!r}")
+    if low is not None and (x <= low if low_open else x < low):
+        raise SceneError(key, f"must be {'>' if low_open else '>='} {low}, got {value!r}")
+    if high is not None and x > high:
+        raise SceneError(key, f"must be <= {high}, got {value!r}")
+    return x
+
+
+def unit(v: np.ndarray, key: str) -> np.ndarray:
+    length = float(np.linalg.norm(v))
+    if length == 0.0 or not math.isfinite(length):
+        raise SceneError(key, "must be a non-zero direction")
+    out = v / length
+    out.setflags(write=False)
+    return out
+
+
+def _frozen(arr: np.ndarray) -> np.ndarray:
+    arr.setflags(write=False)
+    return arr
+
+
+# ---------------------------------------------------------------------------------------------
+# Materials and lights
+# ---------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class Material:
+    """Phong material.  Colours are linear RGB (3,) float64.
+
+    The ray tracer's colour is `local * (1 - reflectivity - transparency) + reflectivity *
+    reflected + transparency * refracted`, so `reflectivity + transparency` must not exceed 1.
+    """
+
+    ambient: np.ndarray = field(default_factory=lambda: vec([0.1, 0.1, 0.1], "ambient"))
+    diffuse: np.ndarray = field(default_factory=lambda: vec([0.8, 0.8, 0.8], "diffuse"))
+    specular: np.ndarray = field(default_factory=lambda: vec([0.2, 0.2, 0.2], "specular"))
+    shininess: float = 32.0
+    reflectivity: float = 0.0
+    transparency: float = 0.0
+    ior: float = 1.5
+
+    def __post_init__(self):
+        for name in ("ambient", "diffuse", "specular"):
+            v = vec(getattr(self, name), name)
+            if np.any(v < 0):
+                raise SceneError(name, f"colour components must be >= 0, got {v.tolist()}")
+            object.__setattr__(self, name, v)
+        object.__setattr__(self, "shininess", num(self.shininess, "shininess", low=0.0))
+        object.__setattr__(self, "reflectivity",
+                           num(self.reflectivity, "reflectivity", low=0.0, high=1.0))
+        object.__setattr__(self, "transparency",
+                           num(self.transparency, "transparency", low=0.0, high=1.0))
+        object.__setattr__(self, "ior", num(self.ior, "ior", low=0.0, low_open=True))
+        if self.reflectivity + self.transparency > 1.0 + 1e-12:
+            raise SceneError("reflectivity", "reflectivity + transparency must be <= 1")
+
+
+def _light_colour(self) -> None:
+    c = vec(self.color, "color")
+    if np.any(c < 0):
+        raise SceneError("color", f"colour components must be >= 0, got {c.tolist()}")
+    object.__setattr__(self, "color", c)
+    object.__setattr__(self, "intensity", num(self.intensity, "intensity", low=0.0))
+
+
+@dataclass(frozen=True, eq=False)
+class PointLight:
+    position: np.ndarray
+    color: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "color"))
+    intensity: float = 1.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "position", vec(self.position, "position"))
+        _light_colour(self)
+
+    @property
+    def radiance(self) -> np.ndarray:
+        return self.color * self.intensity
+
+
+@dataclass(frozen=True, eq=False)
+class DirectionalLight:
+    """`direction` is the direction the light travels (unit length after construction)."""
+
+    direction: np.ndarray
+    color: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "color"))
+    intensity: float = 1.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "direction", unit(vec(self.direction, "direction"), "direction"))
+        _light_colour(self)
+
+    @property
+    def radiance(self) -> np.ndarray:
+        return self.color * self.intensity
+
+
+@dataclass(frozen=True, eq=False)
+class SpotLight:
+    """A point light limited to a cone: a point P is inside when the angle between `direction`
+    and P - position is at most `cone_angle` degrees (the half-angle of the cone)."""
+
+    position: np.ndarray
+    direction: np.ndarray
+    cone_angle: float = 30.0
+    color: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "color"))
+    intensity: float = 1.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "position", vec(self.position, "position"))
+        object.__setattr__(self, "direction", unit(vec(self.direction, "direction"), "direction"))
+        object.__setattr__(self, "cone_angle",
+                           num(self.cone_angle, "cone_angle", low=0.0, high=90.0, low_open=True))
+        _light_colour(self)
+
+    @property
+    def radiance(self) -> np.ndarray:
+        return self.color * self.intensity
+
+    @property
+    def cos_cutoff(self) -> float:
+        return math.cos(math.radians(self.cone_angle))
+
+
+Light = PointLight | DirectionalLight | SpotLight
+
+
+# ---------------------------------------------------------------------------------------------
+# Geometry
+# ---------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class Sphere:
+    """Exact sphere in world space (for the ray tracer's images)."""
+
+    center: np.ndarray
+    radius: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "center", vec(self.center, "center"))
+        object.__setattr__(self, "radius", num(self.radius, "radius", low=0.0, low_open=True))
+
+
+@dataclass(frozen=True, eq=False)
+class Parallelogram:
+    """Exact finite plane in world space: points origin + s*edge_u + t*edge_v, s, t in [0, 1].
+
+    A rectangle under any affine transform stays a parallelogram, so this is the analytic form
+    of the scene's `plane` primitive.  `normal` is unit length: cross(edge_u, edge_v) normalised.
+    """
+
+    origin: np.ndarray
+    edge_u: np.ndarray
+    edge_v: np.ndarray
+
+    def __post_init__(self):
+        for name in ("origin", "edge_u", "edge_v"):
+            object.__setattr__(self, name, vec(getattr(self, name), name))
+        if np.linalg.norm(np.cross(self.edge_u, self.edge_v)) == 0.0:
+            raise SceneError("size", "the plane has zero area")
+
+    @property
+    def normal(self) -> np.ndarray:
+        return unit(np.cross(self.edge_u, self.edge_v), "normal")
+
+
+Analytic = Sphere | Parallelogram
+
+
+@dataclass(frozen=True, eq=False)
+class Object:
+    """One object: world-space triangles and a material.
+
+    vertices : (n, 3) float64, read-only, world space (as loaded: duplicated seam vertices stay)
+    faces    : (m, 3) int64, read-only, indices into `vertices`; winding is not trusted by the
+               renderers (surfaces are two-sided)
+    analytic : the exact shape the triangles tessellate, or None for meshes
+    """
+
+    name: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    material: Material = field(default_factory=Material)
+    analytic: Analytic | None = None
+
+    def __post_init__(self):
+        v = np.array(self.vertices, dtype=np.float64)
+        f = np.array(self.faces)
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise SceneError("vertices", f"expected an (n, 3) array, got shape {v.shape}")
+        if f.size == 0:
+            f = f.reshape(0, 3)
+        if f.ndim != 2 or f.shape[1] != 3:
+            raise SceneError("faces", f"expected an (m, 3) array of triangles, got shape {f.shape}")
+        if f.shape[0] == 0:
+            raise SceneError("faces", "the mesh has no triangles")
+        if not np.issubdtype(f.dtype, np.integer):
+            raise SceneError("faces", f"indices must be integers, got {f.dtype}")
+        if f.min() < 0 or f.max() >= len(v):
+            raise SceneError("faces", f"index out of range 0..{len(v) - 1}")
+        bad = ~np.isfinite(v).all(axis=1)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise SceneError("vertices", f"{int(bad.sum())} non-finite vertices "
+                                         f"(first: vertex {i} = {v[i].tolist()})")
+        object.__setattr__(self, "vertices", _frozen(v))
+        object.__setattr__(self, "faces", _frozen(f.astype(np.int64)))
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(m, 3, 3) float64: the corner positions of every triangle."""
+        return self.vertices[self.faces]
+
+
+@dataclass(frozen=True, eq=False)
+class Camera:
+    """Look-at camera, OpenGL style (looks down its -z axis); see CONVENTIONS.md."""
+
+    eye: np.ndarray
+    target: np.ndarray
+    up: np.ndarray = field(default_factory=lambda: vec([0, 1, 0], "up"))
+    fov_y: float = 45.0
+    near: float = 0.05
+
+    def __post_init__(self):
+        for name in ("eye", "target", "up"):
+            object.__setattr__(self, name, vec(getattr(self, name), name))
+        object.__setattr__(self, "fov_y", num(self.fov_y, "fov_y", low=0.0, high=179.0,
+                                              low_open=True))
+        object.__setattr__(self, "near", num(self.near, "near", low=0.0, low_open=True))
+        view = self.target - self.eye
+        if np.linalg.norm(view) == 0.0:
+            raise SceneError("target", "eye and target are the same point")
+        if np.linalg.norm(self.up) == 0.0:
+            raise SceneError("up", "up is the zero vector")
+        sin = np.linalg.norm(np.cross(view, self.up)) / (np.linalg.norm(view) *
+                                                         np.linalg.norm(self.up))
+        if sin < PARALLEL_TOLERANCE:
+            raise SceneError("up", "up is parallel to the view direction (target - eye)")
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """The whole scene.  Build it in code (see `shadowvol.primitives`) or load it from a file
+    (`shadowvol.scenefile.load_scene`); change it with `dataclasses.replace`."""
+
+    camera: Camera
+    objects: tuple[Object, ...]
+    lights: tuple[Light, ...]
+    width: int = 640
+    height: int = 480
+    ambient: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "ambient"))
+    background: np.ndarray = field(default_factory=lambda: vec([0.05, 0.05, 0.08], "background"))
+    max_depth: int = 4
+    name: str = "scene"
+
+    def __post_init__(self):
+        object.__setattr__(self, "objects", tuple(self.objects))
+        object.__setattr__(self, "lights", tuple(self.lights))
+        for key in ("width", "height"):
+            n = getattr(self, key)
+            if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n <= 0:
+                raise SceneError(f"image.{key}", f"must be a positive whole number, got {n!r}")
+        if self.width * self.height > MAX_IMAGE_PIXELS:
+            raise SceneError("image", f"{self.width}x{self.height} is more than "
+                                      f"{MAX_IMAGE_PIXELS} pixels")
+        md = self.max_depth
+        if isinstance(md, bool) or not isinstance(md, (int, np.integer)) or md < 0:
+            raise SceneError("render.max_depth", f"must be a whole number >= 0, got {md!r}")
+        object.__setattr__(self, "ambient", vec(self.ambient, "ambient"))
+        object.__setattr__(self, "background", vec(self.background, "image.background"))
+        for i, light in enumerate(self.lights):
+            if not isinstance(light, (PointLight, DirectionalLight, SpotLight)):
+                raise SceneError(f"lights[{i}]", f"not a light: {type(light).__name__}")
+        if not self.objects:
+            raise SceneError("objects", "the scene has no objects")
+
+    @property
+    def aspect(self) -> float:
+        return self.width / self.height
+
+    def triangles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """All objects' triangles as one soup.
+
+        Returns vertices (N, 3) float64, faces (M, 3) int64 and object_ids (M,) int32 (the index
+        into `objects` of each triangle).
+        """
+        offsets = np.cumsum([0] + [len(o.vertices) for o in self.objects])
+        vertices = np.concatenate([o.vertices for o in self.objects])
+        faces = np.concatenate([o.faces + off for o, off in zip(self.objects, offsets)])
+        ids = np.concatenate([np.full(len(o.faces), i, np.int32)
+                              for i, o in enumerate(self.objects)])
+        return vertices, faces, ids
+
+    @property
+    def extent(self) -> float:
+        """Diagonal of the bounding box of all geometry and the eye: the scene's length scale."""
+        pts = np.concatenate([o.vertices for o in self.objects] + [self.camera.eye[None]])
+        return float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))) or 1.0
+
+    def replace(self, **changes) -> "Scene":
+        return dataclasses.replace(self, **changes)

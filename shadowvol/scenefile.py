@@ -1,0 +1,213 @@
+"""Scene files: TOML (for people) or JSON (for programs), one schema; see scenes/README.md.
+
+Loading never executes code: TOML and JSON are parsed as data, and meshes are read by trimesh's
+loaders for a fixed list of data formats.  Every problem raises `SceneError` naming the file, the
+key (e.g. `objects[2].material.shininess`) and what is wrong.
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from . import primitives
+from .scene import Camera, DirectionalLight, Material, PointLight, Scene, SceneError, SpotLight
+
+MESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
+
+# Allowed keys per table; anything else is an error (a typo must not be silently ignored).
+TOP_KEYS = {"name", "image", "camera", "ambient", "render", "materials", "lights", "objects"}
+IMAGE_KEYS = {"width", "height", "background"}
+CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near"}
+RENDER_KEYS = {"max_depth"}
+MATERIAL_KEYS = {"ambient", "diffuse", "specular", "shininess", "reflectivity", "transparency",
+                 "ior"}
+LIGHT_KEYS = {
+    "point": {"type", "position", "color", "intensity"},
+    "directional": {"type", "direction", "color", "intensity"},
+    "spot": {"type", "position", "direction", "cone_angle", "color", "intensity"},
+}
+TRANSFORM_KEYS = {"scale", "rotation", "translation"}
+COMMON_OBJECT_KEYS = {"type", "name", "material", "transform"}
+OBJECT_KEYS = {
+    "mesh": COMMON_OBJECT_KEYS | {"path"},
+    "sphere": COMMON_OBJECT_KEYS | {"center", "radius", "subdivisions"},
+    "plane": COMMON_OBJECT_KEYS | {"point", "normal", "size"},
+    "box": COMMON_OBJECT_KEYS | {"center", "size"},
+}
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read a scene from a `.toml` or `.json` file.  Raises SceneError (a ValueError)."""
+    path = Path(path)
+    try:
+        text = path.read_bytes()
+    except OSError as exc:
+        raise SceneError("", f"cannot read the scene file: {exc.strerror or exc}",
+                         str(path)) from None
+    try:
+        if path.suffix.lower() == ".json":
+            data = json.loads(text)
+        elif path.suffix.lower() == ".toml":
+            data = tomllib.loads(text.decode("utf-8"))
+        else:
+            raise SceneError("", "a scene file must end in .toml or .json", str(path))
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise SceneError("", f"not valid {path.suffix[1:].upper()}: {exc}", str(path)) from None
+    try:
+        return scene_from_dict(data, base_dir=path.parent, default_name=path.stem)
+    except SceneError as exc:
+        raise exc.in_file(str(path)) from None
+
+
+def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene") -> Scene:
+    """Build a Scene from parsed TOML/JSON data; mesh paths are relative to `base_dir`."""
+    _table(data, "", TOP_KEYS)
+    image = _table(data.get("image", {}), "image", IMAGE_KEYS)
+    camera = _table(_required(data, "camera", ""), "camera", CAMERA_KEYS)
+    render = _table(data.get("render", {}), "render", RENDER_KEYS)
+
+    materials = _table(data.get("materials", {}), "materials", None)
+    named = {name: _material(m, f"materials.{name}") for name, m in materials.items()}
+
+    lights = _list(data.get("lights", []), "lights")
+    objects = _list(_required(data, "objects", ""), "objects")
+
+    kwargs = {}
+    for key in ("width", "height"):
+        if key in image:
+            kwargs[key] = image[key]
+    if "background" in image:
+        kwargs["background"] = image["background"]
+    if "ambient" in data:
+        kwargs["ambient"] = data["ambient"]
+    if "max_depth" in render:
+        kwargs["max_depth"] = render["max_depth"]
+    name = data.get("name", default_name)
+    if not isinstance(name, str):
+        raise SceneError("name", f"expected a string, got {name!r}")
+    return _build("", Scene,
+                  camera=_build("camera", Camera, **camera),
+                  objects=[_object(o, f"objects[{i}]", named, base_dir)
+                           for i, o in enumerate(objects)],
+                  lights=[_light(lt, f"lights[{i}]") for i, lt in enumerate(lights)],
+                  name=name, **kwargs)
+
+
+# ---------------------------------------------------------------------------------------------
+
+def _table(value, key: str, allowed: set[str] | None) -> dict:
+    if not isinstance(value, dict):
+        raise SceneError(key or "(top level)", f"expected a table, got {type(value).__name__}")
+    if allowed is not None:
+        unknown = sorted(set(value) - allowed)
+        if unknown:
+            prefix = f"{key}." if key else ""
+            raise SceneError(f"{prefix}{unknown[0]}",
+                             f"unknown key (allowed here: {', '.join(sorted(allowed))})")
+    return value
+
+
+def _list(value, key: str) -> list:
+    if not isinstance(value, list):
+        raise SceneError(key, f"expected a list, got {type(value).__name__}")
+    return value
+
+
+def _required(table: dict, key: str, prefix: str):
+    if key not in table:
+        raise SceneError(f"{prefix}.{key}" if prefix else key, "missing")
+    return table[key]
+
+
+def _build(key: str, cls, **kwargs):
+    """Call a scene-model constructor, prefixing any SceneError with `key`."""
+    try:
+        return cls(**kwargs)
+    except SceneError as exc:
+        raise (exc.under(key) if key else exc) from None
+
+
+def _material(value, key: str) -> Material:
+    return _build(key, Material, **_table(value, key, MATERIAL_KEYS))
+
+
+def _light(value, key: str):
+    table = _table(value, key, None)
+    kind = _required(table, "type", key)
+    if kind not in LIGHT_KEYS:
+        raise SceneError(f"{key}.type", f"unknown light type {kind!r} "
+                                        f"(one of: {', '.join(LIGHT_KEYS)})")
+    _table(table, key, LIGHT_KEYS[kind])
+    args = {k: v for k, v in table.items() if k != "type"}
+    cls = {"point": PointLight, "directional": DirectionalLight, "spot": SpotLight}[kind]
+    return _build(key, cls, **args)
+
+
+def _object(value, key: str, named: dict[str, Material], base_dir: Path):
+    table = _table(value, key, None)
+    kind = _required(table, "type", key)
+    if kind not in OBJECT_KEYS:
+        raise SceneError(f"{key}.type", f"unknown object type {kind!r} "
+                                        f"(one of: {', '.join(OBJECT_KEYS)})")
+    _table(table, key, OBJECT_KEYS[kind])
+    name = table.get("name", f"{kind}{key[len('objects'):]}")
+    if not isinstance(name, str):
+        raise SceneError(f"{key}.name", f"expected a string, got {name!r}")
+
+    material = table.get("material")
+    if material is None:
+        material = Material()
+    elif isinstance(material, str):
+        if material not in named:
+            raise SceneError(f"{key}.material", f"no material named {material!r} in [materials]")
+        material = named[material]
+    else:
+        material = _material(material, f"{key}.material")
+
+    transform = _build(f"{key}.transform", primitives.Transform,
+                       **_table(table.get("transform", {}), f"{key}.transform", TRANSFORM_KEYS))
+    args = {k: v for k, v in table.items() if k not in COMMON_OBJECT_KEYS}
+    if kind == "mesh":
+        vertices, faces = _read_mesh(_required(table, "path", key), f"{key}.path", base_dir)
+        return _build(key, primitives.mesh, name=name, vertices=vertices, faces=faces,
+                      material=material, transform=transform)
+    builder = {"sphere": primitives.sphere, "plane": primitives.plane, "box": primitives.box}[kind]
+    if kind == "sphere":
+        for required in ("center", "radius"):
+            _required(table, required, key)
+    return _build(key, builder, name=name, material=material, transform=transform, **args)
+
+
+def _read_mesh(rel, key: str, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and faces of a mesh file, as stored (seam duplicates kept), with glTF node
+    transforms applied."""
+    import trimesh  # deferred: trimesh's import is slow and only meshes need it here
+
+    if not isinstance(rel, str) or not rel:
+        raise SceneError(key, f"expected a file path, got {rel!r}")
+    path = base_dir / rel
+    if path.suffix.lower() not in MESH_FORMATS:
+        raise SceneError(key, f"{rel!r}: unsupported mesh format (use one of "
+                              f"{', '.join(MESH_FORMATS)})")
+    if not path.is_file():
+        raise SceneError(key, f"mesh file not found: {path}")
+    try:
+        loaded = trimesh.load(str(path), process=False)
+    except Exception as exc:  # trimesh raises many types for malformed files
+        raise SceneError(key, f"cannot parse mesh {path}: {type(exc).__name__}: {exc}") from None
+    if isinstance(loaded, trimesh.Scene):
+        if not loaded.geometry:
+            raise SceneError(key, f"{path} holds no geometry")
+        loaded = loaded.to_mesh()  # applies each node's transform; vertices are not merged
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise SceneError(key, f"{path} holds no triangles")
+    vertices = np.asarray(loaded.vertices, dtype=np.float64)
+    if not np.isfinite(vertices).all():
+        bad = int((~np.isfinite(vertices).all(axis=1)).sum())
+        raise SceneError(key, f"{path}: {bad} vertices are NaN or infinite")
+    return vertices, np.asarray(loaded.faces, dtype=np.int64)
+
