@@ -277,3 +277,15 @@ def test_triangle_soup_concatenates_objects():
     assert v.shape == (12, 3) and f.shape == (14, 3)
     assert ids.tolist() == [0] * 12 + [1] * 2
     np.testing.assert_array_equal(v[f[12:]], scene.objects[1].triangles)
+
+
+def test_the_documented_example_loads():
+    """scenes/README.md's complete example is a real scene (its mesh path is relative to scenes/)."""
+    import tomllib
+    text = (SCENES / "README.md").read_text()
+    block = text.split("```toml\n", 1)[1].split("```", 1)[0]
+    scene = scene_from_dict(tomllib.loads(block), base_dir=SCENES)
+    assert [type(o).__name__ for o in scene.lights] == ["PointLight", "DirectionalLight",
+                                                        "SpotLight"]
+    assert [o.name for o in scene.objects][:1] == ["floor"]
+    assert len(scene.objects) == 4 and scene.objects[3].faces.shape == (984, 3)
