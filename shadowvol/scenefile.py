@@ -33,7 +33,7 @@ LIGHT_KEYS = {
 TRANSFORM_KEYS = {"scale", "rotation", "translation"}
 COMMON_OBJECT_KEYS = {"type", "name", "material", "transform"}
 OBJECT_KEYS = {
-    "mesh": COMMON_OBJECT_KEYS | {"path"},
+    "mesh": COMMON_OBJECT_KEYS | {"path", "vertices", "faces"},
     "sphere": COMMON_OBJECT_KEYS | {"center", "radius", "subdivisions"},
     "plane": COMMON_OBJECT_KEYS | {"point", "normal", "size"},
     "box": COMMON_OBJECT_KEYS | {"center", "size"},
@@ -172,7 +172,12 @@ def _object(value, key: str, named: dict[str, Material], base_dir: Path):
                        **_table(table.get("transform", {}), f"{key}.transform", TRANSFORM_KEYS))
     args = {k: v for k, v in table.items() if k not in COMMON_OBJECT_KEYS}
     if kind == "mesh":
-        vertices, faces = _read_mesh(_required(table, "path", key), f"{key}.path", base_dir)
+        if ("path" in table) == ("vertices" in table or "faces" in table):
+            raise SceneError(key, "a mesh needs either `path` or inline `vertices` and `faces`")
+        if "path" in table:
+            vertices, faces = _read_mesh(table["path"], f"{key}.path", base_dir)
+        else:
+            vertices, faces = _inline_mesh(table, key)
         return _build(key, primitives.mesh, name=name, vertices=vertices, faces=faces,
                       material=material, transform=transform)
     builder = {"sphere": primitives.sphere, "plane": primitives.plane, "box": primitives.box}[kind]
@@ -180,6 +185,22 @@ def _object(value, key: str, named: dict[str, Material], base_dir: Path):
         for required in ("center", "radius"):
             _required(table, required, key)
     return _build(key, builder, name=name, material=material, transform=transform, **args)
+
+
+def _inline_mesh(table: dict, key: str) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and faces written in the scene file itself (as `save_scene` writes them)."""
+    vertices, faces = _required(table, "vertices", key), _required(table, "faces", key)
+    try:
+        v = np.array(vertices, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SceneError(f"{key}.vertices", "expected a list of [x, y, z] numbers") from None
+    if v.ndim != 2 or v.shape[1:] != (3,):
+        raise SceneError(f"{key}.vertices", f"expected a list of [x, y, z], got shape {v.shape}")
+    f = np.array(faces)
+    if f.size and (f.ndim != 2 or f.shape[1:] != (3,) or
+                   not np.issubdtype(f.dtype, np.integer)):
+        raise SceneError(f"{key}.faces", "expected a list of [i, j, k] whole numbers")
+    return v, f
 
 
 def _read_mesh(rel, key: str, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -211,3 +232,48 @@ def _read_mesh(rel, key: str, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
         raise SceneError(key, f"{path}: {bad} vertices are NaN or infinite")
     return vertices, np.asarray(loaded.faces, dtype=np.int64)
 
+
+
+def scene_to_dict(scene: Scene) -> dict:
+    """The scene as plain data in the file schema: every object as an inline mesh of its
+    world-space triangles (analytic spheres and planes become their tessellations), every
+    material inline.  `scene_from_dict(scene_to_dict(s))` gives the same triangles, camera and
+    lights, so a saved scene reproduces any mask exactly."""
+
+    def material(m: Material) -> dict:
+        return {"ambient": m.ambient.tolist(), "diffuse": m.diffuse.tolist(),
+                "specular": m.specular.tolist(), "shininess": m.shininess,
+                "reflectivity": m.reflectivity, "transparency": m.transparency, "ior": m.ior}
+
+    def light(lt) -> dict:
+        out = {"color": lt.color.tolist(), "intensity": lt.intensity}
+        if isinstance(lt, PointLight):
+            return {"type": "point", "position": lt.position.tolist(), **out}
+        if isinstance(lt, DirectionalLight):
+            return {"type": "directional", "direction": lt.direction.tolist(), **out}
+        return {"type": "spot", "position": lt.position.tolist(),
+                "direction": lt.direction.tolist(), "cone_angle": lt.cone_angle, **out}
+
+    cam = scene.camera
+    return {
+        "name": scene.name,
+        "ambient": scene.ambient.tolist(),
+        "image": {"width": int(scene.width), "height": int(scene.height),
+                  "background": scene.background.tolist()},
+        "camera": {"eye": cam.eye.tolist(), "target": cam.target.tolist(), "up": cam.up.tolist(),
+                   "fov_y": cam.fov_y, "near": cam.near},
+        "render": {"max_depth": int(scene.max_depth)},
+        "lights": [light(lt) for lt in scene.lights],
+        "objects": [{"type": "mesh", "name": o.name, "vertices": o.vertices.tolist(),
+                     "faces": o.faces.tolist(), "material": material(o.material)}
+                    for o in scene.objects],
+    }
+
+
+def save_scene(scene: Scene, path: str | Path) -> None:
+    """Write `scene` as a self-contained JSON scene file (atomically)."""
+    from .files import atomic_write
+
+    data = json.dumps(scene_to_dict(scene), indent=1).encode()
+    with atomic_write(path) as f:
+        f.write(data)

@@ -289,3 +289,29 @@ def test_the_documented_example_loads():
                                                         "SpotLight"]
     assert [o.name for o in scene.objects][:1] == ["floor"]
     assert len(scene.objects) == 4 and scene.objects[3].faces.shape == (984, 3)
+
+
+def test_save_scene_round_trip(tmp_path):
+    from shadowvol.scenefile import save_scene
+    original = load_scene(SCENES / "whitted.toml")
+    save_scene(original, tmp_path / "copy.json")
+    copy = load_scene(tmp_path / "copy.json")
+    assert len(copy.objects) == len(original.objects)
+    for a, b in zip(original.objects, copy.objects):
+        np.testing.assert_array_equal(a.triangles, b.triangles)
+        np.testing.assert_array_equal(a.material.diffuse, b.material.diffuse)
+    for a, b in zip(original.lights, copy.lights):
+        assert type(a) is type(b)
+        np.testing.assert_array_equal(a.radiance, b.radiance)
+    np.testing.assert_array_equal(original.camera.eye, copy.camera.eye)
+    assert (copy.width, copy.height, copy.max_depth) == (original.width, original.height,
+                                                         original.max_depth)
+
+
+def test_inline_mesh_needs_path_or_vertices(tmp_path):
+    err = error_of(tmp_path, MINIMAL + '\n[[objects]]\ntype = "mesh"\nname = "m"\n')
+    assert err.key == "objects[1]" and "either `path`" in err.problem
+    err = error_of(tmp_path, MINIMAL + '\n[[objects]]\ntype = "mesh"\n'
+                                       'vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]\n'
+                                       'faces = [[0, 1, 2]]\n')
+    assert err.key == "objects[1].faces" and "out of range" in err.problem
