@@ -11,8 +11,9 @@ Both give the same answers (tests/test_backends.py) up to float32 rounding at tr
     closest_hit(origins, directions, tmax=None) -> Hits(t, tri)
     occluded(origins, directions, tmax=None)    -> (n,) bool
 
-`t` is always refined in float64 against the plane of the hit triangle, so hit points are
-float64-accurate whichever backend chose the triangle.
+`t` is always computed by the ray–plane formula against the plane of the hit triangle, in the
+precision of the rays given (float64 rays: float64-accurate hit points, whichever backend chose
+the triangle; float32 rays, as the masks use: float32).
 
 Embree and float32: Embree converts vertices, origins, directions and distances to float32.  The
 choice of triangle can therefore differ from float64 for rays within ~1e-7 (relative) of an edge,
@@ -39,7 +40,8 @@ BACKENDS = ("numpy", "embree")
 class Hits(NamedTuple):
     """Closest hits of n rays.
 
-    t   : (n,) float64, distance along the ray in units of |direction|; np.inf for a miss
+    t   : (n,) float, the dtype of the rays' origins: distance along the ray in units of
+          |direction|; np.inf for a miss
     tri : (n,) int64, index of the hit triangle in `faces`; -1 for a miss
     """
 
@@ -48,11 +50,21 @@ class Hits(NamedTuple):
 
 
 class TriangleBackend(Protocol):
+    normals: np.ndarray  # (M, 3) float64 unit face normals, plane_d (M,): see TriangleSet
+    plane_d: np.ndarray
+    normals_t32: np.ndarray  # float32 copies, normals component-major (3, M)
+    plane_d32: np.ndarray
+
+    def closest_triangle(self, origins: np.ndarray, directions: np.ndarray,
+                         tmax: np.ndarray | float | None = None, parallel: bool = True
+                         ) -> np.ndarray: ...
+
     def closest_hit(self, origins: np.ndarray, directions: np.ndarray,
-                    tmax: np.ndarray | float | None = None) -> Hits: ...
+                    tmax: np.ndarray | float | None = None, parallel: bool = True) -> Hits: ...
 
     def occluded(self, origins: np.ndarray, directions: np.ndarray,
-                 tmax: np.ndarray | float | None = None) -> np.ndarray: ...
+                 tmax: np.ndarray | float | None = None, parallel: bool = True
+                 ) -> np.ndarray: ...
 
 
 class TriangleSet:
@@ -61,6 +73,8 @@ class TriangleSet:
     vertices : (N, 3) float64;  faces : (M, 3) int64.
     normals  : (M, 3) float64 unit face normals by winding, (b − a) × (c − a) normalised
                (zero for degenerate triangles);  plane_d : (M,) float64, normals · a.
+    normals_t32 : (3, M) float32, the normals component-major (fast gathers for the masks);
+    plane_d32 : (M,) float32.
     """
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray):
@@ -71,18 +85,24 @@ class TriangleSet:
         length = np.linalg.norm(n, axis=1, keepdims=True)
         self.normals = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
         self.plane_d = dot(self.normals, tri[:, 0])
+        # float32 copies for the masks, whose arithmetic is float32 (see raytrace.masks).
+        self.normals_t32 = np.ascontiguousarray(self.normals.T, dtype=np.float32)
+        self.plane_d32 = self.plane_d.astype(np.float32)
 
     def __len__(self) -> int:
         return len(self.faces)
 
     def refine(self, origins: np.ndarray, directions: np.ndarray, tri: np.ndarray) -> np.ndarray:
-        """Distance t (n,) float64 to the plane of triangle `tri` (n,) int (-1 = miss -> inf):
-        the ray–plane formula in float64, whatever precision chose the triangle."""
-        t = np.full(len(tri), np.inf)
-        hit = tri >= 0
-        n = self.normals[tri[hit]]
+        """Distance t (n,) to the plane of triangle `tri` (n,) int (-1 = miss -> inf): the
+        ray–plane formula, in the dtype of `origins` (float32 or float64), whatever precision
+        chose the triangle."""
+        dtype = np.float32 if origins.dtype == np.float32 else np.float64
+        t = np.full(len(tri), np.inf, dtype)
+        hit = np.flatnonzero(tri >= 0)
+        k = tri[hit]
+        n = self.normals[k].astype(dtype, copy=False)
         with np.errstate(divide="ignore", invalid="ignore"):
-            th = (self.plane_d[tri[hit]] - dot(n, origins[hit])) / dot(n, directions[hit])
+            th = (self.plane_d[k].astype(dtype) - dot(n, origins[hit])) / dot(n, directions[hit])
         t[hit] = np.where(np.isfinite(th), th, 0.0)  # a ray inside a triangle's plane: t ~ 0
         return t
 
@@ -195,19 +215,28 @@ class NumpyBackend(TriangleSet):
                     t_best[rays[better]] = t[better]
                 tri_best[rays[better]] = tris[j[better]]
 
-    def closest_hit(self, origins, directions, tmax=None) -> Hits:
-        """origins, directions : (n, 3) float64; tmax : None, float or (n,).  Hits with t < tmax."""
+    def closest_triangle(self, origins, directions, tmax=None, parallel=True) -> np.ndarray:
+        """Index (n,) int64 of the nearest triangle hit at 0 < t < tmax, -1 for none.
+        origins, directions : (n, 3) float64 (or float32: traced in float64 all the same);
+        tmax : None, float or (n,).  `parallel` is ignored (numpy runs on one core)."""
         o = np.asarray(origins, dtype=np.float64)
         d = np.asarray(directions, dtype=np.float64)
         t_best = _tmax_array(tmax, len(o))
         tri_best = np.full(len(o), -1, np.int64)
         self._traverse(o, d, t_best, tri_best, any_hit=False)
-        return Hits(self.refine(o, d, tri_best), tri_best)
+        return tri_best
 
-    def occluded(self, origins, directions, tmax=None) -> np.ndarray:
-        """(n,) bool: does the ray hit any triangle at 0 < t < tmax (None: anywhere)?"""
+    def closest_hit(self, origins, directions, tmax=None, parallel=True) -> Hits:
+        """`closest_triangle` and t, the ray–plane distance to it in the dtype of `origins`."""
+        o, d = np.asarray(origins), np.asarray(directions)
+        tri = self.closest_triangle(o, d, tmax)
+        return Hits(self.refine(o, d, tri), tri)
+
+    def occluded(self, origins, directions, tmax=None, parallel=True) -> np.ndarray:
+        """(n,) bool: does the ray hit any triangle at 0 < t < tmax (None: anywhere)?
+        directions : (n, 3), or (1, 3) for one direction shared by all rays."""
         o = np.asarray(origins, dtype=np.float64)
-        d = np.asarray(directions, dtype=np.float64)
+        d = np.broadcast_to(np.asarray(directions, dtype=np.float64), o.shape)
         t_best = _tmax_array(tmax, len(o))
         tri_best = np.full(len(o), -1, np.int64)
         self._traverse(o, d, t_best, tri_best, any_hit=True)
@@ -248,36 +277,48 @@ class EmbreeBackend(TriangleSet):
         self.threads = threads or _threads()
         self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))  # commit
 
-    def _run(self, origins, directions, dists, query: str) -> np.ndarray:
-        """Trace in parallel chunks; returns primID (INTERSECT) or geomID (OCCLUDED), int32 (n,),
-        -1 for a miss / an unoccluded ray."""
-        o = np.ascontiguousarray(origins, dtype=np.float32)
-        d = np.ascontiguousarray(directions, dtype=np.float32)
+    def _run(self, origins, directions, dists, query: str, parallel: bool) -> np.ndarray:
+        """Trace; returns primID (INTERSECT) or geomID (OCCLUDED), int32 (n,), -1 for a miss /
+        an unoccluded ray.  origins (n, 3); directions (n, 3), or (1, 3): one for all rays;
+        dists : None (unbounded), a float, or (n,): each ray's tfar.
+        With `parallel`, in one contiguous chunk per core on a thread pool."""
+        # float32: Embree's only ray format.  No copy for float32 input, strided or not:
+        # embreex reads its arguments through strided buffers.
+        o = np.asarray(origins, dtype=np.float32)
+        d = np.asarray(directions, dtype=np.float32)
         n = len(o)
-        if dists is not None:
-            dists = np.ascontiguousarray(np.broadcast_to(dists, (n,)), dtype=np.float32)
-            dists = np.minimum(dists, np.float32(1e37))  # embreex's own "no bound" value
-        chunks = min(self.threads, max(1, n // MIN_RAYS_PER_THREAD))
+        if dists is not None and np.ndim(dists) == 0:
+            dists = min(float(dists), 1e37)  # 1e37: embreex's own "no bound"; float32-safe
+        elif dists is not None:
+            dists = np.minimum(np.asarray(dists, dtype=np.float32), np.float32(1e37))
+        chunks = min(self.threads, max(1, n // MIN_RAYS_PER_THREAD)) if parallel else 1
         if chunks == 1:
             return self._scene.run(o, d, dists=dists, query=query)
-        bounds = np.linspace(0, n, chunks + 1).astype(int)
-        parts = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
-        with ThreadPoolExecutor(chunks) as pool:
-            results = pool.map(
-                lambda s: self._scene.run(o[s], d[s], dists=None if dists is None else dists[s],
-                                          query=query), parts)
-            return np.concatenate(list(results))
 
-    def closest_hit(self, origins, directions, tmax=None) -> Hits:
-        """origins, directions : (n, 3); tmax : None, float or (n,).  Hits with t < tmax."""
-        o = np.asarray(origins, dtype=np.float64)
-        d = np.asarray(directions, dtype=np.float64)
-        tri = self._run(o, d, None if tmax is None else _tmax_array(tmax, len(o)),
-                        "INTERSECT").astype(np.int64)
+        def run(part: slice) -> np.ndarray:
+            bound = dists if dists is None or np.ndim(dists) == 0 else dists[part]
+            return self._scene.run(o[part], d if len(d) == 1 else d[part], dists=bound,
+                                   query=query)
+
+        bounds = np.linspace(0, n, chunks + 1).astype(int)
+        with ThreadPoolExecutor(chunks) as pool:
+            return np.concatenate(list(pool.map(run, [slice(a, b) for a, b in
+                                                      zip(bounds[:-1], bounds[1:])])))
+
+    def closest_triangle(self, origins, directions, tmax=None, parallel=True) -> np.ndarray:
+        """Index (n,) int64 of the nearest triangle hit at 0 < t < tmax, -1 for none.
+        origins, directions : (n, 3) float64 or float32 (traced in float32 either way);
+        tmax : None, float or (n,)."""
+        return self._run(origins, directions, tmax, "INTERSECT", parallel).astype(np.int64)
+
+    def closest_hit(self, origins, directions, tmax=None, parallel=True) -> Hits:
+        """`closest_triangle` and t, the ray–plane distance to it in the dtype of `origins`."""
+        o, d = np.asarray(origins), np.asarray(directions)
+        tri = self.closest_triangle(o, d, tmax, parallel)
         return Hits(self.refine(o, d, tri), tri)
 
-    def occluded(self, origins, directions, tmax=None) -> np.ndarray:
+    def occluded(self, origins, directions, tmax=None, parallel=True) -> np.ndarray:
         """(n,) bool: does the ray hit any triangle at 0 < t < tmax (None: anywhere)?  A bounded
-        Embree occlusion query: it stops at the first hit and never looks past tmax."""
-        return self._run(origins, directions, None if tmax is None else
-                         _tmax_array(tmax, len(origins)), "OCCLUDED") != -1
+        Embree occlusion query: it stops at the first hit and never looks past tmax.
+        directions : (n, 3), or (1, 3) for one direction shared by all rays."""
+        return self._run(origins, directions, tmax, "OCCLUDED", parallel) != -1

@@ -24,33 +24,67 @@ def camera_basis(camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def pixel_ndc(width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
-    """Normalised device coordinates of every pixel centre, row 0 at the TOP.
+    """Normalised device coordinates of the pixel centres (CONVENTIONS.md), row 0 at the TOP.
 
-    Returns ndc_x, ndc_y : (height, width) float64, ((x + 0.5) / W * 2 - 1, 1 - (y + 0.5) / H * 2).
+    Returns ndc_x : (W,) float64, (x + 0.5) / W * 2 - 1 per column, and ndc_y : (H,) float64,
+    1 - (y + 0.5) / H * 2 per row.
     """
-    x = (np.arange(width) + 0.5) / width * 2.0 - 1.0
-    y = 1.0 - (np.arange(height) + 0.5) / height * 2.0
-    return np.broadcast_to(x[None, :], (height, width)), np.broadcast_to(y[:, None],
-                                                                         (height, width))
+    return ((np.arange(width) + 0.5) / width * 2.0 - 1.0,
+            1.0 - (np.arange(height) + 0.5) / height * 2.0)
 
 
-def primary_rays(camera, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+class RayGrid:
+    """The primary rays of a W x H image, factored: the direction through pixel (x, y), scaled to
+    eye-space depth 1, is  col[:, x] + row[:, y]  with
+
+        col[:, x] = ndc_x · tan(fov_y / 2) · aspect · right − back     (3, W)
+        row[:, y] = ndc_y · tan(fov_y / 2) · up                        (3, H)
+
+    and the ray starts on the near plane at  eye + near · direction.  Stored component-major
+    (3, n) in `dtype` because numpy is fast on long contiguous rows (the masks' hot path).
+    """
+
+    def __init__(self, camera, width: int, height: int, dtype=np.float64):
+        right, up, back = camera_basis(camera)
+        x, y = pixel_ndc(width, height)
+        half_h = math.tan(math.radians(camera.fov_y) / 2.0)
+        half_w = half_h * (width / height)
+        self.width, self.height, self.dtype = width, height, dtype
+        self.eye = camera.eye.astype(dtype)
+        self.near = dtype(camera.near)
+        self.col = (right[:, None] * (x * half_w) - back[:, None]).astype(dtype)
+        self.row = (up[:, None] * (y * half_h)).astype(dtype)
+
+    def directions(self, rows: slice | None = None) -> np.ndarray:
+        """(3, R*W) directions of eye-space depth 1 for the image rows `rows` (default all),
+        row-major pixel order within them."""
+        r = self.row[:, rows or slice(None)]
+        return (r[:, :, None] + self.col[:, None, :]).reshape(3, -1)
+
+    def origins(self, directions: np.ndarray) -> np.ndarray:
+        """(3, n) ray starts on the near plane for directions (3, n) of depth 1."""
+        return self.eye[:, None] + self.near * directions
+
+
+def primary_rays(camera, width: int, height: int, rows: slice | None = None,
+                 dtype=np.float64, unit: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """One ray per pixel centre, starting where it crosses the near plane.
 
-    Returns origins : (H*W, 3) float64 and directions : (H*W, 3) float64, unit length, in
-    row-major pixel order (index = y * W + x, row 0 at the top), so `t` along a ray is a distance.
+    rows  : the image rows to make rays for (default: all), row 0 at the top.
+    dtype : float64, or float32.
+    unit  : normalise the directions (then t along a ray is a distance); if False, each
+            direction has eye-space depth 1 (its component along the view axis is 1).
+    Returns origins : (R*W, 3) and directions : (R*W, 3) of `dtype`, in row-major pixel order
+    (index = row * W + x within `rows`).
 
     In eye space the ray through NDC (sx, sy) has direction (sx * tan(fov_y / 2) * aspect,
     sy * tan(fov_y / 2), -1); scaled by `near` it reaches the near plane (eye-space depth == near,
     a plane, not a sphere), which is where the ray starts: geometry nearer than that is clipped,
     as in the rasterizer.
     """
-    right, up, back = camera_basis(camera)
-    sx, sy = pixel_ndc(width, height)
-    half_h = math.tan(math.radians(camera.fov_y) / 2.0)
-    half_w = half_h * (width / height)
-    # Eye-space direction with depth 1, mapped to world space.
-    d = ((sx * half_w).reshape(-1, 1) * right + (sy * half_h).reshape(-1, 1) * up - back)
-    origins = camera.eye + camera.near * d
-    directions = d / np.linalg.norm(d, axis=1, keepdims=True)
-    return origins, directions
+    grid = RayGrid(camera, width, height, dtype)
+    d = grid.directions(rows)
+    origins = grid.origins(d).T.copy()
+    if unit:
+        d = d / np.sqrt((d * d).sum(axis=0))
+    return origins, d.T.copy()
