@@ -1,0 +1,42 @@
+"""The one place that creates an OpenGL context: headless, through EGL (no display needed).
+
+Everything GL in shadowvol runs on a context made by `create_context`.  Mesa's llvmpipe (a CPU
+rasterizer) is enough; a GPU vendor's EGL driver works unchanged.
+"""
+
+from __future__ import annotations
+
+import moderngl
+
+REQUIRED_GL_VERSION = 450  # geometry shaders with `precise`, glClipControl-era core profile
+
+INSTALL_HINT = ("install an EGL driver with OpenGL 4.5: on Debian/Ubuntu "
+                "`apt-get install libegl1 libgl1-mesa-dri` (Mesa), or your GPU vendor's EGL driver")
+
+
+class ContextError(RuntimeError):
+    """No usable OpenGL 4.5 context: EGL, the driver or the GL version is missing."""
+
+
+def create_context() -> moderngl.Context:
+    """A new standalone OpenGL >= 4.5 core context on EGL.
+
+    The caller owns it and must `release()` it.  Raises ContextError naming what to install when
+    libEGL, a driver, or GL 4.5 is missing.
+    """
+    try:
+        ctx = moderngl.create_context(standalone=True, backend="egl",
+                                      require=REQUIRED_GL_VERSION)
+    except Exception as exc:  # glcontext raises bare Exceptions with the loader's message
+        text = str(exc).strip() or type(exc).__name__
+        if "version" in text.lower() or "require" in text.lower():
+            raise ContextError(f"OpenGL {REQUIRED_GL_VERSION // 100}.{REQUIRED_GL_VERSION % 100 // 10}"
+                               f" is not available ({text}); {INSTALL_HINT}") from None
+        raise ContextError(f"cannot create a headless EGL context ({text}); "
+                           f"{INSTALL_HINT}") from None
+    if ctx.version_code < REQUIRED_GL_VERSION:
+        version = ctx.info.get("GL_VERSION", str(ctx.version_code))
+        ctx.release()
+        raise ContextError(f"the EGL driver offers OpenGL {version}, shadowvol needs 4.5; "
+                           f"{INSTALL_HINT}")
+    return ctx

@@ -1,0 +1,122 @@
+"""The passes of a shadowed frame, in order:
+
+1. `depth_ambient`: depth (test LESS, writes on) and the ambient term ka * ambient.
+2. per light: `count_volumes` — the stencil cleared, then the shadow volumes drawn with colour
+   and depth writes off and two-sided stencil counting, z-pass or z-fail per caster;
+   `add_light` — the light's Phong term added where the stencil is 0 (depth test EQUAL, additive
+   blending), and its lit mask written.
+
+The depth test of the volume passes is LESS, so that a volume face exactly at the surface's depth
+counts as behind it (z-fail near caps tie with their own triangle; see `volumes`).
+"""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from . import glsl, stencil
+from .camera import gl_matrix
+from .framebuffer import Target
+from .gpuscene import SceneGeometry
+from .scene import Camera, Light, Scene, SpotLight
+from .silhouettes import light_vector
+
+NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)
+
+
+def set_uniform(program: moderngl.Program, name: str, value) -> None:
+    """Set a uniform if the program uses it (the linker drops unused ones)."""
+    if name in program:
+        member = program[name]
+        if isinstance(value, bytes):
+            member.write(value)
+        else:
+            member.value = value
+
+
+class ScenePrograms:
+    """The programs that draw the scene's own triangles (ambient, Phong).  Call `release()`."""
+
+    def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
+        self.geometry = geometry
+        self.ambient = glsl.program(ctx, "scene.vert", "ambient.frag")
+        self.phong = glsl.program(ctx, "scene.vert", "phong.frag")
+        self.ambient_vao = ctx.vertex_array(self.ambient, geometry.soup_bindings(self.ambient))
+        self.phong_vao = ctx.vertex_array(self.phong, geometry.soup_bindings(self.phong))
+
+    def release(self) -> None:
+        for obj in (self.ambient_vao, self.phong_vao, self.ambient, self.phong):
+            obj.release()
+
+
+def set_camera(programs, view_proj: np.ndarray, camera: Camera) -> None:
+    for p in programs:
+        set_uniform(p, "u_view_proj", gl_matrix(view_proj))
+        set_uniform(p, "u_eye", tuple(float(x) for x in camera.eye))
+
+
+def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
+                  scene: Scene) -> None:
+    """Clear everything, then depth and ambient for all triangles."""
+    target.clear(scene.background)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = "<"
+    ctx.front_face = "ccw"
+    set_uniform(progs.ambient, "u_ambient", tuple(float(x) for x in scene.ambient))
+    progs.geometry.materials.use(0)
+    set_uniform(progs.ambient, "u_materials", 0)
+    progs.ambient_vao.render(moderngl.TRIANGLES)
+
+
+def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
+                  zfail: np.ndarray) -> None:
+    """Stencil := the signed count of shadow volumes around each visible point, for the light
+    `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster."""
+    target.clear_stencil()
+    target.use(colour=False, depth=False)
+    ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count
+    ctx.depth_func = "<"
+    by_zpass = [int(i) for i in np.flatnonzero(~zfail)]
+    by_zfail = [int(i) for i in np.flatnonzero(zfail)]
+    if by_zpass:
+        with stencil.zpass_counting(gl):
+            volumes.draw_sides(by_zpass)
+    if by_zfail:
+        with stencil.zfail_counting(gl, depth_clamp=True):
+            volumes.draw_sides(by_zfail)
+            volumes.draw_caps(by_zfail, near=False)
+        with stencil.zfail_counting(gl, depth_clamp=False):
+            volumes.draw_caps(by_zfail, near=True)
+    target.use()
+
+
+def light_uniforms(program: moderngl.Program, light: Light) -> None:
+    set_uniform(program, "u_light", tuple(float(x) for x in light_vector(light)))
+    set_uniform(program, "u_radiance", tuple(float(x) for x in light.radiance))
+    if isinstance(light, SpotLight):
+        set_uniform(program, "u_spot_direction", tuple(float(x) for x in light.direction))
+        set_uniform(program, "u_spot_cos", light.cos_cutoff)
+    else:
+        set_uniform(program, "u_spot_direction", (0.0, 0.0, 1.0))
+        set_uniform(program, "u_spot_cos", NO_CONE)
+
+
+def add_light(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
+              light: Light) -> None:
+    """Add `light`'s Phong term where the stencil is 0; its lit mask goes to `target.lit`."""
+    target.clear_lit()
+    target.use(colour=True, depth=False)
+    ctx.enable_only(moderngl.DEPTH_TEST | moderngl.BLEND)
+    ctx.depth_func = "=="
+    ctx.blend_func = moderngl.ONE, moderngl.ONE
+    ctx.blend_equation = moderngl.FUNC_ADD
+    ctx.front_face = "ccw"
+    light_uniforms(progs.phong, light)
+    progs.geometry.materials.use(0)
+    set_uniform(progs.phong, "u_materials", 0)
+    with stencil.where_unshadowed(gl):
+        progs.phong_vao.render(moderngl.TRIANGLES)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = "<"
+    target.use()

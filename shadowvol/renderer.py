@@ -1,0 +1,138 @@
+"""The shadow-volume renderer: `Renderer` for many frames of one scene, `render` for one.
+
+A Renderer holds one GL context (its own, or one it is given), uploads the scene's geometry once,
+and renders frames: depth + ambient, then per light the stencil count of its shadow volumes and
+its Phong term where the count is 0.  It returns arrays only; files are the CLI's business.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+
+from . import methods, passes, stencil
+from .camera import view_projection
+from .context import create_context
+from .framebuffer import Target
+from .gpuscene import SceneGeometry
+from .scene import Camera, Light, Scene
+from .silhouettes import light_vector
+from .volumes import CpuVolumes, GpuVolumes
+
+SILHOUETTES = ("cpu", "gpu")
+
+
+@dataclass(frozen=True, eq=False)
+class RenderResult:
+    """One frame.
+
+    image    : (H, W, 3) float32 linear RGB (direct Phong lighting with hard shadows)
+    lit      : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot cone
+    coverage : (H, W) bool, geometry visible at the pixel centre
+    stencil  : (L, H, W) int16 signed stencil counts after each light's volume pass, or None
+               when not asked for
+    zfail    : (L, n_objects) bool, which casters were counted with z-fail for each light
+    """
+
+    image: np.ndarray
+    lit: np.ndarray
+    coverage: np.ndarray
+    stencil: np.ndarray | None
+    zfail: np.ndarray
+
+
+class Renderer:
+    """Renders `scene` (its geometry and materials; camera and lights may change per frame).
+
+    Use as a context manager or call `release()`: every GL object it made is released, and the
+    context too if the renderer created it.
+    """
+
+    def __init__(self, scene: Scene, ctx: moderngl.Context | None = None):
+        self.scene = scene
+        self._own_ctx = ctx is None
+        self.ctx = create_context() if ctx is None else ctx
+        self._owned = []
+        try:
+            self.gl = stencil.RawGL()
+            self.geometry = self._own(SceneGeometry(self.ctx, scene))
+            self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
+            self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
+            self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
+        except BaseException:
+            self.release()
+            raise
+
+    def _own(self, obj):
+        self._owned.append(obj)
+        return obj
+
+    def volumes(self, silhouettes: str) -> CpuVolumes | GpuVolumes:
+        """The volume builder for "cpu" or "gpu" silhouettes (made on first use)."""
+        if silhouettes not in SILHOUETTES:
+            raise ValueError(f"silhouettes must be 'cpu' or 'gpu', got {silhouettes!r}")
+        if silhouettes not in self._volumes:
+            cls = CpuVolumes if silhouettes == "cpu" else GpuVolumes
+            self._volumes[silhouettes] = self._own(cls(self.ctx, self.geometry))
+        return self._volumes[silhouettes]
+
+    def render(self, method: str = "auto", silhouettes: str = "cpu", *,
+               camera: Camera | None = None, lights: tuple[Light, ...] | None = None,
+               stencil: bool = False) -> RenderResult:
+        """One frame.  `method`: "auto" (z-fail only for casters the near plane may cut),
+        "zpass" or "zfail".  `camera`/`lights` override the scene's for this frame.
+        `stencil=True` also returns the per-light stencil counts (one extra read-back each)."""
+        if method not in methods.METHODS:
+            raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
+                             f"got {method!r}")
+        camera = self.scene.camera if camera is None else camera
+        lights = self.scene.lights if lights is None else tuple(lights)
+        vols = self.volumes(silhouettes)
+        view_proj = view_projection(camera, self.scene.aspect)
+        passes.set_camera((self.programs.ambient, self.programs.phong, *vols.programs),
+                          view_proj, camera)
+        passes.depth_ambient(self.ctx, self.target, self.programs, self.scene)
+        lit, counts, zfail = [], [], []
+        for light in lights:
+            light4 = light_vector(light)
+            choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
+                                    light4, self.scene.extent)
+            vols.prepare(light4)
+            for p in vols.programs:
+                passes.set_uniform(p, "u_light", tuple(float(x) for x in light4))
+            passes.count_volumes(self.ctx, self.gl, self.target, vols, choice)
+            if stencil:
+                counts.append(self.target.read_stencil())
+            passes.add_light(self.ctx, self.gl, self.target, self.programs, light)
+            lit.append(self.target.read_lit())
+            zfail.append(choice)
+        rgba = self.target.read_colour()
+        h, w = self.scene.height, self.scene.width
+        return RenderResult(
+            image=np.ascontiguousarray(rgba[..., :3]),
+            lit=np.array(lit, bool).reshape(len(lights), h, w),
+            coverage=rgba[..., 3] > 0.5,
+            stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if stencil else None,
+            zfail=np.array(zfail, bool).reshape(len(lights), len(self.scene.objects)))
+
+    def release(self) -> None:
+        while self._owned:
+            self._owned.pop().release()
+        if self._own_ctx and self.ctx is not None:
+            self.ctx.release()
+        self.ctx = None
+
+    def __enter__(self) -> "Renderer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+def render(scene: Scene, method: str = "auto", silhouettes: str = "cpu", *,
+           stencil: bool = False, ctx: moderngl.Context | None = None) -> RenderResult:
+    """Render one frame of `scene` (a fresh context unless `ctx` is given)."""
+    with Renderer(scene, ctx) as renderer:
+        return renderer.render(method, silhouettes, stencil=stencil)
