@@ -1,0 +1,251 @@
+"""Whitted ray tracing, vectorised per generation.
+
+All rays of one depth are traced at once (per tile of the image, see `TILE_RAYS`): primary rays
+are generation 0; a hit on a reflective or transparent surface spawns the next generation's
+reflection and refraction rays.  The colour of a ray that hits a surface is
+
+    local · (1 − refl − transp) + refl · reflected + transp · refracted
+
+and, at the depth limit (and for max_depth == 0), the local term alone, unweighted — so
+`render(scene, max_depth=0)` is exactly the direct lighting the rasterizer draws.  A ray that
+hits nothing gets `scene.background`.  The recursion is unrolled into per-ray weights: each ray
+carries the product of the refl / transp factors along its path and adds weight · its own term to
+its pixel.
+
+The local term is Phong:
+
+    ka · scene.ambient + Σ_visible lights [kd · max(n·l, 0) + ks · max(r·v, 0)^shininess] · radiance
+
+where a light is visible when n·l > 0, a spot light's cone contains the point, and no object lies
+between the point and the light (hard shadows; transparent objects are opaque to shadow rays, as
+in the rasterizer).  No distance attenuation.
+
+Geometry: objects with an analytic form (Sphere, Parallelogram) are intersected exactly; the
+others (meshes, boxes) go through the triangle backend; the nearest hit wins.  Shading normals
+are exact for analytic shapes and the face normal for triangles, flipped to face the incoming
+ray.  Refraction decides entering / leaving by the geometric normal (outward for spheres, by
+winding for triangles, edge_u × edge_v for parallelograms) against the ray, and assumes the
+other side is air (ior 1): nested media are not tracked.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from shadowvol.scene import DirectionalLight, Parallelogram, Scene, Sphere, SpotLight
+
+from .backends import make_backend
+from .camera import primary_rays
+from .intersect import dot, ray_parallelogram, ray_sphere, reflect, refract
+from .progress import Progress
+from .tolerances import surface_offset
+
+# Primary rays per tile: bounds memory (a generation holds a few dozen float64 values per ray)
+# and sets the progress bar's step.
+TILE_RAYS = 1 << 15
+
+
+class World:
+    """What the tracer intersects: the analytic objects, one triangle backend for the rest,
+    and every object's material as arrays indexed by object.
+
+    kind     : (K,) int: 0 sphere, 1 parallelogram, 2 triangles
+    center   : (K, 3), radius : (K,)         spheres
+    normal   : (K, 3)                         parallelograms (unit, edge_u × edge_v)
+    ka, kd, ks : (K, 3);  shininess, refl, transp, ior : (K,)
+    """
+
+    SPHERE, PARALLELOGRAM, TRIANGLES = 0, 1, 2
+
+    def __init__(self, scene: Scene, backend: str = "embree"):
+        objs = scene.objects
+        self.offset = surface_offset(scene)
+        K = len(objs)
+        self.kind = np.full(K, self.TRIANGLES)
+        self.center = np.zeros((K, 3))
+        self.radius = np.ones(K)
+        self.normal = np.zeros((K, 3))
+        self.analytic = []
+        for i, o in enumerate(objs):
+            if isinstance(o.analytic, Sphere):
+                self.kind[i] = self.SPHERE
+                self.center[i], self.radius[i] = o.analytic.center, o.analytic.radius
+                self.analytic.append((i, o.analytic))
+            elif isinstance(o.analytic, Parallelogram):
+                self.kind[i] = self.PARALLELOGRAM
+                self.normal[i] = o.analytic.normal
+                self.analytic.append((i, o.analytic))
+        meshes = [i for i in range(K) if self.kind[i] == self.TRIANGLES]
+        self.tracer = None
+        if meshes:
+            offsets = np.cumsum([0] + [len(objs[i].vertices) for i in meshes])
+            vertices = np.concatenate([objs[i].vertices for i in meshes])
+            faces = np.concatenate([objs[i].faces + off for i, off in zip(meshes, offsets)])
+            self.tri_object = np.concatenate([np.full(len(objs[i].faces), i) for i in meshes])
+            self.tracer = make_backend(backend, vertices, faces)
+        m = [o.material for o in objs]
+        self.ka = np.array([x.ambient for x in m])
+        self.kd = np.array([x.diffuse for x in m])
+        self.ks = np.array([x.specular for x in m])
+        self.shininess = np.array([x.shininess for x in m])
+        self.refl = np.array([x.reflectivity for x in m])
+        self.transp = np.array([x.transparency for x in m])
+        self.ior = np.array([x.ior for x in m])
+
+    def nearest(self, o: np.ndarray, d: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Nearest hits of rays o, d (n, 3) float64.
+
+        Returns t (n,) float64 (inf: miss), obj (n,) int (-1: miss) and the geometric normal
+        (n, 3) float64, unit, outward / by winding (not yet facing the ray).
+        """
+        n = len(o)
+        t = np.full(n, np.inf)
+        obj = np.full(n, -1)
+        for i, shape in self.analytic:
+            if isinstance(shape, Sphere):
+                lam = ray_sphere(o, d, shape.center, shape.radius)
+            else:
+                lam = ray_parallelogram(o, d, shape.origin, shape.edge_u, shape.edge_v)
+            closer = lam < t
+            t[closer], obj[closer] = lam[closer], i
+        tri = np.full(n, -1)
+        if self.tracer is not None:
+            hits = self.tracer.closest_hit(o, d, tmax=t)
+            closer = (hits.tri >= 0) & (hits.t < t)
+            t[closer], obj[closer], tri[closer] = hits.t[closer], \
+                self.tri_object[hits.tri[closer]], hits.tri[closer]
+        hit = obj >= 0
+        p = o + np.where(hit, t, 0.0)[:, None] * d
+        kind = np.where(hit, self.kind[obj], -1)
+        normal = np.zeros((n, 3))
+        s = kind == self.SPHERE
+        normal[s] = (p[s] - self.center[obj[s]]) / self.radius[obj[s], None]
+        q = kind == self.PARALLELOGRAM
+        normal[q] = self.normal[obj[q]]
+        m = kind == self.TRIANGLES
+        if m.any():
+            normal[m] = self.tracer.normals[tri[m]]
+        return t, obj, normal
+
+    def occluded(self, o: np.ndarray, d: np.ndarray, tmax: float | None) -> np.ndarray:
+        """(n,) bool: does any object lie on the rays o + λd, 0 < λ < tmax (None: anywhere)?"""
+        bound = np.inf if tmax is None else tmax
+        blocked = np.zeros(len(o), bool)
+        for _, shape in self.analytic:
+            if isinstance(shape, Sphere):
+                lam = ray_sphere(o, d, shape.center, shape.radius)
+            else:
+                lam = ray_parallelogram(o, d, shape.origin, shape.edge_u, shape.edge_v)
+            blocked |= lam < bound
+        if self.tracer is not None:
+            rest = np.flatnonzero(~blocked)
+            blocked[rest] = self.tracer.occluded(o[rest], d[rest], tmax)
+        return blocked
+
+
+def local_colour(world: World, scene: Scene, p, n, view, obj) -> np.ndarray:
+    """Phong local term (k, 3) float64 at points p (k, 3) with unit normals n (k, 3) facing the
+    viewer, unit view directions `view` (k, 3) (toward the viewer), objects obj (k,)."""
+    colour = world.ka[obj] * scene.ambient
+    start = p + world.offset * n  # shadow rays leave on the viewer's side (n·l > 0 there)
+    for light in scene.lights:
+        if isinstance(light, DirectionalLight):
+            to_light = np.broadcast_to(-light.direction, p.shape)
+            tmax = None
+        else:
+            to_light = light.position - p
+            tmax = 1.0  # the segment start -> light, with an unnormalised direction
+        dist = np.linalg.norm(to_light, axis=1)
+        l = to_light / dist[:, None]
+        n_dot_l = dot(n, l)
+        visible = n_dot_l > 0.0
+        if isinstance(light, SpotLight):
+            visible &= dot(-l, light.direction) >= light.cos_cutoff
+        c = np.flatnonzero(visible)
+        if tmax is None:
+            shadow_dir = to_light[c]
+        else:
+            shadow_dir = light.position - start[c]
+        visible[c] = ~world.occluded(start[c], shadow_dir, tmax)
+        c = np.flatnonzero(visible)
+        r = reflect(-l[c], n[c])  # the light's direction mirrored about n
+        r_dot_v = np.maximum(dot(r, view[c]), 0.0)
+        o = obj[c]
+        term = (world.kd[o] * n_dot_l[c, None]
+                + world.ks[o] * (r_dot_v ** world.shininess[o])[:, None])
+        colour[c] += term * light.radiance
+    return colour
+
+
+def trace(world: World, scene: Scene, origins, directions, max_depth: int) -> np.ndarray:
+    """Colours (n, 3) float64 of rays origins, directions (n, 3) (unit directions)."""
+    n_rays = len(origins)
+    colour = np.zeros((n_rays, 3))
+    o, d = origins, directions
+    pixel = np.arange(n_rays)  # which primary ray each ray of this generation belongs to
+    weight = np.ones(n_rays)  # product of refl / transp factors along the path
+    for depth in range(max_depth + 1):
+        t, obj, geo_n = world.nearest(o, d)
+        hit = obj >= 0
+        miss = ~hit
+        _accumulate(colour, pixel[miss], weight[miss, None] * scene.background)
+        if not hit.any():
+            break
+        h = np.flatnonzero(hit)
+        o, d, t, obj, geo_n, pixel, weight = o[h], d[h], t[h], obj[h], geo_n[h], pixel[h], \
+            weight[h]
+        p = o + t[:, None] * d
+        entering = dot(geo_n, d) < 0.0
+        n = np.where(entering[:, None], geo_n, -geo_n)  # shading normal, facing the ray
+        local = local_colour(world, scene, p, n, -d, obj)
+        refl, transp = world.refl[obj], world.transp[obj]
+        if depth == max_depth:
+            _accumulate(colour, pixel, weight[:, None] * local)
+            break
+        _accumulate(colour, pixel, (weight * (1.0 - refl - transp))[:, None] * local)
+        r = np.flatnonzero(refl > 0.0)
+        s = np.flatnonzero(transp > 0.0)
+        # Reflection leaves on the ray's side; refraction crosses to the other side (unless
+        # it is totally reflected inside, when `refract` hands back the mirror direction).
+        eta = np.where(entering[s], 1.0 / world.ior[obj[s]], world.ior[obj[s]])
+        refr_dir, tir = refract(d[s], n[s], eta)
+        side = np.where(tir, 1.0, -1.0)[:, None]
+        o = np.concatenate([p[r] + world.offset * n[r], p[s] + side * world.offset * n[s]])
+        d = np.concatenate([reflect(d[r], n[r]), refr_dir])
+        pixel = np.concatenate([pixel[r], pixel[s]])
+        weight = np.concatenate([weight[r] * refl[r], weight[s] * transp[s]])
+        if len(o) == 0:
+            break
+    return colour
+
+
+def _accumulate(colour: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+    """colour[index] += values, with repeated indices summed (several rays per pixel)."""
+    for c in range(3):
+        colour[:, c] += np.bincount(index, weights=values[:, c], minlength=len(colour))
+
+
+def render(scene: Scene, max_depth: int | None = None, backend: str = "embree",
+           progress: bool | None = None) -> np.ndarray:
+    """Ray-trace `scene`: (H, W, 3) float64 linear RGB, row 0 at the top.
+
+    max_depth : reflection / refraction generations (default `scene.max_depth`); 0 gives the
+                direct lighting alone (exactly what the rasterizer draws).
+    backend   : "embree" or "numpy", for objects without an analytic form (meshes, boxes).
+    progress  : a progress bar on stderr: None (default) when stderr is a terminal.
+    """
+    depth = scene.max_depth if max_depth is None else max_depth
+    if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or depth < 0:
+        raise ValueError(f"max_depth must be a whole number >= 0, got {depth!r}")
+    H, W = scene.height, scene.width
+    world = World(scene, backend)
+    image = np.zeros((H, W, 3))
+    rows_per_tile = max(1, TILE_RAYS // W)
+    tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
+    with Progress(len(tiles), f"raytrace {scene.name}", enabled=progress) as bar:
+        for rows in tiles:
+            o, d = primary_rays(scene.camera, W, H, rows)
+            image[rows] = trace(world, scene, o, d, depth).reshape(-1, W, 3)
+            bar.update()
+    return image
