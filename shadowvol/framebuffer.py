@@ -74,6 +74,10 @@ class Target:
         return top_row_first(raw.view(np.int8).astype(np.int16))
 
     def release(self) -> None:
+        if self.ctx.fbo in (self.fbo, self.lit_fbo):
+            # moderngl re-binds its record of the bound framebuffer after creating the next
+            # one; leaving it pointing at a deleted framebuffer raises GL_INVALID_OPERATION
+            self.ctx.detect_framebuffer(0).use()
         self.depth_stencil.release()
         for obj in (self.fbo, self.lit_fbo, self.colour, self.lit):
             obj.release()
