@@ -197,11 +197,15 @@ def _our_material(material, ambient_light: np.ndarray) -> Material:
                     specular=specular, shininess=shininess)
 
 
-def _natural_key(name) -> tuple:
-    """Sort key putting 'light2' before 'light10' and unnamed (None) nodes last."""
+def _node_key(pr_scene, node) -> tuple:
+    """Sort key for nodes: by name, 'light2' before 'light10', unnamed (None) last; ties (equal
+    or missing names) by world pose, so the order never depends on pyrender's node set."""
+    name = node.name
+    pose = tuple(np.asarray(pr_scene.get_pose(node), dtype=np.float64).ravel())
     if name is None:
-        return (1, ())
-    return (0, tuple(int(t) if t.isdigit() else t for t in re.split(r"(\d+)", name)))
+        return (1, (), pose)
+    return (0, tuple((0, int(t), "") if t.isdigit() else (1, 0, t)
+                     for t in re.split(r"(\d+)", name)), pose)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -269,14 +273,14 @@ def from_pyrender(pr_scene, width: int, height: int, name: str | None = None) ->
     - The main camera node must hold a PerspectiveCamera; its aspect ratio, if set, must equal
       width / height.  zfar is dropped (we have no far plane).
     - Directional, spot and point lights, sorted by node name ("light2" before "light10",
-      unnamed last).  Spot: cone_angle = the OUTER cone angle (the inner one's falloff is lost).
+      unnamed last; equal names by pose).  Mesh nodes are sorted the same way.  Spot: cone_angle = the OUTER cone angle (the inner one's falloff is lost).
     - Materials and intensities: see the module docstring.  The scene's ambient light goes into
       each material's ambient; our scene ambient is white.
     """
     pyrender = _pyrender()
     ambient_light = np.asarray(pr_scene.ambient_light, dtype=np.float64)[:3]
     objects = []
-    for node in sorted(pr_scene.mesh_nodes, key=lambda n: _natural_key(n.name)):
+    for node in sorted(pr_scene.mesh_nodes, key=lambda n: _node_key(pr_scene, n)):
         pose = pr_scene.get_pose(node)
         prims = node.mesh.primitives
         for k, prim in enumerate(prims):
@@ -312,7 +316,7 @@ def from_pyrender(pr_scene, width: int, height: int, name: str | None = None) ->
     triangles = (np.concatenate([o.triangles for o in objects]) if objects
                  else np.zeros((0, 3, 3)))
     lights = []
-    for node in sorted(pr_scene.light_nodes, key=lambda n: _natural_key(n.name)):
+    for node in sorted(pr_scene.light_nodes, key=lambda n: _node_key(pr_scene, n)):
         light, pose = node.light, pr_scene.get_pose(node)
         position, direction = pose[:3, 3], -pose[:3, 2]
         if isinstance(light, pyrender.DirectionalLight):
