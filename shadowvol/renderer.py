@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from . import methods, passes, stencil
+from . import methods, passes, stencil, views
 from .camera import view_projection
 from .context import create_context
 from .framebuffer import Target
@@ -116,6 +116,22 @@ class Renderer:
             coverage=rgba[..., 3] > 0.5,
             stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if stencil else None,
             zfail=np.array(zfail, bool).reshape(len(lights), len(self.scene.objects)))
+
+    def volume_view(self, method: str = "auto", silhouettes: str = "cpu", *,
+                    camera: Camera | None = None,
+                    lights: tuple[int, ...] | None = None) -> np.ndarray:
+        """(H, W, 3) float32 linear RGB: the frame with the shadow-volume polygons of the
+        lights numbered in `lights` (default: all) drawn over it, coloured by role (see
+        `views`).  The polygons are exactly those the stencil pass drew under `method`."""
+        result = self.render(method, silhouettes, camera=camera)  # leaves the frame in target
+        vols = self.volumes(silhouettes)
+        for i, light in enumerate(self.scene.lights):
+            if lights is None or i in lights:
+                light4 = light_vector(light)
+                vols.prepare(light4)
+                views.draw_volume_overlay(self.ctx, self.gl, self.target, vols, light4,
+                                          result.zfail[i])
+        return np.ascontiguousarray(self.target.read_colour()[..., :3])
 
     def release(self) -> None:
         while self._owned:
