@@ -1,6 +1,6 @@
 """Benchmark (not a test): reference masks of the Stanford bunny on a plane against raw Embree.
 
-    python benchmarks/bench_masks.py [--runs N] [--width W] [--height H]
+    python benchmarks/bench_masks.py [--runs N] [--width W] [--height H] [--model OBJ]
 
 The scene: the shared bunny (../shared/models/bunny.obj, 69k triangles, open base), scaled to
 about 1.5 units tall, standing on a 6 x 6 plane, one point light, 1280x720.  It times
@@ -27,18 +27,16 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
-BUNNY = ROOT.parent / "shared" / "models" / "bunny.obj"
-if not BUNNY.is_file():  # the checkout may live elsewhere; the shared folder is fixed
-    BUNNY = Path("/work/shared/models/bunny.obj")
+BUNNY = ROOT.parent / "shared" / "models" / "bunny.obj"  # ../shared/models beside the checkout
 
 
-def bunny_scene(width: int, height: int):
+def bunny_scene(width: int, height: int, model: Path = BUNNY):
     import trimesh
 
     from shadowvol.primitives import Transform, mesh, plane
     from shadowvol.scene import Camera, Material, PointLight, Scene
 
-    loaded = trimesh.load(str(BUNNY), process=False)
+    loaded = trimesh.load(str(model), process=False)
     v = np.asarray(loaded.vertices)
     scale = 1.5 / float(np.ptp(v[:, 1]))
     base = v.min(axis=0) * scale
@@ -71,10 +69,13 @@ def main(argv=None) -> int:
     ap.add_argument("--runs", type=int, default=7, help="timed runs after one warm-up (median)")
     ap.add_argument("--width", type=int, default=1280)
     ap.add_argument("--height", type=int, default=720)
+    ap.add_argument("--model", type=Path, default=BUNNY,
+                    help=f"the bunny OBJ (default: {BUNNY})")
     args = ap.parse_args(argv)
-    if not BUNNY.is_file():
-        print(f"error: the shared bunny is missing ({BUNNY}); this benchmark needs "
-              "../shared/models/bunny.obj", file=sys.stderr)
+    if not args.model.is_file():
+        print(f"error: the Stanford bunny is missing: {args.model} does not exist.  This "
+              "benchmark needs the shared models folder (../shared/models/bunny.obj beside the "
+              "checkout) or --model PATH.", file=sys.stderr)
         return 2
 
     from raytrace.backends import EmbreeBackend
@@ -82,7 +83,7 @@ def main(argv=None) -> int:
     from raytrace.masks import scene_backend, shadow_masks
     from raytrace.tolerances import surface_offset
 
-    scene = bunny_scene(args.width, args.height)
+    scene = bunny_scene(args.width, args.height, args.model)
     vertices, faces, _ = scene.triangles()
     t0 = time.perf_counter()
     backend: EmbreeBackend = scene_backend(scene, "embree")
