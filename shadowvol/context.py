@@ -40,3 +40,13 @@ def create_context() -> moderngl.Context:
         raise ContextError(f"the EGL driver offers OpenGL {version}, shadowvol needs 4.5; "
                            f"{INSTALL_HINT}")
     return ctx
+
+
+def make_current(ctx: moderngl.Context) -> None:
+    """Make `ctx` the thread's current context (raw GL calls go to the current context).
+
+    moderngl's `with ctx:` would do it, but glcontext's EGL `__exit__` does not restore the
+    previous context: it leaves NO context current (checked with eglGetCurrentContext, glcontext
+    3.1).  So we enter and never exit: the renderer's context simply stays current.
+    """
+    ctx.__enter__()

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import methods, passes, stencil, views
 from .camera import view_projection
-from .context import create_context
+from .context import create_context, make_current
 from .framebuffer import Target
 from .gpuscene import SceneGeometry
 from .scene import Camera, Light, Scene
@@ -55,12 +55,16 @@ class Renderer:
         self._own_ctx = ctx is None
         self.ctx = create_context() if ctx is None else ctx
         self._owned = []
+        self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
         try:
+            # every public method first makes the context current: raw GL calls
+            # (stencil.RawGL) go to whichever context is current, e.g. after another renderer
+            # with its own context has run
+            make_current(self.ctx)
             self.gl = stencil.RawGL()
             self.geometry = self._own(SceneGeometry(self.ctx, scene))
             self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
             self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
-            self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
         except BaseException:
             self.release()
             raise
@@ -75,6 +79,7 @@ class Renderer:
             raise ValueError(f"silhouettes must be 'cpu' or 'gpu', got {silhouettes!r}")
         if silhouettes not in self._volumes:
             cls = CpuVolumes if silhouettes == "cpu" else GpuVolumes
+            make_current(self.ctx)
             self._volumes[silhouettes] = self._own(cls(self.ctx, self.geometry))
         return self._volumes[silhouettes]
 
@@ -87,6 +92,10 @@ class Renderer:
         if method not in methods.METHODS:
             raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
                              f"got {method!r}")
+        make_current(self.ctx)
+        return self._render(method, silhouettes, camera, lights, stencil)
+
+    def _render(self, method, silhouettes, camera, lights, stencil) -> RenderResult:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else tuple(lights)
         vols = self.volumes(silhouettes)
@@ -134,9 +143,12 @@ class Renderer:
         return np.ascontiguousarray(self.target.read_colour()[..., :3])
 
     def release(self) -> None:
+        if self.ctx is None:
+            return
+        make_current(self.ctx)
         while self._owned:
             self._owned.pop().release()
-        if self._own_ctx and self.ctx is not None:
+        if self._own_ctx:
             self.ctx.release()
         self.ctx = None
 

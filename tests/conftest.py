@@ -33,6 +33,9 @@ def gl_session():
 
 @pytest.fixture
 def ctx(gl_session):
+    from shadowvol.context import make_current
+
+    make_current(gl_session)  # a test that made its own context may have left that one current
     before = gl_session.error
     if before != "GL_NO_ERROR":
         pytest.fail(f"GL error flag set before the test: {before}")
