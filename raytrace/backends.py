@@ -146,16 +146,16 @@ class NumpyBackend(TriangleSet):
         super().__init__(vertices, faces)
         tri = self.vertices[self.faces]
         self._a, self._b, self._c = tri[:, 0], tri[:, 1], tri[:, 2]
-        scale = float(np.abs(tri).max()) if len(tri) else 1.0
-        pad = BVH_BOX_PAD_RELATIVE * max(scale, 1.0)
+        pad = BVH_BOX_PAD_RELATIVE * float(np.abs(tri).max())
         lo_t, hi_t = tri.min(axis=1) - pad, tri.max(axis=1) + pad
         centroids = tri.mean(axis=1)
         self.nodes: list[_Node] = []
-        stack = [(np.arange(len(tri)), None, 0)]
-        # Iterative build: each entry is (triangle indices, parent, which child of the parent).
+        # Iterative build, depth first: each stack entry is (triangle indices, parent node id).
+        # The left half is pushed last, so it is built (and listed as a child) first.
+        stack = [(np.arange(len(tri)), None)]
         pending_children: dict[int, list[int]] = {}
         while stack:
-            idx, parent, side = stack.pop()
+            idx, parent = stack.pop()
             node_id = len(self.nodes)
             lo, hi = lo_t[idx].min(axis=0), hi_t[idx].max(axis=0)
             if len(idx) <= leaf_size:
@@ -167,8 +167,8 @@ class NumpyBackend(TriangleSet):
                 half = len(order) // 2
                 self.nodes.append(_Node(lo, hi, (), idx[:0]))
                 pending_children[node_id] = []
-                stack.append((order[half:], node_id, 1))
-                stack.append((order[:half], node_id, 0))
+                stack.append((order[half:], node_id))
+                stack.append((order[:half], node_id))
             if parent is not None:
                 pending_children[parent].append(node_id)
         for node_id, kids in pending_children.items():
@@ -186,6 +186,8 @@ class NumpyBackend(TriangleSet):
     def _traverse(self, origins, directions, t_best, tri_best, any_hit: bool) -> None:
         """Fill t_best/tri_best (n,) in place; with any_hit, a ray stops at its first hit
         (t_best becomes -inf so that every box culls it)."""
+        # A zero direction component becomes the smallest normal float, so that 1/d is huge but
+        # finite and the slab test never computes 0 * inf = NaN.
         d = np.where(directions == 0.0, np.finfo(np.float64).tiny, directions)
         with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
             inv = 1.0 / d
@@ -276,7 +278,9 @@ class EmbreeBackend(TriangleSet):
         TriangleMesh(self._scene, self.vertices.astype(np.float32),
                      self.faces.astype(np.int32))
         self.threads = threads or _threads()
-        self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))  # commit
+        # embreex commits the scene (builds the BVH) lazily in the first run(); do it now, so
+        # that threads never race to do it and the build is not billed to the first trace.
+        self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
 
     def _run(self, origins, directions, dists, query: str, parallel: bool) -> np.ndarray:
         """Trace; returns primID (INTERSECT) or geomID (OCCLUDED), int32 (n,), -1 for a miss /
