@@ -101,9 +101,14 @@ def check(scene, name, max_per_edge_pixel=0.05):
         band = binary_dilation(edges, iterations=BAND)
         bad = got != ref
         ok = not (bad & ~band).any() and bad.sum() <= max_per_edge_pixel * edges.sum()
-        if not ok:
+        if not ok:  # leave the evidence where the test output goes
             save_png(OUT / name / "masks.png", masks_image(lit, coverage))
             save_png(OUT / name / "expected.png", masks_image(ref_lit, ref_cov))
+            diff = np.zeros(ref.shape + (3,), np.uint8)
+            diff[band] = 60  # where mismatches are allowed
+            diff[bad & got] = (40, 80, 255)  # traced True, expected False
+            diff[bad & ~got] = (230, 30, 30)  # traced False, expected True
+            save_png(OUT / name / f"diff-{what.replace(' ', '')}.png", diff)
         assert not (bad & ~band).any(), f"{what}: {(bad & ~band).sum()} mismatches off the edges"
         assert bad.sum() <= max_per_edge_pixel * edges.sum(), \
             f"{what}: {bad.sum()} mismatches along {edges.sum()} edge pixels"
