@@ -10,6 +10,7 @@ sphere is for images only.
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+from typing import NamedTuple
 
 import numpy as np
 
@@ -91,30 +92,48 @@ def _tile_masks(scene: Scene, tracer: TriangleBackend, grid: RayGrid, rows: slic
     n_dot_v = (normal * view).sum(axis=0)
     side = np.where(n_dot_v > 0, f32(-1), f32(1))
     # The hit point.  Every primary ray is o = eye + near·v, so p = eye + s·v with s = near + t,
-    # and the ray–plane formula n·p = plane_d gives  s = (plane_d − n·eye) / (n·v).
+    # and the ray–plane formula n·p = plane_d gives  s = (plane_d − n·eye) / (n·v).  Only the
+    # distance s is computed here; each light builds the points it needs (n·l > 0) from it.
     with np.errstate(divide="ignore", invalid="ignore"):
         s = np.where(covered, (plane_d - grid.eye @ normal) / n_dot_v, f32(0))
-    point = grid.eye[:, None] + s * view
+    hit = _Hits(grid.eye, view, s, normal, side * offset, plane_d * side, covered)
     for i, light in enumerate(scene.lights):
-        lit[i] = _lit(tracer, light, point, normal, side * offset, plane_d * side,
-                      covered).reshape(shape)
+        lit[i] = _lit(tracer, light, hit).reshape(shape)
     return lit, covered.reshape(shape)
 
 
-def _lit(tracer: TriangleBackend, light, point, normal, step, side_d, covered) -> np.ndarray:
-    """(n,) bool: which of n surface points the light reaches.
+class _Hits(NamedTuple):
+    """The primary hits of a tile, all float32, vectors component-major.
 
-    point : (3, n) float32;  normal : (3, n) unit face normals by winding;  step : (n,) the
-    surface offset times ±1, the sign that turns `normal` toward the camera, so a shadow ray
-    starts at point + step·normal;  side_d : (n,) (±1)·(normal·point);  covered : (n,) bool,
-    where there is a surface at all.
+    eye : (3,);  view : (3, n) ray directions;  s : (n,) the hit point is eye + s·view;
+    normal : (3, n) unit face normals by winding;  step : (n,) the surface offset times ±1, the
+    sign that turns `normal` toward the camera, so a shadow ray starts at p + step·normal;
+    side_d : (n,) (±1)·(normal·p);  covered : (n,) bool, where there is a surface at all.
     """
-    sign = np.sign(step)
+
+    eye: np.ndarray
+    view: np.ndarray
+    s: np.ndarray
+    normal: np.ndarray
+    step: np.ndarray
+    side_d: np.ndarray
+    covered: np.ndarray
+
+    def shadow_starts(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Hit points (3, k) of the rays `c` (k,) int, and where their shadow rays start."""
+        p = self.eye[:, None] + self.s[c] * np.take(self.view, c, axis=1)
+        return p, p + self.step[c] * np.take(self.normal, c, axis=1)
+
+
+def _lit(tracer: TriangleBackend, light, hit: _Hits) -> np.ndarray:
+    """(n,) bool: which of the tile's n hit points the light reaches."""
+    sign = np.sign(hit.step)
     if isinstance(light, DirectionalLight):
         toward = (-light.direction).astype(np.float32)
-        candidate = covered & (sign * (toward @ normal) > 0)  # n·l > 0, n facing the camera
+        # n·l > 0, with n facing the camera.
+        candidate = hit.covered & (sign * (toward @ hit.normal) > 0)
         c = np.flatnonzero(candidate)
-        start = np.take(point, c, axis=1) + step[c] * np.take(normal, c, axis=1)
+        _, start = hit.shadow_starts(c)
         # Unbounded: anything anywhere along the ray toward a directional light blocks it.
         candidate[c] = ~tracer.occluded(start.T, toward[None], None, parallel=False)
         return candidate
@@ -122,17 +141,16 @@ def _lit(tracer: TriangleBackend, light, point, normal, step, side_d, covered) -
         raise TypeError(f"not a light: {type(light).__name__}")
     position = light.position.astype(np.float32)
     # n·(L − p) = n·L − n·p, and n·p = plane_d on the triangle's plane.
-    candidate = covered & (sign * (position @ normal) - side_d > 0)
+    candidate = hit.covered & (sign * (position @ hit.normal) - hit.side_d > 0)
     c = np.flatnonzero(candidate)
-    p = np.take(point, c, axis=1)
+    p, start = hit.shadow_starts(c)
     if isinstance(light, SpotLight):
         # Inside the cone: cos(angle between the spot's axis and the point) >= cos_cutoff.
         from_light = p - position[:, None]
         inside = light.direction.astype(np.float32) @ from_light >= \
             np.float32(light.cos_cutoff) * np.sqrt((from_light * from_light).sum(axis=0))
         candidate[c[~inside]] = False
-        c, p = c[inside], p[:, inside]
-    start = p + step[c] * np.take(normal, c, axis=1)
+        c, start = c[inside], start[:, inside]
     # Bounded: the segment from the start to the light, direction not normalised, so tmax = 1.
     candidate[c] = ~tracer.occluded(start.T, (position[:, None] - start).T, 1.0, parallel=False)
     return candidate
