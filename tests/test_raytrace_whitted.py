@@ -10,7 +10,7 @@ import pytest
 
 import raytrace
 from raytrace.progress import Progress
-from shadowvol.primitives import box, plane, sphere
+from shadowvol.primitives import plane, sphere
 from shadowvol.scene import Camera, Material, PointLight, Scene, SpotLight
 from shadowvol.scenefile import load_scene
 
