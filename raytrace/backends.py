@@ -33,9 +33,15 @@ from typing import NamedTuple, Protocol
 import numpy as np
 
 from .intersect import dot, ray_triangle
-from .tolerances import BVH_BOX_PAD_RELATIVE, BVH_LEAF_SIZE, MAX_PAIRS_PER_BATCH
+from .tolerances import BVH_BOX_PAD_RELATIVE
 
 BACKENDS = ("numpy", "embree")
+
+# Tuning of the numpy backend (not tolerances: they change speed, never results): triangles per
+# BVH leaf, and the most (ray, triangle) pairs tested at once (bounds the temporaries, ~30
+# float64 values per pair).
+BVH_LEAF_SIZE = 32
+MAX_PAIRS_PER_BATCH = 1 << 18
 
 
 class Hits(NamedTuple):

@@ -18,6 +18,11 @@ on the scene's size (a small scene far from the origin needs a larger offset).  
 ~800 float32 ulps, ample, yet a tenth of a pixel's footprint in a 1000-pixel-wide view of the
 scene, so contact shadows stay put.  The numpy backend (float64) would manage with far less,
 but both backends use the same offset so they trace the same rays.
+
+Where float32 is used: everything Embree touches (see `raytrace.backends`), and all of the
+masks' arithmetic (`raytrace.masks`: the rays, hit points and shadow-ray starts), which is as
+precise as Embree's own and ~1e-3 of the offset.  The intersection formulas, the numpy backend
+and the Whitted renderer are float64.
 """
 
 from __future__ import annotations
@@ -31,18 +36,16 @@ SURFACE_OFFSET_RELATIVE = 1e-4
 # offset above, not a minimum distance, keeps rays off the surface they leave.
 T_MIN = 0.0
 
-# The numpy BVH pads each node's box by this much (relative to the scene's length scale) so that
-# rounding in the slab test never culls a ray that touches a triangle on the box's face.
+# The numpy BVH pads each node's box by this much (relative to the largest |coordinate| of its
+# triangles) so that rounding in the slab test never culls a ray that touches a triangle on the
+# box's face.
 BVH_BOX_PAD_RELATIVE = 1e-9
-
-# Triangles per BVH leaf in the numpy backend, and the most (ray, triangle) pairs tested at
-# once (bounds the temporaries: ~ 30 float64 values per pair).
-BVH_LEAF_SIZE = 32
-MAX_PAIRS_PER_BATCH = 1 << 18
 
 # Backend agreement (tests/test_backends.py): numpy (float64) and Embree (float32) may pick
 # different triangles only for rays that pass within this distance (relative to the length
 # scale) of a triangle edge: there float32 rounding decides which of the two triangles is hit.
+# float32 puts a coordinate within ~6e-8 (relative) of its value and Embree's edge tests add a
+# few ulps more; 1e-5 is ~100 times that.
 EDGE_AGREEMENT_RELATIVE = 1e-5
 
 
