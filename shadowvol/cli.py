@@ -60,9 +60,10 @@ def add_render_parser(subparsers) -> argparse.ArgumentParser:
                         "pass drew, over the image (orange sides, green near caps, violet far "
                         "caps)")
     p.add_argument("--stencil", metavar="PNG",
-                   help="also write the stencil counts as a heat map, one panel per light "
-                        "(0: the image, darkened; 1, 2, ... yellow to red to violet; negative: "
-                        "blue)")
+                   help="also write the stencil counts as a heat map, one panel per light, "
+                        "with a legend (0: lit, the image darkened; 1, 2, ... yellow to red to "
+                        "violet; negative: blue).  Every triangle casts, so a closed object "
+                        "counts 2 behind it (its front and its back)")
     p.set_defaults(func=render_command)
     return p
 
@@ -86,7 +87,7 @@ def render_command(args) -> int:
         save_png(args.volumes, volumes)
         written.append(args.volumes)
     if args.stencil:
-        save_png(args.stencil, heat_maps(result.stencil, encode_srgb(result.image)))
+        save_png(args.stencil, heat_maps(result.stencil, encode_srgb(result.image), legend=True))
         written.append(args.stencil)
     print(f"wrote {', '.join(written)}", file=sys.stderr)
     return EXIT_OK

@@ -85,17 +85,19 @@ class Renderer:
 
     def render(self, method: str = "auto", silhouettes: str = "cpu", *,
                camera: Camera | None = None, lights: tuple[Light, ...] | None = None,
-               stencil: bool = False) -> RenderResult:
+               stencil: bool = False, shadows: bool = True) -> RenderResult:
         """One frame.  `method`: "auto" (z-fail only for casters the near plane may cut),
         "zpass" or "zfail".  `camera`/`lights` override the scene's for this frame.
-        `stencil=True` also returns the per-light stencil counts (one extra read-back each)."""
+        `stencil=True` also returns the per-light stencil counts (one extra read-back each).
+        `shadows=False` skips the volume passes (every count stays 0): the same frame without
+        shadows, the benchmark's baseline."""
         if method not in methods.METHODS:
             raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
                              f"got {method!r}")
         make_current(self.ctx)
-        return self._render(method, silhouettes, camera, lights, stencil)
+        return self._render(method, silhouettes, camera, lights, stencil, shadows)
 
-    def _render(self, method, silhouettes, camera, lights, stencil) -> RenderResult:
+    def _render(self, method, silhouettes, camera, lights, stencil, shadows) -> RenderResult:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else tuple(lights)
         vols = self.volumes(silhouettes)
@@ -108,10 +110,13 @@ class Renderer:
             light4 = light_vector(light)
             choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
                                     light4, self.scene.extent)
-            vols.prepare(light4)
-            for p in vols.programs:
-                passes.set_uniform(p, "u_light", tuple(float(x) for x in light4))
-            passes.count_volumes(self.ctx, self.gl, self.target, vols, choice)
+            if shadows:
+                vols.prepare(light4)
+                for p in vols.programs:
+                    passes.set_uniform(p, "u_light", tuple(float(x) for x in light4))
+                passes.count_volumes(self.ctx, self.gl, self.target, vols, choice)
+            else:
+                self.target.clear_stencil()
             if stencil:
                 counts.append(self.target.read_stencil())
             passes.add_light(self.ctx, self.gl, self.target, self.programs, light)

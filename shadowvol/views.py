@@ -78,13 +78,39 @@ def heat_map(counts: np.ndarray, image: np.ndarray | None = None) -> np.ndarray:
     return out
 
 
-def heat_maps(stencil_counts: np.ndarray, image: np.ndarray | None = None) -> np.ndarray:
-    """(L, H, W) counts -> one panel per light side by side, (H, L*W + gaps, 3) uint8."""
+def heat_maps(stencil_counts: np.ndarray, image: np.ndarray | None = None,
+              legend: bool = False) -> np.ndarray:
+    """(L, H, W) counts -> one panel per light side by side, (H, L*W + gaps, 3) uint8, with a
+    legend strip of LEGEND_HEIGHT rows below when `legend`."""
     if len(stencil_counts) == 0:  # no lights: nothing counted
-        return heat_map(np.zeros(stencil_counts.shape[1:], np.int16), image)
-    panels = [heat_map(c, image) for c in stencil_counts]
-    gap = np.full((stencil_counts.shape[1], 4, 3), 255, np.uint8)
-    out = panels[:1]
-    for p in panels[1:]:
-        out += [gap, p]
-    return np.concatenate(out, axis=1)
+        out = heat_map(np.zeros(stencil_counts.shape[1:], np.int16), image)
+    else:
+        panels = [heat_map(c, image) for c in stencil_counts]
+        gap = np.full((stencil_counts.shape[1], 4, 3), 255, np.uint8)
+        parts = panels[:1]
+        for p in panels[1:]:
+            parts += [gap, p]
+        out = np.concatenate(parts, axis=1)
+    return np.concatenate([out, heat_legend(out.shape[1])]) if legend else out
+
+
+LEGEND_HEIGHT = 20
+
+
+def heat_legend(width: int) -> np.ndarray:
+    """(LEGEND_HEIGHT, width, 3) uint8: a swatch per count with its number (PIL's built-in
+    bitmap font)."""
+    from PIL import Image, ImageDraw
+
+    strip = Image.new("RGB", (width, LEGEND_HEIGHT), (255, 255, 255))
+    draw = ImageDraw.Draw(strip)
+    entries = [("0 lit", (128, 128, 128))]
+    entries += [(str(k + 1) + ("+" if k == len(HEAT_PALETTE) - 1 else ""), tuple(map(int, c)))
+                for k, c in enumerate(HEAT_PALETTE)]
+    entries.append(("<0", tuple(map(int, NEGATIVE_COLOUR))))
+    x = 4
+    for label, colour in entries:
+        draw.rectangle([x, 4, x + 11, 15], fill=colour, outline=(0, 0, 0))
+        draw.text((x + 15, 5), label, fill=(0, 0, 0))
+        x += 22 + 6 * len(label)
+    return np.asarray(strip, np.uint8)

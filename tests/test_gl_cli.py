@@ -10,7 +10,8 @@ from shadowvol import cli
 from shadowvol.context import ContextError
 from shadowvol.files import load_masks
 from shadowvol.renderer import Renderer
-from shadowvol.views import HEAT_PALETTE, NEGATIVE_COLOUR, ROLE_COLOURS, heat_map
+from shadowvol.views import (HEAT_PALETTE, LEGEND_HEIGHT, NEGATIVE_COLOUR, ROLE_COLOURS,
+                             heat_map)
 
 from test_gl_exact import tiny_scene
 
@@ -53,7 +54,7 @@ def test_render_writes_every_output(ctx, scene_file, tmp_path, capsys):
     assert code == 0, capsys.readouterr().err
     assert Image.open(out["image"]).size == (64, 48)
     assert Image.open(out["volumes"]).size == (64, 48)
-    assert Image.open(out["stencil"]).size == (2 * 64 + 4, 48)  # two lights side by side
+    assert Image.open(out["stencil"]).size == (2 * 64 + 4, 48 + LEGEND_HEIGHT)  # two lights
     lit, coverage = load_masks(out["masks"])
     assert lit.shape == (2, 48, 64) and lit.dtype == bool and coverage.dtype == bool
     from shadowvol.scenefile import load_scene
