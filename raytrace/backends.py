@@ -256,7 +256,8 @@ class NumpyBackend(TriangleSet):
 # Embree
 # ---------------------------------------------------------------------------------------------
 
-def _threads() -> int:
+def cpu_threads() -> int:
+    """How many cores this process may use."""
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # not Linux
@@ -283,7 +284,7 @@ class EmbreeBackend(TriangleSet):
         self._scene = rtcore_scene.EmbreeScene()
         TriangleMesh(self._scene, self.vertices.astype(np.float32),
                      self.faces.astype(np.int32))
-        self.threads = threads or _threads()
+        self.threads = threads or cpu_threads()
         # embreex commits the scene (builds the BVH) lazily in the first run(); do it now, so
         # that threads never race to do it and the build is not billed to the first trace.
         self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))

@@ -30,11 +30,13 @@ other side is air (ior 1): nested media are not tracked.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 
 from shadowvol.scene import DirectionalLight, Parallelogram, Scene, Sphere, SpotLight
 
-from .backends import make_backend
+from .backends import cpu_threads, make_backend
 from .camera import primary_rays
 from .intersect import dot, ray_parallelogram, ray_sphere, reflect, refract
 from .progress import Progress
@@ -57,7 +59,10 @@ class World:
 
     SPHERE, PARALLELOGRAM, TRIANGLES = 0, 1, 2
 
-    def __init__(self, scene: Scene, backend: str = "embree"):
+    def __init__(self, scene: Scene, backend: str = "embree", parallel: bool = True):
+        # parallel: may the triangle backend split its rays over the cores?  Not when the
+        # caller already runs one tile per core.
+        self.parallel = parallel
         objs = scene.objects
         self.offset = surface_offset(scene)
         K = len(objs)
@@ -111,7 +116,7 @@ class World:
             t[closer], obj[closer] = lam[closer], i
         tri = np.full(n, -1)
         if self.tracer is not None:
-            hits = self.tracer.closest_hit(o, d, tmax=t)
+            hits = self.tracer.closest_hit(o, d, tmax=t, parallel=self.parallel)
             closer = (hits.tri >= 0) & (hits.t < t)
             t[closer], obj[closer], tri[closer] = hits.t[closer], \
                 self.tri_object[hits.tri[closer]], hits.tri[closer]
@@ -140,7 +145,7 @@ class World:
             blocked |= lam < bound
         if self.tracer is not None:
             rest = np.flatnonzero(~blocked)
-            blocked[rest] = self.tracer.occluded(o[rest], d[rest], tmax)
+            blocked[rest] = self.tracer.occluded(o[rest], d[rest], tmax, parallel=self.parallel)
         return blocked
 
 
@@ -239,13 +244,28 @@ def render(scene: Scene, max_depth: int | None = None, backend: str = "embree",
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or depth < 0:
         raise ValueError(f"max_depth must be a whole number >= 0, got {depth!r}")
     H, W = scene.height, scene.width
-    world = World(scene, backend)
-    image = np.zeros((H, W, 3))
     rows_per_tile = max(1, TILE_RAYS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
+    # One tile per core at a time: Embree and numpy's larger operations release the GIL.
+    threads = min(cpu_threads(), len(tiles))
+    world = World(scene, backend, parallel=threads == 1)
+    image = np.zeros((H, W, 3))
+
+    def trace_tile(rows: slice) -> tuple[slice, np.ndarray]:
+        o, d = primary_rays(scene.camera, W, H, rows)
+        return rows, trace(world, scene, o, d, depth).reshape(-1, W, 3)
+
     with Progress(len(tiles), f"raytrace {scene.name}", enabled=progress) as bar:
-        for rows in tiles:
-            o, d = primary_rays(scene.camera, W, H, rows)
-            image[rows] = trace(world, scene, o, d, depth).reshape(-1, W, 3)
-            bar.update()
+        if threads == 1:
+            done = map(trace_tile, tiles)
+        else:
+            pool = ThreadPoolExecutor(threads)
+            done = pool.map(trace_tile, tiles)  # yields in order, as the tiles finish
+        try:
+            for rows, colours in done:
+                image[rows] = colours
+                bar.update()
+        finally:
+            if threads > 1:
+                pool.shutdown(cancel_futures=True)
     return image
