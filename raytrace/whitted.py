@@ -43,7 +43,7 @@ from .progress import Progress
 from .tolerances import surface_offset
 
 # Primary rays per tile: bounds memory (a generation holds a few dozen float64 values per ray)
-# and sets the progress bar's step.
+# and sets the progress bar's step.  Tiles are traced one per core at a time.
 TILE_RAYS = 1 << 15
 
 
