@@ -36,6 +36,10 @@ def atomic_write(path: str | Path):
             yield f
             f.flush()
             os.fsync(f.fileno())
+        # mkstemp creates the file 0600; give the output the mode a plain open() would have.
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

@@ -29,8 +29,8 @@ class SceneError(ValueError):
 
     def __init__(self, key: str, problem: str, file: str | None = None):
         self.key, self.problem, self.file = key, problem, file
-        where = f"{file}: " if file else ""
-        super().__init__(f"{where}{key}: {problem}")
+        parts = [part for part in (file, key) if part]
+        super().__init__(": ".join(parts + [problem]))
 
     def in_file(self, file: str) -> "SceneError":
         return SceneError(self.key, self.problem, file)

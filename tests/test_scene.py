@@ -315,3 +315,19 @@ def test_inline_mesh_needs_path_or_vertices(tmp_path):
                                        'vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]\n'
                                        'faces = [[0, 1, 2]]\n')
     assert err.key == "objects[1].faces" and "out of range" in err.problem
+
+
+def test_error_without_a_key_reads_cleanly(tmp_path):
+    with pytest.raises(SceneError) as info:
+        load_scene(tmp_path / "nope.toml")
+    assert str(info.value).startswith(f"{tmp_path / 'nope.toml'}: cannot read the scene file")
+
+
+def test_written_files_get_the_usual_mode(tmp_path):
+    import os
+    from shadowvol.files import save_png
+    save_png(tmp_path / "a.png", np.zeros((2, 2, 3)))
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (tmp_path / "a.png").stat().st_mode & 0o777 == 0o666 & ~umask
+    assert [p.name for p in tmp_path.iterdir()] == ["a.png"], "no temporary file left behind"
