@@ -31,6 +31,7 @@ other side is air (ior 1): nested media are not tracked.
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -149,31 +150,72 @@ class World:
         return blocked
 
 
+@dataclass(frozen=True, eq=False)
+class ShadowRays:
+    """The shadow rays from k surface points toward one light, exactly as `local_colour`
+    traces them (the ray-tree exercise, raytrace.raytree, reads them too).
+
+    to_light  : (k, 3) float64, unit direction l from each point toward the light
+    n_dot_l   : (k,) float64
+    facing    : (k,) bool, n·l > 0
+    in_cone   : (k,) bool, inside a spot light's cone (True for other lights)
+    origin    : (k, 3) float64, where each shadow ray starts: p + offset·n (the viewer's side)
+    direction : (k, 3) float64, the direction traced: −light.direction for a directional
+                light (tmax None: anywhere along the ray), else light.position − origin, not
+                normalised, with tmax 1 (the segment from the start to the light)
+    tmax      : float or None
+    blocked   : (k,) bool, an object lies on the shadow ray; traced only where facing &
+                in_cone (a point facing away or outside the cone casts no shadow ray: False)
+    """
+
+    to_light: np.ndarray
+    n_dot_l: np.ndarray
+    facing: np.ndarray
+    in_cone: np.ndarray
+    origin: np.ndarray
+    direction: np.ndarray
+    tmax: float | None
+    blocked: np.ndarray
+
+    @property
+    def visible(self) -> np.ndarray:
+        """(k,) bool: the light reaches the point (facing, in the cone, not blocked)."""
+        return self.facing & self.in_cone & ~self.blocked
+
+
+def shadow_rays(world: World, light, p: np.ndarray, n: np.ndarray) -> ShadowRays:
+    """Shadow rays from points p (k, 3) with unit normals n (k, 3) facing the viewer toward
+    `light`; see `ShadowRays`."""
+    start = p + world.offset * n  # shadow rays leave on the viewer's side (n·l > 0 there)
+    if isinstance(light, DirectionalLight):
+        to_light = np.broadcast_to(-light.direction, p.shape)
+        tmax = None
+        direction = to_light
+    else:
+        to_light = light.position - p
+        tmax = 1.0  # the segment start -> light, with an unnormalised direction
+        direction = light.position - start
+    dist = np.linalg.norm(to_light, axis=1)
+    l = to_light / dist[:, None]
+    n_dot_l = dot(n, l)
+    facing = n_dot_l > 0.0
+    in_cone = np.ones(len(p), bool)
+    if isinstance(light, SpotLight):
+        in_cone = dot(-l, light.direction) >= light.cos_cutoff
+    c = np.flatnonzero(facing & in_cone)
+    blocked = np.zeros(len(p), bool)
+    blocked[c] = world.occluded(start[c], direction[c], tmax)
+    return ShadowRays(l, n_dot_l, facing, in_cone, start, direction, tmax, blocked)
+
+
 def local_colour(world: World, scene: Scene, p, n, view, obj) -> np.ndarray:
     """Phong local term (k, 3) float64 at points p (k, 3) with unit normals n (k, 3) facing the
     viewer, unit view directions `view` (k, 3) (toward the viewer), objects obj (k,)."""
     colour = world.ka[obj] * scene.ambient
-    start = p + world.offset * n  # shadow rays leave on the viewer's side (n·l > 0 there)
     for light in scene.lights:
-        if isinstance(light, DirectionalLight):
-            to_light = np.broadcast_to(-light.direction, p.shape)
-            tmax = None
-        else:
-            to_light = light.position - p
-            tmax = 1.0  # the segment start -> light, with an unnormalised direction
-        dist = np.linalg.norm(to_light, axis=1)
-        l = to_light / dist[:, None]
-        n_dot_l = dot(n, l)
-        visible = n_dot_l > 0.0
-        if isinstance(light, SpotLight):
-            visible &= dot(-l, light.direction) >= light.cos_cutoff
-        c = np.flatnonzero(visible)
-        if tmax is None:
-            shadow_dir = to_light[c]
-        else:
-            shadow_dir = light.position - start[c]
-        visible[c] = ~world.occluded(start[c], shadow_dir, tmax)
-        c = np.flatnonzero(visible)
+        rays = shadow_rays(world, light, p, n)
+        c = np.flatnonzero(rays.visible)
+        l, n_dot_l = rays.to_light, rays.n_dot_l
         r = reflect(-l[c], n[c])  # the light's direction mirrored about n
         r_dot_v = np.maximum(dot(r, view[c]), 0.0)
         o = obj[c]
@@ -181,6 +223,51 @@ def local_colour(world: World, scene: Scene, p, n, view, obj) -> np.ndarray:
                 + world.ks[o] * (r_dot_v ** world.shininess[o])[:, None])
         colour[c] += term * light.radiance
     return colour
+
+
+def surface_frame(o, d, t, geo_n) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where rays o, d (k, 3) hit at t (k,) with geometric normals geo_n (k, 3): the points p
+    (k, 3) float64, `entering` (k,) bool (the ray meets the geometric normal's front: d·n < 0)
+    and the shading normals (k, 3), unit, facing the ray."""
+    p = o + t[:, None] * d
+    entering = dot(geo_n, d) < 0.0
+    n = np.where(entering[:, None], geo_n, -geo_n)  # shading normal, facing the ray
+    return p, entering, n
+
+
+@dataclass(frozen=True, eq=False)
+class Secondary:
+    """The rays spawned at k hits on the way to the next generation.
+
+    reflect_index : (kr,) int, which hits have refl > 0: they spawn a mirror ray
+    reflect_origin, reflect_direction : (kr, 3) float64 (unit directions)
+    refract_index : (ks,) int, which hits have transp > 0: they spawn a refracted ray
+    refract_origin, refract_direction : (ks, 3) float64 (unit directions)
+    tir           : (ks,) bool, total internal reflection: the "refracted" ray is the mirror
+                    direction and starts on the ray's side
+    """
+
+    reflect_index: np.ndarray
+    reflect_origin: np.ndarray
+    reflect_direction: np.ndarray
+    refract_index: np.ndarray
+    refract_origin: np.ndarray
+    refract_direction: np.ndarray
+    tir: np.ndarray
+
+
+def secondary_rays(world: World, p, n, d, entering, obj) -> Secondary:
+    """Reflected and refracted rays at hits p (k, 3) with shading normals n (k, 3) (facing the
+    ray), incoming unit directions d (k, 3), `entering` (k,) bool, objects obj (k,)."""
+    r = np.flatnonzero(world.refl[obj] > 0.0)
+    s = np.flatnonzero(world.transp[obj] > 0.0)
+    # Reflection leaves on the ray's side; refraction crosses to the other side (unless
+    # it is totally reflected inside, when `refract` hands back the mirror direction).
+    eta = np.where(entering[s], 1.0 / world.ior[obj[s]], world.ior[obj[s]])
+    refr_dir, tir = refract(d[s], n[s], eta)
+    side = np.where(tir, 1.0, -1.0)[:, None]
+    return Secondary(r, p[r] + world.offset * n[r], reflect(d[r], n[r]),
+                     s, p[s] + side * world.offset * n[s], refr_dir, tir)
 
 
 def trace(world: World, scene: Scene, origins, directions, max_depth: int) -> np.ndarray:
@@ -200,24 +287,17 @@ def trace(world: World, scene: Scene, origins, directions, max_depth: int) -> np
         h = np.flatnonzero(hit)
         o, d, t, obj, geo_n, pixel, weight = o[h], d[h], t[h], obj[h], geo_n[h], pixel[h], \
             weight[h]
-        p = o + t[:, None] * d
-        entering = dot(geo_n, d) < 0.0
-        n = np.where(entering[:, None], geo_n, -geo_n)  # shading normal, facing the ray
+        p, entering, n = surface_frame(o, d, t, geo_n)
         local = local_colour(world, scene, p, n, -d, obj)
         refl, transp = world.refl[obj], world.transp[obj]
         if depth == max_depth:
             _accumulate(colour, pixel, weight[:, None] * local)
             break
         _accumulate(colour, pixel, (weight * (1.0 - refl - transp))[:, None] * local)
-        r = np.flatnonzero(refl > 0.0)
-        s = np.flatnonzero(transp > 0.0)
-        # Reflection leaves on the ray's side; refraction crosses to the other side (unless
-        # it is totally reflected inside, when `refract` hands back the mirror direction).
-        eta = np.where(entering[s], 1.0 / world.ior[obj[s]], world.ior[obj[s]])
-        refr_dir, tir = refract(d[s], n[s], eta)
-        side = np.where(tir, 1.0, -1.0)[:, None]
-        o = np.concatenate([p[r] + world.offset * n[r], p[s] + side * world.offset * n[s]])
-        d = np.concatenate([reflect(d[r], n[r]), refr_dir])
+        sec = secondary_rays(world, p, n, d, entering, obj)
+        r, s = sec.reflect_index, sec.refract_index
+        o = np.concatenate([sec.reflect_origin, sec.refract_origin])
+        d = np.concatenate([sec.reflect_direction, sec.refract_direction])
         pixel = np.concatenate([pixel[r], pixel[s]])
         weight = np.concatenate([weight[r] * refl[r], weight[s] * transp[s]])
         if len(o) == 0:
