@@ -1,7 +1,13 @@
 """Camera matrices (float64, row-major numpy) and the one GL-to-top-row flip.
 
-The projection has an INFINITE far plane: depth = 1 - near / distance never reaches 1 for finite
-points, and points at infinity (w = 0, the far ends of shadow volumes) land at depth exactly 1.
+The projection has an INFINITE far plane and REVERSED depth: with glClipControl's zero-to-one
+depth range (set by `stencil.zero_to_one_depth` around every frame) a point at distance d along
+the view axis gets depth near / d: 1 at the near plane, falling toward 0 far away, and exactly 0
+for points at infinity (w = 0, the far ends of shadow volumes).  Stored in a 32-bit float depth
+buffer this keeps the same RELATIVE precision at every distance (~1e-7 of d, the precision of the
+float32 vertices themselves), where the classic 1 - near / d in 24 bits loses precision with the
+square of the distance; shadow boundaries on surfaces nearly parallel to a volume's side (grazing
+light) depend on exactly that precision.  Nearer means GREATER depth: see NEARER.
 GL samples each pixel at its centre, which is the contract's ndc ((x + 0.5) / W * 2 - 1, ...);
 GL rows run bottom-up, so every read-back goes through `top_row_first`.
 """
@@ -13,6 +19,11 @@ import math
 import numpy as np
 
 from .scene import Camera
+
+
+NEARER = ">"              # depth test passing a fragment nearer than what is stored
+NEARER_OR_EQUAL = ">="
+FAR_DEPTH = 0.0           # the depth buffer's clear value: nothing drawn, infinitely far
 
 
 def view_matrix(camera: Camera) -> np.ndarray:
@@ -29,17 +40,17 @@ def view_matrix(camera: Camera) -> np.ndarray:
 
 
 def infinite_projection(fov_y: float, aspect: float, near: float) -> np.ndarray:
-    """(4, 4) float64 OpenGL perspective with the far plane at infinity.
+    """(4, 4) float64 perspective with the far plane at infinity and reversed depth, for the
+    zero-to-one clip depth range.
 
-    clip z = -z_eye - 2 near, clip w = -z_eye: ndc z = 1 + 2 near / z_eye, in [-1, 1) for
-    z_eye <= -near, and exactly 1 for a point at infinity (w = 0: clip z = clip w).
+    clip z = near * w, clip w = -z_eye: depth = near / -z_eye, in (0, 1] for z_eye <= -near
+    (nearer is clipped: z > w), and exactly 0 for a point at infinity (w = 0).
     """
     f = 1.0 / math.tan(math.radians(fov_y) / 2.0)
     m = np.zeros((4, 4))
     m[0, 0] = f / aspect
     m[1, 1] = f
-    m[2, 2] = -1.0
-    m[2, 3] = -2.0 * near
+    m[2, 3] = near
     m[3, 2] = -1.0
     return m
 

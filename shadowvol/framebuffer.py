@@ -1,10 +1,11 @@
-"""The render target: a float colour attachment, a per-light "lit" attachment, DEPTH24_STENCIL8.
+"""The render target: a float colour attachment, a per-light "lit" attachment, depth + stencil.
 
 - colour (RGBA32F): linear RGB, summed over the passes (float so nothing clamps or is quantised
   before the final sRGB encoding); alpha is 1 where geometry covers the pixel.
 - lit (R8): cleared before each light, set to 1 where that light's Phong term was added, i.e.
   covered, stencil 0, n . l > 0 and inside the spot cone: the light's `lit` mask.
-- depth-stencil: a raw-GL renderbuffer (see `stencil`: moderngl has no stencil API).
+- depth-stencil: DEPTH32F_STENCIL8, a raw-GL renderbuffer (see `stencil`: moderngl has no
+  stencil API); float depth for the reversed depth of `camera.infinite_projection`.
 
 No multisampling: every mask is sampled at pixel centres (CONVENTIONS.md).  Read-backs come out
 row 0 at the top, through `camera.top_row_first`.
@@ -16,7 +17,7 @@ import moderngl
 import numpy as np
 
 from . import stencil
-from .camera import top_row_first
+from .camera import FAR_DEPTH, top_row_first
 
 
 class Target:
@@ -43,10 +44,11 @@ class Target:
         self.fbo.use()
 
     def clear(self, background: np.ndarray) -> None:
-        """Colour to the background (alpha 0: not covered), lit to 0, depth 1, stencil 0."""
+        """Colour to the background (alpha 0: not covered), lit to 0, depth to FAR_DEPTH,
+        stencil 0."""
         self.use()
         self.fbo.clear(*[float(c) for c in background], 0.0)
-        stencil.clear_depth_stencil(self.gl, self.fbo.glo)
+        stencil.clear_depth_stencil(self.gl, self.fbo.glo, FAR_DEPTH)
 
     def clear_lit(self) -> None:
         self.lit_fbo.color_mask = (True,) * 4

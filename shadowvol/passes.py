@@ -6,8 +6,9 @@
    `add_light` — the light's Phong term added where the stencil is 0 (depth test EQUAL, additive
    blending), and its lit mask written.
 
-The depth test of the volume passes is LESS, so that a volume face exactly at the surface's depth
-counts as behind it (z-fail near caps tie with their own triangle; see `volumes`).
+Depth is reversed (camera.NEARER is ">").  The depth test of the volume passes is "strictly
+nearer", so that a volume face exactly at the surface's depth counts as behind it (z-fail near
+caps tie with their own triangle; see `volumes`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import moderngl
 import numpy as np
 
 from . import glsl, stencil
-from .camera import gl_matrix
+from .camera import NEARER, gl_matrix
 from .framebuffer import Target
 from .gpuscene import SceneGeometry
 from .scene import Camera, Light, Scene, SpotLight
@@ -61,7 +62,7 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
     """Clear everything, then depth and ambient for all triangles."""
     target.clear(scene.background)
     ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = "<"
+    ctx.depth_func = NEARER
     ctx.front_face = "ccw"
     set_uniform(progs.ambient, "u_ambient", tuple(float(x) for x in scene.ambient))
     progs.geometry.materials.use(0)
@@ -76,7 +77,7 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     target.clear_stencil()
     target.use(colour=False, depth=False)
     ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count
-    ctx.depth_func = "<"
+    ctx.depth_func = NEARER
     by_zpass = [int(i) for i in np.flatnonzero(~zfail)]
     by_zfail = [int(i) for i in np.flatnonzero(zfail)]
     if by_zpass:
@@ -118,5 +119,5 @@ def add_light(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: S
     with stencil.where_unshadowed(gl):
         progs.phong_vao.render(moderngl.TRIANGLES)
     ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = "<"
+    ctx.depth_func = NEARER
     target.use()

@@ -12,7 +12,8 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from . import methods, passes, stencil, views
+from . import methods, passes, views
+from . import stencil as stencil_gl
 from .camera import view_projection
 from .context import create_context, make_current
 from .framebuffer import Target
@@ -61,7 +62,7 @@ class Renderer:
             # (stencil.RawGL) go to whichever context is current, e.g. after another renderer
             # with its own context has run
             make_current(self.ctx)
-            self.gl = stencil.RawGL()
+            self.gl = stencil_gl.RawGL()
             self.geometry = self._own(SceneGeometry(self.ctx, scene))
             self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
             self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
@@ -95,7 +96,8 @@ class Renderer:
             raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
                              f"got {method!r}")
         make_current(self.ctx)
-        return self._render(method, silhouettes, camera, lights, stencil, shadows)
+        with stencil_gl.zero_to_one_depth(self.gl):
+            return self._render(method, silhouettes, camera, lights, stencil, shadows)
 
     def _render(self, method, silhouettes, camera, lights, stencil, shadows) -> RenderResult:
         camera = self.scene.camera if camera is None else camera
@@ -139,12 +141,13 @@ class Renderer:
         `views`).  The polygons are exactly those the stencil pass drew under `method`."""
         result = self.render(method, silhouettes, camera=camera)  # leaves the frame in target
         vols = self.volumes(silhouettes)
-        for i, light in enumerate(self.scene.lights):
-            if lights is None or i in lights:
-                light4 = light_vector(light)
-                vols.prepare(light4)
-                views.draw_volume_overlay(self.ctx, self.gl, self.target, vols, light4,
-                                          result.zfail[i])
+        with stencil_gl.zero_to_one_depth(self.gl):
+            for i, light in enumerate(self.scene.lights):
+                if lights is None or i in lights:
+                    light4 = light_vector(light)
+                    vols.prepare(light4)
+                    views.draw_volume_overlay(self.ctx, self.gl, self.target, vols, light4,
+                                              result.zfail[i])
         return np.ascontiguousarray(self.target.read_colour()[..., :3])
 
     def release(self) -> None:

@@ -1,7 +1,8 @@
 """The one module that makes raw OpenGL calls: the depth-stencil attachment and stencil state.
 
-moderngl has no stencil API (moderngl#676), so the DEPTH24_STENCIL8 renderbuffer, every piece of
-stencil state, depth clamp and the stencil read-back are raw GL calls here, made through function
+moderngl has no stencil API (moderngl#676), so the depth-stencil renderbuffer (DEPTH32F_STENCIL8),
+every piece of stencil state, depth clamp, the clip-control depth range and the stencil read-back
+are raw GL calls here, made through function
 pointers that EGL hands out for the current context (`eglGetProcAddress`; EGL 1.5 and Mesa return
 core entry points too).  Everything else — programs, buffers, textures, blending, depth test,
 colour and depth write masks — stays with moderngl.
@@ -36,7 +37,11 @@ GL_STENCIL_TEST = 0x0B90
 GL_DEPTH_CLAMP = 0x864F
 GL_PACK_ALIGNMENT = 0x0D05
 GL_RENDERBUFFER = 0x8D41
-GL_DEPTH24_STENCIL8 = 0x88F0
+GL_DEPTH32F_STENCIL8 = 0x8CAD
+GL_LOWER_LEFT = 0x8CA1
+GL_ZERO_TO_ONE = 0x935F
+GL_CLIP_ORIGIN = 0x935C
+GL_CLIP_DEPTH_MODE = 0x935D
 GL_FRAMEBUFFER = 0x8D40
 GL_FRAMEBUFFER_BINDING = 0x8CA6
 GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
@@ -63,6 +68,7 @@ _SIGNATURES = {
     "glBindFramebuffer": (_V, _u, _u),
     "glFramebufferRenderbuffer": (_V, _u, _u, _u, _u),
     "glCheckFramebufferStatus": (_u, _u),
+    "glClipControl": (_V, _u, _u),
 }
 
 
@@ -111,7 +117,8 @@ class RawGL:
 # ---------------------------------------------------------------------------------------------
 
 class DepthStencilBuffer:
-    """A DEPTH24_STENCIL8 renderbuffer attached to a moderngl framebuffer's GL object.
+    """A DEPTH32F_STENCIL8 renderbuffer (float depth for the reversed depth of
+    `camera.infinite_projection`, 8-bit stencil) attached to a moderngl framebuffer's GL object.
     Owns the renderbuffer: call `release()`."""
 
     def __init__(self, gl: RawGL, framebuffer_glo: int, width: int, height: int):
@@ -120,7 +127,7 @@ class DepthStencilBuffer:
         gl.glGenRenderbuffers(1, ids)
         self.glo = int(ids[0])
         gl.glBindRenderbuffer(GL_RENDERBUFFER, self.glo)
-        gl.glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, width, height)
+        gl.glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, width, height)
         gl.glBindRenderbuffer(GL_RENDERBUFFER, 0)
         with bound_framebuffer(gl, framebuffer_glo):
             gl.glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT,
@@ -148,7 +155,7 @@ def bound_framebuffer(gl: RawGL, glo: int) -> Iterator[None]:
         gl.glBindFramebuffer(GL_FRAMEBUFFER, previous)
 
 
-def clear_depth_stencil(gl: RawGL, framebuffer_glo: int, depth: float = 1.0) -> None:
+def clear_depth_stencil(gl: RawGL, framebuffer_glo: int, depth: float) -> None:
     """Depth to `depth`, stencil to 0 (both write masks opened for the clear, then restored)."""
     with _saved_stencil_state(gl), bound_framebuffer(gl, framebuffer_glo):
         gl.glStencilMaskSeparate(GL_FRONT, 0xFF)
@@ -176,6 +183,19 @@ def read_stencil(gl: RawGL, framebuffer_glo: int, width: int, height: int) -> np
         gl.glPixelStorei(GL_PACK_ALIGNMENT, previous)
     gl.check("reading the stencil buffer")
     return out
+
+
+@contextlib.contextmanager
+def zero_to_one_depth(gl: RawGL) -> Iterator[None]:
+    """glClipControl(LOWER_LEFT, ZERO_TO_ONE) for a frame: clip depth 0 <= z <= w mapped to
+    window depth z / w unchanged, which the reversed infinite projection needs (see camera).
+    Restores the previous clip control."""
+    origin, mode = gl.get_int(GL_CLIP_ORIGIN), gl.get_int(GL_CLIP_DEPTH_MODE)
+    gl.glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE)
+    try:
+        yield
+    finally:
+        gl.glClipControl(origin, mode)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -226,8 +246,9 @@ def zpass_counting(gl: RawGL) -> Iterator[None]:
 def zfail_counting(gl: RawGL, depth_clamp: bool) -> Iterator[None]:
     """Z-fail (Carmack's reverse): every volume face BEHIND the scene (depth test fails) counts,
     back faces +1, front faces -1, wrapping.  `depth_clamp` is on for side quads and far caps:
-    far caps lie exactly at depth 1 (w = 0) and must never be clipped away; a side fragment in
-    front of the near plane gets depth 0, passes, and so counts for nothing, as if clipped.  It
+    far caps lie exactly at depth 0 (w = 0, reversed depth) and must never be clipped away; a
+    side fragment in front of the near plane gets depth 1, passes, and so counts for nothing, as
+    if clipped.  It
     is off for near caps, which must be clipped exactly as the depth pass clipped the same
     triangles so that their depths tie bit for bit."""
     with _saved_stencil_state(gl):

@@ -3,7 +3,8 @@
 - `draw_volume_overlay` draws, over a rendered frame, exactly the shadow-volume polygons the
   stencil pass drew for each light, translucent and outlined, coloured by role: side quads,
   near caps, far caps (caps only for casters counted with z-fail).  Depth-tested against the
-  scene (LEQUAL, so caps lying on a surface and far caps at depth 1 over the background show)
+  scene (nearer or equal, so caps lying on a surface and far caps at infinity over the
+  background show)
   with depth clamp, so far caps at infinity are not clipped away.
 - `heat_map` turns one light's signed stencil counts into a picture: the count of shadow
   volumes around each visible point, 0 where the point is lit.
@@ -15,6 +16,7 @@ import moderngl
 import numpy as np
 
 from . import stencil
+from .camera import NEARER, NEARER_OR_EQUAL
 
 ROLE_COLOURS = {  # linear RGB
     "side": (1.0, 0.62, 0.05),
@@ -42,7 +44,7 @@ def draw_volume_overlay(ctx: moderngl.Context, gl: stencil.RawGL, target, volume
     target.fbo.color_mask = [(True, True, True, False), (False,) * 4]
     target.fbo.use()
     ctx.enable_only(moderngl.DEPTH_TEST | moderngl.BLEND)
-    ctx.depth_func = "<="
+    ctx.depth_func = NEARER_OR_EQUAL
     ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
     all_objects = list(range(len(zfail)))
     capped = [int(i) for i in np.flatnonzero(zfail)]
@@ -59,7 +61,7 @@ def draw_volume_overlay(ctx: moderngl.Context, gl: stencil.RawGL, target, volume
                 draw()
     ctx.wireframe = False
     ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = "<"
+    ctx.depth_func = NEARER
     target.use()
 
 

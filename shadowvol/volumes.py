@@ -18,7 +18,8 @@ and leaves it somewhere behind, so the entry at X must count as "behind X" for t
 cancel.  We make that exact rather than approximate: near caps are drawn by the same vertex
 shader (scene.vert, `invariant gl_Position`) from the same vertex buffer in the same vertex order,
 without depth clamp, so their depths equal the depth buffer's bit for bit, and the volume passes
-use the depth test LESS, under which a tie FAILS, i.e. counts as behind.  Orientation (which of
+use the depth test "strictly nearer" (camera.NEARER), under which a tie FAILS, i.e. counts as
+behind.  Orientation (which of
 front/back face the cap is) is set with the front-face state, never by reordering vertices,
 because reordering could change the rasterized depths.  A polygon offset was rejected: it
 only moves the problem to surfaces at another slope.  When the eye sees T's unlit side, X is

@@ -177,3 +177,58 @@ def test_zpass_matches_where_nothing_cuts_the_near_plane(ctx, reference, assert_
         res = r.render("zpass")
         assert not r.render("auto").zfail[:, 1:].any()
     assert_masks_match(res, ref_lit, ref_cov, "zpass")
+
+
+# ---- seeded random scenes ---------------------------------------------------------------------
+
+def _random_scene(seed: int) -> Scene:
+    """A floor, a few boxes, spheres and open triangle soups (some flipped, some unwelded) at
+    random, 1-3 random lights of every kind, and a camera anywhere above the floor, often
+    under or among the casters (inside their volumes, near plane cutting them)."""
+    rng = np.random.default_rng(seed)
+    objects = [_floor(16)]
+    for i in range(rng.integers(2, 6)):
+        kind = rng.integers(0, 3)
+        centre = [rng.uniform(-2, 2), rng.uniform(0.3, 2.5), rng.uniform(-2, 2)]
+        if kind == 0:
+            obj = box(f"box{i}", centre, rng.uniform(0.2, 1.2, 3), RED,
+                      Transform(rotation=rng.uniform(0, 90, 3)))
+        elif kind == 1:
+            obj = sphere(f"ball{i}", centre, rng.uniform(0.2, 0.7), RED, subdivisions=1)
+        else:
+            pts = np.array(centre) + rng.normal(scale=0.5, size=(6, 3))
+            obj = mesh(f"soup{i}", pts, rng.choice(6, size=(5, 3), replace=True), RED)
+            faces = obj.faces[(obj.faces[:, 0] != obj.faces[:, 1]) &
+                              (obj.faces[:, 1] != obj.faces[:, 2]) &
+                              (obj.faces[:, 0] != obj.faces[:, 2])]
+            if len(faces) == 0:
+                continue
+            obj = mesh(f"soup{i}", pts, faces, RED)
+        if rng.random() < 0.3:
+            obj = _soup(obj, obj.name)
+        if rng.random() < 0.3:
+            obj = _flip_some(obj, obj.name, seed)
+        objects.append(obj)
+    lights = []
+    for _ in range(rng.integers(1, 4)):
+        kind = rng.integers(0, 3)
+        pos = [rng.uniform(-3, 3), rng.uniform(3, 6), rng.uniform(-3, 3)]
+        if kind == 0:
+            lights.append(PointLight(pos))
+        elif kind == 1:
+            lights.append(DirectionalLight([rng.uniform(-1, 1), -1, rng.uniform(-1, 1)]))
+        else:
+            lights.append(SpotLight(pos, [rng.uniform(-0.5, 0.5), -1, rng.uniform(-0.5, 0.5)],
+                                    cone_angle=rng.uniform(15, 60)))
+    eye = [rng.uniform(-3, 3), rng.uniform(0.4, 3.0), rng.uniform(-3, 4)]
+    target = [rng.uniform(-1, 1), rng.uniform(0, 1), rng.uniform(-1, 1)]
+    return _scene(objects, lights, eye=eye, target=target, near=rng.choice([0.05, 0.3]))
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_random_scenes(ctx, reference, assert_masks_match, seed):
+    scene = _random_scene(seed)
+    ref_lit, ref_cov = reference(f"random {seed}", scene)
+    with Renderer(scene, ctx) as r:
+        for run in [("auto", "cpu"), ("auto", "gpu"), ("zfail", "cpu")]:
+            assert_masks_match(r.render(*run), ref_lit, ref_cov, "-".join(run))
