@@ -25,6 +25,10 @@ NEAR_CLIP_MARGIN = 1e-6
 # |cos| between the light direction (or light offset) and the near plane below which the light
 # counts as lying IN the near plane; the hull is then flat and every caster takes z-fail.
 DEGENERATE_LIGHT = 1e-9
+# A directional light's hull reaches to infinity toward the light; the box test below stands in a
+# point this many scene extents away (every caster lies within one extent of the near plane, so
+# the prism beyond that point cannot touch one).
+FAR_APEX_EXTENTS = 1e6
 
 
 def near_clip_planes(camera: Camera, aspect: float, light4: np.ndarray) -> np.ndarray | None:
@@ -68,10 +72,10 @@ def needs_zfail(bounds: np.ndarray, camera: Camera, aspect: float, light4: np.nd
     dist = corners @ planes[:, :3].T + planes[:, 3]                       # (n, 8, 5)
     outside_a_hull_plane = (dist > margin).all(axis=1).any(axis=1)
     # and the box's own faces against the hull's corners (a separating-axis test on the box's
-    # three axes too): a flat floor below the hull is separated only this way.  A directional
-    # light's hull has a corner at infinity, standing in as a far point along -direction.
+    # three axes too): a flat floor below the hull is separated only this way.
     rect = near_rectangle(camera, aspect)
-    apex = light4[:3] if light4[3] else rect.mean(axis=0) + light4[:3] * (1e6 * extent)
+    apex = (light4[:3] if light4[3]
+            else rect.mean(axis=0) + light4[:3] * (FAR_APEX_EXTENTS * extent))
     hull = np.concatenate([rect, apex[None]])                             # (5, 3)
     below = (hull[None, :, :] < bounds[:, None, 0, :] - margin).all(axis=1).any(axis=1)
     above = (hull[None, :, :] > bounds[:, None, 1, :] + margin).all(axis=1).any(axis=1)

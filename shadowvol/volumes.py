@@ -85,6 +85,8 @@ class CpuVolumes:
                 indices.append(idx)
                 self._caps[rng.index, sign] = (n_index, len(idx))
                 n_index += len(idx)
+        # float32 at upload: what GL draws; the quads were built in float64 from the welded
+        # positions, which are the drawn vertices exactly, so edges meet the caps exactly
         _upload(self.side_buffer, np.concatenate(sides).astype(np.float32))
         _upload(self.index_buffer, np.concatenate(indices).astype(np.int32))
 
@@ -174,6 +176,8 @@ class GpuVolumes:
             obj.release()
 
 
+# float32 positions: exactly the scene soup's float32 vertices (exact welding), so the geometry
+# shader's tri_sign sees the same numbers as caps.vert does for the same triangle
 EDGE_RECORD = np.dtype([("a", "<f4", 3), ("b", "<f4", 3), ("c", "<f4", (MAX_OPPOSITE, 3)),
                         ("count", "<i4")])
 
