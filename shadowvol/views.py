@@ -17,6 +17,7 @@ import numpy as np
 
 from . import stencil
 from .camera import NEARER, NEARER_OR_EQUAL
+from .passes import set_uniform
 
 ROLE_COLOURS = {  # linear RGB
     "side": (1.0, 0.62, 0.05),
@@ -36,8 +37,6 @@ def draw_volume_overlay(ctx: moderngl.Context, gl: stencil.RawGL, target, volume
                         light4: np.ndarray, zfail: np.ndarray) -> None:
     """Draw one light's volume polygons (prepared in `volumes` for `light4`) over `target`'s
     colour, leaving its alpha (coverage) and the lit attachment alone."""
-    from .passes import set_uniform
-
     for p in volumes.programs:
         set_uniform(p, "u_light", tuple(float(x) for x in light4))
     target.fbo.depth_mask = False
