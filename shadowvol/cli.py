@@ -25,6 +25,7 @@ EXIT_ERROR = 2
 SUBCOMMANDS = (
     ("shadowvol.cli", "add_render_parser"),
     ("shadowvol.shadow2d", "add_shadow2d_parser"),
+    ("shadowvol.compare", "add_compare_parser"),
 )
 
 RENDER_EPILOG = """\
