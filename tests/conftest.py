@@ -10,9 +10,10 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import numpy as np
 import pytest
-from scipy.ndimage import maximum_filter, minimum_filter
+
+# the one definition of a mask edge and of the mismatch report (shared with `compare`)
+from shadowvol.maskdiff import diff_image, edge_pixels, mask_report  # noqa: F401
 
 ROOT = Path(__file__).resolve().parent.parent
 TEST_OUTPUT = ROOT / "test-output"
@@ -43,41 +44,6 @@ def ctx(gl_session):
     after = gl_session.error
     if after != "GL_NO_ERROR":
         pytest.fail(f"GL error flag set by the test: {after}")
-
-
-def edge_pixels(mask: np.ndarray) -> np.ndarray:
-    """(H, W) bool: pixels whose 3x3 neighbourhood in `mask` is not uniform."""
-    m = mask.astype(np.uint8)
-    return maximum_filter(m, 3, mode="nearest") != minimum_filter(m, 3, mode="nearest")
-
-
-def mask_report(got_lit, got_cov, ref_lit, ref_cov) -> list[dict]:
-    """Per light (and one entry for coverage): mismatched pixels in total and in the interior
-    (farther than one pixel from an edge of the lit or coverage mask in either image)."""
-    near_cov = edge_pixels(ref_cov) | edge_pixels(got_cov)
-    rows = [{"what": "coverage", "total": int((got_cov != ref_cov).sum()),
-             "interior": int(((got_cov != ref_cov) & ~near_cov).sum())}]
-    for i in range(len(ref_lit)):
-        near = near_cov | edge_pixels(ref_lit[i]) | edge_pixels(got_lit[i])
-        bad = got_lit[i] != ref_lit[i]
-        rows.append({"what": f"light {i}", "total": int(bad.sum()),
-                     "interior": int((bad & ~near).sum())})
-    return rows
-
-
-def diff_image(got_lit, got_cov, ref_lit, ref_cov) -> np.ndarray:
-    """(H, L*W, 3) uint8: white both lit, grey both shadowed, black both uncovered, red shadowed
-    only in the raster, blue shadowed only in the reference, yellow coverage differs."""
-    panels = []
-    for g, r in zip(got_lit, ref_lit):
-        p = np.zeros(g.shape + (3,), np.uint8)
-        p[ref_cov & got_cov] = 96
-        p[g & r] = 255
-        p[~g & r] = (230, 30, 30)
-        p[g & ~r] = (40, 80, 255)
-        p[got_cov != ref_cov] = (255, 220, 0)
-        panels.append(p)
-    return np.concatenate(panels, axis=1) if panels else np.zeros((1, 1, 3), np.uint8)
 
 
 @pytest.fixture
