@@ -3,6 +3,11 @@
 A Renderer holds one GL context (its own, or one it is given), uploads the scene's geometry once,
 and renders frames: depth + ambient, then per light the stencil count of its shadow volumes and
 its Phong term where the count is 0.  It returns arrays only; files are the CLI's business.
+
+Limit: the stencil is 8 bits and counts wrap (INCR_WRAP / DECR_WRAP).  Every triangle casts, so
+a pixel behind k closed meshes counts 2k; 256 layers over one pixel would read 0, i.e. lit.  That
+needs about 128 closed objects (or 256 open sheets) lined up between one point and one light;
+it is not detected.
 """
 
 from __future__ import annotations
