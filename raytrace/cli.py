@@ -2,6 +2,7 @@
 
     raytrace render scenes/whitted.toml -o whitted.png
     raytrace masks  scenes/whitted.toml -o whitted-masks.npz      (+ whitted-masks.png)
+    raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
 
 Outputs are written atomically (shadowvol.files): an error never leaves half a file behind.
 A bad scene prints `error: <file>: <key>: <problem>` and exits with status 2.
@@ -51,6 +52,22 @@ def _parser() -> argparse.ArgumentParser:
                         "grey shadowed, black empty) (default: beside the .npz, same name, .png)")
     m.add_argument("--no-png", action="store_true", help="write the .npz only")
     _backend(m)
+
+    t = sub.add_parser("tree", help="the ray tree of one pixel (the course's exercise)",
+                       description="Print every ray the Whitted tracer follows for pixel "
+                                   "(X, Y) — primary, shadow rays with their verdicts, "
+                                   "reflected, refracted, total internal reflection — as an "
+                                   "indented tree, and optionally draw them over the render "
+                                   "and in a side view.")
+    t.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
+    t.add_argument("--pixel", nargs=2, type=int, required=True, metavar=("X", "Y"),
+                   help="column X from the left, row Y from the top")
+    t.add_argument("--depth", type=int, default=None, metavar="N",
+                   help="reflection/refraction generations (default: the scene's "
+                        "render.max_depth)")
+    t.add_argument("-o", "--output", metavar="PNG", default=None,
+                   help="also draw the tree: the rays over the ray-traced image and a side view")
+    _backend(t)
     return ap
 
 
@@ -73,6 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
 
     try:
+        if args.command == "tree":
+            return _tree(args, scene)
         if args.command == "render":
             from .whitted import render
             if args.max_depth is not None and args.max_depth < 0:
@@ -102,6 +121,35 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         print(f"error: cannot write output: {exc}", file=sys.stderr)
         return 1
+    return 0
+
+
+def _tree(args, scene) -> int:
+    """The `tree` command: print the ray tree of one pixel, draw it with -o."""
+    import io
+
+    from shadowvol.files import atomic_write
+
+    from .raytree import draw_tree, format_tree, ray_tree
+    from .whitted import render
+
+    x, y = args.pixel
+    if args.depth is not None and args.depth < 0:
+        print(f"error: --depth must be >= 0, got {args.depth}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if not (0 <= x < scene.width and 0 <= y < scene.height):
+        print(f"error: --pixel {x} {y} is outside the {scene.width}x{scene.height} image",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    tree = ray_tree(scene, x, y, max_depth=args.depth, backend=args.backend)
+    print(format_tree(tree, scene))
+    if args.output:
+        image = render(scene, max_depth=args.depth, backend=args.backend, progress=False)
+        buf = io.BytesIO()
+        draw_tree(scene, tree, image).savefig(buf, format="png")
+        with atomic_write(args.output) as f:
+            f.write(buf.getvalue())
+        print(f"wrote {args.output}", file=sys.stderr)
     return 0
 
 
