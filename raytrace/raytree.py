@@ -2,7 +2,7 @@
 
     tree = ray_tree(scene, x, y, max_depth=3)
     print(format_tree(tree))
-    figure = draw_tree(scene, tree)          # the rays over the render, and a side view
+    figure = draw_tree(scene, tree, image)   # the rays over the render; side and top views
 
 The root is the primary ray through the centre of pixel (x, y).  Every ray that hits a surface
 has, as children, one shadow ray per light (with its verdict: lit, blocked, or not traced
@@ -274,23 +274,104 @@ def _clip_near(scene: Scene, a: np.ndarray, b: np.ndarray):
     return a, b
 
 
-def _side_axes(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """The side view's axes: horizontal = the view direction made perpendicular to `up`,
-    vertical = `up` (unit, (3,) each): the scene seen from the camera's right."""
+def _view_axes(scene: Scene, view: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Orthographic views of the scene, by the camera's frame with `up` kept vertical.
+    Returns the plot's horizontal and vertical axes and the direction toward the view's
+    observer ((3,) unit each):
+      "side": horizontal = the view direction made perpendicular to up, vertical = up, seen
+              from the camera's right;
+      "top" : horizontal = the camera's right, vertical = the view direction, seen from above.
+    """
     up = scene.camera.up / np.linalg.norm(scene.camera.up)
     fwd = scene.camera.target - scene.camera.eye
     fwd = fwd - (fwd @ up) * up
-    return fwd / np.linalg.norm(fwd), up
+    fwd = fwd / np.linalg.norm(fwd)
+    right = np.cross(fwd, up)
+    if view == "side":
+        return fwd, up, right
+    return right, fwd, up
+
+
+VIEW_BACKGROUND = "#d8e4f2"
+GLASS_TINT = np.array([0.70, 0.92, 0.98])
+MIRROR_TINT = np.array([0.78, 0.78, 0.84])
+
+
+def _object_colour(material) -> np.ndarray:
+    """(3,) float in [0, 1]: an object's flat colour in the orthographic views — its ambient
+    + diffuse colour, lightened, and tinted pale cyan by transparency and silver by
+    reflectivity (glass and mirrors have almost no colour of their own)."""
+    base = 0.2 + 0.6 * np.clip(material.diffuse + material.ambient, 0.0, 1.0)
+    base = base + material.transparency * (GLASS_TINT - base)
+    return np.clip(base + material.reflectivity * (MIRROR_TINT - base), 0.0, 1.0)
+
+
+def _draw_view(ax, scene: Scene, nodes: list[RayNode], view: str) -> None:
+    """One orthographic view (see `_view_axes`): the objects as filled silhouettes (far ones
+    first), the eye, the point and spot lights, every ray coloured by kind, the hits numbered."""
+    from matplotlib.collections import PolyCollection
+
+    h_axis, v_axis, toward = _view_axes(scene, view)
+    order = sorted(range(len(scene.objects)),
+                   key=lambda i: float(scene.objects[i].vertices.mean(axis=0) @ toward))
+    for i in order:
+        obj = scene.objects[i]
+        tri = obj.triangles  # (m, 3, 3)
+        flat = np.stack([tri @ h_axis, tri @ v_axis], axis=-1)
+        colour = _object_colour(obj.material)
+        # edges in the face colour: a surface seen edge-on (a floor from the side) is a line
+        ax.add_collection(PolyCollection(flat, facecolors=[colour], edgecolors=[colour],
+                                         linewidths=1.0, zorder=1))
+    for node in nodes:
+        a, b = node.origin, node.end
+        style = ":" if node.verdict in (FACES_AWAY, OUTSIDE_CONE) else "-"
+        colour = "black" if node.kind == PRIMARY else _colour(node)
+        ax.plot([a @ h_axis, b @ h_axis], [a @ v_axis, b @ v_axis], style, color=colour,
+                lw=1.4, zorder=3)
+    for k, node in enumerate(nodes):
+        if node.hit and node.kind != SHADOW:
+            q = (node.point @ h_axis, node.point @ v_axis)
+            ax.plot(*q, ".", color="black", ms=4, zorder=4)
+            ax.annotate(f"#{k}", q, fontsize=7, xytext=(3, 3), textcoords="offset points",
+                        zorder=5)
+    ax.set_facecolor(VIEW_BACKGROUND)
+    eye = scene.camera.eye
+    ax.plot([eye @ h_axis], [eye @ v_axis], "s", color="black", ms=6, zorder=4)
+    ax.annotate("eye", (eye @ h_axis, eye @ v_axis), fontsize=8, xytext=(4, -10),
+                textcoords="offset points")
+    for i, light in enumerate(scene.lights):
+        if isinstance(light, DirectionalLight):
+            continue
+        q = (light.position @ h_axis, light.position @ v_axis)
+        ax.plot(*q, "*", color="#e0a000", mec="black", ms=14, zorder=4)
+        kind = "spot" if isinstance(light, SpotLight) else "point"
+        ax.annotate(f"light {i} ({kind})", q, fontsize=8, xytext=(6, 4),
+                    textcoords="offset points")
+    pts = np.array([p for n in nodes for p in (n.origin, n.end)] +
+                   [eye] + [l.position for l in scene.lights
+                            if not isinstance(l, DirectionalLight)])
+    hs, vs = pts @ h_axis, pts @ v_axis
+    pad = 0.08 * max(np.ptp(hs), np.ptp(vs), 1e-9)
+    ax.set_xlim(hs.min() - pad, hs.max() + pad)
+    ax.set_ylim(vs.min() - pad, vs.max() + pad)
+    ax.set_aspect("equal")
+    if view == "side":
+        ax.set_title("side view (from the camera's right)", fontsize=10)
+        ax.set_xlabel("along the view direction")
+        ax.set_ylabel("up")
+    else:
+        ax.set_title("top view (from above)", fontsize=10)
+        ax.set_xlabel("to the camera's right")
+        ax.set_ylabel("along the view direction")
 
 
 def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
-    """A matplotlib Figure: left, `image` ((H, W, 3) linear RGB, e.g. raytrace.render(scene);
-    None: a grey frame) with every ray projected through the camera, coloured by kind and
-    numbered as in `format_tree`; right, a side view (the scene's triangles and lights seen
-    from the camera's right, orthographic) with the same rays."""
+    """A matplotlib Figure of the tree, three panels: `image` ((H, W, 3) linear RGB, e.g.
+    raytrace.render(scene); None: a grey frame) with every ray projected through the camera,
+    coloured by kind and numbered as in `format_tree`; a side view and a top view (the scene's
+    objects, the eye, the lights and the same rays, orthographic); a legend below."""
     import matplotlib
     matplotlib.use("Agg")
-    from matplotlib.collections import PolyCollection
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
     from matplotlib.patheffects import withStroke
@@ -299,8 +380,9 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
 
     nodes = list(tree.walk())
     outline = [withStroke(linewidth=2, foreground="black")]  # labels legible on any colour
-    fig = Figure(figsize=(13, 5.6), dpi=100, layout="constrained")
-    ax_img, ax_side = fig.subplots(1, 2, gridspec_kw={"width_ratios": [scene.aspect, 1.25]})
+    fig = Figure(figsize=(17, 5.8), dpi=100, layout="constrained")
+    ax_img, ax_side, ax_top = fig.subplots(
+        1, 3, gridspec_kw={"width_ratios": [scene.aspect, 1.0, 1.0]})
     # ---- over the image
     if image is None:
         shown = np.full((scene.height, scene.width, 3), 90, np.uint8)
@@ -329,53 +411,9 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
     ax_img.plot([px[0]], [px[1]], "o", mfc="none", mec="white", ms=9, mew=1.5)
     ax_img.annotate("#0 (primary)", px, color="white", fontsize=8, xytext=(6, -10),
                     textcoords="offset points", path_effects=outline)
-    # ---- side view
-    h_axis, v_axis = _side_axes(scene)
-    polys, colours = [], []
-    for obj in scene.objects:
-        tri = obj.triangles  # (m, 3, 3)
-        flat = np.stack([tri @ h_axis, tri @ v_axis], axis=-1)
-        polys.extend(flat)
-        colours.extend([np.clip(obj.material.diffuse, 0, 1)] * len(flat))
-    # edges too: a surface seen edge-on (the floor, from the side) is a line, not an area
-    ax_side.add_collection(PolyCollection(polys, facecolors=colours, edgecolors=colours,
-                                          linewidths=0.4, alpha=0.3))
-    for node in nodes:
-        a, b = node.origin, node.end
-        xs, ys = [a @ h_axis, b @ h_axis], [a @ v_axis, b @ v_axis]
-        style = ":" if node.verdict in (FACES_AWAY, OUTSIDE_CONE) else "-"
-        colour = "black" if node.kind == PRIMARY else _colour(node)
-        ax_side.plot(xs, ys, style, color=colour, lw=1.4)
-        if node.hit and node.kind != SHADOW:
-            ax_side.plot([xs[1]], [ys[1]], ".", color="black", ms=4)
-    for k, node in enumerate(nodes):
-        if node.hit and node.kind != SHADOW:
-            ax_side.annotate(f"#{k}", (node.point @ h_axis, node.point @ v_axis), fontsize=7,
-                             xytext=(3, 3), textcoords="offset points")
-    eye = scene.camera.eye
-    ax_side.plot([eye @ h_axis], [eye @ v_axis], "s", color="black", ms=6)
-    ax_side.annotate("eye", (eye @ h_axis, eye @ v_axis), fontsize=8, xytext=(4, -10),
-                     textcoords="offset points")
-    for i, light in enumerate(scene.lights):
-        if isinstance(light, DirectionalLight):
-            continue
-        lp = light.position
-        ax_side.plot([lp @ h_axis], [lp @ v_axis], "*", color="#e0a000", mec="black", ms=14)
-        kind = "spot" if isinstance(light, SpotLight) else "point"
-        ax_side.annotate(f"light {i} ({kind})", (lp @ h_axis, lp @ v_axis), fontsize=8,
-                         xytext=(6, 4), textcoords="offset points")
-    pts = np.array([p for n in nodes for p in (n.origin, n.end)] +
-                   [eye] + [l.position for l in scene.lights
-                            if not isinstance(l, DirectionalLight)])
-    hs, vs = pts @ h_axis, pts @ v_axis
-    pad = 0.08 * max(np.ptp(hs), np.ptp(vs), 1e-9)
-    ax_side.set_xlim(hs.min() - pad, hs.max() + pad)
-    ax_side.set_ylim(vs.min() - pad, vs.max() + pad)
-    ax_side.set_aspect("equal")
-    ax_side.set_title("side view (from the camera's right): objects, eye, lights, rays",
-                      fontsize=10)
-    ax_side.set_xlabel("along the view direction")
-    ax_side.set_ylabel("up")
+    # ---- orthographic views
+    _draw_view(ax_side, scene, nodes, "side")
+    _draw_view(ax_top, scene, nodes, "top")
     handles = [Line2D([], [], color="black", label="primary"),
                Line2D([], [], color=COLOURS[REFLECTED], label="reflected"),
                Line2D([], [], color=COLOURS[REFRACTED], label="refracted"),
@@ -383,8 +421,10 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
                Line2D([], [], color=COLOURS[LIT], label="shadow ray: lit"),
                Line2D([], [], color=COLOURS[BLOCKED], label="shadow ray: blocked"),
                Line2D([], [], color=COLOURS[FACES_AWAY], ls=":",
-                      label="to a light it faces away from (not traced)")]
-    ax_side.legend(handles=handles, fontsize=7, loc="best", framealpha=0.85)
+                      label="to a light the surface faces away from, or outside a spot's "
+                            "cone (not traced)")]
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=8,
+               frameon=False)
     return fig
 
 

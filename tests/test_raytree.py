@@ -195,7 +195,7 @@ def test_bad_pixel_and_depth():
 def test_picture_and_cli(tmp_path, capsys):
     scene = load_scene(SCENES / "whitted.toml").replace(width=64, height=48)
     fig = draw_tree(scene, ray_tree(scene, 40, 30, max_depth=2))
-    assert len(fig.axes) == 2
+    assert len(fig.axes) == 3  # the image, the side view, the top view
     small = tmp_path / "whitted.json"
     save_scene(scene, small)
     out = tmp_path / "tree.png"
