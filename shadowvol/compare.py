@@ -148,7 +148,7 @@ class Comparison:
                 name = f"light {i} ({l.kind})"
                 diff = maskdiff.diff_panel(self.raster_lit[i], self.raster_coverage,
                                            self.ref_lit[i], self.ref_coverage)
-                diff_label = f"diff: {l.mismatched} px, {l.interior} interior, IoU {l.iou:.3f}"
+                diff_label = f"diff: {l.mismatched} px, {l.interior} interior, IoU {l.iou:.4f}"
             else:
                 name = "no lights"
                 empty = np.zeros((self.height, self.width), bool)
