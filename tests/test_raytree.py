@@ -17,7 +17,7 @@ from raytrace.raytree import (BLOCKED, FACES_AWAY, LIT, OUTSIDE_CONE, PRIMARY, R
                               REFRACTED, SHADOW, TIR, draw_tree, format_tree, ray_tree,
                               tree_colour)
 from raytrace.tolerances import surface_offset
-from shadowvol.primitives import mesh, plane, sphere
+from shadowvol.primitives import mesh, plane
 from shadowvol.scene import (Camera, DirectionalLight, Material, PointLight, Scene, SpotLight)
 from shadowvol.scenefile import load_scene, save_scene
 
