@@ -275,3 +275,50 @@ def depth_clamped(gl: RawGL) -> Iterator[None]:
         gl.glDisable(GL_STENCIL_TEST)
         gl.glEnable(GL_DEPTH_CLAMP)
         yield
+
+
+# ---------------------------------------------------------------------------------------------
+# Planar projected shadows (shadowvol.planar_gl): mark the receiver, shadow each pixel once,
+# light where not shadowed
+# ---------------------------------------------------------------------------------------------
+
+GL_REPLACE = 0x1E01
+GL_INCR = 0x1E02
+GL_NOTEQUAL = 0x0205
+PLANAR_RECEIVER = 1   # stencil value of a pixel where the receiving plane is the visible surface
+PLANAR_SHADOW = 2     # ... and where a projected shadow covers it
+
+
+@contextlib.contextmanager
+def planar_receiver_mark(gl: RawGL) -> Iterator[None]:
+    """Every fragment that passes the depth test writes PLANAR_RECEIVER (drawn with the
+    receiver's own triangles and depth test EQUAL: its visible pixels).  Projected shadows are
+    later drawn only there, so none hangs off the receiver's edge or lands on another object."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_ALWAYS, ref=PLANAR_RECEIVER,
+             front_ops=(GL_KEEP, GL_KEEP, GL_REPLACE), back_ops=(GL_KEEP, GL_KEEP, GL_REPLACE),
+             write_mask=0xFF, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def planar_shadow_once(gl: RawGL) -> Iterator[None]:
+    """Draw a projected shadow fragment only where the stencil is PLANAR_RECEIVER and raise it
+    to PLANAR_SHADOW: the first shadow triangle over a pixel marks it, every later one (the
+    projections overlap: a closed caster projects its front and its back) fails the test, so
+    no pixel is shadowed twice."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_EQUAL, ref=PLANAR_RECEIVER,
+             front_ops=(GL_KEEP, GL_KEEP, GL_INCR), back_ops=(GL_KEEP, GL_KEEP, GL_INCR),
+             write_mask=0xFF, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def where_not_planar_shadow(gl: RawGL) -> Iterator[None]:
+    """Lighting with projected shadows: draw wherever the stencil is not PLANAR_SHADOW (the
+    rest of the receiver and every other object); the stencil is left unchanged."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_NOTEQUAL, ref=PLANAR_SHADOW, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
+             back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
+        yield
