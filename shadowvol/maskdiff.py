@@ -10,7 +10,6 @@ renderer under test (the rasterizer), "ref" the reference (the ray tracer).
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import maximum_filter, minimum_filter
 
 # The difference picture's colours, (3,) uint8 RGB each.
 BOTH_LIT = (255, 255, 255)
@@ -29,8 +28,10 @@ LEGEND = (("both lit", BOTH_LIT), ("both shadowed", BOTH_SHADOWED),
 def edge_pixels(mask: np.ndarray) -> np.ndarray:
     """(H, W) bool: pixels whose 3x3 neighbourhood in `mask` (H, W) bool is not uniform (the
     image border repeats its edge pixels, so it is no edge by itself)."""
-    m = mask.astype(np.uint8)
-    return maximum_filter(m, 3, mode="nearest") != minimum_filter(m, 3, mode="nearest")
+    m = np.pad(np.asarray(mask, dtype=bool), 1, mode="edge")
+    h, w = mask.shape
+    windows = [m[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)]
+    return np.logical_or.reduce(windows) & ~np.logical_and.reduce(windows)
 
 
 def near_edges(got_lit: np.ndarray, got_cov: np.ndarray, ref_lit: np.ndarray,
