@@ -1,0 +1,39 @@
+"""What a plain `pip install .` gives a user: the command-line tools must work with the runtime
+dependencies alone.  Test-only packages are installed in CI, so without this check a stray
+import of one of them (scipy once was) passes CI and breaks the README's first command."""
+
+import subprocess
+import sys
+import textwrap
+
+TEST_ONLY = ("scipy", "pyrender", "hypothesis", "pytest", "OpenGL")
+
+
+def test_cli_modules_need_no_test_only_package():
+    code = textwrap.dedent(f"""
+        import importlib.abc, sys
+        class Block(importlib.abc.MetaPathFinder):
+            def find_spec(self, name, path=None, target=None):
+                if name.split(".")[0] in {TEST_ONLY!r}:
+                    raise ImportError(f"test-only package imported at run time: {{name}}")
+        for name in list(sys.modules):
+            if name.split(".")[0] in {TEST_ONLY!r}:
+                del sys.modules[name]
+        sys.meta_path.insert(0, Block())
+        import shadowvol.cli, raytrace.cli
+        shadowvol.cli.build_parser()
+        for argv in (["render", "--help"], ["compare", "--help"]):
+            try:
+                shadowvol.cli.main(argv)
+            except SystemExit as e:
+                assert e.code == 0, (argv, e.code)
+        for argv in (["render", "--help"], ["masks", "--help"], ["tree", "--help"]):
+            try:
+                raytrace.cli.main(argv)
+            except SystemExit as e:
+                assert e.code == 0, (argv, e.code)
+        import raytrace, shadowvol.renderer, shadowvol.compare
+        print("ok")
+    """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.strip().endswith("ok"), out.stderr[-3000:]
