@@ -121,31 +121,35 @@ class Material:
             raise SceneError("reflectivity", "reflectivity + transparency must be <= 1")
 
 
-def _light_colour(self) -> None:
-    c = vec(self.color, "color")
-    if np.any(c < 0):
-        raise SceneError("color", f"colour components must be >= 0, got {c.tolist()}")
-    object.__setattr__(self, "color", c)
-    object.__setattr__(self, "intensity", num(self.intensity, "intensity", low=0.0))
+class _Emitter:
+    """What every light has: a colour (linear RGB, (3,) float64) times an intensity."""
+
+    def _check_colour(self) -> None:
+        c = vec(self.color, "color")
+        if np.any(c < 0):
+            raise SceneError("color", f"colour components must be >= 0, got {c.tolist()}")
+        object.__setattr__(self, "color", c)
+        object.__setattr__(self, "intensity", num(self.intensity, "intensity", low=0.0))
+
+    @property
+    def radiance(self) -> np.ndarray:
+        """(3,) float64: color * intensity (no distance fall-off)."""
+        return self.color * self.intensity
 
 
 @dataclass(frozen=True, eq=False)
-class PointLight:
+class PointLight(_Emitter):
     position: np.ndarray
     color: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "color"))
     intensity: float = 1.0
 
     def __post_init__(self):
         object.__setattr__(self, "position", vec(self.position, "position"))
-        _light_colour(self)
-
-    @property
-    def radiance(self) -> np.ndarray:
-        return self.color * self.intensity
+        self._check_colour()
 
 
 @dataclass(frozen=True, eq=False)
-class DirectionalLight:
+class DirectionalLight(_Emitter):
     """`direction` is the direction the light travels (unit length after construction)."""
 
     direction: np.ndarray
@@ -154,15 +158,11 @@ class DirectionalLight:
 
     def __post_init__(self):
         object.__setattr__(self, "direction", unit(vec(self.direction, "direction"), "direction"))
-        _light_colour(self)
-
-    @property
-    def radiance(self) -> np.ndarray:
-        return self.color * self.intensity
+        self._check_colour()
 
 
 @dataclass(frozen=True, eq=False)
-class SpotLight:
+class SpotLight(_Emitter):
     """A point light limited to a cone: a point P is inside when the angle between `direction`
     and P - position is at most `cone_angle` degrees (the half-angle of the cone)."""
 
@@ -177,11 +177,7 @@ class SpotLight:
         object.__setattr__(self, "direction", unit(vec(self.direction, "direction"), "direction"))
         object.__setattr__(self, "cone_angle",
                            num(self.cone_angle, "cone_angle", low=0.0, high=90.0, low_open=True))
-        _light_colour(self)
-
-    @property
-    def radiance(self) -> np.ndarray:
-        return self.color * self.intensity
+        self._check_colour()
 
     @property
     def cos_cutoff(self) -> float:

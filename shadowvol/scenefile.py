@@ -135,25 +135,26 @@ def _material(value, key: str) -> Material:
     return _build(key, Material, **_table(value, key, MATERIAL_KEYS))
 
 
-def _light(value, key: str):
+def _typed(value, key: str, allowed_by_type: dict[str, set[str]], what: str) -> tuple[dict, str]:
+    """A table with a `type` key naming one of `allowed_by_type`, checked against that type's
+    allowed keys.  Returns (table, type)."""
     table = _table(value, key, None)
     kind = _required(table, "type", key)
-    if kind not in LIGHT_KEYS:
-        raise SceneError(f"{key}.type", f"unknown light type {kind!r} "
-                                        f"(one of: {', '.join(LIGHT_KEYS)})")
-    _table(table, key, LIGHT_KEYS[kind])
+    if kind not in allowed_by_type:
+        raise SceneError(f"{key}.type", f"unknown {what} type {kind!r} "
+                                        f"(one of: {', '.join(allowed_by_type)})")
+    return _table(table, key, allowed_by_type[kind]), kind
+
+
+def _light(value, key: str):
+    table, kind = _typed(value, key, LIGHT_KEYS, "light")
     args = {k: v for k, v in table.items() if k != "type"}
     cls = {"point": PointLight, "directional": DirectionalLight, "spot": SpotLight}[kind]
     return _build(key, cls, **args)
 
 
 def _object(value, key: str, named: dict[str, Material], base_dir: Path):
-    table = _table(value, key, None)
-    kind = _required(table, "type", key)
-    if kind not in OBJECT_KEYS:
-        raise SceneError(f"{key}.type", f"unknown object type {kind!r} "
-                                        f"(one of: {', '.join(OBJECT_KEYS)})")
-    _table(table, key, OBJECT_KEYS[kind])
+    table, kind = _typed(value, key, OBJECT_KEYS, "object")
     name = table.get("name", f"{kind}{key[len('objects'):]}")
     if not isinstance(name, str):
         raise SceneError(f"{key}.name", f"expected a string, got {name!r}")
