@@ -26,6 +26,7 @@ SUBCOMMANDS = (
     ("shadowvol.cli", "add_render_parser"),
     ("shadowvol.shadow2d", "add_shadow2d_parser"),
     ("shadowvol.compare", "add_compare_parser"),
+    ("shadowvol.demo", "add_demo_parser"),
 )
 
 RENDER_EPILOG = """\
