@@ -40,6 +40,7 @@ RAY_TREE_DEPTH = 2         # "sketch all rays to recursion depth 2"
 PLANAR_CAMERA = dict(eye=[-3.2, 3.6, 4.4], target=[-0.4, 0.7, -0.2], fov_y=45.0)
 ERROR_TINT = np.array([255, 0, 0], np.uint8)    # pixels a method gets wrong
 ERROR_TINT_WEIGHT = 0.6
+MIN_TEXT_SIZE = 8          # px: a title shrinks to this, then is cut short
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,8 +89,10 @@ def text_strip(text: str, width: int, small: bool, *, bold: bool = False) -> np.
     strip = Image.new("RGB", (width, height), (255, 255, 255) if not bold else (40, 40, 48))
     draw = ImageDraw.Draw(strip)
     size = height - 8 if not small else height - 4
-    while size > 7 and draw.textlength(text, font=_font(size)) > width - 8:
+    while size > MIN_TEXT_SIZE and draw.textlength(text, font=_font(size)) > width - 8:
         size -= 1
+    while len(text) > 1 and draw.textlength(text, font=_font(size)) > width - 8:
+        text = text[:-2] + "…"  # still too wide at the smallest size: cut it short
     colour = (0, 0, 0) if not bold else (255, 255, 255)
     draw.text((4, (height - size) // 2 - 1), text, fill=colour, font=_font(size))
     return np.asarray(strip, np.uint8)
