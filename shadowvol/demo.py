@@ -173,8 +173,9 @@ class Gallery:
         return scene
 
     def path(self, name: str) -> str:
-        """How a command names scenes/<name>.toml."""
-        return f"scenes/{name}.toml"
+        """How a command names the scene file: scenes/<name>.toml in a checkout."""
+        folder = "scenes" if self.scenes == SCENES else str(self.scenes)
+        return f"{folder}/{name}.toml"
 
     def release(self) -> None:
         if self._own_ctx and self.ctx is not None:
@@ -311,9 +312,9 @@ def planar(g: Gallery) -> Picture:
                        g.small)]
     return Picture(
         "planar", title,
-        "A matrix squashes every object from the light onto the floor's plane; drawn dark "
-        "(with the stencil: only on the floor, each pixel once) it is the floor's shadow, "
-        "exactly.  But only the floor's: the ball's shadow on the box and the cage's shadow "
+        "A matrix squashes every object from the light onto the floor's plane; where it lands "
+        "(the stencil keeps it on the floor and counts each pixel once) the light is left out, "
+        "and that is the floor's shadow, exactly.  But only the floor's: the ball's shadow on the box and the cage's shadow "
         "on its own inside are missing, because a projection onto one plane cannot shadow "
         "other objects or an object itself.  Shadow volumes do both.",
         "projected shadows; shadow volumes; the projected-shadow image with the pixels that "
@@ -398,7 +399,7 @@ def whitted_best(g: Gallery) -> Picture:
         "reflections, again and again up to the recursion depth; the glass ball bends the "
         "rays by Snell's law and shows the scene behind it upside down; every hit sends shadow "
         f"rays, so the shadows are exact.  Recursion depth {scene.max_depth}.",
-        "the whitted_best scene ray traced (two point and directional lights, Phong, shadow "
+        "the whitted_best scene ray traced (a point and a directional light, Phong, shadow "
         "rays, reflection, refraction)",
         f"raytrace render {g.path('whitted_best')} -o whitted_best.png",
         titled(image, title, g.small))
@@ -415,9 +416,9 @@ def compare_picture(g: Gallery) -> Picture:
     return Picture(
         "compare", title,
         "The same scene twice: shadow volumes on the GPU and the ray tracer's shadow rays, "
-        "pixel by pixel.  Their masks differ only on a few shadow-edge pixels, where a pixel "
-        f"centre lies within rounding of a shadow boundary ({light.mismatched} pixels differ, "
-        f"{light.interior} away from an edge; shadow IoU {light.iou:.4f}).",
+        "compared pixel by pixel.  They may differ only on shadow edges, where a pixel centre "
+        f"lies within rounding of a boundary; here {light.mismatched} pixels differ, "
+        f"{light.interior} away from an edge (shadow IoU {light.iou:.4f}).",
         "per light: the rasterizer's image, the ray tracer's image (direct light), and the "
         "difference of their masks (white both lit, grey both shadowed, red / blue shadowed "
         "in one only)",
