@@ -18,7 +18,7 @@ from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 
 from .backends import TriangleBackend, make_backend
 from .camera import RayGrid
-from .tolerances import surface_offset
+from .tolerances import light_margin, shadow_height
 
 # Rays per tile: big enough that numpy's per-call overhead is small, small enough that a
 # tile's arrays stay in cache and come from the allocator's free list, not fresh pages.
@@ -31,6 +31,27 @@ def scene_backend(scene: Scene, backend: str = "embree") -> TriangleBackend:
     return make_backend(backend, vertices, faces)
 
 
+class _Triangles(NamedTuple):
+    """What the masks need per triangle, float64: normals_t (3, M) unit normals by winding,
+    component-major (fast gathers); plane_d (M,) normal · corner; height (M,) the margin
+    `shadow_height` at the triangle's coordinates (max |coordinate| of its corners)."""
+
+    normals_t: np.ndarray
+    plane_d: np.ndarray
+    height: np.ndarray
+
+    @classmethod
+    def of(cls, tracer: TriangleBackend) -> "_Triangles":
+        magnitude = np.abs(tracer.vertices).max(axis=1)[tracer.faces].max(axis=1)
+        return cls(np.ascontiguousarray(tracer.normals.T), tracer.plane_d,
+                   shadow_height(magnitude))
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot product of component-major vectors: (3, n) x (3, n) -> (n,)."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
 def shadow_masks(scene: Scene, backend: str | TriangleBackend = "embree"
                  ) -> tuple[np.ndarray, np.ndarray]:
     """The reference masks of `scene`.
@@ -40,16 +61,17 @@ def shadow_masks(scene: Scene, backend: str | TriangleBackend = "embree"
     Returns lit : (L, H, W) bool, lights in scene order, and coverage : (H, W) bool; row 0 at
     the top.
 
+    Each pixel's visible triangle is found with the float32 pixel-centre ray (Embree); the hit
+    point is then that triangle's plane cut by the exact float64 ray, and each light's shadow
+    ray is the segment from it to the light, on that segment's own line, shortened only at its
+    ends (see `raytrace.tolerances`).
+
     Speed (this is the benchmark's hot path):
     * The image is cut into tiles of a few rows, which a thread pool with one thread per core
       traces start to finish: Embree and numpy's large operations release the GIL, so the
       arithmetic around the ray casts runs in parallel too, and a tile's arrays stay in cache.
     * Vectors are stored component-major, (3, n): numpy broadcasts a (3,) vector over (n, 3)
-      rows ~10x slower than it runs along contiguous (n,) rows.  Embree reads the transposed
-      views as they are (strided), without a copy.
-    * The arithmetic is float32: Embree traces in float32 anyway, and so does the rasterizer
-      these masks are compared with.  A hit point is accurate to ~1e-7 of the scene's length
-      scale, three orders of magnitude inside the surface offset.
+      rows ~10x slower than it runs along contiguous (n,) rows.
     """
     tracer = scene_backend(scene, backend) if isinstance(backend, str) else backend
     H, W = scene.height, scene.width
@@ -58,11 +80,12 @@ def shadow_masks(scene: Scene, backend: str | TriangleBackend = "embree"
     rows_per_tile = max(1, MASK_TILE_RAYS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
     threads = min(getattr(tracer, "threads", 1), len(tiles))
-    grid = RayGrid(scene.camera, W, H, np.float32)
-    offset = np.float32(surface_offset(scene))
+    grids = (RayGrid(scene.camera, W, H, np.float32), RayGrid(scene.camera, W, H, np.float64))
+    triangles = _Triangles.of(tracer)
+    reach = scene.extent  # a ray that starts farther than this from its point has left the scene
 
     def trace_tile(rows: slice) -> None:
-        lit[:, rows], coverage[rows] = _tile_masks(scene, tracer, grid, rows, offset)
+        lit[:, rows], coverage[rows] = _tile_masks(scene, tracer, triangles, grids, rows, reach)
 
     if threads == 1:
         for rows in tiles:
@@ -73,84 +96,102 @@ def shadow_masks(scene: Scene, backend: str | TriangleBackend = "embree"
     return lit, coverage
 
 
-def _tile_masks(scene: Scene, tracer: TriangleBackend, grid: RayGrid, rows: slice,
-                offset: np.float32) -> tuple[np.ndarray, np.ndarray]:
-    """Masks of the image rows `rows`: lit (L, R, W) bool and coverage (R, W) bool.
-    All vectors (3, n) float32; see `shadow_masks`."""
-    shape = (rows.stop - rows.start, scene.width)
-    f32 = np.float32
-    view = grid.directions(rows)
-    tri = tracer.closest_triangle(grid.origins(view).T, view.T, parallel=False)
-    covered = tri >= 0
-    lit = np.zeros((len(scene.lights),) + shape, bool)
-    if not covered.any() or not scene.lights:
-        return lit, covered.reshape(shape)
-    # Gather for every ray (a miss, tri = -1, reads the last triangle; `covered` masks it out
-    # below): cheaper than compressing to the hits first.
-    normal = np.take(tracer.normals_t32, tri, axis=1)  # by winding; `side` faces the camera
-    plane_d = np.take(tracer.plane_d32, tri)
-    n_dot_v = (normal * view).sum(axis=0)
-    side = np.where(n_dot_v > 0, f32(-1), f32(1))
-    # The hit point.  Every primary ray is o = eye + near·v, so p = eye + s·v with s = near + t,
-    # and the ray–plane formula n·p = plane_d gives  s = (plane_d − n·eye) / (n·v).  Only the
-    # distance s is computed here; each light builds the points it needs (n·l > 0) from it.
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(covered, (plane_d - grid.eye @ normal) / n_dot_v, f32(0))
-    hit = _Hits(grid.eye, view, s, normal, side * offset, plane_d * side, covered)
-    for i, light in enumerate(scene.lights):
-        lit[i] = _lit(tracer, light, hit).reshape(shape)
-    return lit, covered.reshape(shape)
-
-
 class _Hits(NamedTuple):
-    """The primary hits of a tile, all float32, vectors component-major.
+    """The primary hits of a tile (only the covered pixels), float64, vectors component-major.
 
-    eye : (3,);  view : (3, n) ray directions;  s : (n,) the hit point is eye + s·view;
-    normal : (3, n) unit face normals by winding;  step : (n,) the surface offset times ±1, the
-    sign that turns `normal` toward the camera, so a shadow ray starts at p + step·normal;
-    side_d : (n,) (±1)·(normal·p);  covered : (n,) bool, where there is a surface at all.
+    point : (3, h) the hit point, on the plane of the hit triangle;  normal : (3, h) the
+    triangle's unit normal by winding;  side : (h,) ±1, turns `normal` toward the camera;
+    side_d : (h,) side · (normal · point);  height : (h,) the margin at the surface
+    (`tolerances.shadow_height`).
     """
 
-    eye: np.ndarray
-    view: np.ndarray
-    s: np.ndarray
+    point: np.ndarray
     normal: np.ndarray
-    step: np.ndarray
+    side: np.ndarray
     side_d: np.ndarray
-    covered: np.ndarray
-
-    def shadow_starts(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Hit points (3, k) of the rays `c` (k,) int, and where their shadow rays start."""
-        p = self.eye[:, None] + self.s[c] * np.take(self.view, c, axis=1)
-        return p, p + self.step[c] * np.take(self.normal, c, axis=1)
+    height: np.ndarray
 
 
-def _lit(tracer: TriangleBackend, light, hit: _Hits) -> np.ndarray:
-    """(n,) bool: which of the tile's n hit points the light reaches."""
-    sign = np.sign(hit.step)
+def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
+                grids: tuple[RayGrid, RayGrid], rows: slice, reach: float
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Masks of the image rows `rows`: lit (L, R, W) bool and coverage (R, W) bool."""
+    shape = (rows.stop - rows.start, scene.width)
+    grid32, grid64 = grids
+    view32 = grid32.directions(rows)
+    tri = tracer.closest_triangle(grid32.origins(view32).T, view32.T, parallel=False)
+    covered = tri >= 0
+    lit = np.zeros((len(scene.lights), covered.size), bool)
+    index = np.flatnonzero(covered)
+    if len(index) == 0 or not scene.lights:
+        return lit.reshape((-1,) + shape), covered.reshape(shape)
+    k = tri[index]
+    # the exact (float64) pixel-centre directions of the covered pixels
+    view = np.take(grid64.directions(rows), index, axis=1)
+    normal = np.take(triangles.normals_t, k, axis=1)
+    n_dot_v = _dot(normal, view)
+    plane_d = np.take(triangles.plane_d, k)
+    # The hit point: p = eye + s·v on the triangle's plane n·p = plane_d, so
+    # s = (plane_d − n·eye) / (n·v), in float64 (the primary ray starts on the near plane, but
+    # p does not depend on where along the ray it starts).
+    eye = grid64.eye
+    with np.errstate(divide="ignore", invalid="ignore"):  # a degenerate triangle has n = 0
+        s = (plane_d - eye @ normal) / n_dot_v
+    point = eye[:, None] + s * view
+    side = np.where(n_dot_v > 0, -1.0, 1.0)
+    hit = _Hits(point, normal, side, side * plane_d, np.take(triangles.height, k))
+    for i, light in enumerate(scene.lights):
+        lit[i, index] = _lit(tracer, light, hit, reach)
+    return lit.reshape((-1,) + shape), covered.reshape(shape)
+
+
+def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float) -> np.ndarray:
+    """(h,) bool: which of the tile's hit points the light reaches.
+
+    The shadow ray is the segment p -> light (p + t·l, 0 < t < 1, l = L − p) or the ray
+    p + t·l (t > 0, l = −direction) on its own line; only its ends are cut: t > height/(n·l)
+    at the surface (height `hit.height` above p's plane) and, for a point light,
+    t < 1 − light_margin/|l|.  Origins and directions go to Embree as float32, component-major
+    (embreex reads the transposed views without a copy)."""
+    f32 = np.float32
+    out = np.zeros(len(hit.side), bool)
     if isinstance(light, DirectionalLight):
-        toward = (-light.direction).astype(np.float32)
-        # n·l > 0, with n facing the camera.
-        candidate = hit.covered & (sign * (toward @ hit.normal) > 0)
-        c = np.flatnonzero(candidate)
-        _, start = hit.shadow_starts(c)
+        toward = -light.direction
+        n_dot_l = hit.side * (toward @ hit.normal)  # n facing the camera
+        facing = n_dot_l > 0
+        with np.errstate(divide="ignore"):
+            near = hit.height / n_dot_l  # distance along the unit l
+        cast = facing & (near < reach)  # a start beyond the scene's reach sees nothing
+        out[facing & ~cast] = True
+        start = hit.point.compress(cast, axis=1)
+        start += near[cast] * toward[:, None]
         # Unbounded: anything anywhere along the ray toward a directional light blocks it.
-        candidate[c] = ~tracer.occluded(start.T, toward[None], None, parallel=False)
-        return candidate
+        out[cast] = ~tracer.occluded(start.astype(f32).T, toward.astype(f32)[None], None,
+                                     parallel=False)
+        return out
     if not isinstance(light, (PointLight, SpotLight)):
         raise TypeError(f"not a light: {type(light).__name__}")
-    position = light.position.astype(np.float32)
+    position = light.position
     # n·(L − p) = n·L − n·p, and n·p = plane_d on the triangle's plane.
-    candidate = hit.covered & (sign * (position @ hit.normal) - hit.side_d > 0)
-    c = np.flatnonzero(candidate)
-    p, start = hit.shadow_starts(c)
+    n_dot_l = hit.side * (position @ hit.normal) - hit.side_d
+    facing = n_dot_l > 0
+    c = np.flatnonzero(facing)
+    start = hit.point.compress(facing, axis=1)
+    l = position[:, None] - start
+    length = np.sqrt(_dot(l, l))
     if isinstance(light, SpotLight):
         # Inside the cone: cos(angle between the spot's axis and the point) >= cos_cutoff.
-        from_light = p - position[:, None]
-        inside = light.direction.astype(np.float32) @ from_light >= \
-            np.float32(light.cos_cutoff) * np.sqrt((from_light * from_light).sum(axis=0))
-        candidate[c[~inside]] = False
-        c, start = c[inside], start[:, inside]
-    # Bounded: the segment from the start to the light, direction not normalised, so tmax = 1.
-    candidate[c] = ~tracer.occluded(start.T, (position[:, None] - start).T, 1.0, parallel=False)
-    return candidate
+        inside = -(light.direction @ l) >= light.cos_cutoff * length
+        c, start, l, length = c[inside], start[:, inside], l[:, inside], length[inside]
+    near = hit.height[c] / n_dot_l[c]                      # fractions of the segment
+    gap = 1.0 - light_margin(position) / length - near
+    # Where the margins meet (gap <= 0: the light within `height` of the surface's plane)
+    # nothing is strictly between: lit.
+    cast = gap > 0
+    if not cast.all():
+        out[c[~cast]] = True
+        c, start, l, near, gap = c[cast], start[:, cast], l[:, cast], near[cast], gap[cast]
+    start += near * l
+    # Bounded: the rest of the segment, direction l not normalised, so it ends at tmax = gap.
+    out[c] = ~tracer.occluded(start.astype(f32).T, l.astype(f32).T, gap, parallel=False)
+    return out
