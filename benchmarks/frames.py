@@ -1,0 +1,211 @@
+"""Timing shadowvol's frames, their phases, and pyrender's frames of the same scene.
+
+Clocks
+------
+* Whole frames: wall time (`time.perf_counter`) of `Renderer.render(...)`, which returns only
+  after reading the image and the lit masks back, so the GPU work is inside the clock.
+* Phases: glFinish-bracketed wall time.  llvmpipe defers rasterization until a flush, so each
+  phase is bracketed by `ctx.finish()` before and after (the functions the renderer calls are
+  wrapped for one instrumented frame; the extra finishes make that frame a little slower than
+  an uninstrumented one, so phases are reported from their own frames, not subtracted from the
+  whole-frame medians).  GPU silhouettes run inside the volume pass (a geometry shader), so
+  they are also timed alone: the edge records drawn with GL_RASTERIZER_DISCARD.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import statistics
+import time
+import tracemalloc
+from collections import defaultdict
+
+import moderngl
+import numpy as np
+
+from shadowvol import passes
+from shadowvol.renderer import Renderer
+from shadowvol.silhouettes import (edge_multiplicity, light_vector, quads_to_triangles,
+                                   side_quads, triangle_signs)
+
+METHODS = ("zpass", "zfail", "auto")
+SILHOUETTES = ("cpu", "gpu")
+
+
+def stats(times_s: list[float]) -> dict:
+    """{"median", "min", "max", "n"} in milliseconds."""
+    ms = [t * 1e3 for t in times_s]
+    return {"median": statistics.median(ms), "min": min(ms), "max": max(ms), "n": len(ms)}
+
+
+def interleaved(fns: dict, repeat: int, warmup: int) -> dict:
+    """{name: stats} of each function, `warmup` untimed rounds then `repeat` timed ones; the
+    functions take turns within each round, so load from other processes on the machine hurts
+    all of them alike and their ratios stay meaningful."""
+    times = defaultdict(list)
+    for r in range(warmup + repeat):
+        for name, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            if r >= warmup:
+                times[name].append(time.perf_counter() - t0)
+    return {name: stats(ts) for name, ts in times.items()}
+
+
+# ---------------------------------------------------------------------------------------------
+# Phases
+# ---------------------------------------------------------------------------------------------
+
+PHASES = ("depth+ambient", "silhouettes (CPU, incl. upload)", "volume pass", "lighting pass",
+          "read-back")
+
+
+@contextlib.contextmanager
+def _phase_clock(renderer: Renderer, sink: dict):
+    """Wrap the renderer's pass functions so that each call adds its glFinish-bracketed wall
+    time to sink[phase]."""
+    ctx = renderer.ctx
+    undo = []
+
+    def wrap(owner, name, phase, instance=False):
+        original = getattr(owner, name)
+
+        def timed(*args, **kwargs):
+            ctx.finish()
+            t0 = time.perf_counter()
+            out = original(*args, **kwargs)
+            ctx.finish()
+            sink[phase] += time.perf_counter() - t0
+            return out
+
+        setattr(owner, name, timed)
+        undo.append((owner, name, original, instance))
+
+    wrap(passes, "depth_ambient", "depth+ambient")
+    wrap(passes, "count_volumes", "volume pass")
+    wrap(passes, "add_light", "lighting pass")
+    for sil in SILHOUETTES:
+        wrap(renderer.volumes(sil), "prepare",
+             "silhouettes (CPU, incl. upload)" if sil == "cpu" else "_gpu prepare", True)
+    for name in ("read_lit", "read_colour"):
+        wrap(renderer.target, name, "read-back", True)
+    try:
+        yield
+    finally:
+        for owner, name, original, instance in reversed(undo):
+            if instance:
+                delattr(owner, name)      # back to the class's method
+            else:
+                setattr(owner, name, original)
+
+
+def phase_times(renderer: Renderer, method: str, silhouettes: str, repeat: int,
+                **render_kw) -> dict:
+    """{phase: stats} over `repeat` instrumented frames (after one warm-up frame), plus
+    "instrumented frame" (the whole instrumented frame)."""
+    renderer.render(method, silhouettes, **render_kw)
+    runs = defaultdict(list)
+    for _ in range(repeat):
+        sink = defaultdict(float)
+        with _phase_clock(renderer, sink):
+            t0 = time.perf_counter()
+            renderer.render(method, silhouettes, **render_kw)
+            runs["instrumented frame"].append(time.perf_counter() - t0)
+        for phase in PHASES:
+            runs[phase].append(sink[phase])
+    return {phase: stats(ts) for phase, ts in runs.items()}
+
+
+def gpu_silhouette_times(renderer: Renderer, repeat: int) -> dict:
+    """The GPU silhouette geometry shader alone, for every light of the scene: the edge
+    records of all casters drawn with rasterizer discard, glFinish-bracketed."""
+    ctx = renderer.ctx
+    vols = renderer.volumes("gpu")
+    from shadowvol.camera import view_projection
+    from shadowvol.context import make_current
+    make_current(ctx)
+    scene = renderer.scene
+    passes.set_camera(vols.programs, view_projection(scene.camera, scene.aspect), scene.camera)
+    objects = [r.index for r in renderer.geometry.ranges]
+
+    def run():
+        for light in scene.lights:
+            light4 = light_vector(light)
+            vols.prepare(light4)
+            passes.set_uniform(vols.edge_program, "u_light", tuple(float(x) for x in light4))
+            vols.draw_sides(objects)
+
+    ctx.enable(moderngl.RASTERIZER_DISCARD)
+    try:
+        run()
+        ctx.finish()
+        times = []
+        for _ in range(repeat):
+            ctx.finish()
+            t0 = time.perf_counter()
+            run()
+            ctx.finish()
+            times.append(time.perf_counter() - t0)
+    finally:
+        ctx.disable(moderngl.RASTERIZER_DISCARD)
+    return stats(times)
+
+
+def cpu_silhouette_times(renderer: Renderer, repeat: int) -> dict:
+    """CPU silhouette extraction alone (signs, multiplicities, side quads as triangles; no
+    upload, no cap lists) of all casters for every light of the scene."""
+    topologies = renderer.geometry.topologies
+    lights = [light_vector(l) for l in renderer.scene.lights]
+
+    def run():
+        for light4 in lights:
+            for topo in topologies:
+                signs = triangle_signs(topo.vertices, topo.faces, light4)
+                quads_to_triangles(side_quads(topo, edge_multiplicity(topo, signs), light4))
+
+    run()
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - t0)
+    return stats(times)
+
+
+def python_peak_bytes(fn) -> int:
+    """Peak of Python-heap allocations (tracemalloc: Python objects and numpy arrays; not the
+    GL driver's memory) while `fn()` runs."""
+    tracemalloc.start()
+    try:
+        tracemalloc.reset_peak()
+        fn()
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+# ---------------------------------------------------------------------------------------------
+# pyrender
+# ---------------------------------------------------------------------------------------------
+
+@contextlib.contextmanager
+def pyrender_frames(scene):
+    """Yields {"shadowed": fn, "unshadowed": fn}: pyrender 0.1.45 frames of `scene` (its own EGL
+    context; each call makes it current and reads colour and depth back, as
+    OffscreenRenderer.render always does).  The caller's context is current again after."""
+    from shadowvol import pyrender_bridge as pb
+
+    pr_scene = pb.to_pyrender(scene)
+    with pb._offscreen(scene.width, scene.height) as pr:
+        shadowed, plain = pb._flags(shadows=True), pb._flags(shadows=False)
+        yield {"shadowed": lambda: pr.render(pr_scene, flags=shadowed),
+               "unshadowed": lambda: pr.render(pr_scene, flags=plain)}
+
+
+def check_same_scene(renderer: Renderer) -> None:
+    """A cheap sanity check that the frame we time draws something: coverage > 0."""
+    result = renderer.render()
+    if not result.coverage.any():
+        raise RuntimeError("the benchmark scene covers no pixel")
+    if not np.isfinite(result.image).all():
+        raise RuntimeError("the benchmark frame has non-finite pixels")
