@@ -34,10 +34,6 @@ SCENES = Path(__file__).resolve().parent.parent / "scenes"  # a source checkout'
 SMALL_SCALE = 4            # --small: every scene at 1/4 of its width and height
 GAP = 4                    # white pixels between panels
 RAY_TREE_DEPTH = 2         # "sketch all rays to recursion depth 2"
-# The planar demo looks at scenes/planar.toml from the front left, where the cage's windows
-# show its inside (dark with shadow volumes, lit with projected shadows) and the ball hangs
-# over the box; the scene's own camera puts the ball in front of the cage.
-PLANAR_CAMERA = dict(eye=[-3.2, 3.6, 4.4], target=[-0.4, 0.7, -0.2], fov_y=45.0)
 ERROR_TINT = np.array([255, 0, 0], np.uint8)    # pixels a method gets wrong
 ERROR_TINT_WEIGHT = 0.6
 MIN_TEXT_SIZE = 8          # px: a title shrinks to this, then is cut short
@@ -294,13 +290,11 @@ def planar(g: Gallery) -> Picture:
     from .files import encode_srgb
     from .planar_gl import PlanarShadows
     from .renderer import Renderer
-    from .scene import Camera
 
     scene = g.scene("planar")
-    camera = Camera(**PLANAR_CAMERA, near=scene.camera.near)
     with Renderer(scene, g.ctx) as r, PlanarShadows(r) as p:
-        projected = p.render(camera=camera)
-        volumes = r.render(camera=camera)
+        projected = p.render()
+        volumes = r.render()
     missing = (projected.lit & ~volumes.lit).any(axis=0)
     extra = (volumes.lit & ~projected.lit).any(axis=0)
     pv, vv = encode_srgb(projected.image), encode_srgb(volumes.image)
@@ -320,7 +314,7 @@ def planar(g: Gallery) -> Picture:
         "projected shadows; shadow volumes; the projected-shadow image with the pixels that "
         "shadow volumes shadow and the projection leaves lit tinted red",
         "shadowvol demo (shadowvol.demo.planar: shadowvol.planar_gl.PlanarShadows beside "
-        f"Renderer.render on {g.path('planar')}, camera {PLANAR_CAMERA})",
+        f"Renderer.render on {g.path('planar')})",
         titled(row(panels), title, g.small),
         numbers={"missing": int(missing.sum()), "extra": int(extra.sum())})
 
