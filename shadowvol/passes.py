@@ -71,9 +71,13 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
 
 
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
-                  zfail: np.ndarray) -> None:
+                  zfail: np.ndarray, halve: bool = False) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
-    `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster."""
+    `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
+
+    `halve`: z-pass casters whose multiplicities are all even count half (see
+    `CpuVolumes.draw_sides`): the stencil is then 0 exactly where it would have been 0, but
+    the counts themselves differ.  Only for casters that z-pass counts correctly."""
     target.clear_stencil()
     target.use(colour=False, depth=False)
     ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count
@@ -82,7 +86,7 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     by_zfail = [int(i) for i in np.flatnonzero(zfail)]
     if by_zpass:
         with stencil.zpass_counting(gl):
-            volumes.draw_sides(by_zpass)
+            volumes.draw_sides(by_zpass, halve=halve)
     if by_zfail:
         with stencil.zfail_counting(gl, depth_clamp=True):
             volumes.draw_sides(by_zfail)

@@ -121,7 +121,10 @@ class Renderer:
                 vols.prepare(light4)
                 for p in vols.programs:
                     passes.set_uniform(p, "u_light", tuple(float(x) for x in light4))
-                passes.count_volumes(self.ctx, self.gl, self.target, vols, choice)
+                # halving is safe only for casters `auto` chose z-pass for, and only when
+                # the counts themselves are not returned (see passes.count_volumes)
+                passes.count_volumes(self.ctx, self.gl, self.target, vols, choice,
+                                     halve=method == "auto" and not stencil)
             else:
                 self.target.clear_stencil()
             if stencil:

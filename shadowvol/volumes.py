@@ -63,42 +63,81 @@ class CpuVolumes:
                                         geometry.soup_bindings(self.far_program),
                                         index_buffer=self.index_buffer, index_element_size=4)
         self.light4 = None
+        self._signs: list[np.ndarray] = []                        # per object, this light
         self._sides: dict[int, tuple[int, int]] = {}              # object -> (first, count)
         self._caps: dict[tuple[int, int], tuple[int, int]] = {}   # (object, sign) -> (first, n)
+        self._capped: tuple[int, ...] | None = None               # objects in index_buffer
 
     def prepare(self, light4: np.ndarray) -> None:
-        """Compute and upload this light's side quads and cap index lists."""
+        """Compute and upload this light's side quads.  Cap index lists are built on the first
+        `draw_caps` (most frames z-fail few casters or none, and a cap list is 3 indices per
+        triangle)."""
         self.light4 = light4
-        sides, indices = [], []
-        n_side = n_index = 0
+        sides = []
+        n_side = 0
         self._sides.clear()
-        self._caps.clear()
+        self._signs.clear()
+        self._capped = None
         for rng, topo in zip(self.geometry.ranges, self.geometry.topologies):
             signs = triangle_signs(topo.vertices, topo.faces, light4)
-            tris = quads_to_triangles(side_quads(topo, edge_multiplicity(topo, signs), light4))
+            self._signs.append(signs)
+            multiplicity = edge_multiplicity(topo, signs)
+            # A caster whose multiplicities are all even (a closed, consistently wound mesh
+            # gives 2 on every silhouette edge) stores each quad once, m / 2 copies, and is
+            # drawn twice: the same quads as |m| copies, in another order, and stencil
+            # INCR_WRAP / DECR_WRAP commute.  See `draw_sides` for drawing it once.
+            repeat = 2 if multiplicity.any() and not (multiplicity & 1).any() else 1
+            tris = quads_to_triangles(side_quads(topo, multiplicity // repeat, light4))
             sides.append(tris)
-            self._sides[rng.index] = (n_side, len(tris))
+            self._sides[rng.index] = (n_side, len(tris), repeat)
             n_side += len(tris)
-            for sign in (1, -1):
-                t = np.flatnonzero(signs == sign) + rng.first
-                idx = (3 * t[:, None] + np.arange(3)).reshape(-1)
-                indices.append(idx)
-                self._caps[rng.index, sign] = (n_index, len(idx))
-                n_index += len(idx)
         # float32 at upload: what GL draws; the quads were built in float64 from the welded
         # positions, which are the drawn vertices exactly, so edges meet the caps exactly
         _upload(self.side_buffer, np.concatenate(sides).astype(np.float32))
-        _upload(self.index_buffer, np.concatenate(indices).astype(np.int32))
 
-    def draw_sides(self, objects) -> None:
+    def _prepare_caps(self, objects: tuple[int, ...]) -> None:
+        """Upload the cap index lists (soup vertices of the triangles of each sign) of
+        `objects` for the prepared light."""
+        if self._capped == objects:
+            return
+        indices, n_index = [], 0
+        self._caps.clear()
         for i in objects:
-            first, count = self._sides[i]
+            rng = self.geometry.ranges[i]
+            for sign in (1, -1):
+                t = np.flatnonzero(self._signs[i] == sign) + rng.first
+                idx = (3 * t[:, None] + np.arange(3)).reshape(-1)
+                indices.append(idx)
+                self._caps[i, sign] = (n_index, len(idx))
+                n_index += len(idx)
+        _upload(self.index_buffer, np.concatenate(indices).astype(np.int32))
+        self._capped = objects
+
+    def draw_sides(self, objects, halve: bool = False) -> None:
+        """Draw the side quads of `objects`.  `halve`: draw the quads of casters whose
+        multiplicities are all even once (m / 2 copies), not twice.
+
+        Halving is for z-pass casters only, and only when the caller needs just "count == 0":
+        the z-pass count at a pixel is linear in the multiplicities, so such a caster adds
+        exactly half its count, an integer.  Where z-pass is valid (the near rectangle lies in
+        none of the caster's volumes, as `methods.needs_zfail` guarantees) every caster's count
+        is the number of its triangles between the point and the light, >= 0, so the sum is 0
+        exactly when it was 0 before.  (The stencil's 8-bit wrap, documented in `renderer`,
+        needs 256 layers either way.)  Z-fail casters must not be halved: their caps count 1
+        per triangle."""
+        for i in objects:
+            first, count, repeat = self._sides[i]
             if count:
-                self.side_vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+                for _ in range(1 if halve else repeat):
+                    self.side_vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def draw_caps(self, objects, near: bool) -> None:
         if not near and self.light4[3] == 0.0:
             return  # a directional light's far cap is one point at infinity
+        objects = tuple(int(i) for i in objects)
+        if not objects:
+            return
+        self._prepare_caps(objects)
         vao = self.near_vao if near else self.far_vao
         for sign in (1, -1):
             self.ctx.front_face = _FRONT_FACE[near, sign]
@@ -150,7 +189,10 @@ class GpuVolumes:
     def prepare(self, light4: np.ndarray) -> None:
         self.light4 = light4  # everything else happens in the shaders
 
-    def draw_sides(self, objects) -> None:
+    def draw_sides(self, objects, halve: bool = False) -> None:
+        """Draw the side quads of `objects`.  `halve` is accepted for the common interface and
+        ignored: the geometry shader sees one edge at a time, never a whole caster's
+        multiplicities, so it cannot know that they are all even."""
         for i in objects:
             first, count = self._records[i]
             if count:
