@@ -1,0 +1,163 @@
+"""Hypothesis strategies for random scenes, and the test profiles (imported by the robustness
+tests; tests/ is on sys.path because it has a conftest.py and no __init__.py).
+
+Profiles, chosen by the environment variable HYPOTHESIS_PROFILE:
+
+* `ci` (the default): a few dozen scenes, derandomized (the same scenes on every run), so that
+  CI is reproducible and bounded (well under a minute);
+* `long`: hundreds of scenes, also derandomized (with its own, larger, deterministic set), for a
+  run by hand:  HYPOTHESIS_PROFILE=long pytest tests/test_robustness_property.py -s
+
+Coordinates are drawn from a grid of sixteenths: exact in float32 and float64, which makes exact
+coplanarity, collinearity, duplicated vertices and lights in a triangle's plane common instead
+of practically impossible, and keeps shrunk examples readable.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+from hypothesis import HealthCheck, settings
+from hypothesis import strategies as st
+
+from shadowvol.primitives import Transform, box, mesh, plane, sphere
+from shadowvol.scene import (Camera, DirectionalLight, Material, PointLight, Scene,
+                             SceneError, SpotLight)
+
+settings.register_profile(
+    "ci", max_examples=50, derandomize=True, deadline=None, print_blob=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow,
+                           HealthCheck.filter_too_much])
+settings.register_profile(
+    "long", max_examples=1500, derandomize=True, deadline=None, print_blob=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow,
+                           HealthCheck.filter_too_much])
+PROFILE = os.environ.get("HYPOTHESIS_PROFILE", "ci")
+if PROFILE not in ("ci", "long"):
+    raise RuntimeError(f"HYPOTHESIS_PROFILE must be 'ci' or 'long', got {PROFILE!r}")
+
+
+def profile() -> settings:
+    """The settings of the profile chosen by HYPOTHESIS_PROFILE (default `ci`)."""
+    return settings.get_profile(PROFILE)
+
+
+RED = Material(ambient=[0.4, 0.1, 0.1], diffuse=[0.8, 0.2, 0.2])
+GREY = Material(ambient=[0.5, 0.5, 0.45], diffuse=[0.8, 0.8, 0.7], specular=[0, 0, 0])
+
+
+def coord(low: float = -3.0, high: float = 3.0):
+    """A number on the grid of sixteenths in [low, high]."""
+    return st.integers(int(low * 16), int(high * 16)).map(lambda k: k / 16)
+
+
+def point(low=-3.0, high=3.0):
+    return st.tuples(coord(low, high), coord(low, high), coord(low, high)).map(list)
+
+
+def direction():
+    return point(-1.0, 1.0).filter(lambda v: any(v))
+
+
+@st.composite
+def soup(draw, name: str):
+    """An open or non-manifold triangle soup: a few grid points, triangles on them (shared
+    vertices and edges, an edge on three triangles, duplicates), whatever winding."""
+    n = draw(st.integers(3, 7))
+    centre = np.array(draw(point(-2.0, 2.0)))
+    pts = centre + np.array([draw(point(-1.0, 1.0)) for _ in range(n)])
+    faces = draw(st.lists(st.tuples(*[st.integers(0, n - 1)] * 3).filter(
+        lambda f: len(set(f)) == 3), min_size=1, max_size=6))
+    return mesh(name, pts, np.array(faces), RED)
+
+
+@st.composite
+def closed(draw, name: str):
+    """A closed mesh: a rotated box or a coarse icosphere."""
+    centre = draw(point(-2.0, 2.0))
+    if draw(st.booleans()):
+        size = [draw(coord(0.25, 2.0)) for _ in range(3)]
+        rotation = [draw(st.integers(0, 8)) * 11.25 for _ in range(3)]
+        return box(name, centre, size, RED, Transform(rotation=rotation))
+    return sphere(name, centre, draw(coord(0.25, 1.0)), RED,
+                  subdivisions=draw(st.integers(0, 1)))
+
+
+def _variant(obj, how: str, seed: int):
+    """The same triangles as an unwelded soup (every corner its own vertex) or with some
+    triangles' winding reversed."""
+    if how == "unwelded":
+        tri = obj.triangles.reshape(-1, 3)
+        return mesh(obj.name, tri, np.arange(len(tri)).reshape(-1, 3), obj.material)
+    if how == "flipped":
+        faces = obj.faces.copy()
+        flip = np.random.default_rng(seed).random(len(faces)) < 0.5
+        faces[flip] = faces[flip][:, ::-1]
+        return mesh(obj.name, obj.vertices, faces, obj.material)
+    return obj
+
+
+@st.composite
+def objects(draw):
+    out = []
+    if draw(st.booleans()):
+        out.append(plane("floor", point=[0, draw(coord(-1.0, 0.0)), 0], size=[12, 12],
+                         material=GREY))
+    for i in range(draw(st.integers(1, 4))):
+        obj = draw(closed(f"closed{i}")) if draw(st.booleans()) else draw(soup(f"soup{i}"))
+        how = draw(st.sampled_from(["as is", "unwelded", "flipped"]))
+        out.append(_variant(obj, how, draw(st.integers(0, 99))))
+    return out
+
+
+def light_position():
+    """Mostly above the floor and the objects, sometimes among or inside them."""
+    return st.tuples(coord(-4.0, 4.0), coord(-1.0, 5.0), coord(-4.0, 4.0)).map(list)
+
+
+def light_direction():
+    """Mostly downward, sometimes grazing or upward."""
+    return st.tuples(coord(-1.0, 1.0), coord(-1.0, 0.25), coord(-1.0, 1.0)).map(list).filter(
+        lambda v: any(v))
+
+
+@st.composite
+def light(draw):
+    kind = draw(st.sampled_from(["point", "directional", "spot"]))
+    if kind == "point":
+        return PointLight(draw(light_position()))
+    if kind == "directional":
+        return DirectionalLight(draw(light_direction()))
+    position = draw(light_position())
+    # a spot aimed at a point near the middle of the scene, or anywhere
+    aim = draw(st.one_of(point(-1.0, 1.0), light_direction().map(
+        lambda d: [p + x for p, x in zip(position, d)])))
+    axis = [a - p for a, p in zip(aim, position)]
+    if not any(axis):
+        axis = [0.0, -1.0, 0.0]
+    return SpotLight(position, axis, cone_angle=draw(st.integers(5, 90)))
+
+
+@st.composite
+def camera(draw):
+    """Anywhere, often inside the objects or their volumes; near planes up to 1 unit deep, so
+    that they cut volumes and objects."""
+    above = st.tuples(coord(-4.0, 4.0), coord(0.5, 4.0), coord(-4.0, 4.0)).map(list)
+    eye = draw(st.one_of(above, above, point(-4.0, 4.0)))
+    target = draw(point(-1.5, 1.5).filter(lambda t: t != eye))
+    up = draw(st.sampled_from([[0, 1, 0], [0, 0, 1], [1, 0, 0]]))
+    try:
+        return Camera(eye=eye, target=target, up=up, fov_y=draw(st.integers(30, 100)),
+                      near=draw(st.sampled_from([0.01, 0.05, 0.3, 1.0])))
+    except SceneError:  # up parallel to the view: try the next example
+        from hypothesis import reject
+        reject()
+
+
+@st.composite
+def scenes(draw):
+    width, height = draw(st.sampled_from([(64, 48), (96, 72)]))
+    return Scene(camera=draw(camera()), objects=draw(objects()),
+                 lights=draw(st.lists(light(), min_size=1, max_size=3)),
+                 width=width, height=height, name="random")
