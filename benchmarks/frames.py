@@ -26,7 +26,7 @@ import numpy as np
 from shadowvol import passes
 from shadowvol.renderer import Renderer
 from shadowvol.silhouettes import (edge_multiplicity, light_vector, quads_to_triangles,
-                                   side_quads, triangle_signs)
+                                   side_quads, topology_signs)
 
 METHODS = ("zpass", "zfail", "auto")
 SILHOUETTES = ("cpu", "gpu")
@@ -160,7 +160,7 @@ def cpu_silhouette_times(renderer: Renderer, repeat: int) -> dict:
     def run():
         for light4 in lights:
             for topo in topologies:
-                signs = triangle_signs(topo.vertices, topo.faces, light4)
+                signs = topology_signs(topo, light4)
                 quads_to_triangles(side_quads(topo, edge_multiplicity(topo, signs), light4))
 
     run()

@@ -40,7 +40,18 @@ def triangle_signs(vertices: np.ndarray, faces: np.ndarray, light4: np.ndarray) 
     vertices : (k, 3) float64; faces : (m, 3) int64; light4 : (4,) float64.
     """
     v0, v1, v2 = (vertices[faces[:, i]] for i in range(3))
-    normal = np.cross(v1 - v0, v2 - v0)
+    return _signs(np.cross(v1 - v0, v2 - v0), v0, light4)
+
+
+def topology_signs(topology: Topology, light4: np.ndarray) -> np.ndarray:
+    """`triangle_signs(topology.vertices, topology.faces, light4)`, bit for bit (the same
+    float64 operations on the same numbers), from the normals and first corners the topology
+    keeps: per light only the dot products remain."""
+    normal, v0 = topology.face_frames
+    return _signs(normal, v0, light4)
+
+
+def _signs(normal: np.ndarray, v0: np.ndarray, light4: np.ndarray) -> np.ndarray:
     to_light = light4[:3] - light4[3] * v0
     return np.sign(np.einsum("ij,ij->i", normal, to_light)).astype(np.int8)
 

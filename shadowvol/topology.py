@@ -18,6 +18,7 @@ no edge and have sign 0.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -43,6 +44,14 @@ class Topology:
     inc_face: np.ndarray
     inc_opposite: np.ndarray
     inc_parity: np.ndarray
+
+    @cached_property
+    def face_frames(self) -> tuple[np.ndarray, np.ndarray]:
+        """normals (m, 3) float64 = cross(v1 - v0, v2 - v0) of `faces` as wound (not unit), and
+        origins (m, 3) float64 = v0: the light-independent part of every triangle's sign
+        (`silhouettes.topology_signs`), computed on first use and kept (48 bytes a triangle)."""
+        v0, v1, v2 = (self.vertices[self.faces[:, i]] for i in range(3))
+        return np.cross(v1 - v0, v2 - v0), v0
 
     @property
     def triangles_per_edge(self) -> np.ndarray:

@@ -34,8 +34,7 @@ import numpy as np
 
 from . import glsl
 from .gpuscene import SceneGeometry
-from .silhouettes import (edge_multiplicity, quads_to_triangles, side_quads,
-                          triangle_signs)
+from .silhouettes import edge_multiplicity, quads_to_triangles, side_quads, topology_signs
 
 MAX_OPPOSITE = 4  # opposite vertices per edge record (silhouette.geom emits at most 4 quads)
 # front face to use so that a cap of triangles of sign s, drawn in their own winding, faces out
@@ -79,7 +78,7 @@ class CpuVolumes:
         self._signs.clear()
         self._capped = None
         for rng, topo in zip(self.geometry.ranges, self.geometry.topologies):
-            signs = triangle_signs(topo.vertices, topo.faces, light4)
+            signs = topology_signs(topo, light4)
             self._signs.append(signs)
             multiplicity = edge_multiplicity(topo, signs)
             # A caster whose multiplicities are all even (a closed, consistently wound mesh
