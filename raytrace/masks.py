@@ -83,9 +83,11 @@ def shadow_masks(scene: Scene, backend: str | TriangleBackend = "embree"
     grids = (RayGrid(scene.camera, W, H, np.float32), RayGrid(scene.camera, W, H, np.float64))
     triangles = _Triangles.of(tracer)
     reach = scene.extent  # a ray that starts farther than this from its point has left the scene
+    magnitude = float(np.abs(tracer.vertices).max())
 
     def trace_tile(rows: slice) -> None:
-        lit[:, rows], coverage[rows] = _tile_masks(scene, tracer, triangles, grids, rows, reach)
+        lit[:, rows], coverage[rows] = _tile_masks(scene, tracer, triangles, grids, rows, reach,
+                                                   magnitude)
 
     if threads == 1:
         for rows in tiles:
@@ -113,7 +115,7 @@ class _Hits(NamedTuple):
 
 
 def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
-                grids: tuple[RayGrid, RayGrid], rows: slice, reach: float
+                grids: tuple[RayGrid, RayGrid], rows: slice, reach: float, magnitude: float
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Masks of the image rows `rows`: lit (L, R, W) bool and coverage (R, W) bool."""
     shape = (rows.stop - rows.start, scene.width)
@@ -141,11 +143,12 @@ def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
     side = np.where(n_dot_v > 0, -1.0, 1.0)
     hit = _Hits(point, normal, side, side * plane_d, np.take(triangles.height, k))
     for i, light in enumerate(scene.lights):
-        lit[i, index] = _lit(tracer, light, hit, reach)
+        lit[i, index] = _lit(tracer, light, hit, reach, magnitude)
     return lit.reshape((-1,) + shape), covered.reshape(shape)
 
 
-def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float) -> np.ndarray:
+def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float, magnitude: float
+         ) -> np.ndarray:
     """(h,) bool: which of the tile's hit points the light reaches.
 
     The shadow ray is the segment p -> light (p + t·l, 0 < t < 1, l = L − p) or the ray
@@ -184,7 +187,7 @@ def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float) -> np.ndarray
         inside = -(light.direction @ l) >= light.cos_cutoff * length
         c, start, l, length = c[inside], start[:, inside], l[:, inside], length[inside]
     near = hit.height[c] / n_dot_l[c]                      # fractions of the segment
-    gap = 1.0 - light_margin(position) / length - near
+    gap = 1.0 - light_margin(position, magnitude) / length - near
     # Where the margins meet (gap <= 0: the light within `height` of the surface's plane)
     # nothing is strictly between: lit.
     cast = gap > 0

@@ -13,7 +13,8 @@ light) are not counted:
   `eps` above the plane of p's triangle (n the unit normal facing the light side, l̂ the unit
   direction toward the light).  Geometry lying within height `eps` of that plane near p is
   therefore not counted: a contact shadow thinner than `eps` is lost, nothing else.
-* at a point light, by `eps_light` along the ray.
+* at a point light, by `light_margin` along the ray (the same number of float32 spacings, at
+  the larger of the light's and the scene's coordinates).
 
 `eps` is `SHADOW_HEIGHT_ULPS` float32 spacings at the magnitude of the hit triangle's own
 coordinates, `max |coordinate|` of its three corners (which bounds p's too).  Why float32 and
@@ -102,8 +103,12 @@ def shadow_height(magnitude):
     return SHADOW_HEIGHT_ULPS * FLOAT32_EPS * np.maximum(magnitude, 1e-30)
 
 
-def light_margin(light_position) -> float:
+def light_margin(light_position, magnitude: float) -> float:
     """The masks' margin at a point light: the distance before the light (world units) within
     which geometry does not count, so that a surface through the light casts no shadow
-    (its shadow volume has no thickness in the rasterizer either).  light_position : (3,)."""
-    return float(shadow_height(float(np.abs(light_position).max())))
+    (its shadow volume has no thickness in the rasterizer either).  light_position : (3,);
+    magnitude : the largest |coordinate| of the scene's vertices.  Which surface passes through
+    the light is not known here, so the float32 spacing is taken at the larger of the light's
+    and the whole scene's coordinates (a light at the origin on a floor whose corners lie at
+    ±6 needs the spacing of 6, not of 0)."""
+    return float(shadow_height(max(float(np.abs(light_position).max()), magnitude)))

@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 
 import numpy as np
-from hypothesis import HealthCheck, settings
+from hypothesis import HealthCheck, assume, settings
 from hypothesis import strategies as st
 
 from shadowvol.primitives import Transform, box, mesh, plane, sphere
@@ -155,9 +155,45 @@ def camera(draw):
         reject()
 
 
+# |cos| of the angle between a face's plane and the light below which (but above 0) the face is
+# edge-on to the light "by rounding": see `rounding_tie`.
+TIE_COSINE = 1e-6
+
+
+def rounding_tie(scene: Scene) -> bool:
+    """True when some light lies in the plane of some triangle only up to rounding: a face
+    parallel to a directional light, or a point light in a face's plane, with n·l not exactly
+    0 but within TIE_COSINE of it (e.g. the side of a box turned 45 degrees under a light at 45
+    degrees: the corners come from cos 45° and sin 45°, so n·l is ±1e-17).  Then "n·l > 0"
+    (CONVENTIONS.md) is decided by the last bit, in float64 in the ray tracer and float32 on
+    the GPU, and the whole face can be lit in one and unlit in the other, interior pixels and
+    all: both answers are within rounding of the exact one.  The property excludes these
+    inputs; docs/robustness.md lists them as a known limit, and exact ties (axis-aligned, n·l
+    exactly 0 in both renderers) stay in: tests/test_robustness_input.py checks them."""
+    for obj in scene.objects:
+        tri = obj.triangles
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        n_len = np.linalg.norm(n, axis=1)
+        keep = n_len > 0
+        n, tri = n[keep] / n_len[keep, None], tri[keep]
+        for lt in scene.lights:
+            if isinstance(lt, DirectionalLight):
+                cos = np.abs(n @ lt.direction)[:, None]
+            else:
+                to = lt.position - tri                                   # (m, 3, 3)
+                dist = np.linalg.norm(to, axis=2)
+                cos = np.abs(np.einsum("mk,mjk->mj", n, to)) / np.where(dist > 0, dist, 1.0)
+            tie = (cos < TIE_COSINE).all(axis=1) & (cos > 0).any(axis=1)
+            if tie.any():
+                return True
+    return False
+
+
 @st.composite
 def scenes(draw):
     width, height = draw(st.sampled_from([(64, 48), (96, 72)]))
-    return Scene(camera=draw(camera()), objects=draw(objects()),
-                 lights=draw(st.lists(light(), min_size=1, max_size=3)),
-                 width=width, height=height, name="random")
+    scene = Scene(camera=draw(camera()), objects=draw(objects()),
+                  lights=draw(st.lists(light(), min_size=1, max_size=3)),
+                  width=width, height=height, name="random")
+    assume(not rounding_tie(scene))
+    return scene
