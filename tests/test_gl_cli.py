@@ -77,14 +77,14 @@ def test_bad_scene_is_one_line_on_stderr_and_status_2(tmp_path, capsys):
 
 
 def test_missing_gl_is_reported_with_what_to_install(scene_file, tmp_path, capsys, monkeypatch):
-    import shadowvol.renderer
+    import shadowvol.context
 
     def no_egl():
         raise ContextError("cannot create a headless EGL context (no EGL); install libegl1")
 
-    monkeypatch.setattr(shadowvol.renderer, "create_context", no_egl)
+    monkeypatch.setattr(shadowvol.context, "create_context", no_egl)
     code = cli.main(["render", str(scene_file), "-o", str(tmp_path / "x.png")])
-    assert code == 2
+    assert code == 3  # rendering failed (not bad input): see cli.EXIT_STATUS_HELP
     assert capsys.readouterr().err.startswith("error: cannot create a headless EGL context")
 
 
