@@ -9,6 +9,12 @@ layout(triangle_strip, max_vertices = 16) out;  // 4 opposite vertices -> at mos
 
 uniform mat4 u_view_proj;
 uniform vec4 u_light;  // (position, 1) or (-direction, 0)
+// Defines: ZPASS_CLIP — also write the distances to the z-pass clip box (see
+// volume_side.vert: a separate program for z-pass draws only).
+#ifdef ZPASS_CLIP
+uniform vec4 u_clip_planes[6];  // (n, d), n.x + d w >= 0 inside
+out float gl_ClipDistance[6];
+#endif
 
 in vec3 v_a[];
 in vec3 v_b[];
@@ -16,6 +22,16 @@ in vec3 v_c[][4];
 flat in int v_count[];
 
 invariant gl_Position;
+
+void emit(vec4 p) {
+    gl_Position = u_view_proj * p;
+#ifdef ZPASS_CLIP
+    for (int i = 0; i < 6; ++i) {
+        gl_ClipDistance[i] = dot(u_clip_planes[i], p);
+    }
+#endif
+    EmitVertex();
+}
 
 // --- tri_sign: keep identical in silhouette.geom and caps.vert -------------------------------
 // The orientation of triangle (p, q, r) against the light, +1 / -1 / 0, computed on the three
@@ -52,10 +68,10 @@ void main() {
     for (int k = 0; k < abs(m); ++k) {
         // strip e, s, e_inf, s_inf = triangles (e, s, e_inf), (e_inf, s, s_inf): the quad
         // e -> s -> s_inf -> e_inf, wound as the CPU path's.
-        gl_Position = u_view_proj * vec4(e, 1.0); EmitVertex();
-        gl_Position = u_view_proj * vec4(s, 1.0); EmitVertex();
-        gl_Position = u_view_proj * e_inf; EmitVertex();
-        gl_Position = u_view_proj * s_inf; EmitVertex();
+        emit(vec4(e, 1.0));
+        emit(vec4(s, 1.0));
+        emit(e_inf);
+        emit(s_inf);
         EndPrimitive();
     }
 }

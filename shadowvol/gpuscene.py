@@ -33,6 +33,7 @@ class SceneGeometry:
     """GPU buffers of a scene's triangles plus each object's topology.  Call `release()`.
 
     bounds : (n_objects, 2, 3) float64 axis-aligned box (min, max) of each object
+    extent : float, the scene's length scale (`Scene.extent`)
     """
 
     def __init__(self, ctx: moderngl.Context, scene: Scene):
@@ -52,6 +53,7 @@ class SceneGeometry:
         self.topologies = tuple(Topology.build(o.vertices, o.faces) for o in scene.objects)
         self.bounds = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)]
                                 for o in scene.objects])
+        self.extent = scene.extent  # a property of the scene that walks every vertex: once
         self._buffers = []
         self.positions = self._buffer(corners.reshape(-1, 3).astype(np.float32))
         self.normals = self._buffer(np.repeat(normals, 3, axis=0).astype(np.float32))

@@ -29,6 +29,10 @@ DEGENERATE_LIGHT = 1e-9
 # point this many scene extents away (every caster lies within one extent of the near plane, so
 # the prism beyond that point cannot touch one).
 FAR_APEX_EXTENTS = 1e6
+# The z-pass clip box (`zpass_clip_planes`) is grown by this fraction of the scene's extent on
+# every side: far more than float32 rounding of the planes, the vertices and the interpolated
+# clip distances (~1e-6 of the extent), so no fragment that could count is clipped.
+ZPASS_BOX_MARGIN = 1e-3
 
 
 def near_clip_planes(camera: Camera, aspect: float, light4: np.ndarray) -> np.ndarray | None:
@@ -92,3 +96,28 @@ def choose(method: str, bounds: np.ndarray, camera: Camera, aspect: float,
     if method == "auto":
         return needs_zfail(bounds, camera, aspect, light4, extent)
     raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+
+
+def zpass_clip_planes(bounds: np.ndarray, camera: Camera, aspect: float,
+                      extent: float) -> np.ndarray:
+    """(6, 4) float64 planes (n, d) of a box, n . x + d w >= 0 inside (x homogeneous, so a
+    point at infinity (x, 0) is inside when its direction does not leave through the plane),
+    that holds every caster's box and the near rectangle, grown by ZPASS_BOX_MARGIN * extent.
+
+    Z-pass counts the volume faces crossed between the near plane and the visible point.  Both
+    ends of that segment lie in this convex box (a visible point lies on a triangle, inside its
+    object's box), so the whole segment does: a fragment of a volume face outside the box is
+    never in front of a visible point, and clipping the faces to the box leaves every count at
+    a covered pixel exactly as it was, whatever the caster or the method.  It saves the fill of
+    the volumes beyond the receivers, out to infinity.  Uncovered pixels (nothing visible)
+    count differently, so the stencil read-back must not use it.
+    """
+    rect = near_rectangle(camera, aspect)
+    margin = ZPASS_BOX_MARGIN * extent
+    lo = np.minimum(bounds[:, 0].min(axis=0), rect.min(axis=0)) - margin
+    hi = np.maximum(bounds[:, 1].max(axis=0), rect.max(axis=0)) + margin
+    planes = np.zeros((6, 4))
+    for axis in range(3):
+        planes[2 * axis, axis], planes[2 * axis, 3] = 1.0, -lo[axis]         # x >= lo
+        planes[2 * axis + 1, axis], planes[2 * axis + 1, 3] = -1.0, hi[axis]  # x <= hi
+    return planes

@@ -71,20 +71,29 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
 
 
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
-                  zfail: np.ndarray, halve: bool = False) -> None:
+                  zfail: np.ndarray, halve: bool = False,
+                  clip_planes: np.ndarray | None = None) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
     `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
 
     `halve`: z-pass casters whose multiplicities are all even count half (see
     `CpuVolumes.draw_sides`): the stencil is then 0 exactly where it would have been 0, but
-    the counts themselves differ.  Only for casters that z-pass counts correctly."""
+    the counts themselves differ.  Only for casters that z-pass counts correctly.
+
+    `clip_planes` : (6, 4) float64 or None, the box of `methods.zpass_clip_planes`: z-pass
+    side quads are clipped to it (counts at covered pixels unchanged, uncovered ones not)."""
     target.clear_stencil()
     target.use(colour=False, depth=False)
     ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count
     ctx.depth_func = NEARER
     by_zpass = [int(i) for i in np.flatnonzero(~zfail)]
     by_zfail = [int(i) for i in np.flatnonzero(zfail)]
-    if by_zpass:
+    if by_zpass and clip_planes is not None:
+        for p in volumes.programs:
+            set_uniform(p, "u_clip_planes", clip_planes.astype(np.float32).tobytes())
+        with stencil.zpass_counting(gl), stencil.clip_distances(gl, len(clip_planes)):
+            volumes.draw_sides(by_zpass, halve=halve, clipped=True)
+    elif by_zpass:
         with stencil.zpass_counting(gl):
             volumes.draw_sides(by_zpass, halve=halve)
     if by_zfail:

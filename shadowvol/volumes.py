@@ -48,12 +48,17 @@ class CpuVolumes:
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
         self.side_program = glsl.program(ctx, "volume_side.vert", "volume.frag")
+        self.clip_program = glsl.program(ctx, "volume_side.vert", "volume.frag",
+                                         defines={"ZPASS_CLIP": 1})
         self.near_program = glsl.program(ctx, "scene.vert", "volume.frag")
         self.far_program = glsl.program(ctx, "far_cap.vert", "volume.frag")
-        self.programs = (self.side_program, self.near_program, self.far_program)
+        self.programs = (self.side_program, self.clip_program, self.near_program,
+                         self.far_program)
         self.side_buffer = ctx.buffer(reserve=64, dynamic=True)
         self.index_buffer = ctx.buffer(reserve=64, dynamic=True)
         self.side_vao = ctx.vertex_array(self.side_program,
+                                         [(self.side_buffer, "4f", "in_position")])
+        self.clip_vao = ctx.vertex_array(self.clip_program,
                                          [(self.side_buffer, "4f", "in_position")])
         self.near_vao = ctx.vertex_array(self.near_program,
                                          geometry.soup_bindings(self.near_program),
@@ -112,9 +117,11 @@ class CpuVolumes:
         _upload(self.index_buffer, np.concatenate(indices).astype(np.int32))
         self._capped = objects
 
-    def draw_sides(self, objects, halve: bool = False) -> None:
-        """Draw the side quads of `objects`.  `halve`: draw the quads of casters whose
-        multiplicities are all even once (m / 2 copies), not twice.
+    def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
+        """Draw the side quads of `objects`.  `clipped`: with the program that writes the
+        distances to the z-pass clip box (`methods.zpass_clip_planes`; z-pass only).
+        `halve`: draw the quads of casters whose multiplicities are all even once (m / 2
+        copies), not twice.
 
         Halving is for z-pass casters only, and only when the caller needs just "count == 0":
         the z-pass count at a pixel is linear in the multiplicities, so such a caster adds
@@ -124,11 +131,12 @@ class CpuVolumes:
         exactly when it was 0 before.  (The stencil's 8-bit wrap, documented in `renderer`,
         needs 256 layers either way.)  Z-fail casters must not be halved: their caps count 1
         per triangle."""
+        vao = self.clip_vao if clipped else self.side_vao
         for i in objects:
             first, count, repeat = self._sides[i]
             if count:
                 for _ in range(1 if halve else repeat):
-                    self.side_vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+                    vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def draw_caps(self, objects, near: bool) -> None:
         if not near and self.light4[3] == 0.0:
@@ -147,7 +155,7 @@ class CpuVolumes:
         self.ctx.front_face = "ccw"
 
     def release(self) -> None:
-        for obj in (self.side_vao, self.near_vao, self.far_vao, self.side_buffer,
+        for obj in (self.side_vao, self.clip_vao, self.near_vao, self.far_vao, self.side_buffer,
                     self.index_buffer, *self.programs):
             obj.release()
 
@@ -158,10 +166,13 @@ class GpuVolumes:
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
         self.edge_program = glsl.program(ctx, "edge.vert", "volume.frag", "silhouette.geom")
+        self.clip_program = glsl.program(ctx, "edge.vert", "volume.frag", "silhouette.geom",
+                                         defines={"ZPASS_CLIP": 1})
         self.near_program = glsl.program(ctx, "caps.vert", "volume.frag")
         self.far_program = glsl.program(ctx, "caps.vert", "volume.frag",
                                         defines={"FAR_CAP": 1})
-        self.programs = (self.edge_program, self.near_program, self.far_program)
+        self.programs = (self.edge_program, self.clip_program, self.near_program,
+                         self.far_program)
         # every soup vertex also carries its triangle's other two corners (float32, as drawn)
         corners = geometry.soup_corners()                                # (M, 3, 3)
         self.corner_buffers = [ctx.buffer(np.repeat(corners[:, k], 3, axis=0).tobytes())
@@ -180,22 +191,25 @@ class GpuVolumes:
             self._records[rng.index] = (n, len(rec))
             n += len(rec)
         self.edge_buffer = ctx.buffer(np.concatenate(records).tobytes())
-        self.edge_vao = ctx.vertex_array(self.edge_program, [
+        self.edge_vao, self.clip_vao = (ctx.vertex_array(program, [
             (self.edge_buffer, "3f 3f 3f 3f 3f 3f 1i", "in_a", "in_b", "in_c0", "in_c1",
-             "in_c2", "in_c3", "in_count")])
+             "in_c2", "in_c3", "in_count")]) for program in (self.edge_program,
+                                                             self.clip_program))
         self.light4 = None
 
     def prepare(self, light4: np.ndarray) -> None:
         self.light4 = light4  # everything else happens in the shaders
 
-    def draw_sides(self, objects, halve: bool = False) -> None:
-        """Draw the side quads of `objects`.  `halve` is accepted for the common interface and
-        ignored: the geometry shader sees one edge at a time, never a whole caster's
-        multiplicities, so it cannot know that they are all even."""
+    def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
+        """Draw the side quads of `objects`; `clipped` as in `CpuVolumes.draw_sides`.  `halve`
+        is accepted for the common interface and ignored: the geometry shader sees one edge at
+        a time, never a whole caster's multiplicities, so it cannot know that they are all
+        even."""
+        vao = self.clip_vao if clipped else self.edge_vao
         for i in objects:
             first, count = self._records[i]
             if count:
-                self.edge_vao.render(moderngl.POINTS, vertices=count, first=first)
+                vao.render(moderngl.POINTS, vertices=count, first=first)
 
     def draw_caps(self, objects, near: bool) -> None:
         if not near and self.light4[3] == 0.0:
@@ -212,7 +226,7 @@ class GpuVolumes:
         self.ctx.front_face = "ccw"
 
     def release(self) -> None:
-        for obj in (self.edge_vao, self.near_vao, self.far_vao, self.edge_buffer,
+        for obj in (self.edge_vao, self.clip_vao, self.near_vao, self.far_vao, self.edge_buffer,
                     *self.corner_buffers, *self.programs):
             obj.release()
 

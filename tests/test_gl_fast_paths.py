@@ -1,7 +1,13 @@
-"""Halved z-pass sides (`CpuVolumes.draw_sides(halve=True)`): a caster whose edge multiplicities
-are all even draws each side quad once instead of twice.  The stencil is then 0 exactly where
-the full count was 0, so the lit masks must be bit-identical to the unhalved frame's, and the
-ray tracer's masks still match within the budget.
+"""The renderer's shortcuts must not change a single lit pixel.
+
+- Halved z-pass sides (`CpuVolumes.draw_sides(halve=True)`): a caster whose edge multiplicities
+  are all even draws each side quad once instead of twice.  The stencil is then 0 exactly where
+  the full count was 0.
+- The z-pass clip box (`methods.zpass_clip_planes`): z-pass side quads clipped to the box of
+  the near rectangle and the casters; counts at covered pixels are unchanged.
+
+So the lit masks and images must be bit-identical to the frames without them, and the ray
+tracer's masks still match within the budget.
 """
 
 from __future__ import annotations
@@ -67,3 +73,44 @@ def test_halved_sides_give_identical_masks(ctx, seed, monkeypatch, assert_masks_
     np.testing.assert_array_equal(halved.image, full.image)
     ref_lit, ref_cov = raytrace.shadow_masks(scene)
     assert_masks_match(halved, ref_lit, ref_cov, f"seed {seed}")
+
+
+@pytest.mark.parametrize("silhouettes", ["cpu", "gpu"])
+@pytest.mark.parametrize("method", ["zpass", "auto"])
+@pytest.mark.parametrize("seed", range(4))
+def test_zpass_clip_box_gives_identical_masks(ctx, seed, method, silhouettes, monkeypatch):
+    scene = random_scene(seed)
+    if seed % 2:   # the eye among the casters, looking across the floor
+        scene = scene.replace(camera=Camera(eye=[0.5, 1.0, 1.0], target=[-2, 0.5, -3]))
+    original = passes.count_volumes
+    boxes = []
+
+    def spy(*args, clip_planes=None, **kw):
+        boxes.append(clip_planes)
+        return original(*args, clip_planes=clip_planes, **kw)
+
+    def unclipped(*args, clip_planes=None, **kw):
+        return original(*args, clip_planes=None, **kw)
+
+    with Renderer(scene, ctx) as r:
+        monkeypatch.setattr(passes, "count_volumes", spy)
+        clipped = r.render(method, silhouettes)
+        monkeypatch.setattr(passes, "count_volumes", unclipped)
+        full = r.render(method, silhouettes)
+    assert all(b is not None and b.shape == (6, 4) for b in boxes) and len(boxes) == 3
+    np.testing.assert_array_equal(clipped.lit, full.lit)
+    np.testing.assert_array_equal(clipped.image, full.image)
+
+
+def test_the_clip_box_is_off_when_counts_are_returned(ctx, monkeypatch):
+    boxes = []
+    original = passes.count_volumes
+
+    def spy(*args, clip_planes=None, **kw):
+        boxes.append(clip_planes)
+        return original(*args, clip_planes=clip_planes, **kw)
+
+    monkeypatch.setattr(passes, "count_volumes", spy)
+    with Renderer(random_scene(0), ctx) as r:
+        r.render("zpass", stencil=True)
+    assert boxes == [None] * 3
