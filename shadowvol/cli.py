@@ -42,6 +42,7 @@ SUBCOMMANDS = (
     ("shadowvol.cli", "add_render_parser"),
     ("shadowvol.shadow2d", "add_shadow2d_parser"),
     ("shadowvol.compare", "add_compare_parser"),
+    ("shadowvol.demo", "add_demo_parser"),
 )
 
 RENDER_EPILOG = """\
@@ -176,6 +177,7 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
     from .context import ContextError, create_context
     from .files import encode_srgb, save_masks, save_png
     from .glsl import ShaderError
+    from .overflow import StencilOverflowError
     from .renderer import Renderer
     from .scene import SceneError
     from .scenefile import load_scene
@@ -214,7 +216,8 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
               f"{': ' + str(exc) if str(exc) else ''}; try a smaller image or fewer triangles",
               file=sys.stderr)
         return EXIT_RENDER_FAILED, ctx
-    except (ContextError, ShaderError, RawGLError, RenderFailed, moderngl.Error) as exc:
+    except (ContextError, ShaderError, RawGLError, RenderFailed, StencilOverflowError,
+            moderngl.Error) as exc:
         print(f"error: {where(exc)}{exc}", file=sys.stderr)
         return EXIT_RENDER_FAILED, ctx
     print(f"wrote {', '.join(str(p) for p in out.values())}", file=sys.stderr)

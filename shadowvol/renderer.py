@@ -6,8 +6,10 @@ its Phong term where the count is 0.  It returns arrays only; files are the CLI'
 
 Limit: the stencil is 8 bits and counts wrap (INCR_WRAP / DECR_WRAP).  Every triangle casts, so
 a pixel behind k closed meshes counts 2k; 256 layers over one pixel would read 0, i.e. lit.  That
-needs about 128 closed objects (or 256 open sheets) lined up between one point and one light;
-it is not detected.
+needs about 128 closed objects (or 256 open sheets) lined up between one point and one light.
+It is detected (`overflow`): when a conservative bound says a count could reach 256, one more
+saturating volume pass per light finds the pixels that may have wrapped, and render() raises
+overflow.StencilOverflowError instead of returning a wrong shadow.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from . import methods, passes, views
+from . import methods, overflow, passes, views
 from . import stencil as stencil_gl
 from .camera import view_projection
 from .context import create_context, make_current
@@ -62,6 +64,7 @@ class Renderer:
         self.ctx = create_context() if ctx is None else ctx
         self._owned = []
         self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
+        self._count_bound: int | None = None
         try:
             # every public method first makes the context current: raw GL calls
             # (stencil.RawGL) go to whichever context is current, e.g. after another renderer
@@ -102,7 +105,45 @@ class Renderer:
                              f"got {method!r}")
         make_current(self.ctx)
         with stencil_gl.zero_to_one_depth(self.gl):
-            return self._render(method, silhouettes, camera, lights, stencil, shadows)
+            result = self._render(method, silhouettes, camera, lights, stencil, shadows)
+            if shadows and self.count_bound >= overflow.STENCIL_LIMIT:
+                self._check_overflow(result, silhouettes, camera, lights)
+            return result
+
+    @property
+    def count_bound(self) -> int:
+        """`overflow.count_bound` of the scene: below 256 no stencil count can wrap."""
+        if self._count_bound is None:
+            self._count_bound = overflow.count_bound(self.scene)
+        return self._count_bound
+
+    def _check_overflow(self, result: RenderResult, silhouettes: str, camera, lights) -> None:
+        """Raise overflow.StencilOverflowError where a light's count may have wrapped to 0 at a
+        pixel the frame drew lit (saturating volume passes per light; see `overflow`)."""
+        camera = self.scene.camera if camera is None else camera
+        vols = self.volumes(silhouettes)
+        for i, light in enumerate(self.scene.lights if lights is None else lights):
+            light4 = light_vector(light)
+            vols.prepare(light4)
+            for p in vols.programs:
+                passes.set_uniform(p, "u_light", tuple(float(x) for x in light4))
+            choice = result.zfail[i]
+            wrapped = overflow.find_wrapped(self.ctx, self.gl, self.target, vols, choice,
+                                            result.lit[i])
+            # a pixel is cleared by any valid counting whose entering faces stay below 255
+            zpass_valid = not methods.needs_zfail(self.geometry.bounds, camera,
+                                                  self.scene.aspect, light4,
+                                                  self.scene.extent).any()
+            others = [np.ones_like(choice)] + ([np.zeros_like(choice)] if zpass_valid else [])
+            for other in others:
+                if not wrapped.any():
+                    break
+                if not np.array_equal(other, choice):
+                    wrapped &= overflow.find_wrapped(self.ctx, self.gl, self.target, vols,
+                                                     other, result.lit[i])
+            if wrapped.any():
+                raise overflow.StencilOverflowError(i, wrapped)
+
 
     def _render(self, method, silhouettes, camera, lights, stencil, shadows) -> RenderResult:
         camera = self.scene.camera if camera is None else camera
@@ -112,15 +153,11 @@ class Renderer:
         passes.set_camera((self.programs.ambient, self.programs.phong, *vols.programs),
                           view_proj, camera)
         passes.depth_ambient(self.ctx, self.target, self.programs, self.scene)
-        # z-pass faces clipped to the box of the near rectangle and the casters: the same
-        # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
-        clip = None if stencil else methods.zpass_clip_planes(
-            self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
         lit, counts, zfail = [], [], []
         for light in lights:
             light4 = light_vector(light)
             choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
-                                    light4, self.geometry.extent)
+                                    light4, self.scene.extent)
             if shadows:
                 vols.prepare(light4)
                 for p in vols.programs:
@@ -128,7 +165,7 @@ class Renderer:
                 # halving is safe only for casters `auto` chose z-pass for, and only when
                 # the counts themselves are not returned (see passes.count_volumes)
                 passes.count_volumes(self.ctx, self.gl, self.target, vols, choice,
-                                     halve=method == "auto" and not stencil, clip_planes=clip)
+                                     halve=method == "auto" and not stencil)
             else:
                 self.target.clear_stencil()
             if stencil:

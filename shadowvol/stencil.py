@@ -35,7 +35,6 @@ GL_ALWAYS = 0x0207
 GL_EQUAL = 0x0202
 GL_STENCIL_TEST = 0x0B90
 GL_DEPTH_CLAMP = 0x864F
-GL_CLIP_DISTANCE0 = 0x3000
 GL_PACK_ALIGNMENT = 0x0D05
 GL_RENDERBUFFER = 0x8D41
 GL_DEPTH32F_STENCIL8 = 0x8CAD
@@ -259,6 +258,25 @@ def zfail_counting(gl: RawGL, depth_clamp: bool) -> Iterator[None]:
         yield
 
 
+GL_INCR = 0x1E02  # saturating increment (stops at 255)
+
+
+@contextlib.contextmanager
+def entering_faces_counting(gl: RawGL, zfail: bool, depth_clamp: bool) -> Iterator[None]:
+    """The stencil-overflow check (`shadowvol.overflow`): count, SATURATING at 255, only the
+    volume faces by which the view ray ENTERS a volume where the count pass counts them: front
+    faces in front of the surface (z-pass), back faces behind it (z-fail).  The signed count is
+    at most that number, so where it stays below 255 the 8-bit signed count cannot have
+    wrapped.  `depth_clamp` as in `zfail_counting`."""
+    counting = (GL_KEEP, GL_INCR, GL_KEEP) if zfail else (GL_KEEP, GL_KEEP, GL_INCR)
+    ignored = (GL_KEEP, GL_KEEP, GL_KEEP)
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_ALWAYS, ref=0, front_ops=ignored if zfail else counting,
+             back_ops=counting if zfail else ignored, write_mask=0xFF,
+             depth_clamp=depth_clamp)
+        yield
+
+
 @contextlib.contextmanager
 def where_unshadowed(gl: RawGL) -> Iterator[None]:
     """Lighting: draw only where the stencil count is 0; the stencil itself is left unchanged."""
@@ -323,16 +341,3 @@ def where_not_planar_shadow(gl: RawGL) -> Iterator[None]:
         _set(gl, func=GL_NOTEQUAL, ref=PLANAR_SHADOW, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
              back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
         yield
-
-
-@contextlib.contextmanager
-def clip_distances(gl: RawGL, count: int) -> Iterator[None]:
-    """GL_CLIP_DISTANCE0 .. count - 1 enabled (moderngl has no switch for them); all disabled
-    again on exit.  Shaders that write gl_ClipDistance are clipped only while enabled."""
-    for i in range(count):
-        gl.glEnable(GL_CLIP_DISTANCE0 + i)
-    try:
-        yield
-    finally:
-        for i in range(count):
-            gl.glDisable(GL_CLIP_DISTANCE0 + i)
