@@ -104,12 +104,14 @@ def machine(ctx) -> dict:
                                capture_output=True, text=True).stdout.strip()
     except OSError:
         commit, dirty = "?", ""
+    dirty = dirty.splitlines()
     return {
         "cpu": cpu, "cores": os.cpu_count(), "usable_cores": len(os.sched_getaffinity(0)),
         "gl_renderer": ctx.info["GL_RENDERER"], "gl_version": ctx.info["GL_VERSION"],
         "gl_vendor": ctx.info["GL_VENDOR"], "python": platform.python_version(),
         "os": platform.platform(), "versions": versions,
-        "commit": commit + (" (with uncommitted changes)" if dirty else ""),
+        "commit": commit + (f" plus uncommitted changes to {', '.join(l[3:] for l in dirty)}"
+                            if dirty else ""),
         "date": time.strftime("%Y-%m-%d %H:%M %Z"), "load_start": os.getloadavg(),
     }
 
