@@ -144,7 +144,6 @@ class Renderer:
             if wrapped.any():
                 raise overflow.StencilOverflowError(i, wrapped)
 
-
     def _render(self, method, silhouettes, camera, lights, stencil, shadows) -> RenderResult:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else tuple(lights)
@@ -153,11 +152,15 @@ class Renderer:
         passes.set_camera((self.programs.ambient, self.programs.phong, *vols.programs),
                           view_proj, camera)
         passes.depth_ambient(self.ctx, self.target, self.programs, self.scene)
+        # z-pass faces clipped to the box of the near rectangle and the casters: the same
+        # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
+        clip = None if stencil else methods.zpass_clip_planes(
+            self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
         lit, counts, zfail = [], [], []
         for light in lights:
             light4 = light_vector(light)
             choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
-                                    light4, self.scene.extent)
+                                    light4, self.geometry.extent)
             if shadows:
                 vols.prepare(light4)
                 for p in vols.programs:
@@ -165,7 +168,7 @@ class Renderer:
                 # halving is safe only for casters `auto` chose z-pass for, and only when
                 # the counts themselves are not returned (see passes.count_volumes)
                 passes.count_volumes(self.ctx, self.gl, self.target, vols, choice,
-                                     halve=method == "auto" and not stencil)
+                                     halve=method == "auto" and not stencil, clip_planes=clip)
             else:
                 self.target.clear_stencil()
             if stencil:

@@ -35,6 +35,7 @@ GL_ALWAYS = 0x0207
 GL_EQUAL = 0x0202
 GL_STENCIL_TEST = 0x0B90
 GL_DEPTH_CLAMP = 0x864F
+GL_CLIP_DISTANCE0 = 0x3000
 GL_PACK_ALIGNMENT = 0x0D05
 GL_RENDERBUFFER = 0x8D41
 GL_DEPTH32F_STENCIL8 = 0x8CAD
@@ -258,9 +259,6 @@ def zfail_counting(gl: RawGL, depth_clamp: bool) -> Iterator[None]:
         yield
 
 
-GL_INCR = 0x1E02  # saturating increment (stops at 255)
-
-
 @contextlib.contextmanager
 def entering_faces_counting(gl: RawGL, zfail: bool, depth_clamp: bool) -> Iterator[None]:
     """The stencil-overflow check (`shadowvol.overflow`): count, SATURATING at 255, only the
@@ -341,3 +339,16 @@ def where_not_planar_shadow(gl: RawGL) -> Iterator[None]:
         _set(gl, func=GL_NOTEQUAL, ref=PLANAR_SHADOW, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
              back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
         yield
+
+
+@contextlib.contextmanager
+def clip_distances(gl: RawGL, count: int) -> Iterator[None]:
+    """GL_CLIP_DISTANCE0 .. count - 1 enabled (moderngl has no switch for them); all disabled
+    again on exit.  Shaders that write gl_ClipDistance are clipped only while enabled."""
+    for i in range(count):
+        gl.glEnable(GL_CLIP_DISTANCE0 + i)
+    try:
+        yield
+    finally:
+        for i in range(count):
+            gl.glDisable(GL_CLIP_DISTANCE0 + i)
