@@ -101,8 +101,9 @@ def shadow_masks(scene: Scene, backend: str | TriangleBackend = "embree"
 class _Hits(NamedTuple):
     """The primary hits of a tile (only the covered pixels), float64, vectors component-major.
 
-    point : (3, h) the hit point, on the plane of the hit triangle;  normal : (3, h) the
-    triangle's unit normal by winding;  side : (h,) ±1, turns `normal` toward the camera;
+    point : (3, h) float32, the hit point, computed in float64 on the plane of the hit
+    triangle and rounded once (Embree takes float32 rays);  normal : (3, h) the triangle's unit
+    normal by winding;  side : (h,) ±1, turns `normal` toward the camera;
     side_d : (h,) side · (normal · point);  height : (h,) the margin at the surface
     (`tolerances.shadow_height`).
     """
@@ -139,12 +140,18 @@ def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
     eye = grid64.eye
     with np.errstate(divide="ignore", invalid="ignore"):  # a degenerate triangle has n = 0
         s = (plane_d - eye @ normal) / n_dot_v
-    point = eye[:, None] + s * view
+    point = (eye[:, None] + s * view).astype(np.float32)  # rounded once, for Embree
     side = np.where(n_dot_v > 0, -1.0, 1.0)
     hit = _Hits(point, normal, side, side * plane_d, np.take(triangles.height, k))
     for i, light in enumerate(scene.lights):
         lit[i, index] = _lit(tracer, light, hit, reach, magnitude)
     return lit.reshape((-1,) + shape), covered.reshape(shape)
+
+
+def _round_down32(x: np.ndarray) -> np.ndarray:
+    """float64 (n,) -> the float32 values nearest below (or equal)."""
+    y = x.astype(np.float32)
+    return np.where(y > x, np.nextafter(y, np.float32(0)), y)
 
 
 def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float, magnitude: float
@@ -166,11 +173,11 @@ def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float, magnitude: fl
             near = hit.height / n_dot_l  # distance along the unit l
         cast = facing & (near < reach)  # a start beyond the scene's reach sees nothing
         out[facing & ~cast] = True
+        toward32 = toward.astype(f32)
         start = hit.point.compress(cast, axis=1)
-        start += near[cast] * toward[:, None]
+        start += near[cast].astype(f32) * toward32[:, None]
         # Unbounded: anything anywhere along the ray toward a directional light blocks it.
-        out[cast] = ~tracer.occluded(start.astype(f32).T, toward.astype(f32)[None], None,
-                                     parallel=False)
+        out[cast] = ~tracer.occluded(start.T, toward32[None], None, parallel=False)
         return out
     if not isinstance(light, (PointLight, SpotLight)):
         raise TypeError(f"not a light: {type(light).__name__}")
@@ -180,21 +187,22 @@ def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float, magnitude: fl
     facing = n_dot_l > 0
     c = np.flatnonzero(facing)
     start = hit.point.compress(facing, axis=1)
-    l = position[:, None] - start
+    l = position.astype(f32)[:, None] - start
     length = np.sqrt(_dot(l, l))
     if isinstance(light, SpotLight):
         # Inside the cone: cos(angle between the spot's axis and the point) >= cos_cutoff.
         inside = -(light.direction @ l) >= light.cos_cutoff * length
         c, start, l, length = c[inside], start[:, inside], l[:, inside], length[inside]
     near = hit.height[c] / n_dot_l[c]                      # fractions of the segment
-    gap = 1.0 - light_margin(position, magnitude) / length - near
+    gap = 1.0 - light_margin(position, magnitude) / length.astype(np.float64) - near
     # Where the margins meet (gap <= 0: the light within `height` of the surface's plane)
     # nothing is strictly between: lit.
     cast = gap > 0
     if not cast.all():
         out[c[~cast]] = True
         c, start, l, near, gap = c[cast], start[:, cast], l[:, cast], near[cast], gap[cast]
-    start += near * l
+    start += near.astype(f32) * l
+    gap = _round_down32(gap)  # Embree's tfar is float32: never let rounding lengthen the ray
     # Bounded: the rest of the segment, direction l not normalised, so it ends at tmax = gap.
-    out[c] = ~tracer.occluded(start.astype(f32).T, l.astype(f32).T, gap, parallel=False)
+    out[c] = ~tracer.occluded(start.T, l.T, gap, parallel=False)
     return out

@@ -46,9 +46,11 @@ scene's length scale, as before: the images are not compared pixel by pixel, and
 refracted rays have no segment to stay on.
 
 Where float32 is used: everything Embree touches (see `raytrace.backends`) and, in the masks,
-the primary rays (only to choose the visible triangle).  The hit point, n·l, the margins and the
-shadow-ray origins are float64, rounded to float32 once when handed to Embree.  The
-intersection formulas, the numpy backend and the Whitted renderer are float64.
+the primary rays (only to choose the visible triangle) and the shadow rays.  The hit point is
+computed in float64 and rounded to float32 once; n·l (which decides "facing") and the margins
+are float64; the shadow ray's start, p + margin·l, is added in float32, an error of the size of
+p's own rounding (one spacing), well inside the 64-spacing margin; its tfar is rounded down,
+never up.  The intersection formulas, the numpy backend and the Whitted renderer are float64.
 """
 
 from __future__ import annotations
