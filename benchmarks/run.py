@@ -47,7 +47,7 @@ import scenes  # noqa: E402
 FULL = dict(
     sizes=("1k", "10k", "100k", "1M"), lights=(1, 2, 4), size=(1280, 720),
     # (warm-up, timed) frames per size: fewer at 1M, where one frame takes seconds
-    repeat={"1k": (2, 9), "10k": (2, 9), "100k": (2, 7), "1M": (1, 3)},
+    repeat={"1k": (2, 7), "10k": (2, 7), "100k": (2, 11), "1M": (1, 3)},
     phase_repeat={"1k": 5, "10k": 5, "100k": 5, "1M": 2},
     resolutions=((640, 360), (1280, 720), (1920, 1080), (2560, 1440)), resolution_size="100k",
     resolution_repeat=(2, 7),
@@ -101,10 +101,10 @@ def machine(ctx) -> dict:
                                 capture_output=True, text=True).stdout.strip()
         dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--",
                                 "shadowvol", "raytrace", "shaders", "benchmarks"],
-                               capture_output=True, text=True).stdout.strip()
+                               capture_output=True, text=True).stdout
     except OSError:
         commit, dirty = "?", ""
-    dirty = dirty.splitlines()
+    dirty = [line for line in dirty.splitlines() if line.strip()]
     return {
         "cpu": cpu, "cores": os.cpu_count(), "usable_cores": len(os.sched_getaffinity(0)),
         "gl_renderer": ctx.info["GL_RENDERER"], "gl_version": ctx.info["GL_VERSION"],
