@@ -72,12 +72,19 @@ def count_bound(scene) -> int:
     return sum(object_bound(o.vertices, o.faces) for o in scene.objects)
 
 
-def find_wrapped(ctx, gl, target, volumes, zfail: np.ndarray, lit: np.ndarray) -> np.ndarray:
+def find_wrapped(ctx, gl, target, volumes, zfail: np.ndarray, lit: np.ndarray,
+                 clip_planes: np.ndarray | None = None, halve: bool = False) -> np.ndarray:
     """(H, W) bool: pixels where the count of the light `volumes` was prepared for may have
     wrapped although the frame drew them lit (`lit` (H, W) bool, row 0 at the top).
-    zfail : (n_objects,) bool, the method per caster, as in the count pass.  Leaves the stencil
+    zfail : (n_objects,) bool, the method per caster, as in the count pass.  clip_planes : the
+    z-pass clip box (`methods.zpass_clip_planes`), as the count pass uses it: the counts at
+    covered pixels, the only ones read here, are the same, at a fraction of the fill.  halve:
+    as the count pass did (`CpuVolumes.draw_sides`): the frame's count is then half as large
+    for those casters, and so is the entering count that bounds it.  Leaves the stencil
     holding the saturated entering counts."""
     import moderngl
+
+    from .passes import set_uniform
 
     target.clear_stencil()
     target.use(colour=False, depth=False)
@@ -85,9 +92,15 @@ def find_wrapped(ctx, gl, target, volumes, zfail: np.ndarray, lit: np.ndarray) -
     ctx.depth_func = NEARER
     by_zpass = [int(i) for i in np.flatnonzero(~zfail)]
     by_zfail = [int(i) for i in np.flatnonzero(zfail)]
-    if by_zpass:
+    if by_zpass and clip_planes is not None:
+        for p in volumes.programs:
+            set_uniform(p, "u_clip_planes", clip_planes.astype(np.float32).tobytes())
+        with stencil.entering_faces_counting(gl, zfail=False, depth_clamp=False), \
+                stencil.clip_distances(gl, len(clip_planes)):
+            volumes.draw_sides(by_zpass, halve=halve, clipped=True)
+    elif by_zpass:
         with stencil.entering_faces_counting(gl, zfail=False, depth_clamp=False):
-            volumes.draw_sides(by_zpass)
+            volumes.draw_sides(by_zpass, halve=halve)
     if by_zfail:
         with stencil.entering_faces_counting(gl, zfail=True, depth_clamp=True):
             volumes.draw_sides(by_zfail)

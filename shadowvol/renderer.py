@@ -65,6 +65,9 @@ class Renderer:
         self._owned = []
         self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
         self._count_bound: int | None = None
+        # the stencil-overflow check (see `overflow`): on by default; it costs one more volume
+        # pass per light, and only in scenes whose bound allows a count of 256
+        self.check_overflow = True
         try:
             # every public method first makes the context current: raw GL calls
             # (stencil.RawGL) go to whichever context is current, e.g. after another renderer
@@ -106,8 +109,9 @@ class Renderer:
         make_current(self.ctx)
         with stencil_gl.zero_to_one_depth(self.gl):
             result = self._render(method, silhouettes, camera, lights, stencil, shadows)
-            if shadows and self.count_bound >= overflow.STENCIL_LIMIT:
-                self._check_overflow(result, silhouettes, camera, lights)
+            if shadows and self.check_overflow and self.count_bound >= overflow.STENCIL_LIMIT:
+                self._check_overflow(result, silhouettes, camera, lights,
+                                     halve=method == "auto" and not stencil)
             return result
 
     @property
@@ -117,30 +121,34 @@ class Renderer:
             self._count_bound = overflow.count_bound(self.scene)
         return self._count_bound
 
-    def _check_overflow(self, result: RenderResult, silhouettes: str, camera, lights) -> None:
+    def _check_overflow(self, result: RenderResult, silhouettes: str, camera, lights,
+                        halve: bool) -> None:
         """Raise overflow.StencilOverflowError where a light's count may have wrapped to 0 at a
         pixel the frame drew lit (saturating volume passes per light; see `overflow`)."""
         camera = self.scene.camera if camera is None else camera
         vols = self.volumes(silhouettes)
+        clip = methods.zpass_clip_planes(self.geometry.bounds, camera, self.scene.aspect,
+                                         self.geometry.extent)
         for i, light in enumerate(self.scene.lights if lights is None else lights):
             light4 = light_vector(light)
-            vols.prepare(light4)
+            if vols.light4 is None or not np.array_equal(vols.light4, light4):
+                vols.prepare(light4)  # (the frame's last light is still prepared)
             for p in vols.programs:
                 passes.set_uniform(p, "u_light", tuple(float(x) for x in light4))
             choice = result.zfail[i]
             wrapped = overflow.find_wrapped(self.ctx, self.gl, self.target, vols, choice,
-                                            result.lit[i])
+                                            result.lit[i], clip, halve)
             # a pixel is cleared by any valid counting whose entering faces stay below 255
             zpass_valid = not methods.needs_zfail(self.geometry.bounds, camera,
                                                   self.scene.aspect, light4,
-                                                  self.scene.extent).any()
+                                                  self.geometry.extent).any()
             others = [np.ones_like(choice)] + ([np.zeros_like(choice)] if zpass_valid else [])
             for other in others:
                 if not wrapped.any():
                     break
                 if not np.array_equal(other, choice):
                     wrapped &= overflow.find_wrapped(self.ctx, self.gl, self.target, vols,
-                                                     other, result.lit[i])
+                                                     other, result.lit[i], clip)
             if wrapped.any():
                 raise overflow.StencilOverflowError(i, wrapped)
 
