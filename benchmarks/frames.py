@@ -116,9 +116,9 @@ def phase_times(renderer: Renderer, method: str, silhouettes: str, repeat: int,
     return {phase: stats(ts) for phase, ts in runs.items()}
 
 
-def gpu_silhouette_times(renderer: Renderer, repeat: int) -> dict:
-    """The GPU silhouette geometry shader alone, for every light of the scene: the edge
-    records of all casters drawn with rasterizer discard, glFinish-bracketed."""
+def gpu_silhouette_times(renderer: Renderer, repeat: int, lights=None) -> dict:
+    """The GPU silhouette geometry shader alone, for `lights` (default: the scene's): the
+    edge records of all casters drawn with rasterizer discard, glFinish-bracketed."""
     ctx = renderer.ctx
     vols = renderer.volumes("gpu")
     from shadowvol.camera import view_projection
@@ -128,8 +128,10 @@ def gpu_silhouette_times(renderer: Renderer, repeat: int) -> dict:
     passes.set_camera(vols.programs, view_projection(scene.camera, scene.aspect), scene.camera)
     objects = [r.index for r in renderer.geometry.ranges]
 
+    lights = scene.lights if lights is None else lights
+
     def run():
-        for light in scene.lights:
+        for light in lights:
             light4 = light_vector(light)
             vols.prepare(light4)
             passes.set_uniform(vols.edge_program, "u_light", tuple(float(x) for x in light4))
@@ -151,11 +153,11 @@ def gpu_silhouette_times(renderer: Renderer, repeat: int) -> dict:
     return stats(times)
 
 
-def cpu_silhouette_times(renderer: Renderer, repeat: int) -> dict:
+def cpu_silhouette_times(renderer: Renderer, repeat: int, lights=None) -> dict:
     """CPU silhouette extraction alone (signs, multiplicities, side quads as triangles; no
-    upload, no cap lists) of all casters for every light of the scene."""
+    upload, no cap lists) of all casters for `lights` (default: the scene's)."""
     topologies = renderer.geometry.topologies
-    lights = [light_vector(l) for l in renderer.scene.lights]
+    lights = [light_vector(l) for l in (renderer.scene.lights if lights is None else lights)]
 
     def run():
         for light4 in lights:

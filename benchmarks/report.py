@@ -118,8 +118,10 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
     add("## Frames at {}x{}".format(*results["config"]["size"]))
     add("")
     variants = [k for k in results["frames"][0]["times"] if k != "floor"]
-    add("Whole frame with read-back, ms.  `auto` z-fails only the casters the near-clip test "
-        "flags (the last column counts them); setup = scene upload + topology, once.")
+    add("Whole frame with read-back, ms.  Per size one renderer of the 4-light scene renders "
+        "its first 1, 2 or 4 lights, all rows of a size interleaved in the same rounds.  "
+        "`auto` z-fails only the casters the near-clip test flags (the last column counts "
+        "them); setup = scene upload + topology, once.")
     add("")
     add("| triangles | lights | floor | " + " | ".join(variants) +
         " | auto z-fail casters | setup (s) |")
