@@ -18,9 +18,11 @@ the triangle; float32 rays, as the masks use: float32).
 
 Embree and float32: Embree converts vertices, origins, directions and distances to float32.  The
 choice of triangle can therefore differ from float64 for rays within ~1e-7 (relative) of an edge,
-and a secondary ray must start further off its surface than float32 can resolve: see
-`tolerances.SURFACE_OFFSET_RELATIVE`.  embreex releases the GIL while it traces, so the rays are
-split into one chunk per core, traced on a thread pool.  Shadow rays are *bounded* occlusion
+and a ray leaving a surface must keep clear of it by more than float32 can resolve: the masks
+shorten each shadow segment at its ends (`tolerances.shadow_height`, `tolerances.light_margin`,
+and the reasoning in `raytrace.tolerances`); Whitted's secondary rays start
+`tolerances.SURFACE_OFFSET_RELATIVE` off the surface.  embreex releases the GIL while it traces,
+so the rays are split into one chunk per core, traced on a thread pool.  Shadow rays are *bounded* occlusion
 queries (Embree stops at the first hit before tfar), which trimesh's wrapper does not offer.
 """
 
@@ -59,8 +61,6 @@ class Hits(NamedTuple):
 class TriangleBackend(Protocol):
     normals: np.ndarray  # (M, 3) float64 unit face normals, plane_d (M,): see TriangleSet
     plane_d: np.ndarray
-    normals_t32: np.ndarray  # float32 copies, normals component-major (3, M)
-    plane_d32: np.ndarray
 
     def closest_triangle(self, origins: np.ndarray, directions: np.ndarray,
                          tmax: np.ndarray | float | None = None, parallel: bool = True
@@ -80,8 +80,6 @@ class TriangleSet:
     vertices : (N, 3) float64;  faces : (M, 3) int64.
     normals  : (M, 3) float64 unit face normals by winding, (b − a) × (c − a) normalised
                (zero for degenerate triangles);  plane_d : (M,) float64, normals · a.
-    normals_t32 : (3, M) float32, the normals component-major (fast gathers for the masks);
-    plane_d32 : (M,) float32.
     """
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray):
@@ -92,9 +90,6 @@ class TriangleSet:
         length = np.linalg.norm(n, axis=1, keepdims=True)
         self.normals = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
         self.plane_d = dot(self.normals, tri[:, 0])
-        # float32 copies for the masks, whose arithmetic is float32 (see raytrace.masks).
-        self.normals_t32 = np.ascontiguousarray(self.normals.T, dtype=np.float32)
-        self.plane_d32 = self.plane_d.astype(np.float32)
 
     def __len__(self) -> int:
         return len(self.faces)
