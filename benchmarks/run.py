@@ -260,6 +260,9 @@ def main(argv=None) -> int:
                          "checkout for a full run: BENCHMARKS.md, docs/benchmarks.png, "
                          "benchmarks/results.json; test-output/benchmarks-quick for --quick)")
     ap.add_argument("--no-pyrender", action="store_true", help="skip the pyrender peer")
+    ap.add_argument("--report-only", type=Path, metavar="RESULTS_JSON",
+                    help="measure nothing: rewrite the markdown and the plot from a run's "
+                         "results.json (e.g. after editing benchmarks/OPTIMISATIONS.md)")
     args = ap.parse_args(argv)
     cfg = QUICK if args.quick else FULL
     if args.out is not None:
@@ -274,6 +277,14 @@ def main(argv=None) -> int:
                  "json": ROOT / "benchmarks" / "results.json"}
     for p in paths.values():
         p.parent.mkdir(parents=True, exist_ok=True)
+
+    optimisations = ROOT / "benchmarks" / "OPTIMISATIONS.md"
+    history = optimisations.read_text() if optimisations.is_file() else ""
+    if args.report_only:
+        results = json.loads(args.report_only.read_text())
+        report.write(results, paths["md"], paths["png"], history)
+        log(f"rewrote {paths['md']} and {paths['png']} from {args.report_only}")
+        return 0
 
     from shadowvol.context import create_context
 
@@ -297,8 +308,6 @@ def main(argv=None) -> int:
     results["machine"]["load_end"] = os.getloadavg()
     results["wall_s"] = time.perf_counter() - started
     paths["json"].write_text(json.dumps(results, indent=1, default=str))
-    optimisations = ROOT / "benchmarks" / "OPTIMISATIONS.md"
-    history = optimisations.read_text() if optimisations.is_file() else ""
     report.write(results, paths["md"], paths["png"], history)
     log(f"wrote {paths['md']}, {paths['png']} and {paths['json']} "
         f"in {results['wall_s']:.0f} s")
