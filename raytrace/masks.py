@@ -25,10 +25,25 @@ from .tolerances import light_margin, shadow_height
 MASK_TILE_RAYS = 1 << 15
 
 
-def scene_backend(scene: Scene, backend: str = "embree") -> TriangleBackend:
-    """A triangle backend holding all of the scene's triangles (for `shadow_masks`)."""
+class MaskTracer(NamedTuple):
+    """A triangle backend holding all of a scene's triangles, with what the masks need per
+    triangle: built once by `scene_backend`, reusable over many `shadow_masks` calls.
+
+    tracer    : the backend (Embree or numpy)
+    triangles : the per-triangle normals, planes and margins (`_Triangles`)
+    magnitude : float, the largest |coordinate| of any vertex
+    """
+
+    tracer: TriangleBackend
+    triangles: "_Triangles"
+    magnitude: float
+
+
+def scene_backend(scene: Scene, backend: str = "embree") -> MaskTracer:
+    """The scene's triangles in a backend, ready for `shadow_masks` (build once, trace often)."""
     vertices, faces, _ = scene.triangles()
-    return make_backend(backend, vertices, faces)
+    tracer = make_backend(backend, vertices, faces)
+    return MaskTracer(tracer, _Triangles.of(tracer), float(np.abs(tracer.vertices).max()))
 
 
 class _Triangles(NamedTuple):
@@ -52,7 +67,7 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def shadow_masks(scene: Scene, backend: str | TriangleBackend = "embree"
+def shadow_masks(scene: Scene, backend: str | MaskTracer = "embree"
                  ) -> tuple[np.ndarray, np.ndarray]:
     """The reference masks of `scene`.
 
@@ -73,7 +88,8 @@ def shadow_masks(scene: Scene, backend: str | TriangleBackend = "embree"
     * Vectors are stored component-major, (3, n): numpy broadcasts a (3,) vector over (n, 3)
       rows ~10x slower than it runs along contiguous (n,) rows.
     """
-    tracer = scene_backend(scene, backend) if isinstance(backend, str) else backend
+    tracer, triangles, magnitude = (scene_backend(scene, backend) if isinstance(backend, str)
+                                    else backend)
     H, W = scene.height, scene.width
     lit = np.zeros((len(scene.lights), H, W), bool)
     coverage = np.zeros((H, W), bool)
@@ -81,9 +97,7 @@ def shadow_masks(scene: Scene, backend: str | TriangleBackend = "embree"
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
     threads = min(getattr(tracer, "threads", 1), len(tiles))
     grids = (RayGrid(scene.camera, W, H, np.float32), RayGrid(scene.camera, W, H, np.float64))
-    triangles = _Triangles.of(tracer)
     reach = scene.extent  # a ray that starts farther than this from its point has left the scene
-    magnitude = float(np.abs(tracer.vertices).max())
 
     def trace_tile(rows: slice) -> None:
         lit[:, rows], coverage[rows] = _tile_masks(scene, tracer, triangles, grids, rows, reach,

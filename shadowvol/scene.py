@@ -14,6 +14,7 @@ sRGB only when written.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -354,9 +355,10 @@ class Scene:
                               for i, o in enumerate(self.objects)])
         return vertices, faces, ids
 
-    @property
+    @functools.cached_property
     def extent(self) -> float:
-        """Diagonal of the bounding box of all geometry and the eye: the scene's length scale."""
+        """Diagonal of the bounding box of all geometry and the eye: the scene's length scale.
+        Computed once per scene (it walks every vertex; the scene is immutable)."""
         pts = np.concatenate([o.vertices for o in self.objects] + [self.camera.eye[None]])
         return float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))) or 1.0
 
