@@ -79,7 +79,7 @@ def measure(scene, runs: int, full: bool = True) -> dict:
     seconds."""
     from raytrace.camera import primary_rays
     from raytrace.masks import scene_backend, shadow_masks
-    from raytrace.tolerances import surface_offset
+    from raytrace.tolerances import light_margin, shadow_height
     from shadowvol.scene import DirectionalLight
 
     vertices, faces, _ = scene.triangles()
@@ -87,38 +87,47 @@ def measure(scene, runs: int, full: bool = True) -> dict:
     backend = scene_backend(scene, "embree")
     build = time.perf_counter() - t0
     lit, coverage = shadow_masks(scene, backend)
+    tracer = backend.tracer
 
-    # The same rays, rebuilt outside the clock as float32 arrays ready for embreex: primary
-    # rays through the pixel centres from the near plane, shadow rays from the offset hit
-    # point toward the light wherever n·l > 0 (computed here in float64).
+    # The same rays, rebuilt outside the clock as float32 arrays ready for embreex, the way
+    # raytrace.masks builds them: primary rays through the pixel centres from the near plane;
+    # wherever n·l > 0, the segment from the hit point to the light shortened at the surface by
+    # shadow_height / (n·l) and before a point light by light_margin (computed here in float64).
     o, d = primary_rays(scene.camera, scene.width, scene.height, dtype=np.float32, unit=False)
-    hits = backend.closest_hit(o.astype(np.float64), d.astype(np.float64))
+    hits = tracer.closest_hit(o.astype(np.float64), d.astype(np.float64))
     idx = np.flatnonzero(hits.tri >= 0)
     point = o[idx] + hits.t[idx, None] * d[idx]
-    n = backend.normals[hits.tri[idx]]
+    n = tracer.normals[hits.tri[idx]]
     n *= np.where(np.einsum("ij,ij->i", n, d[idx]) > 0, -1.0, 1.0)[:, None]
+    height = shadow_height(np.abs(tracer.vertices[tracer.faces[hits.tri[idx]]]).max(axis=(1, 2)))
     light = scene.lights[0]
     if isinstance(light, DirectionalLight):  # unbounded rays along -direction
         toward = np.broadcast_to(-light.direction, point.shape)
-        dist = None
-    else:                                    # the segment to the light: tmax = 1
+        n_dot_l = np.einsum("ij,ij->i", n, toward)
+        cand = n_dot_l > 0
+        start = point[cand] + (height[cand] / n_dot_l[cand])[:, None] * toward[cand]
+        shadow_dir, dist = np.broadcast_to(-light.direction, start.shape), None
+    else:                                    # the segment to the light, tmax < 1
         toward = light.position - point
-        dist = 1.0
-    cand = np.einsum("ij,ij->i", n, toward) > 0
-    start = (point + surface_offset(scene) * n)[cand]
-    shadow_dir = (np.broadcast_to(-light.direction, start.shape) if dist is None
-                  else light.position - start).astype(np.float32)
+        n_dot_l = np.einsum("ij,ij->i", n, toward)
+        cand = n_dot_l > 0
+        near = height[cand] / n_dot_l[cand]
+        length = np.linalg.norm(toward[cand], axis=1)
+        start = point[cand] + near[:, None] * toward[cand]
+        shadow_dir = toward[cand]
+        dist = (1.0 - light_margin(light.position, backend.magnitude) / length
+                - near).astype(np.float32)
     raw = {
         "INTERSECT": (o, d, None),
-        "OCCLUDED": (start.astype(np.float32), np.ascontiguousarray(shadow_dir), dist),
+        "OCCLUDED": (start.astype(np.float32),
+                     np.ascontiguousarray(shadow_dir, dtype=np.float32), dist),
     }
     # Sanity: these rays give the same masks (up to float32-vs-float64 decisions of n·l > 0).
     raw_lit = np.zeros(len(o), bool)
-    raw_lit[idx[cand]] = backend._scene.run(*raw["OCCLUDED"][:2], dists=dist,
-                                            query="OCCLUDED") == -1
+    raw_lit[idx[cand]] = tracer._scene.run(*raw["OCCLUDED"], query="OCCLUDED") == -1
     mismatched = int((raw_lit.reshape(lit.shape[1:]) != lit[0]).sum())
-    emb = backend._scene
-    threads = backend.threads
+    emb = tracer._scene
+    threads = tracer.threads
     one_light = scene.replace(lights=scene.lights[:1])
 
     def raw_casts():
