@@ -31,7 +31,6 @@ from __future__ import annotations
 import numpy as np
 
 from . import stencil
-from .camera import NEARER
 
 STENCIL_LIMIT = 256  # counts are taken modulo this
 SATURATED = 255
@@ -82,31 +81,10 @@ def find_wrapped(ctx, gl, target, volumes, zfail: np.ndarray, lit: np.ndarray,
     as the count pass did (`CpuVolumes.draw_sides`): the frame's count is then half as large
     for those casters, and so is the entering count that bounds it.  Leaves the stencil
     holding the saturated entering counts."""
-    import moderngl
+    from .passes import count_volumes
 
-    from .passes import set_uniform
-
-    target.clear_stencil()
-    target.use(colour=False, depth=False)
-    ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = NEARER
-    by_zpass = [int(i) for i in np.flatnonzero(~zfail)]
-    by_zfail = [int(i) for i in np.flatnonzero(zfail)]
-    if by_zpass and clip_planes is not None:
-        for p in volumes.programs:
-            set_uniform(p, "u_clip_planes", clip_planes.astype(np.float32).tobytes())
-        with stencil.entering_faces_counting(gl, zfail=False, depth_clamp=False), \
-                stencil.clip_distances(gl, len(clip_planes)):
-            volumes.draw_sides(by_zpass, halve=halve, clipped=True)
-    elif by_zpass:
-        with stencil.entering_faces_counting(gl, zfail=False, depth_clamp=False):
-            volumes.draw_sides(by_zpass, halve=halve)
-    if by_zfail:
-        with stencil.entering_faces_counting(gl, zfail=True, depth_clamp=True):
-            volumes.draw_sides(by_zfail)
-            volumes.draw_caps(by_zfail, near=False)
-        with stencil.entering_faces_counting(gl, zfail=True, depth_clamp=False):
-            volumes.draw_caps(by_zfail, near=True)
-    target.use()
+    count_volumes(ctx, gl, target, volumes, zfail, halve=halve, clip_planes=clip_planes,
+                  counting=lambda zfail_group, depth_clamp: stencil.entering_faces_counting(
+                      gl, zfail=zfail_group, depth_clamp=depth_clamp))
     entering = target.read_stencil().astype(np.int16) & 0xFF  # read as signed; want 0..255
     return (entering >= SATURATED) & lit

@@ -72,7 +72,7 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
 
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
                   zfail: np.ndarray, halve: bool = False,
-                  clip_planes: np.ndarray | None = None) -> None:
+                  clip_planes: np.ndarray | None = None, counting=None) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
     `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
 
@@ -81,7 +81,16 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     the counts themselves differ.  Only for casters that z-pass counts correctly.
 
     `clip_planes` : (6, 4) float64 or None, the box of `methods.zpass_clip_planes`: z-pass
-    side quads are clipped to it (counts at covered pixels unchanged, uncovered ones not)."""
+    side quads are clipped to it (counts at covered pixels unchanged, uncovered ones not).
+
+    `counting(zfail, depth_clamp)` : the stencil state (a context manager from `stencil`) under
+    which each group of volume faces is drawn; default: the signed count
+    (`stencil.zpass_counting`, `stencil.zfail_counting`).  The stencil-overflow check draws the
+    same faces under `stencil.entering_faces_counting`."""
+    if counting is None:
+        def counting(zfail_group: bool, depth_clamp: bool):
+            return (stencil.zfail_counting(gl, depth_clamp=depth_clamp) if zfail_group
+                    else stencil.zpass_counting(gl))
     target.clear_stencil()
     target.use(colour=False, depth=False)
     ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count
@@ -91,16 +100,16 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     if by_zpass and clip_planes is not None:
         for p in volumes.programs:
             set_uniform(p, "u_clip_planes", clip_planes.astype(np.float32).tobytes())
-        with stencil.zpass_counting(gl), stencil.clip_distances(gl, len(clip_planes)):
+        with counting(False, False), stencil.clip_distances(gl, len(clip_planes)):
             volumes.draw_sides(by_zpass, halve=halve, clipped=True)
     elif by_zpass:
-        with stencil.zpass_counting(gl):
+        with counting(False, False):
             volumes.draw_sides(by_zpass, halve=halve)
     if by_zfail:
-        with stencil.zfail_counting(gl, depth_clamp=True):
+        with counting(True, True):
             volumes.draw_sides(by_zfail)
             volumes.draw_caps(by_zfail, near=False)
-        with stencil.zfail_counting(gl, depth_clamp=False):
+        with counting(True, False):
             volumes.draw_caps(by_zfail, near=True)
     target.use()
 
