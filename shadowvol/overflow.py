@@ -31,12 +31,14 @@ from __future__ import annotations
 import numpy as np
 
 from . import stencil
+from .topology import Topology
 
 STENCIL_LIMIT = 256  # counts are taken modulo this
 SATURATED = 255
-# Objects with more triangles are not tested for convexity (their bound is their triangle
-# count, over the limit anyway); the test costs ~1 ms per 1000 triangles, once per scene.
-CONVEXITY_TEST_MAX = 20000
+# An edge counts as convex when the neighbouring corner lies no more than this far (relative:
+# the sine of the angle) on the outer side of the triangle's plane: coplanar neighbours (a box's
+# faces, after a rotation) differ from 0 by rounding only.
+CONVEX_TOLERANCE = 1e-9
 
 
 class StencilOverflowError(RuntimeError):
@@ -53,22 +55,53 @@ class StencilOverflowError(RuntimeError):
             f"the light avoid it")
 
 
-def object_bound(vertices: np.ndarray, faces: np.ndarray) -> int:
+def is_closed_convex(topo: Topology) -> bool:
+    """True when the welded mesh bounds one convex body, so that a segment crosses it at most
+    twice.  Tested in numpy on its topology:
+
+    - closed and consistently wound: every edge has exactly two triangles, running it in
+      opposite directions, and no triangle is degenerate;
+    - locally convex: at every edge, the second triangle's opposite corner lies on the inner
+      side of the first triangle's plane (or on it, up to a relative CONVEX_TOLERANCE), for one
+      orientation of the whole mesh;
+    - Euler characteristic V − E + F = 2.  A closed surface that is locally convex everywhere
+      has only sphere-like components (each of characteristic 2), so 2 means one component,
+      and a connected, closed, locally convex surface bounds a convex body."""
+    faces = topo.faces
+    if len(faces) < 4 or np.any(topo.triangles_per_edge != 2):
+        return False
+    winding = np.bincount(topo.inc_edge, weights=topo.inc_parity, minlength=len(topo.edges))
+    if np.any(winding != 0):
+        return False
+    if len(topo.vertices) - len(topo.edges) + len(faces) != 2:
+        return False
+    normals, origins = topo.face_frames
+    # incidences are sorted by edge, two per edge: pair each edge's first triangle with the
+    # second triangle's opposite corner
+    first, corner = topo.inc_face[0::2], topo.vertices[topo.inc_opposite[1::2]]
+    n, towards = normals[first], corner - origins[first]
+    scale = np.linalg.norm(n, axis=1) * np.linalg.norm(towards, axis=1)
+    if np.any(scale == 0):
+        return False
+    side = np.einsum("ij,ij->i", n, towards) / scale
+    return bool(np.all(side <= CONVEX_TOLERANCE) or np.all(side >= -CONVEX_TOLERANCE))
+
+
+def topology_bound(topo: Topology) -> int:
     """At most how many of these triangles one segment can cross: 2 for a closed convex mesh,
-    else the number of triangles.  vertices (n, 3) float64, faces (m, 3) int."""
-    import trimesh
-
-    if len(faces) <= 2 or len(faces) > CONVEXITY_TEST_MAX:
-        return len(faces)
-    mesh = trimesh.Trimesh(vertices, faces, process=True)  # welds duplicated seam vertices
-    if mesh.is_watertight and mesh.is_convex:
-        return 2
-    return len(faces)
+    else the number of triangles."""
+    return 2 if is_closed_convex(topo) else len(topo.faces)
 
 
-def count_bound(scene) -> int:
-    """A bound on the stencil count at any pixel for any light of `scene` (see the module)."""
-    return sum(object_bound(o.vertices, o.faces) for o in scene.objects)
+def object_bound(vertices: np.ndarray, faces: np.ndarray) -> int:
+    """`topology_bound` of a mesh: vertices (n, 3) float64, faces (m, 3) int."""
+    return topology_bound(Topology.build(vertices, faces))
+
+
+def count_bound(topologies) -> int:
+    """A bound on the stencil count at any pixel for any light of a scene whose objects have
+    these topologies (see the module)."""
+    return sum(topology_bound(t) for t in topologies)
 
 
 def find_wrapped(ctx, gl, target, volumes, zfail: np.ndarray, lit: np.ndarray,

@@ -118,7 +118,7 @@ class Renderer:
     def count_bound(self) -> int:
         """`overflow.count_bound` of the scene: below 256 no stencil count can wrap."""
         if self._count_bound is None:
-            self._count_bound = overflow.count_bound(self.scene)
+            self._count_bound = overflow.count_bound(self.geometry.topologies)
         return self._count_bound
 
     def _check_overflow(self, result: RenderResult, silhouettes: str, camera, lights,

@@ -114,3 +114,29 @@ def test_the_command_line_reports_it_with_status_3(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 3 and err.startswith("error: stencil overflow: light 0")
     assert not (tmp_path / "x.png").exists()
+
+
+def test_closed_convex_classification():
+    """The overflow bound's convexity test (numpy, on the welded topology): 2 only for one
+    closed, consistently wound, locally convex body, whichever way it is wound."""
+    from shadowvol import primitives
+    from shadowvol.topology import Topology
+
+    box = primitives.box("b", size=[1, 2, 3], transform=primitives.Transform(rotation=[10, 33, 71]))
+    v, f = box.vertices, box.faces
+    assert overflow.is_closed_convex(Topology.build(v, f))
+    assert overflow.is_closed_convex(Topology.build(v, f[:, ::-1]))        # wound inward
+    assert not overflow.is_closed_convex(Topology.build(v, f[:-1]))        # open: a face missing
+    flipped = f.copy()
+    flipped[0] = flipped[0, ::-1]
+    assert not overflow.is_closed_convex(Topology.build(v, flipped))       # inconsistent winding
+    two = np.concatenate([v, v + 10.0])
+    assert not overflow.is_closed_convex(Topology.build(two, np.concatenate([f, f + len(v)])))
+    dented = v.copy()
+    top = int(np.argmax(v[:, 1]))
+    dented[top] -= 0.6 * (v[top] - v.mean(axis=0))                       # push a corner inward
+    assert not overflow.is_closed_convex(Topology.build(dented, f))
+    # seam duplicates weld: an unwelded icosphere is still one convex body
+    vi, fi = _icosphere()
+    assert overflow.is_closed_convex(Topology.build(vi[fi].reshape(-1, 3),
+                                                    np.arange(3 * len(fi)).reshape(-1, 3)))
