@@ -30,7 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-SCENES = Path(__file__).resolve().parent.parent / "scenes"  # a source checkout's scenes/
+from .resources import data_dir
+
+SCENES = data_dir("scenes")  # the installed example scenes, or a source checkout's scenes/
 SMALL_SCALE = 4            # --small: every scene at 1/4 of its width and height
 GAP = 4                    # white pixels between panels
 RAY_TREE_DEPTH = 2         # "sketch all rays to recursion depth 2"
@@ -153,8 +155,7 @@ class Gallery:
         self.scenes = Path(scenes)
         if not self.scenes.is_dir():
             from .scene import SceneError
-            raise SceneError("--scenes", f"no scenes folder at {self.scenes} (the demo needs a "
-                                         f"source checkout's scenes/, or pass --scenes DIR)")
+            raise SceneError("--scenes", f"no scenes folder at {self.scenes} (pass --scenes DIR)")
         self._own_ctx = ctx is None
         self.ctx = create_context() if ctx is None else ctx
 
@@ -502,7 +503,8 @@ def add_demo_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--small", action="store_true",
                    help=f"every scene at 1/{SMALL_SCALE} of its size (fast: for CI)")
     p.add_argument("--scenes", type=Path, default=SCENES, metavar="DIR",
-                   help="the scenes folder (default: the source checkout's scenes/)")
+                   help="the scenes folder (default: the example scenes installed with "
+                        "shadowvol, or a source checkout's scenes/)")
     p.set_defaults(func=demo_command)
     return p
 

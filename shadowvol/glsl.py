@@ -14,9 +14,9 @@ from pathlib import Path
 
 import moderngl
 
-_HERE = Path(__file__).resolve().parent
-SHADER_DIRS = (_HERE / "shaders",          # installed wheel: <site-packages>/shadowvol/shaders
-               _HERE.parent / "shaders")   # source checkout: <repo>/shaders beside <repo>/shadowvol
+from .resources import data_dirs
+
+SHADER_DIRS = data_dirs("shaders")  # the installed wheel's, then a source checkout's
 _STAGES = {"vertex_shader": "vertex", "geometry_shader": "geometry", "fragment_shader": "fragment"}
 # Line references in driver logs: Mesa "0:12(5): error", NVIDIA "0(12) : error", AMD "ERROR: 0:12:"
 _LINE = re.compile(r"\b\d+[:(](\d+)\)?")
