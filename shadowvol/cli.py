@@ -30,7 +30,6 @@ EXIT_OK = 0
 EXIT_OVER_BUDGET = 1
 EXIT_BAD_INPUT = 2
 EXIT_RENDER_FAILED = 3
-EXIT_ERROR = EXIT_BAD_INPUT  # the old name
 
 EXIT_STATUS_HELP = """\
 exit status: 0 success; 1 a comparison over its budget (compare --max-interior); 2 bad input

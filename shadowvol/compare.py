@@ -29,9 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import maskdiff
+from .cli import EXIT_OK, EXIT_OVER_BUDGET
 from .scene import DirectionalLight, PointLight, Scene, SpotLight
-
-EXIT_OK, EXIT_OVER_BUDGET, EXIT_BAD_INPUT = 0, 1, 2
 
 NOT_ASKED = "not asked"
 POINT_LIGHT_NA = "n/a (point light)"
