@@ -30,6 +30,7 @@ import numpy as np
 
 from . import maskdiff
 from .cli import EXIT_OK, EXIT_OVER_BUDGET
+from .files import join
 from .scene import DirectionalLight, PointLight, Scene, SpotLight
 
 NOT_ASKED = "not asked"
@@ -195,21 +196,14 @@ def _blank(height: int, width: int, text: str) -> np.ndarray:
 
 def _row(panels: list[tuple[str, np.ndarray]]) -> np.ndarray:
     """Panels (H, W, 3) uint8, each under its label, side by side with gaps."""
-    cells = []
-    for k, (label, image) in enumerate(panels):
-        h, w = image.shape[:2]
-        if k:
-            cells.append(np.full((h + LABEL_HEIGHT, GAP, 3), BACKDROP, np.uint8))
-        cells.append(np.concatenate([_text_strip(w, LABEL_HEIGHT, label), image]))
-    return np.concatenate(cells, axis=1)
+    cells = [np.concatenate([_text_strip(image.shape[1], LABEL_HEIGHT, label), image])
+             for label, image in panels]
+    return join(cells, axis=1, gap=GAP, colour=BACKDROP)
 
 
 def _stack(rows: list[np.ndarray]) -> np.ndarray:
     """Rows of equal width one under another, with gaps."""
-    out = [rows[0]]
-    for r in rows[1:]:
-        out += [np.full((GAP, r.shape[1], 3), BACKDROP, np.uint8), r]
-    return np.concatenate(out)
+    return join(rows, axis=0, gap=GAP, colour=BACKDROP)
 
 
 def _legend(width: int) -> np.ndarray:

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .files import join
 from .resources import data_dir
 
 SCENES = data_dir("scenes")  # the installed example scenes, or a source checkout's scenes/
@@ -103,20 +104,12 @@ def labelled(panel: np.ndarray, label: str, small: bool) -> np.ndarray:
 
 def row(panels: list[np.ndarray]) -> np.ndarray:
     """Panels of equal height side by side, GAP white pixels apart."""
-    gap = np.full((panels[0].shape[0], GAP, 3), 255, np.uint8)
-    parts = [panels[0]]
-    for p in panels[1:]:
-        parts += [gap, p]
-    return np.concatenate(parts, axis=1)
+    return join(panels, axis=1, gap=GAP)
 
 
 def column(rows: list[np.ndarray]) -> np.ndarray:
     """Rows of equal width one above the other, GAP white pixels apart."""
-    gap = np.full((GAP, rows[0].shape[1], 3), 255, np.uint8)
-    parts = [rows[0]]
-    for r in rows[1:]:
-        parts += [gap, r]
-    return np.concatenate(parts, axis=0)
+    return join(rows, axis=0, gap=GAP)
 
 
 def titled(image: np.ndarray, title: str, small: bool) -> np.ndarray:

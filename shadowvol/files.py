@@ -102,8 +102,17 @@ def masks_image(lit: np.ndarray, coverage: np.ndarray) -> np.ndarray:
         panels.append(panel)
     if not panels:
         panels = [np.where(coverage[..., None], 96, 0).astype(np.uint8).repeat(3, axis=2)]
-    gap = np.full((lit.shape[1], 4, 3), (200, 40, 40), np.uint8)
-    out = [panels[0]]
-    for p in panels[1:]:
-        out += [gap, p]
-    return np.concatenate(out, axis=1)
+    return join(panels, axis=1, colour=(200, 40, 40))
+
+
+def join(images: list[np.ndarray], axis: int, gap: int = 4,
+         colour: tuple[int, int, int] = (255, 255, 255)) -> np.ndarray:
+    """(H, W, 3) uint8 images side by side (axis=1, equal heights) or one above another
+    (axis=0, equal widths), with `gap` pixels of `colour` between neighbours."""
+    shape = list(images[0].shape)
+    shape[axis] = gap
+    spacer = np.full(shape, colour, np.uint8)
+    parts = [images[0]]
+    for image in images[1:]:
+        parts += [spacer, image]
+    return np.concatenate(parts, axis=axis)
