@@ -23,10 +23,14 @@ from collections import defaultdict
 import moderngl
 import numpy as np
 
-from shadowvol import passes
-from shadowvol.renderer import Renderer
-from shadowvol.silhouettes import (edge_multiplicity, light_vector, quads_to_triangles,
-                                   side_quads, topology_signs)
+from shadowvol.raster import passes
+from shadowvol.raster.renderer import Renderer
+from shadowvol.raster.silhouettes import (
+    edge_multiplicity,
+    quads_to_triangles,
+    side_quads,
+    topology_signs,
+)
 
 METHODS = ("zpass", "zfail", "auto")
 SILHOUETTES = ("cpu", "gpu")
@@ -121,8 +125,8 @@ def gpu_silhouette_times(renderer: Renderer, repeat: int, lights=None) -> dict:
     edge records of all casters drawn with rasterizer discard, glFinish-bracketed."""
     ctx = renderer.ctx
     vols = renderer.volumes("gpu")
-    from shadowvol.camera import view_projection
-    from shadowvol.context import make_current
+    from shadowvol.raster.context import make_current
+    from shadowvol.raster.projection import view_projection
     make_current(ctx)
     scene = renderer.scene
     passes.set_camera(vols.programs, view_projection(scene.camera, scene.aspect), scene.camera)
@@ -132,7 +136,7 @@ def gpu_silhouette_times(renderer: Renderer, repeat: int, lights=None) -> dict:
 
     def run():
         for light in lights:
-            light4 = light_vector(light)
+            light4 = light.homogeneous
             vols.prepare(light4)
             passes.set_uniform(vols.edge_program, "u_light", tuple(float(x) for x in light4))
             vols.draw_sides(objects)
@@ -157,7 +161,7 @@ def cpu_silhouette_times(renderer: Renderer, repeat: int, lights=None) -> dict:
     """CPU silhouette extraction alone (signs, multiplicities, side quads as triangles; no
     upload, no cap lists) of all casters for `lights` (default: the scene's)."""
     topologies = renderer.geometry.topologies
-    lights = [light_vector(l) for l in (renderer.scene.lights if lights is None else lights)]
+    lights = [l.homogeneous for l in (renderer.scene.lights if lights is None else lights)]
 
     def run():
         for light4 in lights:
@@ -195,7 +199,7 @@ def pyrender_frames(scene):
     """Yields {"shadowed": fn, "unshadowed": fn}: pyrender 0.1.45 frames of `scene` (its own EGL
     context; each call makes it current and reads colour and depth back, as
     OffscreenRenderer.render always does).  The caller's context is current again after."""
-    from shadowvol import pyrender_bridge as pb
+    from shadowvol.compare import pyrender_peer as pb
 
     pr_scene = pb.to_pyrender(scene)
     with pb._offscreen(scene.width, scene.height) as pr:

@@ -33,7 +33,7 @@ def main(argv=None) -> int:
     ap.add_argument("--top", type=int, default=25)
     args = ap.parse_args(argv)
 
-    from shadowvol.renderer import Renderer
+    from shadowvol.raster.renderer import Renderer
 
     scene = scenes.occluder_scene(args.size, args.lights)
     with Renderer(scene) as r:

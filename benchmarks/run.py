@@ -42,6 +42,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 import bench_masks  # noqa: E402
 import frames  # noqa: E402
 import report  # noqa: E402
+
 import scenes  # noqa: E402
 
 FULL = dict(
@@ -127,7 +128,7 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
     them (`render(lights=...)`), and all light counts and variants take turns in the same
     rounds: the cost of a further light is then measured against a floor timed in the same
     rounds, not in another minute with another load."""
-    from shadowvol.renderer import Renderer
+    from shadowvol.raster.renderer import Renderer
 
     width, height = cfg["size"]
     rows, phases, sil, memory = [], [], {}, {}
@@ -170,7 +171,7 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
 
 
 def resolution_section(ctx, cfg) -> list:
-    from shadowvol.renderer import Renderer
+    from shadowvol.raster.renderer import Renderer
 
     out = []
     warm, rep = cfg["resolution_repeat"]
@@ -188,8 +189,8 @@ def resolution_section(ctx, cfg) -> list:
 
 
 def pyrender_section(ctx, cfg) -> list:
-    from shadowvol.context import make_current
-    from shadowvol.renderer import Renderer
+    from shadowvol.raster.context import make_current
+    from shadowvol.raster.renderer import Renderer
 
     width, height = cfg["size"]
     out = []
@@ -286,7 +287,7 @@ def main(argv=None) -> int:
         log(f"rewrote {paths['md']} and {paths['png']} from {args.report_only}")
         return 0
 
-    from shadowvol.context import create_context
+    from shadowvol.raster.context import create_context
 
     command = "python benchmarks/run.py" + (" --quick" if args.quick else "") + \
               (" --no-pyrender" if args.no_pyrender else "")

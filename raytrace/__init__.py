@@ -4,24 +4,14 @@
     image = raytrace.render(scene)                # (H, W, 3) float64 linear RGB
     lit, coverage = raytrace.shadow_masks(scene)  # (L, H, W) bool, (H, W) bool
 
-It shares only the scene model (`shadowvol.scene`) and CONVENTIONS.md with the rasterizer, never
-its code, so that it stays an independent witness.  It never imports GL.
+It shares with the rasterizer only the scene model, the writers (`shadowvol.io`,
+`shadowvol.pictures`), the exit-status table (`shadowvol.cli.status`) and docs/CONVENTIONS.md,
+never its code, so that it stays an independent witness.  It never imports GL.
 """
 
 from __future__ import annotations
 
+from raytrace.masks import shadow_masks
+from raytrace.whitted import render
+
 __all__ = ["render", "shadow_masks"]
-
-
-def render(scene, max_depth=None, backend="embree", progress=None):
-    """Whitted-ray-trace `scene`: (H, W, 3) float64 linear RGB, row 0 at the top.
-    See `raytrace.whitted.render`."""
-    from .whitted import render as _render
-    return _render(scene, max_depth=max_depth, backend=backend, progress=progress)
-
-
-def shadow_masks(scene, backend="embree"):
-    """Reference masks per CONVENTIONS.md: lit (L, H, W) bool, coverage (H, W) bool.
-    See `raytrace.masks.shadow_masks`."""
-    from .masks import shadow_masks as _shadow_masks
-    return _shadow_masks(scene, backend=backend)

@@ -34,6 +34,8 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 
+from shadowvol.errors import require
+
 from .intersect import dot, ray_triangle
 from .tolerances import BVH_BOX_PAD_RELATIVE
 
@@ -269,12 +271,10 @@ class EmbreeBackend(TriangleSet):
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, threads: int | None = None):
         super().__init__(vertices, faces)
-        try:
-            from embreex import rtcore_scene
-            from embreex.mesh_construction import TriangleMesh
-        except ImportError as exc:  # a missing dependency fails loudly, naming the way out
-            raise ImportError("the Embree backend needs embreex (pip install embreex); "
-                              "or use backend='numpy'") from exc
+        rtcore_scene = require("embreex.rtcore_scene", "the Embree backend (or backend "
+                               "'numpy', for small scenes)", package="embreex")
+        TriangleMesh = require("embreex.mesh_construction", "the Embree backend",
+                               package="embreex").TriangleMesh
         # float32: Embree's only vertex format.
         self._scene = rtcore_scene.EmbreeScene()
         TriangleMesh(self._scene, self.vertices.astype(np.float32),

@@ -4,19 +4,29 @@
     raytrace masks  scenes/whitted.toml -o whitted-masks.npz      (+ whitted-masks.png)
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
 
-Outputs are written atomically (shadowvol.files): an error never leaves half a file behind.
-A bad scene prints `error: <file>: <key>: <problem>` and exits with status 2.
+Outputs are written atomically (shadowvol.io): an error never leaves half a file behind.
+A bad scene prints `error: <file>: <key>: <problem>`; the exit statuses are shadowvol's
+(`shadowvol.cli.status`).
 """
 
 from __future__ import annotations
 
 import argparse
+import io
 import sys
 from pathlib import Path
 
-from .backends import BACKENDS
+from shadowvol import __version__
+from shadowvol.cli import outputs, status
+from shadowvol.io import atomic_write, save_masks, save_png
+from shadowvol.pictures import masks_image
+from shadowvol.scene import SceneError
+from shadowvol.scenefile import load_scene
 
-EXIT_BAD_INPUT = 2
+from .backends import BACKENDS
+from .masks import shadow_masks
+from .raytree import draw_tree, format_tree, ray_tree
+from .whitted import render
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -25,7 +35,10 @@ def _parser() -> argparse.ArgumentParser:
         description="Reference CPU ray tracer of shadowvol: Whitted images and the exact "
                     "shadow masks the shadow-volume rasterizer is checked against.",
         epilog="Scene files: TOML or JSON, see scenes/README.md.  Masks follow "
-               "CONVENTIONS.md: lit (L, H, W) bool per light in scene order, coverage (H, W).")
+               "docs/CONVENTIONS.md: lit (L, H, W) bool per light in scene order, coverage "
+               "(H, W).\n\n" + status.EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--version", action="version", version=f"raytrace (shadowvol) {__version__}")
     sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     r = sub.add_parser("render", help="ray-trace an image (Whitted: shadows, reflection, "
@@ -78,69 +91,51 @@ def _backend(p: argparse.ArgumentParser) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
-    from shadowvol.files import masks_image, save_masks, save_png
-    from shadowvol.scene import SceneError
-    from shadowvol.scenefile import load_scene
-
+    status.on_sigterm()
     try:
-        scene = load_scene(args.scene)
-    except SceneError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-
-    try:
-        if args.command == "tree":
-            return _tree(args, scene)
-        if args.command == "render":
-            from .whitted import render
-            if args.max_depth is not None and args.max_depth < 0:
-                print(f"error: --max-depth must be >= 0, got {args.max_depth}", file=sys.stderr)
-                return EXIT_BAD_INPUT
-            image = render(scene, max_depth=args.max_depth, backend=args.backend,
-                           progress=False if args.no_progress else None)
-            save_png(args.output, image)
-            print(f"wrote {args.output}", file=sys.stderr)
-        else:
-            from .masks import shadow_masks
-            png = None if args.no_png else args.png or str(Path(args.output).with_suffix(".png"))
-            if png is not None and Path(png).resolve() == Path(args.output).resolve():
-                print(f"error: the masks and their picture would both be {args.output}; "
-                      "give the masks a .npz name or choose --png", file=sys.stderr)
-                return EXIT_BAD_INPUT
-            lit, coverage = shadow_masks(scene, backend=args.backend)
-            save_masks(args.output, lit, coverage)
-            written = [args.output]
-            if png is not None:
-                save_png(png, masks_image(lit, coverage))
-                written.append(png)
-            print(f"wrote {', '.join(written)}", file=sys.stderr)
-    except ImportError as exc:  # e.g. embreex missing: say so, and how to do without
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
-    except OSError as exc:
-        print(f"error: cannot write output: {exc}", file=sys.stderr)
-        return 1
-    return 0
+        args = _parser().parse_args(argv)
+    except KeyboardInterrupt as exc:
+        return status.report(exc)
+    return status.run(COMMANDS[args.command], args)
 
 
-def _tree(args, scene) -> int:
+def _render(args) -> int:
+    outputs.check({"image": Path(args.output)}, {"image": "-o"})
+    if args.max_depth is not None and args.max_depth < 0:
+        raise SceneError("--max-depth", f"must be >= 0, got {args.max_depth}")
+    scene = load_scene(args.scene)
+    image = render(scene, max_depth=args.max_depth, backend=args.backend,
+                   progress=False if args.no_progress else None)
+    save_png(args.output, image)
+    print(f"wrote {args.output}", file=sys.stderr)
+    return status.OK
+
+
+def _masks(args) -> int:
+    paths = {"masks": Path(args.output)}
+    if not args.no_png:
+        paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
+    outputs.check(paths, {"masks": "-o", "picture": "--png"})
+    scene = load_scene(args.scene)
+    lit, coverage = shadow_masks(scene, backend=args.backend)
+    save_masks(paths["masks"], lit, coverage)
+    if "picture" in paths:
+        save_png(paths["picture"], masks_image(lit, coverage))
+    print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)
+    return status.OK
+
+
+def _tree(args) -> int:
     """The `tree` command: print the ray tree of one pixel, draw it with -o."""
-    import io
-
-    from shadowvol.files import atomic_write
-
-    from .raytree import draw_tree, format_tree, ray_tree
-    from .whitted import render
-
-    x, y = args.pixel
+    if args.output:
+        outputs.check({"picture": Path(args.output)}, {"picture": "-o"})
     if args.depth is not None and args.depth < 0:
-        print(f"error: --depth must be >= 0, got {args.depth}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        raise SceneError("--depth", f"must be >= 0, got {args.depth}")
+    scene = load_scene(args.scene)
+    x, y = args.pixel
     if not (0 <= x < scene.width and 0 <= y < scene.height):
-        print(f"error: --pixel {x} {y} is outside the {scene.width}x{scene.height} image",
-              file=sys.stderr)
-        return EXIT_BAD_INPUT
+        raise SceneError("--pixel", f"{x} {y} is outside the {scene.width}x{scene.height} "
+                                    "image")
     tree = ray_tree(scene, x, y, max_depth=args.depth, backend=args.backend)
     print(format_tree(tree, scene))
     if args.output:
@@ -150,7 +145,10 @@ def _tree(args, scene) -> int:
         with atomic_write(args.output) as f:
             f.write(buf.getvalue())
         print(f"wrote {args.output}", file=sys.stderr)
-    return 0
+    return status.OK
+
+
+COMMANDS = {"render": _render, "masks": _masks, "tree": _tree}
 
 
 if __name__ == "__main__":

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from shadowvol.io import encode_srgb
 from shadowvol.scene import DirectionalLight, Scene, SpotLight
 
 from .camera import camera_basis, primary_rays
@@ -370,13 +371,10 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
     raytrace.render(scene); None: a grey frame) with every ray projected through the camera,
     coloured by kind and numbered as in `format_tree`; a side view and a top view (the scene's
     objects, the eye, the lights and the same rays, orthographic); a legend below."""
-    import matplotlib
-    matplotlib.use("Agg")
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
     from matplotlib.patheffects import withStroke
 
-    from shadowvol.files import encode_srgb
 
     nodes = list(tree.walk())
     outline = [withStroke(linewidth=2, foreground="black")]  # labels legible on any colour

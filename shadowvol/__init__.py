@@ -1,20 +1,51 @@
 """shadowvol: exact hard shadows with stencil shadow volumes, headless (moderngl on EGL).
 
-The scene model (`shadowvol.scene`, `shadowvol.scenefile`, `shadowvol.primitives`) imports no GL,
-so the ray tracer can share it; the GL renderer is imported on first use of `render`.
+    import shadowvol
+    scene = shadowvol.load_scene(shadowvol.example_scene("cage"))
+    result = shadowvol.render(scene)              # image, lit (L, H, W), coverage (H, W)
+    shadowvol.save_png("cage.png", result.image)
+    shadowvol.save_masks("cage.npz", result.lit, result.coverage)
+
+Importing the package loads neither GL nor trimesh nor matplotlib: the renderer is imported on
+first use of `Renderer` or `render`, trimesh when a mesh is first read.  The layers are drawn in
+docs/ARCHITECTURE.md.
 """
 
-from .scene import (Camera, DirectionalLight, Material, Object, PointLight, Scene, SceneError,
-                    SpotLight)
-from .scenefile import load_scene
+from __future__ import annotations
 
-__all__ = ["Camera", "DirectionalLight", "Material", "Object", "PointLight", "Scene",
-           "SceneError", "SpotLight", "load_scene", "render"]
+from shadowvol.resources import example_scene
+from shadowvol.scene import (
+    Camera,
+    DirectionalLight,
+    Material,
+    Object,
+    PointLight,
+    Scene,
+    SceneError,
+    SpotLight,
+)
+
+__version__ = "0.2.0"
+
+__all__ = ["Camera", "DirectionalLight", "Material", "Object", "PointLight", "Renderer",
+           "Scene", "SceneError", "SpotLight", "__version__", "example_scene", "load_scene",
+           "render", "save_masks", "save_png", "save_scene"]
+
+# name -> the module that defines it, imported on first access (PEP 562)
+_LAZY = {"Renderer": "shadowvol.raster.renderer", "render": "shadowvol.raster.renderer",
+         "load_scene": "shadowvol.scenefile", "save_scene": "shadowvol.scenefile",
+         "save_png": "shadowvol.io", "save_masks": "shadowvol.io"}
 
 
-def __getattr__(name):
-    # Deferred so that `import shadowvol.scene` (the ray tracer does) never loads moderngl.
-    if name == "render":
-        from .renderer import render
-        return render
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
     raise AttributeError(f"module 'shadowvol' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

@@ -12,9 +12,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import trimesh
 
-from .scene import Material, Object, Parallelogram, SceneError, Sphere, num, unit, vec
+from shadowvol.scene import (
+    Material,
+    Object,
+    Parallelogram,
+    SceneError,
+    Sphere,
+    num,
+    unit,
+    vec,
+)
 
 DEFAULT_SPHERE_SUBDIVISIONS = 3  # icosphere level: 1280 triangles
 
@@ -81,6 +89,8 @@ def sphere(name: str, center, radius: float, material: Material | None = None,
         raise SceneError("transform.scale", "a sphere needs a uniform scale")
     if isinstance(subdivisions, bool) or not isinstance(subdivisions, int) or not 0 <= subdivisions <= 7:
         raise SceneError("subdivisions", f"must be a whole number 0..7, got {subdivisions!r}")
+    import trimesh  # heavy: imported when a sphere is first tessellated
+
     ico = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
     local = np.asarray(ico.vertices) * radius + center
     world_center = transform.points(center[None])[0]
@@ -120,6 +130,8 @@ def box(name: str, center=(0.0, 0.0, 0.0), size=(1.0, 1.0, 1.0),
     closed, wound outward."""
     center = vec(center, "center")
     size = vec(size, "size", positive=True)
+    import trimesh  # heavy: imported when a box is first built
+
     b = trimesh.creation.box(extents=size)
     return Object(name, transform.points(np.asarray(b.vertices) + center), np.asarray(b.faces),
                   material or Material())

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from shadowvol.scene import SceneError
+
 _HERE = Path(__file__).resolve().parent
 
 
@@ -23,3 +25,19 @@ def data_dir(name: str) -> Path:
     absence the caller reports)."""
     installed, checkout = data_dirs(name)
     return installed if installed.is_dir() else checkout
+
+
+def example_scene(name: str) -> Path:
+    """The path of an example scene shipped with shadowvol: `example_scene("cage")` is the
+    installed (or checkout's) scenes/cage.toml.  Raises SceneError naming the examples there
+    are when `name` is not one of them."""
+
+    folder = data_dir("scenes")
+    stem = Path(name).stem if Path(name).suffix in (".toml", ".json") else name
+    for suffix in (".toml", ".json"):
+        path = folder / f"{stem}{suffix}"
+        if path.is_file():
+            return path
+    known = sorted(p.stem for p in folder.glob("*.toml")) if folder.is_dir() else []
+    raise SceneError("example_scene", f"no example scene {name!r}; the examples are "
+                                      f"{', '.join(known) or '(none: scenes folder missing)'}")

@@ -137,6 +137,18 @@ class _Emitter:
         """(3,) float64: color * intensity (no distance fall-off)."""
         return self.color * self.intensity
 
+    @functools.cached_property
+    def homogeneous(self) -> np.ndarray:
+        """(4,) float64, read-only: the light as a homogeneous point, (position, 1), or for a
+        directional light (-direction, 0), the point at infinity it comes from.  The one
+        conversion every pass and the planar projection use; computed once per light."""
+        if isinstance(self, DirectionalLight):
+            h = np.append(-self.direction, 0.0)
+        else:
+            h = np.append(self.position, 1.0)
+        h.setflags(write=False)
+        return h
+
 
 @dataclass(frozen=True, eq=False)
 class PointLight(_Emitter):

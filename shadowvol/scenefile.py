@@ -13,8 +13,17 @@ from pathlib import Path
 
 import numpy as np
 
-from . import primitives
-from .scene import Camera, DirectionalLight, Material, PointLight, Scene, SceneError, SpotLight
+from shadowvol import primitives
+from shadowvol.io import atomic_write
+from shadowvol.scene import (
+    Camera,
+    DirectionalLight,
+    Material,
+    PointLight,
+    Scene,
+    SceneError,
+    SpotLight,
+)
 
 MESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 
@@ -272,9 +281,56 @@ def scene_to_dict(scene: Scene) -> dict:
 
 
 def save_scene(scene: Scene, path: str | Path) -> None:
-    """Write `scene` as a self-contained JSON scene file (atomically)."""
-    from .files import atomic_write
-
-    data = json.dumps(scene_to_dict(scene), indent=1).encode()
+    """Write `scene` as a self-contained scene file (atomically): TOML for a `.toml` path,
+    JSON for a `.json` path; any other suffix is a SceneError, since `load_scene` would refuse
+    the file."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".toml", ".json"):
+        raise SceneError("path", f"a scene file must end in .toml or .json, got {str(path)!r}",
+                         path)
+    data = scene_to_dict(scene)
+    text = to_toml(data) if suffix == ".toml" else json.dumps(data, indent=1)
     with atomic_write(path) as f:
-        f.write(data)
+        f.write(text.encode("utf-8"))
+
+
+def to_toml(data: dict) -> str:
+    """A scene dict (numbers, strings, booleans, lists, dicts; no None) as TOML: plain keys and
+    inline tables at the top, each list of tables as [[key]] sections.  Floats are written with
+    repr, so they read back bit for bit."""
+    lines, sections = [], []
+    for key, value in data.items():
+        if isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            sections.append((key, value))
+        else:
+            lines.append(f"{_toml_key(key)} = {_toml_value(value)}")
+    for key, tables in sections:
+        for table in tables:
+            lines += ["", f"[[{_toml_key(key)}]]"]
+            lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in table.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _toml_key(key: str) -> str:
+    return key if key.replace("_", "").replace("-", "").isalnum() and key.isascii() \
+        else json.dumps(key)
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return "nan" if v != v else ("inf" if v > 0 else "-inf") if v in (np.inf, -np.inf) \
+            else repr(v)
+    if isinstance(value, str):
+        return json.dumps(value)  # JSON's string escapes are TOML basic-string escapes
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}"
+                               for k, v in value.items()) + "}"
+    raise TypeError(f"cannot write {type(value).__name__} to TOML")

@@ -3,6 +3,11 @@
 `ctx` fails the test when the GL error flag is set before or after it (as moderngl's own
 conftest does), so a test cannot leave an error behind for the next one to trip over.  A missing
 EGL driver fails loudly: it never skips.
+
+The `gl` marker: every test under raster/ and compare/, every test that uses `ctx`, and every
+module that says `pytestmark = pytest.mark.gl` needs a GL context; `pytest -m "not gl"` runs
+the rest, and for those the context factory is blocked, so a test that needs GL but is not
+marked fails instead of passing by luck.
 """
 
 from __future__ import annotations
@@ -11,21 +16,41 @@ import re
 from pathlib import Path
 
 import pytest
+from builders import TEST_OUTPUT
 
 # the one definition of a mask edge and of the mismatch report (shared with `compare`)
-from shadowvol.maskdiff import diff_image, edge_pixels, mask_report  # noqa: F401
+from shadowvol.compare.maskdiff import diff_image, edge_pixels, mask_report  # noqa: F401
+from shadowvol.io import save_png
+from shadowvol.pictures import masks_image
 
-ROOT = Path(__file__).resolve().parent.parent
-TEST_OUTPUT = ROOT / "test-output"
+GL_FOLDERS = ("raster", "compare")
 
 # The budget of CONVENTIONS-style mask comparisons (issue 3): zero mismatches farther than one
 # pixel from a mask edge, and fewer than this fraction of all pixels mismatched.
 MAX_MISMATCH_FRACTION = 0.001
 
 
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        folder = Path(str(item.fspath)).parent.name
+        if folder in GL_FOLDERS or {"ctx", "gl_session"} & set(item.fixturenames):
+            item.add_marker(pytest.mark.gl)
+
+
+@pytest.fixture(autouse=True)
+def _no_gl_unless_marked(request, monkeypatch):
+    if request.node.get_closest_marker("gl") is None:
+        import moderngl
+
+        def refuse(*args, **kwargs):
+            raise AssertionError("this test makes a GL context but is not marked `gl`")
+        monkeypatch.setattr(moderngl, "create_context", refuse)
+    yield
+
+
 @pytest.fixture(scope="session")
 def gl_session():
-    from shadowvol.context import create_context
+    from shadowvol.raster.context import create_context
 
     ctx = create_context()  # raises ContextError (the test errors) when EGL/GL 4.5 is missing
     yield ctx
@@ -34,7 +59,7 @@ def gl_session():
 
 @pytest.fixture
 def ctx(gl_session):
-    from shadowvol.context import make_current
+    from shadowvol.raster.context import make_current
 
     make_current(gl_session)  # a test that made its own context may have left that one current
     before = gl_session.error
@@ -58,8 +83,6 @@ def assert_masks_match(request):
         worst = max(r["total"] for r in rows)
         if interior == 0 and worst < MAX_MISMATCH_FRACTION * pixels:
             return rows
-        from shadowvol.files import masks_image, save_png
-
         name = re.sub(r"[^A-Za-z0-9_.-]+", "_", request.node.name + (f"-{label}" if label else ""))
         out = TEST_OUTPUT / name
         save_png(out / "render.png", result.image)

@@ -22,8 +22,15 @@ from hypothesis import HealthCheck, assume, settings
 from hypothesis import strategies as st
 
 from shadowvol.primitives import Transform, box, mesh, plane, sphere
-from shadowvol.scene import (Camera, DirectionalLight, Material, PointLight, Scene,
-                             SceneError, SpotLight)
+from shadowvol.scene import (
+    Camera,
+    DirectionalLight,
+    Material,
+    PointLight,
+    Scene,
+    SceneError,
+    SpotLight,
+)
 
 settings.register_profile(
     "ci", max_examples=50, derandomize=True, deadline=None, print_blob=True,

@@ -1,0 +1,44 @@
+"""The `shadowvol` command: one module per subcommand, each with `add_parser(subparsers)`.
+
+    shadowvol render SCENE -o out.png [--masks out.npz] [--volumes v.png] [--stencil s.png]
+    shadowvol compare SCENE -o cmp.png [--pyrender] [--max-interior N]
+    shadowvol demo -o DIR [--small]
+    shadowvol shadow2d --example -o shadow2d.png
+
+Exit statuses: `shadowvol.cli.status` (one table for both tools).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from shadowvol import __version__
+from shadowvol.cli import compare, demo, render, shadow2d, status
+
+COMMANDS = (render, shadow2d, compare, demo)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="shadowvol",
+        description="Exact hard shadows with stencil shadow volumes, headless (OpenGL on EGL).",
+        epilog=status.EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"shadowvol {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for module in COMMANDS:
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    status.on_sigterm()
+    try:
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt as exc:
+        return status.report(exc)
+    return status.run(args.func, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

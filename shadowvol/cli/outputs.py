@@ -1,0 +1,33 @@
+"""Output paths named on a command line, checked before any work is done.
+
+Each kind of output has the one file format that is written for it, and a path must end in
+that format's suffix: a PNG is never written into `out.jpg`, nor a mask file into `m.png`.
+Two outputs of one command may not name the same file.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from shadowvol.scene import SceneError
+
+SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".png",
+            "json": ".json", "picture": ".png"}
+
+
+def check(outputs: dict[str, Path], flags: dict[str, str] | None = None) -> None:
+    """Raise SceneError (exit 2) for a path whose suffix is not its kind's, or for two kinds
+    naming one file.  `flags` maps a kind to the option that named it (for the message)."""
+    flags = flags or {}
+    seen: dict[Path, str] = {}
+    for kind, path in outputs.items():
+        flag = flags.get(kind, kind)
+        want = SUFFIXES[kind]
+        if path.suffix.lower() != want:
+            raise SceneError(flag, f"{str(path)!r} must end in {want} (shadowvol writes "
+                                   f"{want[1:].upper()} there and nothing else)")
+        key = path.resolve()
+        if key in seen:
+            raise SceneError(flag, f"{str(path)!r} is also the {flags.get(seen[key], seen[key])} "
+                                   "output; give each output its own file")
+        seen[key] = kind

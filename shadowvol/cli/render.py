@@ -1,0 +1,179 @@
+"""`shadowvol render`: scenes to images, masks and the teaching views."""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from pathlib import Path
+
+from shadowvol.cli import outputs, status
+from shadowvol.io import encode_srgb, save_masks, save_png
+from shadowvol.pictures import heat_maps
+from shadowvol.raster.context import create_context
+from shadowvol.raster.renderer import Renderer
+from shadowvol.scene import SceneError
+from shadowvol.scenefile import load_scene
+
+EPILOG = """\
+Every image is 8-bit sRGB, row 0 at the top; masks follow docs/CONVENTIONS.md.  Scene files are
+TOML or JSON (scenes/README.md).  Rendering needs an EGL driver with OpenGL 4.5 (Mesa's
+llvmpipe is enough: on Debian/Ubuntu `apt-get install libegl1 libgl1-mesa-dri`).
+
+Several scenes in one call: -o names a directory (made if missing) and each scene writes
+OUTDIR/NAME.png, NAME being the scene FILE's name without its extension, reduced to letters,
+digits, '.', '_' and '-' (never the `name` inside the scene: a scene cannot choose where its
+output goes); --masks, --volumes and --stencil then take no file name and write
+OUTDIR/NAME-masks.npz, NAME-volumes.png, NAME-stencil.png.  A scene that fails is reported on
+stderr and the others still render.
+
+""" + status.EPILOG
+
+# output kind -> the suffix of its file when it goes beside the image
+EXTRAS = (("masks", "-masks.npz"), ("volumes", "-volumes.png"), ("stencil", "-stencil.png"))
+SCENE_SUFFIXES = (".toml", ".json")
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "render", help="render scenes with stencil shadow volumes",
+        description="Render SCENE with exact hard shadows counted in the stencil buffer "
+                    "(direct Phong lighting: ambient + each light where unshadowed).",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", metavar="SCENE", nargs="*",
+                   help="scene file (.toml or .json); several: -o is a directory")
+    p.add_argument("-o", "--output", required=True, metavar="PNG|DIR",
+                   help="where to write the image (one scene: a .png) or the images (several "
+                        "scenes: a directory)")
+    p.add_argument("--method", choices=("auto", "zpass", "zfail"), default="auto",
+                   help="how volumes are counted: zpass (from the near plane to the surface; "
+                        "wrong when the near plane cuts a volume, e.g. the camera stands in a "
+                        "shadow), zfail (from the surface to infinity, with caps; always "
+                        "right, costs more), auto (z-fail only for casters whose volume the "
+                        "near plane may cut; default)")
+    p.add_argument("--silhouettes", choices=("cpu", "gpu"), default="cpu",
+                   help="where silhouette edges and caps are found: cpu (numpy, per light) "
+                        "or gpu (geometry shader over an edge buffer) (default: cpu)")
+    p.add_argument("--masks", metavar="NPZ", nargs="?", const=True,
+                   help="also write the shadow masks (.npz): lit (L, H, W) bool per light and "
+                        "coverage (H, W) bool; without a name, beside the image")
+    p.add_argument("--volumes", metavar="PNG", nargs="?", const=True,
+                   help="also write the teaching view: the shadow-volume polygons the stencil "
+                        "pass drew, over the image (orange sides, green near caps, violet far "
+                        "caps)")
+    p.add_argument("--stencil", metavar="PNG", nargs="?", const=True,
+                   help="also write the stencil counts as a heat map, one panel per light, "
+                        "with a legend (0: lit, the image darkened; 1, 2, ... yellow to red to "
+                        "violet; negative: blue).  Every triangle casts, so a closed object "
+                        "counts 2 behind it (its front and its back)")
+    p.set_defaults(func=command)
+    return p
+
+
+def safe_name(stem: str) -> str:
+    """A file name made from a scene file's stem: letters, digits, '.', '_', '-' only, no
+    leading dot, at most 100 characters; "scene" if nothing is left."""
+    name = re.sub(r"[^A-Za-z0-9._-]+", "_", stem).lstrip(".")[:100]
+    return name or "scene"
+
+
+def _take_back_scenes(args) -> None:
+    """`render --masks scene.toml -o x.png`: argparse hands the scene to --masks (its file name
+    is optional).  A mask file can never end in .toml/.json, so such a value is the scene."""
+    for key, _ in EXTRAS:
+        value = getattr(args, key)
+        if isinstance(value, str) and Path(value).suffix.lower() in SCENE_SUFFIXES:
+            args.scene.insert(0, value)
+            setattr(args, key, True)
+    if not args.scene:
+        raise SceneError("SCENE", "no scene file given")
+
+
+def plan(args) -> list[dict[str, Path]]:
+    """Per scene, where each output goes: {"image": Path, "masks": Path, ...}.  Raises
+    SceneError (exit 2) for arguments that do not fit the number of scenes."""
+    _take_back_scenes(args)
+    flags = {"image": "-o", **{key: f"--{key}" for key, _ in EXTRAS}}
+    if len(args.scene) == 1:
+        out = {"image": Path(args.output)}
+        for key, suffix in EXTRAS:
+            value = getattr(args, key)
+            if value is True:  # no file name: beside the image
+                value = out["image"].with_name(out["image"].stem + suffix)
+            if value:
+                out[key] = Path(value)
+        outputs.check(out, flags)
+        return [out]
+    directory = Path(args.output)
+    if directory.suffix.lower() in (".png", ".npz") or directory.is_file():
+        raise SceneError("-o", f"with {len(args.scene)} scenes, -o must name a directory, "
+                               f"got {args.output!r}")
+    for key, _ in EXTRAS:
+        if getattr(args, key) not in (None, True):
+            raise SceneError(f"--{key}", f"with several scenes, --{key} takes no file name "
+                                         f"(each scene writes OUTDIR/NAME{dict(EXTRAS)[key]})")
+    plans, taken = [], set()
+    for scene in args.scene:
+        name = safe_name(Path(scene).stem)
+        unique, k = name, 2
+        while unique in taken:
+            unique, k = f"{name}-{k}", k + 1
+        taken.add(unique)
+        out = {"image": directory / f"{unique}.png"}
+        for key, suffix in EXTRAS:
+            if getattr(args, key):
+                out[key] = directory / f"{unique}{suffix}"
+        for path in out.values():  # belt and braces: nothing may land outside `directory`
+            if path.resolve().parent != directory.resolve():
+                raise SceneError("-o", f"refusing to write {path} outside {directory}")
+        plans.append(out)
+    return plans
+
+
+def command(args) -> int:
+    try:
+        plans = plan(args)
+    except SceneError as exc:
+        return status.report(exc)
+    code, ctx = status.OK, None
+    try:
+        for scene_path, out in zip(args.scene, plans):
+            one, ctx = _render_one(args, scene_path, out, ctx, prefix=len(args.scene) > 1)
+            code = max(code, one)
+    finally:
+        if ctx is not None:
+            ctx.release()
+    return code
+
+
+def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
+    """Load, render and write one scene; returns (exit status, the GL context to reuse).
+    Errors are reported here, one line each, naming the scene when there are several."""
+    try:
+        scene = load_scene(scene_path)
+        if ctx is None:
+            ctx = create_context()
+        limit = min(ctx.info["GL_MAX_RENDERBUFFER_SIZE"], ctx.info["GL_MAX_TEXTURE_SIZE"])
+        if max(scene.width, scene.height) > limit:
+            raise SceneError("image", f"{scene.width}x{scene.height} is larger than this GL "
+                                      f"allows ({limit} pixels per side)", scene_path)
+        with Renderer(scene, ctx) as renderer:
+            result = renderer.render(args.method, args.silhouettes,
+                                     stencil="stencil" in out)
+            volumes = (renderer.volume_view(args.method, args.silhouettes)
+                       if "volumes" in out else None)
+        save_png(out["image"], result.image)
+        if "masks" in out:
+            save_masks(out["masks"], result.lit, result.coverage)
+        if volumes is not None:
+            save_png(out["volumes"], volumes)
+        if "stencil" in out:
+            save_png(out["stencil"],
+                     heat_maps(result.stencil, encode_srgb(result.image), with_legend=True))
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # noqa: BLE001 - report() re-raises what has no status
+        where = f"{scene_path}: " if prefix and not str(exc).startswith(scene_path) else ""
+        return status.report(exc, where), ctx
+    print(f"wrote {', '.join(str(p) for p in out.values())}", file=sys.stderr)
+    return status.OK, ctx

@@ -1,0 +1,95 @@
+"""The one exit-status table of both command-line tools, `shadowvol` and `raytrace`.
+
+Every command returns one of these, and its --help prints `EPILOG`.  `report` turns an
+exception into one line on stderr and its status, so no command prints a traceback for an error
+it can name.  GL-free: `raytrace` imports it too.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+
+from shadowvol.errors import MissingExtra, RenderError
+from shadowvol.scene import SceneError
+
+OK = 0
+OVER_BUDGET = 1
+BAD_INPUT = 2
+RENDER_FAILED = 3
+INTERRUPTED = 130  # 128 + SIGINT, the shell's convention
+TERMINATED = 143   # 128 + SIGTERM
+
+TABLE = (
+    (OK, "success"),
+    (OVER_BUDGET, "a comparison over its budget (compare --max-interior)"),
+    (BAD_INPUT, "bad input: a scene file, a mesh, an argument, an output path, a scene beyond "
+                "the documented limits, or a missing optional extra (named with the pip "
+                "command that installs it)"),
+    (RENDER_FAILED, "rendering failed: no usable EGL/OpenGL 4.5, a GL error, out of memory, a "
+                    "stencil overflow"),
+    (INTERRUPTED, "interrupted (Ctrl-C)"),
+    (TERMINATED, "terminated (SIGTERM)"),
+)
+
+EPILOG = "exit status: " + "; ".join(f"{code} {text}" for code, text in TABLE) + \
+    ".  Outputs are written atomically: a failed or interrupted command leaves no half file."
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived (raised by the handler `on_sigterm` installs)."""
+
+
+def on_sigterm() -> None:
+    """From now on SIGTERM unwinds like Ctrl-C does: writers remove their temporary files and
+    the command exits with TERMINATED.  Main thread only (Python's rule for handlers)."""
+    def handler(signum, frame):
+        raise Terminated()
+    signal.signal(signal.SIGTERM, handler)
+
+
+def status_of(exc: BaseException) -> int | None:
+    """The exit status an exception means, or None for one no command should meet (a bug)."""
+    if isinstance(exc, (SceneError, MissingExtra)):
+        return BAD_INPUT
+    if isinstance(exc, (RenderError, MemoryError)):
+        return RENDER_FAILED
+    moderngl = sys.modules.get("moderngl")  # never imported here: only if GL was used
+    if moderngl is not None and isinstance(exc, moderngl.Error):
+        return RENDER_FAILED
+    if isinstance(exc, OSError):
+        return BAD_INPUT  # a file that cannot be read or written
+    if isinstance(exc, KeyboardInterrupt):
+        return INTERRUPTED
+    if isinstance(exc, Terminated):
+        return TERMINATED
+    return None
+
+
+def message(exc: BaseException) -> str:
+    if isinstance(exc, MemoryError):
+        return ("out of memory" + (f": {exc}" if str(exc) else "") +
+                "; try a smaller image or fewer triangles")
+    if isinstance(exc, KeyboardInterrupt):
+        return "interrupted"
+    if isinstance(exc, Terminated):
+        return "terminated"
+    return str(exc) or type(exc).__name__
+
+
+def report(exc: BaseException, prefix: str = "") -> int:
+    """Print `error: PREFIXmessage` on stderr and return the exception's status; re-raise an
+    exception that has none."""
+    status = status_of(exc)
+    if status is None:
+        raise exc
+    print(f"error: {prefix}{message(exc)}", file=sys.stderr)
+    return status
+
+
+def run(command, args) -> int:
+    """Call `command(args)` and turn what it raises into a status (see `report`)."""
+    try:
+        return command(args)
+    except (Exception, KeyboardInterrupt, Terminated) as exc:  # noqa: BLE001 - report re-raises bugs
+        return report(exc)

@@ -1,0 +1,90 @@
+"""The one writer: PNG images, mask files and text, atomically.
+
+Renderers return arrays; the CLI, batch jobs and the course call these.  Every file goes
+through `atomic_write`: the data goes to a temporary file beside the target, which replaces the
+target only once it is complete, so an error or Ctrl-C never leaves half a file.  Arrays have
+row 0 at the top (docs/CONVENTIONS.md).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+
+def encode_srgb(linear: np.ndarray) -> np.ndarray:
+    """(H, W, 3) float linear RGB -> (H, W, 3) uint8 sRGB (IEC 61966-2-1 transfer curve)."""
+    c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
+    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
+    return np.round(s * 255.0).astype(np.uint8)
+
+
+@contextlib.contextmanager
+def atomic_write(path: str | Path):
+    """Yield a binary file object; on success it atomically becomes `path`, on any error (or
+    KeyboardInterrupt) the partial file is removed and `path` is left as it was."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            yield f
+            f.flush()
+            os.fsync(f.fileno())
+        # mkstemp creates the file 0600; give the output the mode a plain open() would have.
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def png_bytes(image: np.ndarray) -> bytes:
+    """PNG of an (H, W, 3|4) uint8 image or an (H, W) bool/uint8 image."""
+    arr = np.asarray(image)
+    if arr.dtype == bool:
+        arr = arr.astype(np.uint8) * 255
+    if arr.dtype != np.uint8:
+        raise TypeError(f"png_bytes wants uint8 or bool pixels, got {arr.dtype}")
+    buf = io.BytesIO()
+    Image.fromarray(arr).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def save_png(path: str | Path, image: np.ndarray) -> None:
+    """Write an image: uint8 pixels as they are, float pixels as linear RGB encoded to sRGB."""
+    arr = np.asarray(image)
+    if np.issubdtype(arr.dtype, np.floating):
+        arr = encode_srgb(arr)
+    data = png_bytes(arr)
+    with atomic_write(path) as f:
+        f.write(data)
+
+
+def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray) -> None:
+    """Write a mask file as CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage` (H, W)."""
+    lit = np.asarray(lit)
+    coverage = np.asarray(coverage)
+    if lit.dtype != bool or lit.ndim != 3 or coverage.dtype != bool or \
+            coverage.shape != lit.shape[1:]:
+        raise ValueError(f"masks must be lit (L, H, W) bool and coverage (H, W) bool, got "
+                         f"{lit.dtype}{lit.shape} and {coverage.dtype}{coverage.shape}")
+    buf = io.BytesIO()
+    np.savez_compressed(buf, lit=lit, coverage=coverage)
+    with atomic_write(path) as f:
+        f.write(buf.getvalue())
+
+
+def load_masks(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a mask file (never unpickles: allow_pickle=False)."""
+    with np.load(path, allow_pickle=False) as data:
+        return data["lit"], data["coverage"]

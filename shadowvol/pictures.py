@@ -1,0 +1,175 @@
+"""Composing uint8 pictures: panels side by side, labels, legends, heat maps, tints.
+
+The one place pictures are put together; renderers return arrays and `shadowvol.io` writes
+them.  Every array is (H, W, 3) uint8 sRGB with row 0 at the top.  matplotlib is imported only
+by `figure_pixels`, which draws on the figure's own Agg canvas and never changes the process's
+backend.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+
+WHITE = (255, 255, 255)
+GAP = 4  # pixels between neighbouring panels
+
+# Bitmap-font strips (Pillow's built-in font): compare's labels and the swatch legends.
+LABEL_HEIGHT = 16
+LEGEND_HEIGHT = 20
+
+# Scalable-font strips (the gallery's titles and labels), at full size and with --small.
+MIN_TEXT_SIZE = 8
+
+# stencil count -> sRGB colour: 0 keeps the (darkened) image, 1.. warm colours, negatives blue
+HEAT_PALETTE = np.array([[255, 230, 120], [255, 170, 40], [240, 90, 20], [200, 30, 40],
+                         [140, 10, 90], [80, 0, 120]], np.uint8)
+NEGATIVE_COLOUR = np.array([60, 140, 255], np.uint8)
+
+ERROR_TINT = np.array([255, 0, 0], np.uint8)  # pixels a method gets wrong
+ERROR_TINT_WEIGHT = 0.6
+
+
+def join(images: list[np.ndarray], axis: int, gap: int = GAP,
+         colour: tuple[int, int, int] = WHITE) -> np.ndarray:
+    """(H, W, 3) uint8 images side by side (axis=1, equal heights) or one above another
+    (axis=0, equal widths), with `gap` pixels of `colour` between neighbours."""
+    shape = list(images[0].shape)
+    shape[axis] = gap
+    spacer = np.full(shape, colour, np.uint8)
+    parts = [images[0]]
+    for image in images[1:]:
+        parts += [spacer, image]
+    return np.concatenate(parts, axis=axis)
+
+
+def row(panels: list[np.ndarray], gap: int = GAP) -> np.ndarray:
+    """Panels of equal height side by side, `gap` white pixels apart."""
+    return join(panels, axis=1, gap=gap)
+
+
+def column(rows: list[np.ndarray], gap: int = GAP) -> np.ndarray:
+    """Rows of equal width one above the other, `gap` white pixels apart."""
+    return join(rows, axis=0, gap=gap)
+
+
+def label_strip(text: str, width: int, height: int = LABEL_HEIGHT) -> np.ndarray:
+    """(height, width, 3) uint8 white strip with `text` in black, Pillow's bitmap font."""
+
+    strip = Image.new("RGB", (width, height), WHITE)
+    ImageDraw.Draw(strip).text((3, 2), text, fill=(0, 0, 0))
+    return np.asarray(strip, np.uint8)
+
+
+def _font(size: int):
+    return ImageFont.load_default(size=size)
+
+
+def text_strip(text: str, width: int, height: int, size: int, *,
+               dark: bool = False) -> np.ndarray:
+    """(height, width, 3) uint8: `text` in Pillow's scalable font at `size` px on white (on
+    near-black when `dark`), shrunk to MIN_TEXT_SIZE until it fits, then cut short."""
+
+    strip = Image.new("RGB", (width, height), (40, 40, 48) if dark else WHITE)
+    draw = ImageDraw.Draw(strip)
+    while size > MIN_TEXT_SIZE and draw.textlength(text, font=_font(size)) > width - 8:
+        size -= 1
+    while len(text) > 1 and draw.textlength(text, font=_font(size)) > width - 8:
+        text = text[:-2] + "…"
+    draw.text((4, (height - size) // 2 - 1), text, fill=WHITE if dark else (0, 0, 0),
+              font=_font(size))
+    return np.asarray(strip, np.uint8)
+
+
+def blank(height: int, width: int, text: str) -> np.ndarray:
+    """(height, width, 3) uint8 grey panel saying `text` in its middle."""
+
+    panel = Image.new("RGB", (width, height), (70, 70, 70))
+    ImageDraw.Draw(panel).text((6, height // 2 - 6), text, fill=(235, 235, 235))
+    return np.asarray(panel, np.uint8)
+
+
+def labelled_row(panels: list[tuple[str, np.ndarray]]) -> np.ndarray:
+    """(label, (H, W, 3) uint8) pairs: each panel under its bitmap-font label, side by side."""
+    return row([np.concatenate([label_strip(label, image.shape[1]), image])
+                for label, image in panels])
+
+
+def legend(width: int, entries, spacing: int = 24, char_width: int | None = None) -> np.ndarray:
+    """(LEGEND_HEIGHT, width, 3) uint8: a swatch and its name per (label, colour) entry,
+    `spacing` pixels plus the label's width from one entry to the next (the label's drawn
+    width, or `char_width` per character when given: the heat legend's fixed spacing)."""
+
+    strip = Image.new("RGB", (width, LEGEND_HEIGHT), WHITE)
+    draw = ImageDraw.Draw(strip)
+    x = 4
+    for label, colour in entries:
+        draw.rectangle([x, 4, x + 11, 15], fill=tuple(map(int, colour)), outline=(0, 0, 0))
+        draw.text((x + 15, 5), label, fill=(0, 0, 0))
+        x += spacing + (int(draw.textlength(label)) if char_width is None
+                        else char_width * len(label))
+    return np.asarray(strip, np.uint8)
+
+
+def heat_map(counts: np.ndarray, image: np.ndarray | None = None) -> np.ndarray:
+    """(H, W) signed stencil counts -> (H, W, 3) uint8 sRGB.
+
+    Count 0 shows `image` ((H, W, 3) uint8, darkened) or black; count k >= 1 the k-th palette
+    colour (the last for all higher counts); a negative count (only z-pass with the eye inside a
+    volume makes one) is blue.
+    """
+    h, w = counts.shape
+    out = np.zeros((h, w, 3), np.uint8) if image is None else (image // 2).astype(np.uint8)
+    pos = counts > 0
+    out[pos] = HEAT_PALETTE[np.minimum(counts[pos], len(HEAT_PALETTE)) - 1]
+    out[counts < 0] = NEGATIVE_COLOUR
+    return out
+
+
+HEAT_LEGEND = (("0 lit", (128, 128, 128)),
+               *((str(k + 1) + ("+" if k == len(HEAT_PALETTE) - 1 else ""), tuple(c))
+                 for k, c in enumerate(HEAT_PALETTE)),
+               ("<0", tuple(NEGATIVE_COLOUR)))
+
+
+def heat_maps(counts: np.ndarray, image: np.ndarray | None = None,
+              with_legend: bool = False) -> np.ndarray:
+    """(L, H, W) counts -> one heat map per light side by side, with the legend below when
+    asked."""
+    if len(counts) == 0:  # no lights: nothing counted
+        out = heat_map(np.zeros(counts.shape[1:], np.int16), image)
+    else:
+        out = row([heat_map(c, image) for c in counts])
+    return np.concatenate([out, legend(out.shape[1], HEAT_LEGEND, spacing=22, char_width=6)]) \
+        if with_legend else out
+
+
+def masks_image(lit: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+    """A picture of the masks, one panel per light side by side: lit white, covered but
+    shadowed mid grey, not covered black."""
+    panels = []
+    for mask in lit:
+        panel = np.zeros(mask.shape + (3,), np.uint8)
+        panel[coverage] = 96
+        panel[mask & coverage] = 255
+        panels.append(panel)
+    if not panels:
+        panels = [np.where(coverage[..., None], 96, 0).astype(np.uint8).repeat(3, axis=2)]
+    return join(panels, axis=1, colour=(200, 40, 40))
+
+
+def tint(image: np.ndarray, where: np.ndarray, colour: np.ndarray = ERROR_TINT,
+         weight: float = ERROR_TINT_WEIGHT) -> np.ndarray:
+    """(H, W, 3) uint8 with the pixels of `where` (H, W) bool blended toward `colour`."""
+    out = image.copy()
+    out[where] = np.round((1 - weight) * image[where] + weight * colour).astype(np.uint8)
+    return out
+
+
+def figure_pixels(fig) -> np.ndarray:
+    """(H, W, 3) uint8 of a matplotlib Figure, drawn on its own Agg canvas."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[..., :3].copy()

@@ -1,0 +1,83 @@
+"""The one place that creates an OpenGL context: headless, through EGL (no display needed).
+
+Everything GL in shadowvol runs on a context made by `create_context`.  Mesa's llvmpipe (a CPU
+rasterizer) is enough; a GPU vendor's EGL driver works unchanged.
+"""
+
+from __future__ import annotations
+
+import os
+
+import moderngl
+
+from shadowvol.errors import RenderError
+
+REQUIRED_GL_VERSION = 450  # geometry shaders with `precise`, glClipControl-era core profile
+
+INSTALL_HINT = ("install an EGL driver with OpenGL 4.5: on Debian/Ubuntu "
+                "`apt-get install libegl1 libgl1-mesa-dri` (Mesa), or your GPU vendor's EGL driver")
+
+
+class ContextError(RenderError):
+    """No usable OpenGL 4.5 context: EGL, the driver or the GL version is missing."""
+
+
+class ForkedContextError(ContextError):
+    """A process forked after its parent made a GL context tried to make one: EGL's state
+    (the driver's threads, the display connection) does not survive fork, and the call would
+    hang for ever."""
+
+
+FORK_ADVICE = ("this process was forked after its parent made an OpenGL context, and EGL cannot "
+               "be used in such a child (it would hang); start workers with "
+               "multiprocessing.get_context('spawn') or 'forkserver', or make the first context "
+               "in the child, not the parent")
+
+
+class _ProcessState:
+    """Which process made a context here: a process fact, not a renderer's state."""
+    made_in_pid: int | None = None
+
+
+def _check_not_forked() -> None:
+    made = _ProcessState.made_in_pid
+    if made is not None and made != os.getpid():
+        raise ForkedContextError(FORK_ADVICE)
+
+
+def create_context() -> moderngl.Context:
+    """A new standalone OpenGL >= 4.5 core context on EGL.
+
+    The caller owns it and must `release()` it.  Raises ContextError naming what to install when
+    libEGL, a driver, or GL 4.5 is missing.
+    """
+    _check_not_forked()
+    try:
+        ctx = moderngl.create_context(standalone=True, backend="egl",
+                                      require=REQUIRED_GL_VERSION)
+    except Exception as exc:  # glcontext raises bare Exceptions with the loader's message
+        text = str(exc).strip() or type(exc).__name__
+        if "version" in text.lower() or "require" in text.lower():
+            raise ContextError(f"OpenGL {REQUIRED_GL_VERSION // 100}.{REQUIRED_GL_VERSION % 100 // 10}"
+                               f" is not available ({text}); {INSTALL_HINT}") from None
+        raise ContextError(f"cannot create a headless EGL context ({text}); "
+                           f"{INSTALL_HINT}") from None
+    if ctx.version_code < REQUIRED_GL_VERSION:
+        version = ctx.info.get("GL_VERSION", str(ctx.version_code))
+        ctx.release()
+        raise ContextError(f"the EGL driver offers OpenGL {version}, shadowvol needs 4.5; "
+                           f"{INSTALL_HINT}")
+    _ProcessState.made_in_pid = os.getpid()
+    return ctx
+
+
+def make_current(ctx: moderngl.Context) -> None:
+    """Make `ctx` the thread's current context (raw GL calls go to the current context).
+
+    moderngl's `with ctx:` would do it, but glcontext's EGL `__exit__` does not restore the
+    previous context: it leaves NO context current (checked with eglGetCurrentContext, glcontext
+    3.1).  So we enter and never exit: the renderer's context simply stays current.
+    Raises ForkedContextError in a child forked after the context was made.
+    """
+    _check_not_forked()
+    ctx.__enter__()

@@ -1,0 +1,123 @@
+"""Choosing z-pass or z-fail per caster: the near-clip volume test (Lengyel 2002, as in Doom 3's
+and OGRE's renderers).
+
+Z-pass counts the volume faces between the near plane and the visible point, so it is exact
+unless some volume contains a point of the near-plane rectangle R.  A point Q of R lies in the
+shadow volume of a triangle only if the segment from Q to the light crosses that triangle; that
+segment lies in the convex hull of the light and R (the "near-clip volume": a pyramid for a point
+light, an infinite prism toward the light for a directional one).  So a caster whose bounding
+box is separated from that hull can safely use z-pass; every other caster uses z-fail, which
+costs caps.  The test is conservative: it may choose z-fail where z-pass would have worked,
+never the reverse.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from shadowvol.raster.projection import near_rectangle
+from shadowvol.scene import Camera
+
+METHODS = ("auto", "zpass", "zfail")
+# A box counts as outside a plane of the near-clip volume only if all its corners are farther
+# than this fraction of the scene's extent: rounding must never make the test unsafe.
+NEAR_CLIP_MARGIN = 1e-6
+# |cos| between the light direction (or light offset) and the near plane below which the light
+# counts as lying IN the near plane; the hull is then flat and every caster takes z-fail.
+DEGENERATE_LIGHT = 1e-9
+# A directional light's hull reaches to infinity toward the light; the box test below stands in a
+# point this many scene extents away (every caster lies within one extent of the near plane, so
+# the prism beyond that point cannot touch one).
+FAR_APEX_EXTENTS = 1e6
+# The z-pass clip box (`zpass_clip_planes`) is grown by this fraction of the scene's extent on
+# every side: far more than float32 rounding of the planes, the vertices and the interpolated
+# clip distances (~1e-6 of the extent), so no fragment that could count is clipped.
+ZPASS_BOX_MARGIN = 1e-3
+
+
+def near_clip_planes(camera: Camera, aspect: float, light4: np.ndarray) -> np.ndarray | None:
+    """(5, 4) float64 planes (n, d) of the near-clip volume, n . x + d <= 0 inside, or None
+    when the light lies in the near plane (degenerate hull)."""
+    rect = near_rectangle(camera, aspect)                                 # (4, 3)
+    centre = rect.mean(axis=0)
+    forward = camera.target - camera.eye
+    forward = forward / np.linalg.norm(forward)
+    toward_light = light4[:3] - light4[3] * centre                        # centre -> light
+    scale = np.linalg.norm(toward_light)
+    side = float(forward @ toward_light)
+    if scale == 0.0 or abs(side) <= DEGENERATE_LIGHT * scale:
+        return None
+    planes = []
+    # the near plane, the light's side inside
+    n = -forward if side > 0 else forward
+    planes.append(np.append(n, -n @ centre))
+    for p, q in zip(rect, np.roll(rect, -1, axis=0)):
+        n = np.cross(q - p, light4[:3] - light4[3] * p)
+        if n @ (centre - p) > 0:
+            n = -n
+        planes.append(np.append(n / np.linalg.norm(n), -(n / np.linalg.norm(n)) @ p))
+    return np.array(planes)
+
+
+def needs_zfail(bounds: np.ndarray, camera: Camera, aspect: float, light4: np.ndarray,
+                extent: float) -> np.ndarray:
+    """(n,) bool: True for every caster whose volume the near plane may cut.
+
+    bounds : (n, 2, 3) float64 axis-aligned boxes (min, max) of the casters.
+    """
+    planes = near_clip_planes(camera, aspect, light4)
+    if planes is None:
+        return np.ones(len(bounds), bool)
+    # the 8 corners of each box: (n, 8, 3)
+    pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    corners = np.stack([bounds[:, pick[:, 0], 0], bounds[:, pick[:, 1], 1],
+                        bounds[:, pick[:, 2], 2]], axis=-1)
+    margin = NEAR_CLIP_MARGIN * extent
+    dist = corners @ planes[:, :3].T + planes[:, 3]                       # (n, 8, 5)
+    outside_a_hull_plane = (dist > margin).all(axis=1).any(axis=1)
+    # and the box's own faces against the hull's corners (a separating-axis test on the box's
+    # three axes too): a flat floor below the hull is separated only this way.
+    rect = near_rectangle(camera, aspect)
+    apex = (light4[:3] if light4[3]
+            else rect.mean(axis=0) + light4[:3] * (FAR_APEX_EXTENTS * extent))
+    hull = np.concatenate([rect, apex[None]])                             # (5, 3)
+    below = (hull[None, :, :] < bounds[:, None, 0, :] - margin).all(axis=1).any(axis=1)
+    above = (hull[None, :, :] > bounds[:, None, 1, :] + margin).all(axis=1).any(axis=1)
+    return ~(outside_a_hull_plane | below | above)
+
+
+def choose(method: str, bounds: np.ndarray, camera: Camera, aspect: float,
+           light4: np.ndarray, extent: float) -> np.ndarray:
+    """(n,) bool: which casters use z-fail under `method` ("auto", "zpass" or "zfail")."""
+    if method == "zpass":
+        return np.zeros(len(bounds), bool)
+    if method == "zfail":
+        return np.ones(len(bounds), bool)
+    if method == "auto":
+        return needs_zfail(bounds, camera, aspect, light4, extent)
+    raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+
+
+def zpass_clip_planes(bounds: np.ndarray, camera: Camera, aspect: float,
+                      extent: float) -> np.ndarray:
+    """(6, 4) float64 planes (n, d) of a box, n . x + d w >= 0 inside (x homogeneous, so a
+    point at infinity (x, 0) is inside when its direction does not leave through the plane),
+    that holds every caster's box and the near rectangle, grown by ZPASS_BOX_MARGIN * extent.
+
+    Z-pass counts the volume faces crossed between the near plane and the visible point.  Both
+    ends of that segment lie in this convex box (a visible point lies on a triangle, inside its
+    object's box), so the whole segment does: a fragment of a volume face outside the box is
+    never in front of a visible point, and clipping the faces to the box leaves every count at
+    a covered pixel exactly as it was, whatever the caster or the method.  It saves the fill of
+    the volumes beyond the receivers, out to infinity.  Uncovered pixels (nothing visible)
+    count differently, so the stencil read-back must not use it.
+    """
+    rect = near_rectangle(camera, aspect)
+    margin = ZPASS_BOX_MARGIN * extent
+    lo = np.minimum(bounds[:, 0].min(axis=0), rect.min(axis=0)) - margin
+    hi = np.maximum(bounds[:, 1].max(axis=0), rect.max(axis=0)) + margin
+    planes = np.zeros((6, 4))
+    for axis in range(3):
+        planes[2 * axis, axis], planes[2 * axis, 3] = 1.0, -lo[axis]         # x >= lo
+        planes[2 * axis + 1, axis], planes[2 * axis + 1, 3] = -1.0, hi[axis]  # x <= hi
+    return planes

@@ -1,0 +1,82 @@
+"""Camera matrices (float64, row-major numpy) and the one GL-to-top-row flip.
+
+The projection has an INFINITE far plane and REVERSED depth: with glClipControl's zero-to-one
+depth range (set by `stencil.zero_to_one_depth` around every frame) a point at distance d along
+the view axis gets depth near / d: 1 at the near plane, falling toward 0 far away, and exactly 0
+for points at infinity (w = 0, the far ends of shadow volumes).  Stored in a 32-bit float depth
+buffer this keeps the same RELATIVE precision at every distance (~1e-7 of d, the precision of the
+float32 vertices themselves), where the classic 1 - near / d in 24 bits loses precision with the
+square of the distance; shadow boundaries on surfaces nearly parallel to a volume's side (grazing
+light) depend on exactly that precision.  Nearer means GREATER depth: see NEARER.
+GL samples each pixel at its centre, which is the contract's ndc ((x + 0.5) / W * 2 - 1, ...);
+GL rows run bottom-up, so every read-back goes through `top_row_first`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from shadowvol.scene import Camera
+
+NEARER = ">"              # depth test passing a fragment nearer than what is stored
+NEARER_OR_EQUAL = ">="
+FAR_DEPTH = 0.0           # the depth buffer's clear value: nothing drawn, infinitely far
+
+
+def view_matrix(camera: Camera) -> np.ndarray:
+    """(4, 4) float64 world -> eye space; right-handed, the camera looks down -z."""
+    forward = camera.target - camera.eye
+    forward = forward / np.linalg.norm(forward)
+    side = np.cross(forward, camera.up)
+    side = side / np.linalg.norm(side)
+    up = np.cross(side, forward)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = side, up, -forward
+    m[:3, 3] = -m[:3, :3] @ camera.eye
+    return m
+
+
+def infinite_projection(fov_y: float, aspect: float, near: float) -> np.ndarray:
+    """(4, 4) float64 perspective with the far plane at infinity and reversed depth, for the
+    zero-to-one clip depth range.
+
+    clip z = near * w, clip w = -z_eye: depth = near / -z_eye, in (0, 1] for z_eye <= -near
+    (nearer is clipped: z > w), and exactly 0 for a point at infinity (w = 0).
+    """
+    f = 1.0 / math.tan(math.radians(fov_y) / 2.0)
+    m = np.zeros((4, 4))
+    m[0, 0] = f / aspect
+    m[1, 1] = f
+    m[2, 3] = near
+    m[3, 2] = -1.0
+    return m
+
+
+def view_projection(camera: Camera, aspect: float) -> np.ndarray:
+    """(4, 4) float64 world -> clip space."""
+    return infinite_projection(camera.fov_y, aspect, camera.near) @ view_matrix(camera)
+
+
+def gl_matrix(m: np.ndarray) -> bytes:
+    """Bytes of a (4, 4) matrix for a GLSL `mat4` uniform (column-major float32).  float32 is
+    what GLSL computes in; the product is formed in float64 first so it is rounded once."""
+    return np.ascontiguousarray(m.T, dtype=np.float32).tobytes()
+
+
+def near_rectangle(camera: Camera, aspect: float) -> np.ndarray:
+    """(4, 3) float64: the corners of the near-plane rectangle in world space (the view
+    frustum's cross-section at distance `near`), counter-clockwise seen from the eye."""
+    view = view_matrix(camera)
+    side, up, back = view[0, :3], view[1, :3], view[2, :3]
+    h = camera.near * math.tan(math.radians(camera.fov_y) / 2.0)
+    w = h * aspect
+    centre = camera.eye - back * camera.near
+    return np.array([centre - side * w - up * h, centre + side * w - up * h,
+                     centre + side * w + up * h, centre - side * w + up * h])
+
+
+def top_row_first(pixels: np.ndarray) -> np.ndarray:
+    """GL read-back (row 0 at the bottom) -> row 0 at the top.  The one flip (CONVENTIONS.md)."""
+    return np.ascontiguousarray(pixels[::-1])

@@ -1,0 +1,219 @@
+"""The shadow-volume renderer: `Renderer` for many frames of one scene, `render` for one.
+
+A Renderer holds one GL context (its own, or one it is given), uploads the scene's geometry once,
+and renders frames: depth + ambient, then per light the stencil count of its shadow volumes and
+its Phong term where the count is 0.  It returns arrays only; files are the CLI's business.
+
+Limit: the stencil is 8 bits and counts wrap (INCR_WRAP / DECR_WRAP).  Every triangle casts, so
+a pixel behind k closed meshes counts 2k; 256 layers over one pixel would read 0, i.e. lit.  That
+needs about 128 closed objects (or 256 open sheets) lined up between one point and one light.
+It is detected (`overflow`): when a conservative bound says a count could reach 256, one more
+saturating volume pass per light finds the pixels that may have wrapped, and render() raises
+overflow.StencilOverflowError instead of returning a wrong shadow.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+
+from shadowvol.raster import methods, overflow, overlay, passes
+from shadowvol.raster import stencil as stencil_gl
+from shadowvol.raster.context import create_context, make_current
+from shadowvol.raster.geometry import SceneGeometry
+from shadowvol.raster.projection import view_projection
+from shadowvol.raster.target import Target
+from shadowvol.raster.volumes import CpuVolumes, GpuVolumes
+from shadowvol.scene import (
+    Camera,
+    DirectionalLight,
+    Light,
+    PointLight,
+    Scene,
+    SpotLight,
+)
+
+SILHOUETTES = ("cpu", "gpu")
+
+
+@dataclass(frozen=True, eq=False)
+class RenderResult:
+    """One frame.
+
+    image    : (H, W, 3) float32 linear RGB (direct Phong lighting with hard shadows)
+    lit      : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot cone
+    coverage : (H, W) bool, geometry visible at the pixel centre
+    stencil  : (L, H, W) int16 signed stencil counts after each light's volume pass, or None
+               when not asked for
+    zfail    : (L, n_objects) bool, which casters were counted with z-fail for each light
+    """
+
+    image: np.ndarray
+    lit: np.ndarray
+    coverage: np.ndarray
+    stencil: np.ndarray | None
+    zfail: np.ndarray
+
+
+class Renderer:
+    """Renders `scene` (its geometry and materials; camera and lights may change per frame).
+
+    Use as a context manager or call `release()`: every GL object it made is released, and the
+    context too if the renderer created it.
+    """
+
+    def __init__(self, scene: Scene, ctx: moderngl.Context | None = None):
+        self.scene = scene
+        self._own_ctx = ctx is None
+        self.ctx = create_context() if ctx is None else ctx
+        self._owned = []
+        self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
+        self._count_bound: int | None = None
+        # the stencil-overflow check (see `overflow`): on by default; it costs one more volume
+        # pass per light, and only in scenes whose bound allows a count of 256
+        self.check_overflow = True
+        try:
+            # every public method first makes the context current: raw GL calls
+            # (stencil.RawGL) go to whichever context is current, e.g. after another renderer
+            # with its own context has run
+            make_current(self.ctx)
+            self.gl = stencil_gl.RawGL()
+            self.geometry = self._own(SceneGeometry(self.ctx, scene))
+            self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
+            self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
+        except BaseException:
+            self.release()
+            raise
+
+    def _own(self, obj):
+        self._owned.append(obj)
+        return obj
+
+    def volumes(self, silhouettes: str) -> CpuVolumes | GpuVolumes:
+        """The volume builder for "cpu" or "gpu" silhouettes (made on first use)."""
+        if silhouettes not in SILHOUETTES:
+            raise ValueError(f"silhouettes must be 'cpu' or 'gpu', got {silhouettes!r}")
+        if silhouettes not in self._volumes:
+            cls = CpuVolumes if silhouettes == "cpu" else GpuVolumes
+            make_current(self.ctx)
+            self._volumes[silhouettes] = self._own(cls(self.ctx, self.geometry))
+        return self._volumes[silhouettes]
+
+    def render(self, method: str = "auto", silhouettes: str = "cpu", *,
+               camera: Camera | None = None, lights: tuple[Light, ...] | None = None,
+               stencil: bool = False, shadows: bool = True) -> RenderResult:
+        """One frame.  `method`: "auto" (z-fail only for casters the near plane may cut),
+        "zpass" or "zfail".  `camera`/`lights` override the scene's for this frame.
+        `stencil=True` also returns the per-light stencil counts (one extra read-back each).
+        `shadows=False` skips the volume passes (every count stays 0): the same frame without
+        shadows, the benchmark's baseline."""
+        if method not in methods.METHODS:
+            raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
+                             f"got {method!r}")
+        lights = _check_lights(lights)
+        make_current(self.ctx)
+        with stencil_gl.zero_to_one_depth(self.gl):
+            result = self._render(method, silhouettes, camera, lights, stencil, shadows)
+            if shadows and self.check_overflow and self.count_bound >= overflow.STENCIL_LIMIT:
+                overflow.check_frame(self, result, silhouettes, camera, lights,
+                                     halve=method == "auto" and not stencil)
+            return result
+
+    @property
+    def count_bound(self) -> int:
+        """`overflow.count_bound` of the scene: below 256 no stencil count can wrap."""
+        if self._count_bound is None:
+            self._count_bound = overflow.count_bound(self.geometry.topologies)
+        return self._count_bound
+
+    def _render(self, method, silhouettes, camera, lights, stencil, shadows) -> RenderResult:
+        camera = self.scene.camera if camera is None else camera
+        lights = self.scene.lights if lights is None else tuple(lights)
+        vols = self.volumes(silhouettes)
+        view_proj = view_projection(camera, self.scene.aspect)
+        passes.set_camera((self.programs.ambient, self.programs.phong, *vols.programs),
+                          view_proj, camera)
+        passes.depth_ambient(self.ctx, self.target, self.programs, self.scene)
+        # z-pass faces clipped to the box of the near rectangle and the casters: the same
+        # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
+        clip = None if stencil else methods.zpass_clip_planes(
+            self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
+        lit, counts, zfail = [], [], []
+        for light in lights:
+            light4 = light.homogeneous
+            choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
+                                    light4, self.geometry.extent)
+            if shadows:
+                vols.prepare(light4)
+                # halving is safe only for casters `auto` chose z-pass for, and only when
+                # the counts themselves are not returned (see passes.count_volumes)
+                passes.count_volumes(self.ctx, self.gl, self.target, vols, choice,
+                                     halve=method == "auto" and not stencil, clip_planes=clip)
+            else:
+                self.target.clear_stencil()
+            if stencil:
+                counts.append(self.target.read_stencil())
+            passes.add_light(self.ctx, self.gl, self.target, self.programs, light)
+            lit.append(self.target.read_lit())
+            zfail.append(choice)
+        rgba = self.target.read_colour()
+        h, w = self.scene.height, self.scene.width
+        return RenderResult(
+            image=np.ascontiguousarray(rgba[..., :3]),
+            lit=np.array(lit, bool).reshape(len(lights), h, w),
+            coverage=rgba[..., 3] > 0.5,
+            stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if stencil else None,
+            zfail=np.array(zfail, bool).reshape(len(lights), len(self.scene.objects)))
+
+    def volume_view(self, method: str = "auto", silhouettes: str = "cpu", *,
+                    camera: Camera | None = None,
+                    lights: tuple[Light, ...] | None = None) -> np.ndarray:
+        """(H, W, 3) float32 linear RGB: the frame lit by `lights` (default: the scene's, as in
+        `render`) with their shadow-volume polygons drawn over it, coloured by role (see
+        `overlay`).  The polygons are exactly those the stencil pass drew under `method`."""
+        lights = _check_lights(lights)
+        result = self.render(method, silhouettes, camera=camera, lights=lights)
+        vols = self.volumes(silhouettes)  # the frame is left in the target
+        with stencil_gl.zero_to_one_depth(self.gl):
+            for i, light in enumerate(self.scene.lights if lights is None else lights):
+                vols.prepare(light.homogeneous)
+                overlay.draw_volume_overlay(self.ctx, self.gl, self.target, vols,
+                                            result.zfail[i])
+        return np.ascontiguousarray(self.target.read_colour()[..., :3])
+
+    def release(self) -> None:
+        if self.ctx is None:
+            return
+        make_current(self.ctx)
+        while self._owned:
+            self._owned.pop().release()
+        if self._own_ctx:
+            self.ctx.release()
+        self.ctx = None
+
+    def __enter__(self) -> "Renderer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+def _check_lights(lights) -> tuple[Light, ...] | None:
+    """`lights=` of render and volume_view: None (the scene's) or Light objects; anything else
+    (light indices, say) is a TypeError rather than a frame without those lights."""
+    if lights is None:
+        return None
+    lights = tuple(lights)
+    bad = [x for x in lights if not isinstance(x, (PointLight, DirectionalLight, SpotLight))]
+    if bad:
+        raise TypeError(f"lights must be Light objects (e.g. scene.lights[0]), got {bad[0]!r}")
+    return lights
+
+
+def render(scene: Scene, method: str = "auto", silhouettes: str = "cpu", *,
+           stencil: bool = False, ctx: moderngl.Context | None = None) -> RenderResult:
+    """Render one frame of `scene` (a fresh context unless `ctx` is given)."""
+    with Renderer(scene, ctx) as renderer:
+        return renderer.render(method, silhouettes, stencil=stencil)

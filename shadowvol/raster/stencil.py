@@ -1,0 +1,356 @@
+"""The one module that makes raw OpenGL calls: the depth-stencil attachment and stencil state.
+
+moderngl has no stencil API (moderngl#676), so the depth-stencil renderbuffer (DEPTH32F_STENCIL8),
+every piece of stencil state, depth clamp, the clip-control depth range and the stencil read-back
+are raw GL calls here, made through function
+pointers that EGL hands out for the current context (`eglGetProcAddress`; EGL 1.5 and Mesa return
+core entry points too).  Everything else — programs, buffers, textures, blending, depth test,
+colour and depth write masks — stays with moderngl.
+
+Each pass gets a context manager that sets the WHOLE stencil state it needs (test on/off, func
+for both faces, ops for both faces, write mask) and restores the previous state on exit, so no pass
+depends on what an earlier one left behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import ctypes.util
+from typing import Iterator
+
+import numpy as np
+
+from shadowvol.errors import RenderError
+
+# GL enums (from the GL 4.5 core headers)
+GL_UNSIGNED_BYTE = 0x1401
+GL_STENCIL_INDEX = 0x1901
+GL_STENCIL = 0x1802
+GL_DEPTH_STENCIL = 0x84F9
+GL_FRONT = 0x0404
+GL_BACK = 0x0405
+GL_KEEP = 0x1E00
+GL_INCR_WRAP = 0x8507
+GL_DECR_WRAP = 0x8508
+GL_ALWAYS = 0x0207
+GL_EQUAL = 0x0202
+GL_STENCIL_TEST = 0x0B90
+GL_DEPTH_CLAMP = 0x864F
+GL_CLIP_DISTANCE0 = 0x3000
+GL_PACK_ALIGNMENT = 0x0D05
+GL_RENDERBUFFER = 0x8D41
+GL_DEPTH32F_STENCIL8 = 0x8CAD
+GL_LOWER_LEFT = 0x8CA1
+GL_ZERO_TO_ONE = 0x935F
+GL_CLIP_ORIGIN = 0x935C
+GL_CLIP_DEPTH_MODE = 0x935D
+GL_FRAMEBUFFER = 0x8D40
+GL_FRAMEBUFFER_BINDING = 0x8CA6
+GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
+GL_FRAMEBUFFER_COMPLETE = 0x8CD5
+# state queries used to save and restore
+_FRONT_STATE = (0x0B92, 0x0B97, 0x0B93, 0x0B94, 0x0B95, 0x0B96, 0x0B98)  # func ref vmask fail zfail zpass wmask
+_BACK_STATE = (0x8800, 0x8CA3, 0x8CA4, 0x8801, 0x8802, 0x8803, 0x8CA5)
+
+_V = None  # restype void
+_u = ctypes.c_uint
+_i = ctypes.c_int
+_p = ctypes.c_void_p
+_SIGNATURES = {
+    "glEnable": (_V, _u), "glDisable": (_V, _u), "glIsEnabled": (ctypes.c_ubyte, _u),
+    "glGetIntegerv": (_V, _u, _p), "glGetError": (_u,),
+    "glStencilFuncSeparate": (_V, _u, _u, _i, _u),
+    "glStencilOpSeparate": (_V, _u, _u, _u, _u),
+    "glStencilMaskSeparate": (_V, _u, _u),
+    "glClearBufferiv": (_V, _u, _i, _p), "glClearBufferfi": (_V, _u, _i, ctypes.c_float, _i),
+    "glPixelStorei": (_V, _u, _i),
+    "glReadPixels": (_V, _i, _i, _i, _i, _u, _u, _p),
+    "glGenRenderbuffers": (_V, _i, _p), "glDeleteRenderbuffers": (_V, _i, _p),
+    "glBindRenderbuffer": (_V, _u, _u), "glRenderbufferStorage": (_V, _u, _u, _i, _i),
+    "glBindFramebuffer": (_V, _u, _u),
+    "glFramebufferRenderbuffer": (_V, _u, _u, _u, _u),
+    "glCheckFramebufferStatus": (_u, _u),
+    "glClipControl": (_V, _u, _u),
+}
+
+
+class RawGLError(RenderError):
+    pass
+
+
+class RawGL:
+    """Raw GL entry points for the context that is current (moderngl's standalone EGL context
+    stays current on the thread that made it).  Holds function pointers only, no GL objects."""
+
+    def __init__(self):
+        name = "libEGL.so.1"
+        try:
+            egl = ctypes.CDLL(name)
+        except OSError:
+            found = ctypes.util.find_library("EGL")
+            if not found:
+                raise RawGLError("libEGL not found: install libegl1 (Debian/Ubuntu) or your GPU "
+                                 "vendor's EGL driver") from None
+            egl = ctypes.CDLL(found)
+        get = egl.eglGetProcAddress
+        get.restype = ctypes.c_void_p
+        get.argtypes = [ctypes.c_char_p]
+        for fname, (restype, *args) in _SIGNATURES.items():
+            address = get(fname.encode())
+            if not address:
+                raise RawGLError(f"eglGetProcAddress returned no {fname}")
+            proto = ctypes.CFUNCTYPE(restype, *args)
+            setattr(self, fname, proto(address))
+
+    # -- queries -----------------------------------------------------------------------------
+    def get_int(self, pname: int) -> int:
+        out = (ctypes.c_int * 4)()
+        self.glGetIntegerv(pname, out)
+        return int(out[0])
+
+    def check(self, what: str) -> None:
+        err = self.glGetError()
+        if err:
+            raise RawGLError(f"GL error 0x{err:04X} after {what}")
+
+
+# ---------------------------------------------------------------------------------------------
+# The depth-stencil attachment
+# ---------------------------------------------------------------------------------------------
+
+class DepthStencilBuffer:
+    """A DEPTH32F_STENCIL8 renderbuffer (float depth for the reversed depth of
+    `camera.infinite_projection`, 8-bit stencil) attached to a moderngl framebuffer's GL object.
+    Owns the renderbuffer: call `release()`."""
+
+    def __init__(self, gl: RawGL, framebuffer_glo: int, width: int, height: int):
+        self.gl = gl
+        ids = (ctypes.c_uint * 1)()
+        gl.glGenRenderbuffers(1, ids)
+        self.glo = int(ids[0])
+        gl.glBindRenderbuffer(GL_RENDERBUFFER, self.glo)
+        gl.glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, width, height)
+        gl.glBindRenderbuffer(GL_RENDERBUFFER, 0)
+        with bound_framebuffer(gl, framebuffer_glo):
+            gl.glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT,
+                                         GL_RENDERBUFFER, self.glo)
+            status = gl.glCheckFramebufferStatus(GL_FRAMEBUFFER)
+        gl.check("attaching the depth-stencil renderbuffer")
+        if status != GL_FRAMEBUFFER_COMPLETE:
+            self.release()
+            raise RawGLError(f"framebuffer incomplete (status 0x{status:04X})")
+
+    def release(self) -> None:
+        if self.glo:
+            ids = (ctypes.c_uint * 1)(self.glo)
+            self.gl.glDeleteRenderbuffers(1, ids)
+            self.glo = 0
+
+
+@contextlib.contextmanager
+def bound_framebuffer(gl: RawGL, glo: int) -> Iterator[None]:
+    previous = gl.get_int(GL_FRAMEBUFFER_BINDING)
+    gl.glBindFramebuffer(GL_FRAMEBUFFER, glo)
+    try:
+        yield
+    finally:
+        gl.glBindFramebuffer(GL_FRAMEBUFFER, previous)
+
+
+def clear_depth_stencil(gl: RawGL, framebuffer_glo: int, depth: float) -> None:
+    """Depth to `depth`, stencil to 0 (both write masks opened for the clear, then restored)."""
+    with _saved_stencil_state(gl), bound_framebuffer(gl, framebuffer_glo):
+        gl.glStencilMaskSeparate(GL_FRONT, 0xFF)
+        gl.glStencilMaskSeparate(GL_BACK, 0xFF)
+        gl.glClearBufferfi(GL_DEPTH_STENCIL, 0, depth, 0)
+
+
+def clear_stencil(gl: RawGL, framebuffer_glo: int) -> None:
+    """Stencil to 0, depth untouched."""
+    zero = (ctypes.c_int * 1)(0)
+    with _saved_stencil_state(gl), bound_framebuffer(gl, framebuffer_glo):
+        gl.glStencilMaskSeparate(GL_FRONT, 0xFF)
+        gl.glStencilMaskSeparate(GL_BACK, 0xFF)
+        gl.glClearBufferiv(GL_STENCIL, 0, zero)
+
+
+def read_stencil(gl: RawGL, framebuffer_glo: int, width: int, height: int) -> np.ndarray:
+    """(height, width) uint8 stencil values, row 0 at the BOTTOM (GL order; the caller flips)."""
+    out = np.empty((height, width), np.uint8)
+    previous = gl.get_int(GL_PACK_ALIGNMENT)
+    with bound_framebuffer(gl, framebuffer_glo):
+        gl.glPixelStorei(GL_PACK_ALIGNMENT, 1)
+        gl.glReadPixels(0, 0, width, height, GL_STENCIL_INDEX, GL_UNSIGNED_BYTE,
+                        out.ctypes.data_as(ctypes.c_void_p))
+        gl.glPixelStorei(GL_PACK_ALIGNMENT, previous)
+    gl.check("reading the stencil buffer")
+    return out
+
+
+@contextlib.contextmanager
+def zero_to_one_depth(gl: RawGL) -> Iterator[None]:
+    """glClipControl(LOWER_LEFT, ZERO_TO_ONE) for a frame: clip depth 0 <= z <= w mapped to
+    window depth z / w unchanged, which the reversed infinite projection needs (see camera).
+    Restores the previous clip control."""
+    origin, mode = gl.get_int(GL_CLIP_ORIGIN), gl.get_int(GL_CLIP_DEPTH_MODE)
+    gl.glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE)
+    try:
+        yield
+    finally:
+        gl.glClipControl(origin, mode)
+
+
+# ---------------------------------------------------------------------------------------------
+# Stencil state for each pass
+# ---------------------------------------------------------------------------------------------
+
+@contextlib.contextmanager
+def _saved_stencil_state(gl: RawGL) -> Iterator[None]:
+    enabled = bool(gl.glIsEnabled(GL_STENCIL_TEST))
+    clamp = bool(gl.glIsEnabled(GL_DEPTH_CLAMP))
+    front = [gl.get_int(p) for p in _FRONT_STATE]
+    back = [gl.get_int(p) for p in _BACK_STATE]
+    try:
+        yield
+    finally:
+        for face, (func, ref, vmask, sfail, zfail, zpass, wmask) in ((GL_FRONT, front),
+                                                                     (GL_BACK, back)):
+            gl.glStencilFuncSeparate(face, func, ref, vmask & 0xFFFFFFFF)
+            gl.glStencilOpSeparate(face, sfail, zfail, zpass)
+            gl.glStencilMaskSeparate(face, wmask & 0xFFFFFFFF)
+        (gl.glEnable if enabled else gl.glDisable)(GL_STENCIL_TEST)
+        (gl.glEnable if clamp else gl.glDisable)(GL_DEPTH_CLAMP)
+
+
+def _set(gl: RawGL, *, func: int, ref: int, front_ops: tuple[int, int, int],
+         back_ops: tuple[int, int, int], write_mask: int, depth_clamp: bool) -> None:
+    gl.glEnable(GL_STENCIL_TEST)
+    for face, ops in ((GL_FRONT, front_ops), (GL_BACK, back_ops)):
+        gl.glStencilFuncSeparate(face, func, ref, 0xFF)
+        gl.glStencilOpSeparate(face, *ops)
+        gl.glStencilMaskSeparate(face, write_mask)
+    (gl.glEnable if depth_clamp else gl.glDisable)(GL_DEPTH_CLAMP)
+
+
+@contextlib.contextmanager
+def zpass_counting(gl: RawGL) -> Iterator[None]:
+    """Z-pass: every volume face IN FRONT of the scene (depth test passes) counts, front faces
+    +1, back faces -1, wrapping.  No depth clamp: geometry in front of the near plane stays
+    clipped, so the count is taken from the near plane (the auto method's test relies on that)."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_ALWAYS, ref=0,
+             front_ops=(GL_KEEP, GL_KEEP, GL_INCR_WRAP), back_ops=(GL_KEEP, GL_KEEP, GL_DECR_WRAP),
+             write_mask=0xFF, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def zfail_counting(gl: RawGL, depth_clamp: bool) -> Iterator[None]:
+    """Z-fail (Carmack's reverse): every volume face BEHIND the scene (depth test fails) counts,
+    back faces +1, front faces -1, wrapping.  `depth_clamp` is on for side quads and far caps:
+    far caps lie exactly at depth 0 (w = 0, reversed depth) and must never be clipped away; a
+    side fragment in front of the near plane gets depth 1, passes, and so counts for nothing, as
+    if clipped.  It
+    is off for near caps, which must be clipped exactly as the depth pass clipped the same
+    triangles so that their depths tie bit for bit."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_ALWAYS, ref=0,
+             front_ops=(GL_KEEP, GL_DECR_WRAP, GL_KEEP), back_ops=(GL_KEEP, GL_INCR_WRAP, GL_KEEP),
+             write_mask=0xFF, depth_clamp=depth_clamp)
+        yield
+
+
+@contextlib.contextmanager
+def entering_faces_counting(gl: RawGL, zfail: bool, depth_clamp: bool) -> Iterator[None]:
+    """The stencil-overflow check (`shadowvol.raster.overflow`): count, SATURATING at 255, only the
+    volume faces by which the view ray ENTERS a volume where the count pass counts them: front
+    faces in front of the surface (z-pass), back faces behind it (z-fail).  The signed count is
+    at most that number, so where it stays below 255 the 8-bit signed count cannot have
+    wrapped.  `depth_clamp` as in `zfail_counting`."""
+    counting = (GL_KEEP, GL_INCR, GL_KEEP) if zfail else (GL_KEEP, GL_KEEP, GL_INCR)
+    ignored = (GL_KEEP, GL_KEEP, GL_KEEP)
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_ALWAYS, ref=0, front_ops=ignored if zfail else counting,
+             back_ops=counting if zfail else ignored, write_mask=0xFF,
+             depth_clamp=depth_clamp)
+        yield
+
+
+@contextlib.contextmanager
+def where_unshadowed(gl: RawGL) -> Iterator[None]:
+    """Lighting: draw only where the stencil count is 0; the stencil itself is left unchanged."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_EQUAL, ref=0, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
+             back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def depth_clamped(gl: RawGL) -> Iterator[None]:
+    """No stencil, depth clamp on: for drawing shadow polygons in the teaching view, where the
+    far caps at infinity must survive clipping."""
+    with _saved_stencil_state(gl):
+        gl.glDisable(GL_STENCIL_TEST)
+        gl.glEnable(GL_DEPTH_CLAMP)
+        yield
+
+
+# ---------------------------------------------------------------------------------------------
+# Planar projected shadows (shadowvol.course.planar_gl): mark the receiver, shadow each pixel once,
+# light where not shadowed
+# ---------------------------------------------------------------------------------------------
+
+GL_REPLACE = 0x1E01
+GL_INCR = 0x1E02
+GL_NOTEQUAL = 0x0205
+PLANAR_RECEIVER = 1   # stencil value of a pixel where the receiving plane is the visible surface
+PLANAR_SHADOW = 2     # ... and where a projected shadow covers it
+
+
+@contextlib.contextmanager
+def planar_receiver_mark(gl: RawGL) -> Iterator[None]:
+    """Every fragment that passes the depth test writes PLANAR_RECEIVER (drawn with the
+    receiver's own triangles and depth test EQUAL: its visible pixels).  Projected shadows are
+    later drawn only there, so none hangs off the receiver's edge or lands on another object."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_ALWAYS, ref=PLANAR_RECEIVER,
+             front_ops=(GL_KEEP, GL_KEEP, GL_REPLACE), back_ops=(GL_KEEP, GL_KEEP, GL_REPLACE),
+             write_mask=0xFF, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def planar_shadow_once(gl: RawGL) -> Iterator[None]:
+    """Draw a projected shadow fragment only where the stencil is PLANAR_RECEIVER and raise it
+    to PLANAR_SHADOW: the first shadow triangle over a pixel marks it, every later one (the
+    projections overlap: a closed caster projects its front and its back) fails the test, so
+    no pixel is shadowed twice."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_EQUAL, ref=PLANAR_RECEIVER,
+             front_ops=(GL_KEEP, GL_KEEP, GL_INCR), back_ops=(GL_KEEP, GL_KEEP, GL_INCR),
+             write_mask=0xFF, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def where_not_planar_shadow(gl: RawGL) -> Iterator[None]:
+    """Lighting with projected shadows: draw wherever the stencil is not PLANAR_SHADOW (the
+    rest of the receiver and every other object); the stencil is left unchanged."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_NOTEQUAL, ref=PLANAR_SHADOW, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
+             back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def clip_distances(gl: RawGL, count: int) -> Iterator[None]:
+    """GL_CLIP_DISTANCE0 .. count - 1 enabled (moderngl has no switch for them); all disabled
+    again on exit.  Shaders that write gl_ClipDistance are clipped only while enabled."""
+    for i in range(count):
+        gl.glEnable(GL_CLIP_DISTANCE0 + i)
+    try:
+        yield
+    finally:
+        for i in range(count):
+            gl.glDisable(GL_CLIP_DISTANCE0 + i)

@@ -1,0 +1,38 @@
+"""The benchmark command runs end to end (`benchmarks/run.py --quick`, tiny scenes) and writes a
+report of the expected shape.  Structure only: nothing here is timed or compared with a target.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+from builders import ROOT
+
+SECTIONS = ["## Headline ratios and targets", "## Frames at", "## Phases (one light)",
+            "## Resolution scaling", "## pyrender 0.1.45, the same scenes", "## Ray tracer",
+            "## Memory"]
+
+
+def test_quick_benchmark_run_writes_the_report(tmp_path):
+    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "run.py"), "--quick",
+                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    md = (tmp_path / "BENCHMARKS.md").read_text()
+    for heading in SECTIONS:
+        assert heading in md, heading
+    assert "python benchmarks/run.py --quick" in md
+    assert "llvmpipe" in md or "GL**:" in md
+    png = (tmp_path / "benchmarks.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    results = json.loads((tmp_path / "results.json").read_text())
+    for key in ("machine", "frames", "phases", "silhouettes", "resolution", "pyrender",
+                "raytrace", "memory"):
+        assert key in results, key
+    frame = results["frames"][0]["times"]
+    assert {"floor", "auto/cpu", "zpass/gpu", "zfail/cpu"} <= set(frame)
+    assert all({"median", "min", "max"} <= set(s) for s in frame.values())
+    # every headline row has a number and a verdict
+    rows = md.split("## Headline ratios and targets")[1].split("##")[0]
+    assert rows.count("**met**") + rows.count("not met") >= 5

@@ -1,0 +1,143 @@
+"""The 8-bit stencil meets 256 layers (shadowvol.raster.overflow): a count that wraps to 0 is never
+returned as lit; it raises StencilOverflowError (exit status 3 from the command line).
+Counts that reach 256 but do not land on a multiple of it stay right."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import raytrace
+from shadowvol.cli.main import main as shadowvol_main
+from shadowvol.compare.maskdiff import mask_report
+from shadowvol.primitives import box, mesh, plane
+from shadowvol.raster import overflow
+from shadowvol.raster.renderer import Renderer
+from shadowvol.scene import Camera, Material, PointLight, Scene
+from shadowvol.scenefile import save_scene
+
+SIZE = dict(width=64, height=48)
+
+
+def stack(layers: int, closed: bool = False) -> Scene:
+    """`layers` sheets (one mesh of disjoint quads) or thin closed slabs (one object each,
+    counting 2 apiece) stacked between a floor and a light; the camera sees the floor under the
+    stack, in the stack's shadow, and around it, lit."""
+    z = np.linspace(1.0, 2.0, layers)
+    if closed:
+        casters = [box(f"slab{i}", [0, h, 0], [1.0, 0.5 / layers, 1.0]) for i, h in enumerate(z)]
+    else:
+        corners = np.array([[-0.5, 0, -0.5], [0.5, 0, -0.5], [0.5, 0, 0.5], [-0.5, 0, 0.5]])
+        v = (corners[None] + np.stack([np.zeros_like(z), z, np.zeros_like(z)], 1)[:, None])
+        f = (np.array([[0, 1, 2], [0, 2, 3]])[None] + 4 * np.arange(layers)[:, None, None])
+        casters = [mesh("sheets", v.reshape(-1, 3), f.reshape(-1, 3),
+                        Material(diffuse=[0.8, 0.2, 0.2]))]
+    return Scene(camera=Camera(eye=[0, 0.8, 3.0], target=[0, 0, 0], fov_y=60),
+                 objects=[plane("floor", size=[6, 6])] + casters,
+                 lights=[PointLight([0.1, 4.0, 0.05])], **SIZE)
+
+
+@pytest.mark.parametrize("layers, closed", [(256, False), (512, False)])
+def test_a_count_that_wraps_to_zero_raises(ctx, layers, closed):
+    """256 sheets over the floor: the count there is 256, which the 8-bit stencil reads as 0.
+    render() raises, naming the light and the pixels."""
+    scene = stack(layers, closed)
+    lit, cov = raytrace.shadow_masks(scene)
+    shadow = cov & ~lit[0]
+    assert shadow.sum() > 100  # the reference has the stack's shadow
+    with Renderer(scene, ctx) as r:
+        for method in ("auto", "zfail"):
+            with pytest.raises(overflow.StencilOverflowError, match="light 0") as exc:
+                r.render(method)
+            assert exc.value.light == 0
+            # the flagged pixels are wrapped ones: in the stack's shadow, drawn lit
+            assert exc.value.pixels.sum() > 20
+            assert not (exc.value.pixels & ~shadow).any()
+
+
+@pytest.mark.parametrize("method", ["auto", "zfail", "zpass"])
+def test_never_a_wrong_shadow_behind_128_closed_slabs(ctx, method):
+    """128 closed slabs: 256 faces between the floor and the light.  Whatever the counting
+    does with them (a renderer may count a closed caster once instead of twice), the frame is
+    either right or refused: never a wrapped count drawn as lit."""
+    scene = stack(128, closed=True)
+    lit, cov = raytrace.shadow_masks(scene)
+    with Renderer(scene, ctx) as r:
+        try:
+            res = r.render(method)
+        except overflow.StencilOverflowError as exc:
+            assert not (exc.pixels & ~(cov & ~lit[0])).any()
+            return
+    rows = mask_report(res.lit, res.coverage, lit, cov)
+    assert not any(row["interior"] for row in rows), rows
+
+
+@pytest.mark.parametrize("layers", [255, 300])
+def test_counts_past_the_limit_that_do_not_wrap_to_zero_stay_right(ctx, assert_masks_match,
+                                                                    layers):
+    """255 layers (the entering count saturates at exactly 255 and view rays past the stack
+    cross 255 volumes: ambiguous in one counting direction, cleared by the other) and 300
+    (reads 44): shadowed as they should be, no error."""
+    scene = stack(layers)
+    lit, cov = raytrace.shadow_masks(scene)
+    with Renderer(scene, ctx) as r:
+        assert r.count_bound >= overflow.STENCIL_LIMIT
+        for method in ("auto", "zfail"):
+            res = r.render(method)
+            rows = mask_report(res.lit, res.coverage, lit, cov)
+            assert not any(row["interior"] for row in rows), rows
+
+
+def test_scenes_that_cannot_overflow_take_no_extra_pass(ctx, monkeypatch):
+    """The bound: 2 per closed convex object, the triangle count for anything else.  Below 256
+    the check never runs, so the normal frame is unchanged."""
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("the overflow check ran")
+
+    monkeypatch.setattr(overflow, "find_wrapped", must_not_run)
+    scene = stack(100, closed=True)  # 100 boxes: bound 2 + 200
+    with Renderer(scene, ctx) as r:
+        assert r.count_bound == 202
+        r.render()
+    assert overflow.object_bound(*_icosphere()) == 2
+
+
+def _icosphere():
+    from shadowvol.primitives import sphere
+
+    ball = sphere("ball", [0, 0, 0], 1.0, subdivisions=3)
+    return ball.vertices, ball.faces
+
+
+def test_the_command_line_reports_it_with_status_3(tmp_path, capsys):
+    save_scene(stack(256), tmp_path / "stack.json")
+    code = shadowvol_main(["render", str(tmp_path / "stack.json"), "-o", str(tmp_path / "x.png")])
+    err = capsys.readouterr().err
+    assert code == 3 and err.startswith("error: stencil overflow: light 0")
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_closed_convex_classification():
+    """The overflow bound's convexity test (numpy, on the welded topology): 2 only for one
+    closed, consistently wound, locally convex body, whichever way it is wound."""
+    from shadowvol import primitives
+    from shadowvol.raster.topology import Topology
+
+    box = primitives.box("b", size=[1, 2, 3], transform=primitives.Transform(rotation=[10, 33, 71]))
+    v, f = box.vertices, box.faces
+    assert overflow.is_closed_convex(Topology.build(v, f))
+    assert overflow.is_closed_convex(Topology.build(v, f[:, ::-1]))        # wound inward
+    assert not overflow.is_closed_convex(Topology.build(v, f[:-1]))        # open: a face missing
+    flipped = f.copy()
+    flipped[0] = flipped[0, ::-1]
+    assert not overflow.is_closed_convex(Topology.build(v, flipped))       # inconsistent winding
+    two = np.concatenate([v, v + 10.0])
+    assert not overflow.is_closed_convex(Topology.build(two, np.concatenate([f, f + len(v)])))
+    dented = v.copy()
+    top = int(np.argmax(v[:, 1]))
+    dented[top] -= 0.6 * (v[top] - v.mean(axis=0))                       # push a corner inward
+    assert not overflow.is_closed_convex(Topology.build(dented, f))
+    # seam duplicates weld: an unwelded icosphere is still one convex body
+    vi, fi = _icosphere()
+    assert overflow.is_closed_convex(Topology.build(vi[fi].reshape(-1, 3),
+                                                    np.arange(3 * len(fi)).reshape(-1, 3)))
