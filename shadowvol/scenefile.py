@@ -288,7 +288,7 @@ def save_scene(scene: Scene, path: str | Path) -> None:
     suffix = path.suffix.lower()
     if suffix not in (".toml", ".json"):
         raise SceneError("path", f"a scene file must end in .toml or .json, got {str(path)!r}",
-                         path)
+                         str(path))
     data = scene_to_dict(scene)
     text = to_toml(data) if suffix == ".toml" else json.dumps(data, indent=1)
     with atomic_write(path) as f:

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from shadowvol.cli import outputs, status
+from shadowvol.compare import pyrender_peer
 from shadowvol.compare.comparison import compare
 from shadowvol.io import atomic_write, save_png
 from shadowvol.scenefile import load_scene
@@ -71,6 +72,8 @@ def command(args) -> int:
     if args.json:
         paths["json"] = Path(args.json)
     outputs.check(paths, {"picture": "-o", "json": "--json"})
+    if args.pyrender:
+        pyrender_peer.import_pyrender()  # a missing [peer] extra is reported before any work
     scene = load_scene(args.scene)
     if args.size is not None:
         scene = scene.replace(width=args.size[0], height=args.size[1])

@@ -5,7 +5,7 @@ pyrender is the peer the `compare` command measures against: it draws shadows wi
 "Shadows not implemented for point lights"), so its masks show what shadow mapping gets wrong
 (resolution, bias, PCF blur) next to the exact stencil shadows and the ray tracer.
 
-pyrender is imported lazily, inside the functions, through `_pyrender()`, which is the only place
+pyrender is imported lazily, inside the functions, through `import_pyrender()`, which is the only place
 that touches two compatibility problems of pyrender 0.1.45 (pinned in pyproject's `peer` extra):
 - it uses `np.infty`, removed in NumPy 2: we add the alias (`np.infty = np.inf`) if it is missing,
   here and nowhere else;
@@ -77,7 +77,7 @@ MIN_LIGHT_DISTANCE = 1e-3
 # Importing pyrender, and its EGL context
 # ---------------------------------------------------------------------------------------------
 
-def _pyrender():
+def import_pyrender():
     """Import pyrender with its NumPy 2 and headless shims (see the module docstring); without
     the [peer] extra, MissingExtra (exit status 2) naming the pip command."""
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
@@ -101,7 +101,7 @@ def _egl_current():
 @contextlib.contextmanager
 def _offscreen(width: int, height: int):
     """A pyrender OffscreenRenderer that leaves the process's EGL state as it found it."""
-    pyrender = _pyrender()
+    pyrender = import_pyrender()
     saved = _egl_current()
     renderer = pyrender.OffscreenRenderer(width, height)
     try:
@@ -188,7 +188,7 @@ def _shininess(roughness: float) -> float:
 
 
 def _pr_material(material: Material, scene_ambient: np.ndarray, name: str):
-    pyrender = _pyrender()
+    pyrender = import_pyrender()
     # pyrender's mesh.frag adds `emissive * material.emissive_factor` with
     # emissive = emissive_factor: the factor counts squared, hence the square root.
     emissive = np.sqrt(np.clip(material.ambient * scene_ambient, 0.0, 1.0))
@@ -199,7 +199,7 @@ def _pr_material(material: Material, scene_ambient: np.ndarray, name: str):
 
 
 def _our_material(material, ambient_light: np.ndarray) -> Material:
-    pyrender = _pyrender()
+    pyrender = import_pyrender()
     emissive = np.zeros(3)
     if material is not None and material.emissiveFactor is not None:
         emissive = np.asarray(material.emissiveFactor, dtype=np.float64)[:3]
@@ -240,7 +240,7 @@ def to_pyrender(scene: Scene):
     Mesh nodes are named after the objects, light nodes "light0", "light1", ... in the scene's
     order, the camera node "camera"; `from_pyrender` sorts by these names.
     """
-    pyrender = _pyrender()
+    pyrender = import_pyrender()
     import trimesh
 
     pr = pyrender.Scene(bg_color=[*np.clip(scene.background, 0, 1) ** (1 / PYRENDER_GAMMA), 1.0],
@@ -264,7 +264,7 @@ def to_pyrender(scene: Scene):
 def _pr_light(light, triangles: np.ndarray, intensity: float | None = None):
     """(pyrender light, pose) for one of our lights; `intensity` overrides the conversion.
     triangles : (m, 3, 3) the scene's geometry (for the fall-off reference distance)."""
-    pyrender = _pyrender()
+    pyrender = import_pyrender()
     if isinstance(light, DirectionalLight):
         value = light.intensity / PBR_DIFFUSE if intensity is None else intensity
         return (pyrender.DirectionalLight(color=light.color, intensity=value),
@@ -299,7 +299,7 @@ def from_pyrender(pr_scene, width: int, height: int, name: str | None = None) ->
     - Materials and intensities: see the module docstring.  The scene's ambient light goes into
       each material's ambient; our scene ambient is white.
     """
-    pyrender = _pyrender()
+    pyrender = import_pyrender()
     ambient_light = np.asarray(pr_scene.ambient_light, dtype=np.float64)[:3]
     objects = []
     for node in sorted(pr_scene.mesh_nodes, key=lambda n: _node_key(pr_scene, n)):
@@ -362,7 +362,7 @@ def from_pyrender(pr_scene, width: int, height: int, name: str | None = None) ->
 # ---------------------------------------------------------------------------------------------
 
 def _flags(shadows: bool):
-    pyrender = _pyrender()
+    pyrender = import_pyrender()
     flags = pyrender.RenderFlags.NONE
     if shadows:
         flags |= pyrender.RenderFlags.SHADOWS_DIRECTIONAL | pyrender.RenderFlags.SHADOWS_SPOT
@@ -410,7 +410,7 @@ def pyrender_shadow_masks(scene: Scene, lights=None) -> tuple[np.ndarray, np.nda
     The light's intensity is set so that n . l = 1 at the nearest geometry gives brightness 1,
     which keeps B far from saturating.
     """
-    pyrender = _pyrender()
+    pyrender = import_pyrender()
     import trimesh
 
     chosen = tuple(range(len(scene.lights))) if lights is None else tuple(lights)

@@ -33,11 +33,11 @@ from raytrace.raytree import draw_tree, format_tree, ray_tree
 from shadowvol import pictures
 from shadowvol.compare.comparison import compare
 from shadowvol.compare.maskdiff import light_stats
-from shadowvol.course.planar_gl import PlanarShadows
 from shadowvol.course.shadow2d import draw_shadow2d, example
 from shadowvol.io import encode_srgb
 from shadowvol.pictures import column, figure_pixels, heat_maps, row, tint
 from shadowvol.raster.context import create_context
+from shadowvol.raster.planar_pass import PlanarShadows
 from shadowvol.raster.projection import view_matrix, view_projection
 from shadowvol.raster.renderer import Renderer
 from shadowvol.resources import data_dir
@@ -257,7 +257,7 @@ def planar(g: Gallery) -> Picture:
         "other objects or an object itself.  Shadow volumes do both.",
         "projected shadows; shadow volumes; the projected-shadow image with the pixels that "
         "shadow volumes shadow and the projection leaves lit tinted red",
-        "shadowvol demo (shadowvol.course.gallery.planar: shadowvol.course.planar_gl.PlanarShadows beside "
+        "shadowvol demo (shadowvol.course.gallery.planar: shadowvol.raster.planar_pass.PlanarShadows beside "
         f"Renderer.render on {g.path('planar')})",
         titled(row(panels), title, g.small),
         numbers={"missing": int(missing.sum()), "extra": int(extra.sum())})

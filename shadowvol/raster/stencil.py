@@ -297,7 +297,7 @@ def depth_clamped(gl: RawGL) -> Iterator[None]:
 
 
 # ---------------------------------------------------------------------------------------------
-# Planar projected shadows (shadowvol.course.planar_gl): mark the receiver, shadow each pixel once,
+# Planar projected shadows (shadowvol.raster.planar_pass): mark the receiver, shadow each pixel once,
 # light where not shadowed
 # ---------------------------------------------------------------------------------------------
 

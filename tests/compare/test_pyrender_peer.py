@@ -175,7 +175,7 @@ def test_shim_makes_pyrender_importable_under_numpy_2():
         assert not hasattr(np, 'infty')
         import shadowvol.compare.pyrender_peer as pb
         assert 'pyrender' not in sys.modules and 'OpenGL' not in sys.modules
-        pyrender = pb._pyrender()
+        pyrender = pb.import_pyrender()
         assert np.infty == np.inf
         assert os.environ['PYOPENGL_PLATFORM'] == 'egl'
         import trimesh
@@ -230,7 +230,7 @@ def test_round_trip_keeps_triangles_camera_and_lights():
 
 def test_from_pyrender_applies_node_poses_and_drops_points():
     import trimesh
-    pyrender = pb._pyrender()
+    pyrender = pb.import_pyrender()
     pr = pyrender.Scene()
     cube = trimesh.creation.box(extents=[1.0, 1.0, 1.0])
     parent = pyrender.Node(name="rig", matrix=np.array([[1, 0, 0, 10], [0, 1, 0, 0],

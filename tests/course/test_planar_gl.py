@@ -1,4 +1,4 @@
-"""Planar projected shadows in GL (shadowvol.course.planar_gl): right where the answer is known, and
+"""Planar projected shadows in GL (shadowvol.raster.planar_pass): right where the answer is known, and
 wrong exactly where the method is known to be wrong."""
 
 from __future__ import annotations
@@ -11,14 +11,14 @@ import raytrace
 from raytrace.backends import make_backend
 from raytrace.camera import primary_rays
 from shadowvol.course.planar import project_points, projection_matrix
-from shadowvol.course.planar_gl import (
+from shadowvol.primitives import Transform, box, plane, sphere
+from shadowvol.raster import stencil as stencil_gl
+from shadowvol.raster.planar_pass import (
     PlanarShadows,
     ReceiverError,
     receiver_index,
     receiver_plane,
 )
-from shadowvol.primitives import Transform, box, plane, sphere
-from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.projection import view_projection
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import Camera, DirectionalLight, Material, PointLight, Scene

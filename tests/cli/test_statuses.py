@@ -1,0 +1,148 @@
+"""One exit-status table (shadowvol.cli.status) for every command of both tools: each command
+is driven into each class it can reach, and every --help prints the table."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+
+import pytest
+from builders import ROOT, SCENES
+
+import raytrace.cli
+import shadowvol.cli.compare
+import shadowvol.cli.render
+import shadowvol.course.gallery
+from raytrace.cli import main as raytrace_main
+from shadowvol.cli import status
+from shadowvol.cli.main import main as shadowvol_main
+from shadowvol.raster.context import ContextError
+from shadowvol.scenefile import load_scene, save_scene
+
+pytestmark = pytest.mark.gl  # the OK cases render
+
+
+@pytest.fixture
+def small(tmp_path):
+    path = tmp_path / "cage.json"
+    save_scene(load_scene(SCENES / "cage.toml").replace(width=32, height=24), path)
+    return path
+
+
+def _no_gl(*args, **kwargs):
+    raise ContextError("cannot create a headless EGL context (blocked by the test)")
+
+
+def _no_memory(*args, **kwargs):
+    raise MemoryError()
+
+
+SHADOWVOL_OK = {
+    "render": lambda s, o: ["render", str(s), "-o", str(o / "x.png")],
+    "compare": lambda s, o: ["compare", str(s), "-o", str(o / "x.png")],
+    "shadow2d": lambda s, o: ["shadow2d", "--example", "-o", str(o / "x.png"), "--size", "64"],
+}
+RAYTRACE_OK = {
+    "render": lambda s, o: ["render", str(s), "-o", str(o / "x.png"), "--no-progress"],
+    "masks": lambda s, o: ["masks", str(s), "-o", str(o / "x.npz")],
+    "tree": lambda s, o: ["tree", str(s), "--pixel", "16", "12", "--depth", "1", "-o",
+                          str(o / "x.png")],
+}
+
+
+@pytest.mark.parametrize("command", sorted(SHADOWVOL_OK))
+def test_shadowvol_ok_and_bad_input(command, small, tmp_path, capsys):
+    assert shadowvol_main(SHADOWVOL_OK[command](small, tmp_path)) == status.OK
+    bad = [a.replace(str(small), str(tmp_path / "missing.toml")) for a in
+           SHADOWVOL_OK[command](small, tmp_path)]
+    if command == "shadow2d":
+        bad = ["shadow2d", str(tmp_path / "missing.toml")]
+    assert shadowvol_main(bad) == status.BAD_INPUT
+    wrong_suffix = [a.replace("x.png", "x.jpg") for a in SHADOWVOL_OK[command](small, tmp_path)]
+    assert shadowvol_main(wrong_suffix) == status.BAD_INPUT
+    assert not (tmp_path / "x.jpg").exists()
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "must end in .png" in err
+
+
+@pytest.mark.parametrize("command", sorted(RAYTRACE_OK))
+def test_raytrace_ok_bad_input_and_failure(command, small, tmp_path, capsys, monkeypatch):
+    assert raytrace_main(RAYTRACE_OK[command](small, tmp_path)) == status.OK
+    bad = [a.replace(str(small), str(tmp_path / "missing.toml")) for a in
+           RAYTRACE_OK[command](small, tmp_path)]
+    assert raytrace_main(bad) == status.BAD_INPUT
+    monkeypatch.setattr(raytrace.cli, "load_scene", _no_memory)
+    assert raytrace_main(RAYTRACE_OK[command](small, tmp_path)) == status.RENDER_FAILED
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "error: out of memory" in err
+
+
+def test_compare_over_budget():
+    args = ["compare", str(SCENES / "inside_shadow.toml"), "--size", "80x60", "--method",
+            "zpass", "--max-interior", "0", "-o"]
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        assert shadowvol_main(args + [f"{d}/c.png"]) == status.OVER_BUDGET
+
+
+@pytest.mark.parametrize("command, module", [("render", shadowvol.cli.render),
+                                             ("compare", shadowvol.compare.comparison),
+                                             ("demo", shadowvol.course.gallery)])
+def test_no_gl_is_rendering_failed(command, module, small, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(module, "create_context", _no_gl)
+    args = {"render": ["render", str(small), "-o", str(tmp_path / "x.png")],
+            "compare": ["compare", str(small), "-o", str(tmp_path / "x.png")],
+            "demo": ["demo", "--small", "-o", str(tmp_path / "g")]}[command]
+    assert shadowvol_main(args) == status.RENDER_FAILED
+    assert capsys.readouterr().err.startswith("error: cannot create a headless EGL context")
+    assert not (tmp_path / "x.png").exists() and not (tmp_path / "g").exists()
+
+
+def test_demo_bad_scenes_folder(tmp_path):
+    assert shadowvol_main(["demo", "-o", str(tmp_path / "g"), "--scenes",
+                           str(tmp_path / "nowhere")]) == status.BAD_INPUT
+
+
+BLOCK = textwrap.dedent("""
+    import sys
+    class Block:
+        def find_spec(self, name, path=None, target=None):
+            if name.split(".")[0] == MISSING:
+                raise ImportError("No module named " + repr(name), name=name)
+    sys.meta_path.insert(0, Block())
+    """)
+
+
+@pytest.mark.parametrize("missing, tool, args, pip", [
+    ("pyrender", "shadowvol.cli.main", ["compare", "SCENE", "--pyrender", "-o", "OUT.png"],
+     "pip install 'shadowvol[peer]'"),
+    ("embreex", "raytrace.cli", ["masks", "SCENE", "-o", "OUT.npz"], "pip install embreex"),
+])
+def test_a_missing_extra_is_bad_input_naming_the_pip_command(missing, tool, args, pip, small,
+                                                              tmp_path):
+    args = [a.replace("SCENE", str(small)).replace("OUT", str(tmp_path / "out")) for a in args]
+    code = BLOCK.replace("MISSING", repr(missing)) + \
+        f"from {tool} import main\nsys.exit(main({args!r}))\n"
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == status.BAD_INPUT, done.stderr
+    assert pip in done.stderr and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr  # one line, nothing else
+    assert not list(tmp_path.glob("out*"))
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["render", "--help"], ["compare", "--help"],
+                                  ["demo", "--help"], ["shadow2d", "--help"]])
+def test_every_shadowvol_help_prints_the_table(argv, capsys):
+    with pytest.raises(SystemExit):
+        shadowvol_main(argv)
+    text = " ".join(capsys.readouterr().out.split())
+    assert " ".join(status.EPILOG.split()) in text
+
+
+@pytest.mark.parametrize("argv", [["--help"]])
+def test_raytrace_help_prints_the_table(argv, capsys):
+    with pytest.raises(SystemExit):
+        raytrace_main(argv)
+    assert " ".join(status.EPILOG.split()) in " ".join(capsys.readouterr().out.split())
