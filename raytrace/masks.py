@@ -19,8 +19,8 @@ from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 
 from .backends import TriangleBackend, make_backend
 from .camera import RayGrid
-from .tolerances import (OWN_HIT_RETRIES, error_weight, frame_origin, light_margin,
-                         shadow_height, through_light)
+from .tolerances import (OWN_HIT_RETRIES, error_weight, frame_origin, is_sliver,
+                         light_margin, shadow_height, through_light)
 
 # Rays per tile: big enough that numpy's per-call overhead is small, small enough that a
 # tile's arrays stay in cache and come from the allocator's free list, not fresh pages.
@@ -54,16 +54,19 @@ def scene_backend(scene: Scene, backend: str = "embree") -> MaskTracer:
 class _Triangles(NamedTuple):
     """What the masks need per triangle, float64, in the backend's frame: normals_t (3, M)
     unit normals by winding, component-major (fast gathers); plane_d (M,) normal · corner;
-    weight (M,) the `tolerances.error_weight` of its corners."""
+    weight (M,) the `tolerances.error_weight` of its corners; fragile (M,) bool, a sliver
+    (`tolerances.is_sliver`): its blocked shadow rays are checked by id."""
 
     normals_t: np.ndarray
     plane_d: np.ndarray
     weight: np.ndarray
+    fragile: np.ndarray
 
     @classmethod
     def of(cls, tracer: TriangleBackend) -> "_Triangles":
+        corners = tracer.vertices[tracer.faces]
         return cls(np.ascontiguousarray(tracer.normals.T), tracer.plane_d,
-                   error_weight(tracer.normals, tracer.vertices[tracer.faces]))
+                   error_weight(tracer.normals, corners), is_sliver(corners))
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -147,7 +150,8 @@ class _Hits(NamedTuple):
     triangle and rounded once (Embree takes float32 rays);  normal : (3, h) the triangle's unit
     normal by winding;  side : (h,) ±1, turns `normal` toward the camera;
     side_d : (h,) side · (normal · point);  height : (h,) the margin at the surface
-    (`tolerances.shadow_height`);  tri : (h,) int64, the hit triangle (excluded by id).
+    (`tolerances.shadow_height`);  tri : (h,) int64, the hit triangle (excluded by id);
+    fragile : (h,) bool, it is a sliver (`_Triangles.fragile`).
     """
 
     point: np.ndarray
@@ -156,6 +160,7 @@ class _Hits(NamedTuple):
     side_d: np.ndarray
     height: np.ndarray
     tri: np.ndarray
+    fragile: np.ndarray
 
 
 def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
@@ -188,7 +193,7 @@ def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
     side = np.where(n_dot_v > 0, -1.0, 1.0)
     # the bound of p's float error relative to planes through it (tolerances, item 3)
     height = shadow_height(np.take(triangles.weight, k) + _dot(np.abs(normal), np.abs(point64)))
-    hit = _Hits(point, normal, side, side * plane_d, height, k)
+    hit = _Hits(point, normal, side, side * plane_d, height, k, np.take(triangles.fragile, k))
     for i, light in enumerate(lights):
         lit[i, index] = _lit(tracer, light, hit, reach)
     return lit.reshape((-1,) + shape), covered.reshape(shape)
@@ -201,27 +206,30 @@ def _round_down32(x: np.ndarray) -> np.ndarray:
 
 
 def _blocked(tracer: TriangleBackend, start: np.ndarray, direction: np.ndarray,
-             tmax: np.ndarray | None, own: np.ndarray) -> np.ndarray:
+             tmax: np.ndarray | None, own: np.ndarray, fragile: np.ndarray) -> np.ndarray:
     """(n,) bool: is the shadow ray start + t·direction (0 < t < tmax) blocked by a triangle
     other than `own` (n,) int64, the triangle it leaves?  start (3, n) float32; direction
-    (3, n) float32, or (3, 1) for all; tmax (n,) float32 or None (unbounded).
+    (3, n) float32, or (3, 1) for all; tmax (n,) float32 or None (unbounded); fragile (n,)
+    bool: `own` is a sliver, whose float32 arithmetic the height bound does not cover.
 
-    One bounded occlusion query for all; only the rays it finds blocked are cast again for
-    their first hit, and where that is `own` (rounding: see `raytrace.tolerances`) cast on from
-    that hit, at most OWN_HIT_RETRIES times, after which `own` is all they met."""
+    One bounded occlusion query for all.  The rays it finds blocked that leave a sliver are
+    cast again for their first hit, and where that is `own` (rounding: see
+    `raytrace.tolerances`) cast on from that hit, at most OWN_HIT_RETRIES times, after which
+    `own` is all they met: not blocked."""
     blocked = tracer.occluded(start.T, direction.T, tmax, parallel=False)
-    todo = np.flatnonzero(blocked)
+    todo = np.flatnonzero(blocked & fragile)
+    if len(todo) and direction.shape[1] == 1:
+        direction = np.broadcast_to(direction, start.shape)
     for _ in range(OWN_HIT_RETRIES):
         if len(todo) == 0:
             break
-        d = direction if direction.shape[1] == 1 else direction[:, todo]
-        o = start[:, todo]
+        o, d = start[:, todo], direction[:, todo]
         bound = None if tmax is None else tmax[todo]
         t, tri = tracer.first_hit(o.T, d.T, bound)
+        blocked[todo] = tri >= 0
         again = tri == own[todo]
-        blocked[todo[tri < 0]] = False  # (a float32 tie between the two queries)
         todo, t = todo[again], t[again].astype(np.float32)
-        start[:, todo] = o[:, again] + t * (d if d.shape[1] == 1 else d[:, again])
+        start[:, todo] = o[:, again] + t * d[:, again]
         if tmax is not None:
             tmax[todo] = tmax[todo] - t
     blocked[todo] = False  # still only `own`: it cannot block its own segment
@@ -252,7 +260,8 @@ def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) 
         start = hit.point.compress(cast, axis=1)
         start += near[cast].astype(f32) * toward32[:, None]
         # Unbounded: anything anywhere along the ray toward a directional light blocks it.
-        out[cast] = ~_blocked(tracer, start, toward32[:, None], None, hit.tri[cast])
+        out[cast] = ~_blocked(tracer, start, toward32[:, None], None, hit.tri[cast],
+                              hit.fragile[cast])
         return out
     position = local.position
     # n·(L − p) = n·L − n·p, and n·p = plane_d on the triangle's plane.
@@ -278,5 +287,5 @@ def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) 
     start += near.astype(f32) * l
     gap = _round_down32(gap)  # Embree's tfar is float32: never let rounding lengthen the ray
     # Bounded: the rest of the segment, direction l not normalised, so it ends at tmax = gap.
-    out[c] = ~_blocked(tracer, start, l, gap, hit.tri[c])
+    out[c] = ~_blocked(tracer, start, l, gap, hit.tri[c], hit.fragile[c])
     return out
