@@ -22,8 +22,8 @@ Binder, Ray Tracing Gems ch. 6, bound the error of a hit point instead of guessi
    angle below ~14.5 degrees, where the float32 normal's error grows as 1/sin of that angle)
    it does not, so a shadow ray leaving a sliver that Embree finds blocked is cast again
    (`first_hit`) to see whether the blocker is k; if it is, the ray goes on from there
-   (`OWN_HIT_RETRIES`).  (Casting every blocked ray again costs a third of the masks' speed on
-   the bunny; slivers are 0.1% of its triangles.)
+   (`OWN_HIT_RETRIES`).  Only slivers: a second cast of every blocked ray would cost the
+   masks much of their speed (slivers are 0.1% of the bunny's triangles).
 3. **At p, a height bound of the float error of p relative to its own plane.**  Other
    triangles through p (a coplanar decal, the other half of a quad) must not count either, and
    they are told apart from blockers only up to float error.  p is computed in float64 on
