@@ -19,7 +19,7 @@ import numpy as np
 
 from . import primitives
 from .scene import (Camera, DirectionalLight, Material, PointLight, Scene, SceneError, SpotLight,
-                    is_number, shorten)
+                    shorten)
 
 MESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 
@@ -142,6 +142,9 @@ class _JsonObject(dict):
         return obj
 
 
+_CONTAINERS = frozenset({list, dict, _JsonObject})
+
+
 def check_shape(data) -> None:
     """SceneError unless `data` (parsed TOML/JSON) nests at most MAX_NESTING levels, every list
     holds at most MAX_LIST_LENGTH items and no JSON object repeats a key.  Iterative: the depth
@@ -162,10 +165,12 @@ def check_shape(data) -> None:
                 raise SceneError(key, f"a list of {len(node)} items, more than the limit of "
                                       f"{MAX_LIST_LENGTH}")
             for i, item in enumerate(node):
-                if isinstance(item, list) and not any(isinstance(x, (list, dict)) for x in item):
+                kind = type(item)
+                if kind is list and _CONTAINERS.isdisjoint(map(type, item)):
+                    # a list of plain values (a vertex): its own depth and length only
                     if depth + 1 > MAX_NESTING or len(item) > MAX_LIST_LENGTH:
                         stack.append((item, depth + 1, f"{key}[{i}]"))
-                elif isinstance(item, (list, dict)):
+                elif kind in _CONTAINERS:
                     stack.append((item, depth + 1, f"{key}[{i}]"))
 
 
@@ -302,26 +307,35 @@ def _object(value, key: str, named: dict[str, Material], base_dir: Path,
 def _inline_mesh(table: dict, key: str) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and faces written in the scene file itself (as `save_scene` writes them)."""
     vertices, faces = _required(table, "vertices", key), _required(table, "faces", key)
-    bad = _first_not_triple(vertices, is_number)
+    bad = _first_not_triple(vertices, _REALS, "iuf")
     if bad is not None:
         raise SceneError(f"{key}.vertices{bad[0]}", f"expected [x, y, z] numbers, got {bad[1]}")
     v = np.array(vertices, dtype=np.float64).reshape(-1, 3)
-    bad = _first_not_triple(faces, lambda x: type(x) is int)
+    bad = _first_not_triple(faces, _WHOLES, "iu")
     if bad is not None:
         raise SceneError(f"{key}.faces{bad[0]}", f"expected [i, j, k] whole numbers, got {bad[1]}")
     f = np.array(faces, dtype=np.int64).reshape(-1, 3)
     return v, f
 
 
-def _first_not_triple(rows, ok) -> tuple[str, str] | None:
-    """Where `rows` is not a list of 3-lists of items passing `ok` (strictly typed: JSON and
-    TOML give int, float, bool, str, ... and only numbers pass), as ("[i]", the value cut
-    short), or ("", ...) when `rows` is no list; None when it is."""
-    if not isinstance(rows, list):
+# The exact types a number may have in parsed data (JSON and TOML give int and float; code
+# calling `scene_from_dict` may give numpy's).  Exact: a bool is no int here.
+_WHOLES = (int, np.int64, np.int32)
+_REALS = (float, np.float64, np.float32) + _WHOLES
+
+
+def _first_not_triple(rows, types: tuple, kinds: str) -> tuple[str, str] | None:
+    """Where `rows` is not a list of 3-lists of values whose type is exactly one of `types`
+    (or an (n, 3) array of dtype kind in `kinds`), as ("[i]", the value cut short), or
+    ("", ...) when `rows` is neither; None when it is."""
+    if isinstance(rows, np.ndarray) and rows.dtype.kind in kinds and rows.ndim == 2 \
+            and rows.shape[1] == 3:
+        return None
+    if type(rows) is not list:
         return "", shorten(rows)
     for i, row in enumerate(rows):
-        if not (isinstance(row, list) and len(row) == 3 and ok(row[0]) and ok(row[1])
-                and ok(row[2])):
+        if not (type(row) is list and len(row) == 3 and type(row[0]) in types
+                and type(row[1]) in types and type(row[2]) in types):
             return f"[{i}]", shorten(row)
     return None
 
