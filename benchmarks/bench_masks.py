@@ -79,7 +79,12 @@ def measure(scene, runs: int, full: bool = True) -> dict:
     seconds."""
     from raytrace.camera import primary_rays
     from raytrace.masks import scene_backend, shadow_masks
-    from raytrace.tolerances import light_margin, shadow_height
+    from raytrace.tolerances import (
+        error_weight,
+        light_margin,
+        shadow_height,
+        through_light,
+    )
     from shadowvol.scene import DirectionalLight
 
     vertices, faces, _ = scene.triangles()
@@ -90,16 +95,25 @@ def measure(scene, runs: int, full: bool = True) -> dict:
     tracer = backend.tracer
 
     # The same rays, rebuilt outside the clock as float32 arrays ready for embreex, the way
-    # raytrace.masks builds them: primary rays through the pixel centres from the near plane;
-    # wherever n·l > 0, the segment from the hit point to the light shortened at the surface by
-    # shadow_height / (n·l) and before a point light by light_margin (computed here in float64).
-    o, d = primary_rays(scene.camera, scene.width, scene.height, dtype=np.float32, unit=False)
+    # raytrace.masks builds them, in the backend's frame (origin at the eye): primary rays
+    # through the pixel centres from the near plane; wherever n·l > 0, the segment from the hit
+    # point to the light shortened at the surface by shadow_height / (n·l) and before a point
+    # light by light_margin (computed here in float64).  The masks' second casts (a blocked ray
+    # whose blocker may be its own triangle) are not among the raw rays: their cost shows.
+    origin = backend.origin
+    camera = scene.camera.__class__(eye=scene.camera.eye - origin,
+                                    target=scene.camera.target - origin, up=scene.camera.up,
+                                    fov_y=scene.camera.fov_y, near=scene.camera.near)
+    o, d = primary_rays(camera, scene.width, scene.height, dtype=np.float32, unit=False)
     hits = tracer.closest_hit(o.astype(np.float64), d.astype(np.float64))
     idx = np.flatnonzero(hits.tri >= 0)
     point = o[idx] + hits.t[idx, None] * d[idx]
     n = tracer.normals[hits.tri[idx]]
     n *= np.where(np.einsum("ij,ij->i", n, d[idx]) > 0, -1.0, 1.0)[:, None]
-    height = shadow_height(np.abs(tracer.vertices[tracer.faces[hits.tri[idx]]]).max(axis=(1, 2)))
+    k = hits.tri[idx]
+    weight = error_weight(tracer.normals, tracer.vertices[tracer.faces])
+    height = shadow_height(weight[k] + np.einsum("ij,ij->i", np.abs(tracer.normals[k]),
+                                                 np.abs(point)))
     light = scene.lights[0]
     if isinstance(light, DirectionalLight):  # unbounded rays along -direction
         toward = np.broadcast_to(-light.direction, point.shape)
@@ -108,14 +122,16 @@ def measure(scene, runs: int, full: bool = True) -> dict:
         start = point[cand] + (height[cand] / n_dot_l[cand])[:, None] * toward[cand]
         shadow_dir, dist = np.broadcast_to(-light.direction, start.shape), None
     else:                                    # the segment to the light, tmax < 1
-        toward = light.position - point
+        position = light.position - origin
+        toward = position - point
         n_dot_l = np.einsum("ij,ij->i", n, toward)
         cand = n_dot_l > 0
         near = height[cand] / n_dot_l[cand]
         length = np.linalg.norm(toward[cand], axis=1)
         start = point[cand] + near[:, None] * toward[cand]
         shadow_dir = toward[cand]
-        dist = (1.0 - light_margin(light.position, backend.magnitude) / length
+        through = through_light(tracer.normals, tracer.plane_d, weight, position)
+        dist = (1.0 - light_margin(position, length, through) / length
                 - near).astype(np.float32)
     raw = {
         "INTERSECT": (o, d, None),

@@ -75,6 +75,9 @@ class TriangleBackend(Protocol):
                  tmax: np.ndarray | float | None = None, parallel: bool = True
                  ) -> np.ndarray: ...
 
+    def first_hit(self, origins: np.ndarray, directions: np.ndarray,
+                  tmax: np.ndarray | float | None = None) -> Hits: ...
+
 
 class TriangleSet:
     """The triangles a backend traces, with what every backend needs in float64.
@@ -238,6 +241,16 @@ class NumpyBackend(TriangleSet):
         tri = self.closest_triangle(o, d, tmax)
         return Hits(self.refine(o, d, tri), tri)
 
+    def first_hit(self, origins, directions, tmax=None) -> Hits:
+        """The nearest hit at 0 < t < tmax as this backend computes it: t (n,) float64 (its
+        own λ, inf for none) and tri (n,) int64 (-1 for none).  directions : (n, 3) or (1, 3)."""
+        o = np.asarray(origins, dtype=np.float64)
+        d = np.broadcast_to(np.asarray(directions, dtype=np.float64), o.shape)
+        t_best = _tmax_array(tmax, len(o))
+        tri_best = np.full(len(o), -1, np.int64)
+        self._traverse(o, d, t_best, tri_best, any_hit=False)
+        return Hits(np.where(tri_best >= 0, t_best, np.inf), tri_best)
+
     def occluded(self, origins, directions, tmax=None, parallel=True) -> np.ndarray:
         """(n,) bool: does the ray hit any triangle at 0 < t < tmax (None: anywhere)?
         directions : (n, 3), or (1, 3) for one direction shared by all rays."""
@@ -323,6 +336,20 @@ class EmbreeBackend(TriangleSet):
         o, d = np.asarray(origins), np.asarray(directions)
         tri = self.closest_triangle(o, d, tmax, parallel)
         return Hits(self.refine(o, d, tri), tri)
+
+    def first_hit(self, origins, directions, tmax=None) -> Hits:
+        """The nearest hit at 0 < t < tmax as Embree computes it (float32, on one thread):
+        t (n,) float32, Embree's own tfar (inf for none), and tri (n,) int64 (-1 for none).
+        directions : (n, 3) or (1, 3)."""
+        o = np.asarray(origins, dtype=np.float32)
+        d = np.asarray(directions, dtype=np.float32)
+        if len(d) == 1 and len(o) > 1:
+            d = np.broadcast_to(d, o.shape)
+        dists = None if tmax is None else np.minimum(np.asarray(tmax, np.float32),
+                                                     np.float32(1e37))
+        out = self._scene.run(o, d, dists=dists, query="INTERSECT", output=1)
+        tri = out["primID"].astype(np.int64)
+        return Hits(np.where(tri >= 0, out["tfar"], np.float32(np.inf)), tri)
 
     def occluded(self, origins, directions, tmax=None, parallel=True) -> np.ndarray:
         """(n,) bool: does the ray hit any triangle at 0 < t < tmax (None: anywhere)?  A bounded

@@ -9,6 +9,7 @@ sphere is for images only.
 
 from __future__ import annotations
 
+import dataclasses
 from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
@@ -18,7 +19,15 @@ from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 
 from .backends import TriangleBackend, make_backend
 from .camera import RayGrid
-from .tolerances import light_margin, shadow_height
+from .tolerances import (
+    OWN_HIT_RETRIES,
+    error_weight,
+    frame_origin,
+    is_sliver,
+    light_margin,
+    shadow_height,
+    through_light,
+)
 
 # Rays per tile: big enough that numpy's per-call overhead is small, small enough that a
 # tile's arrays stay in cache and come from the allocator's free list, not fresh pages.
@@ -29,37 +38,42 @@ class MaskTracer(NamedTuple):
     """A triangle backend holding all of a scene's triangles, with what the masks need per
     triangle: built once by `scene_backend`, reusable over many `shadow_masks` calls.
 
-    tracer    : the backend (Embree or numpy)
-    triangles : the per-triangle normals, planes and margins (`_Triangles`)
-    magnitude : float, the largest |coordinate| of any vertex
+    tracer    : the backend (Embree or numpy), holding the triangles minus `origin`
+    triangles : the per-triangle normals, planes and error weights (`_Triangles`), same frame
+    origin    : (3,) float64, the frame's origin in world space (`tolerances.frame_origin`)
     """
 
     tracer: TriangleBackend
     triangles: "_Triangles"
-    magnitude: float
+    origin: np.ndarray
 
 
 def scene_backend(scene: Scene, backend: str = "embree") -> MaskTracer:
-    """The scene's triangles in a backend, ready for `shadow_masks` (build once, trace often)."""
+    """The scene's triangles in a backend, ready for `shadow_masks` (build once, trace often),
+    in the float32 frame of `tolerances.frame_origin` (the eye): float64 coordinates minus the
+    origin, subtracted before anything is rounded."""
     vertices, faces, _ = scene.triangles()
-    tracer = make_backend(backend, vertices, faces)
-    return MaskTracer(tracer, _Triangles.of(tracer), float(np.abs(tracer.vertices).max()))
+    origin = frame_origin(scene)
+    tracer = make_backend(backend, vertices - origin, faces)
+    return MaskTracer(tracer, _Triangles.of(tracer), origin)
 
 
 class _Triangles(NamedTuple):
-    """What the masks need per triangle, float64: normals_t (3, M) unit normals by winding,
-    component-major (fast gathers); plane_d (M,) normal · corner; height (M,) the margin
-    `shadow_height` at the triangle's coordinates (max |coordinate| of its corners)."""
+    """What the masks need per triangle, float64, in the backend's frame: normals_t (3, M)
+    unit normals by winding, component-major (fast gathers); plane_d (M,) normal · corner;
+    weight (M,) the `tolerances.error_weight` of its corners; fragile (M,) bool, a sliver
+    (`tolerances.is_sliver`): its blocked shadow rays are checked by id."""
 
     normals_t: np.ndarray
     plane_d: np.ndarray
-    height: np.ndarray
+    weight: np.ndarray
+    fragile: np.ndarray
 
     @classmethod
     def of(cls, tracer: TriangleBackend) -> "_Triangles":
-        magnitude = np.abs(tracer.vertices).max(axis=1)[tracer.faces].max(axis=1)
+        corners = tracer.vertices[tracer.faces]
         return cls(np.ascontiguousarray(tracer.normals.T), tracer.plane_d,
-                   shadow_height(magnitude))
+                   error_weight(tracer.normals, corners), is_sliver(corners))
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -79,7 +93,8 @@ def shadow_masks(scene: Scene, backend: str | MaskTracer = "embree"
     Each pixel's visible triangle is found with the float32 pixel-centre ray (Embree); the hit
     point is then that triangle's plane cut by the exact float64 ray, and each light's shadow
     ray is the segment from it to the light, on that segment's own line, shortened only at its
-    ends (see `raytrace.tolerances`).
+    ends by float error bounds, the visible triangle excluded by id (see
+    `raytrace.tolerances`).  Everything is traced in the frame of the backend's `origin`.
 
     Speed (this is the benchmark's hot path):
     * The image is cut into tiles of a few rows, which a thread pool with one thread per core
@@ -88,20 +103,23 @@ def shadow_masks(scene: Scene, backend: str | MaskTracer = "embree"
     * Vectors are stored component-major, (3, n): numpy broadcasts a (3,) vector over (n, 3)
       rows ~10x slower than it runs along contiguous (n,) rows.
     """
-    tracer, triangles, magnitude = (scene_backend(scene, backend) if isinstance(backend, str)
-                                    else backend)
+    tracer, triangles, origin = (scene_backend(scene, backend) if isinstance(backend, str)
+                                 else backend)
     H, W = scene.height, scene.width
     lit = np.zeros((len(scene.lights), H, W), bool)
     coverage = np.zeros((H, W), bool)
     rows_per_tile = max(1, MASK_TILE_RAYS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
     threads = min(getattr(tracer, "threads", 1), len(tiles))
-    grids = (RayGrid(scene.camera, W, H, np.float32), RayGrid(scene.camera, W, H, np.float64))
+    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
+                                 target=scene.camera.target - origin)
+    grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     reach = scene.extent  # a ray that starts farther than this from its point has left the scene
+    lights = [_local_light(light, origin, triangles) for light in scene.lights]
 
     def trace_tile(rows: slice) -> None:
         lit[:, rows], coverage[rows] = _tile_masks(scene, tracer, triangles, grids, rows, reach,
-                                                   magnitude)
+                                                   lights)
 
     if threads == 1:
         for rows in tiles:
@@ -112,14 +130,35 @@ def shadow_masks(scene: Scene, backend: str | MaskTracer = "embree"
     return lit, coverage
 
 
+class _LocalLight(NamedTuple):
+    """A light in the backend's frame: the light itself, its position there ((3,) float64, or
+    None for a directional light) and `tolerances.through_light`'s weight (0.0 if none)."""
+
+    light: object
+    position: np.ndarray | None
+    through: float
+
+
+def _local_light(light, origin: np.ndarray, triangles: "_Triangles") -> _LocalLight:
+    if isinstance(light, DirectionalLight):
+        return _LocalLight(light, None, 0.0)
+    if not isinstance(light, (PointLight, SpotLight)):
+        raise TypeError(f"not a light: {type(light).__name__}")
+    position = light.position - origin
+    return _LocalLight(light, position, through_light(triangles.normals_t.T, triangles.plane_d,
+                                                      triangles.weight, position))
+
+
 class _Hits(NamedTuple):
-    """The primary hits of a tile (only the covered pixels), float64, vectors component-major.
+    """The primary hits of a tile (only the covered pixels), float64, vectors component-major,
+    in the backend's frame.
 
     point : (3, h) float32, the hit point, computed in float64 on the plane of the hit
     triangle and rounded once (Embree takes float32 rays);  normal : (3, h) the triangle's unit
     normal by winding;  side : (h,) ±1, turns `normal` toward the camera;
     side_d : (h,) side · (normal · point);  height : (h,) the margin at the surface
-    (`tolerances.shadow_height`).
+    (`tolerances.shadow_height`);  tri : (h,) int64, the hit triangle (excluded by id);
+    fragile : (h,) bool, it is a sliver (`_Triangles.fragile`).
     """
 
     point: np.ndarray
@@ -127,11 +166,13 @@ class _Hits(NamedTuple):
     side: np.ndarray
     side_d: np.ndarray
     height: np.ndarray
+    tri: np.ndarray
+    fragile: np.ndarray
 
 
 def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
-                grids: tuple[RayGrid, RayGrid], rows: slice, reach: float, magnitude: float
-                ) -> tuple[np.ndarray, np.ndarray]:
+                grids: tuple[RayGrid, RayGrid], rows: slice, reach: float,
+                lights: list[_LocalLight]) -> tuple[np.ndarray, np.ndarray]:
     """Masks of the image rows `rows`: lit (L, R, W) bool and coverage (R, W) bool."""
     shape = (rows.stop - rows.start, scene.width)
     grid32, grid64 = grids
@@ -154,11 +195,14 @@ def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
     eye = grid64.eye
     with np.errstate(divide="ignore", invalid="ignore"):  # a degenerate triangle has n = 0
         s = (plane_d - eye @ normal) / n_dot_v
-    point = (eye[:, None] + s * view).astype(np.float32)  # rounded once, for Embree
+    point64 = eye[:, None] + s * view
+    point = point64.astype(np.float32)  # rounded once, for Embree
     side = np.where(n_dot_v > 0, -1.0, 1.0)
-    hit = _Hits(point, normal, side, side * plane_d, np.take(triangles.height, k))
-    for i, light in enumerate(scene.lights):
-        lit[i, index] = _lit(tracer, light, hit, reach, magnitude)
+    # the bound of p's float error relative to planes through it (tolerances, item 3)
+    height = shadow_height(np.take(triangles.weight, k) + _dot(np.abs(normal), np.abs(point64)))
+    hit = _Hits(point, normal, side, side * plane_d, height, k, np.take(triangles.fragile, k))
+    for i, light in enumerate(lights):
+        lit[i, index] = _lit(tracer, light, hit, reach)
     return lit.reshape((-1,) + shape), covered.reshape(shape)
 
 
@@ -168,16 +212,48 @@ def _round_down32(x: np.ndarray) -> np.ndarray:
     return np.where(y > x, np.nextafter(y, np.float32(0)), y)
 
 
-def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float, magnitude: float
-         ) -> np.ndarray:
+def _blocked(tracer: TriangleBackend, start: np.ndarray, direction: np.ndarray,
+             tmax: np.ndarray | None, own: np.ndarray, fragile: np.ndarray) -> np.ndarray:
+    """(n,) bool: is the shadow ray start + t·direction (0 < t < tmax) blocked by a triangle
+    other than `own` (n,) int64, the triangle it leaves?  start (3, n) float32; direction
+    (3, n) float32, or (3, 1) for all; tmax (n,) float32 or None (unbounded); fragile (n,)
+    bool: `own` is a sliver, whose float32 arithmetic the height bound does not cover.
+
+    One bounded occlusion query for all.  The rays it finds blocked that leave a sliver are
+    cast again for their first hit, and where that is `own` (rounding: see
+    `raytrace.tolerances`) cast on from that hit, at most OWN_HIT_RETRIES times, after which
+    `own` is all they met: not blocked."""
+    blocked = tracer.occluded(start.T, direction.T, tmax, parallel=False)
+    todo = np.flatnonzero(blocked & fragile)
+    if len(todo) and direction.shape[1] == 1:
+        direction = np.broadcast_to(direction, start.shape)
+    for _ in range(OWN_HIT_RETRIES):
+        if len(todo) == 0:
+            break
+        o, d = start[:, todo], direction[:, todo]
+        bound = None if tmax is None else tmax[todo]
+        t, tri = tracer.first_hit(o.T, d.T, bound)
+        blocked[todo] = tri >= 0
+        again = tri == own[todo]
+        todo, t = todo[again], t[again].astype(np.float32)
+        start[:, todo] = o[:, again] + t * d[:, again]
+        if tmax is not None:
+            tmax[todo] = tmax[todo] - t
+    blocked[todo] = False  # still only `own`: it cannot block its own segment
+    return blocked
+
+
+def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) -> np.ndarray:
     """(h,) bool: which of the tile's hit points the light reaches.
 
     The shadow ray is the segment p -> light (p + t·l, 0 < t < 1, l = L − p) or the ray
     p + t·l (t > 0, l = −direction) on its own line; only its ends are cut: t > height/(n·l)
     at the surface (height `hit.height` above p's plane) and, for a point light,
-    t < 1 − light_margin/|l|.  Origins and directions go to Embree as float32, component-major
-    (embreex reads the transposed views without a copy)."""
+    t < 1 − light_margin/|l|, and the hit triangle does not count (`_blocked`).  Origins and
+    directions go to Embree as float32, component-major (embreex reads the transposed views
+    without a copy)."""
     f32 = np.float32
+    light = local.light
     out = np.zeros(len(hit.side), bool)
     if isinstance(light, DirectionalLight):
         toward = -light.direction
@@ -191,11 +267,10 @@ def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float, magnitude: fl
         start = hit.point.compress(cast, axis=1)
         start += near[cast].astype(f32) * toward32[:, None]
         # Unbounded: anything anywhere along the ray toward a directional light blocks it.
-        out[cast] = ~tracer.occluded(start.T, toward32[None], None, parallel=False)
+        out[cast] = ~_blocked(tracer, start, toward32[:, None], None, hit.tri[cast],
+                              hit.fragile[cast])
         return out
-    if not isinstance(light, (PointLight, SpotLight)):
-        raise TypeError(f"not a light: {type(light).__name__}")
-    position = light.position
+    position = local.position
     # n·(L − p) = n·L − n·p, and n·p = plane_d on the triangle's plane.
     n_dot_l = hit.side * (position @ hit.normal) - hit.side_d
     facing = n_dot_l > 0
@@ -208,7 +283,8 @@ def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float, magnitude: fl
         inside = -(light.direction @ l) >= light.cos_cutoff * length
         c, start, l, length = c[inside], start[:, inside], l[:, inside], length[inside]
     near = hit.height[c] / n_dot_l[c]                      # fractions of the segment
-    gap = 1.0 - light_margin(position, magnitude) / length.astype(np.float64) - near
+    length = length.astype(np.float64)
+    gap = 1.0 - light_margin(position, length, local.through) / length - near
     # Where the margins meet (gap <= 0: the light within `height` of the surface's plane)
     # nothing is strictly between: lit.
     cast = gap > 0
@@ -218,5 +294,5 @@ def _lit(tracer: TriangleBackend, light, hit: _Hits, reach: float, magnitude: fl
     start += near.astype(f32) * l
     gap = _round_down32(gap)  # Embree's tfar is float32: never let rounding lengthen the ray
     # Bounded: the rest of the segment, direction l not normalised, so it ends at tmax = gap.
-    out[c] = ~tracer.occluded(start.T, l.T, gap, parallel=False)
+    out[c] = ~_blocked(tracer, start, l, gap, hit.tri[c], hit.fragile[c])
     return out

@@ -1,42 +1,66 @@
 """Every tolerance of the ray tracer, named, in one place (as trimesh's `tol` and PBRT's
 `ShadowEpsilon`).  Nothing else in `raytrace/` writes a bare epsilon.
 
-The reference masks: the exact segment, shortened only at its ends
---------------------------------------------------------------------
+The reference masks: the exact segment, shortened only by float error bounds
+---------------------------------------------------------------------------
 CONVENTIONS.md defines lit as "nothing lies between the surface point p and the light".  The
 masks test exactly that segment, p to the light (or the ray from p toward a directional light),
-on its own line: a shadow ray never leaves that line.  Only its two END POINTS are pulled in, so
-that the surfaces that merely touch it there (the visible triangle at p, a surface through the
-light) are not counted:
+on its own line: a shadow ray never leaves that line.  What may be dropped is only what float
+arithmetic cannot tell apart from the segment's end points (as PBRT-v3 §3.9 and Wächter &
+Binder, Ray Tracing Gems ch. 6, bound the error of a hit point instead of guessing an epsilon):
 
-* at p, by a margin ALONG THE RAY of  eps / (n·l̂), which is the point of the segment at height
-  `eps` above the plane of p's triangle (n the unit normal facing the light side, l̂ the unit
-  direction toward the light).  Geometry lying within height `eps` of that plane near p is
-  therefore not counted: a contact shadow thinner than `eps` is lost, nothing else.
-* at a point light, by `light_margin` along the ray (the same number of float32 spacings, at
-  the larger of the light's and the scene's coordinates).
+1. **The local frame.**  Embree is float32.  Its triangles and rays are the scene's float64
+   coordinates minus one float64 origin, the camera's eye (`frame_origin`), subtracted before
+   rounding: every error below is relative to coordinates measured from the eye, so a scene
+   translated by 1e6 is traced as exactly as at the origin, and the error at a visible point
+   grows with its distance from the eye (as its pixel's footprint does), not with where the
+   world's origin happens to lie.
+2. **The hit triangle is excluded by id, not by distance.**  A segment that starts on a plane
+   meets it nowhere else, so the visible triangle k never blocks its own point's segment:
+   whatever Embree reports for triangle k is rounding.  The height bound below covers k's
+   own float32 arithmetic for a well-shaped triangle; for a sliver (`is_sliver`: smallest
+   angle below ~14.5 degrees, where the float32 normal's error grows as 1/sin of that angle)
+   it does not, so a shadow ray leaving a sliver that Embree finds blocked is cast again
+   (`first_hit`) to see whether the blocker is k; if it is, the ray goes on from there
+   (`OWN_HIT_RETRIES`).  Only slivers: a second cast of every blocked ray would cost the
+   masks much of their speed (slivers are 0.1% of the bunny's triangles).
+3. **At p, a height bound of the float error of p relative to its own plane.**  Other
+   triangles through p (a coplanar decal, the other half of a quad) must not count either, and
+   they are told apart from blockers only up to float error.  p is computed in float64 on
+   triangle k's float64 plane (the exact pixel ray cut with it), so its float64 error is
+   negligible; what moves it relative to a plane through it, measured along that plane's unit
+   normal n, is all float32 and all bounded by spacings of the coordinates weighted by |n|:
+   rounding p to float32 (<= 1/2 spacing per component: <= 2**-24 · Σ|n_j||p_j|), adding the
+   offset along the ray (the same again), rounding the corners (<= 2**-24 · W, with
+   W = Σ_j |n_j| max_i |v_ij|, the weight of the corners' coordinates), Embree's v − origin and
+   the dot product with its normal (a few 2**-24 · (W + Σ|n_j||p_j|)).  In all about 4 units of
+   2**-23 · (W + Σ|n_j||p_j|): `shadow_height` takes `SURFACE_ERROR_ULPS` = 8 of them, twice
+   the sum, and the segment starts at that height above the plane, on its own line
+   (t = height / (n·l)).  Weighting by |n_j| is what keeps a horizontal ground quad 1e7 wide
+   exact: its corners' x and z are large but its plane depends only on y, and W is the eye's
+   height above it.
+4. **At a point light, a bound of the light position's own error.**  The segment ends
+   `light_margin` before the light: 8 spacings of the light's coordinates, of the segment's
+   length (Embree's t is relative to it) and, if some triangle's plane passes through the light
+   up to its own float32 error (a light lying on a floor), of that triangle's weight W, so that
+   a surface through the light casts no shadow (its shadow volume has no thickness in the
+   rasterizer either) -- and nothing else near the light is dropped: a card 1e-5 beside a light
+   one unit from the eye still shadows (the margin is ~1e-6).
 
-`eps` is `SHADOW_HEIGHT_ULPS` float32 spacings at the magnitude of the hit triangle's own
-coordinates, `max |coordinate|` of its three corners (which bounds p's too).  Why float32 and
-why this magnitude: Embree rounds the ray origin and the triangle's vertices to float32, each
-moving the triangle's plane relative to the origin by at most ~0.9 spacing of the largest
-coordinate involved (half a spacing per component, times |n|_1 <= sqrt 3), and its
-intersection arithmetic works on v0 − origin and edge vectors no longer than the triangle,
-whose length is at most 2·sqrt(3) times that magnitude: a few spacings more.  2**-23·M·64
-leaves a margin of ten or more over the sum; tests/test_reference_exact.py checks it (rays
-leaving random triangles at down to 1e-6 rad of grazing never hit them; a coplanar second
-triangle never shadows) and measures the masks against a float64 brute-force segment test.
+Geometry that lies within that height of the surface, or that close to the light, does not
+count: a contact shadow thinner than ~1e-6 of the distance to the eye is lost, nothing else.
+`tests/test_reference_exact.py` measures the masks against a float64 brute-force segment test
+on large translations, huge ground quads, cards beside lights and grazing creases, and checks
+the height bound directly (rays leaving random triangles at down to 1e-6 rad of grazing never
+hit a coplanar copy of the triangle).
 
-Why not the old way (start at p + offset·n, offset 1e-4 of the scene size): it moves the ray
-OFF the segment's line.  Under grazing light a shadow edge moves by offset / tan(elevation)
-(248 interior mismatches on a wall lit at 2 degrees), and in concave creases the moved start
-escapes the neighbouring triangle that really blocks the segment (5–35 interior mismatches per
-light on the bunny, Suzanne and Spot at 640x480).  Moving along the ray instead keeps the line,
-and the margin shrinks from 1e-4 of the scene to ~1e-5 of the coordinates' float32 resolution.
-
-The surface point p itself is computed in float64 on the hit triangle's plane (the plane of the
-triangle Embree picked, intersected with the exact pixel-centre ray), so the margin only has to
-absorb float32 rounding of the shadow ray, not of the hit point.
+Why not the old ways.  A start at p + offset·n (offset 1e-4 of the scene size) moves the ray
+OFF the segment's line: under grazing light a shadow edge moves by offset / tan(elevation), and
+in concave creases the moved start escapes the neighbouring triangle that really blocks the
+segment.  A margin of 64 spacings of the hit triangle's largest world coordinate (the next
+version) grows with the distance from the world's origin: 5 cm kerbs under a low sun lost their
+shadows once the scene was translated by 1e4, and a light margin of the whole scene's largest
+coordinate let a lamp shade on a 1e6-wide ground quad leak light (3.8 units of margin).
 
 The Whitted images keep their own offset
 -----------------------------------------
@@ -46,11 +70,11 @@ scene's length scale, as before: the images are not compared pixel by pixel, and
 refracted rays have no segment to stay on.
 
 Where float32 is used: everything Embree touches (see `raytrace.backends`) and, in the masks,
-the primary rays (only to choose the visible triangle) and the shadow rays.  The hit point is
-computed in float64 and rounded to float32 once; n·l (which decides "facing") and the margins
-are float64; the shadow ray's start, p + margin·l, is added in float32, an error of the size of
-p's own rounding (one spacing), well inside the 64-spacing margin; its tfar is rounded down,
-never up.  The intersection formulas, the numpy backend and the Whitted renderer are float64.
+the primary rays (only to choose the visible triangle) and the shadow rays, all in the eye's
+frame.  The hit point is computed in float64 and rounded to float32 once; n·l (which decides
+"facing") and the margins are float64; the shadow ray's start, p + margin·l, is added in
+float32 (counted in the bound above); its tfar is rounded down, never up.  The intersection
+formulas, the numpy backend and the Whitted renderer are float64.
 """
 
 from __future__ import annotations
@@ -60,9 +84,20 @@ import numpy as np
 # float32's relative spacing: the distance from 1.0 to the next float32.
 FLOAT32_EPS = float(np.finfo(np.float32).eps)  # 2**-23
 
-# The masks' margins (see above): height above the hit triangle's plane, and distance before a
-# point light, in float32 spacings of the coordinates involved.
-SHADOW_HEIGHT_ULPS = 64.0
+# The masks' margins (see above), in float32 spacings (2**-23 relative) of |n|-weighted
+# coordinates in the eye's frame: at the surface (about 4 are accounted for), and before a point
+# light.
+SURFACE_ERROR_ULPS = 8.0
+LIGHT_ERROR_ULPS = 8.0
+
+# A triangle whose smallest angle has a sine below 1 / SLIVER_SHAPE (~14.5 degrees) is a
+# sliver: the float32 error of its normal, relative, grows as 1 / sin(smallest angle), which
+# the height bound's 2x allowance does not cover; its shadow rays are checked by id instead.
+SLIVER_SHAPE = 4.0
+
+# How many times a shadow ray that Embree finds blocked by the very triangle it leaves is cast
+# on from that hit before the triangle is taken as not blocking (it cannot: see above).
+OWN_HIT_RETRIES = 3
 
 # Whitted's secondary rays start this far (relative to `length_scale`) off the surface, along
 # the normal.
@@ -97,20 +132,51 @@ def surface_offset(scene) -> float:
     return SURFACE_OFFSET_RELATIVE * length_scale(scene)
 
 
-def shadow_height(magnitude):
-    """The masks' margin at the surface: height above the hit triangle's plane below which
-    geometry does not count, for coordinates of magnitude `magnitude` (float or (n,) float64,
-    max |coordinate| of the triangle's corners).  Never 0: a triangle at the origin still gets
-    the spacing of the smallest normal float32 scale, 1e-30."""
-    return SHADOW_HEIGHT_ULPS * FLOAT32_EPS * np.maximum(magnitude, 1e-30)
+def frame_origin(scene) -> np.ndarray:
+    """The origin of the masks' float32 frame: the camera's eye, (3,) float64."""
+    return np.array(scene.camera.eye, dtype=np.float64)
 
 
-def light_margin(light_position, magnitude: float) -> float:
+def error_weight(normals: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """W = Σ_j |n_j| · max_i |corner_ij| per triangle: the size of the float32 rounding of its
+    plane, in spacings.  normals : (M, 3) unit;  corners : (M, 3, 3), in the eye's frame.
+    Returns (M,) float64."""
+    return np.einsum("mj,mj->m", np.abs(normals), np.abs(corners).max(axis=1))
+
+
+def is_sliver(corners: np.ndarray) -> np.ndarray:
+    """(M,) bool: the triangles corners (M, 3, 3) whose smallest angle is below
+    asin(1 / SLIVER_SHAPE), or that are degenerate."""
+    e = corners[:, [1, 2, 2]] - corners[:, [0, 0, 1]]
+    length = np.sort(np.linalg.norm(e, axis=2), axis=1)
+    area2 = np.linalg.norm(np.cross(e[:, 0], e[:, 1]), axis=1)
+    return length[:, 1] * length[:, 2] >= SLIVER_SHAPE * area2
+
+
+def shadow_height(weight):
+    """The masks' margin at the surface: the height above the hit triangle's plane below which
+    geometry does not count.  weight : float or (n,) float64, W + Σ_j |n_j||p_j| (the
+    triangle's `error_weight` plus p's coordinates weighted by |n|, eye's frame).  Never 0: a
+    weight of 0 still gets the spacing at the smallest normal float32 scale, 1e-30."""
+    return SURFACE_ERROR_ULPS * FLOAT32_EPS * np.maximum(weight, 1e-30)
+
+
+def light_margin(light_position, length, through_weight: float = 0.0):
     """The masks' margin at a point light: the distance before the light (world units) within
-    which geometry does not count, so that a surface through the light casts no shadow
-    (its shadow volume has no thickness in the rasterizer either).  light_position : (3,);
-    magnitude : the largest |coordinate| of the scene's vertices.  Which surface passes through
-    the light is not known here, so the float32 spacing is taken at the larger of the light's
-    and the whole scene's coordinates (a light at the origin on a floor whose corners lie at
-    ±6 needs the spacing of 6, not of 0)."""
-    return float(shadow_height(max(float(np.abs(light_position).max()), magnitude)))
+    which geometry does not count.  light_position : (3,) in the eye's frame; length : float or
+    (n,), the segments' lengths; through_weight : the largest weight W + Σ|n_j||L_j| of the
+    triangles whose planes pass through the light up to their float32 error (`through_light`),
+    0 if none."""
+    own = float(np.abs(light_position).max())
+    return LIGHT_ERROR_ULPS * FLOAT32_EPS * np.maximum(own + np.asarray(length) +
+                                                       through_weight, 1e-30)
+
+
+def through_light(normals: np.ndarray, plane_d: np.ndarray, weight: np.ndarray,
+                  light_position: np.ndarray) -> float:
+    """The largest weight W + Σ|n_j||L_j| of the triangles whose plane passes within its own
+    `shadow_height` of the light (a floor the light lies on), 0.0 if none.  normals (M, 3),
+    plane_d (M,), weight (M,): eye's frame; light_position (3,)."""
+    w = weight + np.abs(normals) @ np.abs(light_position)
+    near = np.abs(normals @ light_position - plane_d) <= shadow_height(w)
+    return float(w[near].max()) if near.any() else 0.0

@@ -23,12 +23,41 @@ import numpy as np
 # Geometric tolerances of the scene model itself (renderer tolerances live with each renderer).
 PARALLEL_TOLERANCE = 1e-9  # |sin| of the angle below which `up` counts as parallel to the view
 MAX_IMAGE_PIXELS = 1 << 26  # 64 Mpixel: beyond this the per-pixel arrays stop being practical
+# The float32 range the renderers use: every number of a scene has |x| <= MAX_MAGNITUDE, and
+# every length that must be positive (near, radius, sizes, scale) is >= MIN_POSITIVE, so that
+# x, 1/x, x*x and sums of a few squares are all normal float32 numbers (float32 ends at 3.4e38
+# and its normal numbers at 1.2e-38).  A world 1e6 or 1e9 wide is far inside this.
+MAX_MAGNITUDE = 1e18
+MIN_POSITIVE = 1e-18
+# Messages quote a bad value only up to this many characters (a wrong 1e6-element list is not
+# echoed whole), and a SceneError's key and problem are cut to one line of at most this length.
+MAX_QUOTE = 80
+MAX_MESSAGE = 400
+
+
+def shorten(value, limit: int = MAX_QUOTE) -> str:
+    """repr(value), cut to about `limit` characters ("… (N items)" for a long list)."""
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    more = f" ({len(value)} items)" if isinstance(value, (list, tuple, np.ndarray)) else ""
+    return text[:limit] + "…" + more
+
+
+def _one_line(text: str, limit: int) -> str:
+    """`text` with line breaks and other control characters escaped, cut to `limit`."""
+    if not text.isprintable():
+        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    return text if len(text) <= limit else text[:limit] + "…"
 
 
 class SceneError(ValueError):
     """Bad scene input: names the file (when known), the key and the problem."""
 
     def __init__(self, key: str, problem: str, file: str | None = None):
+        # one line, whatever the input: keys and values from a file may hold line breaks
+        key, problem = _one_line(key, MAX_QUOTE), _one_line(problem, MAX_MESSAGE)
+        file = None if file is None else _one_line(file, MAX_MESSAGE)
         self.key, self.problem, self.file = key, problem, file
         parts = [part for part in (file, key) if part]
         super().__init__(": ".join(parts + [problem]))
@@ -41,18 +70,37 @@ class SceneError(ValueError):
         return SceneError(key, self.problem, self.file)
 
 
+def is_number(x) -> bool:
+    """A real number, strictly: int or float (numpy's too), never a bool or a string."""
+    return (isinstance(x, (int, float, np.integer, np.floating))
+            and not isinstance(x, (bool, np.bool_)))
+
+
+def _numbers(value) -> bool:
+    """`value` is a numeric array or a flat list/tuple of real numbers (`is_number`)."""
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in "iuf"
+    return isinstance(value, (list, tuple)) and all(is_number(x) for x in value)
+
+
 def vec(value, key: str, n: int = 3, *, positive: bool = False) -> np.ndarray:
-    """A read-only float64 vector of length `n` from `value`, or a SceneError naming `key`."""
-    try:
-        arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise SceneError(key, f"expected {n} numbers, got {value!r}") from None
+    """A read-only float64 vector of length `n` from `value` (a list, tuple or array of real
+    numbers: no strings, no booleans), or a SceneError naming `key`."""
+    if not _numbers(value):
+        raise SceneError(key, f"expected {n} numbers, got {shorten(value)}")
+    arr = np.array(value, dtype=np.float64)
     if arr.shape != (n,):
-        raise SceneError(key, f"expected {n} numbers, got {value!r}")
+        raise SceneError(key, f"expected {n} numbers, got {shorten(value)}")
     if not np.all(np.isfinite(arr)):
-        raise SceneError(key, f"non-finite number in {value!r}")
+        raise SceneError(key, f"non-finite number in {shorten(value)}")
+    if np.any(np.abs(arr) > MAX_MAGNITUDE):
+        raise SceneError(key, f"{shorten(value)} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})")
     if positive and np.any(arr <= 0):
-        raise SceneError(key, f"must be positive, got {value!r}")
+        raise SceneError(key, f"must be positive, got {shorten(value)}")
+    if positive and np.any(arr < MIN_POSITIVE):
+        raise SceneError(key, f"{shorten(value)} is too small for float32 (at least "
+                              f"{MIN_POSITIVE:g})")
     arr.setflags(write=False)
     return arr
 
@@ -60,13 +108,18 @@ def vec(value, key: str, n: int = 3, *, positive: bool = False) -> np.ndarray:
 def num(value, key: str, *, low: float | None = None, high: float | None = None,
         low_open: bool = False) -> float:
     """A finite float from `value` within [low, high] (low excluded if `low_open`)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise SceneError(key, f"expected a number, got {value!r}")
+    if not is_number(value):
+        raise SceneError(key, f"expected a number, got {shorten(value)}")
     x = float(value)
     if not math.isfinite(x):
         raise SceneError(key, f"non-finite number {value!r}")
+    if abs(x) > MAX_MAGNITUDE:
+        raise SceneError(key, f"{value!r} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})")
     if low is not None and (x <= low if low_open else x < low):
         raise SceneError(key, f"must be {'>' if low_open else '>='} {low}, got {value!r}")
+    if low == 0.0 and low_open and x < MIN_POSITIVE:
+        raise SceneError(key, f"{value!r} is too small for float32 (at least {MIN_POSITIVE:g})")
     if high is not None and x > high:
         raise SceneError(key, f"must be <= {high}, got {value!r}")
     return x
@@ -278,6 +331,12 @@ class Object:
             i = int(np.flatnonzero(bad)[0])
             raise SceneError("vertices", f"{int(bad.sum())} non-finite vertices "
                                          f"(first: vertex {i} = {v[i].tolist()})")
+        far = (np.abs(v) > MAX_MAGNITUDE).any(axis=1)
+        if far.any():
+            i = int(np.flatnonzero(far)[0])
+            raise SceneError("vertices", f"{int(far.sum())} vertices beyond the float32 range "
+                                         f"the renderers use (|x| <= {MAX_MAGNITUDE:g}; first: "
+                                         f"vertex {i} = {v[i].tolist()})")
         object.__setattr__(self, "vertices", _frozen(v))
         object.__setattr__(self, "faces", _frozen(f.astype(np.int64)))
 

@@ -8,6 +8,10 @@ key (e.g. `objects[2].material.shininess`) and what is wrong.
 from __future__ import annotations
 
 import json
+import os
+import re
+import stat
+import struct
 import tomllib
 from pathlib import Path
 
@@ -23,9 +27,19 @@ from shadowvol.scene import (
     Scene,
     SceneError,
     SpotLight,
+    shorten,
 )
 
 MESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
+
+# Limits on what a scene file may make us read and build (all checked before the work):
+# the sizes of the scene file and of each mesh file (bytes; `load_scene` takes others), how
+# deeply its tables and lists may nest (the schema needs 4: objects[i].vertices[j][k]) and
+# how long any one list may be (16.7M: an inline mesh of 5.6M unwelded triangles).
+MAX_SCENE_FILE_BYTES = 256 << 20
+MAX_MESH_FILE_BYTES = 1 << 30
+MAX_NESTING = 16
+MAX_LIST_LENGTH = 1 << 24
 
 # Allowed keys per table; anything else is an error (a typo must not be silently ignored).
 TOP_KEYS = {"name", "image", "camera", "ambient", "render", "materials", "lights", "objects"}
@@ -49,31 +63,131 @@ OBJECT_KEYS = {
 }
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read a scene from a `.toml` or `.json` file.  Raises SceneError (a ValueError)."""
+def load_scene(path: str | Path, *, max_bytes: int = MAX_SCENE_FILE_BYTES,
+               max_mesh_bytes: int = MAX_MESH_FILE_BYTES) -> Scene:
+    """Read a scene from a `.toml` or `.json` file, which must be a regular file of at most
+    `max_bytes` (its meshes: `max_mesh_bytes` each).  Raises SceneError (a ValueError)."""
     path = Path(path)
+    if path.suffix.lower() not in (".json", ".toml"):
+        raise SceneError("", "a scene file must end in .toml or .json", str(path))
     try:
-        text = path.read_bytes()
-    except OSError as exc:
-        raise SceneError("", f"cannot read the scene file: {exc.strerror or exc}",
-                         str(path)) from None
+        text = read_regular_file(path, max_bytes, what="the scene file")
+    except SceneError as exc:
+        raise exc.in_file(str(path)) from None
     try:
         if path.suffix.lower() == ".json":
-            data = json.loads(text)
-        elif path.suffix.lower() == ".toml":
-            data = tomllib.loads(text.decode("utf-8"))
+            data = json.loads(text, object_pairs_hook=_JsonObject.of)
         else:
-            raise SceneError("", "a scene file must end in .toml or .json", str(path))
+            data = tomllib.loads(text.decode("utf-8"))
     except (tomllib.TOMLDecodeError, json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise SceneError("", f"not valid {path.suffix[1:].upper()}: {exc}", str(path)) from None
+    except RecursionError:
+        raise SceneError("", f"nested more than {MAX_NESTING} levels deep", str(path)) from None
     try:
-        return scene_from_dict(data, base_dir=path.parent, default_name=path.stem)
+        return scene_from_dict(data, base_dir=path.parent, default_name=path.stem,
+                               max_mesh_bytes=max_mesh_bytes)
     except SceneError as exc:
         raise exc.in_file(str(path)) from None
 
 
-def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene") -> Scene:
-    """Build a Scene from parsed TOML/JSON data; mesh paths are relative to `base_dir`."""
+def read_regular_file(path: Path, max_bytes: int, key: str = "", what: str | None = None
+                      ) -> bytes:
+    """The bytes of `path` if it is a regular file of at most `max_bytes`, else a SceneError
+    under `key` saying what it is (naming it as `what`, default the path).  Opened without blocking (a FIFO would wait for a writer),
+    checked with fstat on the open file, then read to at most max_bytes + 1 (a file that grows
+    meanwhile is still caught)."""
+    what = what or str(path)
+    fd = _open_regular(path, max_bytes, key, what)
+    with os.fdopen(fd, "rb") as f:
+        data = f.read(max_bytes + 1)
+    if len(data) > max_bytes:
+        raise SceneError(key, f"{what} grew past {max_bytes} bytes while being read")
+    return data
+
+
+def _open_regular(path: Path, max_bytes: int, key: str, what: str) -> int:
+    """An fd open for reading on `path`, a regular file of at most `max_bytes` (see
+    `read_regular_file`)."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except OSError as exc:
+        raise SceneError(key, f"cannot read {what}: {exc.strerror or exc}") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise SceneError(key, f"{what} is {_file_kind(st.st_mode)}, not a regular file: "
+                                  "not read")
+        if st.st_size > max_bytes:
+            raise SceneError(key, f"{what} is {st.st_size} bytes, more than the limit of "
+                                  f"{max_bytes}: not read")
+        os.set_blocking(fd, True)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+def _file_kind(mode: int) -> str:
+    for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                       (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+class _JsonObject(dict):
+    """A JSON object that remembers the keys it was given more than once (JSON allows them,
+    with the last winning; a scene refuses them, as TOML does): `duplicates`."""
+
+    duplicates: tuple = ()
+
+    @classmethod
+    def of(cls, pairs: list) -> "_JsonObject":
+        obj = cls(pairs)
+        if len(obj) != len(pairs):
+            seen: set = set()
+            obj.duplicates = tuple(k for k, _ in pairs if k in seen or seen.add(k))
+        return obj
+
+
+_CONTAINERS = frozenset({list, dict, _JsonObject})
+
+
+def check_shape(data) -> None:
+    """SceneError unless `data` (parsed TOML/JSON) nests at most MAX_NESTING levels, every list
+    holds at most MAX_LIST_LENGTH items and no JSON object repeats a key.  Iterative: the depth
+    of the data never becomes the depth of the Python stack."""
+    stack = [(data, 0, "")]
+    while stack:
+        node, depth, key = stack.pop()
+        if depth > MAX_NESTING:
+            raise SceneError(key, f"nested more than {MAX_NESTING} levels deep")
+        if isinstance(node, dict):
+            if getattr(node, "duplicates", ()):
+                dup = node.duplicates[0]
+                raise SceneError(f"{key}.{dup}" if key else str(dup),
+                                 "duplicate key (given more than once in this object)")
+            stack.extend((v, depth + 1, f"{key}.{k}" if key else str(k)) for k, v in node.items())
+        elif isinstance(node, list):
+            if len(node) > MAX_LIST_LENGTH:
+                raise SceneError(key, f"a list of {len(node)} items, more than the limit of "
+                                      f"{MAX_LIST_LENGTH}")
+            for i, item in enumerate(node):
+                kind = type(item)
+                if kind is list and _CONTAINERS.isdisjoint(map(type, item)):
+                    # a list of plain values (a vertex): its own depth and length only
+                    if depth + 1 > MAX_NESTING or len(item) > MAX_LIST_LENGTH:
+                        stack.append((item, depth + 1, f"{key}[{i}]"))
+                elif kind in _CONTAINERS:
+                    stack.append((item, depth + 1, f"{key}[{i}]"))
+
+
+def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene",
+                    max_mesh_bytes: int = MAX_MESH_FILE_BYTES) -> Scene:
+    """Build a Scene from parsed TOML/JSON data; mesh paths are relative to `base_dir`, and
+    each mesh file may be at most `max_mesh_bytes`."""
+    check_shape(data)
     _table(data, "", TOP_KEYS)
     image = _table(data.get("image", {}), "image", IMAGE_KEYS)
     camera = _table(_required(data, "camera", ""), "camera", CAMERA_KEYS)
@@ -97,10 +211,10 @@ def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene
         kwargs["max_depth"] = render["max_depth"]
     name = data.get("name", default_name)
     if not isinstance(name, str):
-        raise SceneError("name", f"expected a string, got {name!r}")
+        raise SceneError("name", f"expected a string, got {shorten(name)}")
     return _build("", Scene,
                   camera=_build("camera", Camera, **camera),
-                  objects=[_object(o, f"objects[{i}]", named, base_dir)
+                  objects=[_object(o, f"objects[{i}]", named, base_dir, max_mesh_bytes)
                            for i, o in enumerate(objects)],
                   lights=[_light(lt, f"lights[{i}]") for i, lt in enumerate(lights)],
                   name=name, **kwargs)
@@ -150,7 +264,7 @@ def _typed(value, key: str, allowed_by_type: dict[str, set[str]], what: str) -> 
     table = _table(value, key, None)
     kind = _required(table, "type", key)
     if kind not in allowed_by_type:
-        raise SceneError(f"{key}.type", f"unknown {what} type {kind!r} "
+        raise SceneError(f"{key}.type", f"unknown {what} type {shorten(kind)} "
                                         f"(one of: {', '.join(allowed_by_type)})")
     return _table(table, key, allowed_by_type[kind]), kind
 
@@ -162,18 +276,20 @@ def _light(value, key: str):
     return _build(key, cls, **args)
 
 
-def _object(value, key: str, named: dict[str, Material], base_dir: Path):
+def _object(value, key: str, named: dict[str, Material], base_dir: Path,
+            max_mesh_bytes: int = MAX_MESH_FILE_BYTES):
     table, kind = _typed(value, key, OBJECT_KEYS, "object")
     name = table.get("name", f"{kind}{key[len('objects'):]}")
     if not isinstance(name, str):
-        raise SceneError(f"{key}.name", f"expected a string, got {name!r}")
+        raise SceneError(f"{key}.name", f"expected a string, got {shorten(name)}")
 
     material = table.get("material")
     if material is None:
         material = Material()
     elif isinstance(material, str):
         if material not in named:
-            raise SceneError(f"{key}.material", f"no material named {material!r} in [materials]")
+            raise SceneError(f"{key}.material",
+                             f"no material named {shorten(material)} in [materials]")
         material = named[material]
     else:
         material = _material(material, f"{key}.material")
@@ -185,7 +301,7 @@ def _object(value, key: str, named: dict[str, Material], base_dir: Path):
         if ("path" in table) == ("vertices" in table or "faces" in table):
             raise SceneError(key, "a mesh needs either `path` or inline `vertices` and `faces`")
         if "path" in table:
-            vertices, faces = _read_mesh(table["path"], f"{key}.path", base_dir)
+            vertices, faces = _read_mesh(table["path"], f"{key}.path", base_dir, max_mesh_bytes)
         else:
             vertices, faces = _inline_mesh(table, key)
         return _build(key, primitives.mesh, name=name, vertices=vertices, faces=faces,
@@ -200,34 +316,60 @@ def _object(value, key: str, named: dict[str, Material], base_dir: Path):
 def _inline_mesh(table: dict, key: str) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and faces written in the scene file itself (as `save_scene` writes them)."""
     vertices, faces = _required(table, "vertices", key), _required(table, "faces", key)
-    try:
-        v = np.array(vertices, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise SceneError(f"{key}.vertices", "expected a list of [x, y, z] numbers") from None
-    if v.ndim != 2 or v.shape[1:] != (3,):
-        raise SceneError(f"{key}.vertices", f"expected a list of [x, y, z], got shape {v.shape}")
-    f = np.array(faces)
-    if f.size and (f.ndim != 2 or f.shape[1:] != (3,) or
-                   not np.issubdtype(f.dtype, np.integer)):
-        raise SceneError(f"{key}.faces", "expected a list of [i, j, k] whole numbers")
+    bad = _first_not_triple(vertices, _REALS, "iuf")
+    if bad is not None:
+        raise SceneError(f"{key}.vertices{bad[0]}", f"expected [x, y, z] numbers, got {bad[1]}")
+    v = np.array(vertices, dtype=np.float64).reshape(-1, 3)
+    bad = _first_not_triple(faces, _WHOLES, "iu")
+    if bad is not None:
+        raise SceneError(f"{key}.faces{bad[0]}", f"expected [i, j, k] whole numbers, got {bad[1]}")
+    f = np.array(faces, dtype=np.int64).reshape(-1, 3)
     return v, f
 
 
-def _read_mesh(rel, key: str, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and faces of a mesh file, as stored (seam duplicates kept), with glTF node
-    transforms applied."""
+# The exact types a number may have in parsed data (JSON and TOML give int and float; code
+# calling `scene_from_dict` may give numpy's).  Exact: a bool is no int here.
+_WHOLES = (int, np.int64, np.int32)
+_REALS = (float, np.float64, np.float32) + _WHOLES
+
+
+def _first_not_triple(rows, types: tuple, kinds: str) -> tuple[str, str] | None:
+    """Where `rows` is not a list of 3-lists of values whose type is exactly one of `types`
+    (or an (n, 3) array of dtype kind in `kinds`), as ("[i]", the value cut short), or
+    ("", ...) when `rows` is neither; None when it is."""
+    if isinstance(rows, np.ndarray) and rows.dtype.kind in kinds and rows.ndim == 2 \
+            and rows.shape[1] == 3:
+        return None
+    if type(rows) is not list:
+        return "", shorten(rows)
+    for i, row in enumerate(rows):
+        if not (type(row) is list and len(row) == 3 and type(row[0]) in types
+                and type(row[1]) in types and type(row[2]) in types):
+            return f"[{i}]", shorten(row)
+    return None
+
+
+def _read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYTES
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and faces of a mesh file (a regular file of at most `max_bytes`), as stored
+    (seam duplicates kept), with glTF node transforms applied."""
     import trimesh  # deferred: trimesh's import is slow and only meshes need it here
 
     if not isinstance(rel, str) or not rel:
-        raise SceneError(key, f"expected a file path, got {rel!r}")
+        raise SceneError(key, f"expected a file path, got {shorten(rel)}")
     path = base_dir / rel
     if path.suffix.lower() not in MESH_FORMATS:
-        raise SceneError(key, f"{rel!r}: unsupported mesh format (use one of "
+        raise SceneError(key, f"{shorten(rel)}: unsupported mesh format (use one of "
                               f"{', '.join(MESH_FORMATS)})")
-    if not path.is_file():
+    if not path.exists():
         raise SceneError(key, f"mesh file not found: {path}")
+    # Read (bounded) and checked here first, so that what trimesh would misreport is named.
+    check_mesh_bytes(path, read_regular_file(path, max_bytes, key), key)
     try:
         loaded = trimesh.load(str(path), process=False)
+    except ImportError as exc:  # an optional package of trimesh's, for this format
+        raise SceneError(key, f"reading {path} needs the Python package {exc.name!r}, which is "
+                              f"not installed (pip install {exc.name})") from None
     except Exception as exc:  # trimesh raises many types for malformed files
         raise SceneError(key, f"cannot parse mesh {path}: {type(exc).__name__}: {exc}") from None
     if isinstance(loaded, trimesh.Scene):
@@ -241,6 +383,49 @@ def _read_mesh(rel, key: str, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
         bad = int((~np.isfinite(vertices).all(axis=1)).sum())
         raise SceneError(key, f"{path}: {bad} vertices are NaN or infinite")
     return vertices, np.asarray(loaded.faces, dtype=np.int64)
+
+
+# A face line of an OBJ file with an index 0 in it (OBJ counts from 1; negative indices count
+# back from the last vertex; 0 means nothing, and trimesh would read it as the last vertex).
+_OBJ_ZERO_INDEX = re.compile(rb"^[ \t]*f[ \t][^\n]*?(?<=[ \t/])[+-]?0+(?=[/ \t\r\n]|$)", re.M)
+
+
+def check_mesh_bytes(path: Path, data: bytes, key: str) -> None:
+    """SceneError for what the mesh readers would misreport: binary data in a text OBJ, an OBJ
+    index 0, an STL that is neither binary nor text, a truncated GLB or glTF."""
+    suffix = path.suffix.lower()
+    if suffix == ".obj":
+        if b"\0" in data:
+            raise SceneError(key, f"{path} holds binary data (a NUL byte at {data.index(0)}): "
+                                  "an OBJ file is text")
+        zero = _OBJ_ZERO_INDEX.search(data)
+        if zero:
+            line = data.count(b"\n", 0, zero.start()) + 1
+            raise SceneError(key, f"{path}: line {line}: face index 0 (OBJ indices start at 1)")
+    elif suffix == ".stl":
+        n = struct.unpack_from("<I", data, 80)[0] if len(data) >= 84 else None
+        binary = n is not None and len(data) == 84 + 50 * n
+        text = data.lstrip()[:5].lower() == b"solid" and b"\0" not in data
+        if not (binary or text):
+            expect = (f"its header says {n} triangles, {84 + 50 * n} bytes"
+                      if n is not None else "shorter than the 84-byte header")
+            raise SceneError(key, f"{path} is neither a text STL (it does not begin with "
+                                  f"'solid' or holds NUL bytes) nor a binary STL ({expect}; "
+                                  f"the file has {len(data)})")
+    elif suffix == ".glb":
+        if len(data) < 12 or data[:4] != b"glTF":
+            raise SceneError(key, f"{path} is not a GLB file (no 'glTF' header)")
+        length = struct.unpack_from("<I", data, 8)[0]
+        if length != len(data):
+            raise SceneError(key, f"{path} is truncated or padded: its header says {length} "
+                                  f"bytes, the file has {len(data)}")
+    elif suffix == ".gltf":
+        try:
+            json.loads(data)
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise SceneError(key, f"{path} is not valid glTF JSON (truncated?): {exc}") from None
+        except RecursionError:
+            raise SceneError(key, f"{path}: glTF JSON nested too deeply") from None
 
 
 

@@ -1,6 +1,12 @@
-"""The float64 brute-force judge of shadow masks: every pixel's segment to each light tested
-against every triangle, in float64, with no margins but EXACT_T_MIN.  It settles who is right
-when the rasterizer and the reference ray tracer disagree."""
+"""The float64 brute-force judge of the reference masks (tests only; imported by the tests
+that use it, as strategies.py is; tests/ is on sys.path).
+
+`exact_masks` is the definition of CONVENTIONS.md's "lit" written as plainly as possible: for
+every pixel centre, the nearest triangle along the float64 ray (every triangle tried, no BVH),
+then for every light the segment from that point to the light tested against every other
+triangle (Möller–Trumbore in float64, the visible triangle skipped, nothing moved off the
+segment).  It is slow (pixels x triangles), so it runs on small scenes and crops.
+"""
 
 from __future__ import annotations
 
@@ -9,10 +15,10 @@ import re
 import numpy as np
 import pytest
 from builders import TEST_OUTPUT
+from shadowvol.compare.maskdiff import diff_image, mask_report
 
 import raytrace
 from raytrace.camera import primary_rays
-from shadowvol.compare.maskdiff import diff_image, mask_report
 from shadowvol.io import save_png
 from shadowvol.pictures import masks_image
 from shadowvol.scene import DirectionalLight, Scene, SpotLight

@@ -204,3 +204,59 @@ def scenes(draw):
                   width=width, height=height, name="random")
     assume(not rounding_tie(scene))
     return scene
+
+
+# ---- large worlds (issue 10): the scenes of tests/worlds.py with their numbers drawn ---------
+
+def _far_offset(low_exp: float, high_exp: float):
+    """A translation (3,) of magnitude 10**low_exp .. 10**high_exp, each axis its own sign."""
+    return st.tuples(st.floats(low_exp, high_exp), *[st.sampled_from([-1.0, 1.0])] * 3,
+                     st.floats(0.2, 1.0), st.floats(0.2, 1.0)).map(
+        lambda t: [t[1] * 10 ** t[0], t[2] * t[4] * 10 ** t[0], t[3] * t[5] * 10 ** t[0]])
+
+
+@st.composite
+def far_kerbs(draw):
+    """Kerbs translated by 1e3..1e6 under a sun 1..10 degrees up, from any azimuth."""
+    from worlds import kerbs
+    return kerbs(draw(_far_offset(3.0, 6.0)), elevation=draw(st.floats(1.0, 10.0)),
+                 azimuth=draw(st.floats(0.0, 360.0)), turn=draw(st.floats(0.0, 90.0)),
+                 height=draw(st.sampled_from([0.02, 0.05, 0.2])), size=(48, 36))
+
+
+@st.composite
+def huge_grounds(draw):
+    """The lamp room on a ground quad 1e5..1e7 wide, turned about y, off centre by up to 0.4
+    of its width, sometimes with a low sun."""
+    from worlds import lamp_room
+    ground = 10 ** draw(st.floats(5.0, 7.0))
+    shift = [draw(st.floats(-0.4, 0.4)) * ground, 0.0, draw(st.floats(-0.4, 0.4)) * ground]
+    sun = draw(st.one_of(st.none(), st.floats(2.0, 30.0)))
+    return lamp_room(ground, offset=shift, turn=draw(st.floats(0.0, 90.0)),
+                     sun_elevation=sun, size=(48, 36))
+
+
+@st.composite
+def cards_by_lights(draw):
+    """A card 2e-5..1e-2 wide beside a point light, its centre 1..1.5 of its half-width away
+    (its wedge stays within the floor; the smallest, 1e-5 away, is twice the light margin
+    here: `tolerances.light_margin`, ~6e-6 with the light 3 from the eye), tilted, at the
+    origin or 1e3..1e4 away."""
+    from worlds import card_by_light
+    card = 2 * 10 ** draw(st.floats(-5.0, -2.0))
+    gap = card / 2 * draw(st.floats(1.0, 1.5))
+    offset = draw(st.one_of(st.just([0.0, 0.0, 0.0]), _far_offset(3.0, 4.0)))
+    return card_by_light(card, gap, offset=offset, tilt=draw(st.floats(0.0, 40.0)),
+                         size=(48, 36))
+
+
+@st.composite
+def grazing_creases(draw):
+    """An almost flat concave crease rising 0.05..5 degrees, the sun 0.3..0.9 of that above
+    the floor, rotated anyhow, at the origin or up to 1e4 away."""
+    from worlds import grazing_crease
+    rise = 10 ** draw(st.floats(np.log10(0.05), np.log10(5.0)))
+    elevation = rise * draw(st.floats(0.3, 0.9))
+    rotation = [draw(st.floats(-180.0, 180.0)) for _ in range(3)]
+    offset = draw(st.one_of(st.just([0.0, 0.0, 0.0]), _far_offset(2.0, 4.0)))
+    return grazing_crease(rise, elevation, rotation=rotation, offset=offset, size=(48, 36))

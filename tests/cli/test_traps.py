@@ -9,12 +9,11 @@ import textwrap
 
 import numpy as np
 import pytest
+from builders import ROOT, SCENES
 
 import shadowvol
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.scenefile import load_scene, save_scene
-
-from builders import ROOT, SCENES
 
 pytestmark = pytest.mark.gl
 

@@ -12,7 +12,8 @@ the surface along the normal) was wrong away from shadow edges: a wall lit at 2 
 neighbouring face that blocks the segment).  The real-mesh crop lives in test_real_meshes.py
 (it needs ../shared/models).
 
-Budget (`check_exact`): zero mismatches farther than one pixel from a mask edge
+The checker itself lives in tests/exact.py (shared with the large-world tests).  Budget
+(`check_exact`): zero mismatches farther than one pixel from a mask edge
 (shadowvol.compare.maskdiff), and at most EXACT_EDGE_BUDGET of the pixels in all (float32 picks the
 other side of an edge for rays within ~1e-7 of it).
 """
@@ -25,7 +26,7 @@ from exact import check_exact
 
 import raytrace
 from raytrace.backends import make_backend
-from raytrace.tolerances import shadow_height
+from raytrace.tolerances import error_weight, shadow_height
 from shadowvol.primitives import Transform, box, mesh, plane
 from shadowvol.scene import Camera, DirectionalLight, PointLight, Scene, SpotLight
 
@@ -149,7 +150,9 @@ def test_a_shadow_ray_never_hits_the_triangle_it_leaves(backend, centre):
     elevation = np.where(rng.random(n_rays) < 0.3, 10 ** rng.uniform(-6, -3, n_rays),
                          rng.uniform(0, np.pi / 2, n_rays))
     d = np.cos(elevation)[:, None] * d + np.sin(elevation)[:, None] * normal
-    height = shadow_height(np.abs(tri[k]).max(axis=(1, 2)))
+    # the masks' bound: the triangle's error weight plus p's coordinates weighted by |n|
+    weight = error_weight(normal, tri[k]) + np.einsum("ij,ij->i", np.abs(normal), np.abs(p))
+    height = shadow_height(weight)
     start = p + (height / np.einsum("ij,ij->i", normal, d))[:, None] * d
     hit = tracer.occluded(start, d, 2.0)
     assert not hit.any(), f"{hit.sum()} of {n_rays} shadow rays hit the triangle they left"
