@@ -1,0 +1,214 @@
+"""Ground truth for vision datasets from the reference ray tracer (docs/CONVENTIONS.md, "Ground
+truth"): per pixel the depth, the distance, the face normal and the object id of the visible
+point, and per light whether the point faces it and which objects block it.
+
+Everything rides the masks' own rays (`raytrace.masks`): the same visible triangle, the same
+float64 hit point, the same shadow segments with the same margins.  `lit` is computed exactly
+as `shadow_masks` computes it; `casters` traces every blocked segment again against each
+object alone (one backend per object, in the masks' frame, the visible triangle excluded by id
+in its own object), so bit j of `casters[i, p]` says "object j lies on p's segment to light i".
+
+Limits: `object_id` counts up to 65535 objects (uint16); `casters` is one 64-bit word, so a
+scene of more than 64 objects cannot have it (SceneError naming the count: ask for the other
+outputs, or split the scene).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from shadowvol.cameras import Calibration, calibration
+from shadowvol.io import GROUND_TRUTH
+from shadowvol.scene import Scene, SceneError
+
+from .backends import NumpyBackend, TriangleBackend, make_backend
+from .camera import RayGrid
+from .masks import (
+    MASK_TILE_RAYS,
+    MaskTracer,
+    _blocked,
+    _local_light,
+    _primary_hits,
+    _segments,
+    scene_backend,
+)
+
+MAX_CASTERS = 64          # objects `casters` can name: one uint64 word
+MAX_OBJECT_IDS = 65535    # objects `object_id` can name: uint16, 0 is the background
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class GroundTruth:
+    """One frame's masks, the ground-truth outputs asked for (None otherwise) and the camera.
+
+    lit : (L, H, W) bool and coverage : (H, W) bool, as `shadow_masks` returns them
+    depth : (H, W) float32, eye-space depth (along the view axis); inf where nothing is hit
+    distance : (H, W) float32, from the eye along the pixel's ray; inf where nothing is hit
+    normal : (H, W, 3) float32, the world-space unit face normal, turned toward the camera;
+        0 where nothing is hit
+    object_id : (H, W) uint16, 0 = background, k = scene.objects[k - 1]
+    facing : (L, H, W) bool, n·l > 0 (and inside a spot light's cone)
+    casters : (L, H, W) uint64, bit j set when scene.objects[j] blocks the pixel's segment
+    calibration : the camera matrices and light arrays (`shadowvol.cameras.Calibration`)
+    """
+
+    lit: np.ndarray
+    coverage: np.ndarray
+    calibration: Calibration
+    depth: np.ndarray | None = None
+    distance: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    object_id: np.ndarray | None = None
+    facing: np.ndarray | None = None
+    casters: np.ndarray | None = None
+
+    @property
+    def cast(self) -> np.ndarray:
+        """(L, H, W) bool: cast shadow, facing the light yet not lit (needs `facing`)."""
+        return self.facing & ~self.lit
+
+    @property
+    def attached(self) -> np.ndarray:
+        """(L, H, W) bool: attached shadow, covered but facing away (needs `facing`)."""
+        return self.coverage[None] & ~self.facing
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The outputs computed and the calibration, by their mask-file names
+        (`shadowvol.io.save_masks`)."""
+        out = {name: getattr(self, name) for name in GROUND_TRUTH
+               if getattr(self, name) is not None}
+        return out | self.calibration.arrays()
+
+
+def check_outputs(scene: Scene, outputs) -> tuple[str, ...]:
+    """The outputs asked for, checked: names from `shadowvol.io.GROUND_TRUTH` and what the
+    scene allows (SceneError otherwise); in GROUND_TRUTH's order."""
+    outputs = (outputs,) if isinstance(outputs, str) else tuple(outputs)
+    unknown = [o for o in outputs if o not in GROUND_TRUTH]
+    if unknown:
+        raise SceneError("outputs", f"unknown output {unknown[0]!r} (one of: "
+                                    f"{', '.join(GROUND_TRUTH)})")
+    n = len(scene.objects)
+    if "casters" in outputs and n > MAX_CASTERS:
+        raise SceneError("objects", f"casters is a {MAX_CASTERS}-bit mask, and this scene has "
+                                    f"{n} objects; ask for the other outputs, or split the scene")
+    if "object_id" in outputs and n > MAX_OBJECT_IDS:
+        raise SceneError("objects", f"object_id counts up to {MAX_OBJECT_IDS} objects, and this "
+                                    f"scene has {n}")
+    return tuple(o for o in GROUND_TRUTH if o in outputs)
+
+
+class _ObjectTracers:
+    """One backend per object, in the masks' frame: what `casters` traces segments against.
+
+    first : (n + 1,) int64, object j's triangles are first[j] .. first[j + 1] − 1 of the
+    scene's; object : (M,) int64, each scene triangle's object."""
+
+    def __init__(self, scene: Scene, mask_tracer: MaskTracer):
+        vertices, faces, ids = scene.triangles()
+        kind = "numpy" if isinstance(mask_tracer.tracer, NumpyBackend) else "embree"
+        local = vertices - mask_tracer.origin
+        self.object = ids.astype(np.int64)
+        self.first = np.searchsorted(self.object, np.arange(len(scene.objects) + 1))
+        self.tracers: list[TriangleBackend] = [
+            make_backend(kind, local, faces[a:b]) for a, b in zip(self.first[:-1],
+                                                                   self.first[1:])]
+
+
+def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer = "embree"
+                 ) -> GroundTruth:
+    """The masks of `scene` with the ground-truth `outputs` (names from
+    `shadowvol.io.GROUND_TRUTH`; default all) and the calibration.
+
+    backend : "embree", "numpy", or `raytrace.masks.scene_backend(scene, ...)` built once.
+    `lit` and `coverage` equal `shadow_masks(scene, backend)`; `facing & ~lit` equals
+    `casters != 0`.  Tiled and threaded as `shadow_masks` is."""
+    outputs = check_outputs(scene, outputs)
+    mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
+    tracer, triangles, origin = mt
+    H, W, L = scene.height, scene.width, len(scene.lights)
+    want = set(outputs)
+    objects = _ObjectTracers(scene, mt) if "casters" in want else None
+    lit = np.zeros((L, H * W), bool)
+    coverage = np.zeros(H * W, bool)
+    depth = np.full(H * W, np.inf, np.float32)
+    distance = np.full(H * W, np.inf, np.float32)
+    normal = np.zeros((H * W, 3), np.float32)
+    object_id = np.zeros(H * W, np.uint16)
+    facing = np.zeros((L, H * W), bool)
+    casters = np.zeros((L, H * W), np.uint64)
+    _, _, ids = scene.triangles()
+    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
+                                 target=scene.camera.target - origin)
+    grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
+    reach = scene.extent
+    lights = [_local_light(light, origin, triangles) for light in scene.lights]
+    rows_per_tile = max(1, MASK_TILE_RAYS // W)
+    tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
+
+    def trace_tile(rows: slice) -> None:
+        covered, index, hit = _primary_hits(tracer, triangles, grids, rows)
+        first = rows.start * W
+        coverage[first:first + covered.size] = covered
+        if hit is None:
+            return
+        pixel = first + index
+        if want & {"depth", "distance"}:
+            depth[pixel] = hit.depth
+            view = np.take(grids[1].directions(rows), index, axis=1)
+            distance[pixel] = hit.depth * np.sqrt((view * view).sum(axis=0))
+        if "normal" in want:
+            normal[pixel] = (hit.normal * hit.side).T
+        if "object_id" in want:
+            object_id[pixel] = ids[hit.tri] + 1
+        for i, light in enumerate(lights):
+            seg = _segments(light, hit, reach)
+            own, fragile = hit.tri[seg.rays], hit.fragile[seg.rays]
+            start = seg.start.copy() if objects is not None else seg.start
+            tmax = None if seg.tmax is None else seg.tmax.copy()
+            blocked = _blocked(tracer, seg.start, seg.direction, seg.tmax, own, fragile)
+            lit_here = seg.facing.copy()
+            lit_here[seg.rays] = ~blocked
+            lit[i, pixel] = lit_here
+            facing[i, pixel] = seg.facing
+            if objects is not None and blocked.any():
+                b = np.flatnonzero(blocked)
+                casters[i, pixel[seg.rays[b]]] = _caster_bits(
+                    objects, start[:, b], seg.direction if seg.direction.shape[1] == 1
+                    else seg.direction[:, b], None if tmax is None else tmax[b], own[b],
+                    fragile[b])
+
+    threads = min(getattr(tracer, "threads", 1), len(tiles))
+    if threads == 1:
+        for rows in tiles:
+            trace_tile(rows)
+    else:
+        with ThreadPoolExecutor(threads) as pool:
+            list(pool.map(trace_tile, tiles))  # list(): re-raises a tile's exception here
+    chosen = {"depth": depth.reshape(H, W), "distance": distance.reshape(H, W),
+              "normal": normal.reshape(H, W, 3), "object_id": object_id.reshape(H, W),
+              "facing": facing.reshape(L, H, W), "casters": casters.reshape(L, H, W)}
+    return GroundTruth(lit.reshape(L, H, W), coverage.reshape(H, W), calibration(scene),
+                       **{name: chosen[name] for name in outputs})
+
+
+def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarray,
+                 tmax: np.ndarray | None, own: np.ndarray, fragile: np.ndarray) -> np.ndarray:
+    """(b,) uint64: the objects that block each of b blocked shadow segments, as bits.
+
+    start (3, b) float32, direction (3, b) or (3, 1) float32, tmax (b,) float32 or None: the
+    segments as `_segments` made them (before `_blocked` moved any start); own (b,) int64 the
+    scene triangle each leaves, fragile (b,) bool.  Each object's backend is asked the masks'
+    own question (`_blocked`), its own triangle excluded by id in the object it belongs to."""
+    bits = np.zeros(len(own), np.uint64)
+    own_object = objects.object[own]
+    for j, tracer in enumerate(objects.tracers):
+        mine = own_object == j
+        local_own = np.where(mine, own - objects.first[j], -1)
+        hit = _blocked(tracer, start.copy(), direction, None if tmax is None else tmax.copy(),
+                       local_own, fragile & mine)
+        bits[hit] |= np.uint64(1) << np.uint64(j)
+    return bits
