@@ -4,6 +4,7 @@ from each other).  Vary a built scene with `dataclasses.replace` / `Scene.replac
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 from shadowvol.primitives import plane
@@ -12,7 +13,9 @@ from shadowvol.scene import Camera, DirectionalLight, Scene
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
 TEST_OUTPUT = ROOT / "test-output"
-MODELS = ROOT.parent / "shared" / "models"
+# the shared test meshes: ../shared/models beside the checkout, or where SHADOWVOL_MODELS says
+# (a worktree elsewhere)
+MODELS = Path(os.environ.get("SHADOWVOL_MODELS", ROOT.parent / "shared" / "models"))
 
 
 def tiny_scene(with_blocker_behind_eye: bool = False) -> Scene:
