@@ -66,3 +66,21 @@ def test_render_writes_exr_and_png16(small, tmp_path):
         np.testing.assert_array_equal(f.channels()["RGB"].pixels, image.astype(np.float32))
     assert png16.read_bytes()[24] == 16  # the IHDR bit depth
     assert main(["render", str(small), "-o", str(png), "--exr", str(tmp_path / "a.png")]) == 2
+
+
+@pytest.mark.gl
+def test_shadowvol_render_masks_hold_the_camera_and_the_image_goes_to_exr(ctx, small,
+                                                                          tmp_path):
+    from shadowvol.cli.main import main as shadowvol_main
+
+    png = tmp_path / "s.png"
+    assert shadowvol_main(["render", str(small), "-o", str(png), "--masks", "--exr",
+                           "--png16"]) == 0
+    arrays = load_mask_arrays(tmp_path / "s-masks.npz")
+    assert set(arrays) == {"lit", "coverage"} | CALIBRATION
+    truth = ground_truth(load_scene(small), ())
+    for name, value in truth.calibration.arrays().items():
+        np.testing.assert_array_equal(arrays[name], value)
+    with OpenEXR.File(str(tmp_path / "s.exr")) as f:
+        assert f.channels()["RGB"].pixels.shape == (48, 64, 3)
+    assert (tmp_path / "s-16bit.png").read_bytes()[24] == 16
