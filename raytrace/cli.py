@@ -22,7 +22,7 @@ from shadowvol import __version__
 from shadowvol.cli import outputs, status
 from shadowvol.cameras import calibration
 from shadowvol.io import GROUND_TRUTH, atomic_write, save_exr, save_masks, save_png, save_png16
-from shadowvol.pictures import masks_image
+from shadowvol.pictures import ground_truth_picture, masks_image
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
@@ -73,7 +73,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="where to write the masks (.npz with lit (L, H, W) and coverage (H, W))")
     m.add_argument("--png", metavar="PNG", default=None,
                    help="where to write a picture of the masks, one panel per light (white lit, "
-                        "grey shadowed, black empty) (default: beside the .npz, same name, .png)")
+                        "grey shadowed, black empty), with --outputs also of the outputs side by "
+                        "side (default: beside the .npz, same name, .png)")
     m.add_argument("--no-png", action="store_true", help="write the .npz only")
     m.add_argument("--outputs", metavar="LIST", default=None,
                    help="ground truth to add to the .npz, comma-separated: "
@@ -143,12 +144,14 @@ def _masks(args) -> int:
     if wanted:
         truth = ground_truth(scene, check_outputs(scene, wanted), backend=args.backend)
         lit, coverage, arrays = truth.lit, truth.coverage, truth.arrays()
+        picture = ground_truth_picture(truth, [o.name for o in scene.objects])
     else:
         lit, coverage = shadow_masks(scene, backend=args.backend)
         arrays = calibration(scene).arrays()
+        picture = masks_image(lit, coverage)
     save_masks(paths["masks"], lit, coverage, arrays)
     if "picture" in paths:
-        save_png(paths["picture"], masks_image(lit, coverage))
+        save_png(paths["picture"], picture)
     print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)
     return status.OK
 
