@@ -37,6 +37,11 @@ from .masks import (
 )
 
 MAX_CASTERS = 64          # objects `casters` can name: one uint64 word
+# An object's box is widened by this much of its largest coordinate (eye's frame) before a
+# segment is culled against it: float32 rounding of the corners (2**-24) and of the segment's
+# start and direction, 100 times over.  A speed-up only: the culled segments are those that
+# the object's own backend would find unblocked.
+BOX_PAD_RELATIVE = 1e-5
 MAX_OBJECT_IDS = 65535    # objects `object_id` can name: uint16, 0 is the background
 
 
@@ -105,17 +110,24 @@ class _ObjectTracers:
     """One backend per object, in the masks' frame: what `casters` traces segments against.
 
     first : (n + 1,) int64, object j's triangles are first[j] .. first[j + 1] − 1 of the
-    scene's; object : (M,) int64, each scene triangle's object."""
+    scene's; object : (M,) int64, each scene triangle's object; lo, hi : (n, 3) float64, each
+    object's bounding box, padded by BOX_PAD_RELATIVE of its largest coordinate (a segment
+    that misses the padded box cannot meet the object in float32 either)."""
 
     def __init__(self, scene: Scene, mask_tracer: MaskTracer):
-        vertices, faces, ids = scene.triangles()
         kind = "numpy" if isinstance(mask_tracer.tracer, NumpyBackend) else "embree"
-        local = vertices - mask_tracer.origin
+        _, _, ids = scene.triangles()
         self.object = ids.astype(np.int64)
         self.first = np.searchsorted(self.object, np.arange(len(scene.objects) + 1))
-        self.tracers: list[TriangleBackend] = [
-            make_backend(kind, local, faces[a:b]) for a, b in zip(self.first[:-1],
-                                                                   self.first[1:])]
+        # each object's own vertices and faces (its face k is scene triangle first[j] + k)
+        local = [o.vertices - mask_tracer.origin for o in scene.objects]
+        self.tracers: list[TriangleBackend] = [make_backend(kind, v, o.faces)
+                                               for v, o in zip(local, scene.objects)]
+        lo = np.array([v[o.faces.reshape(-1)].min(axis=0) for v, o in zip(local, scene.objects)])
+        hi = np.array([v[o.faces.reshape(-1)].max(axis=0) for v, o in zip(local, scene.objects)])
+        pad = BOX_PAD_RELATIVE * np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, keepdims=True)
+        self.lo, self.hi = lo - pad - np.finfo(np.float32).tiny, hi + pad + np.finfo(
+            np.float32).tiny
 
 
 def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer = "embree"
@@ -130,16 +142,17 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
     tracer, triangles, origin = mt
     H, W, L = scene.height, scene.width, len(scene.lights)
-    want = set(outputs)
-    objects = _ObjectTracers(scene, mt) if "casters" in want else None
+    objects = _ObjectTracers(scene, mt) if "casters" in outputs else None
     lit = np.zeros((L, H * W), bool)
     coverage = np.zeros(H * W, bool)
-    depth = np.full(H * W, np.inf, np.float32)
-    distance = np.full(H * W, np.inf, np.float32)
-    normal = np.zeros((H * W, 3), np.float32)
-    object_id = np.zeros(H * W, np.uint16)
-    facing = np.zeros((L, H * W), bool)
-    casters = np.zeros((L, H * W), np.uint64)
+    # the outputs asked for, flat (pixels row-major), with what is stored where nothing is hit
+    blank = {"depth": lambda: np.full(H * W, np.inf, np.float32),
+             "distance": lambda: np.full(H * W, np.inf, np.float32),
+             "normal": lambda: np.zeros((H * W, 3), np.float32),
+             "object_id": lambda: np.zeros(H * W, np.uint16),
+             "facing": lambda: np.zeros((L, H * W), bool),
+             "casters": lambda: np.zeros((L, H * W), np.uint64)}
+    out = {name: blank[name]() for name in outputs}
     _, _, ids = scene.triangles()
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
                                  target=scene.camera.target - origin)
@@ -156,14 +169,15 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
         if hit is None:
             return
         pixel = first + index
-        if want & {"depth", "distance"}:
-            depth[pixel] = hit.depth
+        if "depth" in out:
+            out["depth"][pixel] = hit.depth
+        if "distance" in out:
             view = np.take(grids[1].directions(rows), index, axis=1)
-            distance[pixel] = hit.depth * np.sqrt((view * view).sum(axis=0))
-        if "normal" in want:
-            normal[pixel] = (hit.normal * hit.side).T
-        if "object_id" in want:
-            object_id[pixel] = ids[hit.tri] + 1
+            out["distance"][pixel] = hit.depth * np.sqrt((view * view).sum(axis=0))
+        if "normal" in out:
+            out["normal"][pixel] = (hit.normal * hit.side).T
+        if "object_id" in out:
+            out["object_id"][pixel] = ids[hit.tri] + 1
         for i, light in enumerate(lights):
             seg = _segments(light, hit, reach)
             own, fragile = hit.tri[seg.rays], hit.fragile[seg.rays]
@@ -173,10 +187,11 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
             lit_here = seg.facing.copy()
             lit_here[seg.rays] = ~blocked
             lit[i, pixel] = lit_here
-            facing[i, pixel] = seg.facing
+            if "facing" in out:
+                out["facing"][i, pixel] = seg.facing
             if objects is not None and blocked.any():
                 b = np.flatnonzero(blocked)
-                casters[i, pixel[seg.rays[b]]] = _caster_bits(
+                out["casters"][i, pixel[seg.rays[b]]] = _caster_bits(
                     objects, start[:, b], seg.direction if seg.direction.shape[1] == 1
                     else seg.direction[:, b], None if tmax is None else tmax[b], own[b],
                     fragile[b])
@@ -188,11 +203,10 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     else:
         with ThreadPoolExecutor(threads) as pool:
             list(pool.map(trace_tile, tiles))  # list(): re-raises a tile's exception here
-    chosen = {"depth": depth.reshape(H, W), "distance": distance.reshape(H, W),
-              "normal": normal.reshape(H, W, 3), "object_id": object_id.reshape(H, W),
-              "facing": facing.reshape(L, H, W), "casters": casters.reshape(L, H, W)}
+    shapes = {"depth": (H, W), "distance": (H, W), "normal": (H, W, 3), "object_id": (H, W),
+              "facing": (L, H, W), "casters": (L, H, W)}
     return GroundTruth(lit.reshape(L, H, W), coverage.reshape(H, W), calibration(scene),
-                       **{name: chosen[name] for name in outputs})
+                       **{name: value.reshape(shapes[name]) for name, value in out.items()})
 
 
 def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarray,
@@ -205,10 +219,35 @@ def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarr
     own question (`_blocked`), its own triangle excluded by id in the object it belongs to."""
     bits = np.zeros(len(own), np.uint64)
     own_object = objects.object[own]
+    start64 = start.astype(np.float64)
+    direction64 = np.broadcast_to(direction, start.shape).astype(np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inverse = 1.0 / direction64
+    end = np.inf if tmax is None else tmax.astype(np.float64)
     for j, tracer in enumerate(objects.tracers):
         mine = own_object == j
-        local_own = np.where(mine, own - objects.first[j], -1)
-        hit = _blocked(tracer, start.copy(), direction, None if tmax is None else tmax.copy(),
-                       local_own, fragile & mine)
-        bits[hit] |= np.uint64(1) << np.uint64(j)
+        near = _meets_box(start64, inverse, end, objects.lo[j], objects.hi[j]) | mine
+        k = np.flatnonzero(near)
+        if len(k) == 0:
+            continue
+        local_own = np.where(mine[k], own[k] - objects.first[j], -1)
+        hit = _blocked(tracer, start[:, k], direction if direction.shape[1] == 1
+                       else direction[:, k], None if tmax is None else tmax[k].copy(),
+                       local_own, fragile[k] & mine[k])
+        bits[k[hit]] |= np.uint64(1) << np.uint64(j)
     return bits
+
+
+def _meets_box(start: np.ndarray, inverse: np.ndarray, end, lo: np.ndarray, hi: np.ndarray
+               ) -> np.ndarray:
+    """(b,) bool: does the segment start + t·d, 0 <= t <= end, meet the box [lo, hi]?  start,
+    inverse (1/d, inf for a zero component) : (3, b) float64; end : (b,) or inf."""
+    with np.errstate(invalid="ignore"):  # 0 · inf: a zero component inside the slab
+        t1 = (lo[:, None] - start) * inverse
+        t2 = (hi[:, None] - start) * inverse
+    lower = np.fmin(t1, t2)
+    upper = np.fmax(t1, t2)
+    # nan (0 · inf) means the ray runs inside that slab: fmax/fmin drop it
+    t_in = np.fmax(np.fmax(lower[0], lower[1]), np.fmax(lower[2], 0.0))
+    t_out = np.fmin(np.fmin(upper[0], upper[1]), np.fmin(upper[2], end))
+    return t_in <= t_out
