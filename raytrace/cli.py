@@ -91,7 +91,6 @@ def _backend(p: argparse.ArgumentParser) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    status.on_sigterm()
     try:
         args = _parser().parse_args(argv)
     except KeyboardInterrupt as exc:
