@@ -47,8 +47,18 @@ def handled():
         _Pending.signum = None
 
 
+def pending() -> BaseException | None:
+    """The interrupt that arrived (KeyboardInterrupt or Terminated), or None.  An interrupt
+    inside an import can surface as another exception (numpy turns it into ImportError): the
+    CLI reports the interrupt then, not what it broke."""
+    signum = _Pending.signum
+    if signum is None:
+        return None
+    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated()
+
+
 def raise_pending() -> None:
     """Raise again an interrupt that arrived and was swallowed on its way up."""
-    signum = _Pending.signum
-    if signum is not None:
-        raise KeyboardInterrupt() if signum == signal.SIGINT else Terminated()
+    exc = pending()
+    if exc is not None:
+        raise exc

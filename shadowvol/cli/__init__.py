@@ -27,7 +27,11 @@ def raytrace_main(argv=None) -> int:
 def _enter(module: str, argv) -> int:
     try:
         with signals.handled():
-            entry = importlib.import_module(module).main
+            try:
+                entry = importlib.import_module(module).main
+                signals.raise_pending()  # one that an import swallowed
+            except BaseException as exc:
+                raise signals.pending() or exc  # an interrupt may surface as ImportError
     except KeyboardInterrupt:
         print("error: interrupted", file=sys.stderr)
         return 130

@@ -68,6 +68,7 @@ def message(exc: BaseException) -> str:
 def report(exc: BaseException, prefix: str = "") -> int:
     """Print `error: PREFIXmessage` on stderr and return the exception's status; re-raise an
     exception that has none."""
+    exc = signals.pending() or exc  # an interrupt may surface as what it broke
     status = status_of(exc)
     if status is None:
         raise exc
