@@ -3,6 +3,8 @@
     raytrace render scenes/whitted.toml -o whitted.png
     raytrace masks  scenes/whitted.toml -o whitted-masks.npz      (+ whitted-masks.png)
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
+    raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png
+    raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png
 
 Outputs are written atomically (shadowvol.files): an error never leaves half a file behind.
 A bad scene prints `error: <file>: <key>: <problem>` and exits with status 2.
@@ -14,6 +16,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from . import cli_outlook
 from .backends import BACKENDS
 
 EXIT_BAD_INPUT = 2
@@ -40,6 +43,8 @@ def _parser() -> argparse.ArgumentParser:
     _backend(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
+    cli_outlook.add_options(r)
+    cli_outlook.add_parsers(sub)
 
     m = sub.add_parser("masks", help="reference shadow masks (lit per light, coverage)",
                        description="Trace the reference shadow masks of SCENE on its triangles "
@@ -92,6 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "tree":
             return _tree(args, scene)
+        if args.command == "radiosity" or (args.command == "render"
+                                           and args.integrator == "path"):
+            return cli_outlook.run(args, scene)
         if args.command == "render":
             from .whitted import render
             if args.max_depth is not None and args.max_depth < 0:

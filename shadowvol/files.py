@@ -116,3 +116,42 @@ def join(images: list[np.ndarray], axis: int, gap: int = 4,
     for image in images[1:]:
         parts += [spacer, image]
     return np.concatenate(parts, axis=axis)
+
+
+def exr_bytes(image: np.ndarray) -> bytes:
+    """An OpenEXR file of an (H, W, 3) float linear RGB image: scanline, uncompressed, 32-bit
+    float channels B, G, R (EXR lists channels alphabetically), row 0 at the top."""
+    import struct
+
+    arr = np.asarray(image, dtype="<f4")
+    if arr.ndim != 3 or arr.shape[2] != 3:
+        raise ValueError(f"exr_bytes wants an (H, W, 3) image, got shape {arr.shape}")
+    h, w = arr.shape[:2]
+
+    def attr(name: str, kind: str, value: bytes) -> bytes:
+        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(value)) + value
+
+    channels = b"".join(c.encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for c in "BGR")
+    window = struct.pack("<iiii", 0, 0, w - 1, h - 1)
+    header = (struct.pack("<ii", 20000630, 2)
+              + attr("channels", "chlist", channels + b"\0")
+              + attr("compression", "compression", b"\0")
+              + attr("dataWindow", "box2i", window)
+              + attr("displayWindow", "box2i", window)
+              + attr("lineOrder", "lineOrder", b"\0")
+              + attr("pixelAspectRatio", "float", struct.pack("<f", 1.0))
+              + attr("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0))
+              + attr("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
+    line_bytes = 3 * 4 * w
+    first = len(header) + 8 * h
+    offsets = struct.pack(f"<{h}Q", *(first + y * (8 + line_bytes) for y in range(h)))
+    planar = np.ascontiguousarray(arr[:, :, ::-1].transpose(0, 2, 1))  # (H, B|G|R, W)
+    lines = b"".join(struct.pack("<ii", y, line_bytes) + planar[y].tobytes() for y in range(h))
+    return header + offsets + lines
+
+
+def save_exr(path: str | Path, image: np.ndarray) -> None:
+    """Write an (H, W, 3) float linear RGB image as OpenEXR (see `exr_bytes`), atomically."""
+    data = exr_bytes(image)
+    with atomic_write(path) as f:
+        f.write(data)

@@ -1,0 +1,124 @@
+"""The `raytrace` commands of the rendering equation's outlook: path tracing and radiosity.
+
+    raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png [--exr c.exr]
+    raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png [--flat F.png]
+
+`raytrace.cli` registers them (`add_options`, `add_parsers`) and hands over (`run`).  Exit
+status: 0 done, 2 bad input, 3 failure (cannot write, a missing dependency).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+EXIT_OK, EXIT_BAD_INPUT, EXIT_FAILURE = 0, 2, 3
+
+
+def add_options(render: argparse.ArgumentParser) -> None:
+    """The path tracer's options on `raytrace render`."""
+    render.add_argument("--integrator", choices=("whitted", "path"), default="whitted",
+                        help="'whitted' (default) or 'path': unidirectional path tracing with "
+                             "next-event estimation of emissive surfaces (material.emission)")
+    render.add_argument("--spp", type=int, default=16, metavar="N",
+                        help="path tracing: paths per pixel (default 16)")
+    render.add_argument("--seed", type=int, default=0, metavar="S",
+                        help="path tracing: random seed; the same seed gives the same image "
+                             "(default 0)")
+    render.add_argument("--exr", metavar="EXR", default=None,
+                        help="path tracing: also write the linear image as OpenEXR")
+
+
+def add_parsers(sub) -> None:
+    """The `radiosity` subcommand."""
+    r = sub.add_parser("radiosity", help="radiosity of the diffuse scene (patches, ray-cast "
+                                         "form factors, progressive refinement)",
+                       description="Mesh SCENE into patches, compute form factors by casting "
+                                   "rays through Embree, solve by progressive refinement and "
+                                   "show the solution from the camera.  Prints the number of "
+                                   "patches, iterations and time.")
+    r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
+    r.add_argument("-o", "--output", required=True, metavar="PNG",
+                   help="the interpolated (Gouraud) display, sRGB PNG")
+    r.add_argument("--flat", metavar="PNG", default=None,
+                   help="also write the flat display (one colour per patch)")
+    r.add_argument("--exr", metavar="EXR", default=None,
+                   help="also write the interpolated display as linear OpenEXR")
+    r.add_argument("--level", type=int, default=3, metavar="L",
+                   help="subdivision level: patches no longer than the longest triangle edge "
+                        "/ 2^L (default 3)")
+    r.add_argument("--rays", type=int, default=256, metavar="K",
+                   help="form-factor rays per patch (default 256)")
+    r.add_argument("--tol", type=float, default=1e-4, metavar="T",
+                   help="stop when the unshot power is at most T times the emitted (default "
+                        "1e-4)")
+    r.add_argument("--shots", type=int, default=1, metavar="N",
+                   help="patches shot per iteration (default 1: Cohen et al.'s one at a time)")
+    r.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    r.add_argument("--backend", choices=("numpy", "embree"), default="embree",
+                   help="triangle intersection (default: embree)")
+
+
+def _bad(message: str) -> int:
+    print(f"error: {message}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+def run(args, scene) -> int:
+    """Run `render --integrator path` or `radiosity` for the loaded scene."""
+    from shadowvol.files import save_exr, save_png
+
+    try:
+        if args.command == "render":
+            from .pathtrace import render
+            if args.spp < 1:
+                return _bad(f"--spp must be >= 1, got {args.spp}")
+            depth = args.max_depth
+            if depth is not None and depth < 1:
+                return _bad(f"--max-depth must be >= 1 for path tracing, got {depth}")
+            kwargs = {} if depth is None else {"max_depth": depth}
+            result = render(scene, spp=args.spp, seed=args.seed, backend=args.backend,
+                            progress=False if args.no_progress else None, **kwargs)
+            save_png(args.output, result.image)
+            written = [args.output]
+            if args.exr:
+                save_exr(args.exr, result.image)
+                written.append(args.exr)
+            print(f"{args.spp} spp, {result.rays / 1e6:.1f} M rays in {result.seconds:.1f} s "
+                  f"({result.rays / result.seconds / 1e6:.2f} Mrays/s); wrote "
+                  f"{', '.join(written)}", file=sys.stderr)
+            return EXIT_OK
+        from . import radiosity
+        if args.level < 0:
+            return _bad(f"--level must be >= 0, got {args.level}")
+        if args.rays < 1:
+            return _bad(f"--rays must be >= 1, got {args.rays}")
+        if not args.tol > 0.0:
+            return _bad(f"--tol must be > 0, got {args.tol}")
+        if args.shots < 1:
+            return _bad(f"--shots must be >= 1, got {args.shots}")
+        try:
+            solution = radiosity.solve(scene, level=args.level, rays_per_patch=args.rays,
+                                       tol=args.tol, shots=args.shots, seed=args.seed,
+                                       backend=args.backend)
+        except ValueError as exc:  # e.g. a level that would split a triangle absurdly
+            return _bad(str(exc))
+        print(radiosity.summary(solution), file=sys.stderr)
+        smooth = radiosity.display(scene, solution, interpolate=True, backend=args.backend)
+        save_png(args.output, smooth)
+        written = [args.output]
+        if args.flat:
+            save_png(args.flat, radiosity.display(scene, solution, interpolate=False,
+                                                  backend=args.backend))
+            written.append(args.flat)
+        if args.exr:
+            save_exr(args.exr, smooth)
+            written.append(args.exr)
+        print(f"wrote {', '.join(written)}", file=sys.stderr)
+        return EXIT_OK
+    except ImportError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_FAILURE
+    except OSError as exc:
+        print(f"error: cannot write output: {exc}", file=sys.stderr)
+        return EXIT_FAILURE
