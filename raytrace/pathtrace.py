@@ -12,8 +12,11 @@ once, per tile, like `raytrace.whitted`):
   (these delta lights keep the Whitted convention: irradiance pi · radiance · n·l, no distance
   fall-off, so a Lambertian surface gets kd · radiance · n·l as in Whitted);
 * the next direction is drawn from the material (`raytrace.brdf`); emission found by a ray drawn
-  from the Phong lobes is NOT added (NEE has counted it): plain NEE, no multiple importance
-  sampling, so glossy reflections of the area light are noisier than with MIS, not biased;
+  from the Phong lobes is added too, and the two estimates of the same light are combined by
+  multiple importance sampling (Veach 1995, balance heuristic: NEE weighs its sample by
+  p_light / (p_light + p_bsdf), the BSDF-sampled hit by p_bsdf / (p_light + p_bsdf), both
+  densities in solid angle).  MIS, not plain NEE: with NEE alone a point next to a large emitter
+  (a corner of the furnace box) gets 1/r^2 spikes; the BSDF sample covers them;
 * Russian roulette from bounce `RR_START_BOUNCE` on: a path survives with probability
   q = min(max_channel(throughput), RR_MAX_SURVIVAL) and its throughput is divided by q.
 
@@ -86,6 +89,9 @@ class PathWorld:
         self.emitters = np.flatnonzero(power > 0.0)
         self.emitter_cdf = np.cumsum(power[self.emitters]) / max(power.sum(), 1e-300)
         self.emitter_prob = power[self.emitters] / max(power.sum(), 1e-300)
+        # p_A(y) of `sample_emitters` for a point on each triangle (0 off the emitters)
+        self.light_pdf_area = np.zeros(len(self.area))
+        self.light_pdf_area[self.emitters] = self.emitter_prob / self.area[self.emitters]
         self.lights = scene.lights
 
     def intersect(self, o: np.ndarray, d: np.ndarray):
@@ -135,10 +141,12 @@ def _add(L: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
         L[:, c] += np.bincount(index, weights=values[:, c], minlength=len(L))
 
 
-def next_event(world: PathWorld, rng, p, n, wo, obj, beta) -> tuple[np.ndarray, int]:
+def next_event(world: PathWorld, rng, p, n, wo, obj, beta, mis: bool = True
+               ) -> tuple[np.ndarray, int]:
     """Direct light (k, 3) at vertices p (k, 3) with normals n (k, 3) facing wo (k, 3), objects
     obj (k,), throughputs beta (k, 3), from one emitter sample each and every delta light.
-    Returns the contributions and the number of shadow rays traced."""
+    mis: weigh the emitter sample by its MIS share (False at the last bounce, where no BSDF
+    sample follows to take the rest).  Returns the contributions and the shadow rays traced."""
     k = len(p)
     out = np.zeros((k, 3))
     w_phong = 1.0 - world.refl[obj] - world.transp[obj]
@@ -162,6 +170,10 @@ def next_event(world: PathWorld, rng, p, n, wo, obj, beta) -> tuple[np.ndarray, 
         c = c[~blocked]
         f = phong_eval(kd[c], ks[c], s[c], n[c], wo[c], wi[c]) * w_phong[c, None]
         g = cos_x[c] * cos_y[c] / (dist2[c] * p_area[c])
+        p_light = p_area[c] * dist2[c] / cos_y[c]
+        p_bsdf = w_phong[c] * phong_pdf(world.p_diffuse[obj[c]], s[c], n[c], wo[c], wi[c])
+        if mis:
+            g *= p_light / (p_light + p_bsdf)
         out[c] += beta[c] * f * world.emission[world.tri_object[tri[c]]] * g[:, None]
     for light in world.lights:
         if isinstance(light, DirectionalLight):
@@ -195,7 +207,8 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
     background = world.scene.background
     path = np.arange(n_paths)
     beta = np.ones((n_paths, 3))
-    count_emission = np.ones(n_paths, bool)
+    count_emission = np.ones(n_paths, bool)  # camera or delta ray: emission counts fully
+    bsdf_pdf = np.zeros(n_paths)  # solid-angle density of the last Phong-sampled direction
     rays = 0
     for bounce in range(1, max_depth + 1):
         t, tri, geo_n = world.intersect(o, d)
@@ -207,7 +220,7 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
         if len(h) == 0:
             break
         o, d, t, tri, geo_n = o[h], d[h], t[h], tri[h], geo_n[h]
-        path, beta, count_emission = path[h], beta[h], count_emission[h]
+        path, beta, count_emission, bsdf_pdf = path[h], beta[h], count_emission[h], bsdf_pdf[h]
         obj = world.tri_object[tri]
         p = o + t[:, None] * d
         entering = dot(geo_n, d) < 0.0
@@ -215,7 +228,13 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
         wo = -d
         e = np.flatnonzero(count_emission)
         _add(L, path[e], beta[e] * world.emission[obj[e]])
-        direct, shadow = next_event(world, rng, p, n, wo, obj, beta)
+        e = np.flatnonzero(~count_emission & (world.light_pdf_area[tri] > 0.0))
+        if len(e):  # an emitter found by BSDF sampling: its MIS share
+            cos_y = np.abs(dot(geo_n[e], d[e]))
+            p_light = world.light_pdf_area[tri[e]] * t[e] ** 2 / np.maximum(cos_y, 1e-300)
+            w = bsdf_pdf[e] / (bsdf_pdf[e] + p_light)
+            _add(L, path[e], beta[e] * world.emission[obj[e]] * w[:, None])
+        direct, shadow = next_event(world, rng, p, n, wo, obj, beta, mis=bounce < max_depth)
         rays += shadow
         _add(L, path, direct)
         if bounce == max_depth:
@@ -229,6 +248,7 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
         new_d = np.empty((k, 3))
         new_o = p + world.offset * n
         factor = np.ones((k, 3))
+        pdf_next = np.zeros(k)
         m = np.flatnonzero(is_mirror)
         new_d[m] = reflect(d[m], n[m])
         g = np.flatnonzero(is_glass)
@@ -246,6 +266,7 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
             ok = (cos > 0.0) & (pdf > 0.0)
             factor[q] = np.where(ok[:, None], f * (cos / np.where(ok, pdf, 1.0))[:, None], 0.0)
             new_d[q] = wi
+            pdf_next[q] = (1.0 - refl[q] - transp[q]) * pdf
         beta = beta * factor
         alive = beta.max(axis=1) > 0.0
         if bounce >= rr_start:
@@ -256,7 +277,7 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
         if len(keep) == 0:
             break
         o, d, path, beta = new_o[keep], new_d[keep], path[keep], beta[keep]
-        count_emission = ~is_phong[keep]
+        count_emission, bsdf_pdf = ~is_phong[keep], pdf_next[keep]
     return L, rays
 
 

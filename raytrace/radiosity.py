@@ -87,7 +87,7 @@ class PatchMesh:
         return np.concatenate([self.tri_object, self.tri_object])
 
 
-def _split(corners: np.ndarray) -> np.ndarray:
+def split_triangles(corners: np.ndarray) -> np.ndarray:
     """(n, 3, 3) triangles -> (4n, 3, 3), each split at its edge midpoints."""
     a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
     ab, bc, ca = (a + b) / 2, (b + c) / 2, (c + a) / 2
@@ -111,7 +111,7 @@ def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL) -> PatchMesh:
         sel = splits == k
         c = corners[sel]
         for _ in range(k):
-            c = _split(c)
+            c = split_triangles(c)
         out_corners.append(c)
         out_ids.append(np.repeat(ids[sel], 4 ** k))
     c = np.concatenate(out_corners)
