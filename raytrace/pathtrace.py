@@ -53,6 +53,7 @@ RR_START_BOUNCE = 3  # Russian roulette from the third bounce on
 RR_MAX_SURVIVAL = 0.95  # never certain survival: bounds the expected path length
 DEFAULT_MAX_DEPTH = 64  # bounces; the truncation bias is below rho^64 of the image
 TILE_PATHS = 1 << 16  # paths traced together: bounds memory, sets the progress step
+LEAVING_STANDOFF = 10.0  # `radiance_leaving` starts its rays this many surface offsets out
 
 
 class PathWorld:
@@ -279,6 +280,18 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
         o, d, path, beta = new_o[keep], new_d[keep], path[keep], beta[keep]
         count_emission, bsdf_pdf = ~is_phong[keep], pdf_next[keep]
     return L, rays
+
+
+def radiance_leaving(world: PathWorld, points: np.ndarray, normals: np.ndarray,
+                     rng: np.random.Generator, max_depth: int = DEFAULT_MAX_DEPTH
+                     ) -> tuple[np.ndarray, int]:
+    """Radiance (k, 3) leaving surface points (k, 3) along their unit normals (k, 3) (the face
+    to look at), one path each: a ray from just in front of each point, back along -normal.
+    For Lambertian surfaces this is the radiance in every direction, what radiosity computes.
+    The start is `LEAVING_STANDOFF` surface offsets out: clear of the float32 surface, far
+    closer than any other geometry in front of it."""
+    start = points + LEAVING_STANDOFF * world.offset * normals
+    return trace_paths(world, start, -normals, rng, max_depth)
 
 
 def camera_rays(camera, width: int, height: int, rows: np.ndarray, cols: np.ndarray,

@@ -22,12 +22,15 @@ This estimates the area-to-area form factor with visibility, unbiased; sum_j F_i
 (1 minus the escaping rays: exactly 1 in a closed box), reciprocity A_i F_ij = A_j F_ji holds in
 expectation only.  F is stored sparse (CSR), at most rays_per_patch entries a row.
 
-Solver: progressive refinement by shooting.  Each iteration shoots the unshot radiance of the
-`shots` patches holding the most unshot power (A_i · ΔL_i, summed over channels):
-ΔL_j += rho_j F_ij (A_i / A_j) ΔL_i (the gathering form factor F_ji by reciprocity).  It stops when
-the unshot power is at most `tol` times the emitted power (or after `max_iterations`), and the
-unshot remainder then bounds the error: every patch's radiance is low by at most what that
-power would add.
+Solver: progressive refinement by shooting (Cohen et al. 1988).  Each iteration shoots the
+unshot radiance of the `shots` patches holding the most unshot power (A_i · ΔL_i, summed over
+channels) to every patch j that sees them: ΔL_j += rho_j F_ji ΔL_i.  Cohen et al. get the
+receiver's form factor F_ji from the shooter's hemicube by reciprocity, F_ij A_i / A_j; here all
+rows are cast first, so F_ji is j's own estimate (column i of F), and shooting is exactly
+Southwell relaxation of the gathering system above: it converges to that system's solution even
+though ray-cast form factors are reciprocal only on average (with the reciprocity form, a
+furnace box would come out blotchy instead of uniform).  It stops when the unshot power is at
+most `tol` times the emitted power (or after `max_iterations`).
 """
 
 from __future__ import annotations
@@ -174,7 +177,7 @@ def shoot(F: sp.csr_matrix, area: np.ndarray, rho: np.ndarray, emission: np.ndar
           tol: float = DEFAULT_TOL, shots: int = 1, max_iterations: int | None = None
           ) -> tuple[np.ndarray, int, float]:
     """Progressive refinement: radiance (P, 3), iterations, remaining unshot / emitted power.
-    F (P, P) CSR; area (P,); rho, emission (P, 3)."""
+    F (P, P) sparse; area (P,); rho, emission (P, 3)."""
     L = emission.astype(np.float64).copy()
     unshot = L.copy()
     emitted = float((area[:, None] * emission).sum())
@@ -183,25 +186,24 @@ def shoot(F: sp.csr_matrix, area: np.ndarray, rho: np.ndarray, emission: np.ndar
     power = area * unshot.sum(axis=1)
     shots = max(1, int(shots))
     limit = max_iterations if max_iterations is not None else 1000 * len(area) // shots + 1000
-    indptr, indices, data = F.indptr, F.indices, F.data
+    columns = sp.csc_matrix(F)  # column i: F_ji for every receiver j
+    indptr, indices, data = columns.indptr, columns.indices, columns.data
     it = 0
     left = float(power.sum()) / emitted
     while left > tol and it < limit:
         if shots == 1:
             i = int(np.argmax(power))
             js = indices[indptr[i]:indptr[i + 1]]
-            gain = (data[indptr[i]:indptr[i + 1]] * (area[i] / area[js]))[:, None] * \
-                rho[js] * unshot[i]
+            gain = data[indptr[i]:indptr[i + 1], None] * rho[js] * unshot[i]
             unshot[i] = 0.0
             power[i] = 0.0
         else:
             top = np.argpartition(power, -shots)[-shots:]
-            sub = F[top]
-            source = unshot[top] * area[top, None]
+            sub = columns[:, top].tocsr()
+            js = np.flatnonzero(np.diff(sub.indptr))
+            gain = rho[js] * (sub[js] @ unshot[top])
             unshot[top] = 0.0
             power[top] = 0.0
-            js = np.unique(sub.indices)
-            gain = rho[js] * (sub[:, js].T @ source) / area[js, None]
         L[js] += gain
         unshot[js] += gain
         power[js] = area[js] * unshot[js].sum(axis=1)
