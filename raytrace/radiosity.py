@@ -98,14 +98,18 @@ def split_triangles(corners: np.ndarray) -> np.ndarray:
                      ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))], axis=1).reshape(-1, 3, 3)
 
 
-def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL) -> PatchMesh:
-    """Subdivide the scene's triangles (see the module docstring); `level` >= 0."""
+def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | None = None
+                 ) -> PatchMesh:
+    """Subdivide the scene's triangles (see the module docstring); `level` >= 0, or, given,
+    `max_edge` (scene units, > 0) the longest edge allowed instead of longest / 2^level."""
     if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0:
         raise ValueError(f"level must be a whole number >= 0, got {level!r}")
     vertices, faces, ids = scene.triangles()
     corners = vertices[faces]
     edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
-    target = edges.max() / 2.0 ** level
+    target = edges.max() / 2.0 ** level if max_edge is None else float(max_edge)
+    if not target > 0.0:
+        raise ValueError(f"max_edge must be > 0, got {max_edge!r}")
     splits = np.ceil(np.log2(np.maximum(edges / target, 1.0)) - 1e-9).astype(int)
     if splits.max() > MAX_SUBDIVISION:
         raise ValueError(f"level {level} would split a triangle 4^{splits.max()} ways")

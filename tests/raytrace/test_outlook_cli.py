@@ -133,3 +133,15 @@ def test_ladder_bleeds_colour_only_in_the_global_rungs():
         assert redness(images[rung], left) / redness(images[rung], right) > 1.15, rung
     picture = ladder.picture(images, ladder.emitter_colour(scene), "cornell")
     assert picture.dtype == np.uint8 and picture.shape[1] > 5 * 32
+
+
+def test_the_outlook_modules_import_no_gl():
+    import subprocess
+    import sys
+
+    code = ("import sys, raytrace.pathtrace, raytrace.radiosity, raytrace.direct, "
+            "raytrace.ladder, raytrace.cli_outlook, shadowvol.demo; "
+            "bad = [m for m in sys.modules if m.split('.')[0] in ('moderngl', 'OpenGL', 'glcontext')]; "
+            "print(bad); sys.exit(1 if bad else 0)")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -176,3 +176,14 @@ def test_path_tracing_and_radiosity_agree_on_the_diffuse_cornell_box():
 def test_bad_level_is_refused(level):
     with pytest.raises(ValueError, match="level"):
         radiosity.mesh_patches(cornell(8), level)
+
+
+def test_max_edge_meshes_to_a_size():
+    scene = cornell(8)
+    coarse = radiosity.mesh_patches(scene, max_edge=200.0)
+    fine = radiosity.mesh_patches(scene, max_edge=100.0)
+    c = fine.vertices[fine.faces]
+    assert np.linalg.norm(c - np.roll(c, 1, axis=1), axis=2).max() <= 100.0
+    assert 3 * coarse.triangles < fine.triangles
+    with pytest.raises(ValueError, match="max_edge"):
+        radiosity.mesh_patches(scene, max_edge=0.0)
