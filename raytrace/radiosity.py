@@ -54,6 +54,11 @@ DEFAULT_RAYS_PER_PATCH = 256
 DEFAULT_TOL = 1e-4  # unshot power / emitted power at which shooting stops
 MAX_SUBDIVISION = 12  # 4^12 children per triangle is already absurd: a guard against bad input
 RAY_CHUNK = 1 << 20  # form-factor rays traced per call (bounds memory)
+# Interpolated display: patch corners are the same vertex when their positions agree to this
+# fraction of the largest coordinate (midpoint subdivision computes shared corners identically,
+# up to rounding) and their face normals to this much per component.
+WELD_RELATIVE = 1e-7
+NORMAL_QUANTUM = 1e-4
 
 
 @dataclass(frozen=True, eq=False)
@@ -240,8 +245,8 @@ def vertex_radiance(mesh: PatchMesh, radiance: np.ndarray) -> np.ndarray:
     orientation (so that light never leaks round an edge onto another wall)."""
     T = mesh.triangles
     scale = max(float(np.abs(mesh.vertices).max()), 1e-300)
-    pos = np.round(mesh.vertices[mesh.faces] / scale * 1e7).astype(np.int64)  # (T, 3, 3)
-    nrm = np.round(mesh.normal * 1e4).astype(np.int64)
+    pos = np.round(mesh.vertices[mesh.faces] / (scale * WELD_RELATIVE)).astype(np.int64)
+    nrm = np.round(mesh.normal / NORMAL_QUANTUM).astype(np.int64)
     key = np.concatenate([
         np.concatenate([pos, np.broadcast_to(nrm[:, None], (T, 3, 3)),
                         np.broadcast_to(mesh.tri_object[:, None, None], (T, 3, 1))], axis=2),
