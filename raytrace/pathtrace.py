@@ -216,7 +216,7 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
         rays += len(o)
         hit = tri >= 0
         seen = ~hit & count_emission
-        _add(L, path[seen], beta[seen] * background)
+        L[path[seen]] += beta[seen] * background  # a path's index occurs once per bounce
         h = np.flatnonzero(hit)
         if len(h) == 0:
             break
@@ -228,16 +228,16 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
         n = np.where(entering[:, None], geo_n, -geo_n)  # faces the ray's origin
         wo = -d
         e = np.flatnonzero(count_emission)
-        _add(L, path[e], beta[e] * world.emission[obj[e]])
+        L[path[e]] += beta[e] * world.emission[obj[e]]
         e = np.flatnonzero(~count_emission & (world.light_pdf_area[tri] > 0.0))
         if len(e):  # an emitter found by BSDF sampling: its MIS share
             cos_y = np.abs(dot(geo_n[e], d[e]))
             p_light = world.light_pdf_area[tri[e]] * t[e] ** 2 / np.maximum(cos_y, 1e-300)
             w = bsdf_pdf[e] / (bsdf_pdf[e] + p_light)
-            _add(L, path[e], beta[e] * world.emission[obj[e]] * w[:, None])
+            L[path[e]] += beta[e] * world.emission[obj[e]] * w[:, None]
         direct, shadow = next_event(world, rng, p, n, wo, obj, beta, mis=bounce < max_depth)
         rays += shadow
-        _add(L, path, direct)
+        L[path] += direct
         if bounce == max_depth:
             break
         k = len(p)
