@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import struct
 import sys
 import tempfile
 from pathlib import Path
@@ -30,6 +31,9 @@ def encode_srgb(linear: np.ndarray) -> np.ndarray:
 
 class WriteError(OSError):
     """A file could not be written; the message names the path the caller gave."""
+
+    def __str__(self) -> str:
+        return self.strerror  # without OSError's "[Errno N]" prefix
 
 
 STDOUT = "-"
@@ -62,6 +66,9 @@ def atomic_write(path: str | Path):
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    except FileExistsError as exc:  # a file where a folder of the path should be
+        raise WriteError(exc.errno, f"{shown}: cannot write: {exc.filename} is not a "
+                                    "folder") from None
     except OSError as exc:
         raise WriteError(exc.errno, f"{shown}: cannot write: {exc.strerror}") from None
     try:
@@ -140,3 +147,40 @@ def load_masks(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """Read a mask file (never unpickles: allow_pickle=False)."""
     with np.load(path, allow_pickle=False) as data:
         return data["lit"], data["coverage"]
+
+
+def exr_bytes(image: np.ndarray) -> bytes:
+    """An OpenEXR file of an (H, W, 3) float linear RGB image: scanline, uncompressed, 32-bit
+    float channels B, G, R (EXR lists channels alphabetically), row 0 at the top."""
+    arr = np.asarray(image, dtype="<f4")
+    if arr.ndim != 3 or arr.shape[2] != 3:
+        raise ValueError(f"exr_bytes wants an (H, W, 3) image, got shape {arr.shape}")
+    h, w = arr.shape[:2]
+
+    def attr(name: str, kind: str, value: bytes) -> bytes:
+        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(value)) + value
+
+    channels = b"".join(c.encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for c in "BGR")
+    window = struct.pack("<iiii", 0, 0, w - 1, h - 1)
+    header = (struct.pack("<ii", 20000630, 2)
+              + attr("channels", "chlist", channels + b"\0")
+              + attr("compression", "compression", b"\0")
+              + attr("dataWindow", "box2i", window)
+              + attr("displayWindow", "box2i", window)
+              + attr("lineOrder", "lineOrder", b"\0")
+              + attr("pixelAspectRatio", "float", struct.pack("<f", 1.0))
+              + attr("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0))
+              + attr("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
+    line_bytes = 3 * 4 * w
+    first = len(header) + 8 * h
+    offsets = struct.pack(f"<{h}Q", *(first + y * (8 + line_bytes) for y in range(h)))
+    planar = np.ascontiguousarray(arr[:, :, ::-1].transpose(0, 2, 1))  # (H, B|G|R, W)
+    lines = b"".join(struct.pack("<ii", y, line_bytes) + planar[y].tobytes() for y in range(h))
+    return header + offsets + lines
+
+
+def save_exr(path: str | Path, image: np.ndarray) -> None:
+    """Write an (H, W, 3) float linear RGB image as OpenEXR (see `exr_bytes`), atomically."""
+    data = exr_bytes(image)
+    with atomic_write(path) as f:
+        f.write(data)

@@ -15,7 +15,7 @@ from pathlib import Path
 from shadowvol.scene import SceneError
 
 SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".png",
-            "json": ".json", "picture": ".png"}
+            "json": ".json", "picture": ".png", "exr": ".exr", "flat": ".png"}
 
 
 def check(outputs: dict[str, Path], flags: dict[str, str] | None = None) -> None:
