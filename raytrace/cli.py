@@ -5,6 +5,8 @@
     raytrace masks  scenes/whitted.toml -o whitted-masks.npz      (+ whitted-masks.png)
     raytrace masks  scenes/whitted.toml -o truth.npz --outputs depth,normal,object_id,casters
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
+    raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png
+    raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png
 
 Outputs are written atomically (shadowvol.io): an error never leaves half a file behind.
 A bad scene prints `error: <file>: <key>: <problem>`; the exit statuses are shadowvol's
@@ -26,6 +28,7 @@ from shadowvol.pictures import ground_truth_picture, masks_image
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
+from . import cli_outlook
 from .backends import BACKENDS
 from .groundtruth import check_outputs, ground_truth
 from .masks import shadow_masks
@@ -54,13 +57,13 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="reflection/refraction generations; 0 = direct lighting only, as the "
                         "rasterizer draws it (default: the scene's render.max_depth)")
-    r.add_argument("--exr", metavar="EXR", default=None,
-                   help="also write the image as linear OpenEXR (32-bit float RGB)")
     r.add_argument("--png16", metavar="PNG", default=None,
                    help="also write the image as a 16-bit sRGB PNG")
     _backend(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
+    cli_outlook.add_options(r)
+    cli_outlook.add_parsers(sub)
 
     m = sub.add_parser("masks", help="reference shadow masks (lit per light, coverage)",
                        description="Trace the reference shadow masks of SCENE on its triangles "
@@ -106,7 +109,6 @@ def _backend(p: argparse.ArgumentParser) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    status.on_sigterm()
     try:
         args = _parser().parse_args(argv)
     except KeyboardInterrupt as exc:
@@ -115,6 +117,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _render(args) -> int:
+    if args.integrator == "path":
+        return cli_outlook.path_traced(args)
     paths = {"image": Path(args.output)}
     for kind in ("exr", "png16"):
         if getattr(args, kind):
@@ -179,7 +183,8 @@ def _tree(args) -> int:
     return status.OK
 
 
-COMMANDS = {"render": _render, "masks": _masks, "tree": _tree}
+COMMANDS = {"render": _render, "masks": _masks, "tree": _tree,
+            "radiosity": cli_outlook.radiosity_command}
 
 
 if __name__ == "__main__":
