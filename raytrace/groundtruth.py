@@ -153,7 +153,10 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
              "facing": lambda: np.zeros((L, H * W), bool),
              "casters": lambda: np.zeros((L, H * W), np.uint64)}
     out = {name: blank[name]() for name in outputs}
-    _, _, ids = scene.triangles()
+    vertices, faces, ids = scene.triangles()
+    # the output normals: world-space (b − a) × (c − a), normalised in float64 (CONVENTIONS),
+    # not the frame's (the same up to rounding, and the same sign: `hit.side` turns either)
+    world_normals = face_normals(vertices[faces]) if "normal" in out else None
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
                                  target=scene.camera.target - origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
@@ -175,7 +178,7 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
             view = np.take(grids[1].directions(rows), index, axis=1)
             out["distance"][pixel] = hit.depth * np.sqrt((view * view).sum(axis=0))
         if "normal" in out:
-            out["normal"][pixel] = (hit.normal * hit.side).T
+            out["normal"][pixel] = world_normals[hit.tri] * hit.side[:, None]
         if "object_id" in out:
             out["object_id"][pixel] = ids[hit.tri] + 1
         for i, light in enumerate(lights):
@@ -207,6 +210,14 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
               "facing": (L, H, W), "casters": (L, H, W)}
     return GroundTruth(lit.reshape(L, H, W), coverage.reshape(H, W), calibration(scene),
                        **{name: value.reshape(shapes[name]) for name, value in out.items()})
+
+
+def face_normals(corners: np.ndarray) -> np.ndarray:
+    """(M, 3) float64 unit normals (b − a) × (c − a) of world-space corners (M, 3, 3) (zero
+    for a degenerate triangle)."""
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
 
 
 def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarray,
