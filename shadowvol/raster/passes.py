@@ -1,10 +1,17 @@
-"""The passes of a shadowed frame, in order:
+"""The passes of a shadowed frame (deferred: the scene's triangles are drawn once), in order:
 
-1. `depth_ambient`: depth (test LESS, writes on) and the ambient term ka * ambient.
+1. `geometry_pass`: one indexed draw of every triangle: depth (test NEARER, writes on), the
+   ambient term ka * ambient, the coverage bit and the G-buffer (world position, triangle).
 2. per light: `count_volumes` — the stencil cleared, then the shadow volumes drawn with colour
    and depth writes off and two-sided stencil counting, z-pass or z-fail per caster;
-   `add_light` — the light's Phong term added where the stencil is 0 (depth test EQUAL, additive
-   blending), and its lit mask written.
+   `shade_light` — a full-screen pass adding the light's Phong term where the stencil is 0
+   (additive blending) and its lit bit.
+3. `encode_srgb`, when the 8-bit image is asked for.
+
+The forward passes (`depth_ambient`, then per light `add_light` over the soup with depth test
+EQUAL) remain for the planar shadows.  Both compute the same numbers: the same depths (same
+vertex shader, invariant, same vertices in the same order) and the same lighting expressions
+on the same float32 inputs (phong.frag, with or without DEFERRED).
 
 Depth is reversed (camera.NEARER is ">").  The depth test of the volume passes is "strictly
 nearer", so that a volume face exactly at the surface's depth counts as behind it (z-fail near
@@ -27,17 +34,51 @@ NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)
 
 
 class ScenePrograms:
-    """The programs that draw the scene's own triangles (ambient, Phong).  Call `release()`."""
+    """The programs that draw the scene's own triangles: the geometry pass and the deferred
+    lighting and sRGB passes; the forward ambient and Phong passes over the soup (planar
+    shadows) on first use.  Call `release()`."""
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
-        self.geometry = geometry
-        self.ambient = glsl.program(ctx, "scene.vert", "ambient.frag")
-        self.phong = glsl.program(ctx, "scene.vert", "phong.frag")
-        self.ambient_vao = ctx.vertex_array(self.ambient, geometry.soup_bindings(self.ambient))
-        self.phong_vao = ctx.vertex_array(self.phong, geometry.soup_bindings(self.phong))
+        self.ctx, self.geometry = ctx, geometry
+        self.gbuffer = glsl.program(ctx, "scene.vert", "gbuffer.frag")
+        self.gbuffer_vao = ctx.vertex_array(self.gbuffer, geometry.mesh_bindings(self.gbuffer),
+                                            index_buffer=geometry.mesh_indices,
+                                            index_element_size=4)
+        self.shade = glsl.program(ctx, "fullscreen.vert", "phong.frag",
+                                  defines={"DEFERRED": 1})
+        self.shade_vao = ctx.vertex_array(self.shade, [])
+        self.srgb = glsl.program(ctx, "fullscreen.vert", "srgb.frag")
+        self.srgb_vao = ctx.vertex_array(self.srgb, [])
+        self._forward = None
+
+    def _forward_programs(self):
+        if self._forward is None:
+            ambient = glsl.program(self.ctx, "scene.vert", "ambient.frag")
+            phong = glsl.program(self.ctx, "scene.vert", "phong.frag")
+            self._forward = (ambient, phong,
+                             self.ctx.vertex_array(ambient, self.geometry.soup_bindings(ambient)),
+                             self.ctx.vertex_array(phong, self.geometry.soup_bindings(phong)))
+        return self._forward
+
+    @property
+    def ambient(self) -> moderngl.Program:
+        return self._forward_programs()[0]
+
+    @property
+    def phong(self) -> moderngl.Program:
+        return self._forward_programs()[1]
+
+    @property
+    def ambient_vao(self) -> moderngl.VertexArray:
+        return self._forward_programs()[2]
+
+    @property
+    def phong_vao(self) -> moderngl.VertexArray:
+        return self._forward_programs()[3]
 
     def release(self) -> None:
-        for obj in (self.ambient_vao, self.phong_vao, self.ambient, self.phong):
+        for obj in (self.gbuffer_vao, self.shade_vao, self.srgb_vao, self.gbuffer, self.shade,
+                    self.srgb, *(self._forward or ())):
             obj.release()
 
 
@@ -45,6 +86,58 @@ def set_camera(programs, view_proj: np.ndarray, camera: Camera) -> None:
     for p in programs:
         set_uniform(p, "u_view_proj", gl_matrix(view_proj))
         set_uniform(p, "u_eye", tuple(float(x) for x in camera.eye))
+
+
+def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
+                  scene: Scene) -> None:
+    """Clear everything, then one indexed draw of all triangles: depth, ambient, coverage and
+    the G-buffer."""
+    target.clear(scene.background)
+    target.use_gbuffer()
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = NEARER
+    ctx.front_face = "ccw"
+    set_uniform(progs.gbuffer, "u_ambient", tuple(float(x) for x in scene.ambient))
+    progs.geometry.materials.use(0)
+    set_uniform(progs.gbuffer, "u_materials", 0)
+    progs.gbuffer_vao.render(moderngl.TRIANGLES)
+    target.use()
+
+
+def shade_light(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
+                light: Light, bit: int) -> None:
+    """Add `light`'s Phong term where the stencil count is 0, and 2^bit to the bits
+    attachment there (a full-screen pass over the G-buffer; no depth test: every pixel's
+    surface is the geometry pass's)."""
+    target.use(colour=True, depth=False)
+    ctx.enable_only(moderngl.BLEND)
+    ctx.blend_func = moderngl.ONE, moderngl.ONE
+    ctx.blend_equation = moderngl.FUNC_ADD
+    prog = progs.shade
+    light_uniforms(prog, light)
+    set_uniform(prog, "u_bit", float(2 ** bit))
+    progs.geometry.materials.use(0)
+    target.position.use(1)
+    target.surface.use(2)
+    set_uniform(prog, "u_materials", 0)
+    set_uniform(prog, "u_position", 1)
+    set_uniform(prog, "u_surface", 2)
+    progs.geometry.triangle_data.bind_to_storage_buffer(0)
+    with stencil.where_unshadowed(gl):
+        progs.shade_vao.render(moderngl.TRIANGLES, vertices=3)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = NEARER
+
+
+def encode_srgb(ctx: moderngl.Context, target: Target, progs: ScenePrograms) -> None:
+    """The colour attachment encoded to 8-bit sRGB into `target.srgb`, rows flipped."""
+    target.srgb_fbo.use()
+    ctx.enable_only(moderngl.NOTHING)
+    target.colour.use(0)
+    set_uniform(progs.srgb, "u_colour", 0)
+    progs.srgb_vao.render(moderngl.TRIANGLES, vertices=3)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    target.use()
 
 
 def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
