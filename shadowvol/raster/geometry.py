@@ -22,7 +22,10 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
+from shadowvol.errors import RenderError
 from shadowvol.raster.topology import Topology
+
+MAX_TRIANGLES = 2 ** 24  # the G-buffer's surface key is a float32 integer (target.py)
 from shadowvol.scene import Scene
 
 
@@ -55,6 +58,9 @@ class SceneGeometry:
         self.ranges = tuple(ObjectRange(i, int(f), int(c))
                             for i, (f, c) in enumerate(zip(firsts, counts)))
         self.triangle_count = int(sum(counts))
+        if self.triangle_count >= MAX_TRIANGLES:
+            raise RenderError(f"{self.triangle_count:,} triangles: the rasterizer keys each "
+                              f"pixel's triangle by a float32, at most {MAX_TRIANGLES - 1:,}")
         self.topologies = tuple(Topology.build(o.vertices, o.faces) for o in scene.objects)
         self.bounds = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)]
                                 for o in scene.objects])

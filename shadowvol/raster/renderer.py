@@ -79,6 +79,12 @@ class Renderer:
         self._owned = []
         self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
         self._count_bound: int | None = None
+        self._outward_convex: np.ndarray | None = None
+        # back-face culling in the geometry pass for closed convex casters beyond the near
+        # plane (`methods.cullable`): 14-22% of a frame here, but OFF by default because it is
+        # not exact at float32 depth ties: where a silhouette's back face won the depth test by
+        # rounding, the front face shows instead (one pixel of scenes/whitted.toml)
+        self.cull_back_faces = False
         # the stencil-overflow check (see `overflow`): on by default; it costs one more volume
         # pass per light, and only in scenes whose bound allows a count of 256
         self.check_overflow = True
@@ -139,6 +145,15 @@ class Renderer:
             return result
 
     @property
+    def outward_convex(self) -> np.ndarray:
+        """(n_objects,) bool: closed convex meshes wound outward (`overflow.
+        convex_orientation`), whose back faces `methods.cullable` may cull."""
+        if self._outward_convex is None:
+            self._outward_convex = np.array(
+                [overflow.convex_orientation(t) == 1 for t in self.geometry.topologies], bool)
+        return self._outward_convex
+
+    @property
     def count_bound(self) -> int:
         """`overflow.count_bound` of the scene: below 256 no stencil count can wrap."""
         if self._count_bound is None:
@@ -153,48 +168,48 @@ class Renderer:
         vols = self.volumes(silhouettes)
         progs, target = self.programs, self.target
         view_proj = view_projection(camera, self.scene.aspect)
-        passes.set_camera((progs.gbuffer, progs.shade, *vols.programs), view_proj, camera)
-        passes.geometry_pass(self.ctx, target, progs, self.scene)
+        passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
+        cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
+                                self.geometry.extent) if self.cull_back_faces else None
+        passes.geometry_pass(self.ctx, target, progs, cull)
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(
             self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
-        # the lit bits come back one page of lights at a time (one read for up to 23 lights);
-        # coverage is bit 0 of the first page
-        need_bits = "lit" in outputs or ("coverage" in outputs and "image" not in outputs)
+        colour = bool({"image", "image_srgb"} & outputs)
+        need_bits = "lit" in outputs or "coverage" in outputs or not colour
         pages, counts, zfail = [], [], []
-        for i, light in enumerate(lights):
-            light4 = light.homogeneous
-            choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
-                                    light4, self.geometry.extent)
-            if shadows:
-                vols.prepare(light4)
-                # halving is safe only for casters `auto` chose z-pass for, and only when
-                # the counts themselves are not returned (see passes.count_volumes)
-                passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                     halve=method == "auto" and not want_stencil,
-                                     clip_planes=clip)
-            else:
-                target.clear_stencil()
-            if want_stencil:
-                counts.append(target.read_stencil())
-            page, bit = divmod(i, LIGHTS_PER_PAGE)
-            if bit == 0 and page > 0:
+        # lights go in pages of LIGHTS_PER_PAGE: each light's volume count marks its
+        # unshadowed bit, then one shading pass per page (one for any usual frame)
+        for first in range(0, max(len(lights), 1), LIGHTS_PER_PAGE):
+            page_lights = lights[first:first + LIGHTS_PER_PAGE]
+            if first:
+                target.clear_unshadowed()
                 target.clear_lit()
-            passes.shade_light(self.ctx, self.gl, target, progs, light, bit + 1)
-            if need_bits and (bit == LIGHTS_PER_PAGE - 1 or i == len(lights) - 1):
+            for bit, light in enumerate(page_lights):
+                light4 = light.homogeneous
+                choice = methods.choose(method, self.geometry.bounds, camera,
+                                        self.scene.aspect, light4, self.geometry.extent)
+                if shadows:
+                    vols.prepare(light4)
+                    # halving is safe only for casters `auto` chose z-pass for, and only when
+                    # the counts themselves are not returned (see passes.count_volumes)
+                    passes.count_volumes(self.ctx, self.gl, target, vols, choice,
+                                         halve=method == "auto" and not want_stencil,
+                                         clip_planes=clip)
+                else:
+                    target.clear_stencil()
+                if want_stencil:
+                    counts.append(target.read_stencil())
+                passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit)
+                zfail.append(choice)
+            passes.shade(self.ctx, target, progs, self.scene, camera, page_lights,
+                         first_page=not first, colour=colour)
+            if need_bits:
                 pages.append(target.read_bits())
-            zfail.append(choice)
-        if need_bits and not pages:
-            pages.append(target.read_bits())   # no lights: the coverage bit only
         h, w = self.scene.height, self.scene.width
         image = target.read_image() if "image" in outputs else None
-        coverage = None
-        if "coverage" in outputs:
-            # the colour's alpha is 1 exactly where the bits' coverage bit is set
-            coverage = (pages[0] & 1).astype(bool) if pages else None
-            if coverage is None:
-                coverage = target.read_colour()[..., 3] > 0.5
+        coverage = (pages[0] & 1).astype(bool) if "coverage" in outputs else None
         lit = None
         if "lit" in outputs:
             lit = np.empty((len(lights), h, w), bool)
