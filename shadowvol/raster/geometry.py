@@ -1,9 +1,15 @@
 """The scene's geometry on the GPU, uploaded once per scene.
 
-All objects become one triangle soup (three vertices per triangle, objects one after another) so
-that every per-triangle value can be a flat vertex attribute: the face normal, the first corner
-(for the triangle's n . l sign) and the object index (the row of the material texture).  The
-depth pass, the lighting pass and the z-fail near caps all draw from these buffers.
+All objects become one indexed mesh (their vertices one after another, each carrying its object
+index, and one index buffer of every triangle in the scene's order), drawn by the geometry pass
+in ONE indexed draw; `gl_PrimitiveID` of that draw is the triangle's index in the scene, the key
+of the per-triangle storage buffer (face normal, first corner, object index) that the deferred
+lighting pass reads.  The CPU z-fail caps draw subsets of the same index buffer's triangles, with
+the same vertices in the same order, so their depths equal the geometry pass's bit for bit.
+
+The soup (three vertices per triangle, every per-triangle value a flat vertex attribute) is kept
+for the passes that draw per-vertex triangle data: GPU caps and the planar shadows.  It is built
+on first use.
 
 float32 is used on the GPU because that is what GL rasterizes; normals and corners are computed
 in float64 and rounded once.  Edge topology (CPU, float64) is computed here too, once per object.
@@ -16,7 +22,10 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
+from shadowvol.errors import RenderError
 from shadowvol.raster.topology import Topology
+
+MAX_TRIANGLES = 2 ** 24  # the G-buffer's surface key is a float32 integer (target.py)
 from shadowvol.scene import Scene
 
 
@@ -49,16 +58,33 @@ class SceneGeometry:
         self.ranges = tuple(ObjectRange(i, int(f), int(c))
                             for i, (f, c) in enumerate(zip(firsts, counts)))
         self.triangle_count = int(sum(counts))
-        object_ids = np.repeat(np.arange(len(tris), dtype=np.int32), np.array(counts) * 3)
+        if self.triangle_count >= MAX_TRIANGLES:
+            raise RenderError(f"{self.triangle_count:,} triangles: the rasterizer keys each "
+                              f"pixel's triangle by a float32, at most {MAX_TRIANGLES - 1:,}")
         self.topologies = tuple(Topology.build(o.vertices, o.faces) for o in scene.objects)
         self.bounds = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)]
                                 for o in scene.objects])
         self.extent = scene.extent  # a property of the scene that walks every vertex: once
         self._buffers = []
-        self.positions = self._buffer(corners.reshape(-1, 3).astype(np.float32))
-        self.normals = self._buffer(np.repeat(normals, 3, axis=0).astype(np.float32))
-        self.corners = self._buffer(np.repeat(corners[:, 0], 3, axis=0).astype(np.float32))
-        self.objects = self._buffer(object_ids)
+        self._normals = normals
+        self._soup = None
+        # the indexed mesh: float32 vertices (the soup's corners exactly: the same float64
+        # values rounded once) and int32 indices, objects one after another
+        firsts_v = np.concatenate([[0], np.cumsum([len(o.vertices) for o in scene.objects])])
+        self.mesh_positions = self._buffer(
+            np.concatenate([o.vertices for o in scene.objects]).astype(np.float32))
+        self.mesh_objects = self._buffer(np.repeat(
+            np.arange(len(tris), dtype=np.int32), np.diff(firsts_v)))
+        self.faces = np.concatenate([o.faces + f for o, f in zip(scene.objects, firsts_v)]
+                                    ).astype(np.int32)                        # (M, 3)
+        self.mesh_indices = self._buffer(self.faces)
+        # per triangle, std430 vec4 pairs: (unit normal, object index), (first corner, 0);
+        # float32 as the soup's flat attributes were, so the lighting pass sees the same numbers
+        per_triangle = np.zeros((self.triangle_count, 2, 4), np.float32)
+        per_triangle[:, 0, :3] = normals
+        per_triangle[:, 0, 3] = np.repeat(np.arange(len(tris)), counts)
+        per_triangle[:, 1, :3] = corners[:, 0]
+        self.triangle_data = self._buffer(per_triangle)
         materials = np.zeros((len(scene.objects), 3, 4), np.float32)
         for i, o in enumerate(scene.objects):
             m = o.material
@@ -72,15 +98,38 @@ class SceneGeometry:
         self._buffers.append(buf)
         return buf
 
+    def mesh_bindings(self, program: moderngl.Program) -> list[tuple]:
+        """The (buffer, format, name) triples of the indexed mesh's attributes that `program`
+        uses (position and object index; per-triangle values come from `triangle_data`)."""
+        all_ = [(self.mesh_positions, "3f", "in_position"), (self.mesh_objects, "1i", "in_object")]
+        return [b for b in all_ if b[2] in program]
+
+    def _soup_buffers(self) -> dict:
+        if self._soup is None:
+            corners = self._corners
+            object_ids = np.repeat(np.arange(len(self.ranges), dtype=np.int32),
+                                   [3 * r.count for r in self.ranges])
+            self._soup = {
+                "in_position": self._buffer(corners.reshape(-1, 3).astype(np.float32)),
+                "in_normal": self._buffer(np.repeat(self._normals, 3, axis=0).astype(np.float32)),
+                "in_corner": self._buffer(np.repeat(corners[:, 0], 3, axis=0).astype(np.float32)),
+                "in_object": self._buffer(object_ids)}
+        return self._soup
+
+    @property
+    def positions(self) -> moderngl.Buffer:
+        """The soup's vertex positions (float32, three per triangle)."""
+        return self._soup_buffers()["in_position"]
+
     def soup_corners(self) -> np.ndarray:
         """(M, 3, 3) float32: the corners of every soup triangle, exactly as uploaded."""
         return self._corners.astype(np.float32)
 
     def soup_bindings(self, program: moderngl.Program) -> list[tuple]:
         """The (buffer, format, name) triples of the soup's attributes that `program` uses."""
-        all_ = [(self.positions, "3f", "in_position"), (self.normals, "3f", "in_normal"),
-                (self.corners, "3f", "in_corner"), (self.objects, "1i", "in_object")]
-        return [b for b in all_ if b[2] in program]
+        soup = self._soup_buffers()
+        formats = {"in_position": "3f", "in_normal": "3f", "in_corner": "3f", "in_object": "1i"}
+        return [(soup[name], fmt, name) for name, fmt in formats.items() if name in program]
 
     def release(self) -> None:
         for buf in self._buffers:

@@ -59,6 +59,9 @@ def near_clip_planes(camera: Camera, aspect: float, light4: np.ndarray) -> np.nd
     return np.array(planes)
 
 
+CULL_NEAR_MARGIN = 1e-6  # of the scene's extent: a box touching the near plane is not culled
+
+
 def needs_zfail(bounds: np.ndarray, camera: Camera, aspect: float, light4: np.ndarray,
                 extent: float) -> np.ndarray:
     """(n,) bool: True for every caster whose volume the near plane may cut.
@@ -121,3 +124,27 @@ def zpass_clip_planes(bounds: np.ndarray, camera: Camera, aspect: float,
         planes[2 * axis, axis], planes[2 * axis, 3] = 1.0, -lo[axis]         # x >= lo
         planes[2 * axis + 1, axis], planes[2 * axis + 1, 3] = -1.0, hi[axis]  # x <= hi
     return planes
+
+
+def cullable(bounds: np.ndarray, outward_convex: np.ndarray, camera: Camera,
+             extent: float) -> np.ndarray:
+    """(n,) bool: objects whose back faces the geometry pass may cull without changing what is
+    visible: closed convex meshes wound outward (`overflow.convex_orientation` +1) whose whole
+    box lies beyond the near plane (by CULL_NEAR_MARGIN * extent), so the eye is outside the
+    body and no view ray starts inside it.  A view ray from outside a convex body meets it
+    first through a front face; the back faces it meets later lie behind that front face, so
+    in exact arithmetic the depth test rejects them.  In float32 it is not exact: near a
+    silhouette edge a back face's depth can round nearer than the front face's, win, and show
+    its own normal; culled, the front face shows there instead (one pixel of
+    scenes/whitted.toml, lit instead of unlit).  Hence `Renderer.cull_back_faces` is off by
+    default.
+
+    bounds : (n, 2, 3) float64 boxes; outward_convex : (n,) bool."""
+    forward = camera.target - camera.eye
+    forward = forward / np.linalg.norm(forward)
+    pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    corners = np.stack([bounds[:, pick[:, 0], 0], bounds[:, pick[:, 1], 1],
+                        bounds[:, pick[:, 2], 2]], axis=-1)                  # (n, 8, 3)
+    depth = (corners - camera.eye) @ forward                                # (n, 8)
+    beyond = (depth > camera.near + CULL_NEAR_MARGIN * extent).all(axis=1)
+    return outward_convex & beyond

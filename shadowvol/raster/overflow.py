@@ -57,9 +57,10 @@ class StencilOverflowError(RenderError):
             f"the light avoid it")
 
 
-def is_closed_convex(topo: Topology) -> bool:
-    """True when the welded mesh bounds one convex body, so that a segment crosses it at most
-    twice.  Tested in numpy on its topology:
+def convex_orientation(topo: Topology) -> int:
+    """+1 when the welded mesh bounds one convex body (so that a segment crosses it at most
+    twice) and its triangles are wound with normals pointing out of it, -1 when into it, 0 when
+    it is not such a mesh.  Tested in numpy on its topology:
 
     - closed and consistently wound: every edge has exactly two triangles, running it in
       opposite directions, and no triangle is degenerate;
@@ -71,12 +72,12 @@ def is_closed_convex(topo: Topology) -> bool:
       and a connected, closed, locally convex surface bounds a convex body."""
     faces = topo.faces
     if len(faces) < 4 or np.any(topo.triangles_per_edge != 2):
-        return False
+        return 0
     winding = np.bincount(topo.inc_edge, weights=topo.inc_parity, minlength=len(topo.edges))
     if np.any(winding != 0):
-        return False
+        return 0
     if len(topo.vertices) - len(topo.edges) + len(faces) != 2:
-        return False
+        return 0
     normals, origins = topo.face_frames
     # incidences are sorted by edge, two per edge: pair each edge's first triangle with the
     # second triangle's opposite corner
@@ -84,9 +85,20 @@ def is_closed_convex(topo: Topology) -> bool:
     n, towards = normals[first], corner - origins[first]
     scale = np.linalg.norm(n, axis=1) * np.linalg.norm(towards, axis=1)
     if np.any(scale == 0):
-        return False
+        return 0
     side = np.einsum("ij,ij->i", n, towards) / scale
-    return bool(np.all(side <= CONVEX_TOLERANCE) or np.all(side >= -CONVEX_TOLERANCE))
+    # the neighbour's corner below every plane: normals point out of the body (a flat,
+    # double-covered "body", every corner in every plane, is closed and convex but has no
+    # outside: 0 for culling's sake would do, and it keeps its bound of 2 as -1)
+    if np.all(side <= CONVEX_TOLERANCE):
+        return 1 if np.any(side < -CONVEX_TOLERANCE) else -1
+    return -1 if np.all(side >= -CONVEX_TOLERANCE) else 0
+
+
+def is_closed_convex(topo: Topology) -> bool:
+    """True when the welded mesh bounds one convex body, so that a segment crosses it at most
+    twice (`convex_orientation` is not 0)."""
+    return convex_orientation(topo) != 0
 
 
 def topology_bound(topo: Topology) -> int:
