@@ -67,6 +67,10 @@ class SceneGeometry:
         self.extent = scene.extent  # a property of the scene that walks every vertex: once
         self._buffers = []
         self._normals = normals
+        # per triangle: its world-space unit normal (float64) and its object, for the ground
+        # truth's normal and object id (`truth.surface_outputs`)
+        self.face_normals = normals
+        self.triangle_objects = np.repeat(np.arange(len(tris), dtype=np.int64), counts)
         self._soup = None
         # the indexed mesh: float32 vertices (the soup's corners exactly: the same float64
         # values rounded once) and int32 indices, objects one after another

@@ -214,7 +214,8 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
 
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
                   zfail: np.ndarray, halve: bool = False,
-                  clip_planes: np.ndarray | None = None, counting=None) -> None:
+                  clip_planes: np.ndarray | None = None, counting=None,
+                  objects=None) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
     `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
 
@@ -228,7 +229,10 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     `counting(zfail, depth_clamp)` : the stencil state (a context manager from `stencil`) under
     which each group of volume faces is drawn; default: the signed count
     (`stencil.zpass_counting`, `stencil.zfail_counting`).  The stencil-overflow check draws the
-    same faces under `stencil.entering_faces_counting`."""
+    same faces under `stencil.entering_faces_counting`.
+
+    `objects` : the casters to count (default all): the ground truth's per-caster counts
+    (`truth.count_casters`) count one at a time."""
     if counting is None:
         def counting(zfail_group: bool, depth_clamp: bool):
             return (stencil.zfail_counting(gl, depth_clamp=depth_clamp) if zfail_group
@@ -237,8 +241,10 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     target.use(colour=False, depth=False)
     ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count
     ctx.depth_func = NEARER
-    by_zpass = [int(i) for i in np.flatnonzero(~zfail)]
-    by_zfail = [int(i) for i in np.flatnonzero(zfail)]
+    chosen = np.ones(len(zfail), bool) if objects is None else np.isin(
+        np.arange(len(zfail)), list(objects))
+    by_zpass = [int(i) for i in np.flatnonzero(~zfail & chosen)]
+    by_zfail = [int(i) for i in np.flatnonzero(zfail & chosen)]
     if by_zpass and clip_planes is not None:
         for p in volumes.programs:
             set_uniform(p, "u_clip_planes", clip_planes.astype(np.float32).tobytes())

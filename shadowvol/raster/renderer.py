@@ -21,7 +21,8 @@ from dataclasses import dataclass, replace
 import moderngl
 import numpy as np
 
-from shadowvol.raster import methods, overflow, overlay, passes
+from shadowvol.cameras import Calibration, calibration
+from shadowvol.raster import methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import create_context, make_current
 from shadowvol.raster.geometry import SceneGeometry
@@ -39,7 +40,7 @@ from shadowvol.scene import (
 
 SILHOUETTES = ("cpu", "gpu")
 # what `render(outputs=...)` can return; the default is what the frame always returned
-OUTPUTS = ("image", "image_srgb", "lit", "coverage", "stencil")
+OUTPUTS = ("image", "image_srgb", "lit", "coverage", "stencil") + truth.TRUTH_OUTPUTS
 DEFAULT_OUTPUTS = ("image", "lit", "coverage")
 
 
@@ -55,6 +56,9 @@ class RenderResult:
                  (always returned)
     image_srgb : (H, W, 3) uint8, `image` encoded to sRGB on the GPU (the IEC 61966-2-1
                  curve of `shadowvol.io.encode_srgb`, in float32: a code may differ by one)
+    depth, distance, normal, object_id, facing, casters : the ground truth of
+                 docs/CONVENTIONS.md (see `truth`), when asked for
+    calibration : the camera matrices and light arrays of the frame (always)
     """
 
     image: np.ndarray | None
@@ -63,6 +67,30 @@ class RenderResult:
     stencil: np.ndarray | None
     zfail: np.ndarray
     image_srgb: np.ndarray | None = None
+    depth: np.ndarray | None = None
+    distance: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    object_id: np.ndarray | None = None
+    facing: np.ndarray | None = None
+    casters: np.ndarray | None = None
+    calibration: Calibration | None = None
+
+    @property
+    def cast(self) -> np.ndarray:
+        """(L, H, W) bool: cast shadow, facing the light yet not lit (needs facing, lit)."""
+        return self.facing & ~self.lit
+
+    @property
+    def attached(self) -> np.ndarray:
+        """(L, H, W) bool: attached shadow, covered but facing away (needs facing, coverage)."""
+        return self.coverage[None] & ~self.facing
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The ground truth computed and the calibration, by their mask-file names
+        (`shadowvol.io.save_masks`)."""
+        out = {name: getattr(self, name) for name in truth.TRUTH_OUTPUTS
+               if getattr(self, name) is not None}
+        return out | self.calibration.arrays()
 
 
 class Renderer:
@@ -79,6 +107,7 @@ class Renderer:
         self._owned = []
         self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
         self._count_bound: int | None = None
+        self._truth: truth.TruthPass | None = None
         self._outward_convex: np.ndarray | None = None
         # back-face culling in the geometry pass for closed convex casters beyond the near
         # plane (`methods.cullable`): 14-22% of a frame here, but OFF by default because it is
@@ -160,10 +189,21 @@ class Renderer:
             self._count_bound = overflow.count_bound(self.geometry.topologies)
         return self._count_bound
 
+    def _truth_pass(self) -> truth.TruthPass:
+        if self._truth is None:
+            self._truth = self._own(truth.TruthPass(self.ctx, self.scene.width,
+                                                    self.scene.height))
+        return self._truth
+
     def _render(self, method, silhouettes, camera, lights, shadows,
                 outputs: set[str]) -> RenderResult:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else tuple(lights)
+        if "casters" in outputs:
+            truth.check_casters(len(self.scene.objects))
+            outputs = outputs | {"facing"}
+        # facing (and casters) need the facing pass; it gives the lit bits too
+        facing_pass = "facing" in outputs
         want_stencil = "stencil" in outputs
         vols = self.volumes(silhouettes)
         progs, target = self.programs, self.target
@@ -178,7 +218,7 @@ class Renderer:
             self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
         colour = bool({"image", "image_srgb"} & outputs)
         need_bits = "lit" in outputs or "coverage" in outputs or not colour
-        pages, counts, zfail = [], [], []
+        pages, counts, zfail, truth_pages = [], [], [], []
         # lights go in pages of LIGHTS_PER_PAGE: each light's volume count marks its
         # unshadowed bit, then one shading pass per page (one for any usual frame)
         for first in range(0, max(len(lights), 1), LIGHTS_PER_PAGE):
@@ -207,15 +247,21 @@ class Renderer:
                          first_page=not first, colour=colour)
             if need_bits:
                 pages.append(target.read_bits())
+            if facing_pass and page_lights:
+                truth_pages.append(self._truth_pass().run(target, self.geometry, page_lights))
         h, w = self.scene.height, self.scene.width
         image = target.read_image() if "image" in outputs else None
         coverage = (pages[0] & 1).astype(bool) if "coverage" in outputs else None
         lit = None
-        if "lit" in outputs:
+        if "lit" in outputs and not facing_pass:
             lit = np.empty((len(lights), h, w), bool)
             for i in range(len(lights)):
                 page, bit = divmod(i, LIGHTS_PER_PAGE)
                 np.not_equal(pages[page] & np.uint32(1 << (bit + 1)), 0, out=lit[i])
+        extra = self._ground_truth(outputs, camera, lights, truth_pages, zfail, vols,
+                                   method, clip, want_stencil)
+        if facing_pass:
+            lit = extra.pop("lit")
         srgb = None
         if "image_srgb" in outputs:
             passes.encode_srgb(self.ctx, target, progs)
@@ -225,7 +271,53 @@ class Renderer:
             stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if want_stencil
             else None,
             zfail=np.array(zfail, bool).reshape(len(lights), len(self.scene.objects)),
-            image_srgb=srgb)
+            image_srgb=srgb, calibration=calibration(self.scene.replace(
+                camera=camera, lights=lights)), **extra)
+
+    def _ground_truth(self, outputs, camera, lights, truth_pages, zfail, vols, method, clip,
+                      want_stencil) -> dict[str, np.ndarray]:
+        """The ground-truth outputs asked for (and the facing pass's lit, as "lit"), read from
+        the frame left in the target (see `truth`)."""
+        out: dict[str, np.ndarray] = {}
+        want = set(outputs) & set(truth.TRUTH_OUTPUTS)
+        if not want:
+            return out
+        h, w = self.scene.height, self.scene.width
+        if want & {"depth", "distance"}:
+            depth = truth.read_depth(self.target, camera)
+            if "depth" in want:
+                out["depth"] = depth
+            if "distance" in want:
+                out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
+        triangle = front = world = None
+        if want & {"normal", "object_id", "casters"}:
+            triangle, front, world = truth.read_surface(self.target)
+            out |= truth.surface_outputs(self.geometry, triangle, front, want)
+        if "facing" in want:
+            lit = np.zeros((len(lights), h, w), bool)
+            facing = np.zeros((len(lights), h, w), bool)
+            for i in range(len(lights)):
+                page, bit = divmod(i, truth.LIGHTS_PER_PASS)
+                lit_bits, facing_bits = truth_pages[page]
+                np.not_equal(lit_bits & np.uint32(1 << bit), 0, out=lit[i])
+                np.not_equal(facing_bits & np.uint32(1 << bit), 0, out=facing[i])
+            out["lit"], out["facing"] = lit, facing
+        if "casters" in want:
+            casters = np.zeros((len(lights), h, w), np.uint64)
+            for i, light in enumerate(lights):
+                cast = out["facing"][i] & ~out["lit"][i]
+                if not cast.any():
+                    continue
+                light4 = light.homogeneous
+                candidates = truth.caster_candidates(self.geometry.bounds,
+                                                     world[cast].astype(np.float64), light4)
+                vols.prepare(light4)
+                casters[i] = truth.count_casters(
+                    self.ctx, self.gl, self.target, vols, zfail[i], candidates,
+                    out["facing"][i], halve=method == "auto" and not want_stencil,
+                    clip_planes=clip)
+            out["casters"] = casters
+        return out
 
     def volume_view(self, method: str = "auto", silhouettes: str = "cpu", *,
                     camera: Camera | None = None,

@@ -26,6 +26,8 @@ from shadowvol.errors import RenderError
 # GL enums (from the GL 4.5 core headers)
 GL_UNSIGNED_BYTE = 0x1401
 GL_STENCIL_INDEX = 0x1901
+GL_DEPTH_COMPONENT = 0x1902
+GL_FLOAT = 0x1406
 GL_STENCIL = 0x1802
 GL_COLOR = 0x1800
 GL_DEPTH_STENCIL = 0x84F9
@@ -216,6 +218,20 @@ def read_stencil(gl: RawGL, framebuffer_glo: int, width: int, height: int) -> np
                         out.ctypes.data_as(ctypes.c_void_p))
         gl.glPixelStorei(GL_PACK_ALIGNMENT, previous)
     gl.check("reading the stencil buffer")
+    return out
+
+
+def read_depth(gl: RawGL, framebuffer_glo: int, width: int, height: int) -> np.ndarray:
+    """(height, width) float32 depth values, row 0 at the BOTTOM (GL order; the caller flips).
+    The depth attachment is DEPTH32F: the values come back as stored."""
+    out = np.empty((height, width), np.float32)
+    previous = gl.get_int(GL_PACK_ALIGNMENT)
+    with bound_framebuffer(gl, framebuffer_glo):
+        gl.glPixelStorei(GL_PACK_ALIGNMENT, 4)
+        gl.glReadPixels(0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT,
+                        out.ctypes.data_as(ctypes.c_void_p))
+        gl.glPixelStorei(GL_PACK_ALIGNMENT, previous)
+    gl.check("reading the depth buffer")
     return out
 
 
