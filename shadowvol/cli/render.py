@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 
 from shadowvol.cli import outputs, status
-from shadowvol.cameras import calibration
 from shadowvol.io import encode_srgb, save_exr, save_masks, save_png, save_png16
 from shadowvol.pictures import heat_maps
 from shadowvol.raster.context import create_context
@@ -70,6 +69,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "with a legend (0: lit, the image darkened; 1, 2, ... yellow to red to "
                         "violet; negative: blue).  Every triangle casts, so a closed object "
                         "counts 2 behind it (its front and its back)")
+    p.add_argument("--outputs", metavar="LIST", default=None,
+                   help="ground truth to add to the mask file, comma-separated: depth, "
+                        "distance, normal, object_id, facing, casters (or all); see "
+                        "docs/CONVENTIONS.md.  Implies --masks (beside the image unless named)")
     p.add_argument("--exr", metavar="EXR", nargs="?", const=True,
                    help="also write the image as linear OpenEXR (32-bit float RGB); without a "
                         "name, beside the image")
@@ -103,6 +106,9 @@ def plan(args) -> list[dict[str, Path]]:
     """Per scene, where each output goes: {"image": Path, "masks": Path, ...}.  Raises
     SceneError (exit 2) for arguments that do not fit the number of scenes."""
     _take_back_scenes(args)
+    args.truth = outputs.ground_truth(getattr(args, "outputs", None))
+    if args.truth and not args.masks:
+        args.masks = True
     flags = {"image": "-o", **{key: f"--{key}" for key, _ in EXTRAS}}
     if len(args.scene) == 1:
         out = {"image": Path(args.output)}
@@ -169,12 +175,13 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
                                       f"allows ({limit} pixels per side)", scene_path)
         with Renderer(scene, ctx) as renderer:
             result = renderer.render(args.method, args.silhouettes,
-                                     stencil="stencil" in out)
+                                     stencil="stencil" in out,
+                                     outputs=("image", "lit", "coverage") + args.truth)
             volumes = (renderer.volume_view(args.method, args.silhouettes)
                        if "volumes" in out else None)
         save_png(out["image"], result.image)
         if "masks" in out:
-            save_masks(out["masks"], result.lit, result.coverage, calibration(scene).arrays())
+            save_masks(out["masks"], result.lit, result.coverage, result.arrays())
         if "exr" in out:
             save_exr(out["exr"], result.image)
         if "png16" in out:

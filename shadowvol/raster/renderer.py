@@ -199,6 +199,7 @@ class Renderer:
                 outputs: set[str]) -> RenderResult:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else tuple(lights)
+        asked = outputs
         if "casters" in outputs:
             truth.check_casters(len(self.scene.objects))
             outputs = outputs | {"facing"}
@@ -262,6 +263,8 @@ class Renderer:
                                    method, clip, want_stencil)
         if facing_pass:
             lit = extra.pop("lit")
+            if "facing" not in asked:  # computed for casters only
+                extra.pop("facing")
         srgb = None
         if "image_srgb" in outputs:
             passes.encode_srgb(self.ctx, target, progs)

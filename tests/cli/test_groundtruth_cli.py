@@ -111,3 +111,21 @@ def test_readme_synthetic_data_example_runs_from_any_folder(tmp_path):
         <= set(arrays)
     first, second = load_mask_arrays(tmp_path / "view0.npz"), arrays
     assert not np.array_equal(first["world_to_camera"], second["world_to_camera"])
+
+
+@pytest.mark.gl
+def test_shadowvol_render_outputs_go_into_the_mask_file(ctx, small, tmp_path, capsys):
+    from shadowvol.cli.main import main as shadowvol_main
+    from shadowvol.raster.renderer import Renderer
+
+    png = tmp_path / "s.png"
+    assert shadowvol_main(["render", str(small), "-o", str(png), "--outputs",
+                           "casters,normal"]) == 0
+    arrays = load_mask_arrays(tmp_path / "s-masks.npz")
+    assert set(arrays) == {"lit", "coverage", "normal", "casters"} | CALIBRATION
+    with Renderer(load_scene(small), ctx) as r:
+        frame = r.render(outputs=("lit", "coverage", "normal", "casters"))
+    for name in ("lit", "coverage", "normal", "casters"):
+        np.testing.assert_array_equal(arrays[name], getattr(frame, name))
+    assert shadowvol_main(["render", str(small), "-o", str(png), "--outputs", "depth,x"]) == 2
+    assert "unknown output 'x'" in capsys.readouterr().err
