@@ -1,13 +1,15 @@
-"""Benchmark (not a test): what each ground-truth output of the ray tracer costs on a
-100k-triangle frame.
+"""Benchmark (not a test): what each ground-truth output costs on a 100k-triangle frame, in
+both renderers.
 
-    python benchmarks/bench_groundtruth.py [--runs N] [--width W] [--height H] [--lights N]
+    python benchmarks/bench_groundtruth.py [--runs N] [--width W] [--height H]
 
-The scene: the benchmark's `occluder_scene("100k")` (a floor and 20 icospheres, 102,402
-triangles, 21 objects), 1280x720, point lights.  On one prebuilt Embree backend it times
-`raytrace.shadow_masks`, then `raytrace.ground_truth` with no output, each output alone, and all
-of them, as the median of several runs after a warm-up, and prints a markdown table (seconds and
-the ratio to the masks).
+The scene: `occluder_scene("100k")` (a floor and 20 icospheres, 102,402 triangles, 21 objects),
+1280x720, one point light.  The rasterizer: `Renderer.render(outputs=...)` with the frame's own
+outputs (image, lit, coverage) and then each ground-truth output added alone and all of them; the
+ray tracer: `raytrace.shadow_masks` and `raytrace.ground_truth` with each output alone and all,
+on one prebuilt Embree backend.  The variants are interleaved round by round (load slows all
+alike) and each is the median of the rounds after a warm-up.  `run.py` calls `measure` for
+BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -22,48 +24,113 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+OUTPUTS = ("depth", "distance", "normal", "object_id", "facing", "casters")
+FRAME = ("image", "lit", "coverage")
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--runs", type=int, default=3)
-    ap.add_argument("--width", type=int, default=1280)
-    ap.add_argument("--height", type=int, default=720)
-    ap.add_argument("--lights", type=int, default=1)
-    args = ap.parse_args(argv)
 
+def _stats(times: list[float]) -> dict:
+    """Milliseconds: median, min, max of `times` (seconds), and how many."""
+    ms = [t * 1e3 for t in times]
+    return {"median": statistics.median(ms), "min": min(ms), "max": max(ms), "n": len(ms)}
+
+
+def _interleaved(variants: dict, runs: int) -> dict:
+    """{label: stats} of calling each variant once per round, `runs` rounds after a warm-up."""
+    for fn in variants.values():
+        fn()
+    times = {label: [] for label in variants}
+    for _ in range(runs):
+        for label, fn in variants.items():
+            start = time.perf_counter()
+            fn()
+            times[label].append(time.perf_counter() - start)
+    return {label: _stats(t) for label, t in times.items()}
+
+
+def measure(ctx, runs: int = 5, width: int = 1280, height: int = 720,
+            size: str = "100k") -> dict:
+    """Both renderers' costs (see the module) on `occluder_scene(size)` with one point light.
+    ctx: a GL context for the rasterizer."""
+    import numpy as np
     from scenes import occluder_scene
 
     import raytrace
     from raytrace.masks import scene_backend
-    from shadowvol.io import GROUND_TRUTH
+    from shadowvol.raster.renderer import Renderer
 
-    scene = occluder_scene("100k", args.lights, args.width, args.height)
+    scene = occluder_scene(size, 1, width, height)
+    labels = ["frame"] + [f"+ {n}" for n in OUTPUTS] + ["+ all"]
+    extras = [()] + [(n,) for n in OUTPUTS] + [OUTPUTS]
+    with Renderer(scene, ctx) as r:
+        raster = _interleaved({label: (lambda e=e: r.render(outputs=FRAME + e))
+                               for label, e in zip(labels, extras)}, runs)
+        frame = r.render(outputs=FRAME + ("casters",))
+    bits = np.bitwise_or.reduce(frame.casters.reshape(-1))
+    casting = int(sum((int(bits) >> j) & 1 for j in range(64)))
     backend = scene_backend(scene, "embree")
+    rt_variants = {"shadow_masks": lambda: raytrace.shadow_masks(scene, backend)}
+    for label, e in zip(labels[1:], extras[1:]):
+        rt_variants[label] = lambda e=e: raytrace.ground_truth(scene, e, backend)
+    ray = _interleaved(rt_variants, max(2, runs // 2))
+    return {"run": _run_info(),
+            "scene": scene.name, "triangles": sum(len(o.faces) for o in scene.objects),
+            "objects": len(scene.objects), "casting_objects": casting,
+            "width": width, "height": height, "raster": raster, "raytrace": ray}
 
-    def median(fn) -> float:
-        fn()  # warm-up
-        times = []
-        for _ in range(args.runs):
-            start = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - start)
-        return statistics.median(times)
 
-    masks = median(lambda: raytrace.shadow_masks(scene, backend))
-    rows = [("shadow_masks (lit, coverage)", masks)]
-    rows.append(("ground_truth, no output", median(lambda: raytrace.ground_truth(scene, (),
-                                                                               backend))))
-    for name in GROUND_TRUTH:
-        rows.append((f"ground_truth + {name}",
-                     median(lambda: raytrace.ground_truth(scene, [name], backend))))
-    rows.append(("ground_truth, all", median(lambda: raytrace.ground_truth(scene, GROUND_TRUTH,
-                                                                         backend))))
-    triangles = sum(len(o.faces) for o in scene.objects)
-    print(f"{scene.name}: {triangles} triangles, {len(scene.objects)} objects, "
-          f"{len(scene.lights)} light(s), {args.width}x{args.height}, median of {args.runs}\n")
-    print("| call | s | x masks |\n|---|---|---|")
-    for label, t in rows:
-        print(f"| {label} | {t:.3f} | {t / masks:.2f} |")
+def _run_info() -> dict:
+    """When and where: the commit, the UTC time and the load average (1/5/15 min)."""
+    import datetime
+    import os
+    import subprocess
+
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
+                            capture_output=True, text=True).stdout.strip() or "unknown"
+    return {"commit": commit, "date": datetime.datetime.now(datetime.timezone.utc)
+            .strftime("%Y-%m-%d %H:%M UTC"), "load": list(os.getloadavg())}
+
+
+def table(res: dict) -> list[str]:
+    """Markdown lines of a `measure` result."""
+    frame = res["raster"]["frame"]["median"]
+    masks = res["raytrace"]["shadow_masks"]["median"]
+    lines = ["| outputs | raster (ms) | raster, extra / frame | ray tracer (ms) | "
+             "ray tracer / masks |", "|---|---:|---:|---:|---:|"]
+    for label, r in res["raster"].items():
+        rt = res["raytrace"]["shadow_masks" if label == "frame" else label]
+        name = "frame (image, lit, coverage) / masks" if label == "frame" else label
+        lines.append(f"| {name} | {r['median']:.0f} | "
+                     f"{(r['median'] - frame) / frame:+.2f} | {rt['median']:.0f} | "
+                     f"{rt['median'] / masks:.2f} |")
+    return lines
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--width", type=int, default=1280)
+    ap.add_argument("--height", type=int, default=720)
+    ap.add_argument("--into", type=Path, default=None, metavar="RESULTS_JSON",
+                    help="also store the result as the `groundtruth` entry of a run.py "
+                         "results.json (then `run.py --report-only` rewrites the report)")
+    args = ap.parse_args(argv)
+    from shadowvol.raster.context import create_context
+
+    ctx = create_context()
+    try:
+        res = measure(ctx, args.runs, args.width, args.height)
+    finally:
+        ctx.release()
+    print(f"{res['scene']}: {res['triangles']:,} triangles, {res['objects']} objects "
+          f"({res['casting_objects']} casting), one point light, "
+          f"{res['width']}x{res['height']}\n")
+    print("\n".join(table(res)))
+    if args.into is not None:
+        import json
+
+        results = json.loads(args.into.read_text())
+        results["groundtruth"] = res
+        args.into.write_text(json.dumps(results, indent=1, default=str))
     return 0
 
 

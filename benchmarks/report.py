@@ -229,6 +229,37 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
         f"({w['times']['n']} runs after one warm-up).")
     add("")
 
+    if "groundtruth" in results:
+        g = results["groundtruth"]
+        add(f"## Ground truth ({g['triangles']:,} triangles, one point light)")
+        add("")
+        add(f"What each output of docs/CONVENTIONS.md's ground truth adds to a frame of "
+            f"`{g['scene']}` at {g['width']}x{g['height']} ({g['objects']} objects, "
+            f"{g['casting_objects']} of them casting), in each renderer "
+            "(`benchmarks/bench_groundtruth.py`, the variants interleaved round by round): the "
+            "rasterizer's `Renderer.render(outputs=...)` with the frame's image, lit and "
+            "coverage plus that output, and `raytrace.ground_truth` against "
+            "`raytrace.shadow_masks` on one prebuilt Embree backend.  Extra / frame: the "
+            "output's cost in frames.  casters counts each candidate caster's volumes alone "
+            "(one volume pass and one stencil read of the shadow's box each).")
+        if "run" in g:
+            load = " / ".join(f"{x:.2f}" for x in g["run"]["load"])
+            add("")
+            add(f"This table's own run: commit {g['run']['commit']}, {g['run']['date']}, "
+                f"load {load} at its end.")
+        add("")
+        frame = g["raster"]["frame"]["median"]
+        masks = g["raytrace"]["shadow_masks"]["median"]
+        add("| outputs | raster (ms) | raster: extra / frame | ray tracer (ms) | "
+            "ray tracer / masks |")
+        add("|---|---:|---:|---:|---:|")
+        for label, r in g["raster"].items():
+            rt = g["raytrace"]["shadow_masks" if label == "frame" else label]
+            name = "frame (image, lit, coverage); masks" if label == "frame" else label
+            add(f"| {name} | {_ms(r)} | {(r['median'] - frame) / frame:+.2f} | "
+                f"{_ms(rt)} | {rt['median'] / masks:.2f} |")
+        add("")
+
     add("## Memory")
     add("")
     add("tracemalloc peak = Python-heap allocations (Python objects and numpy arrays) during one "

@@ -39,6 +39,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))          # run from a checkout, installed or not
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+import bench_groundtruth  # noqa: E402
 import bench_masks  # noqa: E402
 import frames  # noqa: E402
 import report  # noqa: E402
@@ -56,6 +57,7 @@ FULL = dict(
     pyrender_repeat={"1k": (2, 7), "10k": (2, 7), "100k": (2, 5), "1M": (1, 2)},
     mask_sizes=("100k", "1M"), mask_runs=7, bunny=True,
     whitted_size=(1280, 720), whitted_runs=3,
+    truth_size="100k", truth_runs=7,
 )
 QUICK = dict(
     sizes=("1k",), lights=(1, 2), size=(320, 180),
@@ -64,6 +66,7 @@ QUICK = dict(
     pyrender_sizes=("1k",), pyrender_repeat={"1k": (1, 2)},
     mask_sizes=("1k",), mask_runs=1, bunny=False,
     whitted_size=(160, 90), whitted_runs=1,
+    truth_size="1k", truth_runs=1,
 )
 VARIANTS = [(m, s) for s in frames.SILHOUETTES for m in frames.METHODS]
 
@@ -302,6 +305,11 @@ def main(argv=None) -> int:
         results["maxrss_after_frames_mb"] = maxrss_mb()
         results["pyrender"] = [] if args.no_pyrender else pyrender_section(ctx, cfg)
         results["maxrss_after_pyrender_mb"] = maxrss_mb()
+        width, height = cfg["size"]
+        results["groundtruth"] = bench_groundtruth.measure(
+            ctx, cfg["truth_runs"], width, height, cfg["truth_size"])
+        log("ground truth: all outputs "
+            f"{results['groundtruth']['raster']['+ all']['median']:.0f} ms (raster)")
     finally:
         ctx.release()
     results["raytrace"] = raytrace_section(cfg)

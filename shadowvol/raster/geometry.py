@@ -70,6 +70,7 @@ class SceneGeometry:
         # per triangle: its world-space unit normal (float64) and its object, for the ground
         # truth's normal and object id (`truth.surface_outputs`)
         self.face_normals = normals
+        self.face_normals32 = normals.astype(np.float32)
         self.triangle_objects = np.repeat(np.arange(len(tris), dtype=np.int64), counts)
         self._soup = None
         # the indexed mesh: float32 vertices (the soup's corners exactly: the same float64

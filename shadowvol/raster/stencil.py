@@ -208,13 +208,15 @@ def clear_int_attachment(gl: RawGL, framebuffer_glo: int, draw_buffer: int, valu
         gl.glClearBufferiv(GL_COLOR, draw_buffer, values)
 
 
-def read_stencil(gl: RawGL, framebuffer_glo: int, width: int, height: int) -> np.ndarray:
-    """(height, width) uint8 stencil values, row 0 at the BOTTOM (GL order; the caller flips)."""
+def read_stencil(gl: RawGL, framebuffer_glo: int, width: int, height: int, x: int = 0,
+                 y: int = 0) -> np.ndarray:
+    """(height, width) uint8 stencil values of the rectangle whose lower-left pixel is (x, y)
+    (default the whole frame), row 0 at the BOTTOM (GL order; the caller flips)."""
     out = np.empty((height, width), np.uint8)
     previous = gl.get_int(GL_PACK_ALIGNMENT)
     with bound_framebuffer(gl, framebuffer_glo):
         gl.glPixelStorei(GL_PACK_ALIGNMENT, 1)
-        gl.glReadPixels(0, 0, width, height, GL_STENCIL_INDEX, GL_UNSIGNED_BYTE,
+        gl.glReadPixels(x, y, width, height, GL_STENCIL_INDEX, GL_UNSIGNED_BYTE,
                         out.ctypes.data_as(ctypes.c_void_p))
         gl.glPixelStorei(GL_PACK_ALIGNMENT, previous)
     gl.check("reading the stencil buffer")

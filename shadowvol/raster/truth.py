@@ -137,9 +137,11 @@ def surface_outputs(geometry, triangle: np.ndarray, front: np.ndarray, want: set
     hit = triangle >= 0
     t = np.where(hit, triangle, 0)
     if "normal" in want:
-        n = geometry.face_normals[t] * np.where(front, 1.0, -1.0)[..., None]
+        # rounded to float32 first: negation and the zero fill are exact either way
+        n = geometry.face_normals32[t]
+        np.negative(n, out=n, where=~front[..., None])
         n[~hit] = 0.0
-        out["normal"] = n.astype(np.float32)
+        out["normal"] = n
     if "object_id" in want:
         ids = geometry.triangle_objects[t] + 1
         out["object_id"] = np.where(hit, ids, 0).astype(np.uint16)
@@ -181,14 +183,34 @@ def count_casters(ctx, gl, target, volumes, choice: np.ndarray, candidates: list
                   where: np.ndarray, halve: bool, clip_planes) -> np.ndarray:
     """(H, W) uint64: bit j where candidate object j's own shadow volumes count non-zero and
     `where` (H, W) bool (the pixels facing the light).  `volumes` must be prepared for the
-    light; `choice` (n_objects,) bool is the light's z-fail choice per caster."""
+    light; `choice` (n_objects,) bool is the light's z-fail choice per caster.  Only the box of
+    the cast pixels (`cast_box`) is drawn (scissor), read back and combined."""
     bits = np.zeros(where.shape, np.uint64)
-    for j in candidates:
-        passes.count_volumes(ctx, gl, target, volumes, choice, halve=halve,
-                             clip_planes=clip_planes, objects=[j])
-        counted = target.read_stencil() != 0
-        bits[counted & where] |= np.uint64(1) << np.uint64(j)
+    rows, cols = cast_box(where)
+    h, w = rows.stop - rows.start, cols.stop - cols.start
+    gl_y = target.height - rows.stop  # GL counts rows from the bottom
+    region = where[rows, cols]
+    out = bits[rows, cols]
+    ctx.scissor = (cols.start, gl_y, w, h)
+    try:
+        for j in candidates:
+            passes.count_volumes(ctx, gl, target, volumes, choice, halve=halve,
+                                 clip_planes=clip_planes, objects=[j])
+            stencil = stencil_gl.read_stencil(gl, target.fbo.glo, w, h, cols.start, gl_y)
+            counted = top_row_first(stencil) != 0
+            out[counted & region] |= np.uint64(1) << np.uint64(j)
+    finally:
+        ctx.scissor = None
     return bits
+
+
+def cast_box(mask: np.ndarray) -> tuple[slice, slice]:
+    """The rows and columns (top-first) of the smallest box around the True pixels of `mask`
+    (H, W) bool (the whole frame when it has none)."""
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    if len(rows) == 0:
+        return slice(0, mask.shape[0]), slice(0, mask.shape[1])
+    return slice(int(rows[0]), int(rows[-1]) + 1), slice(int(cols[0]), int(cols[-1]) + 1)
 
 
 def check_casters(objects: int) -> None:

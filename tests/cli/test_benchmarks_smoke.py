@@ -12,7 +12,7 @@ from builders import ROOT
 
 SECTIONS = ["## Headline ratios and targets", "## Frames at", "## Phases (one light)",
             "## Resolution scaling", "## pyrender 0.1.45, the same scenes", "## Ray tracer",
-            "## Memory"]
+            "## Ground truth", "## Memory"]
 
 
 def test_quick_benchmark_run_writes_the_report(tmp_path):
@@ -28,7 +28,7 @@ def test_quick_benchmark_run_writes_the_report(tmp_path):
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
     results = json.loads((tmp_path / "results.json").read_text())
     for key in ("machine", "frames", "phases", "silhouettes", "resolution", "pyrender",
-                "raytrace", "memory"):
+                "raytrace", "memory", "groundtruth"):
         assert key in results, key
     frame = results["frames"][0]["times"]
     assert {"floor", "auto/cpu", "zpass/gpu", "zfail/cpu"} <= set(frame)
