@@ -382,7 +382,9 @@ def _check_lights(lights) -> tuple[Light, ...] | None:
 
 
 def render(scene: Scene, method: str = "auto", silhouettes: str = "cpu", *,
-           stencil: bool = False, ctx: moderngl.Context | None = None) -> RenderResult:
-    """Render one frame of `scene` (a fresh context unless `ctx` is given)."""
+           stencil: bool = False, ctx: moderngl.Context | None = None,
+           outputs: tuple[str, ...] | None = None) -> RenderResult:
+    """Render one frame of `scene` (a fresh context unless `ctx` is given); `outputs` as in
+    `Renderer.render`."""
     with Renderer(scene, ctx) as renderer:
-        return renderer.render(method, silhouettes, stencil=stencil)
+        return renderer.render(method, silhouettes, stencil=stencil, outputs=outputs)
