@@ -18,6 +18,9 @@ import re
 import numpy as np
 import pytest
 from builders import MODELS, SCENES, TEST_OUTPUT, cards_scene
+from hypothesis import given, settings
+from strategies import profile
+from strategies import scenes as random_scenes
 
 from raytrace.groundtruth import ground_truth
 from shadowvol.compare.maskdiff import edge_pixels
@@ -27,7 +30,7 @@ from shadowvol.primitives import box, mesh, plane, sphere
 from shadowvol.raster import truth
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import Camera, DirectionalLight, PointLight, Scene, SceneError, SpotLight
-from shadowvol.scenefile import load_scene
+from shadowvol.scenefile import load_scene, save_scene
 
 ALL = ("image", "lit", "coverage", "depth", "distance", "normal", "object_id", "facing",
        "casters")
@@ -84,18 +87,22 @@ def compare(request, scene: Scene, raster, ref) -> list[str]:
     ids = near_id_edges(raster.object_id, ref.object_id, n)
     limit = MAX_MISMATCH_FRACTION * ids.size
 
-    def masks(label, got, want, extra=None):
+    def masks(label, got, want, either=None):
+        """`either` (H, W) bool: pixels where both answers are right (not counted)."""
         near = ids | edge_pixels(got) | edge_pixels(want)
-        if extra is not None:
-            near |= extra
-        bad = got != want
+        bad = (got != want) if either is None else (got != want) & ~either
         if (bad & ~near).any() or bad.sum() > max(limit, 4):
             failures.append(f"{label}: {int(bad.sum())} differ, {int((bad & ~near).sum())} "
                             f"off the edges: {np.argwhere(bad & ~near)[:4].tolist()}")
 
     masks("coverage", raster.coverage, ref.coverage)
+    # coincident surfaces of two objects (a random scene may hold a mesh twice): which one is
+    # seen is a tie, undecided by CONVENTIONS; where the ids differ but the depths agree, either
+    with np.errstate(invalid="ignore"):
+        tie = (raster.coverage & ref.coverage & (raster.object_id != ref.object_id)
+               & (np.abs(raster.depth / ref.depth - 1) <= RASTER_DEPTH_RTOL))
     for k in range(n + 1):
-        masks(f"object_id == {k}", raster.object_id == k, ref.object_id == k)
+        masks(f"object_id == {k}", raster.object_id == k, ref.object_id == k, tie)
     for i in range(len(scene.lights)):
         masks(f"light {i} lit", raster.lit[i], ref.lit[i])
         masks(f"light {i} facing", raster.facing[i], ref.facing[i])
@@ -234,3 +241,18 @@ def test_candidates_are_conservative_and_few():
     # a directional light from +x: only what lies toward +x of the points
     assert truth.caster_candidates(bounds, points, np.array([1.0, 0.0, 0.0, 0.0])) == [0]
     assert truth.caster_candidates(bounds, points, np.array([1.0, 0.0, 1.0, 0.0])) == [0, 1]
+
+
+@settings(profile(), max_examples=25, deadline=None)
+@given(scene=random_scenes())
+def test_random_scenes_ground_truth_matches(ctx, request, scene):
+    """The property tests' random scenes (tests/strategies.py): soups, closed meshes, cameras
+    anywhere, 1-3 lights of every kind; the same budgets.  A failure is saved as a scene file
+    under test-output/robustness/ (any command renders it)."""
+    with Renderer(scene, ctx) as r:
+        raster = r.render(outputs=ALL)
+    failures = compare(request, scene, raster, ground_truth(scene))
+    if failures:
+        path = TEST_OUTPUT / "robustness" / "failing-groundtruth.json"
+        save_scene(scene, path)
+        raise AssertionError(f"{failures}; the scene is saved as {path}")
