@@ -242,9 +242,10 @@ class Renderer:
                     target.clear_stencil()
                 if want_stencil:
                     counts.append(target.read_stencil())
-                passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit)
+                if bit < len(page_lights) - 1:   # the last light's stencil is read by `shade`
+                    passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit)
                 zfail.append(choice)
-            passes.shade(self.ctx, target, progs, self.scene, camera, page_lights,
+            passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
                          first_page=not first, colour=colour)
             if need_bits:
                 pages.append(target.read_bits())
