@@ -3,6 +3,8 @@
     raytrace render scenes/whitted.toml -o whitted.png
     raytrace masks  scenes/whitted.toml -o whitted-masks.npz      (+ whitted-masks.png)
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
+    raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png
+    raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png
 
 Outputs are written atomically (shadowvol.io): an error never leaves half a file behind.
 A bad scene prints `error: <file>: <key>: <problem>`; the exit statuses are shadowvol's
@@ -23,6 +25,7 @@ from shadowvol.pictures import masks_image
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
+from . import cli_outlook
 from .backends import BACKENDS
 from .masks import shadow_masks
 from .raytree import draw_tree, format_tree, ray_tree
@@ -53,6 +56,8 @@ def _parser() -> argparse.ArgumentParser:
     _backend(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
+    cli_outlook.add_options(r)
+    cli_outlook.add_parsers(sub)
 
     m = sub.add_parser("masks", help="reference shadow masks (lit per light, coverage)",
                        description="Trace the reference shadow masks of SCENE on its triangles "
@@ -91,7 +96,6 @@ def _backend(p: argparse.ArgumentParser) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    status.on_sigterm()
     try:
         args = _parser().parse_args(argv)
     except KeyboardInterrupt as exc:
@@ -100,6 +104,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _render(args) -> int:
+    if args.integrator == "path":
+        return cli_outlook.path_traced(args)
     outputs.check({"image": Path(args.output)}, {"image": "-o"})
     if args.max_depth is not None and args.max_depth < 0:
         raise SceneError("--max-depth", f"must be >= 0, got {args.max_depth}")
@@ -148,7 +154,8 @@ def _tree(args) -> int:
     return status.OK
 
 
-COMMANDS = {"render": _render, "masks": _masks, "tree": _tree}
+COMMANDS = {"render": _render, "masks": _masks, "tree": _tree,
+            "radiosity": cli_outlook.radiosity_command}
 
 
 if __name__ == "__main__":

@@ -6,24 +6,14 @@
     shadowvol.save_png("cage.png", result.image)
     shadowvol.save_masks("cage.npz", result.lit, result.coverage)
 
-Importing the package loads neither GL nor trimesh nor matplotlib: the renderer is imported on
-first use of `Renderer` or `render`, trimesh when a mesh is first read.  The layers are drawn in
+Importing the package loads nothing but itself (not even numpy): every name is imported on
+first use, GL with `Renderer` or `render`, trimesh when a mesh is first read.  The layers are drawn in
 docs/ARCHITECTURE.md.
 """
 
 from __future__ import annotations
 
-from shadowvol.resources import example_scene
-from shadowvol.scene import (
-    Camera,
-    DirectionalLight,
-    Material,
-    Object,
-    PointLight,
-    Scene,
-    SceneError,
-    SpotLight,
-)
+import importlib
 
 __version__ = "0.2.0"
 
@@ -32,15 +22,17 @@ __all__ = ["Camera", "DirectionalLight", "Material", "Object", "PointLight", "Re
            "render", "save_masks", "save_png", "save_scene"]
 
 # name -> the module that defines it, imported on first access (PEP 562)
-_LAZY = {"Renderer": "shadowvol.raster.renderer", "render": "shadowvol.raster.renderer",
+_LAZY = {**{name: "shadowvol.scene" for name in ("Camera", "DirectionalLight", "Material",
+                                                 "Object", "PointLight", "Scene", "SceneError",
+                                                 "SpotLight")},
+         "example_scene": "shadowvol.resources",
+         "Renderer": "shadowvol.raster.renderer", "render": "shadowvol.raster.renderer",
          "load_scene": "shadowvol.scenefile", "save_scene": "shadowvol.scenefile",
          "save_png": "shadowvol.io", "save_masks": "shadowvol.io"}
 
 
 def __getattr__(name: str):
     if name in _LAZY:
-        import importlib
-
         value = getattr(importlib.import_module(_LAZY[name]), name)
         globals()[name] = value
         return value

@@ -11,11 +11,15 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import struct
+import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
+
+from shadowvol import signals
 
 
 def encode_srgb(linear: np.ndarray) -> np.ndarray:
@@ -25,13 +29,48 @@ def encode_srgb(linear: np.ndarray) -> np.ndarray:
     return np.round(s * 255.0).astype(np.uint8)
 
 
+class WriteError(OSError):
+    """A file could not be written; the message names the path the caller gave."""
+
+    def __str__(self) -> str:
+        return self.strerror  # without OSError's "[Errno N]" prefix
+
+
+STDOUT = "-"
+
+
 @contextlib.contextmanager
 def atomic_write(path: str | Path):
-    """Yield a binary file object; on success it atomically becomes `path`, on any error (or
-    KeyboardInterrupt) the partial file is removed and `path` is left as it was."""
+    """Yield a binary file object that becomes `path` only once complete.
+
+    A regular file (or a new name) is written to a temporary file beside it, fsynced and
+    renamed over it: on any error, Ctrl-C or SIGTERM the temporary is removed and `path` is left
+    as it was.  A symbolic link is followed: the file it points to is replaced the same way in
+    its own folder, and the link stays.  A device, a FIFO or "-" (standard output) cannot be
+    replaced: the data is written straight to it.  Errors are WriteError naming `path`.
+    """
+    shown = str(path)
+    if shown == STDOUT:
+        yield _Stream(sys.stdout.buffer, shown)
+        return
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    if path.is_symlink():
+        path = Path(os.path.realpath(path))
+    if path.exists() and not path.is_file() and not path.is_dir():  # a device or a FIFO
+        try:
+            with open(path, "wb", buffering=0) as raw:
+                yield _Stream(raw, shown)
+        except OSError as exc:
+            raise WriteError(exc.errno, f"{shown}: cannot write: {exc.strerror}") from None
+        return
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    except FileExistsError as exc:  # a file where a folder of the path should be
+        raise WriteError(exc.errno, f"{shown}: cannot write: {exc.filename} is not a "
+                                    "folder") from None
+    except OSError as exc:
+        raise WriteError(exc.errno, f"{shown}: cannot write: {exc.strerror}") from None
     try:
         with os.fdopen(fd, "wb") as f:
             yield f
@@ -41,11 +80,31 @@ def atomic_write(path: str | Path):
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
+        signals.raise_pending()  # an interrupt swallowed on its way up: no finished file
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and not isinstance(exc, WriteError):
+            raise WriteError(exc.errno, f"{shown}: cannot write: {exc.strerror or exc}") \
+                from None
         raise
+
+
+class _Stream:
+    """A file object over a stream that cannot be renamed into place (stdout, a device)."""
+
+    def __init__(self, raw, shown: str):
+        self._raw, self._shown = raw, shown
+
+    def write(self, data: bytes) -> int:
+        try:
+            return self._raw.write(data)
+        except OSError as exc:
+            raise WriteError(exc.errno, f"{self._shown}: cannot write: {exc.strerror}") from None
+
+    def flush(self) -> None:
+        self._raw.flush()
 
 
 def png_bytes(image: np.ndarray) -> bytes:
@@ -88,3 +147,40 @@ def load_masks(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """Read a mask file (never unpickles: allow_pickle=False)."""
     with np.load(path, allow_pickle=False) as data:
         return data["lit"], data["coverage"]
+
+
+def exr_bytes(image: np.ndarray) -> bytes:
+    """An OpenEXR file of an (H, W, 3) float linear RGB image: scanline, uncompressed, 32-bit
+    float channels B, G, R (EXR lists channels alphabetically), row 0 at the top."""
+    arr = np.asarray(image, dtype="<f4")
+    if arr.ndim != 3 or arr.shape[2] != 3:
+        raise ValueError(f"exr_bytes wants an (H, W, 3) image, got shape {arr.shape}")
+    h, w = arr.shape[:2]
+
+    def attr(name: str, kind: str, value: bytes) -> bytes:
+        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(value)) + value
+
+    channels = b"".join(c.encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for c in "BGR")
+    window = struct.pack("<iiii", 0, 0, w - 1, h - 1)
+    header = (struct.pack("<ii", 20000630, 2)
+              + attr("channels", "chlist", channels + b"\0")
+              + attr("compression", "compression", b"\0")
+              + attr("dataWindow", "box2i", window)
+              + attr("displayWindow", "box2i", window)
+              + attr("lineOrder", "lineOrder", b"\0")
+              + attr("pixelAspectRatio", "float", struct.pack("<f", 1.0))
+              + attr("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0))
+              + attr("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
+    line_bytes = 3 * 4 * w
+    first = len(header) + 8 * h
+    offsets = struct.pack(f"<{h}Q", *(first + y * (8 + line_bytes) for y in range(h)))
+    planar = np.ascontiguousarray(arr[:, :, ::-1].transpose(0, 2, 1))  # (H, B|G|R, W)
+    lines = b"".join(struct.pack("<ii", y, line_bytes) + planar[y].tobytes() for y in range(h))
+    return header + offsets + lines
+
+
+def save_exr(path: str | Path, image: np.ndarray) -> None:
+    """Write an (H, W, 3) float linear RGB image as OpenEXR (see `exr_bytes`), atomically."""
+    data = exr_bytes(image)
+    with atomic_write(path) as f:
+        f.write(data)

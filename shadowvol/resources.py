@@ -9,8 +9,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from shadowvol.scene import SceneError
-
 _HERE = Path(__file__).resolve().parent
 
 
@@ -31,6 +29,10 @@ def example_scene(name: str) -> Path:
     """The path of an example scene shipped with shadowvol: `example_scene("cage")` is the
     installed (or checkout's) scenes/cage.toml.  Raises SceneError naming the examples there
     are when `name` is not one of them."""
+    from shadowvol.scene import (
+        SceneError,  # numpy: not on `import shadowvol` (see __init__)
+    )
+
 
     folder = data_dir("scenes")
     stem = Path(name).stem if Path(name).suffix in (".toml", ".json") else name

@@ -149,6 +149,11 @@ class Material:
 
     The ray tracer's colour is `local * (1 - reflectivity - transparency) + reflectivity *
     reflected + transparency * refracted`, so `reflectivity + transparency` must not exceed 1.
+
+    `emission` is the radiance the surface emits itself, the same from both faces and in every
+    direction (a Lambertian emitter): it makes an object an area light for the path tracer and
+    radiosity (`raytrace.pathtrace`, `raytrace.radiosity`).  The shadow-volume renderer, the
+    masks and Whitted ignore it: they light only with `Scene.lights`.
     """
 
     ambient: np.ndarray = field(default_factory=lambda: vec([0.1, 0.1, 0.1], "ambient"))
@@ -158,9 +163,10 @@ class Material:
     reflectivity: float = 0.0
     transparency: float = 0.0
     ior: float = 1.5
+    emission: np.ndarray = field(default_factory=lambda: vec([0.0, 0.0, 0.0], "emission"))
 
     def __post_init__(self):
-        for name in ("ambient", "diffuse", "specular"):
+        for name in ("ambient", "diffuse", "specular", "emission"):
             v = vec(getattr(self, name), name)
             if np.any(v < 0):
                 raise SceneError(name, f"colour components must be >= 0, got {v.tolist()}")

@@ -47,7 +47,7 @@ IMAGE_KEYS = {"width", "height", "background"}
 CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near"}
 RENDER_KEYS = {"max_depth"}
 MATERIAL_KEYS = {"ambient", "diffuse", "specular", "shininess", "reflectivity", "transparency",
-                 "ior"}
+                 "ior", "emission"}
 LIGHT_KEYS = {
     "point": {"type", "position", "color", "intensity"},
     "directional": {"type", "direction", "color", "intensity"},
@@ -438,7 +438,8 @@ def scene_to_dict(scene: Scene) -> dict:
     def material(m: Material) -> dict:
         return {"ambient": m.ambient.tolist(), "diffuse": m.diffuse.tolist(),
                 "specular": m.specular.tolist(), "shininess": m.shininess,
-                "reflectivity": m.reflectivity, "transparency": m.transparency, "ior": m.ior}
+                "reflectivity": m.reflectivity, "transparency": m.transparency, "ior": m.ior,
+                "emission": m.emission.tolist()}
 
     def light(lt) -> dict:
         out = {"color": lt.color.tolist(), "intensity": lt.intensity}

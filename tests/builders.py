@@ -1,13 +1,23 @@
-"""Small scenes and paths shared by the tests (the one builders module; tests never import
-from each other).  Vary a built scene with `dataclasses.replace` / `Scene.replace`."""
+"""Small scenes, paths and named tolerances shared by the tests (the one builders module; tests
+never import from each other).  Vary a built scene with `dataclasses.replace` /
+`Scene.replace`.
+
+The statistical checks of the path tracer and radiosity are z-tests on region means whose
+variance the renderer itself estimates; `z_limit(tests)` gives the per-test bound that keeps the
+false-alarm rate of a whole test function (all its regions and channels, Bonferroni) at
+FALSE_ALARM."""
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
+from statistics import NormalDist
 
-from shadowvol.primitives import plane
-from shadowvol.scene import Camera, DirectionalLight, Scene
+import numpy as np
+
+from shadowvol.primitives import box, plane
+from shadowvol.scene import Camera, DirectionalLight, Material, Scene
+from shadowvol.scenefile import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
@@ -26,3 +36,69 @@ def tiny_scene(with_blocker_behind_eye: bool = False) -> Scene:
         objects.append(plane("roof", point=[-3, 0, 8], normal=[0, 0, 1], size=[4, 10]))
     return Scene(camera=camera, objects=objects,
                  lights=[DirectionalLight(direction=[1, 0, -1])], width=4, height=4)
+
+
+# ---- the path tracer and radiosity (the rendering equation's outlook) ----------------------
+
+CORNELL = SCENES / "cornell.toml"
+
+FALSE_ALARM = 1e-3  # probability that a correct renderer fails one statistical test function
+
+# Depth-1 path tracing vs the masks' quadrature (raytrace.direct): the midpoint rule on 4^3
+# points per emitter triangle misses or adds up to one point's share in deep penumbra; measured
+# at most 0.32% of the image's median radiance on a 4x4 block at 48x48, allowed 1%.
+QUADRATURE_ALLOWANCE = 0.01
+
+# Path tracing vs radiosity, per object (area-averaged radiance), on top of z_limit standard
+# errors of the path tracer: piecewise-constant patches at level 3 and Monte Carlo form factors
+# (2048 rays a patch: the small light is hit by ~20 of a patch's rays) leave radiosity its own
+# error, measured up to 5.0% over three seeds (short block), of which the path tracer's standard
+# error (~0.9%) covers a part; allowed 4% on top of z_limit standard errors.
+PT_RADIOSITY_RELATIVE = 0.04
+
+# Radiosity furnace: shooting stops at unshot power <= tol of emitted; the radiance left unshot
+# is bounded by tol / (1 - rho) of the answer.
+RADIOSITY_TOL = 1e-6
+
+
+BOX_CENTRE = np.array([278.0, 274.4, 279.6])  # the Cornell box's centre, mm
+
+
+def facing_inside(obj, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """The normals (k, 3) of a Cornell object's points (k, 3) flipped to the face that the
+    camera's side sees: walls face the box's centre, blocks face away from their own centre."""
+    if "block" in obj.name:
+        toward = points - obj.vertices.mean(axis=0)
+    else:
+        toward = BOX_CENTRE - points
+    return normals * np.where((toward * normals).sum(axis=1) >= 0.0, 1.0, -1.0)[:, None]
+
+
+def z_limit(tests: int, false_alarm: float = FALSE_ALARM) -> float:
+    """|z| bound for each of `tests` two-sided tests so that any of them fails by chance with
+    probability at most `false_alarm`."""
+    return NormalDist().inv_cdf(1.0 - false_alarm / (2.0 * tests))
+
+
+def cornell(size: int = 48) -> Scene:
+    """The Cornell box scene file at size x size pixels."""
+    return load_scene(CORNELL).replace(width=size, height=size)
+
+
+def furnace(albedo, emission, size: int = 16) -> Scene:
+    """A closed cube (side 2, centred at the origin) of one Lambertian material that reflects
+    `albedo` and emits `emission` everywhere, seen from its centre: radiance E / (1 - rho)."""
+    m = Material(diffuse=albedo, specular=[0, 0, 0], emission=emission)
+    cam = Camera(eye=[0.0, 0.0, 0.0], target=[0.3, 0.2, -1.0], fov_y=90.0, near=0.01)
+    return Scene(camera=cam, objects=[box("furnace", size=(2.0, 2.0, 2.0), material=m)],
+                 lights=[], width=size, height=size, background=[0, 0, 0])
+
+
+def block_means(image: np.ndarray, variance: np.ndarray, block: int):
+    """Means of block x block pixel regions (H/b, W/b, 3) and the variance of each mean, for
+    independent pixels with the given variances of their means."""
+    H, W, _ = image.shape
+    shape = (H // block, block, W // block, block, 3)
+    mean = image.reshape(shape).mean(axis=(1, 3))
+    var = variance.reshape(shape).sum(axis=(1, 3)) / block ** 4
+    return mean, var

@@ -15,10 +15,10 @@ import re
 import numpy as np
 import pytest
 from builders import TEST_OUTPUT
-from shadowvol.compare.maskdiff import diff_image, mask_report
 
 import raytrace
 from raytrace.camera import primary_rays
+from shadowvol.compare.maskdiff import diff_image, mask_report
 from shadowvol.io import save_png
 from shadowvol.pictures import masks_image
 from shadowvol.scene import DirectionalLight, Scene, SpotLight

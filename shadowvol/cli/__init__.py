@@ -1,8 +1,41 @@
-"""The command line of both tools: `shadowvol` (`shadowvol.cli.main`) and the one exit-status
-table (`shadowvol.cli.status`) that `raytrace` shares.  Importing this package imports no GL."""
+"""The command line of both tools: `shadowvol` (`shadowvol.cli.main`), `raytrace`
+(`raytrace.cli`) and the one exit-status table (`shadowvol.cli.status`) they share.
+
+The console scripts enter through `main` and `raytrace_main` here: they catch Ctrl-C and
+SIGTERM while the commands' modules are still being imported (GL, numpy, Pillow), which would
+otherwise print a traceback.  Importing this package imports no GL.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+from shadowvol import signals
 
 
 def main(argv=None) -> int:
     """`shadowvol ...` (see `shadowvol.cli.main`)."""
-    from shadowvol.cli.main import main as _main
-    return _main(argv)
+    return _enter("shadowvol.cli.main", argv)
+
+
+def raytrace_main(argv=None) -> int:
+    """`raytrace ...` (see `raytrace.cli`)."""
+    return _enter("raytrace.cli", argv)
+
+
+def _enter(module: str, argv) -> int:
+    try:
+        with signals.handled():
+            try:
+                entry = importlib.import_module(module).main
+                signals.raise_pending()  # one that an import swallowed
+            except BaseException as exc:
+                raise signals.pending() or exc  # an interrupt may surface as ImportError
+    except KeyboardInterrupt:
+        print("error: interrupted", file=sys.stderr)
+        return 130
+    except signals.Terminated:
+        print("error: terminated", file=sys.stderr)
+        return 143
+    return entry(argv)

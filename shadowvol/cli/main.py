@@ -32,7 +32,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    status.on_sigterm()
     try:
         args = build_parser().parse_args(argv)
     except KeyboardInterrupt as exc:

@@ -2,17 +2,20 @@
 
 Each kind of output has the one file format that is written for it, and a path must end in
 that format's suffix: a PNG is never written into `out.jpg`, nor a mask file into `m.png`.
-Two outputs of one command may not name the same file.
+Two outputs of one command may not name the same file (a symbolic link and its target are
+one file).  "-" (standard output), a device or a FIFO may take any output; it is written to
+directly (`shadowvol.io.atomic_write`).
 """
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from shadowvol.scene import SceneError
 
 SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".png",
-            "json": ".json", "picture": ".png"}
+            "json": ".json", "picture": ".png", "exr": ".exr", "flat": ".png"}
 
 
 def check(outputs: dict[str, Path], flags: dict[str, str] | None = None) -> None:
@@ -22,12 +25,22 @@ def check(outputs: dict[str, Path], flags: dict[str, str] | None = None) -> None
     seen: dict[Path, str] = {}
     for kind, path in outputs.items():
         flag = flags.get(kind, kind)
+        stream = str(path) == "-" or _is_stream(path)
         want = SUFFIXES[kind]
-        if path.suffix.lower() != want:
+        if not stream and path.suffix.lower() != want:
             raise SceneError(flag, f"{str(path)!r} must end in {want} (shadowvol writes "
                                    f"{want[1:].upper()} there and nothing else)")
-        key = path.resolve()
+        key = Path("-") if str(path) == "-" else Path(path).resolve()
         if key in seen:
             raise SceneError(flag, f"{str(path)!r} is also the {flags.get(seen[key], seen[key])} "
                                    "output; give each output its own file")
         seen[key] = kind
+
+
+def _is_stream(path: Path) -> bool:
+    """An existing device or FIFO (what `atomic_write` streams to instead of replacing)."""
+    try:
+        real = Path(os.path.realpath(path))
+        return real.exists() and not real.is_file() and not real.is_dir()
+    except OSError:
+        return False

@@ -7,9 +7,9 @@ it can name.  GL-free: `raytrace` imports it too.
 
 from __future__ import annotations
 
-import signal
 import sys
 
+from shadowvol import signals
 from shadowvol.errors import MissingExtra, RenderError
 from shadowvol.scene import SceneError
 
@@ -36,18 +36,6 @@ EPILOG = "exit status: " + "; ".join(f"{code} {text}" for code, text in TABLE) +
     ".  Outputs are written atomically: a failed or interrupted command leaves no half file."
 
 
-class Terminated(BaseException):
-    """SIGTERM arrived (raised by the handler `on_sigterm` installs)."""
-
-
-def on_sigterm() -> None:
-    """From now on SIGTERM unwinds like Ctrl-C does: writers remove their temporary files and
-    the command exits with TERMINATED.  Main thread only (Python's rule for handlers)."""
-    def handler(signum, frame):
-        raise Terminated()
-    signal.signal(signal.SIGTERM, handler)
-
-
 def status_of(exc: BaseException) -> int | None:
     """The exit status an exception means, or None for one no command should meet (a bug)."""
     if isinstance(exc, (SceneError, MissingExtra)):
@@ -61,7 +49,7 @@ def status_of(exc: BaseException) -> int | None:
         return BAD_INPUT  # a file that cannot be read or written
     if isinstance(exc, KeyboardInterrupt):
         return INTERRUPTED
-    if isinstance(exc, Terminated):
+    if isinstance(exc, signals.Terminated):
         return TERMINATED
     return None
 
@@ -72,7 +60,7 @@ def message(exc: BaseException) -> str:
                 "; try a smaller image or fewer triangles")
     if isinstance(exc, KeyboardInterrupt):
         return "interrupted"
-    if isinstance(exc, Terminated):
+    if isinstance(exc, signals.Terminated):
         return "terminated"
     return str(exc) or type(exc).__name__
 
@@ -80,6 +68,7 @@ def message(exc: BaseException) -> str:
 def report(exc: BaseException, prefix: str = "") -> int:
     """Print `error: PREFIXmessage` on stderr and return the exception's status; re-raise an
     exception that has none."""
+    exc = signals.pending() or exc  # an interrupt may surface as what it broke
     status = status_of(exc)
     if status is None:
         raise exc
@@ -88,8 +77,13 @@ def report(exc: BaseException, prefix: str = "") -> int:
 
 
 def run(command, args) -> int:
-    """Call `command(args)` and turn what it raises into a status (see `report`)."""
-    try:
-        return command(args)
-    except (Exception, KeyboardInterrupt, Terminated) as exc:  # noqa: BLE001 - report re-raises bugs
-        return report(exc)
+    """Call `command(args)` with Ctrl-C and SIGTERM handled (`shadowvol.signals`) and turn what
+    it raises into a status (see `report`); an interrupt that something swallowed on the way
+    still ends in its status."""
+    with signals.handled():
+        try:
+            code = command(args)
+            signals.raise_pending()
+            return code
+        except (Exception, KeyboardInterrupt, signals.Terminated) as exc:  # noqa: BLE001
+            return report(exc)  # report re-raises what has no status (a bug)

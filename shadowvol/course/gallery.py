@@ -30,9 +30,9 @@ import numpy as np
 
 import raytrace
 from raytrace.raytree import draw_tree, format_tree, ray_tree
-from shadowvol import pictures
 from shadowvol.compare.comparison import compare
 from shadowvol.compare.maskdiff import light_stats
+from shadowvol.course.layout import labelled, text_strip, titled
 from shadowvol.course.shadow2d import draw_shadow2d, example
 from shadowvol.io import encode_srgb
 from shadowvol.pictures import column, figure_pixels, heat_maps, row, tint
@@ -71,32 +71,6 @@ class Picture:
     image: np.ndarray
     text: str = ""
     numbers: dict = field(default_factory=dict)
-
-
-# ---------------------------------------------------------------------------------------------
-# Layout: titles and panel labels in the scalable font, sized for --small or full size
-# ---------------------------------------------------------------------------------------------
-
-def strip_height(small: bool) -> int:
-    """Height in pixels of a title or label strip."""
-    return 16 if small else 30
-
-
-def text_strip(text: str, width: int, small: bool, *, bold: bool = False) -> np.ndarray:
-    """(strip_height, width, 3) uint8: `text` on white (on dark when `bold`), fitted."""
-    height = strip_height(small)
-    return pictures.text_strip(text, width, height, height - 4 if small else height - 8,
-                               dark=bold)
-
-
-def labelled(panel: np.ndarray, label: str, small: bool) -> np.ndarray:
-    """A panel with its label strip above it."""
-    return np.concatenate([text_strip(label, panel.shape[1], small), panel])
-
-
-def titled(image: np.ndarray, title: str, small: bool) -> np.ndarray:
-    """The picture with its title strip (dark) on top."""
-    return np.concatenate([text_strip(title, image.shape[1], small, bold=True), image])
 
 
 # ---------------------------------------------------------------------------------------------

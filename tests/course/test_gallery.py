@@ -14,6 +14,7 @@ from PIL import Image
 import raytrace
 from shadowvol.cli.main import main
 from shadowvol.course import gallery as demo
+from shadowvol.course import layout
 from shadowvol.pictures import GAP, LEGEND_HEIGHT
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scenefile import load_scene
@@ -64,7 +65,7 @@ def small_size(name: str) -> tuple[int, int]:
 def expected_size(name: str) -> tuple[int, int] | None:
     """(width, height) of the pictures whose layout the demo owns; None for those drawn by
     another module's figure (the ray tree, compare)."""
-    s = demo.strip_height(small=True)
+    s = layout.strip_height(small=True)
     g = GAP
     if name in ("cage", "cage_volumes", "whitted_best"):
         w, h = small_size("whitted_best" if name == "whitted_best" else "cage")
@@ -102,7 +103,7 @@ def test_each_picture_is_a_png_of_its_size(gallery, name):
     if expected_size(name) is not None:
         assert size == expected_size(name)
     pixels = np.asarray(Image.open(out / f"{name}.png"))
-    assert (pixels[1:demo.strip_height(True) - 1, -1] == TITLE_BACKGROUND).all()  # title strip
+    assert (pixels[1:layout.strip_height(True) - 1, -1] == TITLE_BACKGROUND).all()  # title strip
     assert pixels.std() > 10   # a picture, not a blank
 
 
@@ -144,7 +145,7 @@ def test_zpass_error_is_marked_and_zfail_is_right(ctx, gallery):
     # the top-left one (z-pass) with the marked pixels changed
     pixels = np.asarray(Image.open(out / "zpass_zfail.png"))
     w, h = small_size("inside_shadow")
-    s, gap = demo.strip_height(True), GAP
+    s, gap = layout.strip_height(True), GAP
     top_left = pixels[2 * s:2 * s + h, :w]
     bottom_right = pixels[2 * s + h + gap + s:, w + gap:]
     assert bottom_right.shape == top_left.shape

@@ -1,0 +1,64 @@
+"""Ctrl-C and SIGTERM for the command-line tools: never a finished file after an interrupt.
+
+`handled()` (around both CLIs' main) makes SIGINT raise KeyboardInterrupt and SIGTERM raise
+`Terminated`, and remembers that the signal came.  Some libraries swallow exceptions around
+their imports (trimesh guards optional imports with `except BaseException`), so an interrupt in
+the first fraction of a second could vanish and the command finish with status 0; the writer
+therefore asks `raise_pending()` before it renames a file into place, and the CLI asks again
+before it reports success.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived (the command exits with status 143)."""
+
+
+class _Pending:
+    """The signal that arrived and has not yet stopped the command (a process fact)."""
+    signum: int | None = None
+
+
+def _handler(signum, frame):
+    _Pending.signum = signum
+    raise KeyboardInterrupt() if signum == signal.SIGINT else Terminated()
+
+
+@contextlib.contextmanager
+def handled():
+    """While inside: SIGINT -> KeyboardInterrupt, SIGTERM -> Terminated, both remembered; the
+    previous handlers come back on the way out.  Only the main thread may install handlers
+    (Python's rule); elsewhere this changes nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _Pending.signum = None
+    previous = signal.signal(signal.SIGINT, _handler), signal.signal(signal.SIGTERM, _handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous[0])
+        signal.signal(signal.SIGTERM, previous[1])
+        _Pending.signum = None
+
+
+def pending() -> BaseException | None:
+    """The interrupt that arrived (KeyboardInterrupt or Terminated), or None.  An interrupt
+    inside an import can surface as another exception (numpy turns it into ImportError): the
+    CLI reports the interrupt then, not what it broke."""
+    signum = _Pending.signum
+    if signum is None:
+        return None
+    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated()
+
+
+def raise_pending() -> None:
+    """Raise again an interrupt that arrived and was swallowed on its way up."""
+    exc = pending()
+    if exc is not None:
+        raise exc

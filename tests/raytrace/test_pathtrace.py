@@ -1,0 +1,105 @@
+"""The path tracer: furnace, depth 1 against the masks' direct lighting, unbiased Russian
+roulette, the Phong normalisation, reproducibility."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from builders import QUADRATURE_ALLOWANCE, block_means, cornell, furnace, z_limit
+
+from raytrace import brdf
+from raytrace.direct import direct_lighting
+from raytrace.pathtrace import render
+
+
+def test_furnace_converges_to_emission_over_one_minus_albedo():
+    rho, emitted = np.array([0.3, 0.5, 0.7]), 1.0
+    expected = emitted / (1.0 - rho)
+    result = render(furnace(rho, [emitted] * 3), spp=128, seed=1)
+    mean, var = block_means(result.image, result.variance, block=4)
+    whole, whole_var = block_means(result.image, result.variance, block=16)
+    z = np.concatenate([((mean - expected) / np.sqrt(var)).ravel(),
+                        ((whole - expected) / np.sqrt(whole_var)).ravel()])
+    assert np.abs(z).max() < z_limit(z.size), (whole, expected, z)
+    # the statistics are sharp enough to see a 2% error in the whole image's mean
+    assert (z_limit(z.size) * np.sqrt(whole_var) < 0.02 * expected).all()
+
+
+def test_depth_one_equals_direct_lighting_from_the_masks():
+    scene = cornell(48)
+    result = render(scene, spp=64, seed=3, max_depth=1, jitter=False)
+    reference = direct_lighting(scene, splits=3)
+    mean, var = block_means(result.image, result.variance, block=4)
+    ref, _ = block_means(reference, np.zeros_like(reference), block=4)
+    scale = np.median(reference, axis=(0, 1))
+    allowed = z_limit(mean.size) * np.sqrt(var) + QUADRATURE_ALLOWANCE * scale
+    bad = np.abs(mean - ref) > allowed
+    assert not bad.any(), f"{bad.sum()} of {bad.size} block means differ: " \
+        f"{mean[bad][:4]} vs {ref[bad][:4]}"
+    # and the test is sharp: a 5% error in the light would fail a quarter of the blocks
+    assert (np.abs(0.05 * ref) > allowed).sum() > 0.25 * ref.size
+
+
+def test_russian_roulette_is_unbiased():
+    """Mean over seeds with roulette from the first bounce vs a render without roulette (same
+    depth bound): a z-test per 4x4-pixel region and channel, false alarm FALSE_ALARM."""
+    scene = cornell(24)
+    depth = 6
+    runs = [render(scene, spp=32, seed=s, max_depth=depth, rr_start=1) for s in range(8)]
+    low = np.mean([r.image for r in runs], axis=0)
+    low_var = np.sum([r.variance for r in runs], axis=0) / len(runs) ** 2
+    ref = render(scene, spp=384, seed=100, max_depth=depth, rr_start=depth + 1)
+    z = []
+    for block in (4, 24):  # regions, and the whole image
+        a, va = block_means(low, low_var, block)
+        b, vb = block_means(ref.image, ref.variance, block)
+        z.append(((a - b) / np.sqrt(va + vb)).ravel())
+    z = np.concatenate(z)
+    assert np.abs(z).max() < z_limit(z.size), np.abs(z).max()
+    # sharp enough to see a 6% bias of the whole image (e.g. survival weights 1 / 1.06 q)
+    assert (0.06 * b > z_limit(z.size) * np.sqrt(va + vb)).all(), np.sqrt(va + vb) / b
+
+
+def test_same_seed_same_image_other_seed_other_image():
+    scene = cornell(16)
+    a = render(scene, spp=2, seed=7)
+    b = render(scene, spp=2, seed=7)
+    c = render(scene, spp=2, seed=8)
+    assert np.array_equal(a.image, b.image)
+    assert not np.array_equal(a.image, c.image)
+
+
+def test_phong_normalisation_conserves_energy():
+    """Directional albedo of the normalised glossy lobe: ks at normal incidence, below ks at
+    grazing, never above (estimated by sampling the lobe itself, 4e5 samples per case)."""
+    rng = np.random.default_rng(0)
+    k = 400_000
+    n = np.tile([0.0, 0.0, 1.0], (k, 1))
+    ks = np.full((k, 3), 0.6)
+    kd = np.zeros((k, 3))
+    for s, theta, low, high in ((20.0, 0.0, 0.99, 1.01), (5.0, 0.0, 0.99, 1.01),
+                                (20.0, 1.45, 0.05, 0.99)):
+        wo = np.tile([math.sin(theta), 0.0, math.cos(theta)], (k, 1))
+        shin = np.full(k, s)
+        wi = brdf.phong_sample(rng, np.zeros(k), shin, n, wo)
+        f = brdf.phong_eval(kd, ks, shin, n, wo, wi)
+        pdf = brdf.phong_pdf(np.zeros(k), shin, n, wo, wi)
+        cos = np.maximum(wi[:, 2], 0.0)
+        albedo = np.where(pdf > 0, f[:, 0] * cos / np.where(pdf > 0, pdf, 1), 0.0).mean()
+        assert low * 0.6 < albedo < high * 0.6, (s, theta, albedo)
+
+
+def test_kd_plus_ks_above_one_is_scaled_down():
+    kd, ks = brdf.normalised_phong(np.array([[0.8, 0.8, 0.8], [0.2, 0.1, 0.0]]),
+                                   np.array([[0.5, 0.5, 0.5], [0.1, 0.1, 0.1]]))
+    np.testing.assert_allclose(kd[0] + ks[0], 1.0)
+    np.testing.assert_allclose(kd[0] / ks[0], 0.8 / 0.5)
+    np.testing.assert_array_equal(kd[1], [0.2, 0.1, 0.0])
+
+
+@pytest.mark.parametrize("bad", [0, -1, 1.5, True])
+def test_bad_spp_is_refused(bad):
+    with pytest.raises(ValueError, match="spp"):
+        render(cornell(8), spp=bad)
