@@ -107,6 +107,12 @@ class PlainFrame:
         self.fbo.read_into(self.out, components=4)
         return self.out
 
+    def __enter__(self) -> "PlainFrame":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
     def release(self) -> None:
         for obj in (self.vao, self.fbo, self.colour, self.depth, self.ibo, self.nbo, self.vbo,
                     self.program):

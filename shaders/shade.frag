@@ -1,6 +1,6 @@
 #version 450 core
 // The deferred frame's one shading pass, over the whole screen after every light's volume
-// count: per pixel the ambient term ka * ambient plus, for each light whose unshadowed bit is
+// count (drawn twice, split by the last light's stencil test): per pixel the ambient term ka * ambient plus, for each light whose unshadowed bit is
 // set, the light's direct Phong term where n . l > 0 and inside a spot's cone, which also sets
 // the light's lit bit.  The expressions are phong.frag's and scene.vert's (keep them identical),
 // on the same float32 inputs: the interpolated world position from the G-buffer and the
@@ -17,7 +17,9 @@
 uniform sampler2D u_materials;  // row = object: texel 0 ka, 1 kd, 2 (ks, shininess)
 uniform sampler2D u_position;   // world position (xyz) of the visible surface; w: the surface,
                                 // +-(triangle + 1), negative for a back face; 0: uncovered
-uniform sampler2D u_unshadowed; // bit i: light i's stencil count is 0 here
+uniform sampler2D u_unshadowed; // bit i: light i's stencil count is 0 here (i < LIGHTS - 1)
+uniform bool u_last_unshadowed; // the last light's: the stencil still holds its count, and the
+                                // pass is drawn twice, where it is 0 (true) and where not
 uniform vec3 u_eye;
 uniform vec3 u_ambient;
 uniform vec3 u_background;
@@ -51,7 +53,16 @@ void main() {
     int object = int(normal_object.w);
     vec3 corner = triangle_data[2 * t + 1].xyz;
     vec3 world = position.xyz;
+#if LIGHTS > 1
     uint unshadowed = uint(texelFetch(u_unshadowed, p, 0).r);
+#else
+    uint unshadowed = 0u;
+#endif
+#if LIGHTS > 0
+    if (u_last_unshadowed) {
+        unshadowed |= 1u << uint(LIGHTS - 1);
+    }
+#endif
     vec3 n = front ? normal : -normal;
 #ifndef MASKS_ONLY
     vec3 kd = texelFetch(u_materials, ivec2(1, object), 0).rgb;

@@ -126,6 +126,16 @@ class SceneGeometry:
         """The soup's vertex positions (float32, three per triangle)."""
         return self._soup_buffers()["in_position"]
 
+    @property
+    def soup_corners_f64(self) -> np.ndarray:
+        """(M, 3, 3) float64: every triangle's corners, objects one after another."""
+        return self._corners
+
+    @property
+    def object_of(self) -> np.ndarray:
+        """(M,) int64: the object of every triangle."""
+        return np.repeat(np.arange(len(self.ranges)), [r.count for r in self.ranges])
+
     def soup_corners(self) -> np.ndarray:
         """(M, 3, 3) float32: the corners of every soup triangle, exactly as uploaded."""
         return self._corners.astype(np.float32)

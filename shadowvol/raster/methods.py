@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shadowvol.raster.projection import near_rectangle
+from shadowvol.raster.projection import cross3, near_rectangle
 from shadowvol.scene import Camera
 
 METHODS = ("auto", "zpass", "zfail")
@@ -52,7 +52,7 @@ def near_clip_planes(camera: Camera, aspect: float, light4: np.ndarray) -> np.nd
     n = -forward if side > 0 else forward
     planes.append(np.append(n, -n @ centre))
     for p, q in zip(rect, np.roll(rect, -1, axis=0)):
-        n = np.cross(q - p, light4[:3] - light4[3] * p)
+        n = cross3(q - p, light4[:3] - light4[3] * p)
         if n @ (centre - p) > 0:
             n = -n
         planes.append(np.append(n / np.linalg.norm(n), -(n / np.linalg.norm(n)) @ p))

@@ -5,9 +5,9 @@
 2. per light: `count_volumes` — the stencil cleared, then the shadow volumes drawn with colour
    and depth writes off and two-sided stencil counting, z-pass or z-fail per caster;
    `mark_unshadowed` — a full-screen pass adding the light's bit where the count is 0.
-3. `shade`: one full-screen pass: ambient plus every unshadowed light's Phong term where
-   n . l > 0 (and inside a spot's cone), the lit bits and coverage (up to LIGHTS_PER_PAGE
-   lights a pass).
+3. `shade`: one full-screen pass (two draws split by the last light's stencil, which is not
+   marked): ambient plus every unshadowed light's Phong term where n . l > 0 (and inside a
+   spot's cone), the lit bits and coverage (up to LIGHTS_PER_PAGE lights a pass).
 4. `encode_srgb`, when the 8-bit image is asked for.
 
 The forward passes (`depth_ambient`, then per light `add_light` over the soup with depth test
@@ -145,12 +145,15 @@ def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
     target.use()
 
 
-def shade(ctx: moderngl.Context, target: Target, progs: ScenePrograms, scene: Scene,
-          camera: Camera, lights, first_page: bool, colour: bool = True) -> None:
-    """The one shading pass for `lights` (at most LIGHTS_PER_PAGE, bits 0.. of the
-    unshadowed target): colour and bits of every pixel.  A page after the first is added to
-    the first (additive blending; no ambient, no coverage) and its bits must be cleared before.
-    `colour=False`: the lit bits only."""
+def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
+          scene: Scene, camera: Camera, lights, first_page: bool, colour: bool = True) -> None:
+    """The one shading pass for `lights` (at most LIGHTS_PER_PAGE): colour and bits of every
+    pixel.  The unshadowed target holds bits 0.. of all but the last light; the stencil holds
+    the last light's count, and the pass is drawn where it is 0 and where it is not (each
+    pixel once), which spares the last light its marking pass and, for one light, the
+    unshadowed fetch.  A page after the first is added to the first (additive blending; no
+    ambient, no coverage) and its bits must be cleared before.  `colour=False`: the lit bits
+    only."""
     prog, vao = progs.shading(len(lights), colour)
     target.fbo.depth_mask = False
     target.fbo.color_mask = [(colour,) * 4, (True,) * 4]
@@ -182,7 +185,15 @@ def shade(ctx: moderngl.Context, target: Target, progs: ScenePrograms, scene: Sc
     for name, unit in (("u_materials", 0), ("u_position", 1), ("u_unshadowed", 2)):
         set_uniform(prog, name, unit)
     progs.geometry.triangle_data.bind_to_storage_buffer(0)
-    vao.render(moderngl.TRIANGLES, vertices=3)
+    if not lights:
+        set_uniform(prog, "u_last_unshadowed", False)
+        vao.render(moderngl.TRIANGLES, vertices=3)
+    else:
+        for unshadowed, test in ((True, stencil.where_unshadowed),
+                                 (False, stencil.where_shadowed)):
+            set_uniform(prog, "u_last_unshadowed", unshadowed)
+            with test(gl):
+                vao.render(moderngl.TRIANGLES, vertices=3)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     target.use()

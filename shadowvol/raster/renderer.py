@@ -109,6 +109,9 @@ class Renderer:
         self._count_bound: int | None = None
         self._truth: truth.TruthPass | None = None
         self._outward_convex: np.ndarray | None = None
+        self._convex: np.ndarray | None = None
+        # light -> None (used once) or (the slack (M,) it was computed with, the bound)
+        self._light_bounds: dict[bytes, tuple | None] = {}
         # back-face culling in the geometry pass for closed convex casters beyond the near
         # plane (`methods.cullable`): 14-22% of a frame here, but OFF by default because it is
         # not exact at float32 depth ties: where a silhouette's back face won the depth test by
@@ -161,17 +164,55 @@ class Renderer:
         outputs = _check_outputs(outputs, stencil)
         lights = _check_lights(lights)
         make_current(self.ctx)
-        check = shadows and self.check_overflow and self.count_bound >= overflow.STENCIL_LIMIT
+        to_check = self._lights_to_check(camera, lights) if shadows else []
         with stencil_gl.zero_to_one_depth(self.gl):
             # the overflow check needs the lit masks, asked for or not
             result = self._render(method, silhouettes, camera, lights, shadows,
-                                  outputs | ({"lit"} if check else set()))
-            if check:
+                                  outputs | ({"lit"} if to_check else set()))
+            if to_check:
                 overflow.check_frame(self, result, silhouettes, camera, lights,
-                                     halve=method == "auto" and "stencil" not in outputs)
+                                     halve=method == "auto" and "stencil" not in outputs,
+                                     only=to_check)
             if "lit" not in outputs:
                 result = replace(result, lit=None)
             return result
+
+    def _lights_to_check(self, camera, lights) -> list[int]:
+        """Indices of the lights whose stencil count might reach 256 in this frame: none when
+        the scene's bound is below it, else those whose `overflow.light_bound` is not.  A
+        light's bound costs more than one re-check (0.1-0.6 s), so it is computed the second
+        time the light is used, with twice the slack this camera needs, and kept while later
+        cameras need no more slack."""
+        if not self.check_overflow or self.count_bound < overflow.STENCIL_LIMIT:
+            return []
+        camera = self.scene.camera if camera is None else camera
+        lights = self.scene.lights if lights is None else lights
+        corners = self.geometry.soup_corners_f64
+        needed = overflow.world_slack(camera, self.scene.height, corners)
+        out = []
+        for i, light in enumerate(lights):
+            key = light.homogeneous.tobytes()
+            if key not in self._light_bounds:
+                self._light_bounds[key] = None      # seen once: re-check this frame
+                out.append(i)
+                continue
+            kept = self._light_bounds[key]
+            if kept is None or not (needed <= kept[0]).all():
+                slack = 2.0 * needed
+                kept = (slack, overflow.light_bound(corners, self.geometry.object_of,
+                                                    self.convex, light.homogeneous, slack))
+                self._light_bounds[key] = kept
+            if kept[1] >= overflow.STENCIL_LIMIT:
+                out.append(i)
+        return out
+
+    @property
+    def convex(self) -> np.ndarray:
+        """(n_objects,) bool: closed convex meshes (`overflow.is_closed_convex`)."""
+        if self._convex is None:
+            self._convex = np.array([overflow.is_closed_convex(t)
+                                     for t in self.geometry.topologies], bool)
+        return self._convex
 
     @property
     def outward_convex(self) -> np.ndarray:
@@ -242,9 +283,10 @@ class Renderer:
                     target.clear_stencil()
                 if want_stencil:
                     counts.append(target.read_stencil())
-                passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit)
+                if bit < len(page_lights) - 1:   # the last light's stencil is read by `shade`
+                    passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit)
                 zfail.append(choice)
-            passes.shade(self.ctx, target, progs, self.scene, camera, page_lights,
+            passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
                          first_page=not first, colour=colour)
             if need_bits:
                 pages.append(target.read_bits())

@@ -336,6 +336,16 @@ def where_unshadowed(gl: RawGL) -> Iterator[None]:
 
 
 @contextlib.contextmanager
+def where_shadowed(gl: RawGL) -> Iterator[None]:
+    """Draw only where the stencil count is not 0 (the complement of `where_unshadowed`); the
+    stencil itself is left unchanged."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_NOTEQUAL, ref=0, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
+             back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
 def depth_clamped(gl: RawGL) -> Iterator[None]:
     """No stencil, depth clamp on: for drawing shadow polygons in the teaching view, where the
     far caps at infinity must survive clipping."""

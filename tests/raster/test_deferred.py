@@ -184,3 +184,12 @@ def test_only_the_last_lights_are_kept(ctx):
         for k in range(CpuVolumes.KEPT_LIGHTS + 3):
             vols.prepare(np.array([0.5 * k, 7.0, 1.0, 1.0]))
         assert len(vols._kept) == CpuVolumes.KEPT_LIGHTS
+
+
+def test_cross3_is_np_cross_bit_for_bit():
+    from shadowvol.raster.projection import cross3
+    rng = np.random.default_rng(0)
+    for _ in range(2000):
+        a = rng.normal(size=3) * 10.0 ** rng.uniform(-6, 6)
+        b = rng.normal(size=3) * 10.0 ** rng.uniform(-6, 6)
+        np.testing.assert_array_equal(cross3(a, b), np.cross(a, b))
