@@ -291,6 +291,9 @@ class Renderer:
             if need_bits:
                 pages.append(target.read_bits())
             if facing_pass and page_lights:
+                # the facing pass reads every light's unshadowed bit: mark the last one's too
+                # (the stencil still holds its count)
+                passes.mark_unshadowed(self.ctx, self.gl, target, progs, len(page_lights) - 1)
                 truth_pages.append(self._truth_pass().run(target, self.geometry, page_lights))
         h, w = self.scene.height, self.scene.width
         image = target.read_image() if "image" in outputs else None
