@@ -105,3 +105,23 @@ def block_means(image: np.ndarray, variance: np.ndarray, block: int):
     mean = image.reshape(shape).mean(axis=(1, 3))
     var = variance.reshape(shape).sum(axis=(1, 3)) / block ** 4
     return mean, var
+
+
+# Two square cards over a floor under a light straight down: each card's shadow is its own
+# footprint.  A at height 1 covers x -1.0..0.2, z -0.6..0.6; B at height 0.5 covers
+# x -0.2..1.0, z -0.3..0.9; on the floor the overlap x -0.2..0.2, z -0.3..0.6 has both bits,
+# and on B the same region is A's.
+CARDS = {"A": (1.0, (-1.0, 0.2), (-0.6, 0.6)), "B": (0.5, (-0.2, 1.0), (-0.3, 0.9))}
+FLOOR = (0.0, (-4.0, 4.0), (-4.0, 4.0))
+
+
+def cards_scene(width=160, height=120, light=None) -> Scene:
+    def card(name, y, xs, zs, up=1.0):
+        return plane(name, point=[sum(xs) / 2, y, sum(zs) / 2], normal=[0, up, 0],
+                     size=[xs[1] - xs[0], zs[1] - zs[0]])
+    # the floor is wound facing down, away from the camera: its normal must be turned up
+    return Scene(camera=Camera(eye=[0.3, 4.0, 4.5], target=[0.0, 0.3, 0.0], fov_y=40.0),
+                 objects=[card("floor", *FLOOR, up=-1.0), card("A", *CARDS["A"]),
+                          card("B", *CARDS["B"])],
+                 lights=[light or DirectionalLight([0.0, -1.0, 0.0])],
+                 width=width, height=height)

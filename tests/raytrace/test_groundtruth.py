@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from builders import SCENES
+from builders import CARDS, FLOOR, SCENES, cards_scene
 from exact import _ray_triangles
 
 import raytrace
@@ -29,26 +29,6 @@ from shadowvol.scenefile import load_scene
 DEPTH_RTOL = 4 * 2.0 ** -23
 
 # ---- the hand-worked scene ----------------------------------------------------------------------
-
-# Two square cards over a floor under a light straight down: each card's shadow is its own
-# footprint.  A at height 1 covers x -1.0..0.2, z -0.6..0.6; B at height 0.5 covers
-# x -0.2..1.0, z -0.3..0.9; on the floor the overlap x -0.2..0.2, z -0.3..0.6 has both bits,
-# and on B the same region is A's.
-CARDS = {"A": (1.0, (-1.0, 0.2), (-0.6, 0.6)), "B": (0.5, (-0.2, 1.0), (-0.3, 0.9))}
-FLOOR = (0.0, (-4.0, 4.0), (-4.0, 4.0))
-
-
-def cards_scene(width=160, height=120, light=None) -> Scene:
-    def card(name, y, xs, zs, up=1.0):
-        return plane(name, point=[sum(xs) / 2, y, sum(zs) / 2], normal=[0, up, 0],
-                     size=[xs[1] - xs[0], zs[1] - zs[0]])
-    # the floor is wound facing down, away from the camera: its normal must be turned up
-    return Scene(camera=Camera(eye=[0.3, 4.0, 4.5], target=[0.0, 0.3, 0.0], fov_y=40.0),
-                 objects=[card("floor", *FLOOR, up=-1.0), card("A", *CARDS["A"]),
-                          card("B", *CARDS["B"])],
-                 lights=[light or DirectionalLight([0.0, -1.0, 0.0])],
-                 width=width, height=height)
-
 
 def pixel_rays(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """eye (3,) and the pixel-centre directions (H, W, 3) from K and camera_to_world alone
