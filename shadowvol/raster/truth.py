@@ -191,7 +191,9 @@ def count_casters(ctx, gl, target, volumes, choice: np.ndarray, candidates: list
     gl_y = target.height - rows.stop  # GL counts rows from the bottom
     region = where[rows, cols]
     out = bits[rows, cols]
-    ctx.scissor = (cols.start, gl_y, w, h)
+    # the volume passes draw into target.fbo (count_volumes binds it); moderngl keeps a
+    # scissor per framebuffer and applies it when the framebuffer is bound
+    target.fbo.scissor = (cols.start, gl_y, w, h)
     try:
         for j in candidates:
             passes.count_volumes(ctx, gl, target, volumes, choice, halve=halve,
@@ -200,7 +202,8 @@ def count_casters(ctx, gl, target, volumes, choice: np.ndarray, candidates: list
             counted = top_row_first(stencil) != 0
             out[counted & region] |= np.uint64(1) << np.uint64(j)
     finally:
-        ctx.scissor = None
+        target.fbo.scissor = None
+        target.use()  # re-applies the framebuffer's state: no scissor
     return bits
 
 
