@@ -232,8 +232,7 @@ class Renderer:
 
     def _truth_pass(self) -> truth.TruthPass:
         if self._truth is None:
-            self._truth = self._own(truth.TruthPass(self.ctx, self.scene.width,
-                                                    self.scene.height))
+            self._truth = self._own(truth.TruthPass(self.ctx, self.target))
         return self._truth
 
     def _render(self, method, silhouettes, camera, lights, shadows,
@@ -361,7 +360,8 @@ class Renderer:
                                                      world[cast].astype(np.float64), light4)
                 vols.prepare(light4)
                 casters[i] = truth.count_casters(
-                    self.ctx, self.gl, self.target, vols, zfail[i], candidates,
+                    self.ctx, self.gl, self.target, self._truth_pass(), vols, zfail[i],
+                    candidates,
                     out["facing"][i], halve=method == "auto" and not want_stencil,
                     clip_planes=clip)
             out["casters"] = casters

@@ -44,14 +44,20 @@ class TruthPass:
     """What the ground truth needs on the GPU beside the frame: the facing program (per light
     count) and its two bit targets.  Call `release()`."""
 
-    def __init__(self, ctx: moderngl.Context, width: int, height: int):
+    def __init__(self, ctx: moderngl.Context, target):
         self.ctx = ctx
-        self.width, self.height = width, height
+        self.width, self.height = width, height = target.width, target.height
         self.lit = ctx.texture((width, height), 1, dtype="f4")
         self.facing = ctx.texture((width, height), 1, dtype="f4")
-        for t in (self.lit, self.facing):
+        self.casters = ctx.texture((width, height), 4, dtype="f4")
+        for t in (self.lit, self.facing, self.casters):
             t.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.fbo = ctx.framebuffer(color_attachments=[self.lit, self.facing])
+        # the casters' marks are stencil-tested against the frame's own depth-stencil buffer
+        self.casters_fbo = ctx.framebuffer(color_attachments=[self.casters])
+        target.depth_stencil.attach(self.casters_fbo.glo)
+        self.mark = glsl.program(ctx, "fullscreen.vert", "caster_bit.frag")
+        self.mark_vao = ctx.vertex_array(self.mark, [])
         self._programs: dict[int, tuple] = {}
         self._bits = np.empty((height, width), np.float32)
 
@@ -97,9 +103,9 @@ class TruthPass:
             vao.release()
             prog.release()
         self._programs.clear()
-        self.fbo.release()
-        self.lit.release()
-        self.facing.release()
+        for obj in (self.mark_vao, self.mark, self.casters_fbo, self.fbo, self.lit, self.facing,
+                    self.casters):
+            obj.release()
 
 
 def read_surface(target) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -179,31 +185,50 @@ def caster_candidates(bounds: np.ndarray, points: np.ndarray, light4: np.ndarray
     return [int(j) for j in np.flatnonzero(meets)]
 
 
-def count_casters(ctx, gl, target, volumes, choice: np.ndarray, candidates: list[int],
-                  where: np.ndarray, halve: bool, clip_planes) -> np.ndarray:
+def count_casters(ctx, gl, target, truth_pass: TruthPass, volumes, choice: np.ndarray,
+                  candidates: list[int], where: np.ndarray, halve: bool, clip_planes
+                  ) -> np.ndarray:
     """(H, W) uint64: bit j where candidate object j's own shadow volumes count non-zero and
     `where` (H, W) bool (the pixels facing the light).  `volumes` must be prepared for the
-    light; `choice` (n_objects,) bool is the light's z-fail choice per caster.  Only the box of
-    the cast pixels (`cast_box`) is drawn (scissor), read back and combined."""
+    light; `choice` (n_objects,) bool is the light's z-fail choice per caster.
+
+    Per candidate: its volume count (the stencil), then caster_bit.frag adds its bit where the
+    count is not 0; one read of the sums at the end.  Everything is drawn (scissor) and read
+    only in the box of the cast pixels (`cast_box`)."""
     bits = np.zeros(where.shape, np.uint64)
     rows, cols = cast_box(where)
     h, w = rows.stop - rows.start, cols.stop - cols.start
-    gl_y = target.height - rows.stop  # GL counts rows from the bottom
-    region = where[rows, cols]
-    out = bits[rows, cols]
-    # the volume passes draw into target.fbo (count_volumes binds it); moderngl keeps a
-    # scissor per framebuffer and applies it when the framebuffer is bound
-    target.fbo.scissor = (cols.start, gl_y, w, h)
+    box = (cols.start, target.height - rows.stop, w, h)  # GL counts rows from the bottom
+    marks = truth_pass.casters_fbo
+    # moderngl keeps a scissor per framebuffer and applies it when the framebuffer is bound;
+    # the volume passes draw into target.fbo (count_volumes binds it)
+    target.fbo.scissor = marks.scissor = box
     try:
+        marks.use()
+        marks.clear(0.0, 0.0, 0.0, 0.0)  # (within the scissor)
         for j in candidates:
             passes.count_volumes(ctx, gl, target, volumes, choice, halve=halve,
                                  clip_planes=clip_planes, objects=[j])
-            stencil = stencil_gl.read_stencil(gl, target.fbo.glo, w, h, cols.start, gl_y)
-            counted = top_row_first(stencil) != 0
-            out[counted & region] |= np.uint64(1) << np.uint64(j)
+            marks.depth_mask = False
+            marks.use()
+            ctx.enable_only(moderngl.BLEND)
+            ctx.blend_func = moderngl.ONE, moderngl.ONE
+            ctx.blend_equation = moderngl.FUNC_ADD
+            bit = [0.0] * 4
+            bit[j // 16] = float(2 ** (j % 16))
+            set_uniform(truth_pass.mark, "u_bit", tuple(bit))
+            with stencil_gl.where_shadowed(gl):
+                truth_pass.mark_vao.render(moderngl.TRIANGLES, vertices=3)
+            ctx.enable_only(moderngl.DEPTH_TEST)
+        sums = np.empty((h, w, 4), np.float32)
+        marks.read_into(sums, viewport=box, components=4, attachment=0, dtype="f4")
     finally:
-        target.fbo.scissor = None
+        target.fbo.scissor = marks.scissor = None
         target.use()  # re-applies the framebuffer's state: no scissor
+    words = top_row_first(sums).astype(np.uint64)
+    combined = (words[..., 0] | (words[..., 1] << np.uint64(16))
+                | (words[..., 2] << np.uint64(32)) | (words[..., 3] << np.uint64(48)))
+    bits[rows, cols] = np.where(where[rows, cols], combined, np.uint64(0))
     return bits
 
 

@@ -256,3 +256,20 @@ def test_random_scenes_ground_truth_matches(ctx, request, scene):
         path = TEST_OUTPUT / "robustness" / "failing-groundtruth.json"
         save_scene(scene, path)
         raise AssertionError(f"{failures}; the scene is saved as {path}")
+
+
+def test_casters_past_the_first_16_bits(ctx, gl_session, request):
+    """64 objects, the casters at indices 17, 38 and 63 (the raster sums 16 bits a channel):
+    every bit where the ray tracer has it."""
+    objects = [plane("floor", size=[8, 8])]
+    objects += [box(f"far{i}", [20.0 + i, 0.2, -30.0], [0.3, 0.3, 0.3]) for i in range(63)]
+    for k, (x, z) in zip((17, 38, 63), [(-0.8, 0.0), (0.3, 0.4), (0.9, -0.5)]):
+        objects[k] = box(f"caster{k}", [x, 0.9, z], [0.6, 0.1, 0.6])
+    scene = Scene(camera=Camera(eye=[0.0, 3.5, 4.0], target=[0.0, 0.3, 0.0], fov_y=45.0),
+                  objects=objects, lights=[PointLight([0.2, 4.0, 0.3])], **SIZE)
+    with Renderer(scene, gl_session) as r:
+        raster = r.render(outputs=ALL)
+    ref = ground_truth(scene)
+    assert not compare(request, scene, raster, ref)
+    for k in (17, 38, 63):
+        assert ((raster.casters[0] >> np.uint64(k)) & np.uint64(1)).sum() > 50, k
