@@ -325,7 +325,7 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
     add("")
     rss = results.get("rss")
     if rss:
-        add(f"Peak RSS (ru_maxrss) of a fresh process that builds the {rss['size']} scene and "
+        add(f"Peak RSS (VmHWM) of a fresh process that builds the {rss['size']} scene and "
             f"then renders one frame (`Renderer(scene).render()`), against one that computes "
             f"`raytrace.shadow_masks(scene)`:")
         add("")

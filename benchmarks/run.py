@@ -291,12 +291,18 @@ def pyrender_section(ctx, cfg) -> list:
     return out
 
 
+# VmHWM, the peak RSS of this process's memory since exec (ru_maxrss would carry the parent's
+# peak over from fork)
 RSS_CHILD = """
-import resource, sys, time
+import sys, time
 sys.path[:0] = [{root!r}, {bench!r}]
+def hwm_mb():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
 import scenes
 scene = scenes.occluder_scene({size!r}, 1, 1280, 720)
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+base = hwm_mb()
 t0 = time.perf_counter()
 if {what!r} == "frame":
     from shadowvol.raster.renderer import Renderer
@@ -305,14 +311,13 @@ if {what!r} == "frame":
 else:
     from raytrace.masks import shadow_masks
     shadow_masks(scene)
-print(base / 1024, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-      time.perf_counter() - t0)
+print(base, hwm_mb(), time.perf_counter() - t0)
 """
 
 
 def rss_section(cfg) -> dict:
     """Peak RSS of one process that builds the scene and renders one frame, against one that
-    computes the ray tracer's masks of it (each in a fresh process: ru_maxrss is monotone)."""
+    computes the ray tracer's masks of it (each in a fresh process: the peak is monotone)."""
     out = {"size": cfg["rss_size"]}
     for what in ("frame", "masks"):
         code = RSS_CHILD.format(root=str(ROOT), bench=str(ROOT / "benchmarks"),

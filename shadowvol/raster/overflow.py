@@ -178,8 +178,8 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
 LIGHT_GRID = 1024        # cells per side of each cube face (point light) or of the plane
 # the slack allowed for the rasterized volumes, in camera pixels at the triangle: GL snaps
 # vertices to at least 4 sub-pixel bits (1/16 pixel, so at most 1/32 off; GPUs snap to 1/256),
-# taken four times over; float32 rounding of the coordinates is added on top
-PIXEL_SLACK = 0.125
+# taken twice over; float32 rounding of the coordinates is added on top
+PIXEL_SLACK = 1.0 / 16.0
 FLOAT32_SLACK = 16 * np.finfo(np.float32).eps
 GNOMONIC_STRETCH = 3.0   # d(u, v) / d(angle) <= 1 + u^2 + v^2 <= 3 on a cube face
 

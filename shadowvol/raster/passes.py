@@ -33,6 +33,9 @@ from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
 from shadowvol.scene import Camera, Light, Scene, SpotLight
 
 NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)
+# reversed depth: FAR_DEPTH (0) is the clear value and drawn surfaces lie above it, so a
+# fragment at FAR_DEPTH passes "<" exactly where something was drawn
+FARTHER_THAN_NOTHING = "<"
 
 
 class ScenePrograms:
@@ -101,12 +104,12 @@ def set_camera(programs, view_proj: np.ndarray, camera: Camera) -> None:
         set_uniform(p, "u_eye", tuple(float(x) for x in camera.eye))
 
 
-def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
+def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, scene: Scene,
                   cull: np.ndarray | None = None) -> None:
     """Clear the G-buffer, depth and stencil, then every triangle: one indexed draw per run of
     objects with the same `cull` (n_objects,) bool, back faces culled where it is True (one
     draw for all when None or all alike)."""
-    target.clear_gbuffer()
+    target.clear_gbuffer(scene.background)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     ctx.front_face = "ccw"
@@ -139,10 +142,21 @@ def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
     ctx.blend_func = moderngl.ONE, moderngl.ONE
     ctx.blend_equation = moderngl.FUNC_ADD
     set_uniform(progs.mark, "u_bit", float(2 ** bit))
+    _only_where_covered(ctx)
     with stencil.where_unshadowed(gl):
         progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
     ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = NEARER
     target.use()
+
+
+def _only_where_covered(ctx: moderngl.Context) -> None:
+    """The depth test of the full-screen passes (blending as it was): their triangle lies at
+    FAR_DEPTH, the depth of nothing drawn, and passes where the stored depth is farther from
+    FAR_DEPTH than it (any drawn surface; depth writes are off), so uncovered pixels cost no
+    shading."""
+    ctx.enable(moderngl.DEPTH_TEST)
+    ctx.depth_func = FARTHER_THAN_NOTHING
 
 
 def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
@@ -164,6 +178,7 @@ def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: Scene
         ctx.enable_only(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE
         ctx.blend_equation = moderngl.FUNC_ADD
+    _only_where_covered(ctx)
     set_uniform(prog, "u_eye", tuple(float(x) for x in camera.eye))
     set_uniform(prog, "u_first_page", first_page)
     # uniform arrays as packed float32 (glUniform*fv): the same float32 values the forward

@@ -112,6 +112,7 @@ class Renderer:
         self._convex: np.ndarray | None = None
         # light -> None (used once) or (the slack (M,) it was computed with, the bound)
         self._light_bounds: dict[bytes, tuple | None] = {}
+        self._slack: tuple | None = None   # (camera key, `overflow.world_slack`)
         # back-face culling in the geometry pass for closed convex casters beyond the near
         # plane (`methods.cullable`): 14-22% of a frame here, but OFF by default because it is
         # not exact at float32 depth ties: where a silhouette's back face won the depth test by
@@ -188,7 +189,10 @@ class Renderer:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else lights
         corners = self.geometry.soup_corners_f64
-        needed = overflow.world_slack(camera, self.scene.height, corners)
+        key = (camera.eye.tobytes(), float(camera.fov_y))
+        if self._slack is None or self._slack[0] != key:   # a pass over every corner: once
+            self._slack = (key, overflow.world_slack(camera, self.scene.height, corners))
+        needed = self._slack[1]
         out = []
         for i, light in enumerate(lights):
             key = light.homogeneous.tobytes()
@@ -252,7 +256,7 @@ class Renderer:
         passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
         cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
                                 self.geometry.extent) if self.cull_back_faces else None
-        passes.geometry_pass(self.ctx, target, progs, cull)
+        passes.geometry_pass(self.ctx, target, progs, self.scene, cull)
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(

@@ -87,13 +87,14 @@ class Target:
         stencil.clear_depth_stencil(self.gl, self.fbo.glo, FAR_DEPTH)
         stencil.clear_colour_attachment(self.gl, self.fbo.glo, 1, 0.0)
 
-    def clear_gbuffer(self) -> None:
-        """For the geometry pass: position and surface to 0 (nothing drawn), depth to
-        FAR_DEPTH, stencil 0, unshadowed to 0.  Colour and bits need no clear: the shading pass
-        writes every pixel."""
+    def clear_gbuffer(self, background: np.ndarray) -> None:
+        """For the geometry pass: position and surface to 0 (nothing drawn), colour to the
+        background (alpha 0), bits and unshadowed to 0, depth to FAR_DEPTH, stencil 0.  The
+        full-screen passes then run only where geometry is (depth test), so the clears are
+        what uncovered pixels keep."""
+        self.clear(background)   # colour, bits, depth, stencil (`fbo`)
         self.clear_unshadowed()  # glClearBuffer: moderngl's clear would clear the depth too
         self.use_gbuffer()
-        stencil.clear_depth_stencil(self.gl, self.gbuffer_fbo.glo, FAR_DEPTH)
         stencil.clear_colour_attachment(self.gl, self.gbuffer_fbo.glo, 0, 0.0)
 
     def clear_unshadowed(self) -> None:
