@@ -103,11 +103,13 @@ def set_camera(programs, view_proj: np.ndarray, camera: Camera) -> None:
 
 
 def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, scene: Scene,
-                  cull: np.ndarray | None = None) -> None:
+                  cull: np.ndarray | None = None, marks: bool = True) -> None:
     """Clear the G-buffer, depth and stencil, then every triangle of the soup: one draw per run
     of objects with the same `cull` (n_objects,) bool, back faces culled where it is True (one
-    draw for all when None or all alike)."""
-    target.clear_gbuffer(scene.background)
+    draw for all when None or all alike).  `marks`: some light will be marked (more than one
+    light in a page)."""
+    target.clear_gbuffer(scene.background, marks)
+    target.use_gbuffer()
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     ctx.front_face = "ccw"

@@ -9,8 +9,9 @@ files are the CLI's business.
 Limit: the stencil is 8 bits and counts wrap (INCR_WRAP / DECR_WRAP).  Every triangle casts, so
 a pixel behind k closed meshes counts 2k; 256 layers over one pixel would read 0, i.e. lit.  That
 needs about 128 closed objects (or 256 open sheets) lined up between one point and one light.
-It is detected (`overflow`): when a conservative bound says a count could reach 256, one more
-saturating volume pass per light finds the pixels that may have wrapped, and render() raises
+It is detected (`overflow`): when conservative bounds (the scene's, then the light's:
+`overflow.light_bound`) say a count could reach 256, one more saturating volume pass for that
+light finds the pixels that may have wrapped, and render() raises
 overflow.StencilOverflowError instead of returning a wrong shadow.
 """
 
@@ -216,7 +217,7 @@ class Renderer:
         passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
         cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
                                 self.geometry.extent) if self.cull_back_faces else None
-        passes.geometry_pass(self.ctx, target, progs, self.scene, cull)
+        passes.geometry_pass(self.ctx, target, progs, self.scene, cull, marks=len(lights) > 1)
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(
