@@ -41,7 +41,7 @@ void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 position = texelFetch(u_position, p, 0);
     int surface = int(position.w);
-    if (surface == 0) {
+    if (surface == 0) {  // (not reached: the pass is depth-tested to covered pixels)
         f_colour = vec4(u_first_page ? u_background : vec3(0.0), 0.0);
         f_bits = 0.0;
         return;

@@ -1,15 +1,13 @@
 """The scene's geometry on the GPU, uploaded once per scene.
 
-All objects become one indexed mesh (their vertices one after another, each carrying its object
-index, and one index buffer of every triangle in the scene's order), drawn by the geometry pass
-in ONE indexed draw; `gl_PrimitiveID` of that draw is the triangle's index in the scene, the key
-of the per-triangle storage buffer (face normal, first corner, object index) that the deferred
-lighting pass reads.  The CPU z-fail caps draw subsets of the same index buffer's triangles, with
-the same vertices in the same order, so their depths equal the geometry pass's bit for bit.
-
-The soup (three vertices per triangle, every per-triangle value a flat vertex attribute) is kept
-for the passes that draw per-vertex triangle data: GPU caps and the planar shadows.  It is built
-on first use.
+All objects become one triangle soup (three vertices per triangle, objects one after another).
+The geometry pass draws its positions in one draw and keys each pixel by the triangle's index
+(gl_VertexID / 3), the key of the per-triangle storage buffer (face normal, first corner, object
+index) that the deferred shading pass reads; the z-fail near caps draw subsets of the same
+vertices in the same order, so their depths equal the geometry pass's bit for bit.  (An indexed
+mesh with gl_PrimitiveID measured 1.6x slower on llvmpipe: its draw path for primitive ids.)
+The soup's other per-vertex attributes (normal, first corner, object: the GPU caps and the
+planar shadows' forward passes) are built on first use, one buffer each.
 
 float32 is used on the GPU because that is what GL rasterizes; normals and corners are computed
 in float64 and rounded once.  Edge topology (CPU, float64) is computed here too, once per object.
@@ -72,17 +70,7 @@ class SceneGeometry:
         self.face_normals = normals
         self.face_normals32 = normals.astype(np.float32)
         self.triangle_objects = np.repeat(np.arange(len(tris), dtype=np.int64), counts)
-        self._soup = None
-        # the indexed mesh: float32 vertices (the soup's corners exactly: the same float64
-        # values rounded once) and int32 indices, objects one after another
-        firsts_v = np.concatenate([[0], np.cumsum([len(o.vertices) for o in scene.objects])])
-        self.mesh_positions = self._buffer(
-            np.concatenate([o.vertices for o in scene.objects]).astype(np.float32))
-        self.mesh_objects = self._buffer(np.repeat(
-            np.arange(len(tris), dtype=np.int32), np.diff(firsts_v)))
-        self.faces = np.concatenate([o.faces + f for o, f in zip(scene.objects, firsts_v)]
-                                    ).astype(np.int32)                        # (M, 3)
-        self.mesh_indices = self._buffer(self.faces)
+        self._soup: dict[str, moderngl.Buffer] = {}
         # per triangle, std430 vec4 pairs: (unit normal, object index), (first corner, 0);
         # float32 as the soup's flat attributes were, so the lighting pass sees the same numbers
         per_triangle = np.zeros((self.triangle_count, 2, 4), np.float32)
@@ -103,28 +91,26 @@ class SceneGeometry:
         self._buffers.append(buf)
         return buf
 
-    def mesh_bindings(self, program: moderngl.Program) -> list[tuple]:
-        """The (buffer, format, name) triples of the indexed mesh's attributes that `program`
-        uses (position and object index; per-triangle values come from `triangle_data`)."""
-        all_ = [(self.mesh_positions, "3f", "in_position"), (self.mesh_objects, "1i", "in_object")]
-        return [b for b in all_ if b[2] in program]
-
-    def _soup_buffers(self) -> dict:
-        if self._soup is None:
+    def _soup_buffer(self, name: str) -> moderngl.Buffer:
+        """The soup's attribute `name`, uploaded on first use."""
+        if name not in self._soup:
             corners = self._corners
-            object_ids = np.repeat(np.arange(len(self.ranges), dtype=np.int32),
-                                   [3 * r.count for r in self.ranges])
-            self._soup = {
-                "in_position": self._buffer(corners.reshape(-1, 3).astype(np.float32)),
-                "in_normal": self._buffer(np.repeat(self._normals, 3, axis=0).astype(np.float32)),
-                "in_corner": self._buffer(np.repeat(corners[:, 0], 3, axis=0).astype(np.float32)),
-                "in_object": self._buffer(object_ids)}
-        return self._soup
+            if name == "in_position":
+                data = corners.reshape(-1, 3).astype(np.float32)
+            elif name == "in_normal":
+                data = np.repeat(self._normals, 3, axis=0).astype(np.float32)
+            elif name == "in_corner":
+                data = np.repeat(corners[:, 0], 3, axis=0).astype(np.float32)
+            else:
+                data = np.repeat(np.arange(len(self.ranges), dtype=np.int32),
+                                 [3 * r.count for r in self.ranges])
+            self._soup[name] = self._buffer(data)
+        return self._soup[name]
 
     @property
     def positions(self) -> moderngl.Buffer:
         """The soup's vertex positions (float32, three per triangle)."""
-        return self._soup_buffers()["in_position"]
+        return self._soup_buffer("in_position")
 
     @property
     def soup_corners_f64(self) -> np.ndarray:
@@ -142,9 +128,9 @@ class SceneGeometry:
 
     def soup_bindings(self, program: moderngl.Program) -> list[tuple]:
         """The (buffer, format, name) triples of the soup's attributes that `program` uses."""
-        soup = self._soup_buffers()
         formats = {"in_position": "3f", "in_normal": "3f", "in_corner": "3f", "in_object": "1i"}
-        return [(soup[name], fmt, name) for name, fmt in formats.items() if name in program]
+        return [(self._soup_buffer(name), fmt, name) for name, fmt in formats.items()
+                if name in program]
 
     def release(self) -> None:
         for buf in self._buffers:

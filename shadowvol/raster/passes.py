@@ -1,7 +1,7 @@
 """The passes of a shadowed frame (deferred: the scene's triangles are drawn once), in order:
 
-1. `geometry_pass`: one indexed draw of every triangle: depth (test NEARER, writes on) and the
-   G-buffer (world position, triangle).
+1. `geometry_pass`: one draw of every triangle (the soup): depth (test NEARER, writes on) and
+   the G-buffer (world position, triangle).
 2. per light: `count_volumes` — the stencil cleared, then the shadow volumes drawn with colour
    and depth writes off and two-sided stencil counting, z-pass or z-fail per caster;
    `mark_unshadowed` — a full-screen pass adding the light's bit where the count is 0.
@@ -46,9 +46,7 @@ class ScenePrograms:
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
         self.gbuffer = glsl.program(ctx, "scene.vert", "gbuffer.frag")
-        self.gbuffer_vao = ctx.vertex_array(self.gbuffer, geometry.mesh_bindings(self.gbuffer),
-                                            index_buffer=geometry.mesh_indices,
-                                            index_element_size=4)
+        self.gbuffer_vao = ctx.vertex_array(self.gbuffer, geometry.soup_bindings(self.gbuffer))
         self.mark = glsl.program(ctx, "fullscreen.vert", "mark.frag")
         self.mark_vao = ctx.vertex_array(self.mark, [])
         self._shade: dict[tuple[int, bool], tuple] = {}  # (lights, colour) -> program, vao
@@ -105,11 +103,13 @@ def set_camera(programs, view_proj: np.ndarray, camera: Camera) -> None:
 
 
 def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, scene: Scene,
-                  cull: np.ndarray | None = None) -> None:
-    """Clear the G-buffer, depth and stencil, then every triangle: one indexed draw per run of
-    objects with the same `cull` (n_objects,) bool, back faces culled where it is True (one
-    draw for all when None or all alike)."""
-    target.clear_gbuffer(scene.background)
+                  cull: np.ndarray | None = None, marks: bool = True) -> None:
+    """Clear the G-buffer, depth and stencil, then every triangle of the soup: one draw per run
+    of objects with the same `cull` (n_objects,) bool, back faces culled where it is True (one
+    draw for all when None or all alike).  `marks`: some light will be marked (more than one
+    light in a page)."""
+    target.clear_gbuffer(scene.background, marks)
+    target.use_gbuffer()
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     ctx.front_face = "ccw"
@@ -126,7 +126,6 @@ def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, s
         first = ranges[a].first
         count = ranges[b - 1].first + ranges[b - 1].count - first
         ctx.enable_only(moderngl.DEPTH_TEST | (moderngl.CULL_FACE if culled else 0))
-        set_uniform(progs.gbuffer, "u_first_triangle", first)
         progs.gbuffer_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
     ctx.enable_only(moderngl.DEPTH_TEST)
     target.use()

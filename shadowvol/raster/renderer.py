@@ -9,8 +9,9 @@ files are the CLI's business.
 Limit: the stencil is 8 bits and counts wrap (INCR_WRAP / DECR_WRAP).  Every triangle casts, so
 a pixel behind k closed meshes counts 2k; 256 layers over one pixel would read 0, i.e. lit.  That
 needs about 128 closed objects (or 256 open sheets) lined up between one point and one light.
-It is detected (`overflow`): when a conservative bound says a count could reach 256, one more
-saturating volume pass per light finds the pixels that may have wrapped, and render() raises
+It is detected (`overflow`): when conservative bounds (the scene's, then the light's:
+`overflow.light_bound`) say a count could reach 256, one more saturating volume pass for that
+light finds the pixels that may have wrapped, and render() raises
 overflow.StencilOverflowError instead of returning a wrong shadow.
 """
 
@@ -256,7 +257,7 @@ class Renderer:
         passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
         cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
                                 self.geometry.extent) if self.cull_back_faces else None
-        passes.geometry_pass(self.ctx, target, progs, self.scene, cull)
+        passes.geometry_pass(self.ctx, target, progs, self.scene, cull, marks=len(lights) > 1)
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(
@@ -334,15 +335,16 @@ class Renderer:
         if not want:
             return out
         h, w = self.scene.height, self.scene.width
-        if want & {"depth", "distance"}:
-            depth = truth.read_depth(self.target, camera)
-            if "depth" in want:
-                out["depth"] = depth
-            if "distance" in want:
-                out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
+        # the depth buffer is cleared every frame: it says where geometry is (the G-buffer and
+        # the facing pass's targets are written only there)
+        depth, covered = truth.read_depth(self.target, camera)
+        if "depth" in want:
+            out["depth"] = depth
+        if "distance" in want:
+            out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
         triangle = front = world = None
         if want & {"normal", "object_id", "casters"}:
-            triangle, front, world = truth.read_surface(self.target)
+            triangle, front, world = truth.read_surface(self.target, covered)
             out |= truth.surface_outputs(self.geometry, triangle, front, want)
         if "facing" in want:
             lit = np.zeros((len(lights), h, w), bool)
@@ -352,7 +354,7 @@ class Renderer:
                 lit_bits, facing_bits = truth_pages[page]
                 np.not_equal(lit_bits & np.uint32(1 << bit), 0, out=lit[i])
                 np.not_equal(facing_bits & np.uint32(1 << bit), 0, out=facing[i])
-            out["lit"], out["facing"] = lit, facing
+            out["lit"], out["facing"] = lit & covered, facing & covered
         if "casters" in want:
             casters = np.zeros((len(lights), h, w), np.uint64)
             for i, light in enumerate(lights):

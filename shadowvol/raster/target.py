@@ -87,15 +87,15 @@ class Target:
         stencil.clear_depth_stencil(self.gl, self.fbo.glo, FAR_DEPTH)
         stencil.clear_colour_attachment(self.gl, self.fbo.glo, 1, 0.0)
 
-    def clear_gbuffer(self, background: np.ndarray) -> None:
-        """For the geometry pass: position and surface to 0 (nothing drawn), colour to the
-        background (alpha 0), bits and unshadowed to 0, depth to FAR_DEPTH, stencil 0.  The
-        full-screen passes then run only where geometry is (depth test), so the clears are
-        what uncovered pixels keep."""
+    def clear_gbuffer(self, background: np.ndarray, marks: bool) -> None:
+        """For the geometry pass: colour to the background (alpha 0), bits to 0, depth to
+        FAR_DEPTH, stencil 0, and the unshadowed bits to 0 if `marks` (a light will be
+        marked).  The full-screen passes run only where geometry is (depth test), so these are
+        what uncovered pixels keep, and the position attachment needs no clear: it is read
+        only where the geometry pass has just written it."""
         self.clear(background)   # colour, bits, depth, stencil (`fbo`)
-        self.clear_unshadowed()  # glClearBuffer: moderngl's clear would clear the depth too
-        self.use_gbuffer()
-        stencil.clear_colour_attachment(self.gl, self.gbuffer_fbo.glo, 0, 0.0)
+        if marks:
+            self.clear_unshadowed()  # glClearBuffer: moderngl's clear would clear the depth
 
     def clear_unshadowed(self) -> None:
         self.mark_fbo.color_mask = (True,) * 4

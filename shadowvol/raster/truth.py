@@ -108,23 +108,27 @@ class TruthPass:
             obj.release()
 
 
-def read_surface(target) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The G-buffer: triangle (H, W) int64 (−1 where nothing is drawn), front (H, W) bool (its
-    front face is seen) and world (H, W, 3) float32 positions, row 0 at the top."""
+def read_surface(target, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The G-buffer where `covered` (H, W) bool: triangle (H, W) int64 (−1 elsewhere), front
+    (H, W) bool (its front face is seen) and world (H, W, 3) float32 positions, row 0 at the
+    top.  Only covered pixels are read: the geometry pass writes the G-buffer only where it
+    draws (it is not cleared), so elsewhere it may hold an earlier frame's surfaces."""
     raw = np.empty((target.height, target.width, 4), np.float32)
     target.gbuffer_fbo.read_into(raw, components=4, attachment=0, dtype="f4")
     raw = top_row_first(raw)
-    key = raw[..., 3].astype(np.int64)
+    key = np.where(covered, raw[..., 3], 0.0).astype(np.int64)
     return np.abs(key) - 1, key > 0, raw[..., :3]
 
 
-def read_depth(target, camera: Camera) -> np.ndarray:
+def read_depth(target, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
     """(H, W) float32 eye-space depth from the depth buffer (near / stored), inf where nothing
-    is drawn (stored 0), row 0 at the top."""
+    is drawn (stored 0, the clear value), and covered (H, W) bool (stored > 0), row 0 at the
+    top."""
     stored = top_row_first(stencil_gl.read_depth(target.gl, target.gbuffer_fbo.glo,
                                                  target.width, target.height))
     with np.errstate(divide="ignore"):
-        return (np.float64(camera.near) / stored.astype(np.float64)).astype(np.float32)
+        depth = (np.float64(camera.near) / stored.astype(np.float64)).astype(np.float32)
+    return depth, stored > 0
 
 
 def ray_lengths(camera: Camera, width: int, height: int) -> np.ndarray:

@@ -141,19 +141,18 @@ class CpuVolumes:
         return out
 
     def _prepare_caps(self, objects: tuple[int, ...]) -> None:
-        """Upload the cap index lists (the mesh indices of the triangles of each sign) of
+        """Upload the cap index lists (the soup vertices of the triangles of each sign) of
         `objects` for the prepared light."""
         cur = self._current
         if cur.capped == objects:
             return
         indices, n_index = [], 0
         cur.caps.clear()
-        faces = self.geometry.faces
         for sign in (1, -1):   # each sign's lists one after another: one draw per sign
             for i in objects:
                 rng = self.geometry.ranges[i]
                 t = np.flatnonzero(cur.signs[i] == sign) + rng.first
-                idx = faces[t].reshape(-1)
+                idx = (3 * t[:, None] + np.arange(3)).reshape(-1)
                 indices.append(idx)
                 cur.caps[i, sign] = (n_index, len(idx))
                 n_index += len(idx)
@@ -164,7 +163,7 @@ class CpuVolumes:
             cur.index_buffer.release()
         cur.index_buffer = self.ctx.buffer(data.tobytes() if len(data) else b"\0" * 12)
         cur.cap_vaos = {near: self.ctx.vertex_array(
-            program, self.geometry.mesh_bindings(program), index_buffer=cur.index_buffer,
+            program, self.geometry.soup_bindings(program), index_buffer=cur.index_buffer,
             index_element_size=4) for near, program in ((True, self.near_program),
                                                         (False, self.far_program))}
         cur.capped = objects

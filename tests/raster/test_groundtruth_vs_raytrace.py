@@ -273,3 +273,20 @@ def test_casters_past_the_first_16_bits(ctx, gl_session, request):
     assert not compare(request, scene, raster, ref)
     for k in (17, 38, 63):
         assert ((raster.casters[0] >> np.uint64(k)) & np.uint64(1)).sum() > 50, k
+
+
+def test_a_second_frame_keeps_nothing_of_the_first(ctx, gl_session):
+    """The G-buffer is written only where geometry is: a frame that sees less (the camera
+    turned away) must not show the first frame's surfaces where it sees nothing."""
+    scene = load_scene(SCENES / "stack.toml").replace(**SIZE)
+    away = Camera(eye=scene.camera.eye, target=scene.camera.eye + np.array([-1.0, 0.3, -1.0]),
+                  fov_y=scene.camera.fov_y)
+    with Renderer(scene, gl_session) as r:
+        r.render(outputs=ALL)
+        second = r.render(camera=away, outputs=ALL)
+    with Renderer(scene.replace(camera=away), gl_session) as fresh:
+        alone = fresh.render(outputs=ALL)
+    assert (~alone.coverage).any()
+    for name in ("depth", "normal", "object_id", "facing", "casters", "lit"):
+        np.testing.assert_array_equal(getattr(second, name), getattr(alone, name),
+                                      err_msg=name)
