@@ -362,8 +362,7 @@ class Renderer:
                 if not cast.any():
                     continue
                 light4 = light.homogeneous
-                candidates = truth.caster_candidates(self.geometry.bounds,
-                                                     world[cast].astype(np.float64), light4)
+                candidates = truth.caster_candidates(self.geometry.bounds, world[cast], light4)
                 vols.prepare(light4)
                 casters[i] = truth.count_casters(
                     self.ctx, self.gl, self.target, self._truth_pass(), vols, zfail[i],
