@@ -160,9 +160,9 @@ def surface_outputs(geometry, triangle: np.ndarray, front: np.ndarray, want: set
 
 def caster_candidates(bounds: np.ndarray, points: np.ndarray, light4: np.ndarray) -> list[int]:
     """The objects whose box (bounds (n, 2, 3) float64) can lie between some of `points`
-    (k, 3) float32 or float64 (the cast pixels' world positions) and the light (4,) homogeneous: the box
-    of the points joined with a point light's position, or swept toward a directional light
-    (to infinity), meets the object's box.  Conservative (boxes padded by 1e-6 of their size):
+    (k, 3) float32 or float64 (the cast pixels' world positions) and the light (4,)
+    homogeneous: the box of the points joined with a point light's position, or swept toward
+    a directional light (to infinity), meets the object's box.  Conservative (boxes padded by 1e-6 of their size):
     a candidate may cast nothing, a caster is never missed."""
     # the box of the points (float32 world positions are exact in float64)
     lo = points.min(axis=0).astype(np.float64)
