@@ -102,14 +102,17 @@ def main(argv: list[str] | None = None) -> int:
             save_png(args.output, image)
             print(f"wrote {args.output}", file=sys.stderr)
         else:
-            from .masks import shadow_masks
+            from shadowvol.scene import light_samples
+
+            from . import shadow_masks  # (area lights: lit where every sample reaches)
             png = None if args.no_png else args.png or str(Path(args.output).with_suffix(".png"))
             if png is not None and Path(png).resolve() == Path(args.output).resolve():
                 print(f"error: the masks and their picture would both be {args.output}; "
                       "give the masks a .npz name or choose --png", file=sys.stderr)
                 return EXIT_BAD_INPUT
             lit, coverage = shadow_masks(scene, backend=args.backend)
-            save_masks(args.output, lit, coverage)
+            save_masks(args.output, lit, coverage,
+                       light_samples=[light_samples(lt) for lt in scene.lights])
             written = [args.output]
             if png is not None:
                 save_png(png, masks_image(lit, coverage))

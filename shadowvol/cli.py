@@ -178,7 +178,7 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
     from .glsl import ShaderError
     from .overflow import StencilOverflowError
     from .renderer import Renderer
-    from .scene import SceneError
+    from .scene import SceneError, light_samples
     from .scenefile import load_scene
     from .stencil import RawGLError
     from .views import heat_maps
@@ -201,7 +201,8 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
                        if "volumes" in out else None)
         save_png(out["image"], result.image)
         if "masks" in out:
-            save_masks(out["masks"], result.lit, result.coverage)
+            save_masks(out["masks"], result.lit, result.coverage,
+                       light_samples=[light_samples(lt) for lt in scene.lights])
         if volumes is not None:
             save_png(out["volumes"], volumes)
         if "stencil" in out:
