@@ -99,8 +99,10 @@ def blocked_samples(p: np.ndarray, samples: np.ndarray) -> np.ndarray:
     """(..., N) bool: the segment from floor point p (..., 3) to each sample (N, 3) of the
     light crosses the occluder's square (computed analytically, float64), and the distance
     (..., N) of that crossing from the square's outline (how close the call is)."""
-    t = (OCCLUDER_Y - FLOOR_Y) / (LIGHT_Y - FLOOR_Y)
-    q = p[..., None, :] + t * (samples - p[..., None, :])
+    t = (OCCLUDER_Y - p[..., None, 1]) / (samples[:, 1] - p[..., None, 1])
+    if np.any(t >= 1):
+        raise ValueError("every sample must lie above the occluder")
+    q = p[..., None, :] + t[..., None] * (samples - p[..., None, :])
     half = OCCLUDER_SIDE / 2
     dx = half - np.abs(q[..., 0] - OCCLUDER_CENTER[0])
     dz = half - np.abs(q[..., 2] - OCCLUDER_CENTER[2])
