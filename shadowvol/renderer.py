@@ -25,7 +25,7 @@ from .camera import view_projection
 from .context import create_context, make_current
 from .framebuffer import Target
 from .gpuscene import SceneGeometry
-from .scene import Camera, Light, Scene
+from .scene import AreaLight, Camera, Light, Scene, hard_lights
 from .silhouettes import light_vector
 from .volumes import CpuVolumes, GpuVolumes
 
@@ -36,12 +36,17 @@ SILHOUETTES = ("cpu", "gpu")
 class RenderResult:
     """One frame.
 
-    image    : (H, W, 3) float32 linear RGB (direct Phong lighting with hard shadows)
-    lit      : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot cone
+    image    : (H, W, 3) float32 linear RGB (direct Phong lighting; an area light's samples
+               summed: soft shadows)
+    lit      : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot cone;
+               for an area light: so for every sample (lit_count == N)
     coverage : (H, W) bool, geometry visible at the pixel centre
     stencil  : (L, H, W) int16 signed stencil counts after each light's volume pass, or None
-               when not asked for
+               when not asked for (hard lights only)
     zfail    : (L, n_objects) bool, which casters were counted with z-fail for each light
+               (for an area light: for any of its samples)
+    lit_count: (L, H, W) uint16, per light how many of its samples (hard lights: 1) light the
+               pixel as `lit` says
     """
 
     image: np.ndarray
@@ -49,6 +54,7 @@ class RenderResult:
     coverage: np.ndarray
     stencil: np.ndarray | None
     zfail: np.ndarray
+    lit_count: np.ndarray | None = None
 
 
 class Renderer:
@@ -129,15 +135,20 @@ class Renderer:
         vols = self.volumes(silhouettes)
         clip = methods.zpass_clip_planes(self.geometry.bounds, camera, self.scene.aspect,
                                          self.geometry.extent)
-        for i, light in enumerate(self.scene.lights if lights is None else lights):
+        lights = self.scene.lights if lights is None else lights
+        # an area light's samples are checked one by one against every pixel any sample lit
+        # (a superset of the sample's own lit pixels: it may raise where it need not, never
+        # the other way); the casters its samples counted with z-fail stay z-fail (valid)
+        for i, light in ((i, hard) for i, lt in enumerate(lights) for hard in hard_lights(lt)):
             light4 = light_vector(light)
             if vols.light4 is None or not np.array_equal(vols.light4, light4):
                 vols.prepare(light4)  # (the frame's last light is still prepared)
             for p in vols.programs:
                 passes.set_uniform(p, "u_light", tuple(float(x) for x in light4))
             choice = result.zfail[i]
+            drawn = result.lit_count[i] > 0
             wrapped = overflow.find_wrapped(self.ctx, self.gl, self.target, vols, choice,
-                                            result.lit[i], clip, halve)
+                                            drawn, clip, halve)
             # a pixel is cleared by any valid counting whose entering faces stay below 255
             zpass_valid = not methods.needs_zfail(self.geometry.bounds, camera,
                                                   self.scene.aspect, light4,
@@ -148,7 +159,7 @@ class Renderer:
                     break
                 if not np.array_equal(other, choice):
                     wrapped &= overflow.find_wrapped(self.ctx, self.gl, self.target, vols,
-                                                     other, result.lit[i], clip)
+                                                     other, drawn, clip)
             if wrapped.any():
                 raise overflow.StencilOverflowError(i, wrapped)
 
@@ -164,9 +175,15 @@ class Renderer:
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if stencil else methods.zpass_clip_planes(
             self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
-        lit, counts, zfail = [], [], []
-        for light in lights:
-            light4 = light_vector(light)
+        h, w = self.scene.height, self.scene.width
+        if stencil and any(isinstance(light, AreaLight) for light in lights):
+            raise ValueError("stencil counts are per hard light: not for area lights")
+        lit_count = np.zeros((len(lights), h, w), np.uint16)
+        zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
+        counts = []
+        # an area light is its samples, each counted and shaded as a point light
+        for i, sample in ((i, hard) for i, lt in enumerate(lights) for hard in hard_lights(lt)):
+            light4 = light_vector(sample)
             choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
                                     light4, self.geometry.extent)
             if shadows:
@@ -181,17 +198,17 @@ class Renderer:
                 self.target.clear_stencil()
             if stencil:
                 counts.append(self.target.read_stencil())
-            passes.add_light(self.ctx, self.gl, self.target, self.programs, light)
-            lit.append(self.target.read_lit())
-            zfail.append(choice)
+            passes.add_light(self.ctx, self.gl, self.target, self.programs, sample)
+            lit_count[i] += self.target.read_lit()
+            zfail[i] |= choice
         rgba = self.target.read_colour()
-        h, w = self.scene.height, self.scene.width
+        samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
         return RenderResult(
             image=np.ascontiguousarray(rgba[..., :3]),
-            lit=np.array(lit, bool).reshape(len(lights), h, w),
+            lit=lit_count == samples[:, None, None],
             coverage=rgba[..., 3] > 0.5,
             stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if stencil else None,
-            zfail=np.array(zfail, bool).reshape(len(lights), len(self.scene.objects)))
+            zfail=zfail, lit_count=lit_count)
 
     def volume_view(self, method: str = "auto", silhouettes: str = "cpu", *,
                     camera: Camera | None = None,
@@ -202,7 +219,8 @@ class Renderer:
         result = self.render(method, silhouettes, camera=camera)  # leaves the frame in target
         vols = self.volumes(silhouettes)
         with stencil_gl.zero_to_one_depth(self.gl):
-            for i, light in enumerate(self.scene.lights):
+            for i, light in ((i, hard) for i, lt in enumerate(self.scene.lights)
+                             for hard in hard_lights(lt)):  # an area light: every sample's
                 if lights is None or i in lights:
                     light4 = light_vector(light)
                     vols.prepare(light4)

@@ -39,7 +39,8 @@ def square_over_floor(light, size: int = 64) -> Scene:
 
 def floor_points(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Each pixel's pixel-centre ray cut with the floor plane: points (H, W, 3) float64, and
-    `on_floor` (H, W) bool, the pixels where that ray meets the floor, and not the occluder first."""
+    `on_floor` (H, W) bool, the pixels where that ray meets the floor, and not the occluder
+    first."""
     from raytrace.camera import primary_rays
 
     o, d = primary_rays(scene.camera, scene.width, scene.height)
@@ -64,7 +65,8 @@ def _shadow_interval(p: np.ndarray, axis: int) -> tuple[np.ndarray, np.ndarray]:
     k = (LIGHT_Y - FLOOR_Y) / (OCCLUDER_Y - FLOOR_Y)
     half = OCCLUDER_SIDE / 2
     c = OCCLUDER_CENTER[axis]
-    return p[..., axis] + k * (c - half - p[..., axis]), p[..., axis] + k * (c + half - p[..., axis])
+    x = p[..., axis]
+    return x + k * (c - half - x), x + k * (c + half - x)
 
 
 def square_visible_fraction(p: np.ndarray) -> np.ndarray:
