@@ -31,13 +31,15 @@ import numpy as np
 from . import maskdiff
 from .cli import EXIT_OK, EXIT_OVER_BUDGET
 from .files import join
-from .scene import DirectionalLight, PointLight, Scene, SpotLight
+from .scene import AreaLight, DirectionalLight, PointLight, Scene, SpotLight
 
 NOT_ASKED = "not asked"
 POINT_LIGHT_NA = "n/a (point light)"
 
 
 def _kind(light) -> str:
+    if isinstance(light, AreaLight):
+        return light.shape  # "rect", "disk", "sphere"; its lit mask: every sample reaches
     return {PointLight: "point", DirectionalLight: "directional", SpotLight: "spot"}[type(light)]
 
 
@@ -45,7 +47,8 @@ def _kind(light) -> str:
 class LightComparison:
     """The numbers of one light.
 
-    index, kind          : position in scene.lights; "point", "directional" or "spot"
+    index, kind          : position in scene.lights; "point", "directional", "spot" or an
+                           area light's shape
     mismatched           : int, pixels whose lit masks differ (raster vs ray tracer)
     interior             : int, of those, the ones farther than one pixel from a mask edge
     iou                  : float, IoU of the shadow regions (1.0 when neither has a shadow)
