@@ -17,7 +17,7 @@ import pytest
 import raytrace
 from area_builders import square_light, square_over_floor
 from raytrace.soft import sample_masks
-from shadowvol.maskdiff import edge_pixels
+from shadowvol.maskdiff import count_edges, edge_pixels
 from shadowvol.renderer import Renderer
 from shadowvol.scene import AreaLight, DirectionalLight, PointLight, SpotLight
 from shadowvol.scenefile import load_scene
@@ -49,16 +49,6 @@ def _sample_edges(scene, i: int) -> np.ndarray:
         for mask in lit:
             edges |= edge_pixels(mask)
     return edges
-
-
-def count_edges(count: np.ndarray) -> np.ndarray:
-    """(H, W) bool: pixels whose 3x3 neighbourhood in `count` (H, W) is not uniform.  Each
-    lies on an edge of some sample's hard mask (were every sample's mask uniform there, so
-    would their sum be): this is how the raster's per-sample edges are seen in its count."""
-    c = np.pad(count, 1, mode="edge")
-    h, w = count.shape
-    windows = [c[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)]
-    return np.logical_or.reduce([win != count for win in windows])
 
 
 def check_counts(scene, got, ref) -> list[dict]:
