@@ -2,18 +2,23 @@
 
 `square_over_floor`: the analytic case of issue 12, a square occluder parallel to a square light
 above a floor, seen from above; its exact answer is in `square_visible_fraction`.
+`check_counts`: the budget of raster against ray-traced per-sample counts.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from shadowvol.maskdiff import count_edges, edge_pixels
 from shadowvol.primitives import plane
 from shadowvol.scene import AreaLight, Camera, Material, Scene
 
 FLOOR_Y, OCCLUDER_Y, LIGHT_Y = 0.0, 1.0, 2.5
 LIGHT_SIDE, OCCLUDER_SIDE, FLOOR_HALF = 1.2, 1.0, 4.0
 OCCLUDER_CENTER = np.array([0.15, OCCLUDER_Y, -0.1])
+# Raster against ray tracer counts: pixels whose counts may differ, at most, as a fraction of
+# all pixels (and only on edges of the samples' hard masks or of the coverage).
+MAX_DIFFERING_FRACTION = 0.002
 # A cell whose covered fraction is within this of 0 or 1 counts as uncovered or covered (the
 # overlaps are differences of float64 coordinates of ~1).
 COVER_ROUNDING = 1e-9
@@ -112,3 +117,37 @@ def blocked_samples(p: np.ndarray, samples: np.ndarray) -> np.ndarray:
     margin = np.where(inside, np.minimum(dx, dz),
                       np.hypot(np.minimum(dx, 0), np.minimum(dz, 0)))
     return inside, margin
+
+
+def _sample_edges(scene, i: int) -> np.ndarray:
+    """(H, W) bool: pixels on an edge of some sample's reference hard mask of light i."""
+    from raytrace.soft import sample_masks
+
+    edges = np.zeros((scene.height, scene.width), bool)
+    for _, lit in sample_masks(scene, i):
+        for mask in lit:
+            edges |= edge_pixels(mask)
+    return edges
+
+
+def check_counts(scene, got, ref) -> list[dict]:
+    """Raster `got` (RenderResult) against ray tracer `ref` (SoftMasks): per light the
+    pixels whose counts differ, in total and off every sample edge (must be 0), the largest
+    difference.  Sample edges are those of the ray tracer's hard masks and those the raster's
+    count shows (`count_edges`), as `maskdiff` takes the edges of either renderer's masks.
+    Fails the test beyond the budget."""
+    near_cov = edge_pixels(got.coverage) | edge_pixels(ref.coverage)
+    rows = []
+    for i in range(len(scene.lights)):
+        differ = got.lit_count[i] != ref.lit_count[i]
+        edges = _sample_edges(scene, i) | count_edges(got.lit_count[i])
+        interior = differ & ~(near_cov | edges)
+        rows.append({"light": i, "samples": int(ref.samples[i]), "differ": int(differ.sum()),
+                     "interior": int(interior.sum()),
+                     "largest": int(np.abs(got.lit_count[i].astype(int)
+                                           - ref.lit_count[i]).max())})
+    pixels = scene.width * scene.height
+    assert all(r["interior"] == 0 for r in rows), rows
+    assert all(r["differ"] <= MAX_DIFFERING_FRACTION * pixels for r in rows), rows
+    np.testing.assert_array_equal(got.lit, got.lit_count == ref.samples[:, None, None])
+    return rows

@@ -15,9 +15,7 @@ import numpy as np
 import pytest
 
 import raytrace
-from area_builders import square_light, square_over_floor
-from raytrace.soft import sample_masks
-from shadowvol.maskdiff import count_edges, edge_pixels
+from area_builders import check_counts, square_light, square_over_floor
 from shadowvol.renderer import Renderer
 from shadowvol.scene import AreaLight, DirectionalLight, PointLight, SpotLight
 from shadowvol.scenefile import load_scene
@@ -25,8 +23,6 @@ from shadowvol.scenefile import load_scene
 ROOT = Path(__file__).resolve().parent.parent.parent
 SCENE_FILES = sorted(p for p in (ROOT / "scenes").iterdir() if p.suffix in (".toml", ".json"))
 RUNS = [("auto", "cpu"), ("zfail", "gpu")]
-# pixels whose counts may differ, at most, as a fraction of all pixels (and only on edges)
-MAX_DIFFERING_FRACTION = 0.002
 
 
 def _as_area(light, how: str):
@@ -40,38 +36,6 @@ def _as_area(light, how: str):
     if how == "sphere":
         return AreaLight("sphere", radius=0.1, pattern="halton", **common)
     return AreaLight("rect", normal=[0.0, -1.0, 0.0], size=[0.6, 0.4], seed=1, **common)
-
-
-def _sample_edges(scene, i: int) -> np.ndarray:
-    """(H, W) bool: pixels on an edge of some sample's reference hard mask of light i."""
-    edges = np.zeros((scene.height, scene.width), bool)
-    for _, lit in sample_masks(scene, i):
-        for mask in lit:
-            edges |= edge_pixels(mask)
-    return edges
-
-
-def check_counts(scene, got, ref) -> list[dict]:
-    """Raster `got` (RenderResult) against ray tracer `ref` (SoftMasks): per light the
-    pixels whose counts differ, in total and off every sample edge (must be 0), the largest
-    difference.  Sample edges are those of the ray tracer's hard masks and those the raster's
-    count shows (`count_edges`), as `maskdiff` takes the edges of either renderer's masks.
-    Fails the test beyond the budget."""
-    near_cov = edge_pixels(got.coverage) | edge_pixels(ref.coverage)
-    rows = []
-    for i in range(len(scene.lights)):
-        differ = got.lit_count[i] != ref.lit_count[i]
-        edges = _sample_edges(scene, i) | count_edges(got.lit_count[i])
-        interior = differ & ~(near_cov | edges)
-        rows.append({"light": i, "samples": int(ref.samples[i]), "differ": int(differ.sum()),
-                     "interior": int(interior.sum()),
-                     "largest": int(np.abs(got.lit_count[i].astype(int)
-                                           - ref.lit_count[i]).max())})
-    pixels = scene.width * scene.height
-    assert all(r["interior"] == 0 for r in rows), rows
-    assert all(r["differ"] <= MAX_DIFFERING_FRACTION * pixels for r in rows), rows
-    np.testing.assert_array_equal(got.lit, got.lit_count == ref.samples[:, None, None])
-    return rows
 
 
 @pytest.mark.parametrize("how", ["sphere", "rect"])
