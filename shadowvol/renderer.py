@@ -45,8 +45,9 @@ class RenderResult:
                when not asked for (hard lights only)
     zfail    : (L, n_objects) bool, which casters were counted with z-fail for each light
                (for an area light: for any of its samples)
-    lit_count: (L, H, W) uint16, per light how many of its samples (hard lights: 1) light the
+    lit_count : (L, H, W) uint16, per light how many of its samples (hard lights: 1) light the
                pixel as `lit` says
+    samples  : (L,) int64, N per light (hard lights: 1)
     """
 
     image: np.ndarray
@@ -54,7 +55,18 @@ class RenderResult:
     coverage: np.ndarray
     stencil: np.ndarray | None
     zfail: np.ndarray
-    lit_count: np.ndarray | None = None
+    lit_count: np.ndarray
+    samples: np.ndarray
+
+    @property
+    def visibility(self) -> np.ndarray:
+        """(L, H, W) float32: lit_count / N."""
+        return (self.lit_count / self.samples[:, None, None]).astype(np.float32)
+
+    @property
+    def penumbra(self) -> np.ndarray:
+        """(L, H, W) bool: some samples light the pixel, not all (0 < lit_count < N)."""
+        return (self.lit_count > 0) & ~self.lit
 
 
 class Renderer:
@@ -208,7 +220,7 @@ class Renderer:
             lit=lit_count == samples[:, None, None],
             coverage=rgba[..., 3] > 0.5,
             stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if stencil else None,
-            zfail=zfail, lit_count=lit_count)
+            zfail=zfail, lit_count=lit_count, samples=samples)
 
     def volume_view(self, method: str = "auto", silhouettes: str = "cpu", *,
                     camera: Camera | None = None,

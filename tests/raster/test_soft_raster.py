@@ -63,7 +63,11 @@ def test_built_cases(ctx, light):
     with Renderer(scene, ctx) as r:
         for run in RUNS:
             rows = check_counts(scene, r.render(*run), ref)
+        res = r.render()
     assert rows[0]["differ"] <= 2, rows  # this scene has almost nothing to disagree about
+    assert res.samples.tolist() == [light.samples] and res.visibility.dtype == np.float32
+    assert res.penumbra.any() and not (res.penumbra & res.lit).any()
+    np.testing.assert_allclose(res.visibility[0], ref.visibility[0], atol=1.0 / 16 + 1e-7)
 
 
 def test_one_sample_is_the_point_light(ctx):
