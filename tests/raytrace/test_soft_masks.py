@@ -8,11 +8,13 @@ import numpy as np
 import pytest
 
 import raytrace
-from area_builders import (MATTE, blocked_samples, floor_points, square_light,
-                           square_over_floor)
+from area_builders import (MATTE, OCCLUDER_CENTER, OCCLUDER_SIDE, blocked_samples, floor_points,
+                           square_light, square_over_floor)
+from raytrace.camera import primary_rays
 from raytrace.cli import main as raytrace_main
+from raytrace.tolerances import surface_offset
 from shadowvol.primitives import plane
-from shadowvol.scene import AreaLight, Camera, PointLight, Scene
+from shadowvol.scene import AreaLight, Camera, Material, PointLight, Scene
 from shadowvol.scenefile import load_scene, save_scene
 
 SCENES = Path(__file__).resolve().parent.parent.parent / "scenes"
@@ -113,3 +115,47 @@ def test_whitted_direct_light_is_the_sum_of_the_samples():
     np.testing.assert_allclose(image[..., 0][clear], expected[clear], rtol=1e-9, atol=1e-12)
     soft_levels = np.unique(np.round(image[..., 0][clear], 6))
     assert len(soft_levels) > 100  # a soft shadow, not two or three flat levels
+
+
+def test_soft_shadow_seen_in_a_mirror():
+    """A pure mirror behind the scene (z = -2.5, facing the camera): at max_depth 1 a mirror
+    pixel shows the direct light of the floor point its reflected ray meets, soft shadow and
+    all — the same sum over the samples as on the floor itself."""
+    light = square_light(16, seed=2)
+    base = square_over_floor(light, size=64)
+    mirror = plane("mirror", point=[0.0, 1.5, -2.5], normal=[0.0, 0.0, 1.0], size=[8.0, 3.0],
+                   material=Material(ambient=[0, 0, 0], diffuse=[0, 0, 0], specular=[0, 0, 0],
+                                     reflectivity=1.0))
+    scene = base.replace(objects=base.objects + (mirror,), max_depth=1)
+    image = raytrace.render(scene, progress=False)[..., 0].ravel()
+    o, d = primary_rays(scene.camera, scene.width, scene.height)
+    t_mirror = (-2.5 - o[:, 2]) / d[:, 2]
+    m = o + t_mirror[:, None] * d                      # where each pixel ray meets z = -2.5
+    r = d * np.array([1.0, 1.0, -1.0])                 # reflected about the mirror's normal
+    m = m + [0.0, 0.0, surface_offset(scene)]          # where Whitted starts the mirror ray
+    t_floor = -m[:, 1] / r[:, 1]
+    q = m + t_floor[:, None] * r
+    q[:, 1] = 0.0
+    t_occ = (1.0 - m[:, 1]) / r[:, 1]
+    c = m + t_occ[:, None] * r                         # the reflected ray at the occluder's height
+    t_occ_in = (1.0 - o[:, 1]) / d[:, 1]
+    a = o + t_occ_in[:, None] * d                      # the primary ray there
+    half = OCCLUDER_SIDE / 2
+
+    def in_square(p):
+        return (np.abs(p[:, 0] - OCCLUDER_CENTER[0]) <= half) & \
+            (np.abs(p[:, 2] - OCCLUDER_CENTER[2]) <= half)
+
+    on_mirror = (t_mirror > 0) & (m[:, 1] > 0) & (m[:, 1] < 3.0) & (np.abs(m[:, 0]) < 4.0) & \
+        (t_floor > 0) & (np.abs(q[:, 0]) < 4.0) & (np.abs(q[:, 2]) < 4.0) & \
+        ~(in_square(a) & (t_occ_in < t_mirror)) & ~(in_square(c) & (t_occ > 0) &
+                                                  (t_occ < t_floor))
+    blocked, margin = blocked_samples(q, light.positions)
+    to_light = light.positions - q[:, None, :]
+    ly = to_light[..., 1] / np.linalg.norm(to_light, axis=-1)
+    expected = 0.8 / 16 * np.where(blocked, 0.0, ly * ly).sum(axis=-1)
+    clear = on_mirror & (margin.min(axis=-1) > 1e-3)
+    assert clear.sum() > 300
+    np.testing.assert_allclose(image[clear], expected[clear], rtol=1e-9, atol=1e-12)
+    shadowed = clear & (blocked.sum(axis=-1) > 0)
+    assert (blocked[shadowed].sum(axis=-1) < 16).sum() > 20  # penumbra in the mirror
