@@ -50,7 +50,8 @@ import re
 
 import numpy as np
 
-from .scene import (Camera, DirectionalLight, Material, Object, PointLight, Scene, SpotLight)
+from .scene import (AreaLight, Camera, DirectionalLight, Material, Object, PointLight, Scene,
+                    SpotLight)
 
 PBR_MIN_ROUGHNESS = 0.04            # pyrender mesh.frag `min_roughness`: also the dielectric F0
 PBR_DIFFUSE = (1.0 - PBR_MIN_ROUGHNESS) / math.pi   # pyrender's Lambert factor per unit intensity
@@ -242,6 +243,9 @@ def to_pyrender(scene: Scene):
 def _pr_light(light, triangles: np.ndarray, intensity: float | None = None):
     """(pyrender light, pose) for one of our lights; `intensity` overrides the conversion.
     triangles : (m, 3, 3) the scene's geometry (for the fall-off reference distance)."""
+    if isinstance(light, AreaLight):
+        raise ValueError(f"pyrender has no area lights (a {light.shape} light here): compare "
+                         "with pyrender only scenes of point, spot and directional lights")
     pyrender = _pyrender()
     if isinstance(light, DirectionalLight):
         value = light.intensity / PBR_DIFFUSE if intensity is None else intensity

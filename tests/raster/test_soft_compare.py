@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 import raytrace
 from area_builders import square_light, square_over_floor
@@ -61,3 +62,10 @@ def test_command_line_json_has_the_counts(tmp_path):
     numbers = json.loads((tmp_path / "n.json").read_text())
     assert numbers["lights"][0]["samples"] == 4
     assert numbers["lights"][0]["counts"]["interior"] == 0
+
+
+def test_pyrender_refuses_area_lights_plainly():
+    from shadowvol.pyrender_bridge import _pr_light
+
+    with pytest.raises(ValueError, match="pyrender has no area lights"):
+        _pr_light(square_light(4), np.zeros((1, 3, 3)))
