@@ -17,8 +17,9 @@ FLOOR_Y, OCCLUDER_Y, LIGHT_Y = 0.0, 1.0, 2.5
 LIGHT_SIDE, OCCLUDER_SIDE, FLOOR_HALF = 1.2, 1.0, 4.0
 OCCLUDER_CENTER = np.array([0.15, OCCLUDER_Y, -0.1])
 # Raster against ray tracer counts: pixels whose counts may differ, at most, as a fraction of
-# all pixels (and only on edges of the samples' hard masks or of the coverage).
-MAX_DIFFERING_FRACTION = 0.002
+# all pixels (and only on edges of the samples' hard masks or of the coverage): the hard masks'
+# budget (conftest.MAX_MISMATCH_FRACTION), per light however many samples it has.
+MAX_DIFFERING_FRACTION = 0.001
 # A cell whose covered fraction is within this of 0 or 1 counts as uncovered or covered (the
 # overlaps are differences of float64 coordinates of ~1).
 COVER_ROUNDING = 1e-9

@@ -136,3 +136,17 @@ def test_a_sample_whose_count_wraps_raises(ctx):
         r.check_overflow = False
         wrapped = r.render()
     assert (wrapped.lit_count[0][ref.umbra[0]] > 0).any()  # what the check keeps out
+
+
+def test_render_command_writes_the_samples(ctx, tmp_path):
+    from shadowvol import cli
+    from shadowvol.scenefile import save_scene
+
+    scene = square_over_floor(square_light(9, pattern="halton"), size=24)
+    save_scene(scene, tmp_path / "s.json")
+    assert cli.main(["render", str(tmp_path / "s.json"), "-o", str(tmp_path / "s.png"),
+                     "--masks", str(tmp_path / "m.npz")]) == 0
+    with np.load(tmp_path / "m.npz", allow_pickle=False) as data:
+        np.testing.assert_array_equal(data["light_samples_0"], scene.lights[0].positions)
+        with Renderer(scene, ctx) as r:
+            np.testing.assert_array_equal(data["lit"], r.render().lit)
