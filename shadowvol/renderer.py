@@ -222,6 +222,13 @@ class Renderer:
             stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if stencil else None,
             zfail=zfail, lit_count=lit_count, samples=samples)
 
+    def facing(self, *, camera: Camera | None = None,
+               lights: tuple[Light, ...] | None = None) -> np.ndarray:
+        """(L, H, W) bool: some sample of each light faces the pixel (n . l > 0 toward it and
+        inside its cone), shadows aside: the frame without the volume passes.  With a
+        frame's `lit_count`, umbra = facing & (lit_count == 0)."""
+        return self.render(camera=camera, lights=lights, shadows=False).lit_count > 0
+
     def volume_view(self, method: str = "auto", silhouettes: str = "cpu", *,
                     camera: Camera | None = None,
                     lights: tuple[int, ...] | None = None) -> np.ndarray:

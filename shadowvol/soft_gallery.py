@@ -6,8 +6,8 @@
 * `hard_sum`: four of the hard shadows an area light of N = 4 samples is made of, and their sum,
   the soft shadow.
 
-Umbra is "facing & no sample reaches", so the raster's facing is needed: the same frame without
-the volume pass (`shadows=False`) lights exactly the pixels some sample faces.
+Umbra is "facing & no sample reaches", with the raster's facing from `Renderer.facing` (the
+frame without the volume passes).
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def umbra_penumbra(g: Gallery) -> Picture:
     with Renderer(scene, g.ctx) as r:
         for light in lights:
             frame = r.render(lights=(light,))
-            facing = r.render(lights=(light,), shadows=False).lit_count[0] > 0
+            facing = r.facing(lights=(light,))[0]
             umbra = facing & (frame.lit_count[0] == 0)
             penumbra = frame.penumbra[0]
             image = tint(tint(encode_srgb(frame.image), umbra, UMBRA_TINT, TINT_WEIGHT),

@@ -16,6 +16,7 @@ import pytest
 
 import raytrace
 from area_builders import check_counts, square_light, square_over_floor
+from shadowvol.maskdiff import count_edges
 from shadowvol.renderer import Renderer
 from shadowvol.scene import AreaLight, DirectionalLight, PointLight, SpotLight
 from shadowvol.scenefile import load_scene
@@ -78,6 +79,14 @@ def test_built_cases(ctx, light):
     assert res.samples.tolist() == [light.samples] and res.visibility.dtype == np.float32
     assert res.penumbra.any() and not (res.penumbra & res.lit).any()
     np.testing.assert_allclose(res.visibility[0], ref.visibility[0], atol=1.0 / 16 + 1e-7)
+    # facing and umbra as the ray tracer has them, off the samples' edges
+    with Renderer(scene, ctx) as r:
+        facing = r.facing()
+    umbra = facing & (res.lit_count == 0)
+    near = count_edges(facing[0].astype(np.uint8)) | count_edges(ref.facing[0].astype(np.uint8))
+    assert not ((facing[0] != ref.facing[0]) & ~near).any()
+    assert (umbra != ref.umbra).sum() <= 2
+    assert umbra.any() or light.shape == "sphere"  # (a sphere light may leave none on screen)
 
 
 def test_one_sample_is_the_point_light(ctx):
