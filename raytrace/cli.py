@@ -22,12 +22,11 @@ from shadowvol import __version__
 from shadowvol.cli import outputs, status
 from shadowvol.io import atomic_write, save_masks, save_png
 from shadowvol.pictures import masks_image
-from shadowvol.scene import SceneError
+from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene
 
-from . import cli_outlook
+from . import cli_outlook, shadow_masks  # (area lights: lit where every sample reaches)
 from .backends import BACKENDS
-from .masks import shadow_masks
 from .raytree import draw_tree, format_tree, ray_tree
 from .whitted import render
 
@@ -124,7 +123,8 @@ def _masks(args) -> int:
     outputs.check(paths, {"masks": "-o", "picture": "--png"})
     scene = load_scene(args.scene)
     lit, coverage = shadow_masks(scene, backend=args.backend)
-    save_masks(paths["masks"], lit, coverage)
+    save_masks(paths["masks"], lit, coverage,
+               light_samples=[light_samples(lt) for lt in scene.lights])
     if "picture" in paths:
         save_png(paths["picture"], masks_image(lit, coverage))
     print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)

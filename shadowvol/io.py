@@ -129,8 +129,21 @@ def save_png(path: str | Path, image: np.ndarray) -> None:
         f.write(data)
 
 
-def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray) -> None:
-    """Write a mask file as CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage` (H, W)."""
+def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
+               light_samples=None) -> None:
+    """Write a mask file as docs/CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage`
+    (H, W).
+
+    light_samples : optional, per light an (N, 3) float64 array of its sample positions
+    (`shadowvol.scene.light_samples`) or None (a directional light), written as
+    `light_samples_<i>`."""
+    extra = {}
+    for i, samples in enumerate(light_samples or ()):
+        if samples is not None:
+            samples = np.asarray(samples, np.float64)
+            if samples.ndim != 2 or samples.shape[1] != 3:
+                raise ValueError(f"light_samples[{i}] must be (N, 3), got {samples.shape}")
+            extra[f"light_samples_{i}"] = samples
     lit = np.asarray(lit)
     coverage = np.asarray(coverage)
     if lit.dtype != bool or lit.ndim != 3 or coverage.dtype != bool or \
@@ -138,7 +151,7 @@ def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray) -> None:
         raise ValueError(f"masks must be lit (L, H, W) bool and coverage (H, W) bool, got "
                          f"{lit.dtype}{lit.shape} and {coverage.dtype}{coverage.shape}")
     buf = io.BytesIO()
-    np.savez_compressed(buf, lit=lit, coverage=coverage)
+    np.savez_compressed(buf, lit=lit, coverage=coverage, **extra)
     with atomic_write(path) as f:
         f.write(buf.getvalue())
 
