@@ -249,7 +249,8 @@ def stack_stencil(g) -> Picture:
         "segment to the light crosses).  Our surfaces are two-sided: every triangle casts, so "
         "a closed slab counts 2, once for its top and once for its bottom (right, the stencil "
         f"read back): the same shadow, twice the count, at {100 * share:.1f}% of the "
-        "covered pixels.",
+        "covered pixels" + (f"; {numbers['odd_ours']} pixel(s) on edges where volume faces "
+                            "meet read an odd count." if numbers["odd_ours"] else "."),
         "four staggered slabs under one point light; count 0 shows the lit image, each count "
         "that occurs its own colour; left the textbook count, right our stencil",
         f"shadowvol render {g.path('stack')} -o stack.png --stencil stack_stencil.png "
