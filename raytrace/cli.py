@@ -85,6 +85,8 @@ def _parser() -> argparse.ArgumentParser:
     _backend(t)
 
     e = sub.add_parser("exercise", help="a worked exercise of the course, printed and drawn",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
                        description="Print the worked solution of one of the course's "
                                    "exercises, computed with the ray tracer's own formulas, "
                                    "and optionally draw it.  plane: the ray (5,1) + λ(−1,3) "
