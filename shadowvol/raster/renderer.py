@@ -56,6 +56,11 @@ class RenderResult:
     stencil: np.ndarray | None
     zfail: np.ndarray
 
+    def _repr_png_(self) -> bytes:
+        """A notebook shows the frame as its image."""
+        from shadowvol.display import frame_png
+        return frame_png(self)
+
 
 class Renderer:
     """Renders `scene` (its geometry and materials; camera and lights may change per frame).
