@@ -111,12 +111,13 @@ class Probe:
         lines = [f"pixel ({x}, {y}), light {self.light}: "
                  + ("background" if self.surface is None else
                     "visible point (" + ", ".join(f"{v:.3f}" for v in self.surface) + ")")]
+        if self.crossings:
+            lines.append("  t        face      of             step  *behind: z-fail")
         for c in self.crossings:
-            where = "behind" if c.behind else "in front"
             t = "inf" if not np.isfinite(c.t) else f"{c.t:.4f}"
-            lines.append(f"  t = {t:>8}  {c.kind:8} of {name(c.object):14} "
-                         f"{'enters' if c.entering else 'leaves'} x{c.copies}  "
-                         f"z-pass {c.step:+d}  z-fail {-c.step:+d}  ({where})")
+            lines.append(f"  {t:>8} {c.kind:9} {name(c.object)[:14]:14} "
+                         f"{'in ' if c.entering else 'out'} {c.step:+d}"
+                         + (f" *{-c.step:+d}" if c.behind else ""))
         zp, zf = self.zpass_sum(), self.zfail_sum()
         lines.append(f"z-pass sum {zp}, z-fail sum {zf}"
                      + (f", renderer's mix {self.predicted}" if self.zfail_casters.any()

@@ -18,6 +18,7 @@ the count probe's report.
 
 from __future__ import annotations
 
+import textwrap
 import time
 from dataclasses import replace
 
@@ -33,8 +34,8 @@ from shadowvol.raster.renderer import Renderer
 from shadowvol.view import frames
 from shadowvol.view.state import ViewState, drag_light, orbit, pan, zoom
 
-PANEL_WIDTH = 460          # pixels of the side panel
-PANEL_TEXT_PX = 14
+PANEL_WIDTH = 520          # pixels of the side panel
+PANEL_TEXT_PX = 13
 CLICK_SLOP = 3             # a press and release this close (pixels, no drag) is a click
 
 HELP = """mouse
@@ -59,6 +60,15 @@ keys
 MODE_KEYS = {"N": "shaded", "V": "roles", "S": "silhouettes", "C": "stencil", "P": "planar",
              "T": "raytraced"}
 METHOD_KEYS = {"A": "auto", "Z": "zpass", "F": "zfail"}
+
+
+def _mono(px: int):
+    """DejaVu Sans Mono (shipped with matplotlib): the panel's columns line up."""
+    from matplotlib import font_manager
+    from PIL import ImageFont
+
+    return ImageFont.truetype(font_manager.findfont(
+        font_manager.FontProperties(family="DejaVu Sans Mono")), px)
 
 
 class Viewer:
@@ -122,10 +132,14 @@ class Viewer:
         if self.message:
             head.append(self.message)
         body = HELP.splitlines() if s.help else []
-        lines = head + [""] + body + [""] + self.probe_text.splitlines()
+        f = _mono(PANEL_TEXT_PX)
+        columns = max(20, int((PANEL_WIDTH - 16) / f.getlength("m")))
+        lines = []
+        for line in head + [""] + body + [""] + self.probe_text.splitlines():
+            lines += textwrap.wrap(line, columns, subsequent_indent="    ",
+                                   drop_whitespace=False) or [""]
         img = Image.new("RGB", (PANEL_WIDTH, self.scene.height), (250, 250, 250))
         draw = ImageDraw.Draw(img)
-        f = slides.font(PANEL_TEXT_PX)
         step = round(PANEL_TEXT_PX * 1.3)
         for i, line in enumerate(lines):
             y = 6 + i * step
@@ -206,6 +220,7 @@ class Viewer:
         p = probe(self.renderer, px, py, s.probe_light, s.method, camera=s.camera,
                   lights=s.lights)
         self.probe_text = p.explain([o.name for o in self.scene.objects])
+        print(self.probe_text, flush=True)
         return p
 
     # -- running ---------------------------------------------------------------------------
