@@ -177,17 +177,17 @@ def tir_figure(rays: list[Refraction], ior: float = GLASS_IOR, width_px: int = 1
     pt = text_px * 72 / dpi
     fig = Figure(figsize=(width_px / dpi, height_px / dpi), dpi=dpi)
     ax = fig.add_axes([0.01, 0.01, 0.98, 0.98])
-    ax.set_xlim(-2.3, 3.4), ax.set_ylim(-1.45, 1.45), ax.set_aspect("equal"), ax.axis("off")
-    ax.fill_between([-3, 3], -2, 0, color="#cfeaf5")
-    ax.text(2.2, -1.35, f"glass, n = {ior:g}", fontsize=pt, va="bottom", ha="right")
-    ax.text(-2.2, 1.35, "air, n = 1", fontsize=pt, va="top")
-    ax.plot([0, 0], [-1.4, 1.4], ls=":", color="#555555", lw=2)
+    ax.set_xlim(-2.9, 4.4), ax.set_ylim(-2.5, 2.5), ax.set_aspect("equal"), ax.axis("off")
+    ax.fill_between([-3, 4.4], -2.5, 0, color="#cfeaf5")
+    ax.text(4.3, -2.4, f"glass, n = {ior:g}", fontsize=pt, va="bottom", ha="right")
+    ax.text(-2.8, 2.4, "air, n = 1", fontsize=pt, va="top")
+    ax.plot([0, 0], [-2.4, 2.4], ls=":", color="#555555", lw=2)
     colours = ["#1e6ee6", "#00a0a0", "#e08000", "#c81e28"]
     for r, c in zip(rays, colours):
-        start = -min(1.35 / abs(r.direction[1]), 2.2 / max(abs(r.direction[0]), 1e-9)) \
+        start = -min(2.3 / abs(r.direction[1]), 2.8 / max(abs(r.direction[0]), 1e-9)) \
             * r.direction
         ax.plot([start[0], 0], [start[1], 0], color=c, lw=3)
-        out = r.out * 1.3
+        out = r.out * 2.0
         ax.annotate("", out, (0, 0), arrowprops=dict(arrowstyle="-|>", lw=3, color=c,
                                                      ls="--" if r.tir else "-",
                                                      mutation_scale=25))
@@ -196,9 +196,9 @@ def tir_figure(rays: list[Refraction], ior: float = GLASS_IOR, width_px: int = 1
                     textcoords="offset pixels", fontsize=pt * 0.9, color=c, ha="left",
                     va="center")
     tc = np.radians(critical_angle(ior))
-    crit = -1.35 * np.array([np.sin(tc), np.cos(tc)]) / np.cos(tc)
+    crit = -2.3 * np.array([np.sin(tc), np.cos(tc)]) / np.cos(tc)
     ax.plot([crit[0], 0], [crit[1], 0], color="black", lw=1.5, ls="-.")
-    ax.annotate(f"critical angle {np.degrees(tc):.1f}°", 0.45 * crit, xytext=(-2.2, -0.35),
+    ax.annotate(f"critical angle {np.degrees(tc):.1f}°", 0.45 * crit, xytext=(-2.8, -0.6),
                 textcoords="data", fontsize=pt * 0.9, ha="left", va="center",
                 arrowprops=dict(arrowstyle="-", lw=1, color="black"))
     return fig

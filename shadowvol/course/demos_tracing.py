@@ -154,7 +154,7 @@ def ray_plane(g) -> Picture:
     img = figure_pixels(exercise.plane_figure(s, width_px=min(w, h), height_px=h,
                                               text_px=L.px(28)))
     text = exercise.plane_text(s)
-    note = L.note(_wrap(text, 48), side_w, h)
+    note = L.note(_wrap(text, 56), side_w, h)
     title = "Exercise: a ray against a plane"
     return Picture(
         "ray_plane", title, "exercises",
