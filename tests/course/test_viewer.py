@@ -219,3 +219,30 @@ def test_click_probes_the_pixel(session):
     assert "z-pass sum" in text and "z-fail sum" in text and "stencil read back" in text
     assert "shadow ray to the light crosses" in text
     assert "all counts agree" in text
+
+
+def test_view_without_a_display_is_bad_input(monkeypatch, capsys):
+    from shadowvol.cli.main import main
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["view", str(SCENES / "cage.toml")]) == 2
+    assert "no display" in capsys.readouterr().err
+
+
+def test_view_state_moves():
+    from shadowvol.view.state import drag_light, orbit, pan, zoom
+    scene = load_scene(SCENES / "cage.toml")
+    s = ViewState.of(scene)
+    cam = s.camera
+    dist = lambda c: np.linalg.norm(c.eye - c.target)
+    o = orbit(s, 30, 10).camera
+    assert dist(o) == pytest.approx(dist(cam)) and (o.target == cam.target).all()
+    assert not np.allclose(o.eye, cam.eye)
+    assert dist(zoom(s, 2).camera) == pytest.approx(0.81 * dist(cam))
+    p = pan(s, 10, 0, scene.height).camera
+    assert np.allclose(p.eye - cam.eye, p.target - cam.target) and not np.allclose(p.eye, cam.eye)
+    moved = drag_light(s, 20, 0, scene.height).lights[0]
+    delta = moved.position - scene.lights[0].position
+    view = cam.target - cam.eye
+    assert abs(delta @ view) < 1e-9 * np.linalg.norm(view) and np.linalg.norm(delta) > 0
+    assert moved.homogeneous[:3] == pytest.approx(moved.position)     # not the old cache
