@@ -12,7 +12,8 @@ the count probe's report.
     mouse   left drag: orbit    shift+left or middle drag: pan    wheel: zoom
             right drag: move the light    left click: probe the pixel
     keys    A auto  Z z-pass  F z-fail   (counting method)
-            N shaded  V volumes by role  S silhouettes  C stencil counts  P planar  T ray traced
+            N shaded  V volumes by role  S silhouettes  C stencil counts  P planar
+            T raster beside ray traced (split screen)
             L next light   M light marker   H help   Esc quit
 """
 
@@ -51,7 +52,7 @@ keys
   S              silhouette edges
   C              stencil counts (heat map)
   P              planar projected shadows
-  T              ray traced (slow)
+  T              raster | ray traced, split (slow)
   L              next light
   M              light marker on/off
   H              this help on/off

@@ -31,8 +31,15 @@ def frame(renderer, state: ViewState, planar=None) -> np.ndarray:
     elif state.mode == "planar":
         image = encode_srgb(planar.render(camera=cam, lights=lights).image)
     elif state.mode == "raytraced":
+        # split screen at the same camera: the raster's left half beside the ray tracer's
+        # right half, so a shadow edge crossing the divider shows both renderers at once
         import raytrace
-        image = encode_srgb(raytrace.render(scene, progress=False))
+        image = encode_srgb(renderer.render(method, camera=cam, lights=lights).image)
+        traced = encode_srgb(raytrace.render(scene, progress=False))
+        half = scene.width // 2
+        image[:, half:] = traced[:, half:]
+        image[:, half - 1:half + 1] = (255, 255, 255)
+        image = _label(_label(image, "raster", 6), "ray traced", half + 6)
     else:
         image = encode_srgb(renderer.render(method, camera=cam, lights=lights).image)
         if state.mode == "silhouettes" and lights:
@@ -41,6 +48,15 @@ def frame(renderer, state: ViewState, planar=None) -> np.ndarray:
     if state.marker:
         image = slides.mark_lights(image, scene, _layout(scene))
     return image
+
+
+def _label(image: np.ndarray, text: str, x: int) -> np.ndarray:
+    from PIL import Image, ImageDraw
+
+    img = Image.fromarray(image)
+    ImageDraw.Draw(img).text((x, 4), text, fill=(255, 255, 255), font=slides.font(14),
+                             stroke_width=2, stroke_fill=(0, 0, 0))
+    return np.asarray(img, np.uint8)
 
 
 def _layout(scene) -> slides.Layout:

@@ -116,6 +116,7 @@ CHILD = textwrap.dedent("""
     drag(1, w // 2, h // 2, w // 2 + 40, h // 2 + 10); record("orbit")
     drag(3, w // 2, h // 2, w // 2 - 30, h // 2 + 20); record("light")
     click(4, w // 2, h // 2); record("zoom")
+    key("t"); record("raytraced"); key("n")
     key("h"); click(1, w // 2, h * 3 // 4); record("probe")
     json.dump(records, open(f"{out}/records.json", "w"))
     v.close()
@@ -177,7 +178,8 @@ def state_of(scene, r) -> ViewState:
                      r["probe_light"])
 
 
-@pytest.mark.parametrize("name", ["start", "roles", "zpass_stencil", "orbit", "light", "zoom"])
+@pytest.mark.parametrize("name", ["start", "roles", "zpass_stencil", "orbit", "light", "zoom",
+                                  "raytraced"])
 def test_window_frame_equals_the_offscreen_render(ctx, session, name):
     out, records = session
     scene = load_scene(SCENES / "inside_shadow.toml").replace(width=SIZE[0], height=SIZE[1])
@@ -209,6 +211,7 @@ def test_events_changed_the_state(session):
     assert rec["light"]["lights"] != rec["orbit"]["lights"]                 # the light moved
     d = lambda r: np.linalg.norm(np.subtract(r["camera"][0], r["camera"][1]))
     assert d(rec["zoom"]) == pytest.approx(0.9 * d(rec["light"]))           # one wheel step
+    assert rec["raytraced"]["mode"] == "raytraced" and rec["probe"]["mode"] == "shaded"
     assert rec["probe"]["help"] is False
 
 
