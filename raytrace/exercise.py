@@ -79,7 +79,7 @@ def plane_text(s: PlaneSolution) -> str:
         f"3. The point: x({s.lam:g}) = {_v(s.origin)} + {s.lam:g} {_v(s.direction)} = "
         f"{_v(s.hit)}",
         f"   check: n·x − n·a = {float(s.normal @ s.hit - a_n):g}  (on the plane)",
-        f"   λ > 0: the hit lies ahead of the ray's origin",
+        "   λ > 0: the hit lies ahead of the ray's origin",
     ]
     return "\n".join(lines)
 

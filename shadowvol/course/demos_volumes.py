@@ -62,7 +62,7 @@ def cage(g) -> list[Picture]:
                 f"({n_edges} of the cage's edges).",
                 f"left: the cage rendered with shadow volumes (exposure x{CAGE_EXPOSURE}), L "
                 "marked; right: the same with the silhouette edges from L drawn in red",
-                cmd + f" (the silhouettes: shadowvol.course.volume_roles.draw_silhouettes)",
+                cmd + " (the silhouettes: shadowvol.course.volume_roles.draw_silhouettes)",
                 L.compose(title, [[("shadow volumes, L marked", plain),
                                    (f"silhouette edges seen from L ({n_edges})", edges)]],
                           legend=[("light L", slides.SCHEME["light"]),
@@ -106,8 +106,8 @@ def planar(g) -> Picture:
                            (f"missing in the projection: {int(missing.sum())} px",
                             tint(pv, missing))]],
                   below=L.note([
-                      "Blinn's matrix M = (P·L) I − L Pᵀ (4×4, P the floor's plane, L the light) sends "
-                      "every vertex",
+                      "Blinn's matrix M = (P·L) I − L Pᵀ (4×4, P the floor's plane, L the "
+                      "light) sends every vertex",
                       "along its ray from L onto the floor: drawn dark, that is the floor's "
                       "shadow, exact.",
                       "It cannot shadow anything but that one plane: the ball's shadow on the "

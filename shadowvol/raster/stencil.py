@@ -2,11 +2,11 @@
 
 moderngl has no stencil API (moderngl#676), so the depth-stencil renderbuffer (DEPTH32F_STENCIL8),
 every piece of stencil state, depth clamp, the clip-control depth range and the stencil read-back
-are raw GL calls here, made through function
-pointers loaded from whatever context is current: EGL's `eglGetProcAddress` for the renderer's
-headless context (EGL 1.5 and Mesa return core entry points too), GLX's `glXGetProcAddressARB`
-for a window's context under X11 (`shadowvol view`).  Everything else — programs, buffers, textures, blending, depth test,
-colour and depth write masks — stays with moderngl.
+are raw GL calls here, made through function pointers loaded from whatever context is current:
+EGL's `eglGetProcAddress` for the renderer's headless context (EGL 1.5 and Mesa return core entry
+points too), GLX's `glXGetProcAddressARB` for a window's context under X11 (`shadowvol view`).
+Everything else — programs, buffers, textures, blending, depth test, colour and depth write
+masks — stays with moderngl.
 
 Each pass gets a context manager that sets the WHOLE stencil state it needs (test on/off, func
 for both faces, ops for both faces, write mask) and restores the previous state on exit, so no pass

@@ -26,7 +26,6 @@ from dataclasses import replace
 import numpy as np
 from PIL import Image, ImageDraw
 
-from shadowvol.course import slides
 from shadowvol.course.probe import probe
 from shadowvol.errors import require
 from shadowvol.raster import window as gl_window

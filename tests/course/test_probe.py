@@ -3,7 +3,8 @@ z-pass and z-fail, equal the stencil the renderer reads back and the ray tracer'
 on every shipped scene and on random pixels of random scenes.
 
 Budget: every probed pixel agrees, except pixels within one pixel of a change of the stencil
-count, where a pixel centre may lie within rounding of a volume face (the masks' budget, issue 3)."""
+count, where a pixel centre may lie within rounding of a volume face (as the masks' budget,
+issue 3, allows at mask edges)."""
 
 from __future__ import annotations
 

@@ -23,7 +23,7 @@ from PIL import Image
 from shadowvol.io import encode_srgb
 from shadowvol.raster.planar_pass import PlanarShadows
 from shadowvol.raster.renderer import Renderer
-from shadowvol.scene import Camera, DirectionalLight, PointLight
+from shadowvol.scene import Camera, DirectionalLight
 from shadowvol.scenefile import load_scene
 from shadowvol.view import frames
 from shadowvol.view.app import PANEL_WIDTH
