@@ -193,10 +193,10 @@ def diagram(width: int, height: int, text_px: int):
         ax.add_patch(Polygon(BOX, closed=True, fc="#4a5aa0", ec="black", lw=1.5, zorder=3))
         ax.fill_between([x0, x1], y0, 0, color="#e8dcc8", zorder=1)
         ax.plot([x0, x1], [0, 0], color="#6b5a3a", lw=3, zorder=2)
-        ax.text(x1 - 0.15, -0.35, "floor", ha="right", va="top", fontsize=pt * 0.8,
+        ax.text(x1 - 0.15, -0.35, "floor", ha="right", va="top", fontsize=pt * 0.9,
                 color="#6b5a3a")
         ax.text(x0 + 0.15, -0.35, "behind P: z-fail counts here", ha="left",
-                va="top", fontsize=pt * 0.75, color="#6b5a3a")
+                va="top", fontsize=pt * 0.9, color="#6b5a3a")
         for f in sides:
             ax.plot(*np.array([f.a, f.a + far * f.d]).T, color="#f5a000", lw=3, zorder=2)
         for f in tb:
@@ -254,7 +254,7 @@ def diagram(width: int, height: int, text_px: int):
                 color="#c81e28" if a.zpass != a.zfail else "black")
     fig.text(0.5, 0.97, "every crossing: textbook / ours  (entering +1, leaving −1 from the "
              "eye; z-fail counts the faces behind P the other way round)",
-             ha="center", va="top", fontsize=pt * 0.85)
+             ha="center", va="top", fontsize=pt * 0.9)
     return fig, results
 
 

@@ -65,7 +65,7 @@ def raytree(g) -> Picture:
     w, h = L.cell(1, 1, labels=False)
     image = raytrace.render(scene, max_depth=RAY_TREE_DEPTH, progress=False)  # as the command
     fig = draw_tree(scene, tree, image, size_px=(w, h),
-                    text_px=L.px(26))
+                    text_px=L.px(28))
     kinds = [n.kind for n in tree.walk()]
     title = f"The ray tree of pixel ({x}, {y}), to recursion depth {RAY_TREE_DEPTH}"
     return Picture(
@@ -86,7 +86,7 @@ def tir(g) -> Picture:
     L = g.layout
     w, h = L.cell(1, 1, labels=False, side=L.px(760))
     rays = exercise.solve_tir()
-    img = figure_pixels(exercise.tir_figure(rays, width_px=w, height_px=h, text_px=L.px(28)))
+    img = figure_pixels(exercise.tir_figure(rays, width_px=w, height_px=h, text_px=L.px(32)))
     text = exercise.tir_text(rays)
     note = L.note(_wrap(text, 40), L.px(760), h)
     title = "Total internal reflection: from glass into air"
@@ -110,7 +110,7 @@ def shadow2d(g) -> Picture:
     side_w = L.px(700)
     w, h = L.cell(1, 1, labels=False, legend=True, side=side_w)
     size = min(w, h)
-    img = draw_shadow2d(*example(), size_px=size, title="", font_px=L.px(26))
+    img = draw_shadow2d(*example(), size_px=size, title="", font_px=L.px(28))
     note = L.note([
         "Six segments and a point light L",
         "in the unit square.",
@@ -152,7 +152,7 @@ def ray_plane(g) -> Picture:
     w, h = L.cell(1, 1, labels=False, side=side_w)
     s = exercise.solve_plane()
     img = figure_pixels(exercise.plane_figure(s, width_px=min(w, h), height_px=h,
-                                              text_px=L.px(28)))
+                                              text_px=L.px(32)))
     text = exercise.plane_text(s)
     note = L.note(_wrap(text, 56), side_w, h)
     title = "Exercise: a ray against a plane"

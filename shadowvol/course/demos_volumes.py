@@ -265,7 +265,7 @@ def stack_stencil(g) -> Picture:
 def counting_side_view(g) -> Picture:
     L = g.layout
     w, h = L.cell(1, 1, labels=False)
-    fig, results = counting.diagram(w, h, L.px(30))
+    fig, results = counting.diagram(w, h, L.px(32))
     img = figure_pixels(fig)
     title = "Counting along one eye ray: z-pass and z-fail"
     (out_tb, out_ours), (in_tb, in_ours) = results
