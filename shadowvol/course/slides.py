@@ -273,15 +273,15 @@ def mark_lights(image: np.ndarray, scene, layout: Layout, lights=None) -> np.nda
             for (x, y), c in zip(xy, cw):
                 if c > 0:
                     draw.ellipse([x - dot, y - dot, x + dot, y + dot], fill=yellow, outline=ink)
-            (cx, cy), c = (v[0] for v in project(scene, np.append(light.center, 1.0)[None]))
-            if c > 0 and 0 <= cx < w and 0 <= cy < h:
-                draw.text((cx, cy - 3 * dot), "L", fill=ink, font=font(layout.px(32)),
-                          anchor="mb")
-            continue
-        if hasattr(light, "position"):
-            xy, cw = project(scene, np.append(light.position, 1.0)[None])
+        if hasattr(light, "position") or hasattr(light, "center"):
+            centre = light.center if hasattr(light, "positions") else light.position
+            xy, cw = project(scene, np.append(centre, 1.0)[None])
             x, y, cw = float(xy[0, 0]), float(xy[0, 1]), float(cw[0])
             if cw > 0 and 0 <= x < w and 0 <= y < h:
+                if hasattr(light, "positions"):
+                    draw.text((x, y - 3 * dot), "L", fill=ink, font=font(layout.px(32)),
+                              anchor="mb")
+                    continue
                 draw.ellipse([x - r, y - r, x + r, y + r], fill=yellow, outline=ink,
                              width=max(1, layout.px(4)))
                 draw.text((x, y), "L", fill=ink, font=font(layout.px(32)), anchor="mm")
