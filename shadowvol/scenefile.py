@@ -276,6 +276,12 @@ def _light(value, key: str):
     return _build(key, cls, **args)
 
 
+def light_from_dict(value, key: str = "light"):
+    """One light from a table of the scene-file schema (`[[lights]]`), e.g. a batch job's light
+    override; SceneError naming `key` when it is wrong."""
+    return _light(value, key)
+
+
 def _object(value, key: str, named: dict[str, Material], base_dir: Path,
             max_mesh_bytes: int = MAX_MESH_FILE_BYTES):
     table, kind = _typed(value, key, OBJECT_KEYS, "object")
