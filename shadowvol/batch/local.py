@@ -24,7 +24,7 @@ START_METHODS = ("spawn", "forkserver", "fork")
 
 def in_process(tasks: Iterable[list[dict]], scenes: dict, egl_device=None) -> Iterator[dict]:
     """Render every frame of `tasks` here, in order, on one worker (this thread)."""
-    worker = Worker(scenes, egl_device, label="worker 0")
+    worker = Worker(scenes, egl_device, label="in-process worker")
     try:
         for task in tasks:
             for spec in task:
@@ -41,7 +41,7 @@ class _Process:
 
 def _start(scenes: dict, egl_device, environment: dict[str, str]) -> None:
     os.environ.update(environment)  # before GL is loaded: Mesa reads LP_NUM_THREADS then
-    _Process.worker = Worker(scenes, egl_device, label=f"worker {os.getpid()}")
+    _Process.worker = Worker(scenes, egl_device, label="pool worker")
 
 
 def _render(task: list[dict]) -> list[dict]:

@@ -101,9 +101,10 @@ class Worker:
         return found
 
     def _context(self):
-        from shadowvol.raster.context import create_context
+        from shadowvol.raster.context import check_not_forked, create_context
 
         if self._ctx is None:
+            check_not_forked()
             index, why = egl.choose(self.egl_device)
             self._ctx = create_context(device=index)
             self._thread = threading.get_ident()

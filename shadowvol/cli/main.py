@@ -4,6 +4,7 @@
     shadowvol compare SCENE -o cmp.png [--pyrender] [--max-interior N]
     shadowvol demo -o DIR [--small]
     shadowvol shadow2d --example -o shadow2d.png
+    shadowvol batch JOBS.jsonl -o OUT [--workers N] [--shard I/N] [--ray [ADDRESS]]
 
 Exit statuses: `shadowvol.cli.status` (one table for both tools).
 """
@@ -14,9 +15,9 @@ import argparse
 import sys
 
 from shadowvol import __version__
-from shadowvol.cli import compare, demo, render, shadow2d, status
+from shadowvol.cli import batch, compare, demo, render, shadow2d, status
 
-COMMANDS = (render, shadow2d, compare, demo)
+COMMANDS = (render, shadow2d, compare, demo, batch)
 
 
 def build_parser() -> argparse.ArgumentParser:

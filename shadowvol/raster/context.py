@@ -45,6 +45,12 @@ def _check_not_forked() -> None:
         raise ForkedContextError(FORK_ADVICE)
 
 
+def check_not_forked() -> None:
+    """Raise ForkedContextError in a child forked after its parent made a context, before
+    anything (EGL device queries included) can hang there."""
+    _check_not_forked()
+
+
 def create_context(device: int | None = None) -> moderngl.Context:
     """A new standalone OpenGL >= 4.5 core context on EGL.
 
