@@ -279,7 +279,11 @@ def _light(value, key: str):
 def light_from_dict(value, key: str = "light"):
     """One light from a table of the scene-file schema (`[[lights]]`), e.g. a batch job's light
     override; SceneError naming `key` when it is wrong."""
-    return _light(value, key)
+    try:
+        return _light(value, key)
+    except TypeError as exc:  # a required field left out: "missing 1 required ... 'position'"
+        missing = str(exc).rsplit(":", 1)[-1].strip() or str(exc)
+        raise SceneError(key, f"missing {missing}") from None
 
 
 def _object(value, key: str, named: dict[str, Material], base_dir: Path,

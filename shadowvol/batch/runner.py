@@ -192,10 +192,11 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
             kept.update((r["id"], r) for r in records)
         else:
             todo.append(u)
+    # temporary files a killed run left, for any file of this share (made or not)
     if format == "files":
-        store.clean([s for u in todo for s in units[u]])
+        store.clean([s for u in mine for s in units[u]])
     else:
-        store.clean(todo)
+        store.clean(list(mine))
     manifest.remove_stale_parts(out, {own})
 
     summary = Summary(frames=sum(len(units[u]) for u in mine),
