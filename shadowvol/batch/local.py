@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+from collections.abc import Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
-from typing import Iterable, Iterator
 
 from shadowvol.batch.worker import Worker, thread_settings
 from shadowvol.cli import status

@@ -10,8 +10,8 @@ and the webdataset shards take it from this table.  `fields` are attributes of a
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

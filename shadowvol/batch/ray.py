@@ -19,7 +19,7 @@ from __future__ import annotations
 import os
 import threading
 from collections import deque
-from typing import Iterator
+from collections.abc import Iterator
 
 from shadowvol.batch.worker import Worker, thread_settings
 from shadowvol.cli import status

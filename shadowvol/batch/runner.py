@@ -145,7 +145,8 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
             samples_per_tar < 1:
         raise SceneError("--samples-per-tar", f"must be a whole number >= 1, got "
                                               f"{samples_per_tar!r}")
-    egl.parse(egl_device)
+    if egl.parse(egl_device) is not None and not ray:
+        egl.choose(egl_device)  # a bad index is an error naming this machine's devices, now
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise SceneError("-o", f"{str(out)!r} is not a folder")

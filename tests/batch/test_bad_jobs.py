@@ -8,7 +8,7 @@ import json
 import pytest
 from builders import SCENES, job_lines, write_jobs
 
-import shadowvol.batch as batch
+from shadowvol import batch
 from shadowvol.cli import status
 from shadowvol.cli.main import main
 

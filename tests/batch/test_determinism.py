@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 from builders import job_lines, manifest_hashes, output_files, write_jobs
 
-import shadowvol.batch as batch
+from shadowvol import batch
 
 pytestmark = pytest.mark.gl
 
@@ -21,7 +21,7 @@ def reference(tmp_path_factory, request):
 
 
 def test_one_run_makes_every_file_the_manifest_lists(reference):
-    jobs, out = reference
+    _, out = reference
     files = output_files(out)
     assert len(files) == 12  # 6 frames x (png + npz)
     assert {k.split("/")[0] for k in files} == {"cage-turntable", "cage-traced"}

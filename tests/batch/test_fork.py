@@ -9,7 +9,7 @@ import json
 import pytest
 from builders import job_lines, tiny_scene
 
-import shadowvol.batch as batch
+from shadowvol import batch
 from shadowvol.cli import status
 from shadowvol.raster.renderer import Renderer
 

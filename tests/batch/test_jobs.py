@@ -118,3 +118,10 @@ def test_encoders_are_deterministic_and_readable():
     with np.load(io.BytesIO(data), allow_pickle=False) as back:
         assert all(np.array_equal(back[k], v) for k, v in arrays.items())
     assert tar_bytes([("a/1.png", b"x")]) == tar_bytes([("a/1.png", b"x")])
+
+
+def test_the_example_job_file_is_a_turntable_of_an_example_scene():
+    (job,) = read_jobs(SCENES / "turntable.jsonl")
+    assert isinstance(job, Job), job
+    assert job.outputs == ("image", "masks") and 2 <= len(job.cameras) <= 12
+    assert job.scene == str((SCENES / "cage.toml").resolve())

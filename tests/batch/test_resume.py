@@ -14,7 +14,7 @@ import time
 import pytest
 from builders import ROOT, job_lines, write_jobs
 
-import shadowvol.batch as batch
+from shadowvol import batch
 
 pytestmark = pytest.mark.gl
 

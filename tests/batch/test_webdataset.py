@@ -10,7 +10,7 @@ import pytest
 from builders import job_lines, output_files, write_jobs
 from PIL import Image
 
-import shadowvol.batch as batch
+from shadowvol import batch
 
 pytestmark = pytest.mark.gl
 
