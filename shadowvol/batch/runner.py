@@ -121,7 +121,7 @@ def _bar(total: int, progress: bool | None):
 def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), ray=None,
         egl_device=None, format: str = "files",
         samples_per_tar: int = DEFAULT_SAMPLES_PER_TAR, progress: bool | None = None,
-        start_method: str = "spawn") -> Summary:
+        start_method: str = "spawn", gpus_per_worker: float = 0) -> Summary:
     """Render `jobs` (a JSONL file, or job dicts, see `batch.jobs`) into the folder `out`.
 
     workers      : processes on this machine (1: this process), or Ray actors with `ray`
@@ -132,6 +132,8 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     progress     : a tqdm bar on stderr; None: only when stderr is a terminal
     start_method : "spawn" or "forkserver" ("fork" is allowed, and fails clearly in a process
                    that has made a GL context)
+    gpus_per_worker : with `ray`, the GPUs each actor asks Ray for (Ray then sets the actor's
+                   CUDA_VISIBLE_DEVICES, which egl_device="auto" follows)
     Returns a Summary; a bad job or frame is recorded in the manifest and the others go on.
     """
     began = time.perf_counter()
@@ -220,7 +222,8 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         unit_of = {s["id"]: u for u in todo for s in units[u]}
         waiting = {u: {} for u in todo}  # webdataset: unit -> id -> result, until complete
         bar = _bar(len(todo_specs), progress)
-        for result in _results(todo_specs, scenes, workers, ray, egl_device, start_method):
+        for result in _results(todo_specs, scenes, workers, ray, egl_device, start_method,
+                               gpus_per_worker):
             spec = by_id[result["id"]]
             if format == "files":
                 _record(journal, done, summary, spec, result, hashes, store)
@@ -284,7 +287,7 @@ def _record(journal, done, summary, spec, result, hashes, store, files=None) -> 
     done[spec["id"]] = record
 
 
-def _results(specs, scenes, workers, ray, egl_device, start_method):
+def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_worker):
     if not specs:
         return iter(())
     if ray:
@@ -292,7 +295,8 @@ def _results(specs, scenes, workers, ray, egl_device, start_method):
 
         address = None if ray is True else ray
         return ray_backend.results(local.chunks(specs, workers), scenes, actors=workers,
-                                   address=address, egl_device=egl_device)
+                                   address=address, egl_device=egl_device,
+                                   num_gpus=gpus_per_worker)
     if workers == 1 and start_method == "spawn":
         return local.in_process(local.chunks(specs, 1), scenes, egl_device)
     return local.pool(local.chunks(specs, workers), scenes, workers, egl_device, start_method)

@@ -42,6 +42,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--ray", nargs="?", const=True, default=None, metavar="ADDRESS",
                    help="render on Ray actors (pip install 'shadowvol[ray]'): a local Ray "
                         "without ADDRESS, else the cluster at ADDRESS (e.g. auto)")
+    p.add_argument("--gpus-per-worker", type=float, default=0, metavar="G",
+                   help="with --ray: the GPUs each actor asks Ray for (e.g. 1 on a GPU "
+                        "cluster, with --egl-device auto); default 0")
     p.add_argument("--egl-device", default=None, metavar="auto|N",
                    help="the EGL device each worker renders on: an index, or auto (the EGL "
                         "device of the worker's first visible CUDA device, by "
@@ -61,7 +64,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 def command(args) -> int:
     summary = run(args.jobs, args.output, workers=args.workers, shard=parse_shard(args.shard),
                   ray=args.ray, egl_device=args.egl_device, format=args.format,
-                  samples_per_tar=args.samples_per_tar, progress=args.progress)
+                  samples_per_tar=args.samples_per_tar, progress=args.progress,
+                  gpus_per_worker=args.gpus_per_worker)
     for line in summary.errors[:10]:
         print(f"error: {line}", file=sys.stderr)
     if len(summary.errors) > 10:
