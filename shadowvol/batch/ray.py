@@ -64,49 +64,62 @@ def results(tasks: list[list[dict]], scenes: dict, actors: int, address: str | N
 
 
 def _run(ray, tasks, scenes, actors, egl_device, num_gpus) -> Iterator[dict]:
-    remote = ray.remote(num_cpus=1, num_gpus=num_gpus)(FrameActor)
-    scenes_ref = ray.put(scenes)  # big Scene objects go to the object store once
-    environment = thread_settings(actors, cores=1)  # an actor holds one CPU of the cluster
-    made = [0]
+    pool = _Pool(ray, scenes, actors, egl_device, num_gpus)
+    try:
+        yield from pool.results(tasks)
+    finally:  # free the cluster's CPUs now, not when the handles are collected
+        pool.kill()
 
-    def start():
-        made[0] += 1
-        return remote.remote(scenes_ref, egl_device, environment, f"Ray actor {made[0]}")
 
-    pool = [start() for _ in range(max(1, actors))]
-    queue = deque(tasks)
-    flying: dict = {}  # object ref -> (actor, task)
-    replacements = MAX_REPLACEMENTS
+class _Pool:
+    """Actors, a queue of tasks, IN_FLIGHT_PER_ACTOR tasks in flight per actor."""
 
-    def feed(actor) -> None:
-        while queue and sum(a is actor for a, _ in flying.values()) < IN_FLIGHT_PER_ACTOR:
-            task = queue.popleft()
-            flying[actor.render.remote(task)] = (actor, task)
+    def __init__(self, ray, scenes, actors, egl_device, num_gpus):
+        self.ray = ray
+        self.remote = ray.remote(num_cpus=1, num_gpus=num_gpus)(FrameActor)
+        # big Scene objects go to the object store once; an actor holds one CPU of the cluster
+        self.args = (ray.put(scenes), egl_device, thread_settings(actors, cores=1))
+        self.made = 0
+        self.replacements = MAX_REPLACEMENTS
+        self.actors = [self._start() for _ in range(max(1, actors))]
+        self.queue: deque = deque()
+        self.flying: dict = {}  # object ref -> (actor, task)
 
-    for actor in pool:
-        feed(actor)
-    while flying:
-        ready, _ = ray.wait(list(flying), num_returns=1)
-        ref = ready[0]
-        actor, task = flying.pop(ref)
-        try:
-            done = ray.get(ref)
-        except ray.exceptions.RayActorError as exc:
-            queue.appendleft(task)  # re-run elsewhere
-            if actor in pool:
-                pool.remove(actor)
-                if replacements > 0:
-                    replacements -= 1
-                    pool.append(start())
-            if not pool:
-                failed = list(queue)
-                queue.clear()
-                for t in failed:
-                    for spec in t:
-                        yield {"id": spec["id"], "status": status.RENDER_FAILED,
-                               "error": f"every Ray actor died ({type(exc).__name__})"}
-            for a in pool:
-                feed(a)
-            continue
-        yield from done
-        feed(actor)
+    def _start(self):
+        self.made += 1
+        return self.remote.remote(*self.args, f"Ray actor {self.made}")
+
+    def _feed(self) -> None:
+        for actor in self.actors:
+            while self.queue and sum(a is actor for a, _ in self.flying.values()) < \
+                    IN_FLIGHT_PER_ACTOR:
+                task = self.queue.popleft()
+                self.flying[actor.render.remote(task)] = (actor, task)
+
+    def results(self, tasks) -> Iterator[dict]:
+        self.queue.extend(tasks)
+        self._feed()
+        while self.flying:
+            (ref,), _ = self.ray.wait(list(self.flying), num_returns=1)
+            actor, task = self.flying.pop(ref)
+            try:
+                done = self.ray.get(ref)
+            except self.ray.exceptions.RayActorError as exc:
+                self.queue.appendleft(task)  # made again by another actor
+                if any(a is actor for a in self.actors):
+                    self.actors = [a for a in self.actors if a is not actor]
+                    if self.replacements > 0:
+                        self.replacements -= 1
+                        self.actors.append(self._start())
+                if not self.actors:
+                    while self.queue:
+                        for spec in self.queue.popleft():
+                            yield {"id": spec["id"], "status": status.RENDER_FAILED,
+                                   "error": f"every Ray actor died ({type(exc).__name__})"}
+                done = []
+            yield from done
+            self._feed()
+
+    def kill(self) -> None:
+        for actor in self.actors:
+            self.ray.kill(actor)

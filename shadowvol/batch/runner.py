@@ -281,6 +281,7 @@ def _record(journal, done, summary, spec, result, hashes, store, files=None) -> 
                   **({"method": spec["method"]} if spec["renderer"] == "shadowvol" else
                      {"max_depth": spec["max_depth"]}),
                   "versions": result["versions"], "device": result["device"],
+                  "worker": result["worker"],
                   "seconds": seconds}
         summary.rendered += 1
     journal.add(record)

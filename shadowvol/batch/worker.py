@@ -153,7 +153,8 @@ class Worker:
                 "lights": [light_dict(x) for x in lights], "size": [scene.width, scene.height],
                 "seconds": {"scene": round(loaded - start, 6), "render": round(rendered - loaded, 6),
                             "encode": round(done - rendered, 6)},
-                "versions": self.versions(spec["renderer"]), "device": self.device}
+                "versions": self.versions(spec["renderer"]), "device": self.device,
+                "worker": f"{self.label} (pid {os.getpid()})"}
 
     def _frame_scene(self, spec: dict):
         scene = self.scene(spec["scene"])

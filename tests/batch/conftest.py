@@ -9,6 +9,16 @@ import pytest
 from builders import job_lines, manifest_hashes, output_files, write_jobs
 
 
+@pytest.fixture(scope="session")
+def ray_session():
+    """One local Ray (2 CPUs) for the batch tests that use it, shut down after them."""
+    ray = pytest.importorskip("ray", reason="ray is not installed here (pip install "
+                                            "'shadowvol[ray]'): only the Ray runs are skipped")
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    yield ray
+    ray.shutdown()
+
+
 @pytest.fixture
 def jobs_file(tmp_path) -> Path:
     return write_jobs(tmp_path / "jobs.jsonl", job_lines())

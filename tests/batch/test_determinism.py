@@ -48,14 +48,8 @@ def test_shards_together_are_one_run(reference, tmp_path, compare_outputs):
     compare_outputs(out, ref)
 
 
-def test_ray_actors(reference, tmp_path, compare_outputs):
-    ray = pytest.importorskip("ray", reason="ray is not installed here (pip install "
-                                            "'shadowvol[ray]'): only the Ray run is skipped")
+def test_ray_actors(reference, tmp_path, compare_outputs, ray_session):
     jobs, ref = reference
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
-    try:
-        summary = batch.run(jobs, tmp_path / "out", workers=2, ray=True, progress=False)
-    finally:
-        ray.shutdown()
+    summary = batch.run(jobs, tmp_path / "out", workers=2, ray=True, progress=False)
     assert summary.status == 0 and summary.rendered == 6, summary.errors
     compare_outputs(tmp_path / "out", ref)
