@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -65,7 +66,8 @@ def write_scene(folder: Path, models: Path, width: int, height: int) -> Path:
         centre = (lo + hi) / 2 * scale
         x = -3.0 + 1.5 * i
         translation = [x - centre[0], -lo[1] * scale, -centre[2]]
-        lines.append(f'[[objects]]\nname = "{name}"\ntype = "mesh"\npath = {json.dumps(str(path))}\n'
+        lines.append(f'[[objects]]\nname = "{name}"\ntype = "mesh"\n'
+                     f"path = {json.dumps(str(path))}\n"
                      f"transform = {{ scale = {scale!r}, translation = "
                      f"[{', '.join(repr(float(t)) for t in translation)}] }}\n")
     scene = folder / "models.toml"
@@ -85,6 +87,13 @@ def write_jobs(folder: Path, scene: Path, frames: int) -> Path:
 
 def _records(out: Path, name: str = "manifest.jsonl") -> list[dict]:
     return [json.loads(line) for line in (out / name).read_text().splitlines()]
+
+
+def _cpu() -> float:
+    """CPU seconds used so far by this process and its finished children."""
+    me = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def _env() -> dict:
@@ -114,23 +123,27 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
 
     def timed(label, **kwargs):
         out = tmp / label
-        start = time.perf_counter()
+        cpu, start = _cpu(), time.perf_counter()
         summary = batch.run(jobs, out, progress=False, **kwargs)
         seconds = time.perf_counter() - start
         assert summary.status == 0 and summary.rendered == frames, summary.errors
-        result[label] = {"seconds": seconds, "frames_per_s": frames / seconds}
+        result[label] = {"seconds": seconds, "frames_per_s": frames / seconds,
+                         # Ray's actors are not our children: their CPU is not seen here
+                         "cpu_s_per_frame": None if "ray" in kwargs else
+                         (_cpu() - cpu) / frames}
         return out
 
     one = timed("workers_1")
     timed("workers_2", workers=2)
 
-    start = time.perf_counter()
+    cpu, start = _cpu(), time.perf_counter()
     shards = [subprocess.Popen([sys.executable, "-m", "shadowvol", "batch", str(jobs), "-o",
                                 str(tmp / "shards_2"), "--shard", f"{i}/2"], env=_env(),
                                stderr=subprocess.DEVNULL) for i in (0, 1)]
     assert [p.wait() for p in shards] == [0, 0]
     seconds = time.perf_counter() - start
-    result["shards_2"] = {"seconds": seconds, "frames_per_s": frames / seconds}
+    result["shards_2"] = {"seconds": seconds, "frames_per_s": frames / seconds,
+                          "cpu_s_per_frame": (_cpu() - cpu) / frames}
 
     if ray:
         try:
@@ -212,14 +225,15 @@ def main(argv=None) -> int:
           f"{r['size'][0]}x{r['size'][1]}, image + masks, {r['cores']} cores; load average "
           f"{r['load_before']:.1f} before, {r['load_after']:.1f} after")
     print()
-    print("| run | seconds | frames/s | vs 1 worker |")
-    print("|---|---:|---:|---:|")
+    print("| run | seconds | frames/s | vs 1 worker | CPU s per frame |")
+    print("|---|---:|---:|---:|---:|")
     for label, what in (("workers_1", "1 worker"), ("workers_2", "2 workers"),
                         ("shards_2", "2 shards in parallel"), ("ray_2", "Ray, 2 actors")):
         x = r.get(label, {})
         if "frames_per_s" in x:
+            cpu = "" if x["cpu_s_per_frame"] is None else f"{x['cpu_s_per_frame']:.2f}"
             print(f"| {what} | {x['seconds']:.1f} | {x['frames_per_s']:.2f} | "
-                  f"{x['frames_per_s'] / r['workers_1']['frames_per_s']:.2f}x |")
+                  f"{x['frames_per_s'] / r['workers_1']['frames_per_s']:.2f}x | {cpu} |")
     p = r["per_frame"]
     print()
     if "ray_init_s" in r:

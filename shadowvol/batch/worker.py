@@ -151,7 +151,8 @@ class Worker:
                     "status": code if code is not None else status.RENDER_FAILED}
         return {"id": spec["id"], "outputs": encoded, "camera": camera_dict(camera),
                 "lights": [light_dict(x) for x in lights], "size": [scene.width, scene.height],
-                "seconds": {"scene": round(loaded - start, 6), "render": round(rendered - loaded, 6),
+                "seconds": {"scene": round(loaded - start, 6),
+                            "render": round(rendered - loaded, 6),
                             "encode": round(done - rendered, 6)},
                 "versions": self.versions(spec["renderer"]), "device": self.device,
                 "worker": f"{self.label} (pid {os.getpid()})"}
