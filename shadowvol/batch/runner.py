@@ -154,53 +154,18 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         raise SceneError("-o", f"{str(out)!r} is not a folder")
     out.mkdir(parents=True, exist_ok=True)
     entries = _jobs(jobs)
-
-    # every frame of the job file, in order, with the scene each needs
-    scenes: dict[str, str | Scene] = {}
-    digests: dict[str, str] = {}
-    specs: list[dict] = []
-    for job in entries:
-        if isinstance(job, Job):
-            key = job.scene if isinstance(job.scene, str) else f"<Scene {id(job.scene)}>"
-            if key not in scenes:
-                scenes[key], digests[key] = job.scene, scene_digest(job.scene)
-            specs.extend(frames.specs(job, key))
-    hashes = {s["id"]: frames.spec_hash(s, digests[s["scene"]]) for s in specs}
-    per_unit = 1 if format == "files" else samples_per_tar
-    units = [specs[i:i + per_unit] for i in range(0, len(specs), per_unit)]
-    mine = share(len(units), shard)
-
+    plan = _Plan(entries, 1 if format == "files" else samples_per_tar, shard)
     own = manifest.manifest_name(shard)
-    old = manifest.read(out, own)
     store = FileStore(out) if format == "files" else TarStore(out)
-
-    def made(spec) -> dict | None:
-        record = old.get(spec["id"])
-        ok = record is not None and "error" not in record and record.get("spec") == \
-            hashes[spec["id"]] and record.get("format", "files") == format
-        return record if ok else None
-
-    kept: dict[str, dict] = {}
-    todo: list[int] = []
-    for u in mine:
-        records = [made(spec) for spec in units[u]]
-        if format == "files":
-            fine = records[0] is not None and store.verify(units[u][0], records[0])
-        else:
-            fine = all(records) and store.verify(u, old.get(TarStore.tar_id(u)),
-                                                 [s["id"] for s in units[u]])
-            if fine:
-                kept[TarStore.tar_id(u)] = old[TarStore.tar_id(u)]
-        if fine:
-            kept.update((r["id"], r) for r in records)
-        else:
-            todo.append(u)
+    kept, todo = _already_made(plan, manifest.read(out, own), store, format)
     # temporary files a killed run left, for any file of this share (made or not)
     if format == "files":
-        store.clean([s for u in mine for s in units[u]])
+        store.clean([s for u in plan.mine for s in plan.units[u]])
     else:
-        store.clean(list(mine))
+        store.clean(list(plan.mine))
     manifest.remove_stale_parts(out, {own})
+    units, hashes, scenes = plan.units, plan.hashes, plan.scenes
+    mine = plan.mine
 
     summary = Summary(frames=sum(len(units[u]) for u in mine),
                       skipped=sum(len(units[u]) for u in mine) - sum(len(units[u]) for u in todo),
@@ -243,22 +208,64 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
                 bar.update()
         if bar is not None:
             bar.close()
-        # the final manifest: one line per frame of this share, in job-file order
-        ordered = []
-        share_ids = {s["id"] for u in mine for s in units[u]}
-        for job in entries:
-            if isinstance(job, JobError):
-                ordered.append(done[f"job/{job.name}"])
-            else:
-                ordered.extend(done[s["id"]] for s in frames.specs(job, "")
-                               if s["id"] in share_ids and s["id"] in done)
-        ordered.extend(done[TarStore.tar_id(u)] for u in mine if TarStore.tar_id(u) in done)
+        # the final manifest: one line per frame of this share, in job-file order, then the tars
+        ordered = [done[f"job/{job.name}"] for job in entries if isinstance(job, JobError)]
+        ordered += [done[s["id"]] for u in mine for s in units[u] if s["id"] in done]
+        ordered += [done[TarStore.tar_id(u)] for u in mine if TarStore.tar_id(u) in done]
         journal.close()
         manifest.rewrite(out / own, ordered)
     finally:
         journal.close()
     summary.seconds = time.perf_counter() - began
     return summary
+
+
+class _Plan:
+    """Every frame of the job file in order (`specs`), their spec hashes, the scenes they need
+    (key -> path or Scene), the units (a frame, or a tar's frames) and this shard's share."""
+
+    def __init__(self, entries, per_unit: int, shard: tuple[int, int]):
+        self.scenes: dict[str, str | Scene] = {}
+        digests: dict[str, str] = {}
+        self.specs: list[dict] = []
+        for job in entries:
+            if isinstance(job, Job):
+                key = job.scene if isinstance(job.scene, str) else f"<Scene {id(job.scene)}>"
+                if key not in self.scenes:
+                    self.scenes[key], digests[key] = job.scene, scene_digest(job.scene)
+                self.specs.extend(frames.specs(job, key))
+        self.hashes = {s["id"]: frames.spec_hash(s, digests[s["scene"]]) for s in self.specs}
+        self.units = [self.specs[i:i + per_unit] for i in range(0, len(self.specs), per_unit)]
+        self.mine = share(len(self.units), shard)
+
+
+def _already_made(plan: _Plan, old: dict[str, dict], store, format: str
+                  ) -> tuple[dict[str, dict], list[int]]:
+    """(the records of this share's units that are made and check out, the units to make)."""
+
+    def made(spec) -> dict | None:
+        record = old.get(spec["id"])
+        ok = record is not None and "error" not in record and \
+            record.get("spec") == plan.hashes[spec["id"]] and \
+            record.get("format", "files") == format
+        return record if ok else None
+
+    kept: dict[str, dict] = {}
+    todo: list[int] = []
+    for u in plan.mine:
+        records = [made(spec) for spec in plan.units[u]]
+        if format == "files":
+            fine = records[0] is not None and store.verify(plan.units[u][0], records[0])
+        else:
+            tar = old.get(TarStore.tar_id(u))
+            fine = all(records) and store.verify(u, tar, [s["id"] for s in plan.units[u]])
+            if fine:
+                kept[TarStore.tar_id(u)] = tar
+        if fine:
+            kept.update((r["id"], r) for r in records)
+        else:
+            todo.append(u)
+    return kept, todo
 
 
 def _record(journal, done, summary, spec, result, hashes, store, files=None) -> None:
