@@ -29,9 +29,11 @@ def test_one_run_makes_every_file_the_manifest_lists(reference):
         [f"cage-turntable/{i:06d}" for i in range(4)] + [f"cage-traced/{i:06d}" for i in range(2)]
 
 
-def test_two_worker_processes(reference, tmp_path, compare_outputs):
+@pytest.mark.parametrize("start_method", ["spawn", "forkserver"])
+def test_two_worker_processes(reference, tmp_path, compare_outputs, start_method):
     jobs, ref = reference
-    summary = batch.run(jobs, tmp_path / "out", workers=2, progress=False)
+    summary = batch.run(jobs, tmp_path / "out", workers=2, start_method=start_method,
+                        progress=False)
     assert summary.status == 0 and summary.rendered == 6
     compare_outputs(tmp_path / "out", ref)
 
