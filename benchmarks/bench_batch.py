@@ -96,6 +96,15 @@ def _cpu() -> float:
     return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
+def _autogroup() -> bool | None:
+    """Whether Linux shares the CPU between sessions (then all of this session's processes
+    together get one session's share while other sessions are busy)."""
+    try:
+        return Path("/proc/sys/kernel/sched_autogroup_enabled").read_text().strip() == "1"
+    except OSError:
+        return None
+
+
 def _env() -> dict:
     paths = [str(ROOT)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     return dict(os.environ, PYTHONPATH=os.pathsep.join(paths))
@@ -119,7 +128,8 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
     scene = load_scene(scene_path)
     result = {"frames": frames, "size": [width, height], "lights": len(scene.lights),
               "triangles": int(sum(len(o.faces) for o in scene.objects)),
-              "cores": len(os.sched_getaffinity(0)), "load_before": os.getloadavg()[0]}
+              "cores": len(os.sched_getaffinity(0)), "load_before": os.getloadavg()[0],
+              "autogroup": _autogroup()}
 
     def timed(label, **kwargs):
         out = tmp / label
@@ -225,15 +235,17 @@ def main(argv=None) -> int:
           f"{r['size'][0]}x{r['size'][1]}, image + masks, {r['cores']} cores; load average "
           f"{r['load_before']:.1f} before, {r['load_after']:.1f} after")
     print()
-    print("| run | seconds | frames/s | vs 1 worker | CPU s per frame |")
-    print("|---|---:|---:|---:|---:|")
+    print("| run | seconds | frames/s | vs 1 worker | CPU s per frame | cores it got |")
+    print("|---|---:|---:|---:|---:|---:|")
     for label, what in (("workers_1", "1 worker"), ("workers_2", "2 workers"),
                         ("shards_2", "2 shards in parallel"), ("ray_2", "Ray, 2 actors")):
         x = r.get(label, {})
         if "frames_per_s" in x:
-            cpu = "" if x["cpu_s_per_frame"] is None else f"{x['cpu_s_per_frame']:.2f}"
+            cpu = x["cpu_s_per_frame"]
+            used = "" if cpu is None else f"{cpu * r['frames'] / x['seconds']:.2f}"
+            cpu = "" if cpu is None else f"{cpu:.2f}"
             print(f"| {what} | {x['seconds']:.1f} | {x['frames_per_s']:.2f} | "
-                  f"{x['frames_per_s'] / r['workers_1']['frames_per_s']:.2f}x | {cpu} |")
+                  f"{x['frames_per_s'] / r['workers_1']['frames_per_s']:.2f}x | {cpu} | {used} |")
     p = r["per_frame"]
     print()
     if "ray_init_s" in r:
