@@ -13,12 +13,14 @@ checks every file against them and writes `manifest.jsonl`.
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import json
 import os
 from pathlib import Path
 
 from shadowvol.io import write_bytes
+from shadowvol.scene import SceneError
 
 MANIFEST = "manifest.jsonl"
 
@@ -73,30 +75,40 @@ def read(out: str | Path, own: str = MANIFEST) -> dict[str, dict]:
 
 
 class Journal:
-    """Appends records to a manifest, one line each, flushed as written."""
+    """Appends records to a manifest, one line each, flushed as written.  Holds an exclusive
+    lock on the file while open: a second run of the same share into the same folder is
+    refused instead of interleaving its lines (shards have manifests of their own)."""
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._cut_partial_line()
         self._file = open(self.path, "ab")
+        try:
+            fcntl.flock(self._file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            self._file.close()
+            raise SceneError("-o", f"another run is writing {self.path} now; wait for it, or "
+                                   "give this one another folder or shard") from None
+        self._cut_partial_line()
 
     def _cut_partial_line(self) -> None:
-        try:
-            with open(self.path, "r+b") as f:
-                data = f.read()
-                if data and not data.endswith(b"\n"):
-                    f.truncate(data.rfind(b"\n") + 1)
-        except FileNotFoundError:
-            pass
+        with open(self.path, "r+b") as f:
+            data = f.read()
+            if data and not data.endswith(b"\n"):
+                f.truncate(data.rfind(b"\n") + 1)
 
     def add(self, record: dict) -> None:
         self._file.write(encode(record))
         self._file.flush()
 
+    def finish(self, records: list[dict]) -> None:
+        """Replace the manifest with `records` (atomically, still holding the lock), then close."""
+        rewrite(self.path, records)
+        self.close()
+
     def close(self) -> None:
         if not self._file.closed:
-            self._file.close()
+            self._file.close()  # and the lock with it
 
 
 def encode(record: dict) -> bytes:

@@ -212,8 +212,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         ordered = [done[f"job/{job.name}"] for job in entries if isinstance(job, JobError)]
         ordered += [done[s["id"]] for u in mine for s in units[u] if s["id"] in done]
         ordered += [done[TarStore.tar_id(u)] for u in mine if TarStore.tar_id(u) in done]
-        journal.close()
-        manifest.rewrite(out / own, ordered)
+        journal.finish(ordered)
     finally:
         journal.close()
     summary.seconds = time.perf_counter() - began
