@@ -1,9 +1,12 @@
-"""The one writer: PNG images, mask files and text, atomically.
+"""The one writer: PNG images, mask files, tar archives and raw bytes, atomically.
 
 Renderers return arrays; the CLI, batch jobs and the course call these.  Every file goes
 through `atomic_write`: the data goes to a temporary file beside the target, which replaces the
 target only once it is complete, so an error or Ctrl-C never leaves half a file.  Arrays have
-row 0 at the top (docs/CONVENTIONS.md).
+row 0 at the top (docs/CONVENTIONS.md).  The encoders (`png_bytes`, `npz_bytes`, `tar_bytes`)
+are deterministic: the same arrays give the same bytes, whenever and wherever they are written
+(no timestamps, owners or modes from the machine), which is what lets `shadowvol batch` check a
+file against its recorded sha256.
 """
 
 from __future__ import annotations
@@ -13,7 +16,9 @@ import io
 import os
 import struct
 import sys
+import tarfile
 import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -119,20 +124,34 @@ def png_bytes(image: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
-def save_png(path: str | Path, image: np.ndarray) -> None:
-    """Write an image: uint8 pixels as they are, float pixels as linear RGB encoded to sRGB."""
-    arr = np.asarray(image)
-    if np.issubdtype(arr.dtype, np.floating):
-        arr = encode_srgb(arr)
-    data = png_bytes(arr)
+def write_bytes(path: str | Path, data: bytes) -> None:
+    """Write `data` to `path` atomically (see `atomic_write`)."""
     with atomic_write(path) as f:
         f.write(data)
 
 
-def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
-               light_samples=None) -> None:
-    """Write a mask file as docs/CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage`
-    (H, W).
+# zip and tar members carry a time stamp; a fixed one makes the archives reproducible
+# (1980-01-01, the earliest time a zip entry can hold)
+_FIXED_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
+_FIXED_TAR_MTIME = 315532800
+
+
+def npz_bytes(**arrays: np.ndarray) -> bytes:
+    """A compressed `.npz` of `arrays`, readable by `np.load`, without numpy's time stamps (the
+    same arrays give the same bytes).  Never pickles: object arrays are refused."""
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        for name, value in arrays.items():
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=_FIXED_ZIP_TIME)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            with archive.open(info, "w", force_zip64=True) as member:
+                np.lib.format.write_array(member, np.asanyarray(value), allow_pickle=False)
+    return buf.getvalue()
+
+
+def masks_bytes(lit: np.ndarray, coverage: np.ndarray, light_samples=None) -> bytes:
+    """A mask file as docs/CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage` (H, W).
 
     light_samples : optional, per light an (N, 3) float64 array of its sample positions
     (`shadowvol.scene.light_samples`) or None (a directional light), written as
@@ -150,10 +169,39 @@ def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
             coverage.shape != lit.shape[1:]:
         raise ValueError(f"masks must be lit (L, H, W) bool and coverage (H, W) bool, got "
                          f"{lit.dtype}{lit.shape} and {coverage.dtype}{coverage.shape}")
+    return npz_bytes(lit=lit, coverage=coverage, **extra)
+
+
+def tar_bytes(members: list[tuple[str, bytes]]) -> bytes:
+    """An uncompressed POSIX tar of (name, data) members in the given order, with fixed time
+    stamps, owners and modes (the same members give the same bytes)."""
     buf = io.BytesIO()
-    np.savez_compressed(buf, lit=lit, coverage=coverage, **extra)
+    with tarfile.open(fileobj=buf, mode="w", format=tarfile.PAX_FORMAT) as archive:
+        for name, data in members:
+            info = tarfile.TarInfo(name)
+            info.size = len(data)
+            info.mtime = _FIXED_TAR_MTIME
+            info.mode = 0o644
+            info.uid = info.gid = 0
+            info.uname = info.gname = ""
+            archive.addfile(info, io.BytesIO(data))
+    return buf.getvalue()
+
+
+def save_png(path: str | Path, image: np.ndarray) -> None:
+    """Write an image: uint8 pixels as they are, float pixels as linear RGB encoded to sRGB."""
+    arr = np.asarray(image)
+    if np.issubdtype(arr.dtype, np.floating):
+        arr = encode_srgb(arr)
+    data = png_bytes(arr)
     with atomic_write(path) as f:
-        f.write(buf.getvalue())
+        f.write(data)
+
+
+def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
+               light_samples=None) -> None:
+    """Write a mask file (`masks_bytes`), atomically."""
+    write_bytes(path, masks_bytes(lit, coverage, light_samples))
 
 
 def load_masks(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
