@@ -25,13 +25,12 @@ from shadowvol.cli import outputs, status
 from shadowvol.cameras import calibration
 from shadowvol.io import GROUND_TRUTH, atomic_write, save_exr, save_masks, save_png, save_png16
 from shadowvol.pictures import ground_truth_picture, masks_image
-from shadowvol.scene import SceneError
+from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene
 
-from . import cli_outlook
+from . import cli_outlook, shadow_masks  # (area lights: lit where every sample reaches)
 from .backends import BACKENDS
 from .groundtruth import check_outputs, ground_truth
-from .masks import shadow_masks
 from .raytree import draw_tree, format_tree, ray_tree
 from .whitted import render
 
@@ -153,7 +152,8 @@ def _masks(args) -> int:
         lit, coverage = shadow_masks(scene, backend=args.backend)
         arrays = calibration(scene).arrays()
         picture = masks_image(lit, coverage)
-    save_masks(paths["masks"], lit, coverage, arrays)
+    save_masks(paths["masks"], lit, coverage, arrays,
+               light_samples=[light_samples(lt) for lt in scene.lights])
     if "picture" in paths:
         save_png(paths["picture"], picture)
     print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)

@@ -236,11 +236,23 @@ MASK_ARRAYS = {
 
 
 def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
-               arrays: dict[str, np.ndarray] | None = None) -> None:
-    """Write a mask file as CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage` (H, W),
-    and `arrays`, more arrays by name: the ground-truth outputs and the camera and light
-    arrays (`shadowvol.cameras.Calibration.arrays()`), each of the dtype and shape
-    `MASK_ARRAYS` gives it (ValueError otherwise, and for a name it does not know)."""
+               arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> None:
+    """Write a mask file as docs/CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage`
+    (H, W), and
+
+    arrays : more arrays by name: the ground-truth outputs and the camera and light arrays
+        (`shadowvol.cameras.Calibration.arrays()`), each of the dtype and shape `MASK_ARRAYS`
+        gives it (ValueError otherwise, and for a name it does not know);
+    light_samples : per light an (N, 3) float64 array of its sample positions
+        (`shadowvol.scene.light_samples`) or None (a directional light), written as
+        `light_samples_<i>`."""
+    extra = {}
+    for i, samples in enumerate(light_samples or ()):
+        if samples is not None:
+            samples = np.asarray(samples, np.float64)
+            if samples.ndim != 2 or samples.shape[1] != 3:
+                raise ValueError(f"light_samples[{i}] must be (N, 3), got {samples.shape}")
+            extra[f"light_samples_{i}"] = samples
     lit = np.asarray(lit)
     coverage = np.asarray(coverage)
     if lit.dtype != bool or lit.ndim != 3 or coverage.dtype != bool or \
@@ -248,7 +260,6 @@ def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
         raise ValueError(f"masks must be lit (L, H, W) bool and coverage (H, W) bool, got "
                          f"{lit.dtype}{lit.shape} and {coverage.dtype}{coverage.shape}")
     sizes = dict(zip("LHW", lit.shape))
-    extra = {}
     for name, value in (arrays or {}).items():
         if name not in MASK_ARRAYS:
             raise ValueError(f"a mask file holds no array {name!r} (known: "

@@ -13,6 +13,7 @@ The demos, in the order of the course:
   zpass_zfail          the camera inside a shadow volume: z-pass wrong, z-fail right
   stack_stencil        the stencil buffer as a per-pixel counter (heat map)
   planar               planar projected shadows beside shadow volumes: what they cannot do
+  umbra_penumbra, hard_sum   soft shadows: umbra and penumbra; the sum of N hard shadows
   shadow2d             the 2D shadow-polygon exercise
   raytree              the ray-tree exercise: every ray of one pixel to depth 2
   whitted_best         Whitted ray tracing: reflections of reflections, refraction
@@ -333,8 +334,15 @@ def compare_picture(g: Gallery) -> Picture:
                  "interior": sum(l.interior for l in c.lights)})
 
 
-DEMOS = (cage_pictures, zpass_zfail, stack_stencil, planar, shadow2d, raytree, whitted_best,
-         compare_picture)
+def soft_pictures(g: Gallery) -> list[Picture]:
+    """Umbra and penumbra, and a soft shadow as the sum of hard ones (`soft_gallery`)."""
+    from shadowvol.course.soft_gallery import hard_sum, umbra_penumbra
+
+    return [umbra_penumbra(g), hard_sum(g)]
+
+
+DEMOS = (cage_pictures, zpass_zfail, stack_stencil, planar, soft_pictures, shadow2d, raytree,
+         whitted_best, compare_picture)
 
 
 def build_gallery(small: bool = False, scenes: Path = SCENES, ctx=None,

@@ -1,8 +1,9 @@
 """The passes of a shadowed frame, in order:
 
 1. `depth_ambient`: depth (test LESS, writes on) and the ambient term ka * ambient.
-2. per light: `count_volumes` — the stencil cleared, then the shadow volumes drawn with colour
-   and depth writes off and two-sided stencil counting, z-pass or z-fail per caster;
+2. per light (an area light: per sample, as a point light): `count_volumes` — the stencil
+   cleared, then the shadow volumes drawn with colour and depth writes off and two-sided
+   stencil counting, z-pass or z-fail per caster;
    `add_light` — the light's Phong term added where the stencil is 0 (depth test EQUAL, additive
    blending), and its lit mask written.
 
@@ -21,7 +22,7 @@ from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.projection import NEARER, gl_matrix
 from shadowvol.raster.target import Target
-from shadowvol.scene import Camera, Light, Scene, SpotLight
+from shadowvol.scene import AreaSample, Camera, Light, Scene, SpotLight
 
 NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)
 
@@ -107,6 +108,7 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
 def light_uniforms(program: moderngl.Program, light: Light) -> None:
     set_uniform(program, "u_light", tuple(float(x) for x in light.homogeneous))
     set_uniform(program, "u_radiance", tuple(float(x) for x in light.radiance))
+    set_uniform(program, "u_emitter_cosine", 1.0 if isinstance(light, AreaSample) else 0.0)
     if isinstance(light, SpotLight):
         set_uniform(program, "u_spot_direction", tuple(float(x) for x in light.direction))
         set_uniform(program, "u_spot_cos", light.cos_cutoff)

@@ -27,12 +27,14 @@ from shadowvol.raster.projection import view_projection
 from shadowvol.raster.target import Target
 from shadowvol.raster.volumes import CpuVolumes, GpuVolumes
 from shadowvol.scene import (
+    AreaLight,
     Camera,
     DirectionalLight,
     Light,
     PointLight,
     Scene,
     SpotLight,
+    hard_lights,
 )
 
 SILHOUETTES = ("cpu", "gpu")
@@ -42,12 +44,18 @@ SILHOUETTES = ("cpu", "gpu")
 class RenderResult:
     """One frame.
 
-    image    : (H, W, 3) float32 linear RGB (direct Phong lighting with hard shadows)
-    lit      : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot cone
+    image    : (H, W, 3) float32 linear RGB (direct Phong lighting; an area light's samples
+               summed: soft shadows)
+    lit      : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot cone;
+               for an area light: so for every sample (lit_count == N)
     coverage : (H, W) bool, geometry visible at the pixel centre
     stencil  : (L, H, W) int16 signed stencil counts after each light's volume pass, or None
-               when not asked for
+               when not asked for (hard lights only)
     zfail    : (L, n_objects) bool, which casters were counted with z-fail for each light
+               (for an area light: for any of its samples)
+    lit_count : (L, H, W) uint16, per light how many of its samples (hard lights: 1) light the
+               pixel as `lit` says
+    samples  : (L,) int64, N per light (hard lights: 1)
     """
 
     image: np.ndarray
@@ -55,6 +63,18 @@ class RenderResult:
     coverage: np.ndarray
     stencil: np.ndarray | None
     zfail: np.ndarray
+    lit_count: np.ndarray
+    samples: np.ndarray
+
+    @property
+    def visibility(self) -> np.ndarray:
+        """(L, H, W) float32: lit_count / N."""
+        return (self.lit_count / self.samples[:, None, None]).astype(np.float32)
+
+    @property
+    def penumbra(self) -> np.ndarray:
+        """(L, H, W) bool: some samples light the pixel, not all (0 < lit_count < N)."""
+        return (self.lit_count > 0) & ~self.lit
 
 
 class Renderer:
@@ -140,9 +160,15 @@ class Renderer:
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if stencil else methods.zpass_clip_planes(
             self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
-        lit, counts, zfail = [], [], []
-        for light in lights:
-            light4 = light.homogeneous
+        h, w = self.scene.height, self.scene.width
+        if stencil and any(isinstance(light, AreaLight) for light in lights):
+            raise ValueError("stencil counts are per hard light: not for area lights")
+        lit_count = np.zeros((len(lights), h, w), np.uint16)
+        zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
+        counts = []
+        # an area light is its samples, each counted and shaded as a point light
+        for i, sample in ((i, hard) for i, lt in enumerate(lights) for hard in hard_lights(lt)):
+            light4 = sample.homogeneous
             choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
                                     light4, self.geometry.extent)
             if shadows:
@@ -155,17 +181,24 @@ class Renderer:
                 self.target.clear_stencil()
             if stencil:
                 counts.append(self.target.read_stencil())
-            passes.add_light(self.ctx, self.gl, self.target, self.programs, light)
-            lit.append(self.target.read_lit())
-            zfail.append(choice)
+            passes.add_light(self.ctx, self.gl, self.target, self.programs, sample)
+            lit_count[i] += self.target.read_lit()
+            zfail[i] |= choice
         rgba = self.target.read_colour()
-        h, w = self.scene.height, self.scene.width
+        samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
         return RenderResult(
             image=np.ascontiguousarray(rgba[..., :3]),
-            lit=np.array(lit, bool).reshape(len(lights), h, w),
+            lit=lit_count == samples[:, None, None],
             coverage=rgba[..., 3] > 0.5,
             stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if stencil else None,
-            zfail=np.array(zfail, bool).reshape(len(lights), len(self.scene.objects)))
+            zfail=zfail, lit_count=lit_count, samples=samples)
+
+    def facing(self, *, camera: Camera | None = None,
+               lights: tuple[Light, ...] | None = None) -> np.ndarray:
+        """(L, H, W) bool: some sample of each light faces the pixel (n . l > 0 toward it and
+        inside its cone), shadows aside: the frame without the volume passes.  With a
+        frame's `lit_count`, umbra = facing & (lit_count == 0)."""
+        return self.render(camera=camera, lights=lights, shadows=False).lit_count > 0
 
     def volume_view(self, method: str = "auto", silhouettes: str = "cpu", *,
                     camera: Camera | None = None,
@@ -177,7 +210,9 @@ class Renderer:
         result = self.render(method, silhouettes, camera=camera, lights=lights)
         vols = self.volumes(silhouettes)  # the frame is left in the target
         with stencil_gl.zero_to_one_depth(self.gl):
-            for i, light in enumerate(self.scene.lights if lights is None else lights):
+            for i, light in ((i, hard) for i, lt in enumerate(self.scene.lights if lights is None
+                                                              else lights)
+                             for hard in hard_lights(lt)):  # an area light: every sample's
                 vols.prepare(light.homogeneous)
                 overlay.draw_volume_overlay(self.ctx, self.gl, self.target, vols,
                                             result.zfail[i])
@@ -206,7 +241,8 @@ def _check_lights(lights) -> tuple[Light, ...] | None:
     if lights is None:
         return None
     lights = tuple(lights)
-    bad = [x for x in lights if not isinstance(x, (PointLight, DirectionalLight, SpotLight))]
+    bad = [x for x in lights
+           if not isinstance(x, (PointLight, DirectionalLight, SpotLight, AreaLight))]
     if bad:
         raise TypeError(f"lights must be Light objects (e.g. scene.lights[0]), got {bad[0]!r}")
     return lights

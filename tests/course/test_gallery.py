@@ -20,7 +20,7 @@ from shadowvol.raster.renderer import Renderer
 from shadowvol.scenefile import load_scene
 
 EXPECTED = {"cage", "cage_volumes", "zpass_zfail", "stack_stencil", "planar", "shadow2d",
-            "raytree", "whitted_best", "compare"}
+            "raytree", "whitted_best", "compare", "umbra_penumbra", "hard_sum"}
 TITLE_BACKGROUND = (40, 40, 48)
 
 
