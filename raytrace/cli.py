@@ -7,6 +7,7 @@
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
     raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png
     raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png
+    raytrace exercise plane -o plane.png                            (the worked solution)
 
 Outputs are written atomically (shadowvol.io): an error never leaves half a file behind.
 A bad scene prints `error: <file>: <key>: <problem>`; the exit statuses are shadowvol's
@@ -28,7 +29,11 @@ from shadowvol.pictures import ground_truth_picture, masks_image
 from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene
 
-from . import cli_outlook, shadow_masks  # (area lights: lit where every sample reaches)
+from . import (  # (area lights: lit where every sample reaches)
+    cli_outlook,
+    exercise,
+    shadow_masks,
+)
 from .backends import BACKENDS
 from .groundtruth import check_outputs, ground_truth
 from .raytree import draw_tree, format_tree, ray_tree
@@ -98,6 +103,19 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", metavar="PNG", default=None,
                    help="also draw the tree: the rays over the ray-traced image and a side view")
     _backend(t)
+
+    e = sub.add_parser("exercise", help="a worked exercise of the course, printed and drawn",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Print the worked solution of one of the course's "
+                                   "exercises, computed with the ray tracer's own formulas, "
+                                   "and optionally draw it.  plane: the ray (5,1) + λ(−1,3) "
+                                   "against the plane through (2,2) with normal (1,−1).  tir: "
+                                   "Snell's law from glass into air, past the critical angle.")
+    e.add_argument("name", choices=tuple(EXERCISES), metavar="NAME",
+                   help="the exercise: " + ", ".join(EXERCISES))
+    e.add_argument("-o", "--output", metavar="PNG", default=None,
+                   help="also draw the exercise's 2D picture")
     return ap
 
 
@@ -183,7 +201,35 @@ def _tree(args) -> int:
     return status.OK
 
 
-COMMANDS = {"render": _render, "masks": _masks, "tree": _tree,
+def _plane():
+    s = exercise.solve_plane()
+    return exercise.plane_text(s), exercise.plane_figure(s)
+
+
+def _tir():
+    rays = exercise.solve_tir()
+    return exercise.tir_text(rays), exercise.tir_figure(rays)
+
+
+EXERCISES = {"plane": _plane, "tir": _tir}
+
+
+def _exercise(args) -> int:
+    """The `exercise` command: print the worked solution, draw it with -o."""
+    if args.output:
+        outputs.check({"picture": Path(args.output)}, {"picture": "-o"})
+    text, fig = EXERCISES[args.name]()
+    print(text)
+    if args.output:
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png")
+        with atomic_write(args.output) as f:
+            f.write(buf.getvalue())
+        print(f"wrote {args.output}", file=sys.stderr)
+    return status.OK
+
+
+COMMANDS = {"render": _render, "masks": _masks, "tree": _tree, "exercise": _exercise,
             "radiosity": cli_outlook.radiosity_command}
 
 

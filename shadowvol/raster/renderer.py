@@ -76,6 +76,11 @@ class RenderResult:
         """(L, H, W) bool: some samples light the pixel, not all (0 < lit_count < N)."""
         return (self.lit_count > 0) & ~self.lit
 
+    def _repr_png_(self) -> bytes:
+        """A notebook shows the frame as its image."""
+        from shadowvol.display import frame_png
+        return frame_png(self)
+
 
 class Renderer:
     """Renders `scene` (its geometry and materials; camera and lights may change per frame).

@@ -133,7 +133,8 @@ def test_a_missing_extra_is_bad_input_naming_the_pip_command(missing, tool, args
 
 
 @pytest.mark.parametrize("argv", [["--help"], ["render", "--help"], ["compare", "--help"],
-                                  ["demo", "--help"], ["shadow2d", "--help"]])
+                                  ["demo", "--help"], ["shadow2d", "--help"],
+                                  ["planar", "--help"]])
 def test_every_shadowvol_help_prints_the_table(argv, capsys):
     with pytest.raises(SystemExit):
         shadowvol_main(argv)
@@ -141,7 +142,7 @@ def test_every_shadowvol_help_prints_the_table(argv, capsys):
     assert " ".join(status.EPILOG.split()) in text
 
 
-@pytest.mark.parametrize("argv", [["--help"]])
+@pytest.mark.parametrize("argv", [["--help"], ["exercise", "--help"]])
 def test_raytrace_help_prints_the_table(argv, capsys):
     with pytest.raises(SystemExit):
         raytrace_main(argv)
