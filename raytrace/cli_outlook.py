@@ -32,7 +32,7 @@ def add_options(render: argparse.ArgumentParser) -> None:
                         help="path tracing: random seed; the same seed gives the same image "
                              "(default 0)")
     render.add_argument("--exr", metavar="EXR", default=None,
-                        help="path tracing: also write the linear image as OpenEXR")
+                        help="also write the linear image as OpenEXR")
 
 
 def add_parsers(sub) -> None:

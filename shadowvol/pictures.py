@@ -173,3 +173,110 @@ def figure_pixels(fig) -> np.ndarray:
     canvas = FigureCanvasAgg(fig)
     canvas.draw()
     return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+
+# ---- ground truth (docs/CONVENTIONS.md, "Ground truth") ----------------------------------------
+
+# object k's colour is OBJECT_PALETTE[(k - 1) % len]; the background is BACKGROUND
+OBJECT_PALETTE = np.array([[230, 25, 75], [60, 180, 75], [255, 225, 25], [0, 130, 200],
+                           [245, 130, 48], [145, 30, 180], [70, 240, 240], [240, 50, 230],
+                           [210, 245, 60], [250, 190, 212], [0, 128, 128], [220, 190, 255],
+                           [170, 110, 40], [255, 250, 200], [128, 0, 0], [170, 255, 195]],
+                          np.uint8)
+BACKGROUND = np.array([24, 24, 40], np.uint8)
+UNSHADOWED = np.array([70, 70, 70], np.uint8)      # covered, no caster
+LIT_COLOUR = np.array([235, 235, 235], np.uint8)
+CAST_COLOUR = np.array([220, 40, 40], np.uint8)     # facing the light, something in between
+ATTACHED_COLOUR = np.array([50, 90, 230], np.uint8)  # facing away from the light
+
+
+def object_colours(n: int) -> np.ndarray:
+    """(n, 3) uint8: the colour of objects 1..n (object k is row k - 1)."""
+    return OBJECT_PALETTE[np.arange(n) % len(OBJECT_PALETTE)]
+
+
+def depth_image(depth: np.ndarray) -> np.ndarray:
+    """(H, W) float depth -> (H, W, 3) uint8: near white to far dark grey over the finite
+    range, BACKGROUND where it is inf."""
+    finite = np.isfinite(depth)
+    out = np.broadcast_to(BACKGROUND, depth.shape + (3,)).copy()
+    if finite.any():
+        lo, hi = float(depth[finite].min()), float(depth[finite].max())
+        t = (depth[finite] - lo) / max(hi - lo, 1e-30)
+        out[finite] = np.round(255 - 200 * t).astype(np.uint8)[:, None]
+    return out
+
+
+def normal_image(normal: np.ndarray) -> np.ndarray:
+    """(H, W, 3) unit normals -> (H, W, 3) uint8 as (n + 1) / 2; BACKGROUND where n = 0."""
+    out = np.round((np.asarray(normal, np.float64) + 1.0) * 127.5).astype(np.uint8)
+    out[~np.asarray(normal).any(axis=-1)] = BACKGROUND
+    return out
+
+
+def id_image(object_id: np.ndarray) -> np.ndarray:
+    """(H, W) uint16 object ids -> (H, W, 3) uint8 in `object_colours`, BACKGROUND for 0."""
+    ids = np.asarray(object_id, np.int64)
+    table = np.concatenate([BACKGROUND[None], object_colours(max(int(ids.max()), 1))])
+    return table[ids]
+
+
+def shadow_kinds_image(lit: np.ndarray, facing: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+    """One light's (H, W) masks -> (H, W, 3) uint8: lit, cast shadow (facing & ~lit),
+    attached shadow (covered & ~facing), BACKGROUND where nothing is hit."""
+    out = np.broadcast_to(BACKGROUND, lit.shape + (3,)).copy()
+    out[coverage & lit] = LIT_COLOUR
+    out[facing & ~lit] = CAST_COLOUR
+    out[coverage & ~facing] = ATTACHED_COLOUR
+    return out
+
+
+def casters_image(casters: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+    """One light's (H, W) uint64 casters -> (H, W, 3) uint8: each shadowed pixel in the mean
+    colour of the objects that block it (`object_colours`), UNSHADOWED where none does,
+    BACKGROUND where nothing is hit."""
+    bits = np.asarray(casters, np.uint64)
+    total = np.zeros(bits.shape + (3,))
+    count = np.zeros(bits.shape)
+    colours = object_colours(64).astype(np.float64)
+    for j in range(64):
+        on = (bits >> np.uint64(j)) & np.uint64(1) == 1
+        if on.any():
+            total[on] += colours[j]
+            count[on] += 1
+    out = np.broadcast_to(BACKGROUND, bits.shape + (3,)).copy()
+    out[coverage] = UNSHADOWED
+    cast = count > 0
+    out[cast] = np.round(total[cast] / count[cast, None]).astype(np.uint8)
+    return out
+
+
+def ground_truth_picture(truth, names: list[str], image: np.ndarray | None = None) -> np.ndarray:
+    """The outputs of a frame side by side, each under its label: (the image,) depth, normals,
+    object ids; per light lit, cast vs attached and casters; a legend of the objects' colours.
+
+    truth : anything with `lit`, `coverage` and the ground-truth outputs as attributes (None
+    for those not computed: their panels are left out); names : the objects' names;
+    image : (H, W, 3) uint8 sRGB or None."""
+    top = [] if image is None else [("image", image)]
+    for label, key, draw in (("depth", "depth", depth_image), ("normal", "normal", normal_image),
+                             ("object id", "object_id", id_image)):
+        if getattr(truth, key, None) is not None:
+            top.append((label, draw(getattr(truth, key))))
+    rows = [top] if top else []
+    for i in range(len(truth.lit)):
+        panels = [(f"light {i}: lit", masks_image(truth.lit[i:i + 1], truth.coverage))]
+        if getattr(truth, "facing", None) is not None:
+            panels.append((f"light {i}: cast (red) / attached (blue)",
+                           shadow_kinds_image(truth.lit[i], truth.facing[i], truth.coverage)))
+        if getattr(truth, "casters", None) is not None:
+            panels.append((f"light {i}: casters", casters_image(truth.casters[i],
+                                                                truth.coverage)))
+        rows.append(panels)
+    per_row = max(len(r) for r in rows)
+    h, w = truth.coverage.shape
+    strips = [labelled_row(r + [("", np.full((h, w, 3), 255, np.uint8))] * (per_row - len(r)))
+              for r in rows]
+    out = column(strips)
+    entries = [(name, tuple(c)) for name, c in zip(names, object_colours(len(names)))]
+    return np.concatenate([out, legend(out.shape[1], entries, spacing=18)])

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
 from statistics import NormalDist
 
@@ -29,7 +30,9 @@ from shadowvol.scenefile import load_scene
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
 TEST_OUTPUT = ROOT / "test-output"
-MODELS = ROOT.parent / "shared" / "models"
+# the shared test meshes: ../shared/models beside the checkout, or where SHADOWVOL_MODELS says
+# (a worktree elsewhere)
+MODELS = Path(os.environ.get("SHADOWVOL_MODELS", ROOT.parent / "shared" / "models"))
 
 
 def tiny_scene(with_blocker_behind_eye: bool = False) -> Scene:
@@ -302,3 +305,23 @@ def manifest_hashes(out: Path, name: str = "manifest.jsonl") -> list[tuple]:
         else:
             rows.append((record["id"], "error", record["error"]))
     return rows
+
+
+# Two square cards over a floor under a light straight down: each card's shadow is its own
+# footprint.  A at height 1 covers x -1.0..0.2, z -0.6..0.6; B at height 0.5 covers
+# x -0.2..1.0, z -0.3..0.9; on the floor the overlap x -0.2..0.2, z -0.3..0.6 has both bits,
+# and on B the same region is A's.
+CARDS = {"A": (1.0, (-1.0, 0.2), (-0.6, 0.6)), "B": (0.5, (-0.2, 1.0), (-0.3, 0.9))}
+FLOOR = (0.0, (-4.0, 4.0), (-4.0, 4.0))
+
+
+def cards_scene(width=160, height=120, light=None) -> Scene:
+    def card(name, y, xs, zs, up=1.0):
+        return plane(name, point=[sum(xs) / 2, y, sum(zs) / 2], normal=[0, up, 0],
+                     size=[xs[1] - xs[0], zs[1] - zs[0]])
+    # the floor is wound facing down, away from the camera: its normal must be turned up
+    return Scene(camera=Camera(eye=[0.3, 4.0, 4.5], target=[0.0, 0.3, 0.0], fov_y=40.0),
+                 objects=[card("floor", *FLOOR, up=-1.0), card("A", *CARDS["A"]),
+                          card("B", *CARDS["B"])],
+                 lights=[light or DirectionalLight([0.0, -1.0, 0.0])],
+                 width=width, height=height)
