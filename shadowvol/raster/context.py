@@ -68,6 +68,9 @@ def create_context(device: int | None = None) -> moderngl.Context:
                                       require=REQUIRED_GL_VERSION, **where)
     except Exception as exc:  # glcontext raises bare Exceptions with the loader's message
         text = str(exc).strip() or type(exc).__name__
+        if "device index" in text and device is None:  # no EGL device at all
+            raise ContextError(f"cannot create a headless EGL context (the EGL driver lists no "
+                               f"device: {text}); {INSTALL_HINT}") from None
         if "device index" in text:  # glcontext: "requested device index 3, but found 1 devices"
             raise ContextError(f"there is no EGL device {device} ({text})") from None
         if "version" in text.lower() or "require" in text.lower():
