@@ -61,7 +61,9 @@ def _parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("render", help="ray-trace an image (Whitted: shadows, reflection, "
                                       "refraction, Phong)",
-                       description="Ray-trace SCENE into an 8-bit sRGB PNG.")
+                       description="Ray-trace SCENE into an 8-bit sRGB PNG.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     r.add_argument("-o", "--output", required=True, metavar="PNG",
                    help="where to write the image (PNG, sRGB, row 0 at the top)")
@@ -81,7 +83,9 @@ def _parser() -> argparse.ArgumentParser:
                                    "and write them as a .npz (lit, coverage, the camera "
                                    "matrices K, world_to_camera, camera_to_world and the light "
                                    "arrays; with --outputs, the ground truth too) and a "
-                                   "picture.")
+                                   "picture.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     m.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     m.add_argument("-o", "--output", required=True, metavar="NPZ",
                    help="where to write the masks (.npz with lit (L, H, W) and coverage (H, W))")
@@ -100,7 +104,9 @@ def _parser() -> argparse.ArgumentParser:
                                    "(X, Y) — primary, shadow rays with their verdicts, "
                                    "reflected, refracted, total internal reflection — as an "
                                    "indented tree, and optionally draw them over the render "
-                                   "and in a side view.")
+                                   "and in a side view.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     t.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     t.add_argument("--pixel", nargs=2, type=int, required=True, metavar=("X", "Y"),
                    help="column X from the left, row Y from the top")
