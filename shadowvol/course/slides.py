@@ -12,14 +12,14 @@ masks, and every count a picture reports, stay one sample per pixel (CONVENTIONS
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, replace
 
 import numpy as np
-from PIL import Image, ImageDraw, ImageFont
+from PIL import Image, ImageDraw
 
 from shadowvol import pictures
 from shadowvol.io import encode_srgb
+from shadowvol.pictures import font, text_strip  # noqa: F401 - the slides' text
 from shadowvol.raster.overlay import ROLE_COLOURS
 from shadowvol.raster.projection import view_projection
 
@@ -63,32 +63,6 @@ def count_colour(k: int) -> tuple[int, int, int]:
     """The scheme's colour for stencil count k (k >= 1; k < 0: NEGATIVE)."""
     c = NEGATIVE if k < 0 else COUNT_COLOURS[min(k, len(COUNT_COLOURS)) - 1]
     return tuple(int(x) for x in c)
-
-
-@functools.lru_cache(maxsize=64)
-def font(px: int, bold: bool = False):
-    """DejaVu Sans at `px` pixels: the font matplotlib draws the 2D pictures in (it ships
-    with matplotlib), so every slide's text looks alike and has the course's symbols
-    (λ, −, ×, ∞, ·)."""
-    from matplotlib import font_manager
-
-    path = font_manager.findfont(font_manager.FontProperties(
-        family="DejaVu Sans", weight="bold" if bold else "normal"))
-    return ImageFont.truetype(path, max(pictures.MIN_TEXT_SIZE, int(px)))
-
-
-def text_strip(text: str, width: int, height: int, px: int, dark: bool = False) -> np.ndarray:
-    """(height, width, 3) uint8: `text` at `px` on white (near-black when `dark`), shrunk
-    until it fits, then cut short."""
-    strip = Image.new("RGB", (width, height), SCHEME["title"] if dark else (255, 255, 255))
-    draw = ImageDraw.Draw(strip)
-    while px > pictures.MIN_TEXT_SIZE and draw.textlength(text, font=font(px)) > width - 12:
-        px -= 1
-    while len(text) > 1 and draw.textlength(text, font=font(px)) > width - 12:
-        text = text[:-2] + "…"
-    draw.text((8, height // 2), text, fill=(255, 255, 255) if dark else (0, 0, 0),
-              font=font(px), anchor="lm")
-    return np.asarray(strip, np.uint8)
 
 
 @dataclass(frozen=True)
