@@ -396,6 +396,10 @@ def main(argv=None) -> int:
 
     optimisations = ROOT / "benchmarks" / "OPTIMISATIONS.md"
     history = optimisations.read_text() if optimisations.is_file() else ""
+    # sections measured by their own scripts (the viewer needs a display), kept verbatim
+    viewer = ROOT / "benchmarks" / "VIEWER.md"
+    if viewer.is_file():
+        history = viewer.read_text().strip() + "\n\n" + history
     if args.report_only:
         results = json.loads(args.report_only.read_text())
         report.write(results, paths["md"], paths["png"], history)

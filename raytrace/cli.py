@@ -1,10 +1,13 @@
 """The `raytrace` command: Whitted renders and reference shadow masks of a scene file.
 
     raytrace render scenes/whitted.toml -o whitted.png
+    raytrace render scenes/whitted.toml -o whitted.png --exr whitted.exr --png16 whitted16.png
     raytrace masks  scenes/whitted.toml -o whitted-masks.npz      (+ whitted-masks.png)
+    raytrace masks  scenes/whitted.toml -o truth.npz --outputs depth,normal,object_id,casters
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
     raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png
     raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png
+    raytrace exercise plane -o plane.png                            (the worked solution)
 
 Outputs are written atomically (shadowvol.io): an error never leaves half a file behind.
 A bad scene prints `error: <file>: <key>: <problem>`; the exit statuses are shadowvol's
@@ -19,15 +22,27 @@ import sys
 from pathlib import Path
 
 from shadowvol import __version__
+from shadowvol.cameras import calibration
 from shadowvol.cli import outputs, status
-from shadowvol.io import atomic_write, save_masks, save_png
-from shadowvol.pictures import masks_image
-from shadowvol.scene import SceneError
+from shadowvol.io import (
+    GROUND_TRUTH,
+    atomic_write,
+    save_exr,
+    save_masks,
+    save_png,
+    save_png16,
+)
+from shadowvol.pictures import ground_truth_picture, masks_image
+from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene
 
-from . import cli_outlook
+from . import (  # (area lights: lit where every sample reaches)
+    cli_outlook,
+    exercise,
+    shadow_masks,
+)
 from .backends import BACKENDS
-from .masks import shadow_masks
+from .groundtruth import check_outputs, ground_truth
 from .raytree import draw_tree, format_tree, ray_tree
 from .whitted import render
 
@@ -46,13 +61,17 @@ def _parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("render", help="ray-trace an image (Whitted: shadows, reflection, "
                                       "refraction, Phong)",
-                       description="Ray-trace SCENE into an 8-bit sRGB PNG.")
+                       description="Ray-trace SCENE into an 8-bit sRGB PNG.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     r.add_argument("-o", "--output", required=True, metavar="PNG",
                    help="where to write the image (PNG, sRGB, row 0 at the top)")
     r.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="reflection/refraction generations; 0 = direct lighting only, as the "
                         "rasterizer draws it (default: the scene's render.max_depth)")
+    r.add_argument("--png16", metavar="PNG", default=None,
+                   help="also write the image as a 16-bit sRGB PNG")
     _backend(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
@@ -61,14 +80,23 @@ def _parser() -> argparse.ArgumentParser:
 
     m = sub.add_parser("masks", help="reference shadow masks (lit per light, coverage)",
                        description="Trace the reference shadow masks of SCENE on its triangles "
-                                   "and write them as a .npz (lit, coverage) and a picture.")
+                                   "and write them as a .npz (lit, coverage, the camera "
+                                   "matrices K, world_to_camera, camera_to_world and the light "
+                                   "arrays; with --outputs, the ground truth too) and a "
+                                   "picture.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     m.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     m.add_argument("-o", "--output", required=True, metavar="NPZ",
                    help="where to write the masks (.npz with lit (L, H, W) and coverage (H, W))")
     m.add_argument("--png", metavar="PNG", default=None,
                    help="where to write a picture of the masks, one panel per light (white lit, "
-                        "grey shadowed, black empty) (default: beside the .npz, same name, .png)")
+                        "grey shadowed, black empty), with --outputs also of the outputs side by "
+                        "side (default: beside the .npz, same name, .png)")
     m.add_argument("--no-png", action="store_true", help="write the .npz only")
+    m.add_argument("--outputs", metavar="LIST", default=None,
+                   help="ground truth to add to the .npz, comma-separated: "
+                        f"{','.join(GROUND_TRUTH)} (or all); see docs/CONVENTIONS.md")
     _backend(m)
 
     t = sub.add_parser("tree", help="the ray tree of one pixel (the course's exercise)",
@@ -76,7 +104,9 @@ def _parser() -> argparse.ArgumentParser:
                                    "(X, Y) — primary, shadow rays with their verdicts, "
                                    "reflected, refracted, total internal reflection — as an "
                                    "indented tree, and optionally draw them over the render "
-                                   "and in a side view.")
+                                   "and in a side view.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     t.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     t.add_argument("--pixel", nargs=2, type=int, required=True, metavar=("X", "Y"),
                    help="column X from the left, row Y from the top")
@@ -86,6 +116,19 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", metavar="PNG", default=None,
                    help="also draw the tree: the rays over the ray-traced image and a side view")
     _backend(t)
+
+    e = sub.add_parser("exercise", help="a worked exercise of the course, printed and drawn",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Print the worked solution of one of the course's "
+                                   "exercises, computed with the ray tracer's own formulas, "
+                                   "and optionally draw it.  plane: the ray (5,1) + λ(−1,3) "
+                                   "against the plane through (2,2) with normal (1,−1).  tir: "
+                                   "Snell's law from glass into air, past the critical angle.")
+    e.add_argument("name", choices=tuple(EXERCISES), metavar="NAME",
+                   help="the exercise: " + ", ".join(EXERCISES))
+    e.add_argument("-o", "--output", metavar="PNG", default=None,
+                   help="also draw the exercise's 2D picture")
     return ap
 
 
@@ -106,27 +149,44 @@ def main(argv: list[str] | None = None) -> int:
 def _render(args) -> int:
     if args.integrator == "path":
         return cli_outlook.path_traced(args)
-    outputs.check({"image": Path(args.output)}, {"image": "-o"})
+    paths = {"image": Path(args.output)}
+    for kind in ("exr", "png16"):
+        if getattr(args, kind):
+            paths[kind] = Path(getattr(args, kind))
+    outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"})
     if args.max_depth is not None and args.max_depth < 0:
         raise SceneError("--max-depth", f"must be >= 0, got {args.max_depth}")
     scene = load_scene(args.scene)
     image = render(scene, max_depth=args.max_depth, backend=args.backend,
                    progress=False if args.no_progress else None)
     save_png(args.output, image)
-    print(f"wrote {args.output}", file=sys.stderr)
+    if "exr" in paths:
+        save_exr(paths["exr"], image)
+    if "png16" in paths:
+        save_png16(paths["png16"], image)
+    print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)
     return status.OK
 
 
 def _masks(args) -> int:
+    wanted = outputs.ground_truth(args.outputs)
     paths = {"masks": Path(args.output)}
     if not args.no_png:
         paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
     outputs.check(paths, {"masks": "-o", "picture": "--png"})
     scene = load_scene(args.scene)
-    lit, coverage = shadow_masks(scene, backend=args.backend)
-    save_masks(paths["masks"], lit, coverage)
+    if wanted:
+        truth = ground_truth(scene, check_outputs(scene, wanted), backend=args.backend)
+        lit, coverage, arrays = truth.lit, truth.coverage, truth.arrays()
+        picture = ground_truth_picture(truth, [o.name for o in scene.objects])
+    else:
+        lit, coverage = shadow_masks(scene, backend=args.backend)
+        arrays = calibration(scene).arrays()
+        picture = masks_image(lit, coverage)
+    save_masks(paths["masks"], lit, coverage, arrays,
+               light_samples=[light_samples(lt) for lt in scene.lights])
     if "picture" in paths:
-        save_png(paths["picture"], masks_image(lit, coverage))
+        save_png(paths["picture"], picture)
     print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)
     return status.OK
 
@@ -154,7 +214,35 @@ def _tree(args) -> int:
     return status.OK
 
 
-COMMANDS = {"render": _render, "masks": _masks, "tree": _tree,
+def _plane():
+    s = exercise.solve_plane()
+    return exercise.plane_text(s), exercise.plane_figure(s)
+
+
+def _tir():
+    rays = exercise.solve_tir()
+    return exercise.tir_text(rays), exercise.tir_figure(rays)
+
+
+EXERCISES = {"plane": _plane, "tir": _tir}
+
+
+def _exercise(args) -> int:
+    """The `exercise` command: print the worked solution, draw it with -o."""
+    if args.output:
+        outputs.check({"picture": Path(args.output)}, {"picture": "-o"})
+    text, fig = EXERCISES[args.name]()
+    print(text)
+    if args.output:
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png")
+        with atomic_write(args.output) as f:
+            f.write(buf.getvalue())
+        print(f"wrote {args.output}", file=sys.stderr)
+    return status.OK
+
+
+COMMANDS = {"render": _render, "masks": _masks, "tree": _tree, "exercise": _exercise,
             "radiosity": cli_outlook.radiosity_command}
 
 

@@ -32,7 +32,7 @@ def add_options(render: argparse.ArgumentParser) -> None:
                         help="path tracing: random seed; the same seed gives the same image "
                              "(default 0)")
     render.add_argument("--exr", metavar="EXR", default=None,
-                        help="path tracing: also write the linear image as OpenEXR")
+                        help="also write the linear image as OpenEXR")
 
 
 def add_parsers(sub) -> None:
@@ -42,7 +42,9 @@ def add_parsers(sub) -> None:
                        description="Mesh SCENE into patches, compute form factors by casting "
                                    "rays through Embree, solve by progressive refinement and "
                                    "show the solution from the camera.  Prints the number of "
-                                   "patches, iterations and time.")
+                                   "patches, iterations and time.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     r.add_argument("-o", "--output", required=True, metavar="PNG",
                    help="the interpolated (Gouraud) display, sRGB PNG")

@@ -158,7 +158,8 @@ class _Hits(NamedTuple):
     normal by winding;  side : (h,) ±1, turns `normal` toward the camera;
     side_d : (h,) side · (normal · point);  height : (h,) the margin at the surface
     (`tolerances.shadow_height`);  tri : (h,) int64, the hit triangle (excluded by id);
-    fragile : (h,) bool, it is a sliver (`_Triangles.fragile`).
+    fragile : (h,) bool, it is a sliver (`_Triangles.fragile`);  depth : (h,) float64, the
+    eye-space depth of p (p = eye + depth·v, v the pixel's direction of depth 1).
     """
 
     point: np.ndarray
@@ -168,6 +169,7 @@ class _Hits(NamedTuple):
     height: np.ndarray
     tri: np.ndarray
     fragile: np.ndarray
+    depth: np.ndarray
 
 
 def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
@@ -175,14 +177,28 @@ def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
                 lights: list[_LocalLight]) -> tuple[np.ndarray, np.ndarray]:
     """Masks of the image rows `rows`: lit (L, R, W) bool and coverage (R, W) bool."""
     shape = (rows.stop - rows.start, scene.width)
+    covered, index, hit = _primary_hits(tracer, triangles, grids, rows,
+                                        need_hits=bool(scene.lights))
+    lit = np.zeros((len(scene.lights), covered.size), bool)
+    if hit is not None:
+        for i, light in enumerate(lights):
+            lit[i, index] = _lit(tracer, light, hit, reach)
+    return lit.reshape((-1,) + shape), covered.reshape(shape)
+
+
+def _primary_hits(tracer: TriangleBackend, triangles: _Triangles,
+                  grids: tuple[RayGrid, RayGrid], rows: slice, need_hits: bool = True
+                  ) -> tuple[np.ndarray, np.ndarray, _Hits | None]:
+    """The visible triangles of the image rows `rows`: covered (R*W,) bool, index (h,) int64
+    (the covered pixels, row-major within the rows) and their `_Hits` (None when no pixel is
+    covered or `need_hits` is False)."""
     grid32, grid64 = grids
     view32 = grid32.directions(rows)
     tri = tracer.closest_triangle(grid32.origins(view32).T, view32.T, parallel=False)
     covered = tri >= 0
-    lit = np.zeros((len(scene.lights), covered.size), bool)
     index = np.flatnonzero(covered)
-    if len(index) == 0 or not scene.lights:
-        return lit.reshape((-1,) + shape), covered.reshape(shape)
+    if len(index) == 0 or not need_hits:
+        return covered, index, None
     k = tri[index]
     # the exact (float64) pixel-centre directions of the covered pixels
     view = np.take(grid64.directions(rows), index, axis=1)
@@ -200,10 +216,8 @@ def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
     side = np.where(n_dot_v > 0, -1.0, 1.0)
     # the bound of p's float error relative to planes through it (tolerances, item 3)
     height = shadow_height(np.take(triangles.weight, k) + _dot(np.abs(normal), np.abs(point64)))
-    hit = _Hits(point, normal, side, side * plane_d, height, k, np.take(triangles.fragile, k))
-    for i, light in enumerate(lights):
-        lit[i, index] = _lit(tracer, light, hit, reach)
-    return lit.reshape((-1,) + shape), covered.reshape(shape)
+    return covered, index, _Hits(point, normal, side, side * plane_d, height, k,
+                                 np.take(triangles.fragile, k), s)
 
 
 def _round_down32(x: np.ndarray) -> np.ndarray:
@@ -243,8 +257,34 @@ def _blocked(tracer: TriangleBackend, start: np.ndarray, direction: np.ndarray,
     return blocked
 
 
+class _Segments(NamedTuple):
+    """The shadow rays of a tile's hit points toward one light (see `_segments`).
+
+    facing    : (h,) bool, n·l > 0 (and, for a spot light, inside the cone): lit unless blocked
+    rays      : (r,) int64, the facing hits that need a shadow ray (the others are lit)
+    start     : (3, r) float32;  direction : (3, r) float32, or (3, 1) for all
+    tmax      : (r,) float32, or None (unbounded: a directional light)
+    """
+
+    facing: np.ndarray
+    rays: np.ndarray
+    start: np.ndarray
+    direction: np.ndarray
+    tmax: np.ndarray | None
+
+
 def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) -> np.ndarray:
-    """(h,) bool: which of the tile's hit points the light reaches.
+    """(h,) bool: which of the tile's hit points the light reaches: facing it, and their
+    shadow ray (`_segments`) not blocked by a triangle other than their own (`_blocked`)."""
+    seg = _segments(local, hit, reach)
+    out = seg.facing.copy()
+    out[seg.rays] = ~_blocked(tracer, seg.start, seg.direction, seg.tmax, hit.tri[seg.rays],
+                              hit.fragile[seg.rays])
+    return out
+
+
+def _segments(local: _LocalLight, hit: _Hits, reach: float) -> _Segments:
+    """The shadow rays of the tile's hit points toward one light.
 
     The shadow ray is the segment p -> light (p + t·l, 0 < t < 1, l = L − p) or the ray
     p + t·l (t > 0, l = −direction) on its own line; only its ends are cut: t > height/(n·l)
@@ -254,7 +294,6 @@ def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) 
     without a copy)."""
     f32 = np.float32
     light = local.light
-    out = np.zeros(len(hit.side), bool)
     if isinstance(light, DirectionalLight):
         toward = -light.direction
         n_dot_l = hit.side * (toward @ hit.normal)  # n facing the camera
@@ -262,14 +301,11 @@ def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) 
         with np.errstate(divide="ignore"):
             near = hit.height / n_dot_l  # distance along the unit l
         cast = facing & (near < reach)  # a start beyond the scene's reach sees nothing
-        out[facing & ~cast] = True
         toward32 = toward.astype(f32)
         start = hit.point.compress(cast, axis=1)
         start += near[cast].astype(f32) * toward32[:, None]
         # Unbounded: anything anywhere along the ray toward a directional light blocks it.
-        out[cast] = ~_blocked(tracer, start, toward32[:, None], None, hit.tri[cast],
-                              hit.fragile[cast])
-        return out
+        return _Segments(facing, np.flatnonzero(cast), start, toward32[:, None], None)
     position = local.position
     # n·(L − p) = n·L − n·p, and n·p = plane_d on the triangle's plane.
     n_dot_l = hit.side * (position @ hit.normal) - hit.side_d
@@ -281,6 +317,7 @@ def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) 
     if isinstance(light, SpotLight):
         # Inside the cone: cos(angle between the spot's axis and the point) >= cos_cutoff.
         inside = -(light.direction @ l) >= light.cos_cutoff * length
+        facing[c[~inside]] = False
         c, start, l, length = c[inside], start[:, inside], l[:, inside], length[inside]
     near = hit.height[c] / n_dot_l[c]                      # fractions of the segment
     length = length.astype(np.float64)
@@ -289,10 +326,8 @@ def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) 
     # nothing is strictly between: lit.
     cast = gap > 0
     if not cast.all():
-        out[c[~cast]] = True
         c, start, l, near, gap = c[cast], start[:, cast], l[:, cast], near[cast], gap[cast]
     start += near.astype(f32) * l
     gap = _round_down32(gap)  # Embree's tfar is float32: never let rounding lengthen the ray
     # Bounded: the rest of the segment, direction l not normalised, so it ends at tmax = gap.
-    out[c] = ~_blocked(tracer, start, l, gap, hit.tri[c], hit.fragile[c])
-    return out
+    return _Segments(facing, c, start, l, gap)

@@ -8,17 +8,20 @@ backend.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 WHITE = (255, 255, 255)
+TITLE_BACKGROUND = (40, 40, 48)
 GAP = 4  # pixels between neighbouring panels
 
 # Bitmap-font strips (Pillow's built-in font): compare's labels and the swatch legends.
 LABEL_HEIGHT = 16
 LEGEND_HEIGHT = 20
 
-# Scalable-font strips (the gallery's titles and labels), at full size and with --small.
+# Fitted text strips shrink their font down to this, then cut the text short.
 MIN_TEXT_SIZE = 8
 
 # stencil count -> sRGB colour: 0 keeps the (darkened) image, 1.. warm colours, negatives blue
@@ -61,23 +64,31 @@ def label_strip(text: str, width: int, height: int = LABEL_HEIGHT) -> np.ndarray
     return np.asarray(strip, np.uint8)
 
 
-def _font(size: int):
-    return ImageFont.load_default(size=size)
+@functools.lru_cache(maxsize=64)
+def font(px: int, bold: bool = False):
+    """DejaVu Sans at `px` pixels (at least MIN_TEXT_SIZE): the font matplotlib draws the 2D
+    course pictures in (it ships with matplotlib), so all text looks alike and has the course's
+    symbols (λ, −, ×, ∞, ·)."""
+    from matplotlib import (
+        font_manager,  # only to find the font file; no figure, no backend
+    )
+
+    path = font_manager.findfont(font_manager.FontProperties(
+        family="DejaVu Sans", weight="bold" if bold else "normal"))
+    return ImageFont.truetype(path, max(MIN_TEXT_SIZE, int(px)))
 
 
-def text_strip(text: str, width: int, height: int, size: int, *,
-               dark: bool = False) -> np.ndarray:
-    """(height, width, 3) uint8: `text` in Pillow's scalable font at `size` px on white (on
-    near-black when `dark`), shrunk to MIN_TEXT_SIZE until it fits, then cut short."""
-
-    strip = Image.new("RGB", (width, height), (40, 40, 48) if dark else WHITE)
+def text_strip(text: str, width: int, height: int, px: int, dark: bool = False) -> np.ndarray:
+    """(height, width, 3) uint8: `text` at `px` on white (on near-black when `dark`), shrunk
+    until it fits, then cut short.  The one fitted text strip of every picture."""
+    strip = Image.new("RGB", (width, height), TITLE_BACKGROUND if dark else WHITE)
     draw = ImageDraw.Draw(strip)
-    while size > MIN_TEXT_SIZE and draw.textlength(text, font=_font(size)) > width - 8:
-        size -= 1
-    while len(text) > 1 and draw.textlength(text, font=_font(size)) > width - 8:
+    while px > MIN_TEXT_SIZE and draw.textlength(text, font=font(px)) > width - 12:
+        px -= 1
+    while len(text) > 1 and draw.textlength(text, font=font(px)) > width - 12:
         text = text[:-2] + "…"
-    draw.text((4, (height - size) // 2 - 1), text, fill=WHITE if dark else (0, 0, 0),
-              font=_font(size))
+    draw.text((8, height // 2), text, fill=WHITE if dark else (0, 0, 0), font=font(px),
+              anchor="lm")
     return np.asarray(strip, np.uint8)
 
 
@@ -173,3 +184,110 @@ def figure_pixels(fig) -> np.ndarray:
     canvas = FigureCanvasAgg(fig)
     canvas.draw()
     return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+
+# ---- ground truth (docs/CONVENTIONS.md, "Ground truth") ----------------------------------------
+
+# object k's colour is OBJECT_PALETTE[(k - 1) % len]; the background is BACKGROUND
+OBJECT_PALETTE = np.array([[230, 25, 75], [60, 180, 75], [255, 225, 25], [0, 130, 200],
+                           [245, 130, 48], [145, 30, 180], [70, 240, 240], [240, 50, 230],
+                           [210, 245, 60], [250, 190, 212], [0, 128, 128], [220, 190, 255],
+                           [170, 110, 40], [255, 250, 200], [128, 0, 0], [170, 255, 195]],
+                          np.uint8)
+BACKGROUND = np.array([24, 24, 40], np.uint8)
+UNSHADOWED = np.array([70, 70, 70], np.uint8)      # covered, no caster
+LIT_COLOUR = np.array([235, 235, 235], np.uint8)
+CAST_COLOUR = np.array([220, 40, 40], np.uint8)     # facing the light, something in between
+ATTACHED_COLOUR = np.array([50, 90, 230], np.uint8)  # facing away from the light
+
+
+def object_colours(n: int) -> np.ndarray:
+    """(n, 3) uint8: the colour of objects 1..n (object k is row k - 1)."""
+    return OBJECT_PALETTE[np.arange(n) % len(OBJECT_PALETTE)]
+
+
+def depth_image(depth: np.ndarray) -> np.ndarray:
+    """(H, W) float depth -> (H, W, 3) uint8: near white to far dark grey over the finite
+    range, BACKGROUND where it is inf."""
+    finite = np.isfinite(depth)
+    out = np.broadcast_to(BACKGROUND, depth.shape + (3,)).copy()
+    if finite.any():
+        lo, hi = float(depth[finite].min()), float(depth[finite].max())
+        t = (depth[finite] - lo) / max(hi - lo, 1e-30)
+        out[finite] = np.round(255 - 200 * t).astype(np.uint8)[:, None]
+    return out
+
+
+def normal_image(normal: np.ndarray) -> np.ndarray:
+    """(H, W, 3) unit normals -> (H, W, 3) uint8 as (n + 1) / 2; BACKGROUND where n = 0."""
+    out = np.round((np.asarray(normal, np.float64) + 1.0) * 127.5).astype(np.uint8)
+    out[~np.asarray(normal).any(axis=-1)] = BACKGROUND
+    return out
+
+
+def id_image(object_id: np.ndarray) -> np.ndarray:
+    """(H, W) uint16 object ids -> (H, W, 3) uint8 in `object_colours`, BACKGROUND for 0."""
+    ids = np.asarray(object_id, np.int64)
+    table = np.concatenate([BACKGROUND[None], object_colours(max(int(ids.max()), 1))])
+    return table[ids]
+
+
+def shadow_kinds_image(lit: np.ndarray, facing: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+    """One light's (H, W) masks -> (H, W, 3) uint8: lit, cast shadow (facing & ~lit),
+    attached shadow (covered & ~facing), BACKGROUND where nothing is hit."""
+    out = np.broadcast_to(BACKGROUND, lit.shape + (3,)).copy()
+    out[coverage & lit] = LIT_COLOUR
+    out[facing & ~lit] = CAST_COLOUR
+    out[coverage & ~facing] = ATTACHED_COLOUR
+    return out
+
+
+def casters_image(casters: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+    """One light's (H, W) uint64 casters -> (H, W, 3) uint8: each shadowed pixel in the mean
+    colour of the objects that block it (`object_colours`), UNSHADOWED where none does,
+    BACKGROUND where nothing is hit."""
+    bits = np.asarray(casters, np.uint64)
+    total = np.zeros(bits.shape + (3,))
+    count = np.zeros(bits.shape)
+    colours = object_colours(64).astype(np.float64)
+    for j in range(64):
+        on = (bits >> np.uint64(j)) & np.uint64(1) == 1
+        if on.any():
+            total[on] += colours[j]
+            count[on] += 1
+    out = np.broadcast_to(BACKGROUND, bits.shape + (3,)).copy()
+    out[coverage] = UNSHADOWED
+    cast = count > 0
+    out[cast] = np.round(total[cast] / count[cast, None]).astype(np.uint8)
+    return out
+
+
+def ground_truth_picture(truth, names: list[str], image: np.ndarray | None = None) -> np.ndarray:
+    """The outputs of a frame side by side, each under its label: (the image,) depth, normals,
+    object ids; per light lit, cast vs attached and casters; a legend of the objects' colours.
+
+    truth : anything with `lit`, `coverage` and the ground-truth outputs as attributes (None
+    for those not computed: their panels are left out); names : the objects' names;
+    image : (H, W, 3) uint8 sRGB or None."""
+    top = [] if image is None else [("image", image)]
+    for label, key, draw in (("depth", "depth", depth_image), ("normal", "normal", normal_image),
+                             ("object id", "object_id", id_image)):
+        if getattr(truth, key, None) is not None:
+            top.append((label, draw(getattr(truth, key))))
+    rows = [top] if top else []
+    for i in range(len(truth.lit)):
+        panels = [(f"light {i}: lit", masks_image(truth.lit[i:i + 1], truth.coverage))]
+        if getattr(truth, "facing", None) is not None:
+            panels.append((f"light {i}: cast (red) / attached (blue)",
+                           shadow_kinds_image(truth.lit[i], truth.facing[i], truth.coverage)))
+        if getattr(truth, "casters", None) is not None:
+            panels.append((f"light {i}: casters", casters_image(truth.casters[i],
+                                                                truth.coverage)))
+        rows.append(panels)
+    per_row = max(len(r) for r in rows)
+    h, w = truth.coverage.shape
+    strips = [labelled_row(r + [("", np.full((h, w, 3), 255, np.uint8))] * (per_row - len(r)))
+              for r in rows]
+    out = column(strips)
+    entries = [(name, tuple(c)) for name, c in zip(names, object_colours(len(names)))]
+    return np.concatenate([out, legend(out.shape[1], entries, spacing=18)])

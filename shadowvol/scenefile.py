@@ -14,15 +14,18 @@ import stat
 import struct
 import tomllib
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from shadowvol import primitives
 from shadowvol.io import atomic_write
 from shadowvol.scene import (
+    AreaLight,
     Camera,
     DirectionalLight,
     Material,
+    Object,
     PointLight,
     Scene,
     SceneError,
@@ -53,6 +56,9 @@ LIGHT_KEYS = {
     "directional": {"type", "direction", "color", "intensity"},
     "spot": {"type", "position", "direction", "cone_angle", "color", "intensity"},
 }
+AREA_KEYS = {"type", "center", "color", "intensity", "samples", "pattern", "seed"}
+LIGHT_KEYS.update({"rect": AREA_KEYS | {"normal", "size"}, "disk": AREA_KEYS | {"normal", "radius"},
+                   "sphere": AREA_KEYS | {"radius"}})
 TRANSFORM_KEYS = {"scale", "rotation", "translation"}
 COMMON_OBJECT_KEYS = {"type", "name", "material", "transform"}
 OBJECT_KEYS = {
@@ -214,8 +220,9 @@ def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene
         raise SceneError("name", f"expected a string, got {shorten(name)}")
     return _build("", Scene,
                   camera=_build("camera", Camera, **camera),
-                  objects=[_object(o, f"objects[{i}]", named, base_dir, max_mesh_bytes)
-                           for i, o in enumerate(objects)],
+                  objects=[part for i, o in enumerate(objects)
+                           for part in _object(o, f"objects[{i}]", named, base_dir,
+                                               max_mesh_bytes)],
                   lights=[_light(lt, f"lights[{i}]") for i, lt in enumerate(lights)],
                   name=name, **kwargs)
 
@@ -269,15 +276,36 @@ def _typed(value, key: str, allowed_by_type: dict[str, set[str]], what: str) -> 
     return _table(table, key, allowed_by_type[kind]), kind
 
 
+REQUIRED_LIGHT_KEYS = {"point": ("position",), "directional": ("direction",),
+                       "spot": ("position", "direction")}
+
+
 def _light(value, key: str):
     table, kind = _typed(value, key, LIGHT_KEYS, "light")
     args = {k: v for k, v in table.items() if k != "type"}
+    if kind in ("rect", "disk", "sphere"):
+        _required(table, "center", key)
+        return _build(key, AreaLight, shape=kind, **args)
     cls = {"point": PointLight, "directional": DirectionalLight, "spot": SpotLight}[kind]
+    for name in REQUIRED_LIGHT_KEYS[kind]:
+        _required(table, name, key)
     return _build(key, cls, **args)
 
 
+def light_from_dict(value, key: str = "light"):
+    """One light from a table of the scene-file schema (`[[lights]]`), e.g. a batch job's light
+    override; SceneError naming `key` when it is wrong."""
+    try:
+        return _light(value, key)
+    except TypeError as exc:  # a required field left out: "missing 1 required ... 'position'"
+        missing = str(exc).rsplit(":", 1)[-1].strip() or str(exc)
+        raise SceneError(key, f"missing {missing}") from None
+
+
 def _object(value, key: str, named: dict[str, Material], base_dir: Path,
-            max_mesh_bytes: int = MAX_MESH_FILE_BYTES):
+            max_mesh_bytes: int = MAX_MESH_FILE_BYTES) -> list[Object]:
+    """The objects of one `[[objects]]` entry: one, or for a mesh file of several parts (glTF
+    nodes, the meshes of a multi-mesh file) one per part (`mesh_parts`)."""
     table, kind = _typed(value, key, OBJECT_KEYS, "object")
     name = table.get("name", f"{kind}{key[len('objects'):]}")
     if not isinstance(name, str):
@@ -300,17 +328,20 @@ def _object(value, key: str, named: dict[str, Material], base_dir: Path,
     if kind == "mesh":
         if ("path" in table) == ("vertices" in table or "faces" in table):
             raise SceneError(key, "a mesh needs either `path` or inline `vertices` and `faces`")
-        if "path" in table:
-            vertices, faces = _read_mesh(table["path"], f"{key}.path", base_dir, max_mesh_bytes)
-        else:
+        if "vertices" in table:
             vertices, faces = _inline_mesh(table, key)
-        return _build(key, primitives.mesh, name=name, vertices=vertices, faces=faces,
-                      material=material, transform=transform)
+            return [_build(key, primitives.mesh, name=name, vertices=vertices, faces=faces,
+                           material=material, transform=transform)]
+        parts = _read_mesh(table["path"], f"{key}.path", base_dir, max_mesh_bytes)
+        return [_build(key, primitives.mesh, name=part_name(name, part, len(parts)),
+                       vertices=part.vertices, faces=part.faces,
+                       material=part_material(material, part, "material" in table),
+                       transform=transform) for part in parts]
     builder = {"sphere": primitives.sphere, "plane": primitives.plane, "box": primitives.box}[kind]
     if kind == "sphere":
         for required in ("center", "radius"):
             _required(table, required, key)
-    return _build(key, builder, name=name, material=material, transform=transform, **args)
+    return [_build(key, builder, name=name, material=material, transform=transform, **args)]
 
 
 def _inline_mesh(table: dict, key: str) -> tuple[np.ndarray, np.ndarray]:
@@ -349,10 +380,38 @@ def _first_not_triple(rows, types: tuple, kinds: str) -> tuple[str, str] | None:
     return None
 
 
+class MeshPart(NamedTuple):
+    """One mesh of a mesh file, in the file's own space with its node transform applied.
+
+    node     : the node's (or geometry's) name in the file, None for a single-mesh file
+    vertices : (n, 3) float64;  faces : (m, 3) int64, as stored (seam duplicates kept)
+    diffuse  : (3,) float64, the part's glTF baseColorFactor (linear RGB), or None
+    """
+
+    node: str | None
+    vertices: np.ndarray
+    faces: np.ndarray
+    diffuse: np.ndarray | None
+
+
+def part_name(name: str, part: MeshPart, parts: int) -> str:
+    """The object name of a part: the entry's name, then `/node` when the file has several."""
+    return name if parts == 1 or part.node is None else f"{name}/{part.node}"
+
+
+def part_material(material: Material, part: MeshPart, given: bool) -> Material:
+    """The material of a part: the entry's when it names one (`given`), else the part's own
+    base colour as its diffuse colour, else the default."""
+    if given or part.diffuse is None:
+        return material
+    return Material(diffuse=part.diffuse)
+
+
 def _read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYTES
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and faces of a mesh file (a regular file of at most `max_bytes`), as stored
-    (seam duplicates kept), with glTF node transforms applied."""
+               ) -> list[MeshPart]:
+    """The parts of a mesh file (a regular file of at most `max_bytes`): one for a single
+    mesh, one per node instance for a glTF/GLB scene or a multi-mesh file, in the file's node
+    order (`_node_order`), each with its node's transform applied."""
     import trimesh  # deferred: trimesh's import is slow and only meshes need it here
 
     if not isinstance(rel, str) or not rel:
@@ -364,7 +423,8 @@ def _read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYT
     if not path.exists():
         raise SceneError(key, f"mesh file not found: {path}")
     # Read (bounded) and checked here first, so that what trimesh would misreport is named.
-    check_mesh_bytes(path, read_regular_file(path, max_bytes, key), key)
+    data = read_regular_file(path, max_bytes, key)
+    check_mesh_bytes(path, data, key)
     try:
         loaded = trimesh.load(str(path), process=False)
     except ImportError as exc:  # an optional package of trimesh's, for this format
@@ -375,14 +435,75 @@ def _read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYT
     if isinstance(loaded, trimesh.Scene):
         if not loaded.geometry:
             raise SceneError(key, f"{path} holds no geometry")
-        loaded = loaded.to_mesh()  # applies each node's transform; vertices are not merged
-    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        parts = _scene_parts(loaded, _node_order(path, data))
+    elif isinstance(loaded, trimesh.Trimesh):
+        parts = [_part(None, loaded, None)]
+    else:
+        parts = []
+    parts = [p for p in parts if len(p.faces)]
+    if not parts:
         raise SceneError(key, f"{path} holds no triangles")
-    vertices = np.asarray(loaded.vertices, dtype=np.float64)
-    if not np.isfinite(vertices).all():
-        bad = int((~np.isfinite(vertices).all(axis=1)).sum())
-        raise SceneError(key, f"{path}: {bad} vertices are NaN or infinite")
-    return vertices, np.asarray(loaded.faces, dtype=np.int64)
+    for part in parts:
+        if not np.isfinite(part.vertices).all():
+            bad = int((~np.isfinite(part.vertices).all(axis=1)).sum())
+            raise SceneError(key, f"{path}: {bad} vertices are NaN or infinite")
+    return parts
+
+
+def _part(node: str | None, mesh, matrix: np.ndarray | None) -> MeshPart:
+    """A MeshPart of a trimesh.Trimesh, moved by the (4, 4) node `matrix` (None: as it is)."""
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    if matrix is not None:
+        vertices = vertices @ matrix[:3, :3].T + matrix[:3, 3]
+    factor = getattr(getattr(mesh.visual, "material", None), "baseColorFactor", None)
+    diffuse = None
+    if factor is not None:
+        factor = np.asarray(factor)
+        diffuse = factor[:3].astype(np.float64)
+        if factor.dtype == np.uint8:  # trimesh keeps glTF's factor as 0..255
+            diffuse = diffuse / 255.0
+    return MeshPart(node, vertices, np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3),
+                    diffuse)
+
+
+def _scene_parts(loaded, order: list[str]) -> list[MeshPart]:
+    """Every instance of a geometry in a trimesh.Scene's graph (its world transform applied),
+    ordered by the node's place in `order` (the file's node names), then depth-first."""
+    graph = loaded.graph
+    rank = {name: i for i, name in enumerate(order)}
+    walk, stack = [], [graph.base_frame]
+    while stack:  # depth-first, children in trimesh's order
+        node = stack.pop()
+        walk.append(node)
+        stack.extend(reversed(graph.transforms.children.get(node, [])))
+    placed = {node: i for i, node in enumerate(walk)}
+    nodes = sorted(graph.nodes_geometry,
+                   key=lambda n: (rank.get(n, len(rank)), placed.get(n, len(placed)), n))
+    parts = []
+    for node in nodes:
+        matrix, geometry = graph[node]
+        mesh = loaded.geometry.get(geometry)
+        if mesh is not None and hasattr(mesh, "faces"):
+            parts.append(_part(node, mesh, np.asarray(matrix, dtype=np.float64)))
+    return parts
+
+
+def _node_order(path: Path, data: bytes) -> list[str]:
+    """The node names of a glTF/GLB file in the file's order ([] for other formats, or when
+    the JSON cannot be read: trimesh's own order is used then)."""
+    suffix = path.suffix.lower()
+    try:
+        if suffix == ".glb":
+            length = struct.unpack_from("<I", data, 12)[0]
+            document = json.loads(data[20:20 + length])
+        elif suffix == ".gltf":
+            document = json.loads(data)
+        else:
+            return []
+        nodes = document.get("nodes", [])
+        return [n["name"] for n in nodes if isinstance(n, dict) and isinstance(n.get("name"), str)]
+    except (ValueError, struct.error, AttributeError, RecursionError):
+        return []
 
 
 # A face line of an OBJ file with an index 0 in it (OBJ counts from 1; negative indices count
@@ -447,6 +568,12 @@ def scene_to_dict(scene: Scene) -> dict:
             return {"type": "point", "position": lt.position.tolist(), **out}
         if isinstance(lt, DirectionalLight):
             return {"type": "directional", "direction": lt.direction.tolist(), **out}
+        if isinstance(lt, AreaLight):
+            shape = {"normal": lt.normal, "size": lt.size, "radius": lt.radius}
+            return {"type": lt.shape, "center": lt.center.tolist(), "samples": lt.samples,
+                    "pattern": lt.pattern, "seed": lt.seed, **out,
+                    **{k: (v.tolist() if isinstance(v, np.ndarray) else v)
+                       for k, v in shape.items() if v is not None}}
         return {"type": "spot", "position": lt.position.tolist(),
                 "direction": lt.direction.tolist(), "cone_angle": lt.cone_angle, **out}
 

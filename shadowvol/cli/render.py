@@ -7,12 +7,13 @@ import re
 import sys
 from pathlib import Path
 
+from shadowvol.cameras import calibration
 from shadowvol.cli import outputs, status
-from shadowvol.io import encode_srgb, save_masks, save_png
+from shadowvol.io import encode_srgb, save_exr, save_masks, save_png, save_png16
 from shadowvol.pictures import heat_maps
 from shadowvol.raster.context import create_context
 from shadowvol.raster.renderer import Renderer
-from shadowvol.scene import SceneError
+from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene
 
 EPILOG = """\
@@ -23,14 +24,15 @@ llvmpipe is enough: on Debian/Ubuntu `apt-get install libegl1 libgl1-mesa-dri`).
 Several scenes in one call: -o names a directory (made if missing) and each scene writes
 OUTDIR/NAME.png, NAME being the scene FILE's name without its extension, reduced to letters,
 digits, '.', '_' and '-' (never the `name` inside the scene: a scene cannot choose where its
-output goes); --masks, --volumes and --stencil then take no file name and write
-OUTDIR/NAME-masks.npz, NAME-volumes.png, NAME-stencil.png.  A scene that fails is reported on
-stderr and the others still render.
+output goes); --masks, --volumes, --stencil, --exr and --png16 then take no file name and
+write OUTDIR/NAME-masks.npz, NAME-volumes.png, NAME-stencil.png, NAME.exr, NAME-16bit.png.
+A scene that fails is reported on stderr and the others still render.
 
 """ + status.EPILOG
 
 # output kind -> the suffix of its file when it goes beside the image
-EXTRAS = (("masks", "-masks.npz"), ("volumes", "-volumes.png"), ("stencil", "-stencil.png"))
+EXTRAS = (("masks", "-masks.npz"), ("volumes", "-volumes.png"), ("stencil", "-stencil.png"),
+          ("exr", ".exr"), ("png16", "-16bit.png"))
 SCENE_SUFFIXES = (".toml", ".json")
 
 
@@ -55,8 +57,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="where silhouette edges and caps are found: cpu (numpy, per light) "
                         "or gpu (geometry shader over an edge buffer) (default: cpu)")
     p.add_argument("--masks", metavar="NPZ", nargs="?", const=True,
-                   help="also write the shadow masks (.npz): lit (L, H, W) bool per light and "
-                        "coverage (H, W) bool; without a name, beside the image")
+                   help="also write the shadow masks (.npz): lit (L, H, W) bool per light, "
+                        "coverage (H, W) bool and the camera matrices K, world_to_camera, "
+                        "camera_to_world and the light arrays; without a name, beside the "
+                        "image")
     p.add_argument("--volumes", metavar="PNG", nargs="?", const=True,
                    help="also write the teaching view: the shadow-volume polygons the stencil "
                         "pass drew, over the image (orange sides, green near caps, violet far "
@@ -66,6 +70,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "with a legend (0: lit, the image darkened; 1, 2, ... yellow to red to "
                         "violet; negative: blue).  Every triangle casts, so a closed object "
                         "counts 2 behind it (its front and its back)")
+    p.add_argument("--exr", metavar="EXR", nargs="?", const=True,
+                   help="also write the image as linear OpenEXR (32-bit float RGB); without a "
+                        "name, beside the image")
+    p.add_argument("--png16", metavar="PNG", nargs="?", const=True,
+                   help="also write the image as a 16-bit sRGB PNG; without a name, beside the "
+                        "image (NAME-16bit.png)")
     p.set_defaults(func=command)
     return p
 
@@ -164,7 +174,12 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
                        if "volumes" in out else None)
         save_png(out["image"], result.image)
         if "masks" in out:
-            save_masks(out["masks"], result.lit, result.coverage)
+            save_masks(out["masks"], result.lit, result.coverage, calibration(scene).arrays(),
+                       light_samples=[light_samples(lt) for lt in scene.lights])
+        if "exr" in out:
+            save_exr(out["exr"], result.image)
+        if "png16" in out:
+            save_png16(out["png16"], result.image)
         if volumes is not None:
             save_png(out["volumes"], volumes)
         if "stencil" in out:

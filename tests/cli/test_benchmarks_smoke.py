@@ -8,7 +8,10 @@ import json
 import subprocess
 import sys
 
+import pytest
 from builders import ROOT
+
+pytestmark = pytest.mark.gl  # the child processes render
 
 SECTIONS = ["## Headline ratios and targets", "## Frames at", "## Phases (one light)",
             "## pyrender 0.1.45, the same scenes", "## Ray tracer", "## Memory"]

@@ -13,7 +13,7 @@ from builders import ROOT, SCENES
 
 GL_MODULES = ("moderngl", "glcontext")
 # what raytrace may use of shadowvol: the model, the writers, the exit-status table
-RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.primitives",
+RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.primitives", "shadowvol.cameras",
                        "shadowvol.scenefile", "shadowvol.resources", "shadowvol.errors",
                        "shadowvol.io", "shadowvol.pictures", "shadowvol.cli",
                        "shadowvol.cli.status", "shadowvol.cli.outputs"}

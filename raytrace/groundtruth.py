@@ -1,0 +1,279 @@
+"""Ground truth for vision datasets from the reference ray tracer (docs/CONVENTIONS.md, "Ground
+truth"): per pixel the depth, the distance, the face normal and the object id of the visible
+point, and per light whether the point faces it and which objects block it.
+
+Everything rides the masks' own rays (`raytrace.masks`): the same visible triangle, the same
+float64 hit point, the same shadow segments with the same margins.  `lit` is computed exactly
+as `shadow_masks` computes it; `casters` traces every blocked segment again against each
+object alone (one backend per object, in the masks' frame, the visible triangle excluded by id
+in its own object), so bit j of `casters[i, p]` says "object j lies on p's segment to light i".
+
+Limits: `object_id` counts up to 65535 objects (uint16); `casters` is one 64-bit word, so a
+scene of more than 64 objects cannot have it (SceneError naming the count: ask for the other
+outputs, or split the scene).  `facing` and `casters` are per hard light: a scene with an area
+light gets a SceneError for them (`raytrace.soft_masks` has its facing); the other outputs and
+`lit` ("every sample reaches", as `raytrace.shadow_masks`) work.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from shadowvol.cameras import Calibration, calibration
+from shadowvol.io import GROUND_TRUTH
+from shadowvol.scene import AreaLight, Scene, SceneError
+
+from .backends import NumpyBackend, TriangleBackend, make_backend
+from .camera import RayGrid
+from .masks import (
+    MASK_TILE_RAYS,
+    MaskTracer,
+    _blocked,
+    _local_light,
+    _primary_hits,
+    _segments,
+    scene_backend,
+)
+
+MAX_CASTERS = 64          # objects `casters` can name: one uint64 word
+# An object's box is widened by this much of its largest coordinate (eye's frame) before a
+# segment is culled against it: float32 rounding of the corners (2**-24) and of the segment's
+# start and direction, 100 times over.  A speed-up only: the culled segments are those that
+# the object's own backend would find unblocked.
+BOX_PAD_RELATIVE = 1e-5
+MAX_OBJECT_IDS = 65535    # objects `object_id` can name: uint16, 0 is the background
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class GroundTruth:
+    """One frame's masks, the ground-truth outputs asked for (None otherwise) and the camera.
+
+    lit : (L, H, W) bool and coverage : (H, W) bool, as `shadow_masks` returns them
+    depth : (H, W) float32, eye-space depth (along the view axis); inf where nothing is hit
+    distance : (H, W) float32, from the eye along the pixel's ray; inf where nothing is hit
+    normal : (H, W, 3) float32, the world-space unit face normal, turned toward the camera;
+        0 where nothing is hit
+    object_id : (H, W) uint16, 0 = background, k = scene.objects[k - 1]
+    facing : (L, H, W) bool, n·l > 0 (and inside a spot light's cone)
+    casters : (L, H, W) uint64, bit j set when scene.objects[j] blocks the pixel's segment
+    calibration : the camera matrices and light arrays (`shadowvol.cameras.Calibration`)
+    """
+
+    lit: np.ndarray
+    coverage: np.ndarray
+    calibration: Calibration
+    depth: np.ndarray | None = None
+    distance: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    object_id: np.ndarray | None = None
+    facing: np.ndarray | None = None
+    casters: np.ndarray | None = None
+
+    @property
+    def cast(self) -> np.ndarray:
+        """(L, H, W) bool: cast shadow, facing the light yet not lit (needs `facing`)."""
+        return self.facing & ~self.lit
+
+    @property
+    def attached(self) -> np.ndarray:
+        """(L, H, W) bool: attached shadow, covered but facing away (needs `facing`)."""
+        return self.coverage[None] & ~self.facing
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The outputs computed and the calibration, by their mask-file names
+        (`shadowvol.io.save_masks`)."""
+        out = {name: getattr(self, name) for name in GROUND_TRUTH
+               if getattr(self, name) is not None}
+        return out | self.calibration.arrays()
+
+
+def check_outputs(scene: Scene, outputs) -> tuple[str, ...]:
+    """The outputs asked for, checked: names from `shadowvol.io.GROUND_TRUTH` and what the
+    scene allows (SceneError otherwise); in GROUND_TRUTH's order."""
+    outputs = (outputs,) if isinstance(outputs, str) else tuple(outputs)
+    unknown = [o for o in outputs if o not in GROUND_TRUTH]
+    if unknown:
+        raise SceneError("outputs", f"unknown output {unknown[0]!r} (one of: "
+                                    f"{', '.join(GROUND_TRUTH)})")
+    area = [i for i, lt in enumerate(scene.lights) if isinstance(lt, AreaLight)]
+    per_light = [o for o in ("facing", "casters") if o in outputs]
+    if area and per_light:
+        raise SceneError(f"lights[{area[0]}]", f"{per_light[0]} is defined for point, spot and "
+                                               "directional lights; for an area light use "
+                                               "raytrace.soft_masks (lit_count, facing, umbra)")
+    n = len(scene.objects)
+    if "casters" in outputs and n > MAX_CASTERS:
+        raise SceneError("objects", f"casters is a {MAX_CASTERS}-bit mask, and this scene has "
+                                    f"{n} objects; ask for the other outputs, or split the scene")
+    if "object_id" in outputs and n > MAX_OBJECT_IDS:
+        raise SceneError("objects", f"object_id counts up to {MAX_OBJECT_IDS} objects, and this "
+                                    f"scene has {n}")
+    return tuple(o for o in GROUND_TRUTH if o in outputs)
+
+
+class _ObjectTracers:
+    """One backend per object, in the masks' frame: what `casters` traces segments against.
+
+    first : (n + 1,) int64, object j's triangles are first[j] .. first[j + 1] − 1 of the
+    scene's; object : (M,) int64, each scene triangle's object; lo, hi : (n, 3) float64, each
+    object's bounding box, padded by BOX_PAD_RELATIVE of its largest coordinate (a segment
+    that misses the padded box cannot meet the object in float32 either)."""
+
+    def __init__(self, scene: Scene, mask_tracer: MaskTracer):
+        kind = "numpy" if isinstance(mask_tracer.tracer, NumpyBackend) else "embree"
+        _, _, ids = scene.triangles()
+        self.object = ids.astype(np.int64)
+        self.first = np.searchsorted(self.object, np.arange(len(scene.objects) + 1))
+        # each object's own vertices and faces (its face k is scene triangle first[j] + k)
+        local = [o.vertices - mask_tracer.origin for o in scene.objects]
+        self.tracers: list[TriangleBackend] = [make_backend(kind, v, o.faces)
+                                               for v, o in zip(local, scene.objects)]
+        lo = np.array([v[o.faces.reshape(-1)].min(axis=0) for v, o in zip(local, scene.objects)])
+        hi = np.array([v[o.faces.reshape(-1)].max(axis=0) for v, o in zip(local, scene.objects)])
+        pad = BOX_PAD_RELATIVE * np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, keepdims=True)
+        self.lo, self.hi = lo - pad - np.finfo(np.float32).tiny, hi + pad + np.finfo(
+            np.float32).tiny
+
+
+def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer = "embree"
+                 ) -> GroundTruth:
+    """The masks of `scene` with the ground-truth `outputs` (names from
+    `shadowvol.io.GROUND_TRUTH`; default all) and the calibration.
+
+    backend : "embree", "numpy", or `raytrace.masks.scene_backend(scene, ...)` built once.
+    `lit` and `coverage` equal `shadow_masks(scene, backend)`; `facing & ~lit` equals
+    `casters != 0`.  Tiled and threaded as `shadow_masks` is."""
+    outputs = check_outputs(scene, outputs)
+    mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
+    tracer, triangles, origin = mt
+    H, W, L = scene.height, scene.width, len(scene.lights)
+    objects = _ObjectTracers(scene, mt) if "casters" in outputs else None
+    lit = np.zeros((L, H * W), bool)
+    coverage = np.zeros(H * W, bool)
+    # the outputs asked for, flat (pixels row-major), with what is stored where nothing is hit
+    blank = {"depth": lambda: np.full(H * W, np.inf, np.float32),
+             "distance": lambda: np.full(H * W, np.inf, np.float32),
+             "normal": lambda: np.zeros((H * W, 3), np.float32),
+             "object_id": lambda: np.zeros(H * W, np.uint16),
+             "facing": lambda: np.zeros((L, H * W), bool),
+             "casters": lambda: np.zeros((L, H * W), np.uint64)}
+    out = {name: blank[name]() for name in outputs}
+    vertices, faces, ids = scene.triangles()
+    # the output normals: world-space (b − a) × (c − a), normalised in float64 (CONVENTIONS),
+    # not the frame's (the same up to rounding, and the same sign: `hit.side` turns either)
+    world_normals = face_normals(vertices[faces]) if "normal" in out else None
+    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
+                                 target=scene.camera.target - origin)
+    grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
+    reach = scene.extent
+    # with an area light, the tiles trace no shadow rays: lit comes from raytrace.soft below
+    area = any(isinstance(light, AreaLight) for light in scene.lights)
+    lights = [] if area else [_local_light(light, origin, triangles) for light in scene.lights]
+    rows_per_tile = max(1, MASK_TILE_RAYS // W)
+    tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
+
+    def trace_tile(rows: slice) -> None:
+        covered, index, hit = _primary_hits(tracer, triangles, grids, rows)
+        first = rows.start * W
+        coverage[first:first + covered.size] = covered
+        if hit is None:
+            return
+        pixel = first + index
+        if "depth" in out:
+            out["depth"][pixel] = hit.depth
+        if "distance" in out:
+            view = np.take(grids[1].directions(rows), index, axis=1)
+            out["distance"][pixel] = hit.depth * np.sqrt((view * view).sum(axis=0))
+        if "normal" in out:
+            out["normal"][pixel] = world_normals[hit.tri] * hit.side[:, None]
+        if "object_id" in out:
+            out["object_id"][pixel] = ids[hit.tri] + 1
+        for i, light in enumerate(lights):
+            seg = _segments(light, hit, reach)
+            own, fragile = hit.tri[seg.rays], hit.fragile[seg.rays]
+            start = seg.start.copy() if objects is not None else seg.start
+            tmax = None if seg.tmax is None else seg.tmax.copy()
+            blocked = _blocked(tracer, seg.start, seg.direction, seg.tmax, own, fragile)
+            lit_here = seg.facing.copy()
+            lit_here[seg.rays] = ~blocked
+            lit[i, pixel] = lit_here
+            if "facing" in out:
+                out["facing"][i, pixel] = seg.facing
+            if objects is not None and blocked.any():
+                b = np.flatnonzero(blocked)
+                out["casters"][i, pixel[seg.rays[b]]] = _caster_bits(
+                    objects, start[:, b], seg.direction if seg.direction.shape[1] == 1
+                    else seg.direction[:, b], None if tmax is None else tmax[b], own[b],
+                    fragile[b])
+
+    threads = min(getattr(tracer, "threads", 1), len(tiles))
+    if threads == 1:
+        for rows in tiles:
+            trace_tile(rows)
+    else:
+        with ThreadPoolExecutor(threads) as pool:
+            list(pool.map(trace_tile, tiles))  # list(): re-raises a tile's exception here
+    if area:  # "every sample reaches the pixel", as raytrace.shadow_masks says
+        from .soft import lit_counts, sample_counts
+
+        count, _ = lit_counts(scene, mt)
+        lit = (count == sample_counts(scene)[:, None, None]).reshape(L, H * W)
+    shapes = {"depth": (H, W), "distance": (H, W), "normal": (H, W, 3), "object_id": (H, W),
+              "facing": (L, H, W), "casters": (L, H, W)}
+    return GroundTruth(lit.reshape(L, H, W), coverage.reshape(H, W), calibration(scene),
+                       **{name: value.reshape(shapes[name]) for name, value in out.items()})
+
+
+def face_normals(corners: np.ndarray) -> np.ndarray:
+    """(M, 3) float64 unit normals (b − a) × (c − a) of world-space corners (M, 3, 3) (zero
+    for a degenerate triangle)."""
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarray,
+                 tmax: np.ndarray | None, own: np.ndarray, fragile: np.ndarray) -> np.ndarray:
+    """(b,) uint64: the objects that block each of b blocked shadow segments, as bits.
+
+    start (3, b) float32, direction (3, b) or (3, 1) float32, tmax (b,) float32 or None: the
+    segments as `_segments` made them (before `_blocked` moved any start); own (b,) int64 the
+    scene triangle each leaves, fragile (b,) bool.  Each object's backend is asked the masks'
+    own question (`_blocked`), its own triangle excluded by id in the object it belongs to."""
+    bits = np.zeros(len(own), np.uint64)
+    own_object = objects.object[own]
+    start64 = start.astype(np.float64)
+    direction64 = np.broadcast_to(direction, start.shape).astype(np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inverse = 1.0 / direction64
+    end = np.inf if tmax is None else tmax.astype(np.float64)
+    for j, tracer in enumerate(objects.tracers):
+        mine = own_object == j
+        near = _meets_box(start64, inverse, end, objects.lo[j], objects.hi[j]) | mine
+        k = np.flatnonzero(near)
+        if len(k) == 0:
+            continue
+        local_own = np.where(mine[k], own[k] - objects.first[j], -1)
+        hit = _blocked(tracer, start[:, k], direction if direction.shape[1] == 1
+                       else direction[:, k], None if tmax is None else tmax[k].copy(),
+                       local_own, fragile[k] & mine[k])
+        bits[k[hit]] |= np.uint64(1) << np.uint64(j)
+    return bits
+
+
+def _meets_box(start: np.ndarray, inverse: np.ndarray, end, lo: np.ndarray, hi: np.ndarray
+               ) -> np.ndarray:
+    """(b,) bool: does the segment start + t·d, 0 <= t <= end, meet the box [lo, hi]?  start,
+    inverse (1/d, inf for a zero component) : (3, b) float64; end : (b,) or inf."""
+    with np.errstate(invalid="ignore"):  # 0 · inf: a zero component inside the slab
+        t1 = (lo[:, None] - start) * inverse
+        t2 = (hi[:, None] - start) * inverse
+    lower = np.fmin(t1, t2)
+    upper = np.fmax(t1, t2)
+    # nan (0 · inf) means the ray runs inside that slab: fmax/fmin drop it
+    t_in = np.fmax(np.fmax(lower[0], lower[1]), np.fmax(lower[2], 0.0))
+    t_out = np.fmin(np.fmin(upper[0], upper[1]), np.fmin(upper[2], end))
+    return t_in <= t_out
