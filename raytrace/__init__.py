@@ -3,6 +3,7 @@
     import raytrace
     image = raytrace.render(scene)                # (H, W, 3) float64 linear RGB
     lit, coverage = raytrace.shadow_masks(scene)  # (L, H, W) bool, (H, W) bool
+    soft = raytrace.soft_masks(scene)             # per-sample counts of area lights
     truth = raytrace.ground_truth(scene)          # + depth, normal, object_id, facing, casters
 
 It shares with the rasterizer only the scene model, the writers (`shadowvol.io`,
@@ -13,7 +14,19 @@ never its code, so that it stays an independent witness.  It never imports GL.
 from __future__ import annotations
 
 from raytrace.groundtruth import GroundTruth, ground_truth
-from raytrace.masks import shadow_masks
+from raytrace.masks import shadow_masks as _hard_shadow_masks
+from raytrace.soft import lit_counts, sample_counts, soft_masks
 from raytrace.whitted import render
+from shadowvol.scene import AreaLight
 
-__all__ = ["GroundTruth", "ground_truth", "render", "shadow_masks"]
+__all__ = ["GroundTruth", "ground_truth", "render", "shadow_masks", "soft_masks"]
+
+
+def shadow_masks(scene, backend="embree"):
+    """Reference masks per docs/CONVENTIONS.md: lit (L, H, W) bool, coverage (H, W) bool.
+    An area light's `lit` is "every sample reaches the pixel" (`raytrace.soft`); see
+    `raytrace.masks.shadow_masks` for the hard lights."""
+    if any(isinstance(light, AreaLight) for light in scene.lights):
+        count, coverage = lit_counts(scene, backend)
+        return count == sample_counts(scene)[:, None, None], coverage
+    return _hard_shadow_masks(scene, backend=backend)

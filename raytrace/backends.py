@@ -4,10 +4,9 @@
   float64 over a simple BVH, traversed a whole set of rays at a time (each node passes on the
   subset of rays that hit its box).  Fine for small scenes and tests.
 * `EmbreeBackend` — Intel Embree through `embreex`: the production path, for large meshes.
-  Measured here (2 cores): a 1.3M-triangle mesh builds in ~1.8 s (Embree's BVH 1.1 s, the
-  float64 face normals 0.7 s) and its 1280x720 masks for two lights then take ~0.2 s.
 
-Both give the same answers (tests/test_backends.py) up to float32 rounding at triangle edges:
+Both give the same answers (tests/raytrace/test_backends.py) up to float32 rounding at triangle
+edges:
 
     closest_hit(origins, directions, tmax=None) -> Hits(t, tri)
     occluded(origins, directions, tmax=None)    -> (n,) bool

@@ -7,6 +7,7 @@
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
     raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png
     raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png
+    raytrace exercise plane -o plane.png                            (the worked solution)
 
 Outputs are written atomically (shadowvol.io): an error never leaves half a file behind.
 A bad scene prints `error: <file>: <key>: <problem>`; the exit statuses are shadowvol's
@@ -21,17 +22,27 @@ import sys
 from pathlib import Path
 
 from shadowvol import __version__
-from shadowvol.cli import outputs, status
 from shadowvol.cameras import calibration
-from shadowvol.io import GROUND_TRUTH, atomic_write, save_exr, save_masks, save_png, save_png16
+from shadowvol.cli import outputs, status
+from shadowvol.io import (
+    GROUND_TRUTH,
+    atomic_write,
+    save_exr,
+    save_masks,
+    save_png,
+    save_png16,
+)
 from shadowvol.pictures import ground_truth_picture, masks_image
-from shadowvol.scene import SceneError
+from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene
 
-from . import cli_outlook
+from . import (  # (area lights: lit where every sample reaches)
+    cli_outlook,
+    exercise,
+    shadow_masks,
+)
 from .backends import BACKENDS
 from .groundtruth import check_outputs, ground_truth
-from .masks import shadow_masks
 from .raytree import draw_tree, format_tree, ray_tree
 from .whitted import render
 
@@ -50,7 +61,9 @@ def _parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("render", help="ray-trace an image (Whitted: shadows, reflection, "
                                       "refraction, Phong)",
-                       description="Ray-trace SCENE into an 8-bit sRGB PNG.")
+                       description="Ray-trace SCENE into an 8-bit sRGB PNG.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     r.add_argument("-o", "--output", required=True, metavar="PNG",
                    help="where to write the image (PNG, sRGB, row 0 at the top)")
@@ -70,7 +83,9 @@ def _parser() -> argparse.ArgumentParser:
                                    "and write them as a .npz (lit, coverage, the camera "
                                    "matrices K, world_to_camera, camera_to_world and the light "
                                    "arrays; with --outputs, the ground truth too) and a "
-                                   "picture.")
+                                   "picture.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     m.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     m.add_argument("-o", "--output", required=True, metavar="NPZ",
                    help="where to write the masks (.npz with lit (L, H, W) and coverage (H, W))")
@@ -89,7 +104,9 @@ def _parser() -> argparse.ArgumentParser:
                                    "(X, Y) — primary, shadow rays with their verdicts, "
                                    "reflected, refracted, total internal reflection — as an "
                                    "indented tree, and optionally draw them over the render "
-                                   "and in a side view.")
+                                   "and in a side view.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     t.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     t.add_argument("--pixel", nargs=2, type=int, required=True, metavar=("X", "Y"),
                    help="column X from the left, row Y from the top")
@@ -99,6 +116,19 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", metavar="PNG", default=None,
                    help="also draw the tree: the rays over the ray-traced image and a side view")
     _backend(t)
+
+    e = sub.add_parser("exercise", help="a worked exercise of the course, printed and drawn",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Print the worked solution of one of the course's "
+                                   "exercises, computed with the ray tracer's own formulas, "
+                                   "and optionally draw it.  plane: the ray (5,1) + λ(−1,3) "
+                                   "against the plane through (2,2) with normal (1,−1).  tir: "
+                                   "Snell's law from glass into air, past the critical angle.")
+    e.add_argument("name", choices=tuple(EXERCISES), metavar="NAME",
+                   help="the exercise: " + ", ".join(EXERCISES))
+    e.add_argument("-o", "--output", metavar="PNG", default=None,
+                   help="also draw the exercise's 2D picture")
     return ap
 
 
@@ -153,7 +183,8 @@ def _masks(args) -> int:
         lit, coverage = shadow_masks(scene, backend=args.backend)
         arrays = calibration(scene).arrays()
         picture = masks_image(lit, coverage)
-    save_masks(paths["masks"], lit, coverage, arrays)
+    save_masks(paths["masks"], lit, coverage, arrays,
+               light_samples=[light_samples(lt) for lt in scene.lights])
     if "picture" in paths:
         save_png(paths["picture"], picture)
     print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)
@@ -183,7 +214,35 @@ def _tree(args) -> int:
     return status.OK
 
 
-COMMANDS = {"render": _render, "masks": _masks, "tree": _tree,
+def _plane():
+    s = exercise.solve_plane()
+    return exercise.plane_text(s), exercise.plane_figure(s)
+
+
+def _tir():
+    rays = exercise.solve_tir()
+    return exercise.tir_text(rays), exercise.tir_figure(rays)
+
+
+EXERCISES = {"plane": _plane, "tir": _tir}
+
+
+def _exercise(args) -> int:
+    """The `exercise` command: print the worked solution, draw it with -o."""
+    if args.output:
+        outputs.check({"picture": Path(args.output)}, {"picture": "-o"})
+    text, fig = EXERCISES[args.name]()
+    print(text)
+    if args.output:
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png")
+        with atomic_write(args.output) as f:
+            f.write(buf.getvalue())
+        print(f"wrote {args.output}", file=sys.stderr)
+    return status.OK
+
+
+COMMANDS = {"render": _render, "masks": _masks, "tree": _tree, "exercise": _exercise,
             "radiosity": cli_outlook.radiosity_command}
 
 

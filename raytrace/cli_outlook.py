@@ -42,7 +42,9 @@ def add_parsers(sub) -> None:
                        description="Mesh SCENE into patches, compute form factors by casting "
                                    "rays through Embree, solve by progressive refinement and "
                                    "show the solution from the camera.  Prints the number of "
-                                   "patches, iterations and time.")
+                                   "patches, iterations and time.",
+                       epilog=status.EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     r.add_argument("-o", "--output", required=True, metavar="PNG",
                    help="the interpolated (Gouraud) display, sRGB PNG")

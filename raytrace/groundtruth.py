@@ -10,7 +10,9 @@ in its own object), so bit j of `casters[i, p]` says "object j lies on p's segme
 
 Limits: `object_id` counts up to 65535 objects (uint16); `casters` is one 64-bit word, so a
 scene of more than 64 objects cannot have it (SceneError naming the count: ask for the other
-outputs, or split the scene).
+outputs, or split the scene).  `facing` and `casters` are per hard light: a scene with an area
+light gets a SceneError for them (`raytrace.soft_masks` has its facing); the other outputs and
+`lit` ("every sample reaches", as `raytrace.shadow_masks`) work.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ import numpy as np
 
 from shadowvol.cameras import Calibration, calibration
 from shadowvol.io import GROUND_TRUTH
-from shadowvol.scene import Scene, SceneError
+from shadowvol.scene import AreaLight, Scene, SceneError
 
 from .backends import NumpyBackend, TriangleBackend, make_backend
 from .camera import RayGrid
@@ -96,6 +98,12 @@ def check_outputs(scene: Scene, outputs) -> tuple[str, ...]:
     if unknown:
         raise SceneError("outputs", f"unknown output {unknown[0]!r} (one of: "
                                     f"{', '.join(GROUND_TRUTH)})")
+    area = [i for i, lt in enumerate(scene.lights) if isinstance(lt, AreaLight)]
+    per_light = [o for o in ("facing", "casters") if o in outputs]
+    if area and per_light:
+        raise SceneError(f"lights[{area[0]}]", f"{per_light[0]} is defined for point, spot and "
+                                               "directional lights; for an area light use "
+                                               "raytrace.soft_masks (lit_count, facing, umbra)")
     n = len(scene.objects)
     if "casters" in outputs and n > MAX_CASTERS:
         raise SceneError("objects", f"casters is a {MAX_CASTERS}-bit mask, and this scene has "
@@ -161,7 +169,9 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
                                  target=scene.camera.target - origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     reach = scene.extent
-    lights = [_local_light(light, origin, triangles) for light in scene.lights]
+    # with an area light, the tiles trace no shadow rays: lit comes from raytrace.soft below
+    area = any(isinstance(light, AreaLight) for light in scene.lights)
+    lights = [] if area else [_local_light(light, origin, triangles) for light in scene.lights]
     rows_per_tile = max(1, MASK_TILE_RAYS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
 
@@ -206,6 +216,11 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     else:
         with ThreadPoolExecutor(threads) as pool:
             list(pool.map(trace_tile, tiles))  # list(): re-raises a tile's exception here
+    if area:  # "every sample reaches the pixel", as raytrace.shadow_masks says
+        from .soft import lit_counts, sample_counts
+
+        count, _ = lit_counts(scene, mt)
+        lit = (count == sample_counts(scene)[:, None, None]).reshape(L, H * W)
     shapes = {"depth": (H, W), "distance": (H, W), "normal": (H, W, 3), "object_id": (H, W),
               "facing": (L, H, W), "casters": (L, H, W)}
     return GroundTruth(lit.reshape(L, H, W), coverage.reshape(H, W), calibration(scene),

@@ -307,9 +307,11 @@ def _object_colour(material) -> np.ndarray:
     return np.clip(base + material.reflectivity * (MIRROR_TINT - base), 0.0, 1.0)
 
 
-def _draw_view(ax, scene: Scene, nodes: list[RayNode], view: str) -> None:
+def _draw_view(ax, scene: Scene, nodes: list[RayNode], view: str, pt: float = 8.0) -> None:
     """One orthographic view (see `_view_axes`): the objects as filled silhouettes (far ones
-    first), the eye, the point and spot lights, every ray coloured by kind, the hits numbered."""
+    first), the eye, the point and spot lights, every ray coloured by kind and numbered (a hit
+    at its end, a shadow ray along it), labels kept apart; the frame holds every ray and every
+    object the rays meet, whole."""
     from matplotlib.collections import PolyCollection
 
     h_axis, v_axis, toward = _view_axes(scene, view)
@@ -329,48 +331,89 @@ def _draw_view(ax, scene: Scene, nodes: list[RayNode], view: str) -> None:
         colour = "black" if node.kind == PRIMARY else _colour(node)
         ax.plot([a @ h_axis, b @ h_axis], [a @ v_axis, b @ v_axis], style, color=colour,
                 lw=1.4, zorder=3)
-    for k, node in enumerate(nodes):
-        if node.hit and node.kind != SHADOW:
-            q = (node.point @ h_axis, node.point @ v_axis)
-            ax.plot(*q, ".", color="black", ms=4, zorder=4)
-            ax.annotate(f"#{k}", q, fontsize=7, xytext=(3, 3), textcoords="offset points",
-                        zorder=5)
     ax.set_facecolor(VIEW_BACKGROUND)
     eye = scene.camera.eye
-    ax.plot([eye @ h_axis], [eye @ v_axis], "s", color="black", ms=6, zorder=4)
-    ax.annotate("eye", (eye @ h_axis, eye @ v_axis), fontsize=8, xytext=(4, -10),
-                textcoords="offset points")
+    ax.plot([eye @ h_axis], [eye @ v_axis], "s", color="black", ms=pt * 0.8, zorder=4)
+    anchors = [("eye", (eye @ h_axis, eye @ v_axis))]
     for i, light in enumerate(scene.lights):
         if isinstance(light, DirectionalLight):
             continue
         q = (light.position @ h_axis, light.position @ v_axis)
-        ax.plot(*q, "*", color="#e0a000", mec="black", ms=14, zorder=4)
+        ax.plot(*q, "*", color="#e0a000", mec="black", ms=pt * 1.8, zorder=4)
         kind = "spot" if isinstance(light, SpotLight) else "point"
-        ax.annotate(f"light {i} ({kind})", q, fontsize=8, xytext=(6, 4),
-                    textcoords="offset points")
-    pts = np.array([p for n in nodes for p in (n.origin, n.end)] +
-                   [eye] + [l.position for l in scene.lights
-                            if not isinstance(l, DirectionalLight)])
+        anchors.append((f"light {i} ({kind})", q))
+    pts = [p for n in nodes for p in (n.origin, n.end)] + [eye] + \
+        [l.position for l in scene.lights if not isinstance(l, DirectionalLight)]
+    reach = np.ptp(np.array(pts), axis=0).max()
+    hit_objects = {n.obj for n in nodes if n.obj >= 0}
+    for i in hit_objects:   # objects the rays meet, whole, unless far bigger than the rays
+        v = scene.objects[i].vertices
+        if np.ptp(v, axis=0).max() <= reach:
+            pts += [v.min(axis=0), v.max(axis=0), *v[:: max(1, len(v) // 200)]]
+    pts = np.array(pts)
     hs, vs = pts @ h_axis, pts @ v_axis
-    pad = 0.08 * max(np.ptp(hs), np.ptp(vs), 1e-9)
+    pad = 0.06 * max(np.ptp(hs), np.ptp(vs), 1e-9)
     ax.set_xlim(hs.min() - pad, hs.max() + pad)
     ax.set_ylim(vs.min() - pad, vs.max() + pad)
     ax.set_aspect("equal")
+    for k, node in enumerate(nodes):
+        if node.kind == SHADOW:
+            q = node.origin + 0.3 * (node.end - node.origin)
+        elif node.hit:
+            q = node.point
+            ax.plot(q @ h_axis, q @ v_axis, ".", color="black", ms=pt * 0.6, zorder=4)
+        else:
+            q = node.origin + 0.85 * (node.end - node.origin)
+        anchors.append((f"#{k}", (q @ h_axis, q @ v_axis)))
+    place_labels(ax, anchors, pt)
+    ax.tick_params(labelsize=pt * 0.9)
     if view == "side":
-        ax.set_title("side view (from the camera's right)", fontsize=10)
-        ax.set_xlabel("along the view direction")
-        ax.set_ylabel("up")
+        ax.set_title("side view (from the camera's right)", fontsize=pt * 1.2)
+        ax.set_xlabel("along the view direction", fontsize=pt)
+        ax.set_ylabel("up", fontsize=pt)
     else:
-        ax.set_title("top view (from above)", fontsize=10)
-        ax.set_xlabel("to the camera's right")
-        ax.set_ylabel("along the view direction")
+        ax.set_title("top view (from above)", fontsize=pt * 1.2)
+        ax.set_xlabel("to the camera's right", fontsize=pt)
+        ax.set_ylabel("along the view direction", fontsize=pt)
 
 
-def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
+LABEL_OFFSETS = ((4, 4), (4, -14), (-22, 4), (-22, -14), (10, 14), (-30, -24), (16, -26),
+                 (-34, 16))   # points, tried in order; scaled with the font
+
+
+def place_labels(ax, anchors, pt: float, **style) -> None:
+    """Annotate each (text, (x, y) data point) at the first of LABEL_OFFSETS whose box does
+    not overlap a label already placed (the last offset when all do)."""
+    fig = ax.figure
+    to_px = ax.transData.transform
+    scale = pt / 8.0 * fig.dpi / 72.0
+    taken = []
+    for text, q in anchors:
+        x, y = to_px(q)
+        w, h = (0.62 * len(text) + 0.4) * pt * fig.dpi / 72.0, 1.25 * pt * fig.dpi / 72.0
+        choice = LABEL_OFFSETS[-1]
+        for dx, dy in LABEL_OFFSETS:
+            box = (x + dx * scale, y + dy * scale, w, h)
+            if not any(_overlap(box, t) for t in taken):
+                choice = (dx, dy)
+                break
+        taken.append((x + choice[0] * scale, y + choice[1] * scale, w, h))
+        ax.annotate(text, q, xytext=(choice[0] * scale * 72 / fig.dpi,
+                                     choice[1] * scale * 72 / fig.dpi),
+                    textcoords="offset points", fontsize=pt, zorder=6, **style)
+
+
+def _overlap(a, b) -> bool:
+    return a[0] < b[0] + b[2] and b[0] < a[0] + a[2] and a[1] < b[1] + b[3] and b[1] < a[1] + a[3]
+
+
+def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None, *,
+              size_px: tuple[int, int] = (1700, 580), text_px: float | None = None):
     """A matplotlib Figure of the tree, three panels: `image` ((H, W, 3) linear RGB, e.g.
     raytrace.render(scene); None: a grey frame) with every ray projected through the camera,
     coloured by kind and numbered as in `format_tree`; a side view and a top view (the scene's
-    objects, the eye, the lights and the same rays, orthographic); a legend below."""
+    objects, the eye, the lights and the same rays, orthographic); a legend below.
+    `size_px` (width, height) of the figure; `text_px` the labels' size (default 8 points)."""
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
     from matplotlib.patheffects import withStroke
@@ -378,7 +421,8 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
 
     nodes = list(tree.walk())
     outline = [withStroke(linewidth=2, foreground="black")]  # labels legible on any colour
-    fig = Figure(figsize=(17, 5.8), dpi=100, layout="constrained")
+    fig = Figure(figsize=(size_px[0] / 100, size_px[1] / 100), dpi=100, layout="constrained")
+    pt = 8.0 if text_px is None else text_px * 72 / 100
     ax_img, ax_side, ax_top = fig.subplots(
         1, 3, gridspec_kw={"width_ratios": [scene.aspect, 1.0, 1.0]})
     # ---- over the image
@@ -390,10 +434,11 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
     ax_img.set_xlim(0, scene.width)
     ax_img.set_ylim(scene.height, 0)
     px = _pixel(scene, tree)
-    ax_img.set_title(f"{scene.name}: the rays of pixel ({int(px[0])}, {int(px[1])}), "
-                     f"projected through the camera", fontsize=10)
+    ax_img.set_title("the rays over the image",
+                     fontsize=pt * 1.2)
     ax_img.set_xticks([])
     ax_img.set_yticks([])
+    anchors = [("#0 (primary)", tuple(px))]
     for k, node in enumerate(nodes):
         if node.kind == PRIMARY:
             continue
@@ -404,14 +449,12 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
         style = ":" if node.verdict in (FACES_AWAY, OUTSIDE_CONE) else "-"
         ax_img.plot(xy[:, 0], xy[:, 1], style, color=_colour(node), lw=1.6)
         if node.hit and node.kind != SHADOW:
-            ax_img.annotate(f"#{k}", xy[1], color="white", fontsize=8, xytext=(3, 3),
-                            textcoords="offset points", path_effects=outline)
-    ax_img.plot([px[0]], [px[1]], "o", mfc="none", mec="white", ms=9, mew=1.5)
-    ax_img.annotate("#0 (primary)", px, color="white", fontsize=8, xytext=(6, -10),
-                    textcoords="offset points", path_effects=outline)
+            anchors.append((f"#{k}", tuple(xy[1])))
+    ax_img.plot([px[0]], [px[1]], "o", mfc="none", mec="white", ms=pt * 1.1, mew=1.5)
+    place_labels(ax_img, anchors, pt, color="white", path_effects=outline)
     # ---- orthographic views
-    _draw_view(ax_side, scene, nodes, "side")
-    _draw_view(ax_top, scene, nodes, "top")
+    _draw_view(ax_side, scene, nodes, "side", pt)
+    _draw_view(ax_top, scene, nodes, "top", pt)
     handles = [Line2D([], [], color="black", label="primary"),
                Line2D([], [], color=COLOURS[REFLECTED], label="reflected"),
                Line2D([], [], color=COLOURS[REFRACTED], label="refracted"),
@@ -419,10 +462,10 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None):
                Line2D([], [], color=COLOURS[LIT], label="shadow ray: lit"),
                Line2D([], [], color=COLOURS[BLOCKED], label="shadow ray: blocked"),
                Line2D([], [], color=COLOURS[FACES_AWAY], ls=":",
-                      label="to a light the surface faces away from, or outside a spot's "
-                            "cone (not traced)")]
-    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=8,
-               frameon=False)
+                      label="not traced: the light is behind the surface or outside a "
+                            "spot's cone")]
+    fig.legend(handles=handles, loc="outside lower center",
+               ncols=len(handles) if text_px is None else 3, fontsize=pt, frameon=False)
     return fig
 
 

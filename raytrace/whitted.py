@@ -18,7 +18,9 @@ The local term is Phong:
 
 where a light is visible when n·l > 0, a spot light's cone contains the point, and no object lies
 between the point and the light (hard shadows; transparent objects are opaque to shadow rays, as
-in the rasterizer).  No distance attenuation.
+in the rasterizer).  No distance attenuation.  An area light is the sum of its samples
+(`shadowvol.scene.hard_lights`), each with its share of the radiance and, for a rect or disk,
+its cosine at the light: soft shadows, also in mirrors and through glass.
 
 Geometry: objects with an analytic form (Sphere, Parallelogram) are intersected exactly; the
 others (meshes, boxes) go through the triangle backend; the nearest hit wins.  Shading normals
@@ -35,7 +37,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shadowvol.scene import DirectionalLight, Parallelogram, Scene, Sphere, SpotLight
+from shadowvol.scene import (
+    DirectionalLight,
+    Parallelogram,
+    Scene,
+    Sphere,
+    SpotLight,
+    emission_cosine,
+    hard_lights,
+)
 
 from .backends import cpu_threads, make_backend
 from .camera import primary_rays
@@ -212,7 +222,8 @@ def local_colour(world: World, scene: Scene, p, n, view, obj) -> np.ndarray:
     """Phong local term (k, 3) float64 at points p (k, 3) with unit normals n (k, 3) facing the
     viewer, unit view directions `view` (k, 3) (toward the viewer), objects obj (k,)."""
     colour = world.ka[obj] * scene.ambient
-    for light in scene.lights:
+    # an area light is its samples, each weighted by its share and its cosine at the light
+    for light in (hard for lt in scene.lights for hard in hard_lights(lt)):
         rays = shadow_rays(world, light, p, n)
         c = np.flatnonzero(rays.visible)
         l, n_dot_l = rays.to_light, rays.n_dot_l
@@ -221,7 +232,7 @@ def local_colour(world: World, scene: Scene, p, n, view, obj) -> np.ndarray:
         o = obj[c]
         term = (world.kd[o] * n_dot_l[c, None]
                 + world.ks[o] * (r_dot_v ** world.shininess[o])[:, None])
-        colour[c] += term * light.radiance
+        colour[c] += term * light.radiance * np.reshape(emission_cosine(light, l[c]), (-1, 1))
     return colour
 
 

@@ -2,7 +2,8 @@
 // One light's direct Phong term, added where the stencil count is 0 (the stencil test and the
 // depth test EQUAL are set by the pass).  The same terms as the ray tracer's direct light:
 // kd max(n.l, 0) + ks max(r.v, 0)^shininess, times the light's radiance; no attenuation; the
-// face normal flipped toward the viewer; a spot light only inside its cone.  Linear RGB.
+// face normal flipped toward the viewer; a spot light only inside its cone; an area light's
+// sample is a 90-degree spot light, also weighted by its cosine at the light.  Linear RGB.
 
 uniform sampler2D u_materials;  // row = object: texel 0 ka, 1 kd, 2 (ks, shininess)
 uniform vec4 u_light;           // (position, 1) or (-direction, 0)
@@ -10,6 +11,8 @@ uniform vec3 u_radiance;
 uniform vec3 u_eye;
 uniform vec3 u_spot_direction;  // unit; used when u_spot_cos > -2
 uniform float u_spot_cos;       // cos of the cone's half-angle; -2 for no cone
+uniform float u_emitter_cosine; // 1: a one-sided area light's sample, weighted by the cosine at
+                                // the light, max(-l . u_spot_direction, 0); 0: no weight
 
 in vec3 v_world;
 flat in vec3 v_normal;
@@ -40,6 +43,7 @@ void main() {
     float r_dot_v = max(dot(r, v), 0.0);
     // x^0 is 1 (as in numpy), which GLSL's pow leaves undefined at x = 0
     float highlight = ks.a == 0.0 ? 1.0 : pow(r_dot_v, ks.a);
-    f_colour = vec4((kd * n_dot_l + ks.rgb * highlight) * u_radiance, 0.0);
+    float at_light = u_emitter_cosine > 0.0 ? max(dot(-l, u_spot_direction), 0.0) : 1.0;
+    f_colour = vec4((kd * n_dot_l + ks.rgb * highlight) * u_radiance * at_light, 0.0);
     f_lit = 1.0;
 }

@@ -29,6 +29,8 @@ uniform vec4 u_light[LIGHTS];           // (position, 1) or (-direction, 0)
 uniform vec3 u_radiance[LIGHTS];
 uniform vec3 u_spot_direction[LIGHTS];  // unit; used when u_spot_cos > -2
 uniform float u_spot_cos[LIGHTS];       // cos of the cone's half-angle; -2 for no cone
+uniform float u_emitter_cosine[LIGHTS]; // 1: a one-sided area light's sample, weighted by the
+                                        // cosine at the light, max(-l . u_spot_direction, 0)
 #endif
 layout(std430, binding = 0) readonly buffer Triangles {
     vec4 triangle_data[];       // per triangle: (unit normal, object), (first corner, 0)
@@ -95,7 +97,9 @@ void main() {
         float r_dot_v = max(dot(r, v), 0.0);
         // x^0 is 1 (as in numpy), which GLSL's pow leaves undefined at x = 0
         float highlight = ks.a == 0.0 ? 1.0 : pow(r_dot_v, ks.a);
-        colour += (kd * n_dot_l + ks.rgb * highlight) * u_radiance[i];
+        float at_light = u_emitter_cosine[i] > 0.0 ? max(dot(-l, u_spot_direction[i]), 0.0)
+                                                   : 1.0;
+        colour += (kd * n_dot_l + ks.rgb * highlight) * u_radiance[i] * at_light;
 #endif
     }
 #endif

@@ -14,9 +14,10 @@ pipeline without knowing our look-at camera:
   nerfstudio's transforms.json stores `transform_matrix`.  It is NOT the inverse of
   `world_to_camera`: the two differ by diag(1, −1, −1, 1), the flip between the conventions.
 * `light_position` (L, 4): each light as a homogeneous point, (position, 1), or for a
-  directional light (−direction, 0), the point at infinity it comes from.
-* `light_direction` (L, 3): the direction a directional light travels, a spot light's axis,
-  (0, 0, 0) for a point light.
+  directional light (−direction, 0), the point at infinity it comes from; an area light's
+  centre (its samples are the mask file's `light_samples_<i>`).
+* `light_direction` (L, 3): the direction a directional light travels, a spot light's axis, a
+  rect or disk light's normal (the side it emits to), (0, 0, 0) for a point or sphere light.
 
 All float64.  The basis is the look-at basis of CONVENTIONS.md ("Camera and pixels").
 """
@@ -28,7 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from shadowvol.scene import Camera, DirectionalLight, Scene, SpotLight
+from shadowvol.scene import AreaLight, Camera, DirectionalLight, Scene, SpotLight
 
 # OpenGL camera axes (x right, y up, z back) -> OpenCV camera axes (x right, y down, z forward)
 GL_TO_CV = np.diag([1.0, -1.0, -1.0, 1.0])
@@ -85,10 +86,18 @@ def world_to_camera(camera: Camera) -> np.ndarray:
 
 def light_arrays(lights) -> tuple[np.ndarray, np.ndarray]:
     """light_position (L, 4) and light_direction (L, 3), float64 (see the module)."""
-    position = np.array([light.homogeneous for light in lights], np.float64).reshape(-1, 4)
-    direction = np.array([light.direction if isinstance(light, (DirectionalLight, SpotLight))
-                          else np.zeros(3) for light in lights], np.float64).reshape(-1, 3)
-    return position, direction
+    def position(light):
+        return np.append(light.center, 1.0) if isinstance(light, AreaLight) else light.homogeneous
+
+    def direction(light):
+        if isinstance(light, (DirectionalLight, SpotLight)):
+            return light.direction
+        if isinstance(light, AreaLight) and light.normal is not None:
+            return light.normal
+        return np.zeros(3)
+
+    return (np.array([position(lt) for lt in lights], np.float64).reshape(-1, 4),
+            np.array([direction(lt) for lt in lights], np.float64).reshape(-1, 3))
 
 
 def calibration(scene: Scene) -> Calibration:

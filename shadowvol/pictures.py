@@ -8,17 +8,20 @@ backend.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 WHITE = (255, 255, 255)
+TITLE_BACKGROUND = (40, 40, 48)
 GAP = 4  # pixels between neighbouring panels
 
 # Bitmap-font strips (Pillow's built-in font): compare's labels and the swatch legends.
 LABEL_HEIGHT = 16
 LEGEND_HEIGHT = 20
 
-# Scalable-font strips (the gallery's titles and labels), at full size and with --small.
+# Fitted text strips shrink their font down to this, then cut the text short.
 MIN_TEXT_SIZE = 8
 
 # stencil count -> sRGB colour: 0 keeps the (darkened) image, 1.. warm colours, negatives blue
@@ -61,23 +64,31 @@ def label_strip(text: str, width: int, height: int = LABEL_HEIGHT) -> np.ndarray
     return np.asarray(strip, np.uint8)
 
 
-def _font(size: int):
-    return ImageFont.load_default(size=size)
+@functools.lru_cache(maxsize=64)
+def font(px: int, bold: bool = False):
+    """DejaVu Sans at `px` pixels (at least MIN_TEXT_SIZE): the font matplotlib draws the 2D
+    course pictures in (it ships with matplotlib), so all text looks alike and has the course's
+    symbols (λ, −, ×, ∞, ·)."""
+    from matplotlib import (
+        font_manager,  # only to find the font file; no figure, no backend
+    )
+
+    path = font_manager.findfont(font_manager.FontProperties(
+        family="DejaVu Sans", weight="bold" if bold else "normal"))
+    return ImageFont.truetype(path, max(MIN_TEXT_SIZE, int(px)))
 
 
-def text_strip(text: str, width: int, height: int, size: int, *,
-               dark: bool = False) -> np.ndarray:
-    """(height, width, 3) uint8: `text` in Pillow's scalable font at `size` px on white (on
-    near-black when `dark`), shrunk to MIN_TEXT_SIZE until it fits, then cut short."""
-
-    strip = Image.new("RGB", (width, height), (40, 40, 48) if dark else WHITE)
+def text_strip(text: str, width: int, height: int, px: int, dark: bool = False) -> np.ndarray:
+    """(height, width, 3) uint8: `text` at `px` on white (on near-black when `dark`), shrunk
+    until it fits, then cut short.  The one fitted text strip of every picture."""
+    strip = Image.new("RGB", (width, height), TITLE_BACKGROUND if dark else WHITE)
     draw = ImageDraw.Draw(strip)
-    while size > MIN_TEXT_SIZE and draw.textlength(text, font=_font(size)) > width - 8:
-        size -= 1
-    while len(text) > 1 and draw.textlength(text, font=_font(size)) > width - 8:
+    while px > MIN_TEXT_SIZE and draw.textlength(text, font=font(px)) > width - 12:
+        px -= 1
+    while len(text) > 1 and draw.textlength(text, font=font(px)) > width - 12:
         text = text[:-2] + "…"
-    draw.text((4, (height - size) // 2 - 1), text, fill=WHITE if dark else (0, 0, 0),
-              font=_font(size))
+    draw.text((8, height // 2), text, fill=WHITE if dark else (0, 0, 0), font=font(px),
+              anchor="lm")
     return np.asarray(strip, np.uint8)
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from shadowvol import primitives
 from shadowvol.io import atomic_write
 from shadowvol.scene import (
+    AreaLight,
     Camera,
     DirectionalLight,
     Material,
@@ -55,6 +56,9 @@ LIGHT_KEYS = {
     "directional": {"type", "direction", "color", "intensity"},
     "spot": {"type", "position", "direction", "cone_angle", "color", "intensity"},
 }
+AREA_KEYS = {"type", "center", "color", "intensity", "samples", "pattern", "seed"}
+LIGHT_KEYS.update({"rect": AREA_KEYS | {"normal", "size"}, "disk": AREA_KEYS | {"normal", "radius"},
+                   "sphere": AREA_KEYS | {"radius"}})
 TRANSFORM_KEYS = {"scale", "rotation", "translation"}
 COMMON_OBJECT_KEYS = {"type", "name", "material", "transform"}
 OBJECT_KEYS = {
@@ -272,11 +276,30 @@ def _typed(value, key: str, allowed_by_type: dict[str, set[str]], what: str) -> 
     return _table(table, key, allowed_by_type[kind]), kind
 
 
+REQUIRED_LIGHT_KEYS = {"point": ("position",), "directional": ("direction",),
+                       "spot": ("position", "direction")}
+
+
 def _light(value, key: str):
     table, kind = _typed(value, key, LIGHT_KEYS, "light")
     args = {k: v for k, v in table.items() if k != "type"}
+    if kind in ("rect", "disk", "sphere"):
+        _required(table, "center", key)
+        return _build(key, AreaLight, shape=kind, **args)
     cls = {"point": PointLight, "directional": DirectionalLight, "spot": SpotLight}[kind]
+    for name in REQUIRED_LIGHT_KEYS[kind]:
+        _required(table, name, key)
     return _build(key, cls, **args)
+
+
+def light_from_dict(value, key: str = "light"):
+    """One light from a table of the scene-file schema (`[[lights]]`), e.g. a batch job's light
+    override; SceneError naming `key` when it is wrong."""
+    try:
+        return _light(value, key)
+    except TypeError as exc:  # a required field left out: "missing 1 required ... 'position'"
+        missing = str(exc).rsplit(":", 1)[-1].strip() or str(exc)
+        raise SceneError(key, f"missing {missing}") from None
 
 
 def _object(value, key: str, named: dict[str, Material], base_dir: Path,
@@ -545,6 +568,12 @@ def scene_to_dict(scene: Scene) -> dict:
             return {"type": "point", "position": lt.position.tolist(), **out}
         if isinstance(lt, DirectionalLight):
             return {"type": "directional", "direction": lt.direction.tolist(), **out}
+        if isinstance(lt, AreaLight):
+            shape = {"normal": lt.normal, "size": lt.size, "radius": lt.radius}
+            return {"type": lt.shape, "center": lt.center.tolist(), "samples": lt.samples,
+                    "pattern": lt.pattern, "seed": lt.seed, **out,
+                    **{k: (v.tolist() if isinstance(v, np.ndarray) else v)
+                       for k, v in shape.items() if v is not None}}
         return {"type": "spot", "position": lt.position.tolist(),
                 "direction": lt.direction.tolist(), "cone_angle": lt.cone_angle, **out}
 

@@ -5,10 +5,16 @@ never import from each other).  Vary a built scene with `dataclasses.replace` /
 The statistical checks of the path tracer and radiosity are z-tests on region means whose
 variance the renderer itself estimates; `z_limit(tests)` gives the per-test bound that keeps the
 false-alarm rate of a whole test function (all its regions and channels, Bonferroni) at
-FALSE_ALARM."""
+FALSE_ALARM.
+
+Area lights: `square_over_floor` is the analytic case of the soft-shadow issue, a square
+occluder parallel to a square light above a floor, seen from above; its exact answer is in
+`square_visible_fraction`.  `check_counts` is the budget of raster against ray-traced
+per-sample counts."""
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from pathlib import Path
@@ -16,8 +22,9 @@ from statistics import NormalDist
 
 import numpy as np
 
+from shadowvol.compare.maskdiff import count_edges, edge_pixels
 from shadowvol.primitives import box, plane
-from shadowvol.scene import Camera, DirectionalLight, Material, Scene
+from shadowvol.scene import AreaLight, Camera, DirectionalLight, Material, Scene
 from shadowvol.scenefile import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -105,6 +112,199 @@ def block_means(image: np.ndarray, variance: np.ndarray, block: int):
     mean = image.reshape(shape).mean(axis=(1, 3))
     var = variance.reshape(shape).sum(axis=(1, 3)) / block ** 4
     return mean, var
+
+
+# ---- area lights (soft shadows) ------------------------------------------------------------
+
+FLOOR_Y, OCCLUDER_Y, LIGHT_Y = 0.0, 1.0, 2.5
+LIGHT_SIDE, OCCLUDER_SIDE, FLOOR_HALF = 1.2, 1.0, 4.0
+OCCLUDER_CENTER = np.array([0.15, OCCLUDER_Y, -0.1])
+# Raster against ray tracer counts: pixels whose counts may differ, at most, as a fraction of
+# all pixels (and only on edges of the samples' hard masks or of the coverage): the hard masks'
+# budget (conftest.MAX_MISMATCH_FRACTION), per light however many samples it has.
+MAX_DIFFERING_FRACTION = 0.001
+# A cell whose covered fraction is within this of 0 or 1 counts as uncovered or covered (the
+# overlaps are differences of float64 coordinates of ~1).
+COVER_ROUNDING = 1e-9
+MATTE = Material(ambient=[0.0, 0.0, 0.0], diffuse=[0.8, 0.8, 0.8], specular=[0.0, 0.0, 0.0])
+
+
+def square_light(samples: int, pattern: str = "stratified", seed: int = 0, **kw) -> AreaLight:
+    return AreaLight("rect", [0.0, LIGHT_Y, 0.0], normal=[0.0, -1.0, 0.0],
+                     size=[LIGHT_SIDE, LIGHT_SIDE], samples=samples, pattern=pattern, seed=seed,
+                     **kw)
+
+
+def square_over_floor(light, size: int = 64) -> Scene:
+    """Floor (y = 0, 8 x 8), a square occluder (y = 1) and `light`, camera above and in front."""
+    floor = plane("floor", point=[0.0, FLOOR_Y, 0.0], size=[2 * FLOOR_HALF, 2 * FLOOR_HALF],
+                  material=MATTE)
+    occluder = plane("occluder", point=OCCLUDER_CENTER, size=[OCCLUDER_SIDE, OCCLUDER_SIDE],
+                     material=MATTE)
+    camera = Camera(eye=[0.0, 4.5, 5.5], target=[0.0, 0.0, -0.5], fov_y=40.0)
+    return Scene(camera=camera, objects=[floor, occluder], lights=[light], width=size,
+                 height=size, ambient=[0.0, 0.0, 0.0])
+
+
+def floor_points(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Each pixel's pixel-centre ray cut with the floor plane: points (H, W, 3) float64, and
+    `on_floor` (H, W) bool, the pixels where that ray meets the floor, and not the occluder
+    first."""
+    from raytrace.camera import primary_rays
+
+    o, d = primary_rays(scene.camera, scene.width, scene.height)
+    p = o + ((FLOOR_Y - o[:, 1]) / d[:, 1])[:, None] * d
+    q = o + ((OCCLUDER_Y - o[:, 1]) / d[:, 1])[:, None] * d
+    half = OCCLUDER_SIDE / 2
+    hides = (np.abs(q[:, 0] - OCCLUDER_CENTER[0]) <= half) & \
+        (np.abs(q[:, 2] - OCCLUDER_CENTER[2]) <= half)
+    on_floor = (d[:, 1] < 0) & (np.abs(p[:, 0]) < FLOOR_HALF) & (np.abs(p[:, 2]) < FLOOR_HALF)
+    shape = (scene.height, scene.width)
+    return p.reshape(shape + (3,)), (on_floor & ~hides).reshape(shape)
+
+
+def _overlap(lo: np.ndarray, hi: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Length of [lo, hi] ∩ [a, b], elementwise."""
+    return np.clip(np.minimum(hi, b) - np.maximum(lo, a), 0.0, None)
+
+
+def _shadow_interval(p: np.ndarray, axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """The occluder's extent along `axis` projected from floor points p (..., 3) onto the
+    light's plane (a central projection from p, factor k = light height / occluder height)."""
+    k = (LIGHT_Y - FLOOR_Y) / (OCCLUDER_Y - FLOOR_Y)
+    half = OCCLUDER_SIDE / 2
+    c = OCCLUDER_CENTER[axis]
+    x = p[..., axis]
+    return x + k * (c - half - x), x + k * (c + half - x)
+
+
+def square_visible_fraction(p: np.ndarray) -> np.ndarray:
+    """(...,) float64: the exact fraction of the square light visible from floor points p:
+    1 - (product of the two 1D overlaps of the occluder's shadow with the light) / area."""
+    half = LIGHT_SIDE / 2
+    blocked = np.ones(p.shape[:-1])
+    for axis in (0, 2):
+        lo, hi = _shadow_interval(p, axis)
+        blocked = blocked * _overlap(lo, hi, -half, half) / LIGHT_SIDE
+    return 1.0 - blocked
+
+
+def stratified_bound(p: np.ndarray, n: int) -> np.ndarray:
+    """(...,) float64: the error bound of an n x n stratified estimate of the visible fraction
+    at p: the cells the shadow covers only in part, / n².  A cell covered wholly (or not at
+    all) holds its sample inside (outside) the shadow, so only these cells can be wrong, each
+    by less than 1/n²."""
+    half = LIGHT_SIDE / 2
+    edges = -half + LIGHT_SIDE * np.arange(n + 1) / n
+    fractions = []
+    for axis in (0, 2):
+        lo, hi = _shadow_interval(p, axis)
+        fractions.append(_overlap(lo[..., None], hi[..., None], edges[:-1], edges[1:])
+                         * n / LIGHT_SIDE)  # (..., n) covered fraction of each column
+    cover = fractions[0][..., :, None] * fractions[1][..., None, :]
+    partial = (cover > COVER_ROUNDING) & (cover < 1 - COVER_ROUNDING)
+    return partial.sum(axis=(-1, -2)) / n**2
+
+
+def blocked_samples(p: np.ndarray, samples: np.ndarray) -> np.ndarray:
+    """(..., N) bool: the segment from floor point p (..., 3) to each sample (N, 3) of the
+    light crosses the occluder's square (computed analytically, float64), and the distance
+    (..., N) of that crossing from the square's outline (how close the call is)."""
+    t = (OCCLUDER_Y - p[..., None, 1]) / (samples[:, 1] - p[..., None, 1])
+    if np.any(t >= 1):
+        raise ValueError("every sample must lie above the occluder")
+    q = p[..., None, :] + t[..., None] * (samples - p[..., None, :])
+    half = OCCLUDER_SIDE / 2
+    dx = half - np.abs(q[..., 0] - OCCLUDER_CENTER[0])
+    dz = half - np.abs(q[..., 2] - OCCLUDER_CENTER[2])
+    inside = (dx > 0) & (dz > 0)
+    margin = np.where(inside, np.minimum(dx, dz),
+                      np.hypot(np.minimum(dx, 0), np.minimum(dz, 0)))
+    return inside, margin
+
+
+def _sample_edges(scene, i: int) -> np.ndarray:
+    """(H, W) bool: pixels on an edge of some sample's reference hard mask of light i."""
+    from raytrace.soft import sample_masks
+
+    edges = np.zeros((scene.height, scene.width), bool)
+    for _, lit in sample_masks(scene, i):
+        for mask in lit:
+            edges |= edge_pixels(mask)
+    return edges
+
+
+def check_counts(scene, got, ref) -> list[dict]:
+    """Raster `got` (RenderResult) against ray tracer `ref` (SoftMasks): per light the
+    pixels whose counts differ, in total and off every sample edge (must be 0), the largest
+    difference.  Sample edges are those of the ray tracer's hard masks and those the raster's
+    count shows (`count_edges`), as `maskdiff` takes the edges of either renderer's masks.
+    Fails the test beyond the budget."""
+    near_cov = edge_pixels(got.coverage) | edge_pixels(ref.coverage)
+    rows = []
+    for i in range(len(scene.lights)):
+        differ = got.lit_count[i] != ref.lit_count[i]
+        edges = _sample_edges(scene, i) | count_edges(got.lit_count[i])
+        interior = differ & ~(near_cov | edges)
+        rows.append({"light": i, "samples": int(ref.samples[i]), "differ": int(differ.sum()),
+                     "interior": int(interior.sum()),
+                     "largest": int(np.abs(got.lit_count[i].astype(int)
+                                           - ref.lit_count[i]).max())})
+    pixels = scene.width * scene.height
+    assert all(r["interior"] == 0 for r in rows), rows
+    assert all(r["differ"] <= MAX_DIFFERING_FRACTION * pixels for r in rows), rows
+    np.testing.assert_array_equal(got.lit, got.lit_count == ref.samples[:, None, None])
+    return rows
+
+
+# ---- batch jobs (tests/batch) ----------------------------------------------------------
+
+def job_lines(frames: int = 4, size=(40, 30), raytrace: bool = True) -> list[dict]:
+    """A turntable of the cage scene (rasterized) and, optionally, two ray-traced frames of it
+    with a light override and jitter: every kind of job field the runs must agree on."""
+    jobs = [{"name": "cage-turntable", "scene": str(SCENES / "cage.toml"), "size": list(size),
+             "cameras": {"orbit": {"center": [-0.6, 1.0, -0.8], "radius": 7.0,
+                                   "elevation": 30.0, "start": 20.0, "sweep": 60.0,
+                                   "frames": frames}},
+             "outputs": ["image", "masks"]}]
+    if raytrace:
+        jobs.append({"name": "cage-traced", "scene": str(SCENES / "cage.toml"),
+                     "size": [24, 18], "renderer": "raytrace", "max_depth": 1, "seed": 7,
+                     "jitter": {"eye": 0.2, "lights": 0.1},
+                     "lights": [{"type": "point", "position": [0.0, 1.4, 0.0]},
+                                {"type": "directional", "direction": [-0.3, -1.0, -0.4],
+                                 "intensity": 0.5}],
+                     "cameras": [{"eye": [4.2, 3.4, 5.2], "target": [-0.6, 1.0, -0.8]},
+                                 {"eye": [3.0, 2.0, 6.0], "target": [-0.6, 1.0, -0.8],
+                                  "fov_y": 40.0}]})
+    return jobs
+
+
+def write_jobs(path: Path, jobs: list, extra_lines: tuple[str, ...] = ()) -> Path:
+    path.write_text("".join(json.dumps(j) + "\n" for j in jobs) +
+                    "".join(line + "\n" for line in extra_lines))
+    return path
+
+
+def output_files(out: Path) -> dict[str, bytes]:
+    """Every file under `out` but the manifests, by relative path, with its bytes."""
+    return {p.relative_to(out).as_posix(): p.read_bytes() for p in sorted(out.rglob("*"))
+            if p.is_file() and not p.name.startswith("manifest")}
+
+
+def manifest_hashes(out: Path, name: str = "manifest.jsonl") -> list[tuple]:
+    """(id, output, sha256) of every file the manifest lists, and each record's error, in
+    manifest order: what must not depend on how the frames were made."""
+    rows = []
+    for line in (out / name).read_text().splitlines():
+        record = json.loads(line)
+        if "files" in record:
+            rows += [(record["id"], k, v["sha256"]) for k, v in record["files"].items()]
+        elif "tar" in record:
+            rows.append((record["id"], "tar", record["sha256"]))
+        else:
+            rows.append((record["id"], "error", record["error"]))
+    return rows
 
 
 # Two square cards over a floor under a light straight down: each card's shadow is its own

@@ -7,7 +7,9 @@ EGL driver fails loudly: it never skips.
 The `gl` marker: every test under raster/ and compare/, every test that uses `ctx`, and every
 module that says `pytestmark = pytest.mark.gl` needs a GL context; `pytest -m "not gl"` runs
 the rest, and for those the context factory is blocked, so a test that needs GL but is not
-marked fails instead of passing by luck.
+marked fails instead of passing by luck.  Child processes are not covered by that block: run
+`__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json pytest -m "not gl"` (EGL then finds no
+driver anywhere) to check that no unmarked test starts a process that renders.
 """
 
 from __future__ import annotations

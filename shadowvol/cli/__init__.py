@@ -1,7 +1,7 @@
 """The command line of both tools: `shadowvol` (`shadowvol.cli.main`), `raytrace`
 (`raytrace.cli`) and the one exit-status table (`shadowvol.cli.status`) they share.
 
-The console scripts enter through `main` and `raytrace_main` here: they catch Ctrl-C and
+The console scripts enter through `shadowvol_entry` and `raytrace_entry` here: they catch Ctrl-C and
 SIGTERM while the commands' modules are still being imported (GL, numpy, Pillow), which would
 otherwise print a traceback.  Importing this package imports no GL.
 """
@@ -14,12 +14,12 @@ import sys
 from shadowvol import signals
 
 
-def main(argv=None) -> int:
+def shadowvol_entry(argv=None) -> int:
     """`shadowvol ...` (see `shadowvol.cli.main`)."""
     return _enter("shadowvol.cli.main", argv)
 
 
-def raytrace_main(argv=None) -> int:
+def raytrace_entry(argv=None) -> int:
     """`raytrace ...` (see `raytrace.cli`)."""
     return _enter("raytrace.cli", argv)
 

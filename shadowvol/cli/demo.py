@@ -7,22 +7,28 @@ import sys
 from pathlib import Path
 
 from shadowvol.cli import status
-from shadowvol.course.gallery import SCENES, SMALL_SCALE, build_gallery, index_html
+from shadowvol.course.gallery import SCENES, build_gallery, index_html, parse_size
+from shadowvol.course.slides import SLIDE, SMALL_SLIDE
 from shadowvol.io import atomic_write, save_png
+from shadowvol.scene import SceneError
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "demo", help="render the course's gallery of demos and an index.html",
-        description="Render every demo of the course (shadow volumes, z-pass against z-fail, "
-                    "the stencil heat map, planar projected shadows, the 2D exercise, the ray "
-                    "tree, Whitted ray tracing, raster against ray traced), each PNG with a "
-                    "title, and DIR/index.html showing them with captions.",
+        description="Render every picture of the course as a slide (shadows, planar shadows, "
+                    "the shadow polygons of one box, the stencil counter, counting along an "
+                    "eye ray, z-pass against z-fail, Whitted ray tracing, the ray tree, total "
+                    "internal reflection, the exercises, raster against ray traced, shadow "
+                    "mapping against shadow volumes), and DIR/index.html showing them in the "
+                    "course's order with a table of contents and captions.",
         epilog=status.EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("-o", "--output", required=True, metavar="DIR", type=Path,
                    help="the folder to write the pictures and index.html into")
+    p.add_argument("--size", metavar="WxH", default=None,
+                   help=f"slide size in pixels (default {SLIDE[0]}x{SLIDE[1]})")
     p.add_argument("--small", action="store_true",
-                   help=f"every scene at 1/{SMALL_SCALE} of its size (fast: for CI)")
+                   help=f"{SMALL_SLIDE[0]}x{SMALL_SLIDE[1]} slides (fast: for CI)")
     p.add_argument("--scenes", type=Path, default=SCENES, metavar="DIR",
                    help="the scenes folder (default: the example scenes installed with "
                         "shadowvol, or a source checkout's scenes/)")
@@ -34,11 +40,18 @@ def command(args) -> int:
     def progress(name: str, seconds: float) -> None:
         print(f"  {name}: {seconds:.1f} s", file=sys.stderr)
 
-    pictures = build_gallery(args.small, args.scenes, progress=progress)
+    if args.size and args.small:
+        raise SceneError("--size", "give --size or --small, not both")
+    size = parse_size(args.size) if args.size else None
+    skipped = []
+    pictures = build_gallery(args.small, args.scenes, progress=progress, size=size,
+                             skipped=skipped)
+    for name, why in skipped:
+        print(f"  {name}: left out: {why}", file=sys.stderr)
     out = Path(args.output)
     for p in pictures:
         save_png(out / f"{p.name}.png", p.image)
     with atomic_write(out / "index.html") as f:
-        f.write(index_html(pictures, args.small).encode("utf-8"))
+        f.write(index_html(pictures, args.small, size, skipped).encode("utf-8"))
     print(f"wrote {len(pictures)} pictures and {out / 'index.html'}", file=sys.stderr)
     return status.OK

@@ -2,8 +2,11 @@
 
     shadowvol render SCENE -o out.png [--masks out.npz] [--volumes v.png] [--stencil s.png]
     shadowvol compare SCENE -o cmp.png [--pyrender] [--max-interior N]
-    shadowvol demo -o DIR [--small]
+    shadowvol planar SCENE -o out.png [--receiver NAME] [--masks m.npz]
+    shadowvol demo -o DIR [--size WxH] [--small]
+    shadowvol view SCENE                      (a window: orbit, drag the light, probe a pixel)
     shadowvol shadow2d --example -o shadow2d.png
+    shadowvol batch JOBS.jsonl -o OUT [--workers N] [--shard I/N] [--ray [ADDRESS]]
 
 Exit statuses: `shadowvol.cli.status` (one table for both tools).
 """
@@ -14,9 +17,9 @@ import argparse
 import sys
 
 from shadowvol import __version__
-from shadowvol.cli import compare, demo, render, shadow2d, status
+from shadowvol.cli import batch, compare, demo, planar, render, shadow2d, status, view
 
-COMMANDS = (render, shadow2d, compare, demo)
+COMMANDS = (render, planar, shadow2d, compare, demo, view, batch)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -12,7 +12,7 @@ from shadowvol.io import encode_srgb, save_exr, save_masks, save_png, save_png16
 from shadowvol.pictures import heat_maps
 from shadowvol.raster.context import create_context
 from shadowvol.raster.renderer import Renderer
-from shadowvol.scene import SceneError
+from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene
 
 EPILOG = """\
@@ -181,7 +181,9 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
                        if "volumes" in out else None)
         save_png(out["image"], result.image)
         if "masks" in out:
-            save_masks(out["masks"], result.lit, result.coverage, result.arrays())
+            save_masks(out["masks"], result.lit, result.coverage,
+                       light_samples=[light_samples(lt) for lt in scene.lights],
+                       arrays=result.arrays())
         if "exr" in out:
             save_exr(out["exr"], result.image)
         if "png16" in out:

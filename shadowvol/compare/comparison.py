@@ -25,6 +25,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 import raytrace
+from raytrace.masks import scene_backend
+from raytrace.soft import sample_masks
 from shadowvol import pictures
 from shadowvol.compare import maskdiff
 from shadowvol.compare.pyrender_peer import (
@@ -35,13 +37,15 @@ from shadowvol.compare.pyrender_peer import (
 from shadowvol.io import encode_srgb
 from shadowvol.raster.context import create_context
 from shadowvol.raster.renderer import Renderer
-from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
+from shadowvol.scene import AreaLight, DirectionalLight, PointLight, Scene, SpotLight
 
 NOT_ASKED = "not asked"
 POINT_LIGHT_NA = "n/a (point light)"
 
 
 def _kind(light) -> str:
+    if isinstance(light, AreaLight):
+        return light.shape  # "rect", "disk", "sphere"; its lit mask: every sample reaches
     return {PointLight: "point", DirectionalLight: "directional", SpotLight: "spot"}[type(light)]
 
 
@@ -49,7 +53,8 @@ def _kind(light) -> str:
 class LightComparison:
     """The numbers of one light.
 
-    index, kind          : position in scene.lights; "point", "directional" or "spot"
+    index, kind          : position in scene.lights; "point", "directional", "spot" or an
+                           area light's shape
     mismatched           : int, pixels whose lit masks differ (raster vs ray tracer)
     interior             : int, of those, the ones farther than one pixel from a mask edge
     iou                  : float, IoU of the shadow regions (1.0 when neither has a shadow)
@@ -57,6 +62,10 @@ class LightComparison:
                            tracer's (None: not asked, or a point light — see pyrender_note)
     pyrender_interior    : int or None, of those, farther than one pixel from an edge
     pyrender_note        : "" when measured, else NOT_ASKED or POINT_LIGHT_NA
+    samples              : N, the light's samples (1: not an area light)
+    counts_differ, counts_interior, counts_largest : int, an area light's per-sample counts
+                           (`maskdiff.count_stats`: pixels whose counts differ, those off every
+                           sample edge, the largest difference); None for the other lights
     """
 
     index: int
@@ -67,6 +76,10 @@ class LightComparison:
     pyrender_mismatched: int | None = None
     pyrender_interior: int | None = None
     pyrender_note: str = NOT_ASKED
+    samples: int = 1
+    counts_differ: int | None = None
+    counts_interior: int | None = None
+    counts_largest: int | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,6 +98,7 @@ class Comparison:
     ray_images        : (L, H, W, 3) float64 linear RGB, the same from the ray tracer (direct)
     pyrender_images   : tuple of (H, W, 3) uint8 per light (pyrender's own encoding) or None
                         (not asked, or a point light)
+    raster_counts, ref_counts : (L, H, W) uint16, lit_count per light (None: no area light)
     """
 
     scene_name: str
@@ -101,10 +115,14 @@ class Comparison:
     raster_images: np.ndarray = field(repr=False)
     ray_images: np.ndarray = field(repr=False)
     pyrender_images: tuple = field(repr=False, default=())
+    raster_counts: np.ndarray | None = field(repr=False, default=None)
+    ref_counts: np.ndarray | None = field(repr=False, default=None)
 
     def exceeds(self, max_interior: int) -> bool:
-        """True when any light has more than `max_interior` interior mismatches."""
-        return any(l.interior > max_interior for l in self.lights)
+        """True when any light has more than `max_interior` interior mismatches (of its lit
+        masks, or of an area light's counts)."""
+        return any(l.interior > max_interior or (l.counts_interior or 0) > max_interior
+                   for l in self.lights)
 
     def to_dict(self) -> dict:
         """The numbers, JSON-ready."""
@@ -115,7 +133,12 @@ class Comparison:
                             "interior": l.interior, "iou": l.iou,
                             "pyrender": ({"mismatched": l.pyrender_mismatched,
                                           "interior": l.pyrender_interior}
-                                         if not l.pyrender_note else l.pyrender_note)}
+                                         if not l.pyrender_note else l.pyrender_note),
+                            **({"samples": l.samples,
+                                "counts": {"differ": l.counts_differ,
+                                           "interior": l.counts_interior,
+                                           "largest": l.counts_largest}}
+                               if l.counts_differ is not None else {})}
                            for l in self.lights]}
 
     def table(self) -> str:
@@ -133,6 +156,10 @@ class Comparison:
                 pr = l.pyrender_note or f"{l.pyrender_mismatched} ({l.pyrender_interior})"
                 row += f"  {pr:>25}"
             lines.append(row)
+            if l.counts_differ is not None:
+                lines.append(f"{'':<4}{l.samples} samples: counts differ at {l.counts_differ} "
+                             f"px, {l.counts_interior} off sample edges, largest difference "
+                             f"{l.counts_largest}")
         if not self.lights:
             lines.append("(no lights)")
         lines.append(f"coverage differs at {self.coverage_mismatched} pixels")
@@ -169,8 +196,22 @@ class Comparison:
                     panels.append((f"pyrender: {l.pyrender_mismatched} px wrong "
                                    f"({l.pyrender_interior} interior)", image))
             rows.append(pictures.labelled_row(panels))
+            if self.lights and self.lights[i].counts_differ is not None:
+                rows.append(self._count_row(i))
         body = pictures.column(rows)
         return pictures.column([body, pictures.legend(body.shape[1], maskdiff.LEGEND)])
+
+    def _count_row(self, i: int) -> np.ndarray:
+        """An area light's visibility in both renderers and the difference of their counts."""
+        l, got, ref = self.lights[i], self.raster_counts[i], self.ref_counts[i]
+        return pictures.labelled_row([
+            (f"light {i}: raster visibility ({l.samples} samples)",
+             maskdiff.visibility_panel(got, l.samples, self.raster_coverage)),
+            ("ray traced visibility", maskdiff.visibility_panel(ref, l.samples,
+                                                                self.ref_coverage)),
+            (f"counts differ: {l.counts_differ} px, {l.counts_interior} off sample edges, "
+             f"largest {l.counts_largest}",
+             maskdiff.count_diff_panel(got, ref, self.raster_coverage | self.ref_coverage))])
 
 
 def compare(scene: Scene, method: str = "auto", pyrender: bool = False, *,
@@ -218,8 +259,14 @@ def _compare(scene, method, pyrender, silhouettes, backend, ctx, start) -> Compa
         ray_images = [raytrace.render(scene, max_depth=0, backend=backend, progress=False)]
 
     rows = []
+    ref_counts = _reference_counts(scene, backend) if any(
+        isinstance(light, AreaLight) for light in scene.lights) else None
     for i, light in enumerate(scene.lights):
         stats = maskdiff.light_stats(result.lit[i], result.coverage, ref_lit[i], ref_cov)
+        if isinstance(light, AreaLight):
+            count, edges = ref_counts[i]
+            stats.update(samples=light.samples, **maskdiff.count_stats(
+                result.lit_count[i], result.coverage, count, ref_cov, edges))
         rows.append(LightComparison(i, _kind(light), **stats))
     pr_images = ()
     if pyrender:
@@ -229,7 +276,28 @@ def _compare(scene, method, pyrender, silhouettes, backend, ctx, start) -> Compa
         lights=tuple(rows), coverage_mismatched=int((result.coverage != ref_cov).sum()),
         times_ms=times, raster_lit=result.lit, raster_coverage=result.coverage,
         ref_lit=ref_lit, ref_coverage=ref_cov, raster_images=np.array(lone),
-        ray_images=np.array(ray_images), pyrender_images=pr_images)
+        ray_images=np.array(ray_images), pyrender_images=pr_images,
+        raster_counts=None if ref_counts is None else result.lit_count,
+        ref_counts=None if ref_counts is None else np.array(
+            [ref_counts[i][0] if i in ref_counts else ref_lit[i].astype(np.uint16)
+             for i in range(len(scene.lights))]))
+
+
+def _reference_counts(scene: Scene, backend: str) -> dict:
+    """light index -> (lit_count (H, W) uint16, edges (H, W) bool) of every area light: the
+    ray tracer's count and the pixels on an edge of some sample's hard mask."""
+    mt = scene_backend(scene, backend)
+    out = {}
+    for i, light in enumerate(scene.lights):
+        if isinstance(light, AreaLight):
+            count = np.zeros((scene.height, scene.width), np.uint16)
+            edges = np.zeros((scene.height, scene.width), bool)
+            for _, lit in sample_masks(scene, i, mt):
+                count += lit.sum(axis=0, dtype=np.uint16)
+                for mask in lit:
+                    edges |= maskdiff.edge_pixels(mask)
+            out[i] = count, edges
+    return out
 
 
 def _with_pyrender(scene: Scene, rows: list[LightComparison], ref_lit, ref_cov, times):

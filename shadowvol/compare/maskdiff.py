@@ -102,3 +102,52 @@ def diff_image(got_lit, got_cov, ref_lit, ref_cov) -> np.ndarray:
     coverage (H, W) bool); (1, 1, 3) black when there are no lights."""
     panels = [diff_panel(g, got_cov, r, ref_cov) for g, r in zip(got_lit, ref_lit)]
     return np.concatenate(panels, axis=1) if panels else np.zeros((1, 1, 3), np.uint8)
+
+
+# ---- per-sample counts of area lights ----------------------------------------------------------
+
+def count_edges(count: np.ndarray) -> np.ndarray:
+    """(H, W) bool: pixels whose 3x3 neighbourhood in `count` (H, W) int is not uniform.  Each
+    lies on an edge of some sample's hard mask (were every sample's mask uniform there, so
+    would be their sum): the edges a renderer's per-sample masks show through its count."""
+    c = np.pad(np.asarray(count), 1, mode="edge")
+    h, w = count.shape
+    windows = [c[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)]
+    return np.logical_or.reduce([win != count for win in windows])
+
+
+def count_stats(got_count, got_cov, ref_count, ref_cov, ref_sample_edges) -> dict:
+    """The count numbers of one area light (lit_count (H, W) uint16 each, coverage (H, W) bool,
+    `ref_sample_edges` (H, W) bool: pixels on an edge of some sample's reference hard mask):
+
+    counts_differ    : int, pixels whose counts differ
+    counts_interior  : int, of those, the ones on no edge of a sample's hard mask in either
+                       renderer (`ref_sample_edges`, `count_edges` of got) nor of the coverage
+    counts_largest   : int, the largest |difference| of the counts
+    """
+    differ = got_count != ref_count
+    near = (edge_pixels(got_cov) | edge_pixels(ref_cov) | ref_sample_edges |
+            count_edges(got_count))
+    return {"counts_differ": int(differ.sum()), "counts_interior": int((differ & ~near).sum()),
+            "counts_largest": int(np.abs(got_count.astype(np.int64) - ref_count).max(initial=0))}
+
+
+def visibility_panel(count: np.ndarray, samples: int, coverage: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8: count / samples as grey (white: every sample reaches the pixel), the
+    uncovered pixels black."""
+    v = np.round(np.asarray(count, np.float64) / samples * 255).astype(np.uint8)
+    panel = np.repeat(v[..., None], 3, axis=2)
+    panel[~coverage] = UNCOVERED
+    return panel
+
+
+def count_diff_panel(got_count, ref_count, coverage) -> np.ndarray:
+    """(H, W, 3) uint8: where the counts differ, red (got higher) or blue (ref higher), the
+    brighter the larger the difference; equal counts dark grey, uncovered black."""
+    d = got_count.astype(np.int64) - ref_count
+    panel = np.zeros(d.shape + (3,), np.uint8)
+    panel[coverage] = (40, 40, 40)
+    level = np.clip(128 + np.abs(d) * 16, 0, 255).astype(np.uint8)
+    panel[d > 0] = np.stack([level, np.zeros_like(level), np.zeros_like(level)], -1)[d > 0]
+    panel[d < 0] = np.stack([np.zeros_like(level), np.zeros_like(level) + 60, level], -1)[d < 0]
+    return panel

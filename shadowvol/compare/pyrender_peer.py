@@ -52,6 +52,7 @@ import numpy as np
 
 from shadowvol.errors import require
 from shadowvol.scene import (
+    AreaLight,
     Camera,
     DirectionalLight,
     Material,
@@ -264,6 +265,9 @@ def to_pyrender(scene: Scene):
 def _pr_light(light, triangles: np.ndarray, intensity: float | None = None):
     """(pyrender light, pose) for one of our lights; `intensity` overrides the conversion.
     triangles : (m, 3, 3) the scene's geometry (for the fall-off reference distance)."""
+    if isinstance(light, AreaLight):
+        raise ValueError(f"pyrender has no area lights (a {light.shape} light here): compare "
+                         "with pyrender only scenes of point, spot and directional lights")
     pyrender = import_pyrender()
     if isinstance(light, DirectionalLight):
         value = light.intensity / PBR_DIFFUSE if intensity is None else intensity

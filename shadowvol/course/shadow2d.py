@@ -327,11 +327,12 @@ def example() -> tuple[np.ndarray, np.ndarray]:
 
 def draw_shadow2d(light, segments, shadows: list[SegmentShadow] | None = None, *,
                   size_px: int = 800, title: str | None = None,
-                  normal_length: float = 0.06) -> np.ndarray:
+                  normal_length: float = 0.06, font_px: float | None = None) -> np.ndarray:
     """A picture of the exercise: (size_px, size_px, 3) uint8 sRGB, row 0 at the top.
 
     The square, every region shaded (overlaps darker: the count a stencil buffer would hold), the
     shadow polygons dashed with their normals (red), the segments with theirs (blue), the light.
+    `title` "" draws none; `font_px` sizes the labels (default: 8-point labels at 800 px).
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -344,7 +345,9 @@ def draw_shadow2d(light, segments, shadows: list[SegmentShadow] | None = None, *
     dpi = 100
     fig = Figure(figsize=(size_px / dpi, size_px / dpi), dpi=dpi)
     canvas = FigureCanvasAgg(fig)
-    ax = fig.add_axes([0.06, 0.06, 0.88, 0.88])
+    ax = fig.add_axes([0.06, 0.05, 0.9, 0.9] if title == "" else [0.06, 0.06, 0.88, 0.88])
+    pt = 8.0 * size_px / 800 if font_px is None else font_px * 72 / dpi
+    ax.tick_params(labelsize=pt)
     ax.set_xlim(-0.03, 1.03)
     ax.set_ylim(-0.03, 1.03)
     ax.set_aspect("equal")
@@ -368,13 +371,17 @@ def draw_shadow2d(light, segments, shadows: list[SegmentShadow] | None = None, *
         ax.quiver(*mid, *(n * normal_length), color="tab:blue", **arrow)
         label = {FRONT: f"{i}", BACK: f"{i} back", EDGE_ON: f"{i} edge-on",
                  CONTAINS_LIGHT: f"{i} holds L"}[facing[i]]
-        # Label on the side opposite the normal, so the arrow never covers it.
-        ax.annotate(label, mid - n * 0.035, ha="center", va="center", fontsize=8,
-                    color="tab:blue")
-    ax.plot(*L, marker="*", ms=18, mfc="gold", mec="darkorange")
-    ax.annotate("L", L, xytext=(8, 6), textcoords="offset points", fontsize=11)
-    ax.set_title(title or "Shadow polygons in 2D: segments (blue) with outward normals, shadow "
+        # Label beside the segment's first third, on the side opposite the normal, boxed, so
+        # neither arrow (both sit at the midpoint) covers it.
+        ax.annotate(label, seg[0] + (seg[1] - seg[0]) / 3 - n * 0.045, ha="center",
+                    va="center", fontsize=pt, color="tab:blue", zorder=6,
+                    bbox=dict(fc="white", ec="tab:blue", alpha=0.9, boxstyle="round,pad=0.2"))
+    ax.plot(*L, marker="*", ms=2.2 * pt, mfc="gold", mec="darkorange")
+    ax.annotate("L", L, xytext=(8, 6), textcoords="offset points", fontsize=1.4 * pt)
+    if title != "":
+        ax.set_title(title or "Shadow polygons in 2D: segments (blue) with outward normals, shadow "
                           "polygons (red) with normals\npointing out of the shadow; the darker "
-                          "grey, the more shadow regions overlap (a stencil count)", fontsize=9)
+                          "grey, the more shadow regions overlap (a stencil count)",
+                     fontsize=9 * size_px / 800)
     canvas.draw()
     return np.asarray(canvas.buffer_rgba())[..., :3].copy()

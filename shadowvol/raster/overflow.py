@@ -34,6 +34,7 @@ from shadowvol.errors import RenderError
 from shadowvol.raster import methods, stencil
 from shadowvol.raster.passes import count_volumes
 from shadowvol.raster.topology import Topology
+from shadowvol.scene import hard_lights
 
 STENCIL_LIMIT = 256  # counts are taken modulo this
 SATURATED = 255
@@ -147,15 +148,20 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
     vols = renderer.volumes(silhouettes)
     clip = methods.zpass_clip_planes(renderer.geometry.bounds, camera, renderer.scene.aspect,
                                      renderer.geometry.extent)
-    for i, light in enumerate(renderer.scene.lights if lights is None else lights):
+    lights = renderer.scene.lights if lights is None else lights
+    # an area light's samples are checked one by one against every pixel any sample lit (a
+    # superset of the sample's own lit pixels: it may raise where it need not, never the other
+    # way); the casters its samples counted with z-fail stay z-fail (valid)
+    for i, light in ((i, hard) for i, lt in enumerate(lights) for hard in hard_lights(lt)):
         if only is not None and i not in only:
             continue   # its `light_bound` is below STENCIL_LIMIT
         light4 = light.homogeneous
         if vols.light4 is None or not np.array_equal(vols.light4, light4):
             vols.prepare(light4)  # (the frame's last light is still prepared)
         choice = result.zfail[i]
+        drawn = result.lit_count[i] > 0
         wrapped = find_wrapped(renderer.ctx, renderer.gl, renderer.target, vols, choice,
-                               result.lit[i], clip, halve)
+                               drawn, clip, halve)
         # a pixel is cleared by any valid counting whose entering faces stay below 255
         zpass_valid = not methods.needs_zfail(renderer.geometry.bounds, camera,
                                               renderer.scene.aspect, light4,
@@ -166,7 +172,7 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
                 break
             if not np.array_equal(other, choice):
                 wrapped &= find_wrapped(renderer.ctx, renderer.gl, renderer.target, vols,
-                                        other, result.lit[i], clip)
+                                        other, drawn, clip)
         if wrapped.any():
             raise StencilOverflowError(i, wrapped)
 

@@ -2,7 +2,7 @@
 
 1. `geometry_pass`: one draw of every triangle (the soup): depth (test NEARER, writes on) and
    the G-buffer (world position, triangle).
-2. per light: `count_volumes` — the stencil cleared, then the shadow volumes drawn with colour
+2. per light (an area light: per sample, as a point light): `count_volumes` — the stencil cleared, then the shadow volumes drawn with colour
    and depth writes off and two-sided stencil counting, z-pass or z-fail per caster;
    `mark_unshadowed` — a full-screen pass adding the light's bit where the count is 0.
 3. `shade`: one full-screen pass (two draws split by the last light's stencil, which is not
@@ -30,7 +30,7 @@ from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.projection import NEARER, gl_matrix
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
-from shadowvol.scene import Camera, Light, Scene, SpotLight
+from shadowvol.scene import AreaSample, Camera, Light, Scene, SpotLight
 
 NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)
 # reversed depth: FAR_DEPTH (0) is the clear value and drawn surfaces lie above it, so a
@@ -187,7 +187,8 @@ def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: Scene
         "u_light": [l.homogeneous for l in lights],
         "u_radiance": [l.radiance for l in lights],
         "u_spot_direction": [l.direction if s else (0.0, 0.0, 1.0) for l, s in zip(lights, spot)],
-        "u_spot_cos": [l.cos_cutoff if s else NO_CONE for l, s in zip(lights, spot)]}
+        "u_spot_cos": [l.cos_cutoff if s else NO_CONE for l, s in zip(lights, spot)],
+        "u_emitter_cosine": [1.0 if isinstance(l, AreaSample) else 0.0 for l in lights]}
     for name, values in arrays.items() if lights else ():
         set_uniform(prog, name, np.array([np.asarray(v, np.float64) for v in values],
                                          np.float32).tobytes())
@@ -290,6 +291,7 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
 def light_uniforms(program: moderngl.Program, light: Light) -> None:
     set_uniform(program, "u_light", tuple(float(x) for x in light.homogeneous))
     set_uniform(program, "u_radiance", tuple(float(x) for x in light.radiance))
+    set_uniform(program, "u_emitter_cosine", 1.0 if isinstance(light, AreaSample) else 0.0)
     if isinstance(light, SpotLight):
         set_uniform(program, "u_spot_direction", tuple(float(x) for x in light.direction))
         set_uniform(program, "u_spot_cos", light.cos_cutoff)

@@ -85,6 +85,11 @@ class PlanarResult:
     plane: np.ndarray
     stencil: np.ndarray | None
 
+    def _repr_png_(self) -> bytes:
+        """A notebook shows the frame as its image."""
+        from shadowvol.display import frame_png
+        return frame_png(self)
+
 
 def receiver_index(scene: Scene, receiver: str | int | None = None) -> int:
     """The index of the receiving object: `receiver` by name or index, or (None) the plane

@@ -9,7 +9,7 @@ float32 vertices themselves), where the classic 1 - near / d in 24 bits loses pr
 square of the distance; shadow boundaries on surfaces nearly parallel to a volume's side (grazing
 light) depend on exactly that precision.  Nearer means GREATER depth: see NEARER.
 GL samples each pixel at its centre, which is the contract's ndc ((x + 0.5) / W * 2 - 1, ...);
-GL rows run bottom-up, so every read-back goes through `top_row_first`.
+GL rows run bottom-up, so every read-back is flipped once (`target`; `top_row_first`).
 """
 
 from __future__ import annotations

@@ -31,12 +31,15 @@ from shadowvol.raster.projection import view_projection
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
 from shadowvol.raster.volumes import CpuVolumes, GpuVolumes
 from shadowvol.scene import (
+    AreaLight,
     Camera,
     DirectionalLight,
     Light,
     PointLight,
     Scene,
+    SceneError,
     SpotLight,
+    hard_lights,
 )
 
 SILHOUETTES = ("cpu", "gpu")
@@ -49,12 +52,18 @@ DEFAULT_OUTPUTS = ("image", "lit", "coverage")
 class RenderResult:
     """One frame.  Each array is None unless asked for (`Renderer.render(outputs=...)`).
 
-    image      : (H, W, 3) float32 linear RGB (direct Phong lighting with hard shadows)
-    lit        : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot cone
+    image      : (H, W, 3) float32 linear RGB (direct Phong lighting; an area light's
+                 samples summed: soft shadows)
+    lit        : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot
+                 cone; for an area light: so for every sample (lit_count == N)
     coverage   : (H, W) bool, geometry visible at the pixel centre
-    stencil    : (L, H, W) int16 signed stencil counts after each light's volume pass
+    stencil    : (L, H, W) int16 signed stencil counts after each light's volume pass (hard
+                 lights only)
     zfail      : (L, n_objects) bool, which casters were counted with z-fail for each light
-                 (always returned)
+                 (for an area light: for any of its samples; always returned)
+    lit_count  : (L, H, W) uint16, per light how many of its samples (hard lights: 1) light
+                 the pixel as `lit` says (returned with `lit`)
+    samples    : (L,) int64, N per light (hard lights: 1; always returned)
     image_srgb : (H, W, 3) uint8, `image` encoded to sRGB on the GPU (the IEC 61966-2-1
                  curve of `shadowvol.io.encode_srgb`, in float32: a code may differ by one)
     depth, distance, normal, object_id, facing, casters : the ground truth of
@@ -67,6 +76,8 @@ class RenderResult:
     coverage: np.ndarray | None
     stencil: np.ndarray | None
     zfail: np.ndarray
+    lit_count: np.ndarray | None = None
+    samples: np.ndarray | None = None
     image_srgb: np.ndarray | None = None
     depth: np.ndarray | None = None
     distance: np.ndarray | None = None
@@ -92,6 +103,21 @@ class RenderResult:
         out = {name: getattr(self, name) for name in truth.TRUTH_OUTPUTS
                if getattr(self, name) is not None}
         return out | self.calibration.arrays()
+
+    @property
+    def visibility(self) -> np.ndarray:
+        """(L, H, W) float32: lit_count / N."""
+        return (self.lit_count / self.samples[:, None, None]).astype(np.float32)
+
+    @property
+    def penumbra(self) -> np.ndarray:
+        """(L, H, W) bool: some samples light the pixel, not all (0 < lit_count < N)."""
+        return (self.lit_count > 0) & ~self.lit
+
+    def _repr_png_(self) -> bytes:
+        """A notebook shows the frame as its image."""
+        from shadowvol.display import frame_png
+        return frame_png(self)
 
 
 class Renderer:
@@ -176,7 +202,7 @@ class Renderer:
                                      halve=method == "auto" and "stencil" not in outputs,
                                      only=to_check)
             if "lit" not in outputs:
-                result = replace(result, lit=None)
+                result = replace(result, lit=None, lit_count=None)
             return result
 
     def _lights_to_check(self, camera, lights) -> list[int]:
@@ -196,6 +222,9 @@ class Renderer:
         needed = self._slack[1]
         out = []
         for i, light in enumerate(lights):
+            if isinstance(light, AreaLight):
+                out.append(i)   # its samples are re-checked (no per-sample bound is kept)
+                continue
             key = light.homogeneous.tobytes()
             if key not in self._light_bounds:
                 self._light_bounds[key] = None      # seen once: re-check this frame
@@ -250,6 +279,12 @@ class Renderer:
             outputs = outputs | {"facing"}
         # facing (and casters) need the facing pass; it gives the lit bits too
         facing_pass = "facing" in outputs
+        area = [i for i, lt in enumerate(lights) if isinstance(lt, AreaLight)]
+        if facing_pass and area:
+            per_light = "facing" if "facing" in asked else "casters"
+            raise SceneError(f"lights[{area[0]}]", f"{per_light} is defined for point, spot and "
+                                                   "directional lights; for an area light use "
+                                                   "lit_count and Renderer.facing")
         want_stencil = "stencil" in outputs
         vols = self.volumes(silhouettes)
         progs, target = self.programs, self.target
@@ -257,18 +292,27 @@ class Renderer:
         passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
         cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
                                 self.geometry.extent) if self.cull_back_faces else None
-        passes.geometry_pass(self.ctx, target, progs, self.scene, cull, marks=len(lights) > 1)
+        # an area light is its samples, each counted and shaded as a point light
+        hard = [(i, sample) for i, lt in enumerate(lights) for sample in hard_lights(lt)]
+        # the unshadowed bits are cleared when some light of the first page is marked
+        # (and always for the facing pass, which marks every light)
+        passes.geometry_pass(self.ctx, target, progs, self.scene, cull,
+                             marks=len(hard) > 1 or facing_pass)
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(
             self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
+        h, w = self.scene.height, self.scene.width
+        if want_stencil and any(isinstance(light, AreaLight) for light in lights):
+            raise ValueError("stencil counts are per hard light: not for area lights")
         colour = bool({"image", "image_srgb"} & outputs)
         need_bits = "lit" in outputs or "coverage" in outputs or not colour
-        pages, counts, zfail, truth_pages = [], [], [], []
-        # lights go in pages of LIGHTS_PER_PAGE: each light's volume count marks its
+        pages, counts, truth_pages = [], [], []
+        zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
+        # hard lights go in pages of LIGHTS_PER_PAGE: each one's volume count marks its
         # unshadowed bit, then one shading pass per page (one for any usual frame)
-        for first in range(0, max(len(lights), 1), LIGHTS_PER_PAGE):
-            page_lights = lights[first:first + LIGHTS_PER_PAGE]
+        for first in range(0, max(len(hard), 1), LIGHTS_PER_PAGE):
+            page_lights = [sample for _, sample in hard[first:first + LIGHTS_PER_PAGE]]
             if first:
                 target.clear_unshadowed()
                 target.clear_lit()
@@ -289,7 +333,7 @@ class Renderer:
                     counts.append(target.read_stencil())
                 if bit < len(page_lights) - 1:   # the last light's stencil is read by `shade`
                     passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit)
-                zfail.append(choice)
+                zfail[hard[first + bit][0]] |= choice
             passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
                          first_page=not first, colour=colour)
             if need_bits:
@@ -299,19 +343,25 @@ class Renderer:
                 # (the stencil still holds its count)
                 passes.mark_unshadowed(self.ctx, self.gl, target, progs, len(page_lights) - 1)
                 truth_pages.append(self._truth_pass().run(target, self.geometry, page_lights))
-        h, w = self.scene.height, self.scene.width
         image = target.read_image() if "image" in outputs else None
         coverage = (pages[0] & 1).astype(bool) if "coverage" in outputs else None
-        lit = None
-        if "lit" in outputs and not facing_pass:
-            lit = np.empty((len(lights), h, w), bool)
-            for i in range(len(lights)):
-                page, bit = divmod(i, LIGHTS_PER_PAGE)
-                np.not_equal(pages[page] & np.uint32(1 << (bit + 1)), 0, out=lit[i])
+        samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
+        lit = lit_count = None
+        if "lit" in outputs:
+            lit_count = np.zeros((len(lights), h, w), np.uint16)
+            one = np.empty((h, w), bool)
+            for k, (i, _) in enumerate(hard):
+                page, bit = divmod(k, LIGHTS_PER_PAGE)
+                np.not_equal(pages[page] & np.uint32(1 << (bit + 1)), 0, out=one)
+                lit_count[i] += one
+            lit = lit_count == samples[:, None, None]
         extra = self._ground_truth(outputs, camera, lights, truth_pages, zfail, vols,
                                    method, clip, want_stencil)
         if facing_pass:
+            # the facing pass's lit: facing & unshadowed, bit for bit (hard lights only)
             lit = extra.pop("lit")
+            if lit_count is not None:
+                lit_count = lit.astype(np.uint16)
             if "facing" not in asked:  # computed for casters only
                 extra.pop("facing")
         srgb = None
@@ -322,9 +372,9 @@ class Renderer:
             image=image, lit=lit, coverage=coverage,
             stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if want_stencil
             else None,
-            zfail=np.array(zfail, bool).reshape(len(lights), len(self.scene.objects)),
-            image_srgb=srgb, calibration=calibration(self.scene.replace(
-                camera=camera, lights=lights)), **extra)
+            zfail=zfail, lit_count=lit_count, samples=samples, image_srgb=srgb,
+            calibration=calibration(self.scene.replace(camera=camera, lights=lights)),
+            **extra)
 
     def _ground_truth(self, outputs, camera, lights, truth_pages, zfail, vols, method, clip,
                       want_stencil) -> dict[str, np.ndarray]:
@@ -372,6 +422,14 @@ class Renderer:
             out["casters"] = casters
         return out
 
+    def facing(self, *, camera: Camera | None = None,
+               lights: tuple[Light, ...] | None = None) -> np.ndarray:
+        """(L, H, W) bool: some sample of each light faces the pixel (n . l > 0 toward it and
+        inside its cone), shadows aside: the frame without the volume passes.  With a
+        frame's `lit_count`, umbra = facing & (lit_count == 0)."""
+        return self.render(camera=camera, lights=lights, shadows=False,
+                           outputs=("lit",)).lit_count > 0
+
     def volume_view(self, method: str = "auto", silhouettes: str = "cpu", *,
                     camera: Camera | None = None,
                     lights: tuple[Light, ...] | None = None) -> np.ndarray:
@@ -382,7 +440,9 @@ class Renderer:
         result = self.render(method, silhouettes, camera=camera, lights=lights)
         vols = self.volumes(silhouettes)  # the frame is left in the target
         with stencil_gl.zero_to_one_depth(self.gl):
-            for i, light in enumerate(self.scene.lights if lights is None else lights):
+            for i, light in ((i, hard) for i, lt in enumerate(self.scene.lights if lights is None
+                                                              else lights)
+                             for hard in hard_lights(lt)):  # an area light: every sample's
                 vols.prepare(light.homogeneous)
                 overlay.draw_volume_overlay(self.ctx, self.gl, self.target, vols,
                                             result.zfail[i])
@@ -425,7 +485,8 @@ def _check_lights(lights) -> tuple[Light, ...] | None:
     if lights is None:
         return None
     lights = tuple(lights)
-    bad = [x for x in lights if not isinstance(x, (PointLight, DirectionalLight, SpotLight))]
+    bad = [x for x in lights
+           if not isinstance(x, (PointLight, DirectionalLight, SpotLight, AreaLight))]
     if bad:
         raise TypeError(f"lights must be Light objects (e.g. scene.lights[0]), got {bad[0]!r}")
     return lights

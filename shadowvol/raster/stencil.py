@@ -2,10 +2,11 @@
 
 moderngl has no stencil API (moderngl#676), so the depth-stencil renderbuffer (DEPTH32F_STENCIL8),
 every piece of stencil state, depth clamp, the clip-control depth range and the stencil read-back
-are raw GL calls here, made through function
-pointers that EGL hands out for the current context (`eglGetProcAddress`; EGL 1.5 and Mesa return
-core entry points too).  Everything else — programs, buffers, textures, blending, depth test,
-colour and depth write masks — stays with moderngl.
+are raw GL calls here, made through function pointers loaded from whatever context is current:
+EGL's `eglGetProcAddress` for the renderer's headless context (EGL 1.5 and Mesa return core entry
+points too), GLX's `glXGetProcAddressARB` for a window's context under X11 (`shadowvol view`).
+Everything else — programs, buffers, textures, blending, depth test, colour and depth write
+masks — stays with moderngl.
 
 Each pass gets a context manager that sets the WHOLE stencil state it needs (test on/off, func
 for both faces, ops for both faces, write mask) and restores the previous state on exit, so no pass
@@ -83,27 +84,65 @@ class RawGLError(RenderError):
     pass
 
 
+def _library(soname: str, short: str):
+    """ctypes.CDLL of `soname`, else of what find_library finds for `short`, else None."""
+    try:
+        return ctypes.CDLL(soname)
+    except OSError:
+        found = ctypes.util.find_library(short)
+        return ctypes.CDLL(found) if found else None
+
+
+def _egl_loader():
+    egl = _library("libEGL.so.1", "EGL")
+    if egl is None:
+        return None, None
+    current = egl.eglGetCurrentContext
+    current.restype = ctypes.c_void_p
+    get = egl.eglGetProcAddress
+    get.restype = ctypes.c_void_p
+    get.argtypes = [ctypes.c_char_p]
+    return get, bool(current())
+
+
+def _glx_loader():
+    glx = _library("libGL.so.1", "GL")
+    if glx is None or not hasattr(glx, "glXGetCurrentContext"):
+        return None, None
+    current = glx.glXGetCurrentContext
+    current.restype = ctypes.c_void_p
+    get = glx.glXGetProcAddressARB
+    get.restype = ctypes.c_void_p
+    get.argtypes = [ctypes.c_char_p]
+    return get, bool(current())
+
+
+def proc_address_loader() -> tuple[object, str]:
+    """(get_proc_address, "EGL" | "GLX") of the API whose context is current on this thread;
+    EGL when none is (the renderer makes its EGL context current before any raw call)."""
+    egl_get, egl_current = _egl_loader()
+    if egl_current:
+        return egl_get, "EGL"
+    glx_get, glx_current = _glx_loader()
+    if glx_current:
+        return glx_get, "GLX"
+    if egl_get is None:
+        raise RawGLError("libEGL not found: install libegl1 (Debian/Ubuntu) or your GPU "
+                         "vendor's EGL driver")
+    return egl_get, "EGL"
+
+
 class RawGL:
-    """Raw GL entry points for the context that is current (moderngl's standalone EGL context
-    stays current on the thread that made it).  Holds function pointers only, no GL objects."""
+    """Raw GL entry points for the context that is current when it is made (the renderer's
+    EGL context, or a window's GLX context: see `proc_address_loader`).  Holds function
+    pointers only, no GL objects; `api` says where they came from."""
 
     def __init__(self):
-        name = "libEGL.so.1"
-        try:
-            egl = ctypes.CDLL(name)
-        except OSError:
-            found = ctypes.util.find_library("EGL")
-            if not found:
-                raise RawGLError("libEGL not found: install libegl1 (Debian/Ubuntu) or your GPU "
-                                 "vendor's EGL driver") from None
-            egl = ctypes.CDLL(found)
-        get = egl.eglGetProcAddress
-        get.restype = ctypes.c_void_p
-        get.argtypes = [ctypes.c_char_p]
+        get, self.api = proc_address_loader()
         for fname, (restype, *args) in _SIGNATURES.items():
             address = get(fname.encode())
             if not address:
-                raise RawGLError(f"eglGetProcAddress returned no {fname}")
+                raise RawGLError(f"{self.api}: no {fname} for the current context")
             proto = ctypes.CFUNCTYPE(restype, *args)
             setattr(self, fname, proto(address))
 

@@ -15,6 +15,8 @@ from shadowvol.io import load_mask_arrays
 from shadowvol.scenefile import load_scene
 
 CALIBRATION = {"K", "world_to_camera", "camera_to_world", "light_position", "light_direction"}
+# stack.toml's lights: a point light (its position is its one sample) and a directional light
+SAMPLES = {"light_samples_0"}
 
 
 @pytest.fixture
@@ -31,7 +33,8 @@ def test_masks_with_outputs_holds_them_and_the_camera(small, tmp_path):
     assert main(["masks", str(small), "-o", str(out), "--outputs", "casters,depth,object_id",
                  "--no-png"]) == 0
     arrays = load_mask_arrays(out)
-    assert set(arrays) == {"lit", "coverage", "depth", "object_id", "casters"} | CALIBRATION
+    assert set(arrays) == {"lit", "coverage", "depth", "object_id", "casters"} | CALIBRATION \
+        | SAMPLES
     truth = ground_truth(load_scene(small))
     for name in ("lit", "coverage", "depth", "object_id", "casters"):
         np.testing.assert_array_equal(arrays[name], getattr(truth, name))
@@ -42,7 +45,7 @@ def test_masks_with_outputs_holds_them_and_the_camera(small, tmp_path):
 def test_masks_without_outputs_still_holds_the_camera(small, tmp_path):
     out = tmp_path / "m.npz"
     assert main(["masks", str(small), "-o", str(out), "--no-png"]) == 0
-    assert set(load_mask_arrays(out)) == {"lit", "coverage"} | CALIBRATION
+    assert set(load_mask_arrays(out)) == {"lit", "coverage"} | CALIBRATION | SAMPLES
     assert main(["masks", str(small), "-o", str(tmp_path / "all.npz"), "--no-png",
                  "--outputs", "all"]) == 0
     assert {"depth", "distance", "normal", "object_id", "facing", "casters"} <= \
@@ -77,7 +80,7 @@ def test_shadowvol_render_masks_hold_the_camera_and_the_image_goes_to_exr(ctx, s
     assert shadowvol_main(["render", str(small), "-o", str(png), "--masks", "--exr",
                            "--png16"]) == 0
     arrays = load_mask_arrays(tmp_path / "s-masks.npz")
-    assert set(arrays) == {"lit", "coverage"} | CALIBRATION
+    assert set(arrays) == {"lit", "coverage"} | CALIBRATION | SAMPLES
     truth = ground_truth(load_scene(small), ())
     for name, value in truth.calibration.arrays().items():
         np.testing.assert_array_equal(arrays[name], value)
@@ -122,7 +125,7 @@ def test_shadowvol_render_outputs_go_into_the_mask_file(ctx, small, tmp_path, ca
     assert shadowvol_main(["render", str(small), "-o", str(png), "--outputs",
                            "casters,normal"]) == 0
     arrays = load_mask_arrays(tmp_path / "s-masks.npz")
-    assert set(arrays) == {"lit", "coverage", "normal", "casters"} | CALIBRATION
+    assert set(arrays) == {"lit", "coverage", "normal", "casters"} | CALIBRATION | SAMPLES
     with Renderer(load_scene(small), ctx) as r:
         frame = r.render(outputs=("lit", "coverage", "normal", "casters"))
     for name in ("lit", "coverage", "normal", "casters"):

@@ -9,12 +9,11 @@ import sys
 import threading
 
 import pytest
+from builders import ROOT, SCENES
 
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.io import WriteError, atomic_write
 from shadowvol.scenefile import load_scene, save_scene
-
-from builders import ROOT, SCENES
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

@@ -6,7 +6,10 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
 from builders import SCENES
+
+pytestmark = pytest.mark.gl  # the child processes render
 
 TEST_ONLY = ("scipy", "pyrender", "hypothesis", "pytest", "OpenGL")
 

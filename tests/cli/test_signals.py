@@ -15,7 +15,8 @@ from builders import SCENES
 pytestmark = pytest.mark.gl
 
 DELAYS = (0.0, 0.05, 0.2, 0.5, 1.0, 2.0)  # imports, loading, GL, writing
-ENTRY = "from shadowvol.cli import main; import sys; sys.exit(main(sys.argv[1:]))"
+ENTRY = ("from shadowvol.cli import shadowvol_entry; import sys; "
+         "sys.exit(shadowvol_entry(sys.argv[1:]))")
 
 
 def _wait_for_handlers(proc: subprocess.Popen, timeout: float = 30.0) -> None:

@@ -11,9 +11,11 @@ import pytest
 from builders import ROOT, SCENES
 
 import raytrace.cli
+import raytrace.cli_outlook
 import shadowvol.cli.compare
 import shadowvol.cli.render
 import shadowvol.course.gallery
+import shadowvol.raster.renderer
 from raytrace.cli import main as raytrace_main
 from shadowvol.cli import status
 from shadowvol.cli.main import main as shadowvol_main
@@ -133,7 +135,8 @@ def test_a_missing_extra_is_bad_input_naming_the_pip_command(missing, tool, args
 
 
 @pytest.mark.parametrize("argv", [["--help"], ["render", "--help"], ["compare", "--help"],
-                                  ["demo", "--help"], ["shadow2d", "--help"]])
+                                  ["demo", "--help"], ["shadow2d", "--help"],
+                                  ["planar", "--help"]])
 def test_every_shadowvol_help_prints_the_table(argv, capsys):
     with pytest.raises(SystemExit):
         shadowvol_main(argv)
@@ -141,8 +144,88 @@ def test_every_shadowvol_help_prints_the_table(argv, capsys):
     assert " ".join(status.EPILOG.split()) in text
 
 
-@pytest.mark.parametrize("argv", [["--help"]])
+@pytest.mark.parametrize("argv", [["--help"], ["exercise", "--help"]])
 def test_raytrace_help_prints_the_table(argv, capsys):
+    with pytest.raises(SystemExit):
+        raytrace_main(argv)
+    assert " ".join(status.EPILOG.split()) in " ".join(capsys.readouterr().out.split())
+
+
+# ---- the commands that came later: every one into the classes it can reach -------------------
+
+def _radiosity_scene(tmp_path):
+    path = tmp_path / "box.json"
+    save_scene(load_scene(SCENES / "cornell.toml").replace(width=16, height=16), path)
+    return path
+
+
+@pytest.mark.parametrize("argv, ok", [
+    (lambda s, o: ["planar", str(SCENES / "planar.toml"), "-o", str(o / "x.png")], True),
+    (lambda s, o: ["planar", str(s), "-o", str(o / "x.png"), "--receiver", "no such"], False),
+    (lambda s, o: ["planar", str(o / "missing.toml"), "-o", str(o / "x.png")], False),
+    (lambda s, o: ["planar", str(s), "-o", str(o / "x.gif")], False),
+    (lambda s, o: ["batch", str(o / "missing.jsonl"), "-o", str(o / "out")], False),
+])
+def test_planar_and_batch(argv, ok, small, tmp_path, capsys):
+    code = shadowvol_main(argv(small, tmp_path))
+    assert code == (status.OK if ok else status.BAD_INPUT)
+    if not ok:
+        err = capsys.readouterr().err
+        assert err.startswith("error: ") and "Traceback" not in err
+
+
+def test_batch_ok_and_a_frame_that_fails_to_render(small, tmp_path, monkeypatch):
+    jobs = tmp_path / "jobs.jsonl"
+    jobs.write_text('{"scene": "cage.json", "size": [16, 12], "cameras": [{"eye": [4, 3, 5], '
+                    '"target": [0, 1, 0]}], "outputs": ["image"]}\n')
+    assert shadowvol_main(["batch", str(jobs), "-o", str(tmp_path / "ok")]) == status.OK
+    monkeypatch.setattr(shadowvol.raster.renderer.Renderer, "render", _no_memory)
+    assert shadowvol_main(["batch", str(jobs), "-o", str(tmp_path / "fail")]) == \
+        status.RENDER_FAILED
+
+
+def test_view_without_a_display_is_bad_input(small, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert shadowvol_main(["view", str(small)]) == status.BAD_INPUT
+
+
+@pytest.mark.parametrize("argv, code", [
+    (["exercise", "plane"], status.OK),
+    (["exercise", "tir"], status.OK),
+    (["exercise", "plane", "-o", "x.jpg"], status.BAD_INPUT),
+])
+def test_raytrace_exercise(argv, code, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert raytrace_main(argv) == code
+
+
+def test_raytrace_radiosity_and_path_tracing(tmp_path, monkeypatch, capsys):
+    box = _radiosity_scene(tmp_path)
+    assert raytrace_main(["radiosity", str(box), "--level", "0", "--rays", "8", "-o",
+                          str(tmp_path / "r.png")]) == status.OK
+    assert raytrace_main(["radiosity", str(box), "--level", "-1", "-o",
+                          str(tmp_path / "r.png")]) == status.BAD_INPUT
+    assert raytrace_main(["render", str(box), "--integrator", "path", "--spp", "1",
+                          "--no-progress", "-o", str(tmp_path / "p.png")]) == status.OK
+    assert raytrace_main(["render", str(box), "--integrator", "path", "--spp", "0",
+                          "-o", str(tmp_path / "p.png")]) == status.BAD_INPUT
+    monkeypatch.setattr(raytrace.cli_outlook, "load_scene", _no_memory)
+    assert raytrace_main(["radiosity", str(box), "-o", str(tmp_path / "r.png")]) == \
+        status.RENDER_FAILED
+    assert "Traceback" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv", [["planar", "--help"], ["view", "--help"], ["batch", "--help"]])
+def test_the_later_commands_print_the_table(argv, capsys):
+    with pytest.raises(SystemExit):
+        shadowvol_main(argv)
+    assert " ".join(status.EPILOG.split()) in " ".join(capsys.readouterr().out.split())
+
+
+@pytest.mark.parametrize("argv", [["exercise", "--help"], ["radiosity", "--help"],
+                                  ["render", "--help"], ["masks", "--help"], ["tree", "--help"]])
+def test_every_raytrace_help_prints_the_table(argv, capsys):
     with pytest.raises(SystemExit):
         raytrace_main(argv)
     assert " ".join(status.EPILOG.split()) in " ".join(capsys.readouterr().out.split())

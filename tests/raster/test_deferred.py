@@ -193,3 +193,20 @@ def test_cross3_is_np_cross_bit_for_bit():
         a = rng.normal(size=3) * 10.0 ** rng.uniform(-6, 6)
         b = rng.normal(size=3) * 10.0 ** rng.uniform(-6, 6)
         np.testing.assert_array_equal(cross3(a, b), np.cross(a, b))
+
+
+@pytest.mark.parametrize("samples", [9, LIGHTS_PER_PAGE + 5])
+def test_one_area_light_gives_the_same_frame_every_time(ctx, samples):
+    """One area light of several samples (one page, and more than one): each sample is marked,
+    so the unshadowed bits must be cleared every frame, though the scene has one light."""
+    from shadowvol.scene import AreaLight
+    scene = scene_of(1, lights=1)
+    scene = scene.replace(lights=[AreaLight("rect", center=[0.5, 6.0, 1.0], normal=[0, -1, 0],
+                                            size=[1.5, 1.0], samples=samples, seed=2)])
+    with Renderer(scene, ctx) as r:
+        frames = [r.render() for _ in range(3)]
+        alone = sum(r.render(lights=(h,)).lit[0].astype(int) for h in scene.lights[0].hard)
+    for f in frames:
+        np.testing.assert_array_equal(f.lit_count[0], alone)
+        np.testing.assert_array_equal(f.image, frames[0].image)
+    assert 0 < frames[0].lit_count.max() and (frames[0].penumbra.any())

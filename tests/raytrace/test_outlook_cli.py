@@ -11,8 +11,8 @@ import pytest
 from builders import CORNELL, cornell
 from PIL import Image
 
-from shadowvol.course import ladder
 from raytrace.cli import main
+from shadowvol.course import ladder
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene, save_scene
 

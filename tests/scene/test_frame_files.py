@@ -14,7 +14,14 @@ import pytest
 from PIL import Image
 
 from shadowvol.cameras import GL_TO_CV, calibration, project, unproject
-from shadowvol.io import encode_srgb, load_mask_arrays, load_masks, save_exr, save_masks, save_png16
+from shadowvol.io import (
+    encode_srgb,
+    load_mask_arrays,
+    load_masks,
+    save_exr,
+    save_masks,
+    save_png16,
+)
 from shadowvol.primitives import plane
 from shadowvol.scene import Camera, DirectionalLight, PointLight, Scene, SpotLight
 
@@ -114,3 +121,15 @@ def test_camera_matrices_follow_their_conventions():
     # the lights: homogeneous positions, directions (0 for a point light)
     np.testing.assert_allclose(cal.light_position, [[1, 3, 1, 1], [0, 1, 0, 0], [0, 3, 0, 1]])
     np.testing.assert_allclose(cal.light_direction, [[0, 0, 0], [0, -1, 0], [0, -1, 0]])
+
+
+def test_area_lights_in_the_light_arrays():
+    from shadowvol.scene import AreaLight
+
+    rect = AreaLight("rect", [0.0, 2.5, 0.0], normal=[0.0, -1.0, 0.0], size=[1.0, 1.0],
+                     samples=4)
+    ball = AreaLight("sphere", [1.0, 2.0, 0.0], radius=0.3, samples=4)
+    scene = small_scene().replace(lights=(rect, ball))
+    cal = calibration(scene)
+    np.testing.assert_allclose(cal.light_position, [[0, 2.5, 0, 1], [1, 2, 0, 1]])
+    np.testing.assert_allclose(cal.light_direction, [[0, -1, 0], [0, 0, 0]])

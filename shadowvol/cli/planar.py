@@ -1,0 +1,54 @@
+"""`shadowvol planar`: planar projected shadows (Blinn 1988) from the command line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from shadowvol.cli import outputs, status
+from shadowvol.io import save_masks, save_png
+from shadowvol.raster.planar_pass import ReceiverError, render_planar
+from shadowvol.scene import SceneError
+from shadowvol.scenefile import load_scene
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "planar", help="render planar projected shadows (Blinn 1988) onto one plane",
+        description="Render SCENE with planar projected shadows: every object squashed from "
+                    "each light onto the receiving plane by a 4x4 matrix and drawn there as "
+                    "shadow (the stencil keeps it on the receiver, once per pixel).  Only the "
+                    "receiver is ever shadowed: no shadows on other objects, no self-shadows "
+                    "(`shadowvol render` draws those, with shadow volumes).",
+        epilog=status.EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
+    p.add_argument("-o", "--output", required=True, metavar="PNG",
+                   help="where to write the image (8-bit sRGB PNG, row 0 at the top)")
+    p.add_argument("--receiver", metavar="NAME", default=None,
+                   help="the object that receives the shadows: a plane or a flat mesh, by "
+                        "name (default: the largest plane object)")
+    p.add_argument("--masks", metavar="NPZ", default=None,
+                   help="also write the masks (.npz: lit (L, H, W), coverage (H, W)); lit is "
+                        "False only in the projected shadows on the receiver")
+    p.set_defaults(func=command)
+    return p
+
+
+def command(args) -> int:
+    paths = {"image": Path(args.output)}
+    if args.masks:
+        paths["masks"] = Path(args.masks)
+    outputs.check(paths, {"image": "-o", "masks": "--masks"})
+    scene = load_scene(args.scene)
+    try:
+        result = render_planar(scene, args.receiver)
+    except ReceiverError as exc:
+        raise SceneError("--receiver", str(exc)) from None
+    save_png(paths["image"], result.image)
+    if "masks" in paths:
+        save_masks(paths["masks"], result.lit, result.coverage)
+    receiver = scene.objects[result.receiver].name
+    print(f"wrote {', '.join(str(p) for p in paths.values())} (shadows on {receiver!r})",
+          file=sys.stderr)
+    return status.OK

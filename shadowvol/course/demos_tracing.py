@@ -1,0 +1,306 @@
+"""The gallery's ray-tracing pictures, the exercises and the outlook (raster against ray traced,
+shadow mapping against shadow volumes).  Each demo takes the `Gallery` and returns a
+`Picture` (see `gallery`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import raytrace
+from raytrace import exercise
+from raytrace.raytree import draw_tree, format_tree, ray_tree
+from shadowvol.compare import maskdiff
+from shadowvol.compare.comparison import compare
+from shadowvol.course import slides
+from shadowvol.course.picture import Picture
+from shadowvol.course.shadow2d import draw_shadow2d, example
+from shadowvol.pictures import figure_pixels, tint
+from shadowvol.raster.projection import view_matrix, view_projection
+from shadowvol.raster.renderer import Renderer
+
+RAY_TREE_DEPTH = 2    # "sketch all rays to recursion depth 2"
+ZOOM_FRACTION = 6     # a zoomed crop shows 1/6 of the panel's width and height
+
+
+def _traced(scene):
+    return raytrace.render(scene, progress=False)
+
+
+def whitted_best(g) -> Picture:
+    L = g.layout
+    scene = g.scene("whitted_best")
+    w, h = L.cell(1, 1, labels=False)
+    s = slides.fit(scene, w, h)
+    image = slides.mark_lights(slides.supersampled(_traced, scene, w, h, L.supersample), s, L)
+    title = "Whitted ray tracing: reflections of reflections, refraction"
+    return Picture(
+        "whitted_best", title, "raytracing",
+        "Recursive ray tracing: two mirror balls facing each other reflect each other's "
+        "reflections, again and again up to the recursion depth; the glass ball bends the "
+        "rays by Snell's law and shows the scene behind it upside down; every hit sends shadow "
+        f"rays, so the shadows are exact.  Recursion depth {scene.max_depth}.",
+        "the whitted_best scene ray traced (a point and a directional light, Phong, shadow "
+        "rays, reflection, refraction), the lights marked",
+        f"raytrace render {g.path('whitted_best')} -o whitted_best.png",
+        L.compose(title, [[("", image)]]))
+
+
+def ray_tree_pixel(scene, obj_name: str, offset=(-0.35, 0.45)) -> tuple[int, int]:
+    """The pixel (x, y) showing the sphere `obj_name` at `offset` (fractions of its radius,
+    along the camera's right and up) from its centre: a pixel on the sphere at any size."""
+    obj = next(o for o in scene.objects if o.name == obj_name)
+    view = view_matrix(scene.camera)
+    right, up = view[0, :3], view[1, :3]
+    c = obj.analytic.center + obj.analytic.radius * (offset[0] * right + offset[1] * up)
+    clip = view_projection(scene.camera, scene.aspect) @ np.append(c, 1.0)
+    ndc = clip[:2] / clip[3]
+    return (int((ndc[0] + 1) / 2 * scene.width), int((1 - ndc[1]) / 2 * scene.height))
+
+
+def raytree(g) -> Picture:
+    L = g.layout
+    scene = g.scene("whitted")
+    x, y = ray_tree_pixel(scene, "glass ball")
+    tree = ray_tree(scene, x, y, max_depth=RAY_TREE_DEPTH)
+    w, h = L.cell(1, 1, labels=False)
+    image = raytrace.render(scene, max_depth=RAY_TREE_DEPTH, progress=False)  # as the command
+    fig = draw_tree(scene, tree, image, size_px=(w, h),
+                    text_px=L.px(28))
+    kinds = [n.kind for n in tree.walk()]
+    title = f"The ray tree of pixel ({x}, {y}), to recursion depth {RAY_TREE_DEPTH}"
+    return Picture(
+        "raytree", title, "raytracing",
+        "Whitted's recursion for one pixel: the primary ray hits the glass ball; from every "
+        "hit a shadow ray goes to each light, a reflected ray and, through glass, a refracted "
+        "ray, each of which does the same, down to the depth limit.  The pixel's colour is "
+        "the sum of what every ray contributes.",
+        "the rays over the ray-traced image, in a side and a top view, coloured by kind and "
+        "numbered as in the tree below (every ray, shadow rays included)",
+        f"raytrace tree {g.path('whitted')} --pixel {x} {y} --depth {RAY_TREE_DEPTH} "
+        "-o raytree.png",
+        L.compose(title, [[("", figure_pixels(fig))]]), text=format_tree(tree, scene),
+        numbers={"rays": len(kinds), **{k: kinds.count(k) for k in sorted(set(kinds))}})
+
+
+def tir(g) -> Picture:
+    L = g.layout
+    w, h = L.cell(1, 1, labels=False, side=L.px(760))
+    rays = exercise.solve_tir()
+    img = figure_pixels(exercise.tir_figure(rays, width_px=w, height_px=h, text_px=L.px(32)))
+    text = exercise.tir_text(rays)
+    note = L.note(_wrap(text, 40), L.px(760), h)
+    title = "Total internal reflection: from glass into air"
+    return Picture(
+        "tir", title, "raytracing",
+        "Snell's law n1 sin θ1 = n2 sin θ2 bends a ray leaving glass away from the normal.  "
+        f"Past the critical angle, asin(1/{exercise.GLASS_IOR:g}) = "
+        f"{exercise.critical_angle():.1f}°, sin θ2 would exceed 1: no refracted ray exists "
+        "and all the light is reflected back into the glass.  The ray tracer's refract() "
+        "returns that reflection, which is why glass balls show bright rims.",
+        "four rays inside glass meeting the surface at one point at 20°, 35°, 45° and 60°: two "
+        "refracted out, two totally reflected; the critical angle dash-dotted",
+        "raytrace exercise tir -o tir.png",
+        L.compose(title, [[("", img)]], side=note), text=text,
+        numbers={"tir": [r.angle for r in rays if r.tir],
+                 "critical": exercise.critical_angle()})
+
+
+def shadow2d(g) -> Picture:
+    L = g.layout
+    side_w = L.px(700)
+    w, h = L.cell(1, 1, labels=False, legend=True, side=side_w)
+    size = min(w, h)
+    img = draw_shadow2d(*example(), size_px=size, title="", font_px=L.px(28))
+    note = L.note([
+        "Six segments and a point light L",
+        "in the unit square.",
+        "Each casting segment's shadow",
+        "is bounded by the segment and",
+        "the two rays from L through its",
+        "ends, cut off at the border.",
+        "Every shadow polygon's normal",
+        "points out of the shadow.",
+        "",
+        "Two-sided: back-facing segments",
+        "(1 and 5) cast too, as a lone",
+        "wall does.  Segment 4 is edge-on:",
+        "no area, no shadow.  Where",
+        "regions overlap the grey is",
+        "darker: a stencil would count 2.",
+    ], side_w, size)
+    title = "The 2D exercise: shadow polygons of segments"
+    return Picture(
+        "shadow2d", title, "exercises",
+        "Shadow polygons in 2D: every segment casts a shadow region bounded by the segment and "
+        "two rays from the point light L through its ends, cut off at the unit square; the "
+        "segments are two-sided, so back-facing ones cast as well as front-facing ones "
+        "(the course's closed outlines let only front faces cast: `--front-only`).  Each "
+        "shadow polygon has a normal pointing out of the shadow; where regions overlap, a "
+        "stencil would count 2.",
+        "segments (blue) with their outward normals, shadow polygons (red, dashed) with "
+        "theirs, the shadow regions shaded, a segment seen edge-on and two back-facing ones",
+        f"shadowvol shadow2d --example -o shadow2d.png --size {size}",
+        L.compose(title, [[("", img)]], side=note,
+                  legend=[("segment, its normal", (31, 119, 180)),
+                          ("shadow polygon, its normal", (214, 39, 40)),
+                          ("light L", slides.SCHEME["light"])]))
+
+
+def ray_plane(g) -> Picture:
+    L = g.layout
+    side_w = L.px(900)
+    w, h = L.cell(1, 1, labels=False, side=side_w)
+    s = exercise.solve_plane()
+    img = figure_pixels(exercise.plane_figure(s, width_px=min(w, h), height_px=h,
+                                              text_px=L.px(32)))
+    text = exercise.plane_text(s)
+    note = L.note(_wrap(text, 56), side_w, h)
+    title = "Exercise: a ray against a plane"
+    return Picture(
+        "ray_plane", title, "exercises",
+        "The ray (5,1) + λ(−1,3) against the plane through (2,2) with normal (1,−1): in Hesse "
+        "normal form n0·x = d the ray's λ is (d − n0·o) / (n0·r), here "
+        f"λ = {s.lam:g}, the point ({s.hit[0]:g}, {s.hit[1]:g}).  The ray tracer intersects "
+        "every plane and every triangle's plane this way.",
+        "the plane (a line in 2D) with its normal at a, the ray from o along r, the hit",
+        "raytrace exercise plane -o ray_plane.png",
+        L.compose(title, [[("", img)]], side=note), text=text,
+        numbers={"lambda": s.lam, "hit": tuple(s.hit)})
+
+
+def _wrap(text: str, width: int) -> list[str]:
+    import textwrap
+    out = []
+    for line in text.splitlines():
+        out += textwrap.wrap(line, width, subsequent_indent="    ") or [""]
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Outlook: raster against ray traced, shadow mapping against shadow volumes
+# ---------------------------------------------------------------------------------------------
+
+def crop_window(where: np.ndarray, cw: int, ch: int) -> tuple[int, int]:
+    """(x, y) top-left of the cw x ch window holding the most True pixels of `where` (H, W)."""
+    h, w = where.shape
+    s = np.pad(np.cumsum(np.cumsum(where.astype(np.int64), 0), 1), ((1, 0), (1, 0)))
+    sums = s[ch:, cw:] - s[:-ch, cw:] - s[ch:, :-cw] + s[:-ch, :-cw]
+    y, x = np.unravel_index(int(np.argmax(sums)), sums.shape)
+    return int(x), int(y)
+
+
+def zoom(image: np.ndarray, x: int, y: int, cw: int, ch: int, w: int, h: int) -> np.ndarray:
+    """The crop (x, y, cw, ch) of `image` enlarged to (h, w) by repeating pixels (every pixel
+    a visible square)."""
+    crop = image[y:y + ch, x:x + cw]
+    ys = (np.arange(h) * ch // h)
+    xs = (np.arange(w) * cw // w)
+    return crop[ys][:, xs]
+
+
+def _frame(image: np.ndarray, x: int, y: int, cw: int, ch: int, px: int) -> np.ndarray:
+    out = image.copy()
+    c = slides.SCHEME["eye"]
+    out[y:y + px, x:x + cw] = c
+    out[y + ch - px:y + ch, x:x + cw] = c
+    out[y:y + ch, x:x + px] = c
+    out[y:y + ch, x + cw - px:x + cw] = c
+    return out
+
+
+def compare_picture(g) -> Picture:
+    L = g.layout
+    scene = g.scene("cage")
+    w, h = L.cell(2, 2, legend=True)
+    s = slides.fit(scene, w, h)
+    c = compare(s, ctx=g.ctx)
+    light = c.lights[0]
+    diff = maskdiff.diff_panel(c.raster_lit[0], c.raster_coverage, c.ref_lit[0],
+                               c.ref_coverage)
+    bad = c.raster_lit[0] != c.ref_lit[0]
+    cw, ch = max(2, w // ZOOM_FRACTION), max(2, h // ZOOM_FRACTION)
+    # the zoom goes where the masks differ most, or, when they agree everywhere, where the
+    # shadow edges are densest: the pixels where they could have differed
+    x, y = crop_window(bad if bad.any() else maskdiff.edge_pixels(c.ref_lit[0]), cw, ch)
+    ours = slides.mark_lights(slides.supersampled(
+        lambda sc: _raster_image(g, sc), scene, w, h, L.supersample), s, L)
+    ref = slides.mark_lights(slides.supersampled(
+        lambda sc: raytrace.render(sc, max_depth=0, progress=False), scene, w, h,
+        L.supersample), s, L)
+    px = max(1, L.px(4))
+    title = "Raster against ray traced: the cage, pixel by pixel"
+    return Picture(
+        "compare", title, "outlook",
+        "The same scene twice: shadow volumes on the GPU and the ray tracer's shadow rays, "
+        "compared pixel by pixel.  They may differ only on shadow edges, where a pixel centre "
+        f"lies within rounding of a boundary; here {light.mismatched} pixels differ, "
+        f"{light.interior} away from an edge (shadow IoU {light.iou:.4f}).  The zoom shows "
+        "the part of the frame with the most mismatches, one square per pixel.",
+        "top: the rasterizer's image, the ray tracer's (direct light); bottom: the difference "
+        "of their masks, and the boxed part of it enlarged",
+        f"shadowvol compare {g.path('cage')} -o compare.png",
+        L.compose(title, [[("raster (shadow volumes)", _frame(ours, x, y, cw, ch, px)),
+                           ("ray traced (shadow rays)", ref)],
+                          [(f"mask difference: {light.mismatched} px", _frame(
+                              diff, x, y, cw, ch, px)),
+                           (f"zoom x{ZOOM_FRACTION}: {int(bad[y:y + ch, x:x + cw].sum())} px "
+                            "differ here", zoom(diff, x, y, cw, ch, w, h))]],
+                  legend=[(t, c_) for t, c_ in maskdiff.LEGEND[:4]]),
+        numbers={"mismatched": sum(l.mismatched for l in c.lights),
+                 "interior": sum(l.interior for l in c.lights)})
+
+
+def _raster_image(g, scene):
+    with Renderer(scene, g.ctx) as r:
+        return r.render().image
+
+
+def shadow_mapping(g) -> Picture:
+    """pyrender's shadow map against our shadow volumes on the stack's directional light."""
+    from shadowvol.compare.pyrender_peer import pyrender_shadow_masks, render_pyrender
+
+    L = g.layout
+    scene = g.scene("stack")
+    scene = scene.replace(lights=(scene.lights[1],))
+    w, h = L.cell(2, 2, legend=True)
+    s = slides.fit(scene, w, h)
+    ref_lit, ref_cov = raytrace.shadow_masks(s)
+    with Renderer(s, g.ctx) as r:
+        ours_lit = r.render().lit
+    pr_lit, pr_cov = pyrender_shadow_masks(s)
+    pr_bad = (pr_lit[0] != ref_lit[0]) & ref_cov
+    our_bad = (ours_lit[0] != ref_lit[0]) & ref_cov
+    near = maskdiff.near_edges(pr_lit[0], pr_cov, ref_lit[0], ref_cov)
+    pr_image = render_pyrender(s)
+    ours = slides.supersampled(lambda sc: _raster_image(g, sc), scene, w, h, L.supersample)
+    cw, ch = max(2, w // ZOOM_FRACTION), max(2, h // ZOOM_FRACTION)
+    x, y = crop_window(pr_bad, cw, ch)
+    px = max(1, L.px(4))
+    pr_t, our_t = tint(pr_image, pr_bad), tint(ours, our_bad)
+    mark = lambda im: slides.mark_lights(im, s, L)
+    numbers = {"pyrender_wrong": int(pr_bad.sum()), "pyrender_interior": int(
+        (pr_bad & ~near).sum()), "ours_wrong": int(our_bad.sum())}
+    title = "Shadow mapping (pyrender) against shadow volumes (ours)"
+    return Picture(
+        "shadow_mapping", title, "outlook",
+        "A shadow map stores, per texel, the depth of the nearest surface seen from the light; "
+        "a point is shadowed when it lies farther from the light than its texel says.  Its "
+        "texels are bigger than the screen's pixels and the comparison needs a depth bias, so "
+        "shadow edges come out blocky or blurred and shadows detach from their casters "
+        f"(peter-panning): pyrender gets {numbers['pyrender_wrong']} pixels wrong against the "
+        f"ray tracer, {numbers['pyrender_interior']} of them away from an edge.  Shadow "
+        f"volumes test every pixel exactly: ours get {numbers['ours_wrong']} wrong.",
+        "top: pyrender's shadow-mapped image and ours (the stack under its directional "
+        "light); bottom: the boxed part of each enlarged, the pixels whose shadow disagrees "
+        "with the ray tracer's tinted red",
+        f"shadowvol compare {g.path('stack')} --pyrender -o cmp.png (both lights; this picture "
+        "keeps the directional one)",
+        L.compose(title, [[(f"pyrender shadow map: {numbers['pyrender_wrong']} px wrong",
+                            mark(_frame(pr_t, x, y, cw, ch, px))),
+                           (f"shadow volumes: {numbers['ours_wrong']} px wrong",
+                            mark(_frame(our_t, x, y, cw, ch, px)))],
+                          [(f"pyrender, zoom x{ZOOM_FRACTION}", zoom(pr_t, x, y, cw, ch, w, h)),
+                           (f"ours, zoom x{ZOOM_FRACTION}", zoom(our_t, x, y, cw, ch, w, h))]],
+                  legend=[("shadow differs from the ray tracer's", slides.SCHEME["error"]),
+                          ("zoomed part", slides.SCHEME["eye"])]),
+        numbers=numbers)

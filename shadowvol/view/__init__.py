@@ -1,0 +1,1 @@
+"""`shadowvol view SCENE`: the interactive window for the lecture (see `app`)."""

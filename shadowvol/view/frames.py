@@ -1,0 +1,64 @@
+"""The picture of a view state: the same function for the window and for an offscreen check.
+
+`frame(renderer, state)` renders `state` with `renderer` (any context: the window's or EGL) and
+returns (H, W, 3) uint8 sRGB, the light marker drawn when `state.marker`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from shadowvol import pictures
+from shadowvol.course import slides, volume_roles
+from shadowvol.io import encode_srgb
+from shadowvol.view.state import ViewState, scene_of
+
+MARKER_LAYOUT = slides.Layout(1920, 1080)   # marker sizes as on a 1080p slide
+
+
+def frame(renderer, state: ViewState, planar=None) -> np.ndarray:
+    """(H, W, 3) uint8: `state` in its mode.  `planar`: a PlanarShadows on `renderer` (made
+    by the caller; needed for the "planar" mode)."""
+    scene = scene_of(renderer.scene, state)
+    cam, lights, method = state.camera, state.lights, state.method
+    if state.mode == "roles":
+        image = encode_srgb(renderer.volume_view(method, camera=cam, lights=lights))
+    elif state.mode == "stencil":
+        result = renderer.render(method, camera=cam, lights=lights, stencil=True)
+        image = pictures.heat_map(result.stencil[state.probe_light].astype(np.int16),
+                                  encode_srgb(result.image)) if len(lights) else \
+            encode_srgb(result.image)
+    elif state.mode == "planar":
+        image = encode_srgb(planar.render(camera=cam, lights=lights).image)
+    elif state.mode == "raytraced":
+        # split screen at the same camera: the raster's left half beside the ray tracer's
+        # right half, so a shadow edge crossing the divider shows both renderers at once
+        import raytrace
+        image = encode_srgb(renderer.render(method, camera=cam, lights=lights).image)
+        traced = encode_srgb(raytrace.render(scene, progress=False))
+        half = scene.width // 2
+        image[:, half:] = traced[:, half:]
+        image[:, half - 1:half + 1] = (255, 255, 255)
+        image = _label(_label(image, "raster", 6), "ray traced", half + 6)
+    else:
+        image = encode_srgb(renderer.render(method, camera=cam, lights=lights).image)
+        if state.mode == "silhouettes" and lights:
+            image, _ = volume_roles.draw_silhouettes(
+                image, scene, lights[state.probe_light].homogeneous, _layout(scene))
+    if state.marker:
+        image = slides.mark_lights(image, scene, _layout(scene))
+    return image
+
+
+def _label(image: np.ndarray, text: str, x: int) -> np.ndarray:
+    from PIL import Image, ImageDraw
+
+    img = Image.fromarray(image)
+    ImageDraw.Draw(img).text((x, 4), text, fill=(255, 255, 255), font=slides.font(14),
+                             stroke_width=2, stroke_fill=(0, 0, 0))
+    return np.asarray(img, np.uint8)
+
+
+def _layout(scene) -> slides.Layout:
+    """Marker and line sizes for an image of the scene's height (as on a slide that tall)."""
+    return slides.Layout(round(scene.height * 16 / 9), scene.height)

@@ -1,0 +1,106 @@
+"""What the viewer shows, as plain data: the camera, the lights, the counting method, the mode.
+
+A `ViewState` is immutable; every key and drag makes a new one (`orbit`, `pan`, `zoom`,
+`drag_light`, `dataclasses.replace`).  The frame of a state is `frames.frame` of it, the same
+in the window and offscreen.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from shadowvol.scene import Camera, DirectionalLight, Scene
+
+MODES = ("shaded", "roles", "silhouettes", "stencil", "planar", "raytraced")
+METHODS = ("auto", "zpass", "zfail")
+ORBIT_PER_PIXEL = 0.01       # radians of orbit per pixel dragged
+ZOOM_PER_STEP = 0.9          # the eye's distance scales by this per scroll step
+MIN_PITCH = 0.02             # radians kept between the view direction and the up axis
+
+
+@dataclass(frozen=True)
+class ViewState:
+    camera: Camera
+    lights: tuple
+    method: str = "auto"
+    mode: str = "shaded"
+    marker: bool = True           # the light marker drawn over the frame
+    help: bool = True             # the help text in the side panel
+    probe_light: int = 0          # which light the count probe and the stencil view use
+
+    @classmethod
+    def of(cls, scene: Scene) -> "ViewState":
+        return cls(camera=scene.camera, lights=tuple(scene.lights))
+
+
+def _basis(camera: Camera):
+    fwd = camera.target - camera.eye
+    fwd = fwd / np.linalg.norm(fwd)
+    right = np.cross(fwd, camera.up)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, fwd)
+    return fwd, right, up
+
+
+def orbit(state: ViewState, dx: float, dy: float) -> ViewState:
+    """Turn the eye around the target: dx pixels about the up axis, dy pixels up or down."""
+    cam = state.camera
+    up = cam.up / np.linalg.norm(cam.up)
+    offset = cam.eye - cam.target
+    r = np.linalg.norm(offset)
+    yaw = -dx * ORBIT_PER_PIXEL
+    # rotate about up (Rodrigues)
+    k = up
+    offset = (offset * np.cos(yaw) + np.cross(k, offset) * np.sin(yaw)
+              + k * (k @ offset) * (1 - np.cos(yaw)))
+    pitch = np.arccos(np.clip((offset @ up) / r, -1, 1))
+    pitch = np.clip(pitch + dy * ORBIT_PER_PIXEL, MIN_PITCH, np.pi - MIN_PITCH)
+    flat = offset - (offset @ up) * up
+    flat = flat / np.linalg.norm(flat)
+    offset = r * (np.sin(pitch) * flat + np.cos(pitch) * up)
+    return replace(state, camera=replace(cam, eye=cam.target + offset))
+
+
+def pan(state: ViewState, dx: float, dy: float, height: int) -> ViewState:
+    """Slide eye and target along the view plane by dx, dy pixels (at the target's depth)."""
+    cam = state.camera
+    _, right, up = _basis(cam)
+    dist = np.linalg.norm(cam.target - cam.eye)
+    per_pixel = 2 * dist * np.tan(np.radians(cam.fov_y) / 2) / height
+    move = (-dx * right - dy * up) * per_pixel
+    return replace(state, camera=replace(cam, eye=cam.eye + move, target=cam.target + move))
+
+
+def zoom(state: ViewState, steps: float) -> ViewState:
+    """Move the eye toward the target (steps > 0) or away."""
+    cam = state.camera
+    offset = (cam.eye - cam.target) * ZOOM_PER_STEP ** steps
+    return replace(state, camera=replace(cam, eye=cam.target + offset))
+
+
+def drag_light(state: ViewState, dx: float, dy: float, height: int) -> ViewState:
+    """Move the probed light in the view plane at its own depth (a directional light turns)."""
+    i = state.probe_light
+    if not state.lights:
+        return state
+    light = state.lights[i]
+    cam = state.camera
+    fwd, right, up = _basis(cam)
+    if isinstance(light, DirectionalLight):
+        d = light.direction + (dx * right - dy * up) * ORBIT_PER_PIXEL
+        new = replace(light, direction=d / np.linalg.norm(d))
+    else:
+        depth = max((light.position - cam.eye) @ fwd, cam.near)
+        per_pixel = 2 * depth * np.tan(np.radians(cam.fov_y) / 2) / height
+        new = replace(light, position=light.position + (dx * right - dy * up) * per_pixel)
+    # the cached homogeneous form belongs to the old position: a fresh light is made
+    lights = list(state.lights)
+    lights[i] = new
+    return replace(state, lights=tuple(lights))
+
+
+def scene_of(scene: Scene, state: ViewState) -> Scene:
+    """The scene as the state shows it (its camera and lights)."""
+    return scene.replace(camera=state.camera, lights=state.lights)

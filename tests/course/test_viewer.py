@@ -1,0 +1,251 @@
+"""`shadowvol view` for real: a window under Xvfb (`.ci/run` installs it), driven by X events
+sent through the XTEST extension (keys, drags, the wheel, a click), screenshot, and the frame's
+pixels checked against the offscreen (EGL) render of the same view state.
+
+The window runs in a child process (its own GLX context; this process keeps the EGL one); the
+child writes its screenshots and states, this process renders the same states offscreen."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+from builders import ROOT, SCENES
+from PIL import Image
+
+from shadowvol.io import encode_srgb
+from shadowvol.raster.planar_pass import PlanarShadows
+from shadowvol.raster.renderer import Renderer
+from shadowvol.scene import Camera, DirectionalLight
+from shadowvol.scenefile import load_scene
+from shadowvol.view import frames
+from shadowvol.view.app import PANEL_WIDTH
+from shadowvol.view.state import ViewState
+
+pytestmark = pytest.mark.gl
+
+SIZE = (240, 180)
+
+# The child: open the viewer on the window at (0, 0), send X events with XTEST, pump pyglet's
+# event loop, record (state, screenshot) after each step.
+CHILD = textwrap.dedent("""
+    import ctypes, json, sys, time
+    import numpy as np
+    from PIL import Image
+    from shadowvol.scenefile import load_scene
+    from shadowvol.view.app import Viewer
+
+    scene_path, w, h, out = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+    scene = load_scene(scene_path).replace(width=w, height=h)
+    v = Viewer(scene)
+    v.window.set_location(0, 0)
+    x11, xtst = ctypes.CDLL("libX11.so.6"), ctypes.CDLL("libXtst.so.6")
+    x11.XOpenDisplay.restype = ctypes.c_void_p
+    dpy = ctypes.c_void_p(x11.XOpenDisplay(None))
+    x11.XStringToKeysym.restype = ctypes.c_ulong
+    x11.XKeysymToKeycode.argtypes = [ctypes.c_void_p, ctypes.c_ulong]
+
+    def pump(n=15):
+        for _ in range(n):
+            v.window.dispatch_events()
+            time.sleep(0.01)
+        v.draw()
+        v.window.flip()
+
+    def origin():
+        x, y = v.window.get_location()
+        return x, y
+
+    def move(x, y):
+        ox, oy = origin()
+        xtst.XTestFakeMotionEvent(dpy, -1, ox + x, oy + y, 0)
+        x11.XFlush(dpy)
+        pump(2)
+
+    def key(name):
+        code = x11.XKeysymToKeycode(dpy, x11.XStringToKeysym(name.encode()))
+        xtst.XTestFakeKeyEvent(dpy, code, 1, 0)
+        xtst.XTestFakeKeyEvent(dpy, code, 0, 0)
+        x11.XFlush(dpy)
+        pump()
+
+    def drag(button, x0, y0, x1, y1, steps=6):
+        move(x0, y0)
+        xtst.XTestFakeButtonEvent(dpy, button, 1, 0)
+        x11.XFlush(dpy)
+        pump(2)
+        for k in range(1, steps + 1):
+            move(x0 + (x1 - x0) * k // steps, y0 + (y1 - y0) * k // steps)
+        xtst.XTestFakeButtonEvent(dpy, button, 0, 0)
+        x11.XFlush(dpy)
+        pump()
+
+    def click(button, x, y):
+        move(x, y)
+        xtst.XTestFakeButtonEvent(dpy, button, 1, 0)
+        xtst.XTestFakeButtonEvent(dpy, button, 0, 0)
+        x11.XFlush(dpy)
+        pump()
+
+    records = []
+    def record(name):
+        shot = v.screenshot()
+        Image.fromarray(shot).save(f"{out}/{name}.png")
+        s = v.state
+        records.append({"name": name, "mode": s.mode, "method": s.method,
+                        "marker": s.marker, "help": s.help, "probe_light": s.probe_light,
+                        "camera": [s.camera.eye.tolist(), s.camera.target.tolist(),
+                                   s.camera.up.tolist(), s.camera.fov_y, s.camera.near],
+                        "lights": [l.position.tolist() if hasattr(l, "position")
+                                   else l.direction.tolist() for l in s.lights],
+                        "probe": v.probe_text})
+
+    pump(30)
+    move(w // 2, h // 2)                 # the pointer over the window: it gets the keys
+    key("m"); record("start")            # marker off: the bare frame
+    key("v"); record("roles")
+    key("z"); key("c"); record("zpass_stencil")
+    key("n"); key("a"); key("m")
+    drag(1, w // 2, h // 2, w // 2 + 40, h // 2 + 10); record("orbit")
+    drag(3, w // 2, h // 2, w // 2 - 30, h // 2 + 20); record("light")
+    click(4, w // 2, h // 2); record("zoom")
+    key("t"); record("raytraced"); key("n")
+    key("h"); click(1, w // 2, h * 3 // 4); record("probe")
+    json.dump(records, open(f"{out}/records.json", "w"))
+    v.close()
+    """)
+
+
+def _free_display() -> int:
+    for n in range(90, 140):
+        if not os.path.exists(f"/tmp/.X11-unix/X{n}") and not os.path.exists(f"/tmp/.X{n}-lock"):
+            return n
+    pytest.fail("no free X display number")
+
+
+@pytest.fixture(scope="module")
+def xvfb():
+    exe = shutil.which("Xvfb")
+    if exe is None:
+        pytest.fail("Xvfb not found (apt-get install xvfb; .ci/run does)")
+    n = _free_display()
+    proc = subprocess.Popen([exe, f":{n}", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        for _ in range(100):
+            if os.path.exists(f"/tmp/.X11-unix/X{n}"):
+                break
+            time.sleep(0.05)
+        else:
+            pytest.fail("Xvfb did not start")
+        yield f":{n}"
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def session(xvfb, tmp_path_factory):
+    out = tmp_path_factory.mktemp("viewer")
+    env = dict(os.environ, DISPLAY=xvfb,
+               PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    done = subprocess.run([sys.executable, "-c", CHILD, str(SCENES / "inside_shadow.toml"),
+                           str(SIZE[0]), str(SIZE[1]), str(out)], env=env, cwd=ROOT,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    records = {r["name"]: r for r in json.loads((out / "records.json").read_text())}
+    return out, records
+
+
+def state_of(scene, r) -> ViewState:
+    eye, target, up, fov, near = r["camera"]
+    lights = []
+    for light, value in zip(scene.lights, r["lights"]):
+        if isinstance(light, DirectionalLight):
+            lights.append(DirectionalLight(direction=value, color=light.color,
+                                           intensity=light.intensity))
+        else:
+            lights.append(type(light)(**{**light.__dict__, "position": value}))
+    return ViewState(Camera(eye=eye, target=target, up=up, fov_y=fov, near=near),
+                     tuple(lights), r["method"], r["mode"], r["marker"], r["help"],
+                     r["probe_light"])
+
+
+@pytest.mark.parametrize("name", ["start", "roles", "zpass_stencil", "orbit", "light", "zoom",
+                                  "raytraced"])
+def test_window_frame_equals_the_offscreen_render(ctx, session, name):
+    out, records = session
+    scene = load_scene(SCENES / "inside_shadow.toml").replace(width=SIZE[0], height=SIZE[1])
+    state = state_of(scene, records[name])
+    shot = np.asarray(Image.open(out / f"{name}.png"))
+    assert shot.shape == (SIZE[1], SIZE[0] + PANEL_WIDTH, 3)
+    with Renderer(scene, ctx) as r, PlanarShadows(r) as p:
+        expected = frames.frame(r, state, p)
+        if name == "start":           # marker off, shaded: the renderer's image itself
+            assert (expected == encode_srgb(r.render().image)).all()
+    window = shot[:, :SIZE[0]]
+    differ = (window != expected).any(axis=2)
+    if differ.any():
+        from builders import TEST_OUTPUT
+        TEST_OUTPUT.mkdir(exist_ok=True)
+        Image.fromarray(np.concatenate([window, expected], axis=1)).save(
+            TEST_OUTPUT / f"viewer-{name}.png")
+    assert not differ.any(), f"{int(differ.sum())} pixels differ (test-output/viewer-{name}.png)"
+
+
+def test_events_changed_the_state(session):
+    _, rec = session
+    assert rec["start"]["mode"] == "shaded" and rec["start"]["marker"] is False
+    assert rec["roles"]["mode"] == "roles"
+    assert rec["zpass_stencil"]["method"] == "zpass" and rec["zpass_stencil"]["mode"] == "stencil"
+    assert rec["orbit"]["method"] == "auto" and rec["orbit"]["mode"] == "shaded"
+    assert rec["orbit"]["camera"][0] != rec["zpass_stencil"]["camera"][0]   # the eye orbited
+    assert rec["orbit"]["camera"][1] == rec["zpass_stencil"]["camera"][1]   # about the target
+    assert rec["light"]["lights"] != rec["orbit"]["lights"]                 # the light moved
+    d = lambda r: np.linalg.norm(np.subtract(r["camera"][0], r["camera"][1]))
+    assert d(rec["zoom"]) == pytest.approx(0.9 * d(rec["light"]))           # one wheel step
+    assert rec["raytraced"]["mode"] == "raytraced" and rec["probe"]["mode"] == "shaded"
+    assert rec["probe"]["help"] is False
+
+
+def test_click_probes_the_pixel(session):
+    _, rec = session
+    text = rec["probe"]["probe"]
+    assert text.startswith(f"pixel ({SIZE[0] // 2}, {SIZE[1] * 3 // 4})")
+    assert "z-pass sum" in text and "z-fail sum" in text and "stencil read back" in text
+    assert "shadow ray to the light crosses" in text
+    assert "all counts agree" in text
+
+
+def test_view_without_a_display_is_bad_input(monkeypatch, capsys):
+    from shadowvol.cli.main import main
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["view", str(SCENES / "cage.toml")]) == 2
+    assert "no display" in capsys.readouterr().err
+
+
+def test_view_state_moves():
+    from shadowvol.view.state import drag_light, orbit, pan, zoom
+    scene = load_scene(SCENES / "cage.toml")
+    s = ViewState.of(scene)
+    cam = s.camera
+    dist = lambda c: np.linalg.norm(c.eye - c.target)
+    o = orbit(s, 30, 10).camera
+    assert dist(o) == pytest.approx(dist(cam)) and (o.target == cam.target).all()
+    assert not np.allclose(o.eye, cam.eye)
+    assert dist(zoom(s, 2).camera) == pytest.approx(0.81 * dist(cam))
+    p = pan(s, 10, 0, scene.height).camera
+    assert np.allclose(p.eye - cam.eye, p.target - cam.target) and not np.allclose(p.eye, cam.eye)
+    moved = drag_light(s, 20, 0, scene.height).lights[0]
+    delta = moved.position - scene.lights[0].position
+    view = cam.target - cam.eye
+    assert abs(delta @ view) < 1e-9 * np.linalg.norm(view) and np.linalg.norm(delta) > 0
+    assert moved.homogeneous[:3] == pytest.approx(moved.position)     # not the old cache
