@@ -27,7 +27,9 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
-BUNNY = ROOT.parent / "shared" / "models" / "bunny.obj"  # ../shared/models beside the checkout
+BUNNY = next((b / "shared" / "models" / "bunny.obj" for b in (ROOT.parent, ROOT.parent.parent)
+              if (b / "shared" / "models" / "bunny.obj").is_file()),
+             ROOT.parent / "shared" / "models" / "bunny.obj")  # ../shared/models beside the checkout (or its parent)
 
 
 def bunny_scene(width: int, height: int, model: Path = BUNNY):

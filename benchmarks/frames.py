@@ -3,7 +3,8 @@
 Clocks
 ------
 * Whole frames: wall time (`time.perf_counter`) of `Renderer.render(...)`, which returns only
-  after reading the image and the lit masks back, so the GPU work is inside the clock.
+  after reading the image and the lit masks back, so the GPU work is inside the clock; the
+  plain frame (`plain`) likewise returns after its RGBA8 read-back.
 * Phases: glFinish-bracketed wall time.  llvmpipe defers rasterization until a flush, so each
   phase is bracketed by `ctx.finish()` before and after (the functions the renderer calls are
   wrapped for one instrumented frame; the extra finishes make that frame a little slower than
@@ -60,8 +61,8 @@ def interleaved(fns: dict, repeat: int, warmup: int) -> dict:
 # Phases
 # ---------------------------------------------------------------------------------------------
 
-PHASES = ("depth+ambient", "silhouettes (CPU, incl. upload)", "volume pass", "lighting pass",
-          "read-back")
+PHASES = ("geometry pass", "silhouettes (CPU, incl. upload)", "volume pass", "mark unshadowed",
+          "shading pass", "read-back")
 
 
 @contextlib.contextmanager
@@ -85,13 +86,14 @@ def _phase_clock(renderer: Renderer, sink: dict):
         setattr(owner, name, timed)
         undo.append((owner, name, original, instance))
 
-    wrap(passes, "depth_ambient", "depth+ambient")
+    wrap(passes, "geometry_pass", "geometry pass")
     wrap(passes, "count_volumes", "volume pass")
-    wrap(passes, "add_light", "lighting pass")
+    wrap(passes, "mark_unshadowed", "mark unshadowed")
+    wrap(passes, "shade", "shading pass")
     for sil in SILHOUETTES:
         wrap(renderer.volumes(sil), "prepare",
              "silhouettes (CPU, incl. upload)" if sil == "cpu" else "_gpu prepare", True)
-    for name in ("read_lit", "read_colour"):
+    for name in ("read_bits", "read_image"):
         wrap(renderer.target, name, "read-back", True)
     try:
         yield

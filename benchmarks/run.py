@@ -1,25 +1,29 @@
 """Every benchmark of shadowvol in one reproducible run; writes BENCHMARKS.md and its plot.
 
-    python benchmarks/run.py            # the full run (~10-15 min on 2 cores / llvmpipe)
+    python benchmarks/run.py            # the full run (~12-15 min on 2 cores / llvmpipe)
     python benchmarks/run.py --quick    # a smoke run on small scenes (seconds), into --out
 
-What it measures (medians of several runs after warm-up, with min and max):
+What it measures (medians of several runs after warm-up, with min and max), every ratio from
+variants interleaved round by round in the same run:
 
-* shadowvol frames at 1280x720 with read-back, on the procedural scenes of `scenes` (~1k, 10k,
-  100k and 1M triangles) with 1, 2 and 4 point lights: z-pass, z-fail and auto, CPU and GPU
-  silhouettes; the floor (the same frame without shadow volumes, `render(shadows=False)`: same
-  geometry, same context, same size, same read-back) interleaved with them;
+* frames at 1280x720 of the procedural scenes of `scenes` (~1k, 100k and 1M triangles): the
+  PLAIN moderngl frame of the same triangles (`plain`: one indexed draw, back-face culling,
+  Blinn-Phong, RGBA8 read-back), the floor (our frame without shadow volumes), the shadowed
+  frame (auto, CPU silhouettes) with 1, 2 and 4 point lights, GPU silhouettes, mask-only frames
+  (`outputs=("lit", "coverage")`), and the opt-in back-face culling;
 * each phase of a frame (`frames`: glFinish-bracketed wall time), and silhouette extraction
   alone on the CPU and the GPU;
-* resolution scaling, 640x360 to 2560x1440, at 100k triangles;
-* pyrender 0.1.45's frame of the same scenes with and without its shadow maps (spot and
-  directional light), interleaved with ours;
+* the stencil-overflow check's cost on the shared meshes (bunny, teapot, Spot);
+* a 36-view turntable (640x480, the five shared meshes and a floor, 3 lights): our masks and
+  image per view against `raytrace.shadow_masks` of the same views;
+* pyrender 0.1.45's shadow-mapped frame of the same scenes (spot and directional light);
+* peak RSS of a 1M-triangle frame against the ray tracer's masks of it (separate processes);
 * raytrace masks against raw embreex casts of the same rays (`bench_masks.measure`), and a full
-  Whitted render;
-* peak memory: tracemalloc (Python heap, incl. numpy) per frame and the process's ru_maxrss.
+  Whitted render.
 
 The markdown is written by this script from the measured numbers, plus the hand-written
-history of the optimisations (`benchmarks/OPTIMISATIONS.md`) included verbatim.
+history of the optimisations (`benchmarks/OPTIMISATIONS.md`) included verbatim.  Mitsuba 3 is
+an optional peer that this run does not install or time.
 """
 
 from __future__ import annotations
@@ -41,31 +45,36 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import bench_masks  # noqa: E402
 import frames  # noqa: E402
+import plain  # noqa: E402
 import report  # noqa: E402
 
 import scenes  # noqa: E402
 
 FULL = dict(
-    sizes=("1k", "10k", "100k", "1M"), lights=(1, 2, 4), size=(1280, 720),
-    # (warm-up, timed) frames per size: fewer at 1M, where one frame takes seconds
-    repeat={"1k": (2, 7), "10k": (2, 7), "100k": (2, 11), "1M": (1, 3)},
-    phase_repeat={"1k": 5, "10k": 5, "100k": 5, "1M": 2},
-    resolutions=((640, 360), (1280, 720), (1920, 1080), (2560, 1440)), resolution_size="100k",
-    resolution_repeat=(2, 7),
-    pyrender_sizes=("1k", "10k", "100k", "1M"),
-    pyrender_repeat={"1k": (2, 7), "10k": (2, 7), "100k": (2, 5), "1M": (1, 2)},
-    mask_sizes=("100k", "1M"), mask_runs=7, bunny=True,
+    sizes=("1k", "100k", "1M"), lights=(1, 2, 4), size=(1280, 720),
+    # (warm-up, timed) rounds per size: fewer at 1M, where one round takes seconds
+    repeat={"1k": (2, 9), "100k": (2, 9), "1M": (1, 4)},
+    phase_repeat={"1k": 5, "100k": 5, "1M": 2},
+    overflow_meshes=("bunny", "teapot", "spot"), overflow_repeat=(2, 9),
+    turntable=dict(views=36, size=(640, 480)),
+    pyrender_sizes=("1k", "100k", "1M"),
+    pyrender_repeat={"1k": (2, 5), "100k": (2, 5), "1M": (1, 2)},
+    rss_size="1M",
+    mask_sizes=("100k", "1M"), mask_runs=5, bunny=True,
     whitted_size=(1280, 720), whitted_runs=3,
 )
 QUICK = dict(
     sizes=("1k",), lights=(1, 2), size=(320, 180),
     repeat={"1k": (1, 2)}, phase_repeat={"1k": 1},
-    resolutions=((160, 90), (320, 180)), resolution_size="1k", resolution_repeat=(1, 2),
+    overflow_meshes=("spot",), overflow_repeat=(1, 2),
+    turntable=dict(views=2, size=(160, 120)),
     pyrender_sizes=("1k",), pyrender_repeat={"1k": (1, 2)},
+    rss_size="1k",
     mask_sizes=("1k",), mask_runs=1, bunny=False,
     whitted_size=(160, 90), whitted_runs=1,
 )
-VARIANTS = [(m, s) for s in frames.SILHOUETTES for m in frames.METHODS]
+SILHOUETTES = frames.SILHOUETTES
+MASKS = ("lit", "coverage")
 
 
 def log(*args) -> None:
@@ -125,9 +134,8 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
     """Frames by size x lights, phases and silhouettes by size, memory by size.
 
     Per size, ONE renderer of the scene with the most lights renders the first 1, 2 or 4 of
-    them (`render(lights=...)`), and all light counts and variants take turns in the same
-    rounds: the cost of a further light is then measured against a floor timed in the same
-    rounds, not in another minute with another load."""
+    them (`render(lights=...)`), and the plain frame, the floor and every variant take turns
+    in the same rounds: every ratio is of times measured in the same minutes."""
     from shadowvol.raster.renderer import Renderer
 
     width, height = cfg["size"]
@@ -135,32 +143,41 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
     for size in cfg["sizes"]:
         warm, rep = cfg["repeat"][size]
         scene = scenes.occluder_scene(size, max(cfg["lights"]), width, height)
+        one = scene.lights[:1]
         t0 = time.perf_counter()
-        with Renderer(scene, ctx) as r:
+        with Renderer(scene, ctx) as r, plain.PlainFrame(ctx, scene) as pf:
             setup = time.perf_counter() - t0
             frames.check_same_scene(r)
-            sets = {n: scene.lights[:n] for n in cfg["lights"]}
-            fns = {}
-            for n, lights in sets.items():
-                fns[n, "floor"] = lambda lights=lights: r.render(shadows=False, lights=lights)
-                for m, s in VARIANTS:
-                    fns[n, f"{m}/{s}"] = (lambda m=m, s=s, lights=lights:
-                                          r.render(m, s, lights=lights))
+            r.render()          # lazily built programs, kept side quads
+            fns = {"plain": pf, "floor": lambda: r.render(shadows=False, lights=one)}
+            for n in cfg["lights"]:
+                lights = scene.lights[:n]
+                fns[f"auto/cpu x{n}"] = lambda lights=lights: r.render(lights=lights)
+                fns[f"masks/cpu x{n}"] = (lambda lights=lights:
+                                          r.render(lights=lights, outputs=MASKS))
+            fns["auto/gpu x1"] = lambda: r.render("auto", "gpu", lights=one)
+            fns["auto/cpu x1 srgb"] = lambda: r.render(lights=one,
+                                                       outputs=("image_srgb",) + MASKS)
+
+            def culled():
+                r.cull_back_faces = True
+                try:
+                    return r.render(lights=one)
+                finally:
+                    r.cull_back_faces = False
+            fns["auto/cpu x1 culled"] = culled
             times = frames.interleaved(fns, rep, warm)
-            for n, lights in sets.items():
-                row_times = {key: t for (k, key), t in times.items() if k == n}
-                rows.append({"size": size, "triangles": scenes.triangle_count(scene),
-                             "lights": n, "setup_s": setup, "times": row_times,
-                             "auto_zfail_casters": int(r.render("auto", lights=lights)
-                                                       .zfail.sum()),
-                             "casters": len(scene.objects)})
-                log(f"frames {size} x{n}: floor {row_times['floor']['median']:.1f} ms, "
-                    f"auto/cpu {row_times['auto/cpu']['median']:.1f} ms")
-            one = sets[min(sets)]
+            rows.append({"size": size, "triangles": scenes.triangle_count(scene),
+                         "setup_s": setup, "times": times,
+                         "auto_zfail_casters": int(r.render(lights=one).zfail.sum()),
+                         "casters": len(scene.objects)})
+            log(f"frames {size}: plain {times['plain']['median']:.1f} ms, auto/cpu x1 "
+                f"{times['auto/cpu x1']['median']:.1f} ms, x4 "
+                f"{times.get('auto/cpu x4', times['auto/cpu x1'])['median']:.1f} ms")
             prep = cfg["phase_repeat"][size]
-            for m, s in VARIANTS:
-                phases.append({"size": size, "method": m, "silhouettes": s,
-                               "phases": frames.phase_times(r, m, s, prep, lights=one)})
+            for s in SILHOUETTES:
+                phases.append({"size": size, "method": "auto", "silhouettes": s,
+                               "phases": frames.phase_times(r, "auto", s, prep, lights=one)})
             sil[size] = {"cpu": frames.cpu_silhouette_times(r, max(prep, 3), one),
                          "gpu": frames.gpu_silhouette_times(r, max(prep, 3), one)}
             memory[size] = {
@@ -170,21 +187,72 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
     return rows, phases, sil, memory
 
 
-def resolution_section(ctx, cfg) -> list:
+def overflow_section(ctx, cfg) -> list:
+    """The stencil-overflow check on the shared meshes: the same renderer with the check on and
+    off, interleaved (and the plain frame)."""
     from shadowvol.raster.renderer import Renderer
 
+    if scenes.models_dir() is None:
+        log("overflow: the shared meshes are missing; skipped")
+        return []
+    width, height = cfg["size"]
+    warm, rep = cfg["overflow_repeat"]
     out = []
-    warm, rep = cfg["resolution_repeat"]
-    for width, height in cfg["resolutions"]:
-        scene = scenes.occluder_scene(cfg["resolution_size"], 1, width, height)
-        with Renderer(scene, ctx) as r:
-            fns = {"floor": lambda: r.render(shadows=False)}
-            for m, s in VARIANTS:
-                fns[f"{m}/{s}"] = (lambda m=m, s=s: r.render(m, s))
+    for name in cfg["overflow_meshes"]:
+        scene = scenes.model_scene(name, width, height)
+        with Renderer(scene, ctx) as r, plain.PlainFrame(ctx, scene) as pf:
+            def checked(on):
+                r.check_overflow = on
+                return r.render()
+            fns = {"plain": pf, "checked": lambda: checked(True),
+                   "unchecked": lambda: checked(False)}
             times = frames.interleaved(fns, rep, warm)
-        out.append({"width": width, "height": height, "times": times})
-        log(f"resolution {width}x{height}: floor {times['floor']['median']:.1f} ms, "
-            f"auto/cpu {times['auto/cpu']['median']:.1f} ms")
+            bounds = [v[1] for v in r._light_bounds.values() if v is not None]
+            out.append({"mesh": name, "triangles": scenes.triangle_count(scene),
+                        "count_bound": r.count_bound, "light_bounds": bounds, "times": times,
+                        "checks": r.count_bound >= 256 and (not bounds or max(bounds) >= 256)})
+        log(f"overflow {name}: checked {times['checked']['median']:.1f} ms, unchecked "
+            f"{times['unchecked']['median']:.1f} ms (bound {out[-1]['count_bound']})")
+    return out
+
+
+def turntable_section(ctx, cfg) -> dict:
+    """36 views of the shared meshes: our masks + image per view (one renderer, the camera
+    changes) against `raytrace.shadow_masks` of the same view, view by view in turn."""
+    from raytrace.masks import shadow_masks
+    from shadowvol.raster.context import make_current
+    from shadowvol.raster.renderer import Renderer
+
+    if scenes.models_dir() is None:
+        log("turntable: the shared meshes are missing; skipped")
+        return {}
+    w, h = cfg["turntable"]["size"]
+    scene = scenes.turntable_scene(w, h)
+    cameras = scenes.turntable_cameras(cfg["turntable"]["views"])
+    ours, ray, masks_only, differ = [], [], [], []
+    with Renderer(scene, ctx) as r:
+        r.render()
+        shadow_masks(scene)       # warm-up: thread pool, Embree
+        for cam in cameras:
+            t0 = time.perf_counter()
+            res = r.render(camera=cam)
+            ours.append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            r.render(camera=cam, outputs=MASKS)
+            masks_only.append(time.perf_counter() - t0)
+            view = scene.replace(camera=cam)
+            t0 = time.perf_counter()
+            lit, cov = shadow_masks(view)
+            ray.append(time.perf_counter() - t0)
+            make_current(ctx)
+            differ.append(int((lit != res.lit).sum()))
+    out = {"views": len(cameras), "width": w, "height": h,
+           "triangles": scenes.triangle_count(scene), "lights": len(scene.lights),
+           "ours": frames.stats(ours), "ours_masks": frames.stats(masks_only),
+           "raytrace": frames.stats(ray), "ours_total_s": sum(ours), "raytrace_total_s": sum(ray),
+           "pixels_differing_max": max(differ), "pixels_differing_median": sorted(differ)[len(differ) // 2]}
+    log(f"turntable: ours {out['ours']['median']:.1f} ms/view, raytrace "
+        f"{out['raytrace']['median']:.1f} ms/view")
     return out
 
 
@@ -198,10 +266,17 @@ def pyrender_section(ctx, cfg) -> list:
         warm, rep = cfg["pyrender_repeat"][size]
         for kind in ("spot", "directional"):
             scene = scenes.occluder_scene(size, kind, width, height)
-            with Renderer(scene, ctx) as r, frames.pyrender_frames(scene) as pr:
-                fns = {"floor": lambda: r.render(shadows=False),
-                       "auto/cpu": lambda: r.render("auto", "cpu"),
-                       "auto/gpu": lambda: r.render("auto", "gpu"),
+            with Renderer(scene, ctx) as r, plain.PlainFrame(ctx, scene) as pf, \
+                    frames.pyrender_frames(scene) as pr:
+                def ours(s="cpu"):
+                    make_current(ctx)
+                    return r.render("auto", s)
+
+                def plain_frame():
+                    make_current(ctx)
+                    return pf()
+                fns = {"plain": plain_frame, "auto/cpu": ours,
+                       "auto/gpu": lambda: ours("gpu"),
                        "pyrender shadowed": pr["shadowed"],
                        "pyrender unshadowed": pr["unshadowed"]}
                 times = frames.interleaved(fns, rep, warm)
@@ -211,6 +286,46 @@ def pyrender_section(ctx, cfg) -> list:
             log(f"pyrender {size} {kind}: pyrender shadowed "
                 f"{times['pyrender shadowed']['median']:.1f} ms, ours auto/cpu "
                 f"{times['auto/cpu']['median']:.1f} ms")
+    return out
+
+
+# VmHWM, the peak RSS of this process's memory since exec (ru_maxrss would carry the parent's
+# peak over from fork)
+RSS_CHILD = """
+import sys, time
+sys.path[:0] = [{root!r}, {bench!r}]
+def hwm_mb():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+import scenes
+scene = scenes.occluder_scene({size!r}, 1, 1280, 720)
+base = hwm_mb()
+t0 = time.perf_counter()
+if {what!r} == "frame":
+    from shadowvol.raster.renderer import Renderer
+    with Renderer(scene) as r:
+        r.render()
+else:
+    from raytrace.masks import shadow_masks
+    shadow_masks(scene)
+print(base, hwm_mb(), time.perf_counter() - t0)
+"""
+
+
+def rss_section(cfg) -> dict:
+    """Peak RSS of one process that builds the scene and renders one frame, against one that
+    computes the ray tracer's masks of it (each in a fresh process: the peak is monotone)."""
+    out = {"size": cfg["rss_size"]}
+    for what in ("frame", "masks"):
+        code = RSS_CHILD.format(root=str(ROOT), bench=str(ROOT / "benchmarks"),
+                                size=cfg["rss_size"], what=what)
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              check=True)
+        scene_mb, peak_mb, seconds = (float(x) for x in done.stdout.split()[-3:])
+        out[what] = {"after_scene_mb": scene_mb, "peak_mb": peak_mb, "seconds": seconds}
+    log(f"rss {cfg['rss_size']}: frame {out['frame']['peak_mb']:.0f} MB, masks "
+        f"{out['masks']['peak_mb']:.0f} MB")
     return out
 
 
@@ -281,6 +396,10 @@ def main(argv=None) -> int:
 
     optimisations = ROOT / "benchmarks" / "OPTIMISATIONS.md"
     history = optimisations.read_text() if optimisations.is_file() else ""
+    # sections measured by their own scripts (the viewer needs a display), kept verbatim
+    viewer = ROOT / "benchmarks" / "VIEWER.md"
+    if viewer.is_file():
+        history = viewer.read_text().strip() + "\n\n" + history
     if args.report_only:
         results = json.loads(args.report_only.read_text())
         report.write(results, paths["md"], paths["png"], history)
@@ -298,12 +417,14 @@ def main(argv=None) -> int:
                    "config": {k: v for k, v in cfg.items()}}
         frame_rows, phases, sil, memory = frame_section(ctx, cfg)
         results.update(frames=frame_rows, phases=phases, silhouettes=sil, memory=memory)
-        results["resolution"] = resolution_section(ctx, cfg)
+        results["overflow"] = overflow_section(ctx, cfg)
+        results["turntable"] = turntable_section(ctx, cfg)
         results["maxrss_after_frames_mb"] = maxrss_mb()
         results["pyrender"] = [] if args.no_pyrender else pyrender_section(ctx, cfg)
         results["maxrss_after_pyrender_mb"] = maxrss_mb()
     finally:
         ctx.release()
+    results["rss"] = rss_section(cfg)
     results["raytrace"] = raytrace_section(cfg)
     results["maxrss_end_mb"] = maxrss_mb()
     results["machine"]["load_end"] = os.getloadavg()

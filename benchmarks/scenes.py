@@ -8,9 +8,11 @@ case for shadow volumes (each silhouette edge has multiplicity 2, see `shadowvol
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
-from shadowvol.primitives import plane, sphere
+from shadowvol.primitives import Transform, mesh, plane, sphere
 from shadowvol.scene import (
     Camera,
     DirectionalLight,
@@ -61,3 +63,72 @@ def occluder_scene(size: str, lights: int | str = 1, width: int = 1280,
 
 def triangle_count(scene: Scene) -> int:
     return sum(len(o.faces) for o in scene.objects)
+
+
+# ---------------------------------------------------------------------------------------------
+# The shared meshes (../shared/models beside the checkout, or beside its parent for a nested
+# worktree): the overflow check's real meshes and the turntable
+# ---------------------------------------------------------------------------------------------
+
+def models_dir() -> Path | None:
+    root = Path(__file__).resolve().parents[1]
+    for base in (root.parent, root.parent.parent):
+        if (base / "shared" / "models" / "bunny.obj").is_file():
+            return base / "shared" / "models"
+    return None
+
+
+MESHES = ("bunny", "teapot", "spot", "suzanne", "lampshade")
+
+
+def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The shared models' plain OBJ (`v x y z`, `f a b c`, 1-based): vertices (n, 3) float64,
+    faces (m, 3) int64."""
+    v, f = [], []
+    for line in path.read_text().splitlines():
+        if line.startswith("v "):
+            v.append([float(x) for x in line.split()[1:4]])
+        elif line.startswith("f "):
+            f.append([int(x.split("/")[0]) - 1 for x in line.split()[1:4]])
+    return np.array(v), np.array(f, np.int64)
+
+
+def _placed(name: str, height: float, at, material: Material):
+    v, f = read_obj(models_dir() / f"{name}.obj")
+    scale = height / float(np.ptp(v[:, 1]))
+    lo, hi = v.min(axis=0) * scale, v.max(axis=0) * scale
+    offset = np.array([at[0] - (lo[0] + hi[0]) / 2, -lo[1], at[1] - (lo[2] + hi[2]) / 2])
+    return mesh(name, v, f, material, Transform(scale=scale, translation=offset))
+
+
+def model_scene(name: str, width: int = 1280, height: int = 720) -> Scene:
+    """One shared mesh, about 1.5 units tall, on a 6 x 6 floor, one point light."""
+    obj = _placed(name, 1.5, (0.0, 0.0), Material(diffuse=[0.8, 0.7, 0.6]))
+    return Scene(camera=Camera(eye=[0.8, 1.6, 3.6], target=[0.0, 0.65, 0.0], fov_y=40.0),
+                 objects=(plane("floor", size=[6.0, 6.0]), obj),
+                 lights=(PointLight([-2.0, 4.0, 2.5]),), width=width, height=height,
+                 name=f"model-{name}")
+
+
+def turntable_scene(width: int = 640, height: int = 480) -> Scene:
+    """The five shared meshes on a floor, three point lights (the turntable's scene)."""
+    spots = [(-1.6, 0.0), (1.6, 0.0), (0.0, -1.6), (0.0, 1.6), (0.0, 0.0)]
+    rng = np.random.default_rng(1)
+    objects = [plane("floor", size=[8.0, 8.0])]
+    for name, at in zip(MESHES, spots):
+        objects.append(_placed(name, 1.0, at, Material(diffuse=rng.uniform(0.4, 0.9, 3))))
+    lights = [PointLight([-3.0, 5.0, 2.0], intensity=0.6), PointLight([3.0, 4.0, 3.0],
+                                                                      intensity=0.5),
+              PointLight([0.5, 6.0, -3.0], intensity=0.4)]
+    return Scene(camera=turntable_cameras(1)[0], objects=objects, lights=lights, width=width,
+                 height=height, name="turntable")
+
+
+def turntable_cameras(views: int = 36) -> list[Camera]:
+    """`views` cameras on a circle around the turntable scene, every 360 / views degrees."""
+    out = []
+    for k in range(views):
+        a = 2 * np.pi * k / views
+        out.append(Camera(eye=[5.0 * np.sin(a), 3.0, 5.0 * np.cos(a)], target=[0.0, 0.4, 0.0],
+                          fov_y=45.0))
+    return out

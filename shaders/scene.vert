@@ -18,6 +18,8 @@ out vec3 v_world;
 flat out vec3 v_normal;
 flat out float v_facing;    // normal . (L - v0): > 0 when the light is on the normal's side
 flat out int v_object;
+flat out int v_triangle;    // the triangle's index in the soup: three vertices each, drawn
+                            // from vertex 0 (`first` counts in gl_VertexID)
 
 invariant gl_Position;
 
@@ -29,4 +31,5 @@ void main() {
     // three vertices compute the same value from the same flat inputs.
     v_facing = dot(in_normal, u_light.xyz - u_light.w * in_corner);
     v_object = in_object;
+    v_triangle = gl_VertexID / 3;
 }

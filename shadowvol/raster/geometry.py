@@ -1,9 +1,13 @@
 """The scene's geometry on the GPU, uploaded once per scene.
 
-All objects become one triangle soup (three vertices per triangle, objects one after another) so
-that every per-triangle value can be a flat vertex attribute: the face normal, the first corner
-(for the triangle's n . l sign) and the object index (the row of the material texture).  The
-depth pass, the lighting pass and the z-fail near caps all draw from these buffers.
+All objects become one triangle soup (three vertices per triangle, objects one after another).
+The geometry pass draws its positions in one draw and keys each pixel by the triangle's index
+(gl_VertexID / 3), the key of the per-triangle storage buffer (face normal, first corner, object
+index) that the deferred shading pass reads; the z-fail near caps draw subsets of the same
+vertices in the same order, so their depths equal the geometry pass's bit for bit.  (An indexed
+mesh with gl_PrimitiveID measured 1.6x slower on llvmpipe: its draw path for primitive ids.)
+The soup's other per-vertex attributes (normal, first corner, object: the GPU caps and the
+planar shadows' forward passes) are built on first use, one buffer each.
 
 float32 is used on the GPU because that is what GL rasterizes; normals and corners are computed
 in float64 and rounded once.  Edge topology (CPU, float64) is computed here too, once per object.
@@ -16,7 +20,10 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
+from shadowvol.errors import RenderError
 from shadowvol.raster.topology import Topology
+
+MAX_TRIANGLES = 2 ** 24  # the G-buffer's surface key is a float32 integer (target.py)
 from shadowvol.scene import Scene
 
 
@@ -49,16 +56,23 @@ class SceneGeometry:
         self.ranges = tuple(ObjectRange(i, int(f), int(c))
                             for i, (f, c) in enumerate(zip(firsts, counts)))
         self.triangle_count = int(sum(counts))
-        object_ids = np.repeat(np.arange(len(tris), dtype=np.int32), np.array(counts) * 3)
+        if self.triangle_count >= MAX_TRIANGLES:
+            raise RenderError(f"{self.triangle_count:,} triangles: the rasterizer keys each "
+                              f"pixel's triangle by a float32, at most {MAX_TRIANGLES - 1:,}")
         self.topologies = tuple(Topology.build(o.vertices, o.faces) for o in scene.objects)
         self.bounds = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)]
                                 for o in scene.objects])
         self.extent = scene.extent  # a property of the scene that walks every vertex: once
         self._buffers = []
-        self.positions = self._buffer(corners.reshape(-1, 3).astype(np.float32))
-        self.normals = self._buffer(np.repeat(normals, 3, axis=0).astype(np.float32))
-        self.corners = self._buffer(np.repeat(corners[:, 0], 3, axis=0).astype(np.float32))
-        self.objects = self._buffer(object_ids)
+        self._normals = normals
+        self._soup: dict[str, moderngl.Buffer] = {}
+        # per triangle, std430 vec4 pairs: (unit normal, object index), (first corner, 0);
+        # float32 as the soup's flat attributes were, so the lighting pass sees the same numbers
+        per_triangle = np.zeros((self.triangle_count, 2, 4), np.float32)
+        per_triangle[:, 0, :3] = normals
+        per_triangle[:, 0, 3] = np.repeat(np.arange(len(tris)), counts)
+        per_triangle[:, 1, :3] = corners[:, 0]
+        self.triangle_data = self._buffer(per_triangle)
         materials = np.zeros((len(scene.objects), 3, 4), np.float32)
         for i, o in enumerate(scene.objects):
             m = o.material
@@ -72,15 +86,46 @@ class SceneGeometry:
         self._buffers.append(buf)
         return buf
 
+    def _soup_buffer(self, name: str) -> moderngl.Buffer:
+        """The soup's attribute `name`, uploaded on first use."""
+        if name not in self._soup:
+            corners = self._corners
+            if name == "in_position":
+                data = corners.reshape(-1, 3).astype(np.float32)
+            elif name == "in_normal":
+                data = np.repeat(self._normals, 3, axis=0).astype(np.float32)
+            elif name == "in_corner":
+                data = np.repeat(corners[:, 0], 3, axis=0).astype(np.float32)
+            else:
+                data = np.repeat(np.arange(len(self.ranges), dtype=np.int32),
+                                 [3 * r.count for r in self.ranges])
+            self._soup[name] = self._buffer(data)
+        return self._soup[name]
+
+    @property
+    def positions(self) -> moderngl.Buffer:
+        """The soup's vertex positions (float32, three per triangle)."""
+        return self._soup_buffer("in_position")
+
+    @property
+    def soup_corners_f64(self) -> np.ndarray:
+        """(M, 3, 3) float64: every triangle's corners, objects one after another."""
+        return self._corners
+
+    @property
+    def object_of(self) -> np.ndarray:
+        """(M,) int64: the object of every triangle."""
+        return np.repeat(np.arange(len(self.ranges)), [r.count for r in self.ranges])
+
     def soup_corners(self) -> np.ndarray:
         """(M, 3, 3) float32: the corners of every soup triangle, exactly as uploaded."""
         return self._corners.astype(np.float32)
 
     def soup_bindings(self, program: moderngl.Program) -> list[tuple]:
         """The (buffer, format, name) triples of the soup's attributes that `program` uses."""
-        all_ = [(self.positions, "3f", "in_position"), (self.normals, "3f", "in_normal"),
-                (self.corners, "3f", "in_corner"), (self.objects, "1i", "in_object")]
-        return [b for b in all_ if b[2] in program]
+        formats = {"in_position": "3f", "in_normal": "3f", "in_corner": "3f", "in_object": "1i"}
+        return [(self._soup_buffer(name), fmt, name) for name, fmt in formats.items()
+                if name in program]
 
     def release(self) -> None:
         for buf in self._buffers:

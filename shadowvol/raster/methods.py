@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shadowvol.raster.projection import near_rectangle
+from shadowvol.raster.projection import cross3, near_rectangle
 from shadowvol.scene import Camera
 
 METHODS = ("auto", "zpass", "zfail")
@@ -52,11 +52,14 @@ def near_clip_planes(camera: Camera, aspect: float, light4: np.ndarray) -> np.nd
     n = -forward if side > 0 else forward
     planes.append(np.append(n, -n @ centre))
     for p, q in zip(rect, np.roll(rect, -1, axis=0)):
-        n = np.cross(q - p, light4[:3] - light4[3] * p)
+        n = cross3(q - p, light4[:3] - light4[3] * p)
         if n @ (centre - p) > 0:
             n = -n
         planes.append(np.append(n / np.linalg.norm(n), -(n / np.linalg.norm(n)) @ p))
     return np.array(planes)
+
+
+CULL_NEAR_MARGIN = 1e-6  # of the scene's extent: a box touching the near plane is not culled
 
 
 def needs_zfail(bounds: np.ndarray, camera: Camera, aspect: float, light4: np.ndarray,
@@ -121,3 +124,27 @@ def zpass_clip_planes(bounds: np.ndarray, camera: Camera, aspect: float,
         planes[2 * axis, axis], planes[2 * axis, 3] = 1.0, -lo[axis]         # x >= lo
         planes[2 * axis + 1, axis], planes[2 * axis + 1, 3] = -1.0, hi[axis]  # x <= hi
     return planes
+
+
+def cullable(bounds: np.ndarray, outward_convex: np.ndarray, camera: Camera,
+             extent: float) -> np.ndarray:
+    """(n,) bool: objects whose back faces the geometry pass may cull without changing what is
+    visible: closed convex meshes wound outward (`overflow.convex_orientation` +1) whose whole
+    box lies beyond the near plane (by CULL_NEAR_MARGIN * extent), so the eye is outside the
+    body and no view ray starts inside it.  A view ray from outside a convex body meets it
+    first through a front face; the back faces it meets later lie behind that front face, so
+    in exact arithmetic the depth test rejects them.  In float32 it is not exact: near a
+    silhouette edge a back face's depth can round nearer than the front face's, win, and show
+    its own normal; culled, the front face shows there instead (one pixel of
+    scenes/whitted.toml, lit instead of unlit).  Hence `Renderer.cull_back_faces` is off by
+    default.
+
+    bounds : (n, 2, 3) float64 boxes; outward_convex : (n,) bool."""
+    forward = camera.target - camera.eye
+    forward = forward / np.linalg.norm(forward)
+    pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    corners = np.stack([bounds[:, pick[:, 0], 0], bounds[:, pick[:, 1], 1],
+                        bounds[:, pick[:, 2], 2]], axis=-1)                  # (n, 8, 3)
+    depth = (corners - camera.eye) @ forward                                # (n, 8)
+    beyond = (depth > camera.near + CULL_NEAR_MARGIN * extent).all(axis=1)
+    return outward_convex & beyond

@@ -58,9 +58,10 @@ class StencilOverflowError(RenderError):
             f"the light avoid it")
 
 
-def is_closed_convex(topo: Topology) -> bool:
-    """True when the welded mesh bounds one convex body, so that a segment crosses it at most
-    twice.  Tested in numpy on its topology:
+def convex_orientation(topo: Topology) -> int:
+    """+1 when the welded mesh bounds one convex body (so that a segment crosses it at most
+    twice) and its triangles are wound with normals pointing out of it, -1 when into it, 0 when
+    it is not such a mesh.  Tested in numpy on its topology:
 
     - closed and consistently wound: every edge has exactly two triangles, running it in
       opposite directions, and no triangle is degenerate;
@@ -72,12 +73,12 @@ def is_closed_convex(topo: Topology) -> bool:
       and a connected, closed, locally convex surface bounds a convex body."""
     faces = topo.faces
     if len(faces) < 4 or np.any(topo.triangles_per_edge != 2):
-        return False
+        return 0
     winding = np.bincount(topo.inc_edge, weights=topo.inc_parity, minlength=len(topo.edges))
     if np.any(winding != 0):
-        return False
+        return 0
     if len(topo.vertices) - len(topo.edges) + len(faces) != 2:
-        return False
+        return 0
     normals, origins = topo.face_frames
     # incidences are sorted by edge, two per edge: pair each edge's first triangle with the
     # second triangle's opposite corner
@@ -85,9 +86,20 @@ def is_closed_convex(topo: Topology) -> bool:
     n, towards = normals[first], corner - origins[first]
     scale = np.linalg.norm(n, axis=1) * np.linalg.norm(towards, axis=1)
     if np.any(scale == 0):
-        return False
+        return 0
     side = np.einsum("ij,ij->i", n, towards) / scale
-    return bool(np.all(side <= CONVEX_TOLERANCE) or np.all(side >= -CONVEX_TOLERANCE))
+    # the neighbour's corner below every plane: normals point out of the body (a flat,
+    # double-covered "body", every corner in every plane, is closed and convex but has no
+    # outside: 0 for culling's sake would do, and it keeps its bound of 2 as -1)
+    if np.all(side <= CONVEX_TOLERANCE):
+        return 1 if np.any(side < -CONVEX_TOLERANCE) else -1
+    return -1 if np.all(side >= -CONVEX_TOLERANCE) else 0
+
+
+def is_closed_convex(topo: Topology) -> bool:
+    """True when the welded mesh bounds one convex body, so that a segment crosses it at most
+    twice (`convex_orientation` is not 0)."""
+    return convex_orientation(topo) != 0
 
 
 def topology_bound(topo: Topology) -> int:
@@ -125,7 +137,8 @@ def find_wrapped(ctx, gl, target, volumes, zfail: np.ndarray, lit: np.ndarray,
     return (entering >= SATURATED) & lit
 
 
-def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool) -> None:
+def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
+                only=None) -> None:
     """Raise StencilOverflowError where a light's count may have wrapped to 0 at a pixel
     `renderer`'s frame `result` drew lit: a saturating pass per light counts the faces by
     which view rays enter volumes (`find_wrapped`), and a pixel found there is cleared by any
@@ -140,6 +153,8 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool)
     # superset of the sample's own lit pixels: it may raise where it need not, never the other
     # way); the casters its samples counted with z-fail stay z-fail (valid)
     for i, light in ((i, hard) for i, lt in enumerate(lights) for hard in hard_lights(lt)):
+        if only is not None and i not in only:
+            continue   # its `light_bound` is below STENCIL_LIMIT
         light4 = light.homogeneous
         if vols.light4 is None or not np.array_equal(vols.light4, light4):
             vols.prepare(light4)  # (the frame's last light is still prepared)
@@ -160,3 +175,172 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool)
                                         other, drawn, clip)
         if wrapped.any():
             raise StencilOverflowError(i, wrapped)
+
+
+# ---------------------------------------------------------------------------------------------
+# A per-light bound: how many triangles any segment to this light can cross
+# ---------------------------------------------------------------------------------------------
+
+LIGHT_GRID = 1024        # cells per side of each cube face (point light) or of the plane
+# the slack allowed for the rasterized volumes, in camera pixels at the triangle: GL snaps
+# vertices to at least 4 sub-pixel bits (1/16 pixel, so at most 1/32 off; GPUs snap to 1/256),
+# taken twice over; float32 rounding of the coordinates is added on top
+PIXEL_SLACK = 1.0 / 16.0
+FLOAT32_SLACK = 16 * np.finfo(np.float32).eps
+GNOMONIC_STRETCH = 3.0   # d(u, v) / d(angle) <= 1 + u^2 + v^2 <= 3 on a cube face
+
+
+def world_slack(camera, height: int, corners: np.ndarray) -> np.ndarray:
+    """(M,) float64: how far (world units) each triangle's rasterized volume faces may stray
+    from the exact ones: PIXEL_SLACK camera pixels at its farthest corner from the eye, plus the
+    float32 rounding of the scene's largest coordinate.  corners : (M, 3, 3) float64."""
+    far = np.linalg.norm(corners - camera.eye, axis=-1).max(axis=1)
+    pixel = 2.0 * np.tan(np.radians(camera.fov_y) / 2.0) / height
+    return PIXEL_SLACK * pixel * far + FLOAT32_SLACK * float(np.abs(corners).max())
+
+
+def _binned_max(lo: np.ndarray, hi: np.ndarray, weight: np.ndarray, grid: int) -> np.ndarray:
+    """(grid, grid) int64: per cell of [-1, 1]^2, the sum of `weight` over the rectangles
+    [lo, hi] (n, 2) that overlap it (closed: touching counts)."""
+    a = np.clip(np.floor((lo + 1.0) / 2.0 * grid), 0, grid - 1).astype(np.int64)
+    b = np.clip(np.floor((hi + 1.0) / 2.0 * grid), 0, grid - 1).astype(np.int64) + 1
+    diff = np.zeros((grid + 1) * (grid + 1), np.int64)
+    stride = grid + 1
+    for (ix, iy), sgn in (((a[:, 0], a[:, 1]), 1), ((b[:, 0], a[:, 1]), -1),
+                          ((a[:, 0], b[:, 1]), -1), ((b[:, 0], b[:, 1]), 1)):
+        diff += np.bincount(ix * stride + iy, weights=sgn * weight,
+                            minlength=len(diff)).astype(np.int64)
+    return diff.reshape(stride, stride).cumsum(0).cumsum(1)[:grid, :grid]
+
+
+def _clip_to_pyramid(tri: np.ndarray, axis: int, sign: float) -> tuple[np.ndarray, np.ndarray]:
+    """The box (lo, hi) (n, 2) of the central projection of each triangle's part inside the
+    cube face's pyramid (apex at the light, `sign` * x[axis] >= |x[b]|, |x[c]|): the triangles
+    (n, 3, 3), relative to the light, clipped by the pyramid's four planes (Sutherland-Hodgman,
+    vectorised); an empty part gives lo > hi."""
+    b, c = [k for k in range(3) if k != axis]
+    n = len(tri)
+    poly = np.zeros((n, 7, 3))
+    poly[:, :3] = tri
+    count = np.full(n, 3)
+    for other, s2 in ((b, 1.0), (b, -1.0), (c, 1.0), (c, -1.0)):
+        def f(x):  # >= 0 inside: depth - s2 * x[other]
+            return sign * x[..., axis] - s2 * x[..., other]
+        out = np.zeros_like(poly)
+        out_n = np.zeros(n, np.int64)
+        rows = np.arange(n)
+        for k in range(7):
+            valid = k < count
+            cur = poly[:, k]
+            nxt = poly[rows, np.where(k + 1 < count, k + 1, 0)]
+            fc, fn = f(cur), f(nxt)
+            keep = valid & (fc >= 0)
+            out[rows[keep], out_n[keep]] = cur[keep]
+            out_n += keep
+            cross = valid & ((fc >= 0) != (fn >= 0))
+            t = np.where(cross, fc / np.where(cross, fc - fn, 1.0), 0.0)
+            point = cur + t[:, None] * (nxt - cur)
+            out[rows[cross], np.minimum(out_n[cross], 6)] = point[cross]
+            out_n += cross
+        poly, count = out, np.minimum(out_n, 7)
+    depth = sign * poly[..., axis]
+    valid = (np.arange(7)[None] < count[:, None]) & (depth > 0)
+    safe = np.where(valid, depth, 1.0)
+    uv = np.stack([poly[..., b] / safe, poly[..., c] / safe], axis=-1)
+    lo = np.where(valid[..., None], uv, np.inf).min(axis=1)
+    hi = np.where(valid[..., None], uv, -np.inf).max(axis=1)
+    # the apex itself (depth 0) may be a vertex of the clipped part: its direction is any
+    apex = ((np.arange(7)[None] < count[:, None]) & (depth <= 0)).any(axis=1)
+    lo[apex], hi[apex] = -1.0, 1.0
+    return np.clip(lo, -1.0, np.inf), np.clip(hi, -np.inf, 1.0)
+
+
+def light_bound(corners: np.ndarray, object_of: np.ndarray, convex: np.ndarray,
+                light4: np.ndarray, slack: float, grid: int = LIGHT_GRID) -> int:
+    """An upper bound on the stencil count at any visible point for this light: the largest
+    number of triangles that one ray leaving the light (or, for a directional light, one line
+    along its direction) can cross, each closed convex object counted at most twice.
+
+    The count at a point X is the number of triangles crossing the segment from X to the light
+    (every triangle casts).  Directions from the light are binned on the six faces of a cube
+    around it (central projection: a triangle with all corners in front of a face projects to
+    the triangle of its projected corners, so its box of projected corners holds every
+    direction that meets it; a triangle wholly behind the face's plane in none; one across that
+    plane by the box of its part clipped to the face's pyramid).  A directional light's lines are binned on the plane
+    perpendicular to it.  Each box grows by its triangle's `slack` (M,) (world units,
+    `world_slack`) seen from the light, so that the rasterized volumes, a little off the exact
+    ones, stay inside.  The bound is the largest cell's sum.
+
+    corners : (M, 3, 3) float64;  object_of : (M,) int, each triangle's object;  convex :
+    (n_objects,) bool, closed convex objects (`is_closed_convex`)."""
+    if light4[3] == 0.0:
+        d = -np.asarray(light4[:3], np.float64)
+        d = d / np.linalg.norm(d)
+        e1 = np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(d, e1)
+        uv = np.stack([corners @ e1, corners @ e2], axis=-1)              # (M, 3, 2)
+        lo, hi = uv.min(axis=1) - slack[:, None], uv.max(axis=1) + slack[:, None]
+        centre = (lo.min(axis=0) + hi.max(axis=0)) / 2
+        half = float((hi.max(axis=0) - lo.min(axis=0)).max()) / 2 * (1 + 1e-9) + 1e-30
+        faces = [((lo - centre) / half, (hi - centre) / half, np.ones(len(lo), bool))]
+    else:
+        rel = corners - np.asarray(light4[:3], np.float64)                # (M, 3, 3)
+        dist = np.linalg.norm(rel, axis=-1).min(axis=1)                   # nearest corner
+        # the nearest point of a triangle may be nearer than its corners: its box's distance
+        box_lo, box_hi = rel.min(axis=1), rel.max(axis=1)
+        nearest = np.linalg.norm(np.maximum(np.maximum(box_lo, -box_hi), 0.0), axis=1)
+        dist = np.minimum(dist, nearest)
+        with np.errstate(divide="ignore"):
+            margin = np.where(dist > 0, GNOMONIC_STRETCH * slack / dist, np.inf)
+        faces = []
+        for axis in range(3):
+            b, c = [k for k in range(3) if k != axis]
+            for sign in (1.0, -1.0):
+                depth = sign * rel[..., axis]                             # (M, 3)
+                front = (depth > 0).all(axis=1)
+                safe = np.where(depth > 0, depth, 1.0)
+                uv = np.stack([rel[..., b] / safe, rel[..., c] / safe], axis=-1)
+                lo = np.where(front[:, None], uv.min(axis=1) - margin[:, None], -1.0)
+                hi = np.where(front[:, None], uv.max(axis=1) + margin[:, None], 1.0)
+                # a triangle across the face's plane: the box of its part in the pyramid
+                across = ~front & ~(depth <= 0).all(axis=1)
+                if across.any():
+                    c_lo, c_hi = _clip_to_pyramid(rel[across], axis, sign)
+                    lo[across] = c_lo - margin[across, None]
+                    hi[across] = c_hi + margin[across, None]
+                # triangles whose box misses the face, or wholly behind its plane, meet no ray
+                # through it
+                behind = (depth <= 0).all(axis=1)
+                meets = ~((lo > 1.0).any(axis=1) | (hi < -1.0).any(axis=1) | behind)
+                lo, hi = np.nan_to_num(lo, neginf=-1.0), np.nan_to_num(hi, posinf=1.0)
+                faces.append((lo, hi, meets))
+    bound = 0
+    convex_of = convex[object_of]
+    for lo, hi, meets in faces:
+        # boxes that cover the whole face (triangles across its plane) add the same to every
+        # cell; the grid spans the rest, zoomed to their extent
+        whole = meets & (lo <= -1.0).all(axis=1) & (hi >= 1.0).all(axis=1)
+        part = meets & ~whole
+        base = int((whole & ~convex_of).sum()) + sum(
+            min(int((whole & (object_of == o)).sum()), 2) for o in np.flatnonzero(convex))
+        if not part.any():
+            bound = max(bound, base)
+            continue
+        lo_p, hi_p = np.maximum(lo[part], -1.0), np.minimum(hi[part], 1.0)
+        z_lo, z_hi = lo_p.min(axis=0), hi_p.max(axis=0)
+        scale = np.maximum(z_hi - z_lo, 1e-300) / 2
+        lo_z, hi_z = (lo_p - z_lo) / scale - 1.0, (hi_p - z_lo) / scale - 1.0
+        obj = object_of[part]
+        open_part = ~convex_of[part]
+        cells = _binned_max(lo_z[open_part], hi_z[open_part], np.ones(int(open_part.sum())),
+                            grid)
+        for o in np.flatnonzero(convex):
+            mine = obj == o
+            if mine.any():
+                cells = cells + np.minimum(
+                    _binned_max(lo_z[mine], hi_z[mine], np.ones(int(mine.sum())), grid), 2)
+        # a convex object both whole-face and partial is capped twice: still at most 4 of its
+        # crossings counted, a bound
+        bound = max(bound, base + int(cells.max()))
+    return bound

@@ -1,11 +1,19 @@
-"""The passes of a shadowed frame, in order:
+"""The passes of a shadowed frame (deferred: the scene's triangles are drawn once), in order:
 
-1. `depth_ambient`: depth (test LESS, writes on) and the ambient term ka * ambient.
-2. per light (an area light: per sample, as a point light): `count_volumes` — the stencil
-   cleared, then the shadow volumes drawn with colour and depth writes off and two-sided
-   stencil counting, z-pass or z-fail per caster;
-   `add_light` — the light's Phong term added where the stencil is 0 (depth test EQUAL, additive
-   blending), and its lit mask written.
+1. `geometry_pass`: one draw of every triangle (the soup): depth (test NEARER, writes on) and
+   the G-buffer (world position, triangle).
+2. per light (an area light: per sample, as a point light): `count_volumes` — the stencil cleared, then the shadow volumes drawn with colour
+   and depth writes off and two-sided stencil counting, z-pass or z-fail per caster;
+   `mark_unshadowed` — a full-screen pass adding the light's bit where the count is 0.
+3. `shade`: one full-screen pass (two draws split by the last light's stencil, which is not
+   marked): ambient plus every unshadowed light's Phong term where n . l > 0 (and inside a
+   spot's cone), the lit bits and coverage (up to LIGHTS_PER_PAGE lights a pass).
+4. `encode_srgb`, when the 8-bit image is asked for.
+
+The forward passes (`depth_ambient`, then per light `add_light` over the soup with depth test
+EQUAL) remain for the planar shadows.  Both compute the same numbers: the same depths (the same
+invariant vertex shader on the same vertices in the same order) and the same lighting
+expressions on the same float32 inputs (shade.frag repeats phong.frag's and scene.vert's).
 
 Depth is reversed (camera.NEARER is ">").  The depth test of the volume passes is "strictly
 nearer", so that a volume face exactly at the surface's depth counts as behind it (z-fail near
@@ -21,24 +29,70 @@ from shadowvol.raster import glsl, stencil
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.projection import NEARER, gl_matrix
-from shadowvol.raster.target import Target
+from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
 from shadowvol.scene import AreaSample, Camera, Light, Scene, SpotLight
 
 NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)
+# reversed depth: FAR_DEPTH (0) is the clear value and drawn surfaces lie above it, so a
+# fragment at FAR_DEPTH passes "<" exactly where something was drawn
+FARTHER_THAN_NOTHING = "<"
 
 
 class ScenePrograms:
-    """The programs that draw the scene's own triangles (ambient, Phong).  Call `release()`."""
+    """The programs that draw the scene's own triangles: the geometry pass and the deferred
+    lighting and sRGB passes; the forward ambient and Phong passes over the soup (planar
+    shadows) on first use.  Call `release()`."""
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
-        self.geometry = geometry
-        self.ambient = glsl.program(ctx, "scene.vert", "ambient.frag")
-        self.phong = glsl.program(ctx, "scene.vert", "phong.frag")
-        self.ambient_vao = ctx.vertex_array(self.ambient, geometry.soup_bindings(self.ambient))
-        self.phong_vao = ctx.vertex_array(self.phong, geometry.soup_bindings(self.phong))
+        self.ctx, self.geometry = ctx, geometry
+        self.gbuffer = glsl.program(ctx, "scene.vert", "gbuffer.frag")
+        self.gbuffer_vao = ctx.vertex_array(self.gbuffer, geometry.soup_bindings(self.gbuffer))
+        self.mark = glsl.program(ctx, "fullscreen.vert", "mark.frag")
+        self.mark_vao = ctx.vertex_array(self.mark, [])
+        self._shade: dict[tuple[int, bool], tuple] = {}  # (lights, colour) -> program, vao
+        self.srgb = glsl.program(ctx, "fullscreen.vert", "srgb.frag")
+        self.srgb_vao = ctx.vertex_array(self.srgb, [])
+        self._forward = None
+
+    def shading(self, lights: int, colour: bool) -> tuple:
+        """(program, vao) of the shading pass for a page of `lights` lights (a constant in the
+        shader: its loop unrolls), with colour or the lit bits only; made on first use."""
+        key = (lights, colour)
+        if key not in self._shade:
+            defines = {"LIGHTS": lights} | ({} if colour else {"MASKS_ONLY": 1})
+            program = glsl.program(self.ctx, "fullscreen.vert", "shade.frag", defines=defines)
+            self._shade[key] = (program, self.ctx.vertex_array(program, []))
+        return self._shade[key]
+
+    def _forward_programs(self):
+        if self._forward is None:
+            ambient = glsl.program(self.ctx, "scene.vert", "ambient.frag")
+            phong = glsl.program(self.ctx, "scene.vert", "phong.frag")
+            self._forward = (ambient, phong,
+                             self.ctx.vertex_array(ambient, self.geometry.soup_bindings(ambient)),
+                             self.ctx.vertex_array(phong, self.geometry.soup_bindings(phong)))
+        return self._forward
+
+    @property
+    def ambient(self) -> moderngl.Program:
+        return self._forward_programs()[0]
+
+    @property
+    def phong(self) -> moderngl.Program:
+        return self._forward_programs()[1]
+
+    @property
+    def ambient_vao(self) -> moderngl.VertexArray:
+        return self._forward_programs()[2]
+
+    @property
+    def phong_vao(self) -> moderngl.VertexArray:
+        return self._forward_programs()[3]
 
     def release(self) -> None:
-        for obj in (self.ambient_vao, self.phong_vao, self.ambient, self.phong):
+        for obj in (self.gbuffer_vao, self.mark_vao, self.srgb_vao, self.gbuffer, self.mark,
+                    self.srgb, *(x for pv in self._shade.values() for x in pv[::-1]),
+                    *(self._forward or ())):
             obj.release()
 
 
@@ -46,6 +100,129 @@ def set_camera(programs, view_proj: np.ndarray, camera: Camera) -> None:
     for p in programs:
         set_uniform(p, "u_view_proj", gl_matrix(view_proj))
         set_uniform(p, "u_eye", tuple(float(x) for x in camera.eye))
+
+
+def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, scene: Scene,
+                  cull: np.ndarray | None = None, marks: bool = True) -> None:
+    """Clear the G-buffer, depth and stencil, then every triangle of the soup: one draw per run
+    of objects with the same `cull` (n_objects,) bool, back faces culled where it is True (one
+    draw for all when None or all alike).  `marks`: some light will be marked (more than one
+    light in a page)."""
+    target.clear_gbuffer(scene.background, marks)
+    target.use_gbuffer()
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = NEARER
+    ctx.front_face = "ccw"
+    ctx.cull_face = "back"
+    ranges = progs.geometry.ranges
+    if cull is None or not cull.any():
+        runs = [(0, len(ranges), False)]
+    else:
+        change = np.flatnonzero(np.diff(cull.astype(np.int8))) + 1
+        starts = np.concatenate([[0], change])
+        ends = np.concatenate([change, [len(ranges)]])
+        runs = [(int(a), int(b), bool(cull[a])) for a, b in zip(starts, ends)]
+    for a, b, culled in runs:
+        first = ranges[a].first
+        count = ranges[b - 1].first + ranges[b - 1].count - first
+        ctx.enable_only(moderngl.DEPTH_TEST | (moderngl.CULL_FACE if culled else 0))
+        progs.gbuffer_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    target.use()
+
+
+def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
+                    progs: ScenePrograms, bit: int) -> None:
+    """Add 2^bit to the unshadowed bits where the stencil count is 0."""
+    target.mark_fbo.depth_mask = False
+    target.mark_fbo.color_mask = (True,) * 4
+    target.mark_fbo.use()
+    ctx.enable_only(moderngl.BLEND)
+    ctx.blend_func = moderngl.ONE, moderngl.ONE
+    ctx.blend_equation = moderngl.FUNC_ADD
+    set_uniform(progs.mark, "u_bit", float(2 ** bit))
+    _only_where_covered(ctx)
+    with stencil.where_unshadowed(gl):
+        progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = NEARER
+    target.use()
+
+
+def _only_where_covered(ctx: moderngl.Context) -> None:
+    """The depth test of the full-screen passes (blending as it was): their triangle lies at
+    FAR_DEPTH, the depth of nothing drawn, and passes where the stored depth is farther from
+    FAR_DEPTH than it (any drawn surface; depth writes are off), so uncovered pixels cost no
+    shading."""
+    ctx.enable(moderngl.DEPTH_TEST)
+    ctx.depth_func = FARTHER_THAN_NOTHING
+
+
+def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
+          scene: Scene, camera: Camera, lights, first_page: bool, colour: bool = True) -> None:
+    """The one shading pass for `lights` (at most LIGHTS_PER_PAGE): colour and bits of every
+    pixel.  The unshadowed target holds bits 0.. of all but the last light; the stencil holds
+    the last light's count, and the pass is drawn where it is 0 and where it is not (each
+    pixel once), which spares the last light its marking pass and, for one light, the
+    unshadowed fetch.  A page after the first is added to the first (additive blending; no
+    ambient, no coverage) and its bits must be cleared before.  `colour=False`: the lit bits
+    only."""
+    prog, vao = progs.shading(len(lights), colour)
+    target.fbo.depth_mask = False
+    target.fbo.color_mask = [(colour,) * 4, (True,) * 4]
+    target.fbo.use()
+    if first_page:
+        ctx.enable_only(moderngl.NOTHING)
+    else:
+        ctx.enable_only(moderngl.BLEND)
+        ctx.blend_func = moderngl.ONE, moderngl.ONE
+        ctx.blend_equation = moderngl.FUNC_ADD
+    _only_where_covered(ctx)
+    set_uniform(prog, "u_eye", tuple(float(x) for x in camera.eye))
+    set_uniform(prog, "u_first_page", first_page)
+    # uniform arrays as packed float32 (glUniform*fv): the same float32 values the forward
+    # pass's single uniforms hold
+    spot = [isinstance(l, SpotLight) for l in lights]
+    arrays = {
+        "u_light": [l.homogeneous for l in lights],
+        "u_radiance": [l.radiance for l in lights],
+        "u_spot_direction": [l.direction if s else (0.0, 0.0, 1.0) for l, s in zip(lights, spot)],
+        "u_spot_cos": [l.cos_cutoff if s else NO_CONE for l, s in zip(lights, spot)],
+        "u_emitter_cosine": [1.0 if isinstance(l, AreaSample) else 0.0 for l in lights]}
+    for name, values in arrays.items() if lights else ():
+        set_uniform(prog, name, np.array([np.asarray(v, np.float64) for v in values],
+                                         np.float32).tobytes())
+    set_uniform(prog, "u_ambient", tuple(float(x) for x in scene.ambient))
+    set_uniform(prog, "u_background", tuple(float(x) for x in scene.background))
+    progs.geometry.materials.use(0)
+    target.position.use(1)
+    target.unshadowed.use(2)
+    for name, unit in (("u_materials", 0), ("u_position", 1), ("u_unshadowed", 2)):
+        set_uniform(prog, name, unit)
+    progs.geometry.triangle_data.bind_to_storage_buffer(0)
+    if not lights:
+        set_uniform(prog, "u_last_unshadowed", False)
+        vao.render(moderngl.TRIANGLES, vertices=3)
+    else:
+        for unshadowed, test in ((True, stencil.where_unshadowed),
+                                 (False, stencil.where_shadowed)):
+            set_uniform(prog, "u_last_unshadowed", unshadowed)
+            with test(gl):
+                vao.render(moderngl.TRIANGLES, vertices=3)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = NEARER
+    target.use()
+
+
+def encode_srgb(ctx: moderngl.Context, target: Target, progs: ScenePrograms) -> None:
+    """The colour attachment encoded to 8-bit sRGB into `target.srgb`, rows flipped."""
+    target.srgb_fbo.use()
+    ctx.enable_only(moderngl.NOTHING)
+    target.colour.use(0)
+    set_uniform(progs.srgb, "u_colour", 0)
+    progs.srgb_vao.render(moderngl.TRIANGLES, vertices=3)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    target.use()
 
 
 def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,

@@ -9,7 +9,7 @@ float32 vertices themselves), where the classic 1 - near / d in 24 bits loses pr
 square of the distance; shadow boundaries on surfaces nearly parallel to a volume's side (grazing
 light) depend on exactly that precision.  Nearer means GREATER depth: see NEARER.
 GL samples each pixel at its centre, which is the contract's ndc ((x + 0.5) / W * 2 - 1, ...);
-GL rows run bottom-up, so every read-back goes through `top_row_first`.
+GL rows run bottom-up, so every read-back is flipped once (`target`; `top_row_first`).
 """
 
 from __future__ import annotations
@@ -25,13 +25,20 @@ NEARER_OR_EQUAL = ">="
 FAR_DEPTH = 0.0           # the depth buffer's clear value: nothing drawn, infinitely far
 
 
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """np.cross of two (3,) float64 vectors, the same products and differences (bit for bit),
+    without np.cross's per-call axis handling (tens of microseconds, many times a frame)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
 def view_matrix(camera: Camera) -> np.ndarray:
     """(4, 4) float64 world -> eye space; right-handed, the camera looks down -z."""
     forward = camera.target - camera.eye
     forward = forward / np.linalg.norm(forward)
-    side = np.cross(forward, camera.up)
+    side = cross3(forward, camera.up)
     side = side / np.linalg.norm(side)
-    up = np.cross(side, forward)
+    up = cross3(side, forward)
     m = np.eye(4)
     m[0, :3], m[1, :3], m[2, :3] = side, up, -forward
     m[:3, 3] = -m[:3, :3] @ camera.eye

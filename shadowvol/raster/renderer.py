@@ -1,20 +1,23 @@
 """The shadow-volume renderer: `Renderer` for many frames of one scene, `render` for one.
 
 A Renderer holds one GL context (its own, or one it is given), uploads the scene's geometry once,
-and renders frames: depth + ambient, then per light the stencil count of its shadow volumes and
-its Phong term where the count is 0.  It returns arrays only; files are the CLI's business.
+and renders deferred frames: one geometry pass (depth, ambient, G-buffer), then per light the
+stencil count of its shadow volumes and a full-screen pass adding its Phong term where the
+count is 0 (see `passes`).  It returns arrays only, and only those asked for (`outputs=`);
+files are the CLI's business.
 
 Limit: the stencil is 8 bits and counts wrap (INCR_WRAP / DECR_WRAP).  Every triangle casts, so
 a pixel behind k closed meshes counts 2k; 256 layers over one pixel would read 0, i.e. lit.  That
 needs about 128 closed objects (or 256 open sheets) lined up between one point and one light.
-It is detected (`overflow`): when a conservative bound says a count could reach 256, one more
-saturating volume pass per light finds the pixels that may have wrapped, and render() raises
+It is detected (`overflow`): when conservative bounds (the scene's, then the light's:
+`overflow.light_bound`) say a count could reach 256, one more saturating volume pass for that
+light finds the pixels that may have wrapped, and render() raises
 overflow.StencilOverflowError instead of returning a wrong shadow.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import moderngl
 import numpy as np
@@ -24,7 +27,7 @@ from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import create_context, make_current
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.projection import view_projection
-from shadowvol.raster.target import Target
+from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
 from shadowvol.raster.volumes import CpuVolumes, GpuVolumes
 from shadowvol.scene import (
     AreaLight,
@@ -38,33 +41,39 @@ from shadowvol.scene import (
 )
 
 SILHOUETTES = ("cpu", "gpu")
+# what `render(outputs=...)` can return; the default is what the frame always returned
+OUTPUTS = ("image", "image_srgb", "lit", "coverage", "stencil")
+DEFAULT_OUTPUTS = ("image", "lit", "coverage")
 
 
 @dataclass(frozen=True, eq=False)
 class RenderResult:
-    """One frame.
+    """One frame.  Each array is None unless asked for (`Renderer.render(outputs=...)`).
 
-    image    : (H, W, 3) float32 linear RGB (direct Phong lighting; an area light's samples
-               summed: soft shadows)
-    lit      : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot cone;
-               for an area light: so for every sample (lit_count == N)
-    coverage : (H, W) bool, geometry visible at the pixel centre
-    stencil  : (L, H, W) int16 signed stencil counts after each light's volume pass, or None
-               when not asked for (hard lights only)
-    zfail    : (L, n_objects) bool, which casters were counted with z-fail for each light
-               (for an area light: for any of its samples)
-    lit_count : (L, H, W) uint16, per light how many of its samples (hard lights: 1) light the
-               pixel as `lit` says
-    samples  : (L,) int64, N per light (hard lights: 1)
+    image      : (H, W, 3) float32 linear RGB (direct Phong lighting; an area light's
+                 samples summed: soft shadows)
+    lit        : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot
+                 cone; for an area light: so for every sample (lit_count == N)
+    coverage   : (H, W) bool, geometry visible at the pixel centre
+    stencil    : (L, H, W) int16 signed stencil counts after each light's volume pass (hard
+                 lights only)
+    zfail      : (L, n_objects) bool, which casters were counted with z-fail for each light
+                 (for an area light: for any of its samples; always returned)
+    lit_count  : (L, H, W) uint16, per light how many of its samples (hard lights: 1) light
+                 the pixel as `lit` says (returned with `lit`)
+    samples    : (L,) int64, N per light (hard lights: 1; always returned)
+    image_srgb : (H, W, 3) uint8, `image` encoded to sRGB on the GPU (the IEC 61966-2-1
+                 curve of `shadowvol.io.encode_srgb`, in float32: a code may differ by one)
     """
 
-    image: np.ndarray
-    lit: np.ndarray
-    coverage: np.ndarray
+    image: np.ndarray | None
+    lit: np.ndarray | None
+    coverage: np.ndarray | None
     stencil: np.ndarray | None
     zfail: np.ndarray
-    lit_count: np.ndarray
-    samples: np.ndarray
+    lit_count: np.ndarray | None = None
+    samples: np.ndarray | None = None
+    image_srgb: np.ndarray | None = None
 
     @property
     def visibility(self) -> np.ndarray:
@@ -96,6 +105,16 @@ class Renderer:
         self._owned = []
         self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
         self._count_bound: int | None = None
+        self._outward_convex: np.ndarray | None = None
+        self._convex: np.ndarray | None = None
+        # light -> None (used once) or (the slack (M,) it was computed with, the bound)
+        self._light_bounds: dict[bytes, tuple | None] = {}
+        self._slack: tuple | None = None   # (camera key, `overflow.world_slack`)
+        # back-face culling in the geometry pass for closed convex casters beyond the near
+        # plane (`methods.cullable`): 14-22% of a frame here, but OFF by default because it is
+        # not exact at float32 depth ties: where a silhouette's back face won the depth test by
+        # rounding, the front face shows instead (one pixel of scenes/whitted.toml)
+        self.cull_back_faces = False
         # the stencil-overflow check (see `overflow`): on by default; it costs one more volume
         # pass per light, and only in scenes whose bound allows a count of 256
         self.check_overflow = True
@@ -128,23 +147,85 @@ class Renderer:
 
     def render(self, method: str = "auto", silhouettes: str = "cpu", *,
                camera: Camera | None = None, lights: tuple[Light, ...] | None = None,
-               stencil: bool = False, shadows: bool = True) -> RenderResult:
+               stencil: bool = False, shadows: bool = True,
+               outputs: tuple[str, ...] | None = None) -> RenderResult:
         """One frame.  `method`: "auto" (z-fail only for casters the near plane may cut),
         "zpass" or "zfail".  `camera`/`lights` override the scene's for this frame.
-        `stencil=True` also returns the per-light stencil counts (one extra read-back each).
-        `shadows=False` skips the volume passes (every count stays 0): the same frame without
-        shadows, the benchmark's baseline."""
+        `outputs`: the arrays to read back (names in OUTPUTS; default image, lit and
+        coverage); the others are None in the result.  `stencil=True` adds "stencil": the
+        per-light stencil counts (one extra read-back each).  `shadows=False` skips the volume
+        passes (every count stays 0): the same frame without shadows, the benchmark's
+        baseline."""
         if method not in methods.METHODS:
             raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
                              f"got {method!r}")
+        outputs = _check_outputs(outputs, stencil)
         lights = _check_lights(lights)
         make_current(self.ctx)
+        to_check = self._lights_to_check(camera, lights) if shadows else []
         with stencil_gl.zero_to_one_depth(self.gl):
-            result = self._render(method, silhouettes, camera, lights, stencil, shadows)
-            if shadows and self.check_overflow and self.count_bound >= overflow.STENCIL_LIMIT:
+            # the overflow check needs the lit masks, asked for or not
+            result = self._render(method, silhouettes, camera, lights, shadows,
+                                  outputs | ({"lit"} if to_check else set()))
+            if to_check:
                 overflow.check_frame(self, result, silhouettes, camera, lights,
-                                     halve=method == "auto" and not stencil)
+                                     halve=method == "auto" and "stencil" not in outputs,
+                                     only=to_check)
+            if "lit" not in outputs:
+                result = replace(result, lit=None, lit_count=None)
             return result
+
+    def _lights_to_check(self, camera, lights) -> list[int]:
+        """Indices of the lights whose stencil count might reach 256 in this frame: none when
+        the scene's bound is below it, else those whose `overflow.light_bound` is not.  A
+        light's bound costs more than one re-check (0.1-0.6 s), so it is computed the second
+        time the light is used, with twice the slack this camera needs, and kept while later
+        cameras need no more slack."""
+        if not self.check_overflow or self.count_bound < overflow.STENCIL_LIMIT:
+            return []
+        camera = self.scene.camera if camera is None else camera
+        lights = self.scene.lights if lights is None else lights
+        corners = self.geometry.soup_corners_f64
+        key = (camera.eye.tobytes(), float(camera.fov_y))
+        if self._slack is None or self._slack[0] != key:   # a pass over every corner: once
+            self._slack = (key, overflow.world_slack(camera, self.scene.height, corners))
+        needed = self._slack[1]
+        out = []
+        for i, light in enumerate(lights):
+            if isinstance(light, AreaLight):
+                out.append(i)   # its samples are re-checked (no per-sample bound is kept)
+                continue
+            key = light.homogeneous.tobytes()
+            if key not in self._light_bounds:
+                self._light_bounds[key] = None      # seen once: re-check this frame
+                out.append(i)
+                continue
+            kept = self._light_bounds[key]
+            if kept is None or not (needed <= kept[0]).all():
+                slack = 2.0 * needed
+                kept = (slack, overflow.light_bound(corners, self.geometry.object_of,
+                                                    self.convex, light.homogeneous, slack))
+                self._light_bounds[key] = kept
+            if kept[1] >= overflow.STENCIL_LIMIT:
+                out.append(i)
+        return out
+
+    @property
+    def convex(self) -> np.ndarray:
+        """(n_objects,) bool: closed convex meshes (`overflow.is_closed_convex`)."""
+        if self._convex is None:
+            self._convex = np.array([overflow.is_closed_convex(t)
+                                     for t in self.geometry.topologies], bool)
+        return self._convex
+
+    @property
+    def outward_convex(self) -> np.ndarray:
+        """(n_objects,) bool: closed convex meshes wound outward (`overflow.
+        convex_orientation`), whose back faces `methods.cullable` may cull."""
+        if self._outward_convex is None:
+            self._outward_convex = np.array(
+                [overflow.convex_orientation(t) == 1 for t in self.geometry.topologies], bool)
+        return self._outward_convex
 
     @property
     def count_bound(self) -> int:
@@ -153,57 +234,90 @@ class Renderer:
             self._count_bound = overflow.count_bound(self.geometry.topologies)
         return self._count_bound
 
-    def _render(self, method, silhouettes, camera, lights, stencil, shadows) -> RenderResult:
+    def _render(self, method, silhouettes, camera, lights, shadows,
+                outputs: set[str]) -> RenderResult:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else tuple(lights)
+        want_stencil = "stencil" in outputs
         vols = self.volumes(silhouettes)
+        progs, target = self.programs, self.target
         view_proj = view_projection(camera, self.scene.aspect)
-        passes.set_camera((self.programs.ambient, self.programs.phong, *vols.programs),
-                          view_proj, camera)
-        passes.depth_ambient(self.ctx, self.target, self.programs, self.scene)
+        passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
+        cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
+                                self.geometry.extent) if self.cull_back_faces else None
+        # an area light is its samples, each counted and shaded as a point light
+        hard = [(i, sample) for i, lt in enumerate(lights) for sample in hard_lights(lt)]
+        # the unshadowed bits are cleared when some light of the first page is marked
+        passes.geometry_pass(self.ctx, target, progs, self.scene, cull, marks=len(hard) > 1)
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
-        clip = None if stencil else methods.zpass_clip_planes(
+        clip = None if want_stencil else methods.zpass_clip_planes(
             self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
         h, w = self.scene.height, self.scene.width
-        if stencil and any(isinstance(light, AreaLight) for light in lights):
+        if want_stencil and any(isinstance(light, AreaLight) for light in lights):
             raise ValueError("stencil counts are per hard light: not for area lights")
-        lit_count = np.zeros((len(lights), h, w), np.uint16)
+        colour = bool({"image", "image_srgb"} & outputs)
+        need_bits = "lit" in outputs or "coverage" in outputs or not colour
+        pages, counts = [], []
         zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
-        counts = []
-        # an area light is its samples, each counted and shaded as a point light
-        for i, sample in ((i, hard) for i, lt in enumerate(lights) for hard in hard_lights(lt)):
-            light4 = sample.homogeneous
-            choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
-                                    light4, self.geometry.extent)
-            if shadows:
-                vols.prepare(light4)
-                # halving is safe only for casters `auto` chose z-pass for, and only when
-                # the counts themselves are not returned (see passes.count_volumes)
-                passes.count_volumes(self.ctx, self.gl, self.target, vols, choice,
-                                     halve=method == "auto" and not stencil, clip_planes=clip)
-            else:
-                self.target.clear_stencil()
-            if stencil:
-                counts.append(self.target.read_stencil())
-            passes.add_light(self.ctx, self.gl, self.target, self.programs, sample)
-            lit_count[i] += self.target.read_lit()
-            zfail[i] |= choice
-        rgba = self.target.read_colour()
+        # hard lights go in pages of LIGHTS_PER_PAGE: each one's volume count marks its
+        # unshadowed bit, then one shading pass per page (one for any usual frame)
+        for first in range(0, max(len(hard), 1), LIGHTS_PER_PAGE):
+            page_lights = [sample for _, sample in hard[first:first + LIGHTS_PER_PAGE]]
+            if first:
+                target.clear_unshadowed()
+                target.clear_lit()
+            for bit, light in enumerate(page_lights):
+                light4 = light.homogeneous
+                choice = methods.choose(method, self.geometry.bounds, camera,
+                                        self.scene.aspect, light4, self.geometry.extent)
+                if shadows:
+                    vols.prepare(light4)
+                    # halving is safe only for casters `auto` chose z-pass for, and only when
+                    # the counts themselves are not returned (see passes.count_volumes)
+                    passes.count_volumes(self.ctx, self.gl, target, vols, choice,
+                                         halve=method == "auto" and not want_stencil,
+                                         clip_planes=clip)
+                else:
+                    target.clear_stencil()
+                if want_stencil:
+                    counts.append(target.read_stencil())
+                if bit < len(page_lights) - 1:   # the last light's stencil is read by `shade`
+                    passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit)
+                zfail[hard[first + bit][0]] |= choice
+            passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
+                         first_page=not first, colour=colour)
+            if need_bits:
+                pages.append(target.read_bits())
+        image = target.read_image() if "image" in outputs else None
+        coverage = (pages[0] & 1).astype(bool) if "coverage" in outputs else None
         samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
+        lit = lit_count = None
+        if "lit" in outputs:
+            lit_count = np.zeros((len(lights), h, w), np.uint16)
+            one = np.empty((h, w), bool)
+            for k, (i, _) in enumerate(hard):
+                page, bit = divmod(k, LIGHTS_PER_PAGE)
+                np.not_equal(pages[page] & np.uint32(1 << (bit + 1)), 0, out=one)
+                lit_count[i] += one
+            lit = lit_count == samples[:, None, None]
+        srgb = None
+        if "image_srgb" in outputs:
+            passes.encode_srgb(self.ctx, target, progs)
+            srgb = target.read_srgb()
         return RenderResult(
-            image=np.ascontiguousarray(rgba[..., :3]),
-            lit=lit_count == samples[:, None, None],
-            coverage=rgba[..., 3] > 0.5,
-            stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if stencil else None,
-            zfail=zfail, lit_count=lit_count, samples=samples)
+            image=image, lit=lit, coverage=coverage,
+            stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if want_stencil
+            else None,
+            zfail=zfail, lit_count=lit_count, samples=samples, image_srgb=srgb)
 
     def facing(self, *, camera: Camera | None = None,
                lights: tuple[Light, ...] | None = None) -> np.ndarray:
         """(L, H, W) bool: some sample of each light faces the pixel (n . l > 0 toward it and
         inside its cone), shadows aside: the frame without the volume passes.  With a
         frame's `lit_count`, umbra = facing & (lit_count == 0)."""
-        return self.render(camera=camera, lights=lights, shadows=False).lit_count > 0
+        return self.render(camera=camera, lights=lights, shadows=False,
+                           outputs=("lit",)).lit_count > 0
 
     def volume_view(self, method: str = "auto", silhouettes: str = "cpu", *,
                     camera: Camera | None = None,
@@ -238,6 +352,20 @@ class Renderer:
 
     def __exit__(self, *exc) -> None:
         self.release()
+
+
+def _check_outputs(outputs, stencil: bool) -> set[str]:
+    """`outputs=` of render: names from OUTPUTS (default DEFAULT_OUTPUTS); `stencil=True`
+    adds "stencil"."""
+    if outputs is None:
+        outputs = DEFAULT_OUTPUTS
+    if isinstance(outputs, str):
+        raise TypeError(f"outputs must be a sequence of names, e.g. ({outputs!r},)")
+    chosen = set(outputs)
+    unknown = sorted(chosen - set(OUTPUTS))
+    if unknown:
+        raise ValueError(f"unknown output {unknown[0]!r}; outputs are {', '.join(OUTPUTS)}")
+    return chosen | ({"stencil"} if stencil else set())
 
 
 def _check_lights(lights) -> tuple[Light, ...] | None:

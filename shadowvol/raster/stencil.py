@@ -28,6 +28,7 @@ from shadowvol.errors import RenderError
 GL_UNSIGNED_BYTE = 0x1401
 GL_STENCIL_INDEX = 0x1901
 GL_STENCIL = 0x1802
+GL_COLOR = 0x1800
 GL_DEPTH_STENCIL = 0x84F9
 GL_FRONT = 0x0404
 GL_BACK = 0x0405
@@ -64,7 +65,8 @@ _SIGNATURES = {
     "glStencilFuncSeparate": (_V, _u, _u, _i, _u),
     "glStencilOpSeparate": (_V, _u, _u, _u, _u),
     "glStencilMaskSeparate": (_V, _u, _u),
-    "glClearBufferiv": (_V, _u, _i, _p), "glClearBufferfi": (_V, _u, _i, ctypes.c_float, _i),
+    "glClearBufferiv": (_V, _u, _i, _p), "glClearBufferfv": (_V, _u, _i, _p),
+    "glClearBufferfi": (_V, _u, _i, ctypes.c_float, _i),
     "glPixelStorei": (_V, _u, _i),
     "glReadPixels": (_V, _i, _i, _i, _i, _u, _u, _p),
     "glGenRenderbuffers": (_V, _i, _p), "glDeleteRenderbuffers": (_V, _i, _p),
@@ -180,6 +182,17 @@ class DepthStencilBuffer:
             self.release()
             raise RawGLError(f"framebuffer incomplete (status 0x{status:04X})")
 
+    def attach(self, framebuffer_glo: int) -> None:
+        """Attach the same renderbuffer to another framebuffer too (passes that must not write
+        some of the first one's attachments share its depth and stencil)."""
+        with bound_framebuffer(self.gl, framebuffer_glo):
+            self.gl.glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT,
+                                              GL_RENDERBUFFER, self.glo)
+            status = self.gl.glCheckFramebufferStatus(GL_FRAMEBUFFER)
+        self.gl.check("attaching the depth-stencil renderbuffer")
+        if status != GL_FRAMEBUFFER_COMPLETE:
+            raise RawGLError(f"framebuffer incomplete (status 0x{status:04X})")
+
     def release(self) -> None:
         if self.glo:
             ids = (ctypes.c_uint * 1)(self.glo)
@@ -212,6 +225,24 @@ def clear_stencil(gl: RawGL, framebuffer_glo: int) -> None:
         gl.glStencilMaskSeparate(GL_FRONT, 0xFF)
         gl.glStencilMaskSeparate(GL_BACK, 0xFF)
         gl.glClearBufferiv(GL_STENCIL, 0, zero)
+
+
+def clear_colour_attachment(gl: RawGL, framebuffer_glo: int, draw_buffer: int,
+                            value: float) -> None:
+    """Float colour attachment `draw_buffer` (its index among the draw buffers) to `value` in
+    every channel, under the current colour write mask (moderngl clears all attachments with
+    one colour)."""
+    values = (ctypes.c_float * 4)(value, value, value, value)
+    with bound_framebuffer(gl, framebuffer_glo):
+        gl.glClearBufferfv(GL_COLOR, draw_buffer, values)
+
+
+def clear_int_attachment(gl: RawGL, framebuffer_glo: int, draw_buffer: int, value: int) -> None:
+    """Integer colour attachment `draw_buffer` to `value` (glClear's float colour leaves an
+    integer attachment undefined)."""
+    values = (ctypes.c_int * 4)(value, value, value, value)
+    with bound_framebuffer(gl, framebuffer_glo):
+        gl.glClearBufferiv(GL_COLOR, draw_buffer, values)
 
 
 def read_stencil(gl: RawGL, framebuffer_glo: int, width: int, height: int) -> np.ndarray:
@@ -321,6 +352,16 @@ def where_unshadowed(gl: RawGL) -> Iterator[None]:
     """Lighting: draw only where the stencil count is 0; the stencil itself is left unchanged."""
     with _saved_stencil_state(gl):
         _set(gl, func=GL_EQUAL, ref=0, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
+             back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def where_shadowed(gl: RawGL) -> Iterator[None]:
+    """Draw only where the stencil count is not 0 (the complement of `where_unshadowed`); the
+    stencil itself is left unchanged."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_NOTEQUAL, ref=0, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
              back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
         yield
 

@@ -1,14 +1,26 @@
-"""The render target: a float colour attachment, a per-light "lit" attachment, depth + stencil.
+"""The render target: the G-buffer of the deferred frame, depth + stencil, and the read-backs.
 
-- colour (RGBA32F): linear RGB, summed over the passes (float so nothing clamps or is quantised
-  before the final sRGB encoding); alpha is 1 where geometry covers the pixel.
-- lit (R8): cleared before each light, set to 1 where that light's Phong term was added, i.e.
-  covered, stencil 0, n . l > 0 and inside the spot cone: the light's `lit` mask.
+- position (RGBA32F), written by the geometry pass: the visible surface's world position, and
+  in w +-(triangle index + 1), negative where its back face is seen, 0 where nothing is drawn:
+  the key of the per-triangle data (normal, first corner, object; a float, exact below 2^24).
+  Further per-pixel outputs (depth, object id) fit beside it as attachments of the same pass.
+- unshadowed (R32F): bit i set where light i's stencil count was 0, summed by additive
+  blending (distinct powers of two add exactly in float32 up to 2^24).
+- colour (RGBA32F): linear RGB (float so nothing clamps or is quantised before the final sRGB
+  encoding); alpha is 1 where geometry covers the pixel.
+- bits (R32F): bit 0 covered, bit i + 1 lit by the frame's i-th light (of a page of
+  `LIGHTS_PER_PAGE`): every light's lit mask and the coverage come back in ONE read.  (The
+  forward passes, the planar shadows', clear it per light and add 1.0: one light's mask.)
 - depth-stencil: DEPTH32F_STENCIL8, a raw-GL renderbuffer (see `stencil`: moderngl has no
-  stencil API); float depth for the reversed depth of `camera.infinite_projection`.
+  stencil API) shared by every framebuffer here; float depth for the reversed depth of
+  `camera.infinite_projection`.
+- srgb (RGBA8, its own framebuffer): the image encoded to 8-bit sRGB by a full-screen pass.
 
-No multisampling: every mask is sampled at pixel centres (CONVENTIONS.md).  Read-backs come out
-row 0 at the top, through `camera.top_row_first`.
+A pass never samples a texture attached to the framebuffer it draws into (undefined in GL), so
+each pass has its framebuffer: `gbuffer_fbo`, `mark_fbo`, `fbo` (colour and bits), `srgb_fbo`.
+No multisampling: every mask is sampled at pixel centres (CONVENTIONS.md).  Read-backs go into
+buffers allocated once and come out row 0 at the top (one flip, here, or none for the sRGB
+image, whose pass writes the rows flipped).
 """
 
 from __future__ import annotations
@@ -17,7 +29,9 @@ import moderngl
 import numpy as np
 
 from shadowvol.raster import stencil
-from shadowvol.raster.projection import FAR_DEPTH, top_row_first
+from shadowvol.raster.projection import FAR_DEPTH
+
+LIGHTS_PER_PAGE = 23  # lit bits 1..23 and the coverage bit of a float32: exact
 
 
 class Target:
@@ -27,28 +41,65 @@ class Target:
         self.ctx, self.gl = ctx, gl
         self.width, self.height = width, height
         self.colour = ctx.texture((width, height), 4, dtype="f4")
-        self.lit = ctx.texture((width, height), 1, dtype="f1")
-        self.fbo = ctx.framebuffer(color_attachments=[self.colour, self.lit])
-        self.lit_fbo = ctx.framebuffer(color_attachments=[self.lit])
+        self.bits = ctx.texture((width, height), 1, dtype="f4")
+        self.position = ctx.texture((width, height), 4, dtype="f4")
+        self.unshadowed = ctx.texture((width, height), 1, dtype="f4")
+        self.srgb = ctx.texture((width, height), 4, dtype="f1")
+        self._textures = (self.colour, self.bits, self.position, self.unshadowed, self.srgb)
+        for t in self._textures:
+            t.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.gbuffer_fbo = ctx.framebuffer(color_attachments=[self.position])
+        self.mark_fbo = ctx.framebuffer(color_attachments=[self.unshadowed])
+        self.fbo = ctx.framebuffer(color_attachments=[self.colour, self.bits])
+        self.lit_fbo = ctx.framebuffer(color_attachments=[self.bits])
+        self.srgb_fbo = ctx.framebuffer(color_attachments=[self.srgb])
+        self._fbos = (self.gbuffer_fbo, self.mark_fbo, self.fbo, self.lit_fbo, self.srgb_fbo)
+        # read-back staging, GL's row order (bottom row first), allocated once
+        self._rgba = np.empty((height, width, 4), np.float32)
+        self._rgb = np.empty((height, width, 3), np.float32)
+        self._bits = np.empty((height, width), np.float32)
         try:
             self.depth_stencil = stencil.DepthStencilBuffer(gl, self.fbo.glo, width, height)
+            self.depth_stencil.attach(self.gbuffer_fbo.glo)
+            self.depth_stencil.attach(self.mark_fbo.glo)
         except Exception:
-            for obj in (self.fbo, self.lit_fbo, self.colour, self.lit):
+            for obj in (*self._fbos, *self._textures):
                 obj.release()
             raise
 
     def use(self, colour: bool = True, depth: bool = True) -> None:
-        """Bind for drawing with colour writes (both attachments) and depth writes on or off."""
+        """Bind for drawing with colour writes (colour and bits) and depth writes on or off."""
         self.fbo.depth_mask = depth
         self.fbo.color_mask = [(colour,) * 4, (colour,) * 4]
         self.fbo.use()
 
+    def use_gbuffer(self) -> None:
+        """Bind the geometry pass's framebuffer: position (and surface) and depth written."""
+        self.gbuffer_fbo.depth_mask = True
+        self.gbuffer_fbo.color_mask = (True,) * 4
+        self.gbuffer_fbo.use()
+
     def clear(self, background: np.ndarray) -> None:
-        """Colour to the background (alpha 0: not covered), lit to 0, depth to FAR_DEPTH,
-        stencil 0."""
+        """For the forward passes: colour to the background (alpha 0: not covered), bits to 0,
+        depth to FAR_DEPTH, stencil 0; `fbo` left bound."""
         self.use()
         self.fbo.clear(*[float(c) for c in background], 0.0)
         stencil.clear_depth_stencil(self.gl, self.fbo.glo, FAR_DEPTH)
+        stencil.clear_colour_attachment(self.gl, self.fbo.glo, 1, 0.0)
+
+    def clear_gbuffer(self, background: np.ndarray, marks: bool) -> None:
+        """For the geometry pass: colour to the background (alpha 0), bits to 0, depth to
+        FAR_DEPTH, stencil 0, and the unshadowed bits to 0 if `marks` (a light will be
+        marked).  The full-screen passes run only where geometry is (depth test), so these are
+        what uncovered pixels keep, and the position attachment needs no clear: it is read
+        only where the geometry pass has just written it."""
+        self.clear(background)   # colour, bits, depth, stencil (`fbo`)
+        if marks:
+            self.clear_unshadowed()  # glClearBuffer: moderngl's clear would clear the depth
+
+    def clear_unshadowed(self) -> None:
+        self.mark_fbo.color_mask = (True,) * 4
+        stencil.clear_colour_attachment(self.gl, self.mark_fbo.glo, 0, 0.0)
 
     def clear_lit(self) -> None:
         self.lit_fbo.color_mask = (True,) * 4
@@ -61,25 +112,40 @@ class Target:
 
     def read_colour(self) -> np.ndarray:
         """(H, W, 4) float32: linear RGB and coverage alpha, row 0 at the top."""
-        raw = self.fbo.read(components=4, attachment=0, dtype="f4")
-        return top_row_first(np.frombuffer(raw, np.float32).reshape(self.height, self.width, 4))
+        self.fbo.read_into(self._rgba, components=4, attachment=0, dtype="f4")
+        return np.ascontiguousarray(self._rgba[::-1])
+
+    def read_image(self) -> np.ndarray:
+        """(H, W, 3) float32 linear RGB, row 0 at the top (GL packs RGB; one contiguous copy
+        flips the rows: a strided numpy copy of RGB out of RGBA costs 5x more)."""
+        self.fbo.read_into(self._rgb, components=3, attachment=0, dtype="f4")
+        return self._rgb[::-1].copy()
+
+    def read_bits(self) -> np.ndarray:
+        """(H, W) uint32 of the bits attachment, row 0 at the top."""
+        self.fbo.read_into(self._bits, components=1, attachment=1, dtype="f4")
+        return self._bits[::-1].astype(np.uint32)
 
     def read_lit(self) -> np.ndarray:
-        """(H, W) bool, row 0 at the top."""
-        raw = self.fbo.read(components=1, attachment=1, dtype="f1")
-        return top_row_first(np.frombuffer(raw, np.uint8).reshape(self.height, self.width) > 127)
+        """(H, W) bool, row 0 at the top: the one light of a forward lighting pass."""
+        return self.read_bits() > 0
+
+    def read_srgb(self) -> np.ndarray:
+        """(H, W, 3) uint8 sRGB, written by the sRGB pass with the rows already flipped."""
+        raw = self.srgb_fbo.read(components=3, attachment=0, dtype="f1")
+        return np.frombuffer(raw, np.uint8).reshape(self.height, self.width, 3).copy()
 
     def read_stencil(self) -> np.ndarray:
         """(H, W) int16: the signed stencil count (the 8-bit value read as two's complement, so
         a net -1 from DECR_WRAP reads -1), row 0 at the top."""
         raw = stencil.read_stencil(self.gl, self.fbo.glo, self.width, self.height)
-        return top_row_first(raw.view(np.int8).astype(np.int16))
+        return np.ascontiguousarray(raw[::-1]).view(np.int8).astype(np.int16)
 
     def release(self) -> None:
-        if self.ctx.fbo in (self.fbo, self.lit_fbo):
+        if self.ctx.fbo in self._fbos:
             # moderngl re-binds its record of the bound framebuffer after creating the next
             # one; leaving it pointing at a deleted framebuffer raises GL_INVALID_OPERATION
             self.ctx.detect_framebuffer(0).use()
         self.depth_stencil.release()
-        for obj in (self.fbo, self.lit_fbo, self.colour, self.lit):
+        for obj in (*self._fbos, *self._textures):
             obj.release()

@@ -47,8 +47,35 @@ MAX_OPPOSITE = 4  # opposite vertices per edge record (silhouette.geom emits at 
 _FRONT_FACE = {(True, 1): "ccw", (True, -1): "cw", (False, 1): "cw", (False, -1): "ccw"}
 
 
+class _LightVolumes:
+    """One light's CPU volumes, kept while the light (and the casters) do not move: per-object
+    signs, the side triangles in their own buffer, and the cap index lists once built."""
+
+    def __init__(self):
+        self.signs: list[np.ndarray] = []                         # per object
+        self.sides: dict[int, tuple[int, int, int]] = {}          # object -> (first, n, repeat)
+        self.buffer: moderngl.Buffer | None = None
+        self.vaos: dict[bool, moderngl.VertexArray] = {}          # clipped? -> vao
+        self.caps: dict[tuple[int, int], tuple[int, int]] = {}    # (object, sign) -> (first, n)
+        self.capped: tuple[int, ...] | None = None                # objects in the index buffer
+        self.index_buffer: moderngl.Buffer | None = None
+        self.cap_vaos: dict[bool, moderngl.VertexArray] = {}      # near? -> vao
+
+    def release(self) -> None:
+        for obj in (*self.vaos.values(), *self.cap_vaos.values(), self.buffer,
+                    self.index_buffer):
+            if obj is not None:
+                obj.release()
+
+
 class CpuVolumes:
-    """Shadow volumes from CPU silhouettes.  Programs are made here; call `release()`."""
+    """Shadow volumes from CPU silhouettes.  Programs are made here; call `release()`.
+
+    The volumes of the last `KEPT_LIGHTS` lights are kept (keyed by the homogeneous light):
+    the scene's casters never move, so a light that comes back, in the next frame or the next
+    camera of a turntable, reuses its side quads and cap lists as they were uploaded."""
+
+    KEPT_LIGHTS = 8
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
@@ -59,38 +86,41 @@ class CpuVolumes:
         self.far_program = glsl.program(ctx, "far_cap.vert", "volume.frag")
         self.programs = (self.side_program, self.clip_program, self.near_program,
                          self.far_program)
-        self.side_buffer = ctx.buffer(reserve=64, dynamic=True)
-        self.index_buffer = ctx.buffer(reserve=64, dynamic=True)
-        self.side_vao = ctx.vertex_array(self.side_program,
-                                         [(self.side_buffer, "4f", "in_position")])
-        self.clip_vao = ctx.vertex_array(self.clip_program,
-                                         [(self.side_buffer, "4f", "in_position")])
-        self.near_vao = ctx.vertex_array(self.near_program,
-                                         geometry.soup_bindings(self.near_program),
-                                         index_buffer=self.index_buffer, index_element_size=4)
-        self.far_vao = ctx.vertex_array(self.far_program,
-                                        geometry.soup_bindings(self.far_program),
-                                        index_buffer=self.index_buffer, index_element_size=4)
         self.light4 = None
-        self._signs: list[np.ndarray] = []                        # per object, this light
-        self._sides: dict[int, tuple[int, int]] = {}              # object -> (first, count)
-        self._caps: dict[tuple[int, int], tuple[int, int]] = {}   # (object, sign) -> (first, n)
-        self._capped: tuple[int, ...] | None = None               # objects in index_buffer
+        self._kept: dict[bytes, _LightVolumes] = {}   # insertion order = age
+        self._current: _LightVolumes | None = None
+
+    @property
+    def _signs(self) -> list[np.ndarray]:
+        return self._current.signs
+
+    @property
+    def _sides(self) -> dict[int, tuple[int, int, int]]:
+        return self._current.sides
 
     def prepare(self, light4: np.ndarray) -> None:
-        """Compute and upload this light's side quads.  Cap index lists are built on the first
-        `draw_caps` (most frames z-fail few casters or none, and a cap list is 3 indices per
-        triangle).  Sets the light on the volume programs."""
+        """Select this light's side quads, computing and uploading them unless they are kept.
+        Cap index lists are built on the first `draw_caps` (most frames z-fail few casters or
+        none, and a cap list is 3 indices per triangle).  Sets the light on the volume
+        programs."""
+        light4 = np.asarray(light4, np.float64)
         self.light4 = light4
         _set_light(self.programs, light4)
-        sides = []
-        n_side = 0
-        self._sides.clear()
-        self._signs.clear()
-        self._capped = None
+        key = light4.tobytes()
+        kept = self._kept.pop(key, None)
+        if kept is None:
+            kept = self._build(light4)
+            while len(self._kept) >= self.KEPT_LIGHTS:
+                self._kept.pop(next(iter(self._kept))).release()
+        self._kept[key] = kept
+        self._current = kept
+
+    def _build(self, light4: np.ndarray) -> _LightVolumes:
+        out = _LightVolumes()
+        sides, n_side = [], 0
         for rng, topo in zip(self.geometry.ranges, self.geometry.topologies):
             signs = topology_signs(topo, light4)
-            self._signs.append(signs)
+            out.signs.append(signs)
             multiplicity = edge_multiplicity(topo, signs)
             # A caster whose multiplicities are all even (a closed, consistently wound mesh
             # gives 2 on every silhouette edge) stores each quad once, m / 2 copies, and is
@@ -99,35 +129,50 @@ class CpuVolumes:
             repeat = 2 if multiplicity.any() and not (multiplicity & 1).any() else 1
             tris = quads_to_triangles(side_quads(topo, multiplicity // repeat, light4))
             sides.append(tris)
-            self._sides[rng.index] = (n_side, len(tris), repeat)
+            out.sides[rng.index] = (n_side, len(tris), repeat)
             n_side += len(tris)
         # float32 at upload: what GL draws; the quads were built in float64 from the welded
         # positions, which are the drawn vertices exactly, so edges meet the caps exactly
-        _upload(self.side_buffer, np.concatenate(sides).astype(np.float32))
+        data = np.concatenate(sides).astype(np.float32)
+        out.buffer = self.ctx.buffer(data.tobytes() if len(data) else b"\0" * 16)
+        out.vaos = {clipped: self.ctx.vertex_array(program, [(out.buffer, "4f", "in_position")])
+                    for clipped, program in ((False, self.side_program),
+                                             (True, self.clip_program))}
+        return out
 
     def _prepare_caps(self, objects: tuple[int, ...]) -> None:
-        """Upload the cap index lists (soup vertices of the triangles of each sign) of
+        """Upload the cap index lists (the soup vertices of the triangles of each sign) of
         `objects` for the prepared light."""
-        if self._capped == objects:
+        cur = self._current
+        if cur.capped == objects:
             return
         indices, n_index = [], 0
-        self._caps.clear()
-        for i in objects:
-            rng = self.geometry.ranges[i]
-            for sign in (1, -1):
-                t = np.flatnonzero(self._signs[i] == sign) + rng.first
+        cur.caps.clear()
+        for sign in (1, -1):   # each sign's lists one after another: one draw per sign
+            for i in objects:
+                rng = self.geometry.ranges[i]
+                t = np.flatnonzero(cur.signs[i] == sign) + rng.first
                 idx = (3 * t[:, None] + np.arange(3)).reshape(-1)
                 indices.append(idx)
-                self._caps[i, sign] = (n_index, len(idx))
+                cur.caps[i, sign] = (n_index, len(idx))
                 n_index += len(idx)
-        _upload(self.index_buffer, np.concatenate(indices).astype(np.int32))
-        self._capped = objects
+        data = np.concatenate(indices).astype(np.int32)
+        for vao in cur.cap_vaos.values():
+            vao.release()
+        if cur.index_buffer is not None:
+            cur.index_buffer.release()
+        cur.index_buffer = self.ctx.buffer(data.tobytes() if len(data) else b"\0" * 12)
+        cur.cap_vaos = {near: self.ctx.vertex_array(
+            program, self.geometry.soup_bindings(program), index_buffer=cur.index_buffer,
+            index_element_size=4) for near, program in ((True, self.near_program),
+                                                        (False, self.far_program))}
+        cur.capped = objects
 
     def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
         """Draw the side quads of `objects`.  `clipped`: with the program that writes the
         distances to the z-pass clip box (`methods.zpass_clip_planes`; z-pass only).
         `halve`: draw the quads of casters whose multiplicities are all even once (m / 2
-        copies), not twice.
+        copies), not twice.  Objects next to each other in the buffer are drawn by one call.
 
         Halving is for z-pass casters only, and only when the caller needs just "count == 0":
         the z-pass count at a pixel is linear in the multiplicities, so such a caster adds
@@ -137,12 +182,16 @@ class CpuVolumes:
         exactly when it was 0 before.  (The stencil's 8-bit wrap, documented in `renderer`,
         needs 256 layers either way.)  Z-fail casters must not be halved: their caps count 1
         per triangle."""
-        vao = self.clip_vao if clipped else self.side_vao
-        for i in objects:
-            first, count, repeat = self._sides[i]
-            if count:
-                for _ in range(1 if halve else repeat):
-                    vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+        vao = self._current.vaos[clipped]
+        sides = self._current.sides
+        # every object once, then the objects drawn twice once more: INCR_WRAP / DECR_WRAP
+        # commute, so the order of the draws does not change a count
+        rounds = [list(objects)]
+        if not halve:
+            rounds.append([i for i in objects if sides[i][2] == 2])
+        for round_ in rounds:
+            for first, count in _runs(sides[i][:2] for i in round_):
+                vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def draw_caps(self, objects, near: bool) -> None:
         if not near and self.light4[3] == 0.0:
@@ -151,19 +200,34 @@ class CpuVolumes:
         if not objects:
             return
         self._prepare_caps(objects)
-        vao = self.near_vao if near else self.far_vao
+        cur = self._current
+        vao = cur.cap_vaos[near]
         for sign in (1, -1):
             self.ctx.front_face = _FRONT_FACE[near, sign]
-            for i in objects:
-                first, count = self._caps[i, sign]
-                if count:
-                    vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+            for first, count in _runs(cur.caps[i, sign] for i in objects):
+                vao.render(moderngl.TRIANGLES, vertices=count, first=first)
         self.ctx.front_face = "ccw"
 
     def release(self) -> None:
-        for obj in (self.side_vao, self.clip_vao, self.near_vao, self.far_vao, self.side_buffer,
-                    self.index_buffer, *self.programs):
+        for kept in self._kept.values():
+            kept.release()
+        self._kept.clear()
+        for obj in self.programs:
             obj.release()
+
+
+def _runs(ranges) -> list[tuple[int, int]]:
+    """(first, count) ranges, empty ones dropped and ranges that continue each other merged:
+    one draw call per run instead of one per object."""
+    out: list[list[int]] = []
+    for first, count in ranges:
+        if not count:
+            continue
+        if out and out[-1][0] + out[-1][1] == first:
+            out[-1][1] += count
+        else:
+            out.append([first, count])
+    return [(f, c) for f, c in out]
 
 
 class GpuVolumes:
@@ -260,14 +324,6 @@ def edge_records(topo) -> np.ndarray:
     out["c"][rec, rank % MAX_OPPOSITE] = topo.vertices[topo.inc_opposite]
     out["count"] = np.bincount(rec, minlength=len(out))
     return out
-
-
-def _upload(buffer: moderngl.Buffer, data: np.ndarray) -> None:
-    raw = data.tobytes()
-    if len(raw) > buffer.size:
-        buffer.orphan(max(len(raw), 2 * buffer.size))
-    if raw:
-        buffer.write(raw)
 
 
 def _set_light(programs, light4: np.ndarray) -> None:

@@ -14,8 +14,9 @@ from builders import ROOT
 pytestmark = pytest.mark.gl  # the child processes render
 
 SECTIONS = ["## Headline ratios and targets", "## Frames at", "## Phases (one light)",
-            "## Resolution scaling", "## pyrender 0.1.45, the same scenes", "## Ray tracer",
-            "## Memory"]
+            "## pyrender 0.1.45, the same scenes", "## Ray tracer", "## Memory"]
+# with the shared meshes beside the checkout (or its parent) the real-mesh sections run too
+MESH_SECTIONS = ["## The stencil-overflow check on real meshes", "## Turntable"]
 
 
 def test_quick_benchmark_run_writes_the_report(tmp_path):
@@ -23,19 +24,19 @@ def test_quick_benchmark_run_writes_the_report(tmp_path):
                            "--out", str(tmp_path)], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
     md = (tmp_path / "BENCHMARKS.md").read_text()
-    for heading in SECTIONS:
+    results = json.loads((tmp_path / "results.json").read_text())
+    for heading in SECTIONS + (MESH_SECTIONS if results["overflow"] else []):
         assert heading in md, heading
     assert "python benchmarks/run.py --quick" in md
     assert "llvmpipe" in md or "GL**:" in md
     png = (tmp_path / "benchmarks.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
-    results = json.loads((tmp_path / "results.json").read_text())
-    for key in ("machine", "frames", "phases", "silhouettes", "resolution", "pyrender",
-                "raytrace", "memory"):
+    for key in ("machine", "frames", "phases", "silhouettes", "overflow", "turntable",
+                "pyrender", "rss", "raytrace", "memory"):
         assert key in results, key
     frame = results["frames"][0]["times"]
-    assert {"floor", "auto/cpu", "zpass/gpu", "zfail/cpu"} <= set(frame)
+    assert {"plain", "floor", "auto/cpu x1", "masks/cpu x1", "auto/gpu x1"} <= set(frame)
     assert all({"median", "min", "max"} <= set(s) for s in frame.values())
     # every headline row has a number and a verdict
     rows = md.split("## Headline ratios and targets")[1].split("##")[0]
-    assert rows.count("**met**") + rows.count("not met") >= 5
+    assert rows.count("**met**") + rows.count("not met") >= 2

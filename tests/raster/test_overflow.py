@@ -141,3 +141,87 @@ def test_closed_convex_classification():
     vi, fi = _icosphere()
     assert overflow.is_closed_convex(Topology.build(vi[fi].reshape(-1, 3),
                                                     np.arange(3 * len(fi)).reshape(-1, 3)))
+
+
+@pytest.mark.parametrize("layers", [40, 255, 256, 512])
+def test_the_light_bound_bounds_the_counts(ctx, layers):
+    """`light_bound` >= every stencil count (z-fail: the true counts, unhalved), and it sees the
+    stack: at least `layers`; 256 sheets and more keep the re-check (the second frame too)."""
+    scene = stack(layers)
+    with Renderer(scene, ctx) as r:
+        g = r.geometry
+        slack = overflow.world_slack(scene.camera, scene.height, g.soup_corners_f64)
+        bound = overflow.light_bound(g.soup_corners_f64, g.object_of, r.convex,
+                                     scene.lights[0].homogeneous, slack)
+        assert bound >= layers
+        if layers < 256:
+            counts = r.render("zfail", stencil=True).stencil.astype(np.int64) & 0xFF  # 0..255
+            assert counts.max() <= bound
+        else:
+            for _ in range(2):   # the first frame re-checks, the second uses the light bound
+                with pytest.raises(overflow.StencilOverflowError):
+                    r.render()
+
+
+def test_the_light_bound_skips_the_recheck_of_shallow_stacks(ctx, monkeypatch):
+    """A 1,000-triangle mesh (scene bound 1,000) of 10 layers: the first frame re-checks, later
+    frames do not; the masks are the same either way."""
+    scene = stack(10)
+    tiles = []
+    for k in range(50):   # split each sheet into 50 strips: 1,000 triangles, still 10 layers
+        x0, x1 = -0.5 + k / 50, -0.5 + (k + 1) / 50
+        tiles.append(np.array([[x0, 0, -0.5], [x1, 0, -0.5], [x1, 0, 0.5], [x0, 0, 0.5]]))
+    z = np.linspace(1.0, 2.0, 10)
+    v = np.concatenate([t + [0, h, 0] for h in z for t in tiles])
+    f = (np.array([[0, 1, 2], [0, 2, 3]])[None] + 4 * np.arange(len(v) // 4)[:, None, None])
+    scene = scene.replace(objects=[scene.objects[0], mesh("strips", v, f.reshape(-1, 3))])
+    calls = []
+    original = overflow.find_wrapped
+    monkeypatch.setattr(overflow, "find_wrapped",
+                        lambda *a, **k: calls.append(1) or original(*a, **k))
+    with Renderer(scene, ctx) as r:
+        assert r.count_bound >= 256
+        first = r.render()
+        n_first = len(calls)
+        second = r.render()
+        third = r.render(camera=Camera(eye=[0.3, 0.9, 3.2], target=[0, 0, 0], fov_y=60))
+    assert n_first >= 1 and len(calls) == n_first
+    np.testing.assert_array_equal(first.lit, second.lit)
+    assert third.lit.any()
+
+
+def test_the_light_bound_of_a_directional_light(ctx):
+    from shadowvol.scene import DirectionalLight
+    scene = stack(30).replace(lights=[DirectionalLight([0.05, -1.0, 0.02])])
+    with Renderer(scene, ctx) as r:
+        g = r.geometry
+        slack = overflow.world_slack(scene.camera, scene.height, g.soup_corners_f64)
+        bound = overflow.light_bound(g.soup_corners_f64, g.object_of, r.convex,
+                                     scene.lights[0].homogeneous, slack)
+        counts = r.render("zfail", stencil=True).stencil
+    assert 30 <= bound < 256 and 0 <= counts.min() and counts.max() <= bound
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_light_bound_bounds_random_counts(ctx, seed):
+    """Random open sheets and closed boxes around a point light (some across the light's axis
+    planes, some beside it): every true count (z-fail, unhalved) is within the bound."""
+    rng = np.random.default_rng(seed)
+    light = np.array([rng.uniform(-0.5, 0.5), 3.0, rng.uniform(-0.5, 0.5)])
+    objects = [plane("floor", size=[8, 8])]
+    for i in range(12):
+        c = light + rng.uniform([-2, -2.5, -2], [2, -0.3, 2])
+        if i % 3 == 0:
+            objects.append(box(f"b{i}", c, rng.uniform(0.2, 0.8, 3)))
+        else:
+            quad = rng.uniform(-0.6, 0.6, (4, 3)) + c
+            objects.append(mesh(f"q{i}", quad, np.array([[0, 1, 2], [0, 2, 3]])))
+    scene = Scene(camera=Camera(eye=[0, 2.0, 6.0], target=[0, 0.8, 0], fov_y=60),
+                  objects=objects, lights=[PointLight(light)], **SIZE)
+    with Renderer(scene, ctx) as r:
+        g = r.geometry
+        slack = overflow.world_slack(scene.camera, scene.height, g.soup_corners_f64)
+        bound = overflow.light_bound(g.soup_corners_f64, g.object_of, r.convex,
+                                     scene.lights[0].homogeneous, slack)
+        counts = r.render("zfail", stencil=True).stencil
+    assert counts.min() >= 0 and counts.max() <= bound < 256

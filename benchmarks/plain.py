@@ -1,0 +1,119 @@
+"""The physical floor every frame ratio is quoted against: a plain moderngl frame of the same
+triangles and camera, written here and nowhere else (no shadowvol code on its GL path).
+
+One indexed draw of every triangle (smooth vertex normals, back-face culling, depth test),
+Blinn-Phong for one point light in the fragment shader, into an RGBA8 + depth framebuffer, and
+an RGBA8 read-back.  No shadows.  This is what any renderer of these triangles must at least
+pay on this machine.
+"""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from shadowvol.raster.projection import view_matrix
+
+VERTEX = """
+#version 330
+uniform mat4 u_mvp;
+in vec3 in_position;
+in vec3 in_normal;
+out vec3 v_position;
+out vec3 v_normal;
+void main() {
+    gl_Position = u_mvp * vec4(in_position, 1.0);
+    v_position = in_position;
+    v_normal = in_normal;
+}
+"""
+FRAGMENT = """
+#version 330
+uniform vec3 u_light;
+uniform vec3 u_eye;
+in vec3 v_position;
+in vec3 v_normal;
+out vec4 f_colour;
+void main() {
+    vec3 n = normalize(v_normal);
+    vec3 l = normalize(u_light - v_position);
+    vec3 h = normalize(l + normalize(u_eye - v_position));
+    float d = max(dot(n, l), 0.0);
+    float s = pow(max(dot(n, h), 0.0), 32.0);
+    f_colour = vec4(vec3(0.05) + vec3(0.7) * d + vec3(0.3) * s, 1.0);
+}
+"""
+
+
+def perspective(camera, aspect: float, far_factor: float = 1e4) -> np.ndarray:
+    """(4, 4) the classic OpenGL perspective (depth -1..1, near plane camera.near, far plane
+    far_factor * near), for the plain frame's ordinary depth test."""
+    f = 1.0 / np.tan(np.radians(camera.fov_y) / 2)
+    n = camera.near
+    far = n * far_factor
+    return np.array([[f / aspect, 0, 0, 0], [0, f, 0, 0],
+                     [0, 0, (far + n) / (n - far), 2 * far * n / (n - far)], [0, 0, -1, 0]])
+
+
+class PlainFrame:
+    """`PlainFrame(ctx, scene)()` renders one frame and returns (H, W, 4) uint8 (bottom row
+    first, as GL reads it).  Call `release()`."""
+
+    def __init__(self, ctx: moderngl.Context, scene):
+        self.ctx = ctx
+        verts, normals, faces, offset = [], [], [], 0
+        for o in scene.objects:
+            v = np.asarray(o.vertices, np.float64)
+            f = np.asarray(o.faces, np.int64)
+            tri = v[f]
+            fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            vn = np.zeros_like(v)
+            for k in range(3):
+                np.add.at(vn, f[:, k], fn)
+            vn /= np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-30)
+            verts.append(v)
+            normals.append(vn)
+            faces.append(f + offset)
+            offset += len(v)
+        self.program = ctx.program(vertex_shader=VERTEX, fragment_shader=FRAGMENT)
+        self.vbo = ctx.buffer(np.concatenate(verts).astype("f4").tobytes())
+        self.nbo = ctx.buffer(np.concatenate(normals).astype("f4").tobytes())
+        self.ibo = ctx.buffer(np.concatenate(faces).astype("i4").tobytes())
+        self.vao = ctx.vertex_array(self.program, [(self.vbo, "3f", "in_position"),
+                                                   (self.nbo, "3f", "in_normal")],
+                                    index_buffer=self.ibo, index_element_size=4)
+        self.colour = ctx.renderbuffer((scene.width, scene.height), 4)
+        self.depth = ctx.depth_renderbuffer((scene.width, scene.height))
+        self.fbo = ctx.framebuffer(self.colour, self.depth)
+        self.out = np.empty((scene.height, scene.width, 4), np.uint8)
+        light = scene.lights[0]
+        position = getattr(light, "position", None)
+        if position is None:  # a directional light: a point far along its reverse direction
+            position = -np.asarray(light.direction) * 1e4
+        self.program["u_mvp"].write(np.ascontiguousarray(
+            (perspective(scene.camera, scene.aspect) @ view_matrix(scene.camera)).T,
+            np.float32).tobytes())
+        self.program["u_light"].value = tuple(float(x) for x in position)
+        self.program["u_eye"].value = tuple(float(x) for x in scene.camera.eye)
+
+    def __call__(self) -> np.ndarray:
+        self.fbo.use()
+        self.ctx.enable_only(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
+        self.ctx.depth_func = "<"
+        self.ctx.cull_face = "back"
+        self.ctx.front_face = "ccw"
+        self.fbo.clear(0.1, 0.1, 0.1, 1.0, depth=1.0)
+        self.vao.render(moderngl.TRIANGLES)
+        self.fbo.read_into(self.out, components=4)
+        return self.out
+
+    def __enter__(self) -> "PlainFrame":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def release(self) -> None:
+        for obj in (self.vao, self.fbo, self.colour, self.depth, self.ibo, self.nbo, self.vbo,
+                    self.program):
+            obj.release()

@@ -1,0 +1,112 @@
+#version 450 core
+// The deferred frame's one shading pass, over the whole screen after every light's volume
+// count (drawn twice, split by the last light's stencil test): per pixel the ambient term ka * ambient plus, for each light whose unshadowed bit is
+// set, the light's direct Phong term where n . l > 0 and inside a spot's cone, which also sets
+// the light's lit bit.  The expressions are phong.frag's and scene.vert's (keep them identical),
+// on the same float32 inputs: the interpolated world position from the G-buffer and the
+// triangle's flat values from the per-triangle buffer, so the masks and the image are the
+// forward passes' bit for bit.  Terms are added in light order, as the forward passes blended
+// them.
+//
+// MASKS_ONLY: the lit bits alone, no colour.
+
+#ifndef LIGHTS
+#define LIGHTS 1        // lights in this page, at most 23 (lit bits 1..23 and coverage: exact
+#endif                  // in a float32); a constant, so that the loop unrolls
+
+uniform sampler2D u_materials;  // row = object: texel 0 ka, 1 kd, 2 (ks, shininess)
+uniform sampler2D u_position;   // world position (xyz) of the visible surface; w: the surface,
+                                // +-(triangle + 1), negative for a back face; 0: uncovered
+uniform sampler2D u_unshadowed; // bit i: light i's stencil count is 0 here (i < LIGHTS - 1)
+uniform bool u_last_unshadowed; // the last light's: the stencil still holds its count, and the
+                                // pass is drawn twice, where it is 0 (true) and where not
+uniform vec3 u_eye;
+uniform vec3 u_ambient;
+uniform vec3 u_background;
+uniform bool u_first_page;      // the first page of lights: ambient and the coverage bit
+#if LIGHTS > 0
+uniform vec4 u_light[LIGHTS];           // (position, 1) or (-direction, 0)
+uniform vec3 u_radiance[LIGHTS];
+uniform vec3 u_spot_direction[LIGHTS];  // unit; used when u_spot_cos > -2
+uniform float u_spot_cos[LIGHTS];       // cos of the cone's half-angle; -2 for no cone
+uniform float u_emitter_cosine[LIGHTS]; // 1: a one-sided area light's sample, weighted by the
+                                        // cosine at the light, max(-l . u_spot_direction, 0)
+#endif
+layout(std430, binding = 0) readonly buffer Triangles {
+    vec4 triangle_data[];       // per triangle: (unit normal, object), (first corner, 0)
+};
+
+layout(location = 0) out vec4 f_colour;
+layout(location = 1) out float f_bits;     // bit 0 covered, bit i + 1 lit by light i
+
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    vec4 position = texelFetch(u_position, p, 0);
+    int surface = int(position.w);
+    if (surface == 0) {  // (not reached: the pass is depth-tested to covered pixels)
+        f_colour = vec4(u_first_page ? u_background : vec3(0.0), 0.0);
+        f_bits = 0.0;
+        return;
+    }
+    bool front = surface > 0;
+    int t = abs(surface) - 1;
+    vec4 normal_object = triangle_data[2 * t];
+    vec3 normal = normal_object.xyz;
+    int object = int(normal_object.w);
+    vec3 corner = triangle_data[2 * t + 1].xyz;
+    vec3 world = position.xyz;
+#if LIGHTS > 1
+    uint unshadowed = uint(texelFetch(u_unshadowed, p, 0).r);
+#else
+    uint unshadowed = 0u;
+#endif
+#if LIGHTS > 0
+    if (u_last_unshadowed) {
+        unshadowed |= 1u << uint(LIGHTS - 1);
+    }
+#endif
+    vec3 n = front ? normal : -normal;
+#ifndef MASKS_ONLY
+    vec3 kd = texelFetch(u_materials, ivec2(1, object), 0).rgb;
+    vec4 ks = texelFetch(u_materials, ivec2(2, object), 0);
+    vec3 v = normalize(u_eye - world);
+    vec3 colour = u_first_page ? texelFetch(u_materials, ivec2(0, object), 0).rgb * u_ambient
+                               : vec3(0.0);
+#endif
+    uint lit = u_first_page ? 1u : 0u;
+#if LIGHTS > 0
+    for (int i = 0; i < LIGHTS; ++i) {
+        if ((unshadowed & (1u << uint(i))) == 0u) {
+            continue;  // in this light's shadow volumes
+        }
+        // scene.vert's v_facing and phong.frag's tests
+        float facing = dot(normal, u_light[i].xyz - u_light[i].w * corner);
+        float side = front ? facing : -facing;
+        if (side <= 0.0) {
+            continue;  // the light is behind the visible side: not lit (n . l <= 0)
+        }
+        vec3 to_light = u_light[i].xyz - u_light[i].w * world;
+        vec3 l = normalize(to_light);
+        if (u_spot_cos[i] > -2.0 && dot(-l, u_spot_direction[i]) < u_spot_cos[i]) {
+            continue;  // outside the spot's cone
+        }
+        lit |= 2u << uint(i);
+#ifndef MASKS_ONLY
+        float n_dot_l = max(dot(n, l), 0.0);
+        vec3 r = 2.0 * dot(n, l) * n - l;
+        float r_dot_v = max(dot(r, v), 0.0);
+        // x^0 is 1 (as in numpy), which GLSL's pow leaves undefined at x = 0
+        float highlight = ks.a == 0.0 ? 1.0 : pow(r_dot_v, ks.a);
+        float at_light = u_emitter_cosine[i] > 0.0 ? max(dot(-l, u_spot_direction[i]), 0.0)
+                                                   : 1.0;
+        colour += (kd * n_dot_l + ks.rgb * highlight) * u_radiance[i] * at_light;
+#endif
+    }
+#endif
+#ifndef MASKS_ONLY
+    f_colour = vec4(colour, u_first_page ? 1.0 : 0.0);
+#else
+    f_colour = vec4(0.0);
+#endif
+    f_bits = float(lit);
+}

@@ -1,0 +1,212 @@
+"""The deferred frame's outputs and shortcuts must not change a single lit pixel.
+
+- `outputs=`: what is not asked for is not returned; what is asked for is the full frame's,
+  bit for bit (mask-only frames shade no colour).
+- Lit bits in pages of LIGHTS_PER_PAGE: a frame of more lights gives each light the mask of
+  that light alone.
+- Back-face culling of closed convex casters (`methods.cullable`, opt-in): only where the box is
+  beyond the near plane; on these scenes masks and image identical to the frame without it
+  (it is not exact everywhere: a back face that won a float32 depth tie is culled).
+- Side quads kept per light (`CpuVolumes.KEPT_LIGHTS`): frames with kept volumes equal fresh
+  ones.
+- The sRGB image from the GPU: within one code of `io.encode_srgb`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from shadowvol.io import encode_srgb
+from shadowvol.primitives import box, plane, sphere
+from shadowvol.raster import methods
+from shadowvol.raster.renderer import OUTPUTS, Renderer
+from shadowvol.raster.target import LIGHTS_PER_PAGE
+from shadowvol.raster.volumes import CpuVolumes
+from shadowvol.scene import (
+    Camera,
+    DirectionalLight,
+    Material,
+    PointLight,
+    Scene,
+    SpotLight,
+)
+
+
+def scene_of(seed: int, lights: int = 3) -> Scene:
+    """A floor, closed spheres and boxes (cullable), lights of every kind above them."""
+    rng = np.random.default_rng(seed)
+    objects = [plane("floor", size=[12, 12])]
+    for i in range(4):
+        c = [rng.uniform(-3, 3), rng.uniform(0.5, 2.0), rng.uniform(-3, 2)]
+        m = Material(diffuse=rng.uniform(0.2, 0.9, 3), specular=[0.3] * 3, shininess=20)
+        objects.append(sphere(f"s{i}", c, rng.uniform(0.3, 0.8), m, subdivisions=2) if i % 2
+                       else box(f"b{i}", c, rng.uniform(0.3, 1.2, 3), m))
+    kinds = [lambda: PointLight([rng.uniform(-4, 4), rng.uniform(5, 8), rng.uniform(-2, 4)],
+                                intensity=0.3),
+             lambda: DirectionalLight([rng.uniform(-0.5, 0.5), -1, rng.uniform(-0.5, 0.5)],
+                                      intensity=0.3),
+             lambda: SpotLight([rng.uniform(-2, 2), 6, 2], [0, -1, -0.3], cone_angle=50,
+                               intensity=0.3)]
+    return Scene(camera=Camera(eye=[0, 4, 9], target=[0, 0.8, 0]), objects=objects,
+                 lights=[kinds[i % 3]() for i in range(lights)], width=96, height=72)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_outputs_asked_for_are_the_full_frames(ctx, seed):
+    with Renderer(scene_of(seed), ctx) as r:
+        full = r.render(stencil=True, outputs=OUTPUTS)
+        default = r.render()
+        masks = r.render(outputs=("lit", "coverage"))
+        image = r.render(outputs=("image",))
+        srgb = r.render(outputs=("image_srgb",))
+    assert default.stencil is None and default.image_srgb is None
+    for res in (masks,):
+        assert res.image is None and res.image_srgb is None
+        np.testing.assert_array_equal(res.lit, full.lit)
+        np.testing.assert_array_equal(res.coverage, full.coverage)
+    assert image.lit is None and image.coverage is None
+    np.testing.assert_array_equal(image.image, default.image)
+    np.testing.assert_array_equal(default.lit, full.lit)
+    np.testing.assert_array_equal(srgb.image_srgb, full.image_srgb)
+    assert full.stencil.shape == full.lit.shape
+    # stencil counts are 0 wherever a light is lit
+    assert not (full.lit & (full.stencil != 0)).any()
+
+
+def test_unknown_outputs_are_refused(ctx):
+    with Renderer(scene_of(0), ctx) as r:
+        with pytest.raises(ValueError, match="unknown output 'depht'"):
+            r.render(outputs=("image", "depht"))
+        with pytest.raises(TypeError):
+            r.render(outputs="image")
+
+
+def test_gpu_srgb_is_within_one_code_of_the_writer(ctx):
+    with Renderer(scene_of(1), ctx) as r:
+        res = r.render(outputs=("image", "image_srgb"))
+    ref = encode_srgb(res.image)
+    diff = np.abs(res.image_srgb.astype(int) - ref)
+    assert diff.max() <= 1, diff.max()
+    assert (diff > 0).mean() < 0.01
+
+
+def test_more_lights_than_a_page(ctx):
+    """LIGHTS_PER_PAGE + 2 lights: two shading passes; each light's mask is its own frame's."""
+    n = LIGHTS_PER_PAGE + 2
+    scene = scene_of(2, lights=n)
+    with Renderer(scene, ctx) as r:
+        res = r.render()
+        alone = [r.render(lights=(light,)) for light in scene.lights]
+        dark = r.render(lights=())
+    for i, one in enumerate(alone):
+        np.testing.assert_array_equal(res.lit[i], one.lit[0], err_msg=f"light {i}")
+    np.testing.assert_array_equal(res.coverage, alone[0].coverage)
+    # the image is the ambient plus every light's term (the second page's sum is blended onto
+    # the first's: another order of float32 additions)
+    terms = sum(one.image - dark.image for one in alone)
+    np.testing.assert_allclose(res.image, dark.image + terms, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_back_face_culling_changes_no_pixel_here(ctx, seed, monkeypatch):
+    scene = scene_of(seed)
+    with Renderer(scene, ctx) as r:
+        cull = methods.cullable(r.geometry.bounds, r.outward_convex, scene.camera,
+                                r.geometry.extent)
+        assert not cull[0] and cull[1:].all()   # the floor is open, boxes and spheres closed
+        r.cull_back_faces = True
+        culled = r.render(stencil=seed % 2 == 1)
+        r.cull_back_faces = False
+        plain = r.render(stencil=seed % 2 == 1)
+    np.testing.assert_array_equal(culled.lit, plain.lit)
+    np.testing.assert_array_equal(culled.coverage, plain.coverage)
+    np.testing.assert_array_equal(culled.image, plain.image)
+
+
+def test_culling_needs_the_box_beyond_the_near_plane(ctx):
+    scene = scene_of(0)
+    with Renderer(scene, ctx) as r:
+        b = r.geometry.bounds[1]
+        inside = Camera(eye=(b[0] + b[1]) / 2, target=[0, 0, 0])
+        assert not methods.cullable(r.geometry.bounds, r.outward_convex, inside,
+                                    r.geometry.extent)[1]
+        # the near plane cutting the box: eye just outside it, looking in
+        centre = (b[0] + b[1]) / 2
+        grazing = Camera(eye=[centre[0], centre[1], b[1][2] + 0.01], target=centre)
+        assert not methods.cullable(r.geometry.bounds, r.outward_convex, grazing,
+                                    r.geometry.extent)[1]
+
+
+def test_inward_wound_and_open_meshes_are_not_culled(ctx):
+    scene = scene_of(0)
+    inverted = replace(scene.objects[1], faces=scene.objects[1].faces[:, ::-1].copy())
+    scene = scene.replace(objects=[scene.objects[0], inverted, *scene.objects[2:]])
+    with Renderer(scene, ctx) as r:
+        assert not r.outward_convex[0] and not r.outward_convex[1]
+        assert r.outward_convex[2:].all()
+        r.cull_back_faces = True
+        culled = r.render()
+        r.cull_back_faces = False
+        plain = r.render()
+    np.testing.assert_array_equal(culled.lit, plain.lit)
+    np.testing.assert_array_equal(culled.image, plain.image)
+
+
+def test_kept_side_quads_give_the_same_frames(ctx, monkeypatch):
+    scene = scene_of(3)
+    with Renderer(scene, ctx) as r:
+        first = r.render()
+        vols = r.volumes("cpu")
+        built = []
+        original = CpuVolumes._build
+        monkeypatch.setattr(CpuVolumes, "_build",
+                            lambda self, light4: built.append(1) or original(self, light4))
+        moved = Camera(eye=[3, 5, 8], target=[0, 0.5, 0])
+        other = r.render(camera=moved)          # the camera moves, the lights do not
+        again = r.render()
+        assert built == []                      # nothing rebuilt
+        assert len(vols._kept) == len(scene.lights)
+    with Renderer(scene, ctx) as fresh:
+        fresh_other = fresh.render(camera=moved)
+    np.testing.assert_array_equal(first.lit, again.lit)
+    np.testing.assert_array_equal(first.image, again.image)
+    np.testing.assert_array_equal(other.lit, fresh_other.lit)
+    np.testing.assert_array_equal(other.image, fresh_other.image)
+
+
+def test_only_the_last_lights_are_kept(ctx):
+    scene = scene_of(0, lights=1)
+    with Renderer(scene, ctx) as r:
+        vols = r.volumes("cpu")
+        for k in range(CpuVolumes.KEPT_LIGHTS + 3):
+            vols.prepare(np.array([0.5 * k, 7.0, 1.0, 1.0]))
+        assert len(vols._kept) == CpuVolumes.KEPT_LIGHTS
+
+
+def test_cross3_is_np_cross_bit_for_bit():
+    from shadowvol.raster.projection import cross3
+    rng = np.random.default_rng(0)
+    for _ in range(2000):
+        a = rng.normal(size=3) * 10.0 ** rng.uniform(-6, 6)
+        b = rng.normal(size=3) * 10.0 ** rng.uniform(-6, 6)
+        np.testing.assert_array_equal(cross3(a, b), np.cross(a, b))
+
+
+@pytest.mark.parametrize("samples", [9, LIGHTS_PER_PAGE + 5])
+def test_one_area_light_gives_the_same_frame_every_time(ctx, samples):
+    """One area light of several samples (one page, and more than one): each sample is marked,
+    so the unshadowed bits must be cleared every frame, though the scene has one light."""
+    from shadowvol.scene import AreaLight
+    scene = scene_of(1, lights=1)
+    scene = scene.replace(lights=[AreaLight("rect", center=[0.5, 6.0, 1.0], normal=[0, -1, 0],
+                                            size=[1.5, 1.0], samples=samples, seed=2)])
+    with Renderer(scene, ctx) as r:
+        frames = [r.render() for _ in range(3)]
+        alone = sum(r.render(lights=(h,)).lit[0].astype(int) for h in scene.lights[0].hard)
+    for f in frames:
+        np.testing.assert_array_equal(f.lit_count[0], alone)
+        np.testing.assert_array_equal(f.image, frames[0].image)
+    assert 0 < frames[0].lit_count.max() and (frames[0].penumbra.any())
