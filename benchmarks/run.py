@@ -371,13 +371,12 @@ def raytrace_section(cfg) -> dict:
 # ---------------------------------------------------------------------------------------------
 
 # The other issues' benchmarks, each a script of its own (benchmarks/bench_*.py), run by this
-# command in the same run and reported verbatim: (name, arguments, what it measures).
+# command in the same run and reported verbatim: (name, arguments, what it measures).  The
+# ground truth's (bench_groundtruth.py) is measured in the run itself: its own section.
 EXTRAS = (
     ("bench_soft.py", ["--size", "100k"],
      "soft shadows: a rect light of N = 1, 4, 16, 64 samples against point lights, and the "
      "raster against the ray tracer's lit_count (issue: soft shadows)"),
-    ("bench_groundtruth.py", [],
-     "each ground-truth output's cost on the 100k-triangle frame (issue: ground truth)"),
     ("bench_batch.py", [],
      "shadowvol batch on the 36-view turntable of the shared meshes: 1 worker, 2 workers, 2 "
      "shards, Ray with 2 actors, and the machinery's overhead (issue: datasets at scale)"),
