@@ -307,7 +307,8 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
             "coverage plus that output, and `raytrace.ground_truth` against "
             "`raytrace.shadow_masks` on one prebuilt Embree backend.  Extra / frame: the "
             "output's cost in frames.  casters counts each candidate caster's volumes alone "
-            "(one volume pass and one stencil read of the shadow's box each).")
+            "(per candidate one volume pass and one marking pass over the shadow's box; one "
+            "read per light).")
         if "run" in g:
             load = " / ".join(f"{x:.2f}" for x in g["run"]["load"])
             add("")
