@@ -276,6 +276,10 @@ def _typed(value, key: str, allowed_by_type: dict[str, set[str]], what: str) -> 
     return _table(table, key, allowed_by_type[kind]), kind
 
 
+REQUIRED_LIGHT_KEYS = {"point": ("position",), "directional": ("direction",),
+                       "spot": ("position", "direction")}
+
+
 def _light(value, key: str):
     table, kind = _typed(value, key, LIGHT_KEYS, "light")
     args = {k: v for k, v in table.items() if k != "type"}
@@ -283,7 +287,19 @@ def _light(value, key: str):
         _required(table, "center", key)
         return _build(key, AreaLight, shape=kind, **args)
     cls = {"point": PointLight, "directional": DirectionalLight, "spot": SpotLight}[kind]
+    for name in REQUIRED_LIGHT_KEYS[kind]:
+        _required(table, name, key)
     return _build(key, cls, **args)
+
+
+def light_from_dict(value, key: str = "light"):
+    """One light from a table of the scene-file schema (`[[lights]]`), e.g. a batch job's light
+    override; SceneError naming `key` when it is wrong."""
+    try:
+        return _light(value, key)
+    except TypeError as exc:  # a required field left out: "missing 1 required ... 'position'"
+        missing = str(exc).rsplit(":", 1)[-1].strip() or str(exc)
+        raise SceneError(key, f"missing {missing}") from None
 
 
 def _object(value, key: str, named: dict[str, Material], base_dir: Path,

@@ -6,6 +6,7 @@
     shadowvol demo -o DIR [--size WxH] [--small]
     shadowvol view SCENE                      (a window: orbit, drag the light, probe a pixel)
     shadowvol shadow2d --example -o shadow2d.png
+    shadowvol batch JOBS.jsonl -o OUT [--workers N] [--shard I/N] [--ray [ADDRESS]]
 
 Exit statuses: `shadowvol.cli.status` (one table for both tools).
 """
@@ -16,9 +17,9 @@ import argparse
 import sys
 
 from shadowvol import __version__
-from shadowvol.cli import compare, demo, planar, render, shadow2d, status, view
+from shadowvol.cli import batch, compare, demo, planar, render, shadow2d, status, view
 
-COMMANDS = (render, planar, shadow2d, compare, demo, view)
+COMMANDS = (render, planar, shadow2d, compare, demo, view, batch)
 
 
 def build_parser() -> argparse.ArgumentParser:

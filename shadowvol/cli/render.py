@@ -174,8 +174,9 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
                        if "volumes" in out else None)
         save_png(out["image"], result.image)
         if "masks" in out:
-            save_masks(out["masks"], result.lit, result.coverage, calibration(scene).arrays(),
-                       light_samples=[light_samples(lt) for lt in scene.lights])
+            save_masks(out["masks"], result.lit, result.coverage,
+                       light_samples=[light_samples(lt) for lt in scene.lights],
+                       arrays=calibration(scene).arrays())
         if "exr" in out:
             save_exr(out["exr"], result.image)
         if "png16" in out:

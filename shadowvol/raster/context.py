@@ -45,18 +45,31 @@ def _check_not_forked() -> None:
         raise ForkedContextError(FORK_ADVICE)
 
 
-def create_context() -> moderngl.Context:
+def check_not_forked() -> None:
+    """Raise ForkedContextError in a child forked after its parent made a context, before
+    anything (EGL device queries included) can hang there."""
+    _check_not_forked()
+
+
+def create_context(device: int | None = None) -> moderngl.Context:
     """A new standalone OpenGL >= 4.5 core context on EGL.
 
-    The caller owns it and must `release()` it.  Raises ContextError naming what to install when
-    libEGL, a driver, or GL 4.5 is missing.
+    `device`: the index of the EGL device to render on (in eglQueryDevicesEXT's order; see
+    `shadowvol.batch.egl` for listing and choosing them), or None for glcontext's default
+    (device 0, or $GLCONTEXT_DEVICE_INDEX).  CUDA_VISIBLE_DEVICES does not select an EGL device.
+    The caller owns the context and must `release()` it.  Raises ContextError naming what to
+    install when libEGL, a driver, or GL 4.5 is missing, and one saying how many devices there
+    are when `device` is not one of them.
     """
     _check_not_forked()
+    where = {} if device is None else {"device_index": int(device)}
     try:
         ctx = moderngl.create_context(standalone=True, backend="egl",
-                                      require=REQUIRED_GL_VERSION)
+                                      require=REQUIRED_GL_VERSION, **where)
     except Exception as exc:  # glcontext raises bare Exceptions with the loader's message
         text = str(exc).strip() or type(exc).__name__
+        if "device index" in text:  # glcontext: "requested device index 3, but found 1 devices"
+            raise ContextError(f"there is no EGL device {device} ({text})") from None
         if "version" in text.lower() or "require" in text.lower():
             raise ContextError(f"OpenGL {REQUIRED_GL_VERSION // 100}.{REQUIRED_GL_VERSION % 100 // 10}"
                                f" is not available ({text}); {INSTALL_HINT}") from None

@@ -279,3 +279,14 @@ def test_the_cli_gives_one_line_and_status_2(tmp_path, capsys):
 def test_max_magnitude_is_inside_float32():
     big = np.float32(MAX_MAGNITUDE)
     assert np.isfinite(big * big * np.float32(3)) and np.isfinite(np.float32(1) / np.float32(1e-18))
+
+
+@pytest.mark.parametrize("light, missing", [('type = "point"', "position"),
+                                            ('type = "directional"', "direction"),
+                                            ('type = "spot"\nposition = [0, 1, 0]', "direction")])
+def test_a_light_without_its_required_key(tmp_path, light, missing):
+    path = tmp_path / "s.toml"
+    path.write_text(f'[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\n[[lights]]\n{light}\n'
+                    '[[objects]]\ntype = "box"\n')
+    with pytest.raises(SceneError, match=rf"lights\[0\]\.{missing}: missing"):
+        load_scene(path)

@@ -1,0 +1,263 @@
+"""Benchmark (not a test): `shadowvol batch` throughput and the cost of its machinery.
+
+    python benchmarks/bench_batch.py [--models DIR] [--frames 36] [--width 640 --height 480]
+                                     [--json out.json]
+
+The scene: the five shared meshes (../shared/models beside the checkout, or $SHADOWVOL_MODELS,
+or --models: bunny, teapot, Suzanne, Spot, lamp shade, ~84k triangles) in a row on a floor,
+three lights (point, directional, spot), a turntable of 36 views at 640x480, image + masks.
+`measure()` returns a dict; it times, each from a fresh output folder:
+
+* 1 worker (this process), 2 worker processes, 2 shards run in parallel as two `shadowvol batch
+  --shard I/2` commands, and Ray with 2 actors (a local ray.init(num_cpus=2), its start-up
+  timed apart): frames/s of the whole run, start-up included, as a user sees it;
+* the bare loop: the same frames by one Renderer with nothing written, and the batch
+  machinery per frame (manifest line, sha256, atomic write), from the 1-worker manifest and a
+  micro-benchmark of the journal, as a fraction of a frame.
+
+When the models folder is absent it returns {"skipped": reason} and says so.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
+MODELS = Path(os.environ.get("SHADOWVOL_MODELS", ROOT.parent / "shared" / "models"))
+NAMES = ("bunny", "teapot", "suzanne", "spot", "lampshade")
+
+
+def _bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh
+
+    v = np.asarray(trimesh.load(str(path), process=False).vertices)
+    return v.min(axis=0), v.max(axis=0)
+
+
+def write_scene(folder: Path, models: Path, width: int, height: int) -> Path:
+    """The benchmark scene as a scene file (meshes by absolute path, each scaled to 1.2 units
+    and stood on the floor along x)."""
+    lines = ['name = "models"', "ambient = [0.15, 0.15, 0.15]", "",
+             f"[image]\nwidth = {width}\nheight = {height}\n",
+             "[camera]\neye = [0.0, 2.5, 6.0]\ntarget = [0.0, 0.5, 0.0]\nfov_y = 50.0\n",
+             '[[lights]]\ntype = "point"\nposition = [1.5, 3.5, 2.0]\nintensity = 0.6\n',
+             '[[lights]]\ntype = "directional"\ndirection = [-0.4, -1.0, -0.3]\n'
+             'intensity = 0.4\n',
+             '[[lights]]\ntype = "spot"\nposition = [-2.0, 3.5, 1.5]\n'
+             'direction = [0.5, -1.0, -0.4]\ncone_angle = 40.0\nintensity = 0.5\n',
+             '[[objects]]\nname = "floor"\ntype = "plane"\npoint = [0.0, 0.0, 0.0]\n'
+             'normal = [0.0, 1.0, 0.0]\nsize = [10.0, 10.0]\n']
+    for i, name in enumerate(NAMES):
+        path = models / f"{name}.obj"
+        lo, hi = _bounds(path)
+        scale = 1.2 / float((hi - lo).max())
+        centre = (lo + hi) / 2 * scale
+        x = -3.0 + 1.5 * i
+        translation = [x - centre[0], -lo[1] * scale, -centre[2]]
+        lines.append(f'[[objects]]\nname = "{name}"\ntype = "mesh"\n'
+                     f"path = {json.dumps(str(path))}\n"
+                     f"transform = {{ scale = {scale!r}, translation = "
+                     f"[{', '.join(repr(float(t)) for t in translation)}] }}\n")
+    scene = folder / "models.toml"
+    scene.write_text("\n".join(lines))
+    return scene
+
+
+def write_jobs(folder: Path, scene: Path, frames: int) -> Path:
+    job = {"name": "models-turntable", "scene": str(scene),
+           "cameras": {"orbit": {"center": [0.0, 0.5, 0.0], "radius": 6.0, "elevation": 25.0,
+                                 "frames": frames}},
+           "outputs": ["image", "masks"]}
+    path = folder / "turntable.jsonl"
+    path.write_text(json.dumps(job) + "\n")
+    return path
+
+
+def _records(out: Path, name: str = "manifest.jsonl") -> list[dict]:
+    return [json.loads(line) for line in (out / name).read_text().splitlines()]
+
+
+def _cpu() -> float:
+    """CPU seconds used so far by this process and its finished children."""
+    me = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def _autogroup() -> bool | None:
+    """Whether Linux shares the CPU between sessions (then all of this session's processes
+    together get one session's share while other sessions are busy)."""
+    try:
+        return Path("/proc/sys/kernel/sched_autogroup_enabled").read_text().strip() == "1"
+    except OSError:
+        return None
+
+
+def _env() -> dict:
+    paths = [str(ROOT)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+    return dict(os.environ, PYTHONPATH=os.pathsep.join(paths))
+
+
+def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: int = 480,
+            ray: bool = True) -> dict:
+    if not all((models / f"{n}.obj").is_file() for n in NAMES):
+        return {"skipped": f"the shared models are missing: {models} does not hold "
+                           f"{', '.join(n + '.obj' for n in NAMES)} (set $SHADOWVOL_MODELS or "
+                           f"--models)"}
+    import shadowvol.batch as batch
+    from shadowvol.batch import manifest
+    from shadowvol.raster.renderer import Renderer
+    from shadowvol.scene import Camera
+    from shadowvol.scenefile import load_scene
+
+    tmp = Path(tempfile.mkdtemp(prefix="bench_batch-"))
+    scene_path = write_scene(tmp, models, width, height)
+    jobs = write_jobs(tmp, scene_path, frames)
+    scene = load_scene(scene_path)
+    result = {"frames": frames, "size": [width, height], "lights": len(scene.lights),
+              "triangles": int(sum(len(o.faces) for o in scene.objects)),
+              "cores": len(os.sched_getaffinity(0)), "load_before": os.getloadavg()[0],
+              "autogroup": _autogroup()}
+
+    def timed(label, **kwargs):
+        out = tmp / label
+        cpu, start = _cpu(), time.perf_counter()
+        summary = batch.run(jobs, out, progress=False, **kwargs)
+        seconds = time.perf_counter() - start
+        assert summary.status == 0 and summary.rendered == frames, summary.errors
+        result[label] = {"seconds": seconds, "frames_per_s": frames / seconds,
+                         # Ray's actors are not our children: their CPU is not seen here
+                         "cpu_s_per_frame": None if "ray" in kwargs else
+                         (_cpu() - cpu) / frames}
+        return out
+
+    one = timed("workers_1")
+    timed("workers_2", workers=2)
+
+    cpu, start = _cpu(), time.perf_counter()
+    shards = [subprocess.Popen([sys.executable, "-m", "shadowvol", "batch", str(jobs), "-o",
+                                str(tmp / "shards_2"), "--shard", f"{i}/2"], env=_env(),
+                               stderr=subprocess.DEVNULL) for i in (0, 1)]
+    assert [p.wait() for p in shards] == [0, 0]
+    seconds = time.perf_counter() - start
+    result["shards_2"] = {"seconds": seconds, "frames_per_s": frames / seconds,
+                          "cpu_s_per_frame": (_cpu() - cpu) / frames}
+
+    if ray:
+        try:
+            import ray as ray_module
+        except ImportError:
+            result["ray_2"] = {"skipped": "ray is not installed (pip install 'shadowvol[ray]')"}
+        else:
+            start = time.perf_counter()
+            ray_module.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+            result["ray_init_s"] = time.perf_counter() - start
+            try:
+                timed("ray_2", workers=2, ray=True)
+            finally:
+                ray_module.shutdown()
+
+    # the same outputs whichever way they were made
+    ref = [(r["id"], r["files"]) for r in _records(one)]
+    for label in ("workers_2", "ray_2"):
+        if (tmp / label / "manifest.jsonl").exists():
+            assert [(r["id"], r["files"]) for r in _records(tmp / label)] == ref, label
+    merged = batch.run(jobs, tmp / "shards_2", progress=False)
+    assert merged.skipped == frames and [(r["id"], r["files"]) for r in
+                                         _records(tmp / "shards_2")] == ref
+
+    # the bare loop: one Renderer, the same cameras, nothing encoded or written
+    cameras = [r["camera"] for r in _records(one)]
+    with Renderer(scene) as renderer:
+        renderer.render()  # warm-up
+        bare = []
+        for cam in cameras:
+            t = time.perf_counter()
+            renderer.render(camera=Camera(**cam))
+            bare.append(time.perf_counter() - t)
+    frame = statistics.median(bare)
+    records = _records(one)
+    render = statistics.median(r["seconds"]["render"] for r in records)
+    encode = statistics.median(r["seconds"]["encode"] for r in records)
+    write = statistics.median(r["seconds"]["write"] for r in records)  # sha256 + atomic writes
+    journal = manifest.Journal(tmp / "journal-bench.jsonl")
+    t = time.perf_counter()
+    for r in records * 10:
+        journal.add(r)
+    line = (time.perf_counter() - t) / (len(records) * 10)
+    journal.close()
+    result["per_frame"] = {
+        "bare_render_s": frame, "batch_render_s": render, "encode_s": encode,
+        "write_and_hash_s": write, "manifest_line_s": line,
+        "machinery_fraction": (write + line) / frame,
+        "machinery_and_encoding_fraction": (write + line + encode) / frame}
+    w1 = result["workers_1"]["frames_per_s"]
+    result["speedup_workers_2"] = result["workers_2"]["frames_per_s"] / w1
+    result["speedup_shards_2"] = result["shards_2"]["frames_per_s"] / w1
+    if "frames_per_s" in result.get("ray_2", {}):
+        result["ray_vs_pool"] = result["ray_2"]["frames_per_s"] / \
+            result["workers_2"]["frames_per_s"]
+    result["load_after"] = os.getloadavg()[0]
+    import shutil
+
+    shutil.rmtree(tmp, ignore_errors=True)
+    return result
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--models", type=Path, default=MODELS)
+    ap.add_argument("--frames", type=int, default=36)
+    ap.add_argument("--width", type=int, default=640)
+    ap.add_argument("--height", type=int, default=480)
+    ap.add_argument("--no-ray", action="store_true", help="leave out the Ray run")
+    ap.add_argument("--json", type=Path, help="also write the results here")
+    args = ap.parse_args(argv)
+    r = measure(args.models, args.frames, args.width, args.height, ray=not args.no_ray)
+    if "skipped" in r:
+        print(f"skipped: {r['skipped']}", file=sys.stderr)
+        return 0
+    if args.json:
+        args.json.write_text(json.dumps(r, indent=2) + "\n")
+    print(f"{r['frames']}-view turntable, {r['triangles']:,} triangles, {r['lights']} lights, "
+          f"{r['size'][0]}x{r['size'][1]}, image + masks, {r['cores']} cores; load average "
+          f"{r['load_before']:.1f} before, {r['load_after']:.1f} after")
+    print()
+    print("| run | seconds | frames/s | vs 1 worker | CPU s per frame | cores it got |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for label, what in (("workers_1", "1 worker"), ("workers_2", "2 workers"),
+                        ("shards_2", "2 shards in parallel"), ("ray_2", "Ray, 2 actors")):
+        x = r.get(label, {})
+        if "frames_per_s" in x:
+            cpu = x["cpu_s_per_frame"]
+            used = "" if cpu is None else f"{cpu * r['frames'] / x['seconds']:.2f}"
+            cpu = "" if cpu is None else f"{cpu:.2f}"
+            print(f"| {what} | {x['seconds']:.1f} | {x['frames_per_s']:.2f} | "
+                  f"{x['frames_per_s'] / r['workers_1']['frames_per_s']:.2f}x | {cpu} | {used} |")
+    p = r["per_frame"]
+    print()
+    if "ray_init_s" in r:
+        print(f"Ray start-up (not in the Ray row): {r['ray_init_s']:.1f} s; Ray / pool: "
+              f"{r['ray_vs_pool']:.2f}")
+    print(f"per frame: bare render {p['bare_render_s'] * 1e3:.0f} ms (batch's render "
+          f"{p['batch_render_s'] * 1e3:.0f} ms), encoding PNG + NPZ {p['encode_s'] * 1e3:.1f} ms, "
+          f"sha256 + atomic writes {p['write_and_hash_s'] * 1e3:.1f} ms, manifest line "
+          f"{p['manifest_line_s'] * 1e6:.0f} us: machinery {p['machinery_fraction']:.1%} of a "
+          f"frame ({p['machinery_and_encoding_fraction']:.1%} with encoding)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

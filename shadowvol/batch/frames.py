@@ -1,0 +1,194 @@
+"""The frames of a job: cameras from a list, an orbit (turntable) or a path of key poses;
+stable ids; the seeded per-frame generator; the frame specs the workers render.
+
+A frame spec is a plain dict (JSON types only), made in the parent from the job alone, so that
+every process given it renders the same frame: its id `<job>/<index:06d>`, the camera, the
+light overrides, the size, the outputs, the renderer and its options, the seed and jitter.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+
+import numpy as np
+
+from shadowvol.scene import Camera, DirectionalLight, SceneError, is_number, shorten
+
+CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near"}
+ORBIT_KEYS = {"center", "radius", "elevation", "frames", "start", "sweep", "up", "fov_y",
+              "near"}
+MAX_FRAMES = 10_000_000
+
+
+def frame_id(job: str, index: int) -> str:
+    """The stable id of frame `index` of `job`: also its file stem, `OUT/<job>/<index:06d>.*`."""
+    return f"{job}/{index:06d}"
+
+
+def _vector(value, key: str) -> list[float]:
+    if not (isinstance(value, list) and len(value) == 3 and all(is_number(x) for x in value)
+            and all(math.isfinite(x) for x in value)):
+        raise SceneError(key, f"expected 3 finite numbers, got {shorten(value)}")
+    return [float(x) for x in value]
+
+
+def _number(value, key: str, low: float | None = None) -> float:
+    if not is_number(value) or not math.isfinite(value) or (low is not None and value < low):
+        raise SceneError(key, f"expected a finite number{'' if low is None else f' >= {low}'}, "
+                              f"got {shorten(value)}")
+    return float(value)
+
+
+def _count(value, key: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_FRAMES:
+        raise SceneError(key, f"must be a whole number from 1 to {MAX_FRAMES}, got "
+                              f"{shorten(value)}")
+    return value
+
+
+def _optics(table: dict, key: str) -> dict:
+    """The optional camera keys up, fov_y, near of `table`, checked."""
+    out = {}
+    if "up" in table:
+        out["up"] = _vector(table["up"], f"{key}.up")
+    for name in ("fov_y", "near"):
+        if name in table:
+            out[name] = _number(table[name], f"{key}.{name}")
+    return out
+
+
+def camera_dict(value, key: str) -> dict:
+    """One camera of a job: eye and target, and up/fov_y/near where given; checked by building
+    the Camera (the scene's fov_y, near and up fill what is left out, in the worker)."""
+    if not isinstance(value, dict):
+        raise SceneError(key, f"expected a camera table, got {shorten(value)}")
+    unknown = sorted(set(value) - CAMERA_KEYS)
+    if unknown:
+        raise SceneError(f"{key}.{unknown[0]}", f"unknown camera key (the keys are: "
+                                                f"{', '.join(sorted(CAMERA_KEYS))})")
+    for need in ("eye", "target"):
+        if need not in value:
+            raise SceneError(f"{key}.{need}", "missing")
+    cam = {"eye": _vector(value["eye"], f"{key}.eye"),
+           "target": _vector(value["target"], f"{key}.target"), **_optics(value, key)}
+    try:
+        Camera(**cam)
+    except SceneError as exc:
+        raise exc.under(key) from None
+    return cam
+
+
+def orbit(value) -> tuple[dict, ...]:
+    """A turntable: `frames` eyes on a circle of `radius` around `center` (y up) at
+    `elevation` degrees, starting at azimuth `start` (0: on +z) and turning `sweep` degrees
+    (default 360, so the last frame is one step short of the first), all looking at `center`."""
+    key = "cameras.orbit"
+    if not isinstance(value, dict):
+        raise SceneError(key, f"expected a table, got {shorten(value)}")
+    unknown = sorted(set(value) - ORBIT_KEYS)
+    if unknown:
+        raise SceneError(f"{key}.{unknown[0]}", f"unknown key (the keys are: "
+                                                f"{', '.join(sorted(ORBIT_KEYS))})")
+    for need in ("center", "radius", "frames"):
+        if need not in value:
+            raise SceneError(f"{key}.{need}", "missing")
+    center = np.array(_vector(value["center"], f"{key}.center"))
+    radius = _number(value["radius"], f"{key}.radius", low=0.0)
+    if radius == 0:
+        raise SceneError(f"{key}.radius", "must be > 0")
+    elevation = math.radians(_number(value.get("elevation", 0.0), f"{key}.elevation"))
+    if abs(elevation) >= math.pi / 2:
+        raise SceneError(f"{key}.elevation", "must be strictly between -90 and 90 degrees")
+    n = _count(value["frames"], f"{key}.frames")
+    start = _number(value.get("start", 0.0), f"{key}.start")
+    sweep = _number(value.get("sweep", 360.0), f"{key}.sweep")
+    optics = _optics(value, key)
+    cameras = []
+    for i in range(n):
+        azimuth = math.radians(start + sweep * i / n)
+        offset = radius * np.array([math.cos(elevation) * math.sin(azimuth), math.sin(elevation),
+                                    math.cos(elevation) * math.cos(azimuth)])
+        cameras.append({"eye": (center + offset).tolist(), "target": center.tolist(), **optics})
+    return tuple(cameras)
+
+
+def path(value) -> tuple[dict, ...]:
+    """`frames` cameras along key poses: eye, target, up and fov_y linearly interpolated
+    between consecutive keys, the first frame at the first key and the last at the last."""
+    key = "cameras.path"
+    if not isinstance(value, dict) or set(value) - {"keys", "frames"}:
+        raise SceneError(key, f"expected {{\"keys\": [camera, ...], \"frames\": n}}, got "
+                              f"{shorten(value)}")
+    keys = value.get("keys")
+    if not isinstance(keys, list) or len(keys) < 2:
+        raise SceneError(f"{key}.keys", "expected a list of at least 2 cameras")
+    poses = [camera_dict(c, f"{key}.keys[{i}]") for i, c in enumerate(keys)]
+    for name in ("up", "fov_y", "near"):
+        if len({name in p for p in poses}) != 1:
+            raise SceneError(f"{key}.keys", f"give {name} in every key or in none")
+    n = _count(value.get("frames"), f"{key}.frames")
+    cameras = []
+    for i in range(n):
+        t = 0.0 if n == 1 else i * (len(poses) - 1) / (n - 1)
+        k = min(int(t), len(poses) - 2)
+        a, b, u = poses[k], poses[k + 1], t - k
+        cam = {name: (np.array(a[name]) * (1 - u) + np.array(b[name]) * u).tolist()
+               for name in ("eye", "target", "up") if name in a}
+        if "fov_y" in a:
+            cam["fov_y"] = a["fov_y"] * (1 - u) + b["fov_y"] * u
+        if "near" in a:
+            cam["near"] = a["near"]
+        cameras.append(camera_dict(cam, f"{key} frame {i}"))
+    return tuple(cameras)
+
+
+def frame_rng(seed: int, index: int) -> np.random.Generator:
+    """The generator of frame `index` of a job seeded `seed`: depends on nothing else (not on
+    the worker, the shard or the order frames are made in)."""
+    return np.random.default_rng([seed, index])
+
+
+def _in_ball(rng: np.random.Generator, radius: float) -> np.ndarray:
+    direction = rng.normal(size=3)
+    direction /= np.linalg.norm(direction) or 1.0
+    return direction * radius * rng.uniform() ** (1 / 3)
+
+
+def jittered(camera: Camera, lights: tuple, jitter: dict, seed: int, index: int):
+    """(camera, lights) of a frame with `jitter` applied: the eye, then each point/spot light's
+    position, moved by offsets drawn in that order from `frame_rng(seed, index)`."""
+    if not jitter:
+        return camera, lights
+    import dataclasses
+
+    rng = frame_rng(seed, index)
+    eye = camera.eye + _in_ball(rng, jitter.get("eye", 0.0))
+    camera = dataclasses.replace(camera, eye=eye)
+    moved = []
+    for light in lights:
+        if isinstance(light, DirectionalLight):
+            moved.append(light)
+        else:
+            moved.append(dataclasses.replace(
+                light, position=light.position + _in_ball(rng, jitter.get("lights", 0.0))))
+    return camera, tuple(moved)
+
+
+def specs(job, scene_key: str) -> list[dict]:
+    """The frame specs of a checked `jobs.Job`, in index order."""
+    common = {"job": job.name, "scene": scene_key,
+              "lights": None if job.lights is None else list(job.lights),
+              "size": None if job.size is None else list(job.size),
+              "outputs": list(job.outputs), "renderer": job.renderer, "method": job.method,
+              "max_depth": job.max_depth, "seed": job.seed, "jitter": dict(job.jitter)}
+    return [{"id": frame_id(job.name, i), "index": i, "camera": camera, **common}
+            for i, camera in enumerate(job.cameras)]
+
+
+def spec_hash(spec: dict, scene_sha256: str) -> str:
+    """sha256 of everything that decides a frame's files: the spec and the scene file's bytes
+    (a mesh file that changes under an unchanged scene file is not seen)."""
+    text = json.dumps({**spec, "scene": scene_sha256}, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()

@@ -1,0 +1,141 @@
+"""OUT/manifest.jsonl: one JSON line per frame (its id, files and their sha256, camera and
+light parameters, renderer, versions, seconds, or its error), and per webdataset tar one line
+with the tar's sha256.
+
+While a run goes, each line is appended as soon as its files are written (a journal: a run
+killed at any point keeps every line before the kill, and at worst half of the last one, which
+the next run cuts off).  At the end the run rewrites the file atomically with one line per frame,
+in job-file order, so a killed and resumed run ends with the same manifest, timings aside, as an
+uninterrupted one.  A shard `I/N` (N > 1) writes `manifest.shard-I-of-N.jsonl`, so that shards
+on a shared file system never write one file; a later run without --shard reads them all,
+checks every file against them and writes `manifest.jsonl`.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import hashlib
+import json
+import os
+from pathlib import Path
+
+from shadowvol.io import write_bytes
+from shadowvol.scene import SceneError
+
+MANIFEST = "manifest.jsonl"
+
+
+def manifest_name(shard: tuple[int, int]) -> str:
+    index, count = shard
+    return MANIFEST if count == 1 else f"manifest.shard-{index}-of-{count}.jsonl"
+
+
+def sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def file_sha256(path: Path) -> str | None:
+    """The sha256 of a regular file's bytes, or None when it is not there."""
+    digest = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            while chunk := f.read(1 << 20):
+                digest.update(chunk)
+    except (FileNotFoundError, IsADirectoryError, NotADirectoryError):
+        return None
+    return digest.hexdigest()
+
+
+def _lines(path: Path):
+    try:
+        text = path.read_bytes()
+    except FileNotFoundError:
+        return
+    for line in text.split(b"\n"):
+        if not line.strip():
+            continue
+        try:
+            record = json.loads(line)
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            continue  # the half line a killed run left, or one being written by a shard now
+        if isinstance(record, dict) and isinstance(record.get("id"), str):
+            yield record
+
+
+def read(out: str | Path, own: str = MANIFEST) -> dict[str, dict]:
+    """The latest record of each id in every manifest of `out` (the shards' first, then `own`,
+    whose records win)."""
+    out = Path(out)
+    names = sorted(p.name for p in out.glob("manifest*.jsonl") if p.name != own) + [own]
+    records: dict[str, dict] = {}
+    for name in names:
+        for record in _lines(out / name):
+            records[record["id"]] = record
+    return records
+
+
+class Journal:
+    """Appends records to a manifest, one line each, flushed as written.  Holds an exclusive
+    lock on the file while open: a second run of the same share into the same folder is
+    refused instead of interleaving its lines (shards have manifests of their own)."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._file = open(self.path, "ab")
+        try:
+            fcntl.flock(self._file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            self._file.close()
+            raise SceneError("-o", f"another run is writing {self.path} now; wait for it, or "
+                                   "give this one another folder or shard") from None
+        self._cut_partial_line()
+
+    def _cut_partial_line(self) -> None:
+        with open(self.path, "r+b") as f:
+            data = f.read()
+            if data and not data.endswith(b"\n"):
+                f.truncate(data.rfind(b"\n") + 1)
+
+    def add(self, record: dict) -> None:
+        self._file.write(encode(record))
+        self._file.flush()
+
+    def finish(self, records: list[dict]) -> None:
+        """Replace the manifest with `records` (atomically, still holding the lock), then close."""
+        rewrite(self.path, records)
+        self.close()
+
+    def close(self) -> None:
+        if not self._file.closed:
+            self._file.close()  # and the lock with it
+
+
+def encode(record: dict) -> bytes:
+    return (json.dumps(record, separators=(",", ":"), allow_nan=False) + "\n").encode()
+
+
+def rewrite(path: str | Path, records: list[dict]) -> None:
+    """Replace the manifest at `path` with `records`, atomically."""
+    write_bytes(path, b"".join(encode(r) for r in records))
+
+
+def remove_stale_parts(folder: Path, names: set[str]) -> int:
+    """Remove the temporary files `shadowvol.io.atomic_write` left in `folder` for targets named
+    in `names` (a run killed mid-write leaves `.NAME.XXXXXXXX.part`).  Only those: a shard
+    running beside this one has its own targets and its temporary files are left alone."""
+    removed = 0
+    try:
+        entries = list(os.scandir(folder))
+    except FileNotFoundError:
+        return 0
+    for entry in entries:
+        if entry.name.startswith(".") and entry.name.endswith(".part"):
+            target = entry.name[1:-len(".part")].rsplit(".", 1)[0]
+            if target in names:
+                try:
+                    os.unlink(entry.path)
+                    removed += 1
+                except FileNotFoundError:
+                    pass
+    return removed

@@ -1,0 +1,47 @@
+"""What a batch frame can write: one entry per output, data-driven.
+
+Each output names the arrays it needs from a frame (`fields`), the suffix of its file
+(`OUT/<job>/<frame>.<suffix>`, or the member `<job>/<frame>.<suffix>` of a webdataset tar) and
+its encoder (arrays -> bytes, deterministic: `shadowvol.io`).  A new output of the renderers
+(depth, normals, object ids, ...) is one more entry here; jobs, the workers, the manifest, resume
+and the webdataset shards take it from this table.  `fields` are attributes of a frame's result
+(`Renderer.render(...)`), or the ray tracer's arrays of the same names (`batch.worker`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from shadowvol.io import encode_srgb, masks_bytes, png_bytes
+
+
+@dataclass(frozen=True)
+class Output:
+    name: str
+    suffix: str                      # after "<frame>.": no "/", the first "." splits the key
+    fields: tuple[str, ...]          # the frame arrays `encode` reads
+    encode: Callable[[dict[str, np.ndarray]], bytes]
+    description: str
+
+
+OUTPUTS: dict[str, Output] = {o.name: o for o in (
+    Output("image", "png", ("image",), lambda f: png_bytes(encode_srgb(f["image"])),
+           "the image, 8-bit sRGB PNG, row 0 at the top"),
+    Output("masks", "masks.npz", ("lit", "coverage"),
+           lambda f: masks_bytes(f["lit"], f["coverage"]),
+           "the shadow masks (docs/CONVENTIONS.md): lit (L, H, W) bool, coverage (H, W) bool"),
+)}
+
+DEFAULT = ("image", "masks")
+
+
+def fields_of(names) -> tuple[str, ...]:
+    """The frame arrays the outputs `names` need, each once, in a fixed order."""
+    seen: dict[str, None] = {}
+    for name in names:
+        for field in OUTPUTS[name].fields:
+            seen.setdefault(field, None)
+    return tuple(seen)

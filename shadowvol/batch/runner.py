@@ -1,0 +1,309 @@
+"""`shadowvol.batch.run`: jobs -> frames -> this run's share -> what is not already made ->
+workers (this process, a process pool, or Ray actors) -> files and the manifest.
+
+The frames of a job file are numbered in file order; they are cut into units (a frame, or in
+webdataset format the frames of one tar), and `--shard I/N` takes the I-th of N contiguous runs
+of units, so N shards together make exactly the files of one unsharded run, with no
+coordination.  A unit is skipped when the manifests in OUT say it was made from the same spec
+(`frames.spec_hash`) and its files are there with the recorded sha256; everything else is made
+again, and written atomically.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from shadowvol.batch import egl, frames, local, manifest
+from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
+from shadowvol.batch.store import FORMATS, FileStore, TarStore
+from shadowvol.cli import status
+from shadowvol.errors import require
+from shadowvol.scene import Scene, SceneError
+
+DEFAULT_SAMPLES_PER_TAR = 1000
+
+
+@dataclass
+class Summary:
+    """What a run did.  `status` is the exit status: OK when every frame of its share was made
+    (now or before), else the worst of the failures' (BAD_INPUT for bad jobs and scenes,
+    RENDER_FAILED for frames that failed to render)."""
+
+    frames: int = 0
+    rendered: int = 0
+    skipped: int = 0
+    failed: int = 0
+    bad_jobs: int = 0
+    seconds: float = 0.0
+    status: int = status.OK
+    manifest: Path | None = None
+    errors: list[str] = field(default_factory=list)
+
+    def line(self) -> str:
+        rate = self.rendered / self.seconds if self.seconds > 0 else 0.0
+        text = (f"batch: {self.frames} frames: {self.rendered} rendered, {self.skipped} "
+                f"already made, {self.failed} failed; {self.seconds:.1f} s "
+                f"({rate:.2f} frames/s)")
+        if self.bad_jobs:
+            text += f"; {self.bad_jobs} bad job{'s' * (self.bad_jobs > 1)}"
+        return text + f"; manifest {self.manifest}"
+
+
+def parse_shard(text: str) -> tuple[int, int]:
+    """'I/N' -> (I, N) with 0 <= I < N."""
+    try:
+        index, count = (int(x) for x in str(text).split("/"))
+    except ValueError:
+        raise SceneError("--shard", f"expected I/N (e.g. 0/4), got {text!r}") from None
+    if not 0 <= index < count:
+        raise SceneError("--shard", f"I/N needs 0 <= I < N, got {text!r}")
+    return index, count
+
+
+def share(units: int, shard: tuple[int, int]) -> range:
+    """The units of shard (I, N): the I-th of N contiguous, nearly equal runs."""
+    index, count = shard
+    return range(units * index // count, units * (index + 1) // count)
+
+
+def _digest(value, h) -> None:
+    if isinstance(value, np.ndarray):
+        h.update(str((value.dtype.str, value.shape)).encode())
+        h.update(np.ascontiguousarray(value).tobytes())
+    elif dataclasses.is_dataclass(value):
+        h.update(type(value).__name__.encode())
+        for f in dataclasses.fields(value):
+            _digest(getattr(value, f.name), h)
+    elif isinstance(value, (tuple, list)):
+        h.update(b"[%d" % len(value))
+        for item in value:
+            _digest(item, h)
+    else:
+        h.update(repr(value).encode())
+
+
+def scene_digest(scene: str | Scene) -> str:
+    """sha256 of a scene file's bytes, or of a Scene's data; "missing" for no such file."""
+    if isinstance(scene, Scene):
+        h = hashlib.sha256()
+        _digest(scene, h)
+        return h.hexdigest()
+    return manifest.file_sha256(Path(scene)) or "missing"
+
+
+def _jobs(jobs) -> list[Job | JobError]:
+    if isinstance(jobs, (str, Path)):
+        return read_jobs(jobs)
+    if isinstance(jobs, dict):
+        jobs = [jobs]
+    return check_jobs(list(jobs))
+
+
+def _bar(total: int, progress: bool | None):
+    if progress is False or (progress is None and not sys.stderr.isatty()):
+        return None
+    try:
+        tqdm = require("tqdm", "the progress bar", "tqdm").tqdm
+    except ImportError:
+        if progress:
+            raise
+        return None
+    return tqdm(total=total, unit="frame", desc="batch", file=sys.stderr, smoothing=0.1)
+
+
+def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), ray=None,
+        egl_device=None, format: str = "files",
+        samples_per_tar: int = DEFAULT_SAMPLES_PER_TAR, progress: bool | None = None,
+        start_method: str = "spawn", gpus_per_worker: float = 0) -> Summary:
+    """Render `jobs` (a JSONL file, or job dicts, see `batch.jobs`) into the folder `out`.
+
+    workers      : processes on this machine (1: this process), or Ray actors with `ray`
+    shard        : (I, N) or "I/N": make only this shard's share
+    ray          : None (local), True (ray.init() with no address) or a cluster address
+    egl_device   : None, "auto" or an EGL device index (`batch.egl`)
+    format       : "files" (OUT/<job>/<frame>.<suffix>) or "webdataset" (OUT/shard-*.tar)
+    progress     : a tqdm bar on stderr; None: only when stderr is a terminal
+    start_method : "spawn" or "forkserver" ("fork" is allowed, and fails clearly in a process
+                   that has made a GL context)
+    gpus_per_worker : with `ray`, the GPUs each actor asks Ray for (Ray then sets the actor's
+                   CUDA_VISIBLE_DEVICES, which egl_device="auto" follows)
+    Returns a Summary; a bad job or frame is recorded in the manifest and the others go on.
+    """
+    began = time.perf_counter()
+    if isinstance(shard, str):
+        shard = parse_shard(shard)
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise SceneError("--workers", f"must be a whole number >= 1, got {workers!r}")
+    if format not in FORMATS:
+        raise SceneError("--format", f"must be one of {', '.join(FORMATS)}, got {format!r}")
+    if isinstance(samples_per_tar, bool) or not isinstance(samples_per_tar, int) or \
+            samples_per_tar < 1:
+        raise SceneError("--samples-per-tar", f"must be a whole number >= 1, got "
+                                              f"{samples_per_tar!r}")
+    if egl.parse(egl_device) is not None and not ray:
+        egl.choose(egl_device)  # a bad index is an error naming this machine's devices, now
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise SceneError("-o", f"{str(out)!r} is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    entries = _jobs(jobs)
+    plan = _Plan(entries, 1 if format == "files" else samples_per_tar, shard)
+    own = manifest.manifest_name(shard)
+    store = FileStore(out) if format == "files" else TarStore(out)
+    kept, todo = _already_made(plan, manifest.read(out, own), store, format)
+    # temporary files a killed run left, for any file of this share (made or not)
+    if format == "files":
+        store.clean([s for u in plan.mine for s in plan.units[u]])
+    else:
+        store.clean(list(plan.mine))
+    manifest.remove_stale_parts(out, {own})
+    units, hashes, scenes = plan.units, plan.hashes, plan.scenes
+    mine = plan.mine
+
+    summary = Summary(frames=sum(len(units[u]) for u in mine),
+                      skipped=sum(len(units[u]) for u in mine) - sum(len(units[u]) for u in todo),
+                      manifest=out / own)
+    journal = manifest.Journal(out / own)
+    done: dict[str, dict] = dict(kept)
+    try:
+        for job in entries:
+            if isinstance(job, JobError):
+                record = {"id": f"job/{job.name}", "job": job.name, "source": job.source,
+                          "error": job.error, "status": status.BAD_INPUT}
+                journal.add(record)
+                done[record["id"]] = record
+                summary.bad_jobs += 1
+                summary.status = max(summary.status, status.BAD_INPUT)
+                summary.errors.append(f"{job.source}: {job.error}")
+        todo_specs = [s for u in todo for s in units[u]]
+        by_id = {s["id"]: s for s in todo_specs}
+        unit_of = {s["id"]: u for u in todo for s in units[u]}
+        waiting = {u: {} for u in todo}  # webdataset: unit -> id -> result, until complete
+        bar = _bar(len(todo_specs), progress)
+        for result in _results(todo_specs, scenes, workers, ray, egl_device, start_method,
+                               gpus_per_worker):
+            spec = by_id[result["id"]]
+            if format == "files":
+                _record(journal, done, summary, spec, result, hashes, store)
+            else:
+                u = unit_of[spec["id"]]
+                waiting[u][spec["id"]] = result
+                if len(waiting[u]) == len(units[u]):
+                    got = waiting.pop(u)
+                    pairs = [(s, got[s["id"]]) for s in units[u]]
+                    tar_record, files = store.write(u, pairs)
+                    for s, r in pairs:
+                        _record(journal, done, summary, s, r, hashes, None,
+                                files=files.get(s["id"]))
+                    journal.add(tar_record)
+                    done[tar_record["id"]] = tar_record
+            if bar is not None:
+                bar.update()
+        if bar is not None:
+            bar.close()
+        # the final manifest: one line per frame of this share, in job-file order, then the tars
+        ordered = [done[f"job/{job.name}"] for job in entries if isinstance(job, JobError)]
+        ordered += [done[s["id"]] for u in mine for s in units[u] if s["id"] in done]
+        ordered += [done[TarStore.tar_id(u)] for u in mine if TarStore.tar_id(u) in done]
+        journal.finish(ordered)
+    finally:
+        journal.close()
+    summary.seconds = time.perf_counter() - began
+    return summary
+
+
+class _Plan:
+    """Every frame of the job file in order (`specs`), their spec hashes, the scenes they need
+    (key -> path or Scene), the units (a frame, or a tar's frames) and this shard's share."""
+
+    def __init__(self, entries, per_unit: int, shard: tuple[int, int]):
+        self.scenes: dict[str, str | Scene] = {}
+        digests: dict[str, str] = {}
+        self.specs: list[dict] = []
+        for job in entries:
+            if isinstance(job, Job):
+                key = job.scene if isinstance(job.scene, str) else f"<Scene {id(job.scene)}>"
+                if key not in self.scenes:
+                    self.scenes[key], digests[key] = job.scene, scene_digest(job.scene)
+                self.specs.extend(frames.specs(job, key))
+        self.hashes = {s["id"]: frames.spec_hash(s, digests[s["scene"]]) for s in self.specs}
+        self.units = [self.specs[i:i + per_unit] for i in range(0, len(self.specs), per_unit)]
+        self.mine = share(len(self.units), shard)
+
+
+def _already_made(plan: _Plan, old: dict[str, dict], store, format: str
+                  ) -> tuple[dict[str, dict], list[int]]:
+    """(the records of this share's units that are made and check out, the units to make)."""
+
+    def made(spec) -> dict | None:
+        record = old.get(spec["id"])
+        ok = record is not None and "error" not in record and \
+            record.get("spec") == plan.hashes[spec["id"]] and \
+            record.get("format", "files") == format
+        return record if ok else None
+
+    kept: dict[str, dict] = {}
+    todo: list[int] = []
+    for u in plan.mine:
+        records = [made(spec) for spec in plan.units[u]]
+        if format == "files":
+            fine = records[0] is not None and store.verify(plan.units[u][0], records[0])
+        else:
+            tar = old.get(TarStore.tar_id(u))
+            fine = all(records) and store.verify(u, tar, [s["id"] for s in plan.units[u]])
+            if fine:
+                kept[TarStore.tar_id(u)] = tar
+        if fine:
+            kept.update((r["id"], r) for r in records)
+        else:
+            todo.append(u)
+    return kept, todo
+
+
+def _record(journal, done, summary, spec, result, hashes, store, files=None) -> None:
+    """Write a frame's files (files format) and append its manifest line."""
+    base = {"id": spec["id"], "job": spec["job"], "frame": spec["index"],
+            "spec": hashes[spec["id"]], "renderer": spec["renderer"]}
+    if "error" in result:
+        record = {**base, "error": result["error"], "status": result["status"]}
+        summary.failed += 1
+        summary.status = max(summary.status, result["status"])
+        summary.errors.append(f"{spec['id']}: {result['error']}")
+    else:
+        start = time.perf_counter()
+        if store is not None:
+            files = store.write(spec, result["outputs"])
+        seconds = dict(result["seconds"], write=round(time.perf_counter() - start, 6))
+        record = {**base, "format": "files" if store is not None else "webdataset",
+                  "files": files, "camera": result["camera"], "lights": result["lights"],
+                  "size": result["size"], "seed": spec["seed"],
+                  **({"method": spec["method"]} if spec["renderer"] == "shadowvol" else
+                     {"max_depth": spec["max_depth"]}),
+                  "versions": result["versions"], "device": result["device"],
+                  "worker": result["worker"],
+                  "seconds": seconds}
+        summary.rendered += 1
+    journal.add(record)
+    done[spec["id"]] = record
+
+
+def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_worker):
+    if not specs:
+        return iter(())
+    if ray:
+        from shadowvol.batch import ray as ray_backend
+
+        address = None if ray is True else ray
+        return ray_backend.results(local.chunks(specs, workers), scenes, actors=workers,
+                                   address=address, egl_device=egl_device,
+                                   num_gpus=gpus_per_worker)
+    if workers == 1 and start_method == "spawn":
+        return local.in_process(local.chunks(specs, 1), scenes, egl_device)
+    return local.pool(local.chunks(specs, workers), scenes, workers, egl_device, start_method)

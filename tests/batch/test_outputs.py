@@ -1,0 +1,66 @@
+"""The outputs are a table: an output added there (as the ground-truth outputs will be) flows
+through jobs, files, the manifest, resume and the webdataset tars with no other change; the
+progress bar shows only on a terminal."""
+
+from __future__ import annotations
+
+import io
+import json
+import sys
+
+import numpy as np
+import pytest
+from builders import job_lines
+from PIL import Image
+
+import shadowvol.batch as batch
+from shadowvol.batch import outputs, runner
+from shadowvol.batch.outputs import Output
+from shadowvol.io import png_bytes
+
+
+@pytest.mark.gl
+def test_a_new_output_flows_through(tmp_path, monkeypatch):
+    extra = Output("coverage", "coverage.png", ("coverage",),
+                   lambda f: png_bytes(f["coverage"]), "coverage as a black/white PNG")
+    monkeypatch.setitem(outputs.OUTPUTS, "coverage", extra)
+    job = dict(job_lines(frames=2, size=(32, 24), raytrace=False)[0],
+               outputs=["image", "coverage", "masks"])
+    out = tmp_path / "out"
+    assert batch.run([job], out, progress=False).status == 0  # in this process: the table
+    record = json.loads((out / "manifest.jsonl").read_text().splitlines()[0])
+    assert set(record["files"]) == {"image", "coverage", "masks"}
+    picture = np.asarray(Image.open(out / record["files"]["coverage"]["path"]))
+    with np.load(out / record["files"]["masks"]["path"]) as masks:
+        assert np.array_equal(picture, masks["coverage"].astype(np.uint8) * 255)
+    assert batch.run([job], out, progress=False).skipped == 2
+    tars = batch.run([job], tmp_path / "tars", format="webdataset", progress=False)
+    assert tars.status == 0
+    import tarfile
+
+    with tarfile.open(tmp_path / "tars" / "shard-000000.tar") as archive:
+        names = archive.getnames()
+        data = archive.extractfile("cage-turntable/000000.coverage.png").read()
+    assert "cage-turntable/000001.coverage.png" in names
+    assert np.array_equal(np.asarray(Image.open(io.BytesIO(data))), picture)
+
+
+def test_the_progress_bar_only_on_a_terminal(monkeypatch):
+    pytest.importorskip("tqdm", reason="tqdm is not installed (pip install 'shadowvol[tqdm]')")
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: False, raising=False)
+    assert runner._bar(10, None) is None and runner._bar(10, False) is None
+    bar = runner._bar(10, True)
+    assert bar is not None and bar.total == 10
+    bar.close()
+
+
+def test_the_benchmark_says_when_the_models_are_missing(tmp_path):
+    import importlib.util
+
+    from builders import ROOT
+
+    spec = importlib.util.spec_from_file_location("bench_batch", ROOT / "benchmarks" /
+                                                  "bench_batch.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert "the shared models are missing" in module.measure(models=tmp_path)["skipped"]
