@@ -22,9 +22,16 @@ import sys
 from pathlib import Path
 
 from shadowvol import __version__
-from shadowvol.cli import outputs, status
 from shadowvol.cameras import calibration
-from shadowvol.io import GROUND_TRUTH, atomic_write, save_exr, save_masks, save_png, save_png16
+from shadowvol.cli import outputs, status
+from shadowvol.io import (
+    GROUND_TRUTH,
+    atomic_write,
+    save_exr,
+    save_masks,
+    save_png,
+    save_png16,
+)
 from shadowvol.pictures import ground_truth_picture, masks_image
 from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene

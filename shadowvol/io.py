@@ -1,5 +1,5 @@
-"""The one writer: PNG images (8- and 16-bit), OpenEXR images, mask files, tar archives and raw
-bytes, atomically.
+"""The one writer: PNG images (8- and 16-bit), OpenEXR images, mask files, tar archives and
+raw bytes, atomically.
 
 Renderers return arrays; the CLI, batch jobs and the course call these.  Every file goes
 through `atomic_write`: the data goes to a temporary file beside the target, which replaces the
@@ -126,117 +126,6 @@ def png_bytes(image: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
-def write_bytes(path: str | Path, data: bytes) -> None:
-    """Write `data` to `path` atomically (see `atomic_write`)."""
-    with atomic_write(path) as f:
-        f.write(data)
-
-
-# zip and tar members carry a time stamp; a fixed one makes the archives reproducible
-# (1980-01-01, the earliest time a zip entry can hold)
-_FIXED_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
-_FIXED_TAR_MTIME = 315532800
-
-
-def npz_bytes(**arrays: np.ndarray) -> bytes:
-    """A compressed `.npz` of `arrays`, readable by `np.load`, without numpy's time stamps (the
-    same arrays give the same bytes).  Never pickles: object arrays are refused."""
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as archive:
-        for name, value in arrays.items():
-            info = zipfile.ZipInfo(f"{name}.npy", date_time=_FIXED_ZIP_TIME)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = 0o644 << 16
-            with archive.open(info, "w", force_zip64=True) as member:
-                np.lib.format.write_array(member, np.asanyarray(value), allow_pickle=False)
-    return buf.getvalue()
-
-
-# The ground-truth outputs a frame may carry, by name, in this order (docs/CONVENTIONS.md).
-GROUND_TRUTH = ("depth", "distance", "normal", "object_id", "facing", "casters")
-
-# The arrays a mask file may hold beside `lit` and `coverage` (docs/CONVENTIONS.md): name ->
-# (dtype, shape), the shape in terms of the lights L, the height H and the width W.
-MASK_ARRAYS = {
-    "depth": (np.float32, ("H", "W")),
-    "distance": (np.float32, ("H", "W")),
-    "normal": (np.float32, ("H", "W", 3)),
-    "object_id": (np.uint16, ("H", "W")),
-    "facing": (np.bool_, ("L", "H", "W")),
-    "casters": (np.uint64, ("L", "H", "W")),
-    "K": (np.float64, (3, 3)),
-    "world_to_camera": (np.float64, (4, 4)),
-    "camera_to_world": (np.float64, (4, 4)),
-    "light_position": (np.float64, ("L", 4)),
-    "light_direction": (np.float64, ("L", 3)),
-}
-
-
-def masks_bytes(lit: np.ndarray, coverage: np.ndarray, light_samples=None,
-                arrays: dict[str, np.ndarray] | None = None) -> bytes:
-    """A mask file as docs/CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage` (H, W),
-    and
-
-    light_samples : optional, per light an (N, 3) float64 array of its sample positions
-        (`shadowvol.scene.light_samples`) or None (a directional light), written as
-        `light_samples_<i>`;
-    arrays : more arrays by name: the ground-truth outputs and the camera and light arrays
-        (`shadowvol.cameras.Calibration.arrays()`), each of the dtype and shape `MASK_ARRAYS`
-        gives it (ValueError otherwise, and for a name it does not know)."""
-    extra = {}
-    for i, samples in enumerate(light_samples or ()):
-        if samples is not None:
-            samples = np.asarray(samples, np.float64)
-            if samples.ndim != 2 or samples.shape[1] != 3:
-                raise ValueError(f"light_samples[{i}] must be (N, 3), got {samples.shape}")
-            extra[f"light_samples_{i}"] = samples
-    lit = np.asarray(lit)
-    coverage = np.asarray(coverage)
-    if lit.dtype != bool or lit.ndim != 3 or coverage.dtype != bool or \
-            coverage.shape != lit.shape[1:]:
-        raise ValueError(f"masks must be lit (L, H, W) bool and coverage (H, W) bool, got "
-                         f"{lit.dtype}{lit.shape} and {coverage.dtype}{coverage.shape}")
-    sizes = dict(zip("LHW", lit.shape))
-    for name, value in (arrays or {}).items():
-        if name not in MASK_ARRAYS:
-            raise ValueError(f"a mask file holds no array {name!r} (known: "
-                             f"{', '.join(MASK_ARRAYS)})")
-        dtype, shape = MASK_ARRAYS[name]
-        want = tuple(sizes.get(n, n) for n in shape)
-        value = np.asarray(value)
-        if value.dtype != dtype or value.shape != want:
-            raise ValueError(f"{name} must be {np.dtype(dtype)}{want}, got "
-                             f"{value.dtype}{value.shape}")
-        extra[name] = value
-    return npz_bytes(lit=lit, coverage=coverage, **extra)
-
-
-def tar_bytes(members: list[tuple[str, bytes]]) -> bytes:
-    """An uncompressed POSIX tar of (name, data) members in the given order, with fixed time
-    stamps, owners and modes (the same members give the same bytes)."""
-    buf = io.BytesIO()
-    with tarfile.open(fileobj=buf, mode="w", format=tarfile.PAX_FORMAT) as archive:
-        for name, data in members:
-            info = tarfile.TarInfo(name)
-            info.size = len(data)
-            info.mtime = _FIXED_TAR_MTIME
-            info.mode = 0o644
-            info.uid = info.gid = 0
-            info.uname = info.gname = ""
-            archive.addfile(info, io.BytesIO(data))
-    return buf.getvalue()
-
-
-def save_png(path: str | Path, image: np.ndarray) -> None:
-    """Write an image: uint8 pixels as they are, float pixels as linear RGB encoded to sRGB."""
-    arr = np.asarray(image)
-    if np.issubdtype(arr.dtype, np.floating):
-        arr = encode_srgb(arr)
-    data = png_bytes(arr)
-    with atomic_write(path) as f:
-        f.write(data)
-
-
 def png16_bytes(linear: np.ndarray) -> bytes:
     """A 16-bit RGB PNG of an (H, W, 3) float linear RGB image, sRGB-encoded (clipped to 0..1,
     rounded to 0..65535, with an sRGB chunk), row 0 at the top.  Written here because Pillow
@@ -322,15 +211,126 @@ def save_exr(path: str | Path, image: np.ndarray) -> None:
         f.write(data)
 
 
+# The ground-truth outputs a frame may carry, by name, in this order (docs/CONVENTIONS.md).
+GROUND_TRUTH = ("depth", "distance", "normal", "object_id", "facing", "casters")
+
+# The arrays a mask file may hold beside `lit` and `coverage` (docs/CONVENTIONS.md): name ->
+# (dtype, shape), the shape in terms of the lights L, the height H and the width W.
+MASK_ARRAYS = {
+    "depth": (np.float32, ("H", "W")),
+    "distance": (np.float32, ("H", "W")),
+    "normal": (np.float32, ("H", "W", 3)),
+    "object_id": (np.uint16, ("H", "W")),
+    "facing": (np.bool_, ("L", "H", "W")),
+    "casters": (np.uint64, ("L", "H", "W")),
+    "K": (np.float64, (3, 3)),
+    "world_to_camera": (np.float64, (4, 4)),
+    "camera_to_world": (np.float64, (4, 4)),
+    "light_position": (np.float64, ("L", 4)),
+    "light_direction": (np.float64, ("L", 3)),
+}
+
+
+def write_bytes(path: str | Path, data: bytes) -> None:
+    """Write `data` to `path` atomically (see `atomic_write`)."""
+    with atomic_write(path) as f:
+        f.write(data)
+
+
+# zip and tar members carry a time stamp; a fixed one makes the archives reproducible
+# (1980-01-01, the earliest time a zip entry can hold)
+_FIXED_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
+_FIXED_TAR_MTIME = 315532800
+
+
+def npz_bytes(**arrays: np.ndarray) -> bytes:
+    """A compressed `.npz` of `arrays`, readable by `np.load`, without numpy's time stamps (the
+    same arrays give the same bytes).  Never pickles: object arrays are refused."""
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        for name, value in arrays.items():
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=_FIXED_ZIP_TIME)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            with archive.open(info, "w", force_zip64=True) as member:
+                np.lib.format.write_array(member, np.asanyarray(value), allow_pickle=False)
+    return buf.getvalue()
+
+
+def masks_bytes(lit: np.ndarray, coverage: np.ndarray,
+                arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> bytes:
+    """A mask file as docs/CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage` (H, W),
+    and
+
+    arrays : more arrays by name: the ground-truth outputs and the camera and light arrays
+        (`shadowvol.cameras.Calibration.arrays()`), each of the dtype and shape `MASK_ARRAYS`
+        gives it (ValueError otherwise, and for a name it does not know);
+    light_samples : per light an (N, 3) float64 array of its sample positions
+        (`shadowvol.scene.light_samples`) or None (a directional light), written as
+        `light_samples_<i>`.
+    The same arrays give the same bytes (`npz_bytes`)."""
+    extra = {}
+    for i, samples in enumerate(light_samples or ()):
+        if samples is not None:
+            samples = np.asarray(samples, np.float64)
+            if samples.ndim != 2 or samples.shape[1] != 3:
+                raise ValueError(f"light_samples[{i}] must be (N, 3), got {samples.shape}")
+            extra[f"light_samples_{i}"] = samples
+    lit = np.asarray(lit)
+    coverage = np.asarray(coverage)
+    if lit.dtype != bool or lit.ndim != 3 or coverage.dtype != bool or \
+            coverage.shape != lit.shape[1:]:
+        raise ValueError(f"masks must be lit (L, H, W) bool and coverage (H, W) bool, got "
+                         f"{lit.dtype}{lit.shape} and {coverage.dtype}{coverage.shape}")
+    sizes = dict(zip("LHW", lit.shape))
+    for name, value in (arrays or {}).items():
+        if name not in MASK_ARRAYS:
+            raise ValueError(f"a mask file holds no array {name!r} (known: "
+                             f"{', '.join(MASK_ARRAYS)})")
+        dtype, shape = MASK_ARRAYS[name]
+        want = tuple(sizes.get(n, n) for n in shape)
+        value = np.asarray(value)
+        if value.dtype != dtype or value.shape != want:
+            raise ValueError(f"{name} must be {np.dtype(dtype)}{want}, got "
+                             f"{value.dtype}{value.shape}")
+        extra[name] = value
+    return npz_bytes(lit=lit, coverage=coverage, **extra)
+
+
+def tar_bytes(members: list[tuple[str, bytes]]) -> bytes:
+    """An uncompressed POSIX tar of (name, data) members in the given order, with fixed time
+    stamps, owners and modes (the same members give the same bytes)."""
+    buf = io.BytesIO()
+    with tarfile.open(fileobj=buf, mode="w", format=tarfile.PAX_FORMAT) as archive:
+        for name, data in members:
+            info = tarfile.TarInfo(name)
+            info.size = len(data)
+            info.mtime = _FIXED_TAR_MTIME
+            info.mode = 0o644
+            info.uid = info.gid = 0
+            info.uname = info.gname = ""
+            archive.addfile(info, io.BytesIO(data))
+    return buf.getvalue()
+
+
+def save_png(path: str | Path, image: np.ndarray) -> None:
+    """Write an image: uint8 pixels as they are, float pixels as linear RGB encoded to sRGB."""
+    arr = np.asarray(image)
+    if np.issubdtype(arr.dtype, np.floating):
+        arr = encode_srgb(arr)
+    data = png_bytes(arr)
+    with atomic_write(path) as f:
+        f.write(data)
+
+
 def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
-               light_samples=None, arrays: dict[str, np.ndarray] | None = None) -> None:
-    """Write a mask file (`masks_bytes`: lit, coverage, light samples, the ground truth and
-    the camera), atomically."""
-    write_bytes(path, masks_bytes(lit, coverage, light_samples, arrays))
+               arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> None:
+    """Write a mask file (`masks_bytes`), atomically."""
+    write_bytes(path, masks_bytes(lit, coverage, arrays, light_samples))
 
 
 def load_masks(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a mask file's `lit` and `coverage` (never unpickles: allow_pickle=False)."""
+    """Read a mask file (never unpickles: allow_pickle=False)."""
     with np.load(path, allow_pickle=False) as data:
         return data["lit"], data["coverage"]
 
@@ -339,5 +339,3 @@ def load_mask_arrays(path: str | Path) -> dict[str, np.ndarray]:
     """Every array of a mask file by name (never unpickles)."""
     with np.load(path, allow_pickle=False) as data:
         return {name: data[name] for name in data.files}
-
-

@@ -7,8 +7,8 @@ import re
 import sys
 from pathlib import Path
 
-from shadowvol.cli import outputs, status
 from shadowvol.cameras import calibration
+from shadowvol.cli import outputs, status
 from shadowvol.io import encode_srgb, save_exr, save_masks, save_png, save_png16
 from shadowvol.pictures import heat_maps
 from shadowvol.raster.context import create_context

@@ -20,7 +20,7 @@ from raytrace.camera import primary_rays
 from raytrace.groundtruth import MAX_CASTERS, ground_truth
 from shadowvol.cameras import calibration
 from shadowvol.compare.maskdiff import edge_pixels
-from shadowvol.primitives import box, plane, sphere
+from shadowvol.primitives import box, sphere
 from shadowvol.scene import (
     AreaLight,
     Camera,

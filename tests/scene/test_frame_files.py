@@ -14,7 +14,14 @@ import pytest
 from PIL import Image
 
 from shadowvol.cameras import GL_TO_CV, calibration, project, unproject
-from shadowvol.io import encode_srgb, load_mask_arrays, load_masks, save_exr, save_masks, save_png16
+from shadowvol.io import (
+    encode_srgb,
+    load_mask_arrays,
+    load_masks,
+    save_exr,
+    save_masks,
+    save_png16,
+)
 from shadowvol.primitives import plane
 from shadowvol.scene import Camera, DirectionalLight, PointLight, Scene, SpotLight
 
