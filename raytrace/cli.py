@@ -183,8 +183,8 @@ def _masks(args) -> int:
         lit, coverage = shadow_masks(scene, backend=args.backend)
         arrays = calibration(scene).arrays()
         picture = masks_image(lit, coverage)
-    save_masks(paths["masks"], lit, coverage, arrays,
-               light_samples=[light_samples(lt) for lt in scene.lights])
+    save_masks(paths["masks"], lit, coverage,
+               light_samples=[light_samples(lt) for lt in scene.lights], arrays=arrays)
     if "picture" in paths:
         save_png(paths["picture"], picture)
     print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)

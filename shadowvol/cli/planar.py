@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from shadowvol.cameras import calibration
 from shadowvol.cli import outputs, status
 from shadowvol.io import save_masks, save_png
 from shadowvol.raster.planar_pass import ReceiverError, render_planar
@@ -47,7 +48,8 @@ def command(args) -> int:
         raise SceneError("--receiver", str(exc)) from None
     save_png(paths["image"], result.image)
     if "masks" in paths:
-        save_masks(paths["masks"], result.lit, result.coverage)
+        save_masks(paths["masks"], result.lit, result.coverage,
+                   arrays=calibration(scene).arrays())
     receiver = scene.objects[result.receiver].name
     print(f"wrote {', '.join(str(p) for p in paths.values())} (shadows on {receiver!r})",
           file=sys.stderr)

@@ -39,7 +39,7 @@ def test_mask_file_holds_the_extra_arrays_and_refuses_wrong_ones(tmp_path):
     cov = np.ones((6, 8), bool)
     arrays = calibration(scene).arrays() | {
         "depth": np.full((6, 8), 2.5, np.float32), "casters": np.ones((3, 6, 8), np.uint64)}
-    save_masks(tmp_path / "m.npz", lit, cov, arrays)
+    save_masks(tmp_path / "m.npz", lit, cov, arrays=arrays)
     back = load_mask_arrays(tmp_path / "m.npz")
     assert set(back) == {"lit", "coverage"} | set(arrays)
     for name, value in arrays.items():
@@ -47,11 +47,11 @@ def test_mask_file_holds_the_extra_arrays_and_refuses_wrong_ones(tmp_path):
         np.testing.assert_array_equal(back[name], value)
     assert [a.shape for a in load_masks(tmp_path / "m.npz")] == [(3, 6, 8), (6, 8)]
     with pytest.raises(ValueError, match=r"depth must be float32\(6, 8\), got float64"):
-        save_masks(tmp_path / "bad.npz", lit, cov, {"depth": np.zeros((6, 8))})
+        save_masks(tmp_path / "bad.npz", lit, cov, arrays={"depth": np.zeros((6, 8))})
     with pytest.raises(ValueError, match=r"facing must be bool\(3, 6, 8\)"):
-        save_masks(tmp_path / "bad.npz", lit, cov, {"facing": np.zeros((2, 6, 8), bool)})
+        save_masks(tmp_path / "bad.npz", lit, cov, arrays={"facing": np.zeros((2, 6, 8), bool)})
     with pytest.raises(ValueError, match="holds no array 'depths'"):
-        save_masks(tmp_path / "bad.npz", lit, cov, {"depths": np.zeros((6, 8), np.float32)})
+        save_masks(tmp_path / "bad.npz", lit, cov, arrays={"depths": np.zeros((6, 8), np.float32)})
     assert not (tmp_path / "bad.npz").exists()
 
 
