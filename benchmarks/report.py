@@ -323,6 +323,16 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
             add(f"| `shadow_masks` incl. build, {r['scene']} | "
                 f"{r['memory_python_peak_mb']:.1f} | |")
     add("")
+    if results.get("extras"):
+        add("## The other issues' benchmarks (the same run)")
+        add("Each is a script of its own in `benchmarks/`, run by `run.py` after the sections "
+            "above, one after another, under the same load; what it printed is kept verbatim.")
+        for row in results["extras"]:
+            status = ("ok" if row["returncode"] == 0 else
+                      f"exit status {row['returncode']}" if row["returncode"] is not None
+                      else "timed out")
+            add(f"### `{row['command']}`\n\n{row['what']}; {row['seconds']:.0f} s, {status}."
+                f"\n\n```\n{row['output']}\n```")
     if history.strip():
         add(history.strip())
         add("")

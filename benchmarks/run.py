@@ -367,6 +367,46 @@ def raytrace_section(cfg) -> dict:
 
 # ---------------------------------------------------------------------------------------------
 
+# The other issues' benchmarks, each a script of its own (benchmarks/bench_*.py), run by this
+# command in the same run and reported verbatim: (name, arguments, what it measures).
+EXTRAS = (
+    ("bench_soft.py", ["--size", "100k"],
+     "soft shadows: a rect light of N = 1, 4, 16, 64 samples against point lights, and the "
+     "raster against the ray tracer's lit_count (issue: soft shadows)"),
+    ("bench_groundtruth.py", [],
+     "each ground-truth output's cost on the 100k-triangle frame (issue: ground truth)"),
+    ("bench_batch.py", [],
+     "shadowvol batch on the 36-view turntable of the shared meshes: 1 worker, 2 workers, 2 "
+     "shards, Ray with 2 actors, and the machinery's overhead (issue: datasets at scale)"),
+    ("bench_outlook.py", [],
+     "path tracing Mrays/s against raw Embree casts, radiosity at ~1k/4k/16k patches (issue: "
+     "the lecture's outlook)"),
+    ("bench_viewer.py", ["--frames", "15"],
+     "the viewer's frame rate on the shipped scenes, under its own Xvfb (issue: the course)"),
+)
+EXTRA_TIMEOUT_S = 900
+
+
+def extras_section() -> list[dict]:
+    """Run every EXTRAS script once, in this run, one after another; keep what it prints."""
+    rows = []
+    for script, args, what in EXTRAS:
+        command = [sys.executable, str(ROOT / "benchmarks" / script), *args]
+        log(f"extra: {script} {' '.join(args)}")
+        start = time.perf_counter()
+        try:
+            done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True,
+                                  timeout=EXTRA_TIMEOUT_S)
+            output, rc = done.stdout + (done.stderr[-2000:] if done.returncode else ""), \
+                done.returncode
+        except subprocess.TimeoutExpired as exc:
+            output, rc = f"timed out after {exc.timeout} s", None
+        rows.append({"script": script, "command": "python benchmarks/" + " ".join(
+            [script, *args]), "what": what, "seconds": time.perf_counter() - start,
+            "returncode": rc, "output": output.strip()})
+    return rows
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true",
@@ -376,6 +416,9 @@ def main(argv=None) -> int:
                          "checkout for a full run: BENCHMARKS.md, docs/benchmarks.png, "
                          "benchmarks/results.json; test-output/benchmarks-quick for --quick)")
     ap.add_argument("--no-pyrender", action="store_true", help="skip the pyrender peer")
+    ap.add_argument("--no-extras", action="store_true",
+                    help="skip the other issues' benchmark scripts (EXTRAS; a --quick run "
+                         "skips them too)")
     ap.add_argument("--report-only", type=Path, metavar="RESULTS_JSON",
                     help="measure nothing: rewrite the markdown and the plot from a run's "
                          "results.json (e.g. after editing benchmarks/OPTIMISATIONS.md)")
@@ -396,10 +439,6 @@ def main(argv=None) -> int:
 
     optimisations = ROOT / "benchmarks" / "OPTIMISATIONS.md"
     history = optimisations.read_text() if optimisations.is_file() else ""
-    # sections measured by their own scripts (the viewer needs a display), kept verbatim
-    viewer = ROOT / "benchmarks" / "VIEWER.md"
-    if viewer.is_file():
-        history = viewer.read_text().strip() + "\n\n" + history
     if args.report_only:
         results = json.loads(args.report_only.read_text())
         report.write(results, paths["md"], paths["png"], history)
@@ -426,6 +465,7 @@ def main(argv=None) -> int:
         ctx.release()
     results["rss"] = rss_section(cfg)
     results["raytrace"] = raytrace_section(cfg)
+    results["extras"] = [] if args.quick or args.no_extras else extras_section()
     results["maxrss_end_mb"] = maxrss_mb()
     results["machine"]["load_end"] = os.getloadavg()
     results["wall_s"] = time.perf_counter() - started

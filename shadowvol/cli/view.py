@@ -14,7 +14,8 @@ mouse: left drag orbit, shift+left or middle drag pan, wheel zoom, right drag mo
 left click probes the pixel (every shadow-volume face its eye ray crosses, with +1/-1, the
 z-pass and z-fail sums, the stencil read back and the ray-traced shadow ray).
 keys: A auto, Z z-pass, F z-fail; N shaded, V volumes by role, S silhouettes, C stencil counts,
-P planar shadows, T ray traced; L next light, M light marker, H help, Esc quit.
+P planar shadows, T ray traced; L next light, [ and ] shrink and grow an area light,
+M light marker, H help, Esc quit.
 
 """
 

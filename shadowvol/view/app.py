@@ -32,7 +32,8 @@ from shadowvol.raster import window as gl_window
 from shadowvol.raster.planar_pass import PlanarShadows, ReceiverError, receiver_index
 from shadowvol.raster.renderer import Renderer
 from shadowvol.view import frames
-from shadowvol.view.state import ViewState, drag_light, orbit, pan, zoom
+from shadowvol.view.state import (ViewState, drag_light, hard_view, orbit, pan, resize_light,
+                                  zoom)
 
 PANEL_WIDTH = 520          # pixels of the side panel
 PANEL_TEXT_PX = 13
@@ -53,6 +54,7 @@ keys
   P              planar projected shadows
   T              raster | ray traced, split (slow)
   L              next light
+  [ / ]          shrink / grow an area light
   M              light marker on/off
   H              this help on/off
   Esc            quit"""
@@ -60,6 +62,7 @@ keys
 MODE_KEYS = {"N": "shaded", "V": "roles", "S": "silhouettes", "C": "stencil", "P": "planar",
              "T": "raytraced"}
 METHOD_KEYS = {"A": "auto", "Z": "zpass", "F": "zfail"}
+SIZE_KEYS = {"BRACKETLEFT": -1, "BRACKETRIGHT": 1}  # area light: shrink, grow
 
 
 def _mono(px: int):
@@ -179,6 +182,8 @@ class Viewer:
             self.set_state(replace(s, marker=not s.marker))
         elif name == "H":
             self.state = replace(s, help=not s.help)        # the panel only
+        elif name in SIZE_KEYS:
+            self.set_state(resize_light(s, SIZE_KEYS[name]))
         elif name == "L" and s.lights:
             self.set_state(replace(s, probe_light=(s.probe_light + 1) % len(s.lights)))
         elif symbol == key.ESCAPE:
@@ -218,7 +223,7 @@ class Viewer:
             self.probe_text = "no lights: nothing to probe"
             return None
         p = probe(self.renderer, px, py, s.probe_light, s.method, camera=s.camera,
-                  lights=s.lights)
+                  lights=hard_view(s.lights))  # an area light: its centre sample
         self.probe_text = p.explain([o.name for o in self.scene.objects])
         print(self.probe_text, flush=True)
         return p

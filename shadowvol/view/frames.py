@@ -11,7 +11,7 @@ import numpy as np
 from shadowvol import pictures
 from shadowvol.course import slides, volume_roles
 from shadowvol.io import encode_srgb
-from shadowvol.view.state import ViewState, scene_of
+from shadowvol.view.state import ViewState, hard_view, scene_of
 
 MARKER_LAYOUT = slides.Layout(1920, 1080)   # marker sizes as on a 1080p slide
 
@@ -23,13 +23,13 @@ def frame(renderer, state: ViewState, planar=None) -> np.ndarray:
     cam, lights, method = state.camera, state.lights, state.method
     if state.mode == "roles":
         image = encode_srgb(renderer.volume_view(method, camera=cam, lights=lights))
-    elif state.mode == "stencil":
-        result = renderer.render(method, camera=cam, lights=lights, stencil=True)
+    elif state.mode == "stencil":  # an area light: its centre sample's counts
+        result = renderer.render(method, camera=cam, lights=hard_view(lights), stencil=True)
         image = pictures.heat_map(result.stencil[state.probe_light].astype(np.int16),
                                   encode_srgb(result.image)) if len(lights) else \
             encode_srgb(result.image)
     elif state.mode == "planar":
-        image = encode_srgb(planar.render(camera=cam, lights=lights).image)
+        image = encode_srgb(planar.render(camera=cam, lights=hard_view(lights)).image)
     elif state.mode == "raytraced":
         # split screen at the same camera: the raster's left half beside the ray tracer's
         # right half, so a shadow edge crossing the divider shows both renderers at once
@@ -44,7 +44,8 @@ def frame(renderer, state: ViewState, planar=None) -> np.ndarray:
         image = encode_srgb(renderer.render(method, camera=cam, lights=lights).image)
         if state.mode == "silhouettes" and lights:
             image, _ = volume_roles.draw_silhouettes(
-                image, scene, lights[state.probe_light].homogeneous, _layout(scene))
+                image, scene, hard_view(lights)[state.probe_light].homogeneous,
+                _layout(scene))
     if state.marker:
         image = slides.mark_lights(image, scene, _layout(scene))
     return image

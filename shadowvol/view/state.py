@@ -11,13 +11,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from shadowvol.scene import Camera, DirectionalLight, Scene
+from shadowvol.scene import AreaLight, Camera, DirectionalLight, Scene
 
 MODES = ("shaded", "roles", "silhouettes", "stencil", "planar", "raytraced")
 METHODS = ("auto", "zpass", "zfail")
 ORBIT_PER_PIXEL = 0.01       # radians of orbit per pixel dragged
 ZOOM_PER_STEP = 0.9          # the eye's distance scales by this per scroll step
 MIN_PITCH = 0.02             # radians kept between the view direction and the up axis
+RESIZE_PER_STEP = 1.25       # an area light's size scales by this per key press
 
 
 @dataclass(frozen=True)
@@ -91,6 +92,10 @@ def drag_light(state: ViewState, dx: float, dy: float, height: int) -> ViewState
     if isinstance(light, DirectionalLight):
         d = light.direction + (dx * right - dy * up) * ORBIT_PER_PIXEL
         new = replace(light, direction=d / np.linalg.norm(d))
+    elif isinstance(light, AreaLight):  # its centre moves; its samples are made anew
+        depth = max((light.center - cam.eye) @ fwd, cam.near)
+        per_pixel = 2 * depth * np.tan(np.radians(cam.fov_y) / 2) / height
+        new = replace(light, center=light.center + (dx * right - dy * up) * per_pixel)
     else:
         depth = max((light.position - cam.eye) @ fwd, cam.near)
         per_pixel = 2 * depth * np.tan(np.radians(cam.fov_y) / 2) / height
@@ -99,6 +104,34 @@ def drag_light(state: ViewState, dx: float, dy: float, height: int) -> ViewState
     lights = list(state.lights)
     lights[i] = new
     return replace(state, lights=tuple(lights))
+
+
+def resize_light(state: ViewState, steps: int) -> ViewState:
+    """Grow (steps > 0) or shrink the probed light if it is an area light: its size (rect) or
+    radius (disk, sphere) scales by RESIZE_PER_STEP per step, with the same number of samples
+    made anew (the umbra shrinks and the penumbra widens as it grows).  Other lights stay."""
+    if not state.lights or not isinstance(state.lights[state.probe_light], AreaLight):
+        return state
+    light = state.lights[state.probe_light]
+    scale = RESIZE_PER_STEP ** steps
+    new = (replace(light, size=light.size * scale) if light.shape == "rect"
+           else replace(light, radius=light.radius * scale))
+    lights = list(state.lights)
+    lights[state.probe_light] = new
+    return replace(state, lights=tuple(lights))
+
+
+def hard_view(lights) -> tuple:
+    """The lights as the stencil, silhouette, planar and probe views count them: an area light
+    by its sample nearest its centre at the whole light's power (each sample is counted as a
+    point light), the others as they are."""
+    out = []
+    for light in lights:
+        if isinstance(light, AreaLight):
+            nearest = int(np.argmin(np.linalg.norm(light.positions - light.center, axis=1)))
+            light = replace(light.hard[nearest], intensity=light.intensity)
+        out.append(light)
+    return tuple(out)
 
 
 def scene_of(scene: Scene, state: ViewState) -> Scene:

@@ -249,3 +249,50 @@ def test_view_state_moves():
     view = cam.target - cam.eye
     assert abs(delta @ view) < 1e-9 * np.linalg.norm(view) and np.linalg.norm(delta) > 0
     assert moved.homogeneous[:3] == pytest.approx(moved.position)     # not the old cache
+
+
+def test_an_area_light_is_dragged_and_resized():
+    from shadowvol.view.app import SIZE_KEYS
+    from shadowvol.view.state import RESIZE_PER_STEP, drag_light, resize_light
+    scene = load_scene(SCENES / "soft.toml")
+    s = ViewState.of(scene)
+    light = s.lights[0]
+    grown = resize_light(s, SIZE_KEYS["BRACKETRIGHT"]).lights[0]
+    np.testing.assert_allclose(grown.size, light.size * RESIZE_PER_STEP)
+    assert grown.samples == light.samples and not np.allclose(grown.positions, light.positions)
+    # the samples spread with the light: their spread about the centre grows by the same factor
+    spread = lambda lt: np.abs(lt.positions - lt.center).max()
+    assert spread(grown) == pytest.approx(spread(light) * RESIZE_PER_STEP, rel=0.05)
+    shrunk = resize_light(s, SIZE_KEYS["BRACKETLEFT"]).lights[0]
+    np.testing.assert_allclose(shrunk.size, light.size / RESIZE_PER_STEP)
+    moved = drag_light(s, 40, 0, scene.height).lights[0]
+    assert not np.allclose(moved.center, light.center)
+    np.testing.assert_allclose(moved.positions - moved.center, light.positions - light.center,
+                               atol=1e-12)
+    point = ViewState.of(load_scene(SCENES / "cage.toml"))
+    assert resize_light(point, 1) is point  # a point light has no size
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("mode", ["shaded", "roles", "silhouettes", "stencil", "planar"])
+def test_every_mode_draws_an_area_light_scene(ctx, mode):
+    """The counting views take an area light by its centre sample; the shaded view by all."""
+    from dataclasses import replace
+
+    from shadowvol.raster.planar_pass import PlanarShadows
+    from shadowvol.raster.renderer import Renderer
+    from shadowvol.view.frames import frame
+    from shadowvol.view.state import hard_view
+    scene = load_scene(SCENES / "soft.toml").replace(width=64, height=48)
+    s = replace(ViewState.of(scene), mode=mode)
+    (centre,) = hard_view(s.lights)
+    light = s.lights[0]
+    assert np.linalg.norm(centre.position - light.center) == pytest.approx(
+        np.linalg.norm(light.positions - light.center, axis=1).min())
+    assert centre.intensity == light.intensity
+    with Renderer(scene, ctx) as r, PlanarShadows(r) as planar:
+        image = frame(r, s, planar)
+        assert image.shape == (48, 64, 3) and image.std() > 0
+        if mode == "stencil":
+            counts = r.render(lights=(centre,), stencil=True).stencil[0]
+            assert (counts > 0).any()  # the centre sample's shadow is counted
