@@ -30,9 +30,12 @@ class Output:
 OUTPUTS: dict[str, Output] = {o.name: o for o in (
     Output("image", "png", ("image",), lambda f: png_bytes(encode_srgb(f["image"])),
            "the image, 8-bit sRGB PNG, row 0 at the top"),
-    Output("masks", "masks.npz", ("lit", "coverage"),
-           lambda f: masks_bytes(f["lit"], f["coverage"]),
-           "the shadow masks (docs/CONVENTIONS.md): lit (L, H, W) bool, coverage (H, W) bool"),
+    Output("masks", "masks.npz", ("lit", "coverage", "camera", "light_samples"),
+           lambda f: masks_bytes(f["lit"], f["coverage"], arrays=f["camera"],
+                                 light_samples=f["light_samples"]),
+           "the shadow masks (docs/CONVENTIONS.md): lit (L, H, W) bool, coverage (H, W) bool, "
+           "the camera matrices and lights (K, world_to_camera, camera_to_world, ...) and each "
+           "area light's samples, as every mask file holds them"),
 )}
 
 DEFAULT = ("image", "masks")

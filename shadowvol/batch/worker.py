@@ -26,7 +26,8 @@ from shadowvol import __version__, signals
 from shadowvol.batch import egl, frames
 from shadowvol.batch.outputs import OUTPUTS, fields_of
 from shadowvol.cli import status
-from shadowvol.scene import Camera, Scene
+from shadowvol.cameras import calibration
+from shadowvol.scene import Camera, Scene, light_samples
 from shadowvol.scenefile import light_from_dict, load_scene
 
 # Renderers kept alive per worker (least recently used released first): a job file that cycles
@@ -186,6 +187,11 @@ class Worker:
             renderer = self.renderer(spec["scene"], scene)
             result = renderer.render(spec["method"], camera=camera, lights=lights)
             arrays = {name: getattr(result, name) for name in wanted if hasattr(result, name)}
+        frame_scene = scene.replace(camera=camera, lights=lights)
+        if "camera" in wanted:  # what every mask file holds beside the masks
+            arrays["camera"] = calibration(frame_scene).arrays()
+        if "light_samples" in wanted:
+            arrays["light_samples"] = [light_samples(lt) for lt in lights]
         missing = [name for name in wanted if name not in arrays]
         if missing:
             raise ValueError(f"the {spec['renderer']} renderer does not make {missing[0]!r}")
