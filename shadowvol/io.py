@@ -257,6 +257,13 @@ def npz_bytes(**arrays: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
+def npy_bytes(array: np.ndarray) -> bytes:
+    """A `.npy` of `array` (no time stamp: the same array gives the same bytes; never pickles)."""
+    buf = io.BytesIO()
+    np.lib.format.write_array(buf, np.asanyarray(array), allow_pickle=False)
+    return buf.getvalue()
+
+
 def masks_bytes(lit: np.ndarray, coverage: np.ndarray,
                 arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> bytes:
     """A mask file as docs/CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage` (H, W),

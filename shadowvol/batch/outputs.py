@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shadowvol.io import encode_srgb, masks_bytes, png_bytes
+from shadowvol.io import GROUND_TRUTH, encode_srgb, masks_bytes, npy_bytes, png_bytes
 
 
 @dataclass(frozen=True)
@@ -36,6 +36,10 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
            "the shadow masks (docs/CONVENTIONS.md): lit (L, H, W) bool, coverage (H, W) bool, "
            "the camera matrices and lights (K, world_to_camera, camera_to_world, ...) and each "
            "area light's samples, as every mask file holds them"),
+    # the ground truth (docs/CONVENTIONS.md): one .npy each, from either renderer
+    *(Output(name, f"{name}.npy", (name,), lambda f, name=name: npy_bytes(f[name]),
+             f"the ground truth's {name} (docs/CONVENTIONS.md), a .npy of its array")
+      for name in GROUND_TRUTH),
 )}
 
 DEFAULT = ("image", "masks")

@@ -25,10 +25,15 @@ import numpy as np
 from shadowvol import __version__, signals
 from shadowvol.batch import egl, frames
 from shadowvol.batch.outputs import OUTPUTS, fields_of
-from shadowvol.cli import status
 from shadowvol.cameras import calibration
+from shadowvol.cli import status
+from shadowvol.io import GROUND_TRUTH
 from shadowvol.scene import Camera, Scene, light_samples
 from shadowvol.scenefile import light_from_dict, load_scene
+
+# what a batch frame asks `Renderer.render(outputs=...)` for (its OUTPUTS; named here, since
+# the worker imports GL only when it first renders)
+RASTER_OUTPUTS = ("image", "lit", "coverage", *GROUND_TRUTH)
 
 # Renderers kept alive per worker (least recently used released first): a job file that cycles
 # through many scenes holds at most this many scenes' geometry on the GPU at once.
@@ -173,6 +178,7 @@ class Worker:
 
     def _arrays(self, spec, scene: Scene, camera: Camera, lights) -> dict[str, np.ndarray]:
         wanted = fields_of(spec["outputs"])
+        truth = [name for name in GROUND_TRUTH if name in wanted]
         if spec["renderer"] == "raytrace":
             import raytrace
 
@@ -181,12 +187,18 @@ class Worker:
             if "image" in wanted:
                 arrays["image"] = raytrace.render(frame_scene, max_depth=spec["max_depth"],
                                                   progress=False)
-            if {"lit", "coverage"} & set(wanted):
+            if truth:  # the masks come with it, on the same rays
+                gt = raytrace.ground_truth(frame_scene, outputs=truth)
+                arrays.update({name: getattr(gt, name) for name in truth},
+                              lit=gt.lit, coverage=gt.coverage)
+            elif {"lit", "coverage"} & set(wanted):
                 arrays["lit"], arrays["coverage"] = raytrace.shadow_masks(frame_scene)
         else:
             renderer = self.renderer(spec["scene"], scene)
-            result = renderer.render(spec["method"], camera=camera, lights=lights)
-            arrays = {name: getattr(result, name) for name in wanted if hasattr(result, name)}
+            asked = tuple(name for name in wanted if name in RASTER_OUTPUTS)
+            result = renderer.render(spec["method"], camera=camera, lights=lights,
+                                     outputs=asked)
+            arrays = {name: getattr(result, name) for name in asked}
         frame_scene = scene.replace(camera=camera, lights=lights)
         if "camera" in wanted:  # what every mask file holds beside the masks
             arrays["camera"] = calibration(frame_scene).arrays()

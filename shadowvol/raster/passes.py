@@ -29,7 +29,7 @@ from shadowvol.raster import glsl, stencil
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.projection import NEARER, gl_matrix
-from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
+from shadowvol.raster.target import Target
 from shadowvol.scene import AreaSample, Camera, Light, Scene, SpotLight
 
 NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)

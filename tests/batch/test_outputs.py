@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 import pytest
-from builders import job_lines
+from builders import SCENES, job_lines
 from PIL import Image
 
 import shadowvol.batch as batch
@@ -64,3 +64,34 @@ def test_the_benchmark_says_when_the_models_are_missing(tmp_path):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     assert "the shared models are missing" in module.measure(models=tmp_path)["skipped"]
+
+
+@pytest.mark.gl
+def test_the_ground_truth_flows_through_from_both_renderers(tmp_path, ctx):
+    """Every ground-truth output is a file of the frame, equal to what the renderer gives for
+    the same frame; the mask file holds the camera, as every mask file does."""
+    import raytrace
+    from shadowvol.io import GROUND_TRUTH, load_mask_arrays
+    from shadowvol.raster.renderer import Renderer
+    from shadowvol.scene import Camera
+    from shadowvol.scenefile import load_scene
+
+    view = {"eye": [4.0, 3.0, 5.0], "target": [0.0, 1.0, 0.0]}
+    jobs = [{"name": name, "scene": str(SCENES / "stack.toml"), "size": [40, 30],
+             "renderer": name, "cameras": [view], "outputs": ["masks", *GROUND_TRUTH]}
+            for name in ("shadowvol", "raytrace")]
+    batch.run(jobs, tmp_path / "out")
+    base = load_scene(SCENES / "stack.toml").replace(width=40, height=30)
+    scene = base.replace(camera=Camera(**{"up": base.camera.up, "fov_y": base.camera.fov_y,
+                                          "near": base.camera.near, **view}))
+    with Renderer(scene, ctx) as r:
+        raster = r.render(outputs=("lit", "coverage", *GROUND_TRUTH))
+    traced = raytrace.ground_truth(scene, outputs=GROUND_TRUTH)
+    for job, want in (("shadowvol", raster), ("raytrace", traced)):
+        folder = tmp_path / "out" / job
+        for name in GROUND_TRUTH:
+            np.testing.assert_array_equal(np.load(folder / f"000000.{name}.npy"),
+                                          getattr(want, name), err_msg=f"{job} {name}")
+        masks = load_mask_arrays(folder / "000000.masks.npz")
+        np.testing.assert_array_equal(masks["lit"], want.lit)
+        np.testing.assert_allclose(masks["K"], traced.calibration.K)
