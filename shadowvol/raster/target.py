@@ -28,16 +28,41 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
+from shadowvol.errors import RenderError
 from shadowvol.raster import stencil
 from shadowvol.raster.projection import FAR_DEPTH
 
 LIGHTS_PER_PAGE = 23  # lit bits 1..23 and the coverage bit of a float32: exact
 
 
+# GPU memory of one pixel of the frame: colour RGBA32F, lit bits R32F, G-buffer RGBA32F,
+# unshadowed marks R32F, sRGB RGBA8, depth32F + stencil8 (8 with padding)
+BYTES_PER_PIXEL = 16 + 4 + 16 + 4 + 4 + 8
+
+
+class FrameAllocationError(RenderError):
+    """The GL could not allocate the frame's buffers (out of GPU memory, or a size the driver
+    refuses)."""
+
+
 class Target:
     """Owns its textures, framebuffers and renderbuffer: call `release()`."""
 
     def __init__(self, ctx: moderngl.Context, gl: stencil.RawGL, width: int, height: int):
+        self.ctx, self.gl = ctx, gl
+        self._textures, self._fbos, self.depth_stencil = (), (), None
+        try:
+            self._allocate(ctx, gl, width, height)
+        except (moderngl.Error, stencil.RawGLError) as exc:
+            self.release()
+            mib = width * height * BYTES_PER_PIXEL / 2**20
+            raise FrameAllocationError(
+                f"the GL could not allocate a {width}x{height} frame (about {mib:,.0f} MiB of "
+                f"GPU memory at {BYTES_PER_PIXEL} bytes a pixel; {exc}); try a smaller "
+                "image") from None
+
+    def _allocate(self, ctx: moderngl.Context, gl: stencil.RawGL, width: int,
+                  height: int) -> None:
         self.ctx, self.gl = ctx, gl
         self.width, self.height = width, height
         self.colour = ctx.texture((width, height), 4, dtype="f4")
@@ -142,10 +167,22 @@ class Target:
         return np.ascontiguousarray(raw[::-1]).view(np.int8).astype(np.int16)
 
     def release(self) -> None:
+        # what a failed allocation made so far is released too
+        made = [getattr(self, n, None) for n in ("colour", "bits", "position", "unshadowed",
+                                                 "srgb", "gbuffer_fbo", "mark_fbo", "fbo",
+                                                 "lit_fbo", "srgb_fbo")]
+        self._textures = tuple(o for o in made[:5] if o is not None)
+        self._fbos = tuple(o for o in made[5:] if o is not None)
         if self.ctx.fbo in self._fbos:
             # moderngl re-binds its record of the bound framebuffer after creating the next
             # one; leaving it pointing at a deleted framebuffer raises GL_INVALID_OPERATION
             self.ctx.detect_framebuffer(0).use()
-        self.depth_stencil.release()
+        if self.depth_stencil is not None:
+            self.depth_stencil.release()
         for obj in (*self._fbos, *self._textures):
             obj.release()
+        for name in ("colour", "bits", "position", "unshadowed", "srgb", "gbuffer_fbo",
+                     "mark_fbo", "fbo", "lit_fbo", "srgb_fbo"):
+            if hasattr(self, name):
+                delattr(self, name)
+        self._textures, self._fbos, self.depth_stencil = (), (), None

@@ -32,8 +32,15 @@ from shadowvol.raster import window as gl_window
 from shadowvol.raster.planar_pass import PlanarShadows, ReceiverError, receiver_index
 from shadowvol.raster.renderer import Renderer
 from shadowvol.view import frames
-from shadowvol.view.state import (ViewState, drag_light, hard_view, orbit, pan, resize_light,
-                                  zoom)
+from shadowvol.view.state import (
+    ViewState,
+    drag_light,
+    hard_view,
+    orbit,
+    pan,
+    resize_light,
+    zoom,
+)
 
 PANEL_WIDTH = 520          # pixels of the side panel
 PANEL_TEXT_PX = 13
