@@ -34,6 +34,7 @@ from shadowvol.raster.renderer import Renderer
 from shadowvol.view import frames
 from shadowvol.view.state import (
     ViewState,
+    change_samples,
     drag_light,
     hard_view,
     orbit,
@@ -62,6 +63,7 @@ keys
   T              raster | ray traced, split (slow)
   L              next light
   [ / ]          shrink / grow an area light
+  , / .          halve / double its samples
   M              light marker on/off
   H              this help on/off
   Esc            quit"""
@@ -70,6 +72,7 @@ MODE_KEYS = {"N": "shaded", "V": "roles", "S": "silhouettes", "C": "stencil", "P
              "T": "raytraced"}
 METHOD_KEYS = {"A": "auto", "Z": "zpass", "F": "zfail"}
 SIZE_KEYS = {"BRACKETLEFT": -1, "BRACKETRIGHT": 1}  # area light: shrink, grow
+SAMPLE_KEYS = {"COMMA": 0.5, "PERIOD": 2.0}          # area light: halve, double its samples
 
 
 def _mono(px: int):
@@ -191,6 +194,8 @@ class Viewer:
             self.state = replace(s, help=not s.help)        # the panel only
         elif name in SIZE_KEYS:
             self.set_state(resize_light(s, SIZE_KEYS[name]))
+        elif name in SAMPLE_KEYS:
+            self.set_state(change_samples(s, SAMPLE_KEYS[name]))
         elif name == "L" and s.lights:
             self.set_state(replace(s, probe_light=(s.probe_light + 1) % len(s.lights)))
         elif symbol == key.ESCAPE:

@@ -19,6 +19,10 @@ ORBIT_PER_PIXEL = 0.01       # radians of orbit per pixel dragged
 ZOOM_PER_STEP = 0.9          # the eye's distance scales by this per scroll step
 MIN_PITCH = 0.02             # radians kept between the view direction and the up axis
 RESIZE_PER_STEP = 1.25       # an area light's size scales by this per key press
+# An area light is shown with at most this many samples (each is a full stencil count, so the
+# frame costs about one volume pass per sample); `,` and `.` halve and double it, up to the
+# scene's own N.  The window says how many it shows.
+VIEW_SAMPLES = 16
 
 
 @dataclass(frozen=True)
@@ -31,9 +35,14 @@ class ViewState:
     help: bool = True             # the help text in the side panel
     probe_light: int = 0          # which light the count probe and the stencil view use
 
+    scene_lights: tuple = ()      # the scene's own lights (an area light's full N)
+
     @classmethod
     def of(cls, scene: Scene) -> "ViewState":
-        return cls(camera=scene.camera, lights=tuple(scene.lights))
+        lights = tuple(scene.lights)
+        shown = tuple(with_samples(lt, min(VIEW_SAMPLES, lt.samples))
+                      if isinstance(lt, AreaLight) else lt for lt in lights)
+        return cls(camera=scene.camera, lights=shown, scene_lights=lights)
 
 
 def _basis(camera: Camera):
@@ -103,6 +112,27 @@ def drag_light(state: ViewState, dx: float, dy: float, height: int) -> ViewState
     # the cached homogeneous form belongs to the old position: a fresh light is made
     lights = list(state.lights)
     lights[i] = new
+    return replace(state, lights=tuple(lights))
+
+
+def with_samples(light, samples: int):
+    """An area light with `samples` samples (at least 1); other lights as they are."""
+    if not isinstance(light, AreaLight):
+        return light
+    return replace(light, samples=max(1, int(samples)))
+
+
+def change_samples(state: ViewState, factor: float) -> ViewState:
+    """The probed area light with its samples scaled by `factor`, between 1 and the scene's N."""
+    i = state.probe_light
+    if not state.lights or not isinstance(state.lights[i], AreaLight):
+        return state
+    light = state.lights[i]
+    full = state.scene_lights[i].samples if i < len(state.scene_lights) and \
+        isinstance(state.scene_lights[i], AreaLight) else light.samples
+    n = min(full, max(1, round(light.samples * factor)))
+    lights = list(state.lights)
+    lights[i] = with_samples(light, n)
     return replace(state, lights=tuple(lights))
 
 

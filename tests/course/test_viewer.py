@@ -296,3 +296,23 @@ def test_every_mode_draws_an_area_light_scene(ctx, mode):
         if mode == "stencil":
             counts = r.render(lights=(centre,), stencil=True).stencil[0]
             assert (counts > 0).any()  # the centre sample's shadow is counted
+
+
+def test_an_area_light_is_shown_with_few_samples_and_more_on_request():
+    from shadowvol.view.app import SAMPLE_KEYS
+    from shadowvol.view.state import VIEW_SAMPLES, change_samples
+    scene = load_scene(SCENES / "soft.toml")
+    s = ViewState.of(scene)
+    assert scene.lights[0].samples == 144 and s.lights[0].samples == VIEW_SAMPLES
+    more = change_samples(s, SAMPLE_KEYS["PERIOD"])
+    assert more.lights[0].samples == 2 * VIEW_SAMPLES
+    for _ in range(5):
+        more = change_samples(more, SAMPLE_KEYS["PERIOD"])
+    assert more.lights[0].samples == 144               # never past the scene's own N
+    fewer = s
+    for _ in range(8):
+        fewer = change_samples(fewer, SAMPLE_KEYS["COMMA"])
+    assert fewer.lights[0].samples == 1
+    small = scene.replace(lights=(scene.lights[0].__class__(
+        "rect", [0.0, 4.0, 0.0], normal=[0.0, -1.0, 0.0], size=[1.0, 1.0], samples=4),))
+    assert ViewState.of(small).lights[0].samples == 4  # fewer than VIEW_SAMPLES: kept
