@@ -23,7 +23,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from shadowvol.cameras import Calibration, calibration
-from shadowvol.io import GROUND_TRUTH
+from shadowvol.io import GROUND_TRUTH, GroundTruthFrame
 from shadowvol.scene import AreaLight, Scene, SceneError
 
 from .backends import NumpyBackend, TriangleBackend, make_backend
@@ -48,7 +48,7 @@ MAX_OBJECT_IDS = 65535    # objects `object_id` can name: uint16, 0 is the backg
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class GroundTruth:
+class GroundTruth(GroundTruthFrame):
     """One frame's masks, the ground-truth outputs asked for (None otherwise) and the camera.
 
     lit : (L, H, W) bool and coverage : (H, W) bool, as `shadow_masks` returns them
@@ -72,22 +72,6 @@ class GroundTruth:
     facing: np.ndarray | None = None
     casters: np.ndarray | None = None
 
-    @property
-    def cast(self) -> np.ndarray:
-        """(L, H, W) bool: cast shadow, facing the light yet not lit (needs `facing`)."""
-        return self.facing & ~self.lit
-
-    @property
-    def attached(self) -> np.ndarray:
-        """(L, H, W) bool: attached shadow, covered but facing away (needs `facing`)."""
-        return self.coverage[None] & ~self.facing
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The outputs computed and the calibration, by their mask-file names
-        (`shadowvol.io.save_masks`)."""
-        out = {name: getattr(self, name) for name in GROUND_TRUTH
-               if getattr(self, name) is not None}
-        return out | self.calibration.arrays()
 
 
 def check_outputs(scene: Scene, outputs) -> tuple[str, ...]:

@@ -216,6 +216,30 @@ GROUND_TRUTH = ("depth", "distance", "normal", "object_id", "facing", "casters")
 
 # The arrays a mask file may hold beside `lit` and `coverage` (docs/CONVENTIONS.md): name ->
 # (dtype, shape), the shape in terms of the lights L, the height H and the width W.
+class GroundTruthFrame:
+    """What a frame of either renderer derives from its arrays, as docs/CONVENTIONS.md defines
+    it: the cast and the attached shadow, and its arrays by their mask-file names.  Mixed into
+    both renderers' results, which hold `lit`, `coverage`, `facing`, `calibration` and the
+    GROUND_TRUTH outputs (None where not asked for)."""
+
+    @property
+    def cast(self) -> np.ndarray:
+        """(L, H, W) bool: cast shadow, facing the light yet not lit (needs facing, lit)."""
+        return self.facing & ~self.lit
+
+    @property
+    def attached(self) -> np.ndarray:
+        """(L, H, W) bool: attached shadow, covered but facing away (needs facing, coverage)."""
+        return self.coverage[None] & ~self.facing
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The ground truth computed and the calibration, by their mask-file names
+        (`save_masks`)."""
+        out = {name: getattr(self, name) for name in GROUND_TRUTH
+               if getattr(self, name) is not None}
+        return out | self.calibration.arrays()
+
+
 MASK_ARRAYS = {
     "depth": (np.float32, ("H", "W")),
     "distance": (np.float32, ("H", "W")),

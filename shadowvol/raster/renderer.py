@@ -23,6 +23,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.cameras import Calibration, calibration
+from shadowvol.io import GroundTruthFrame
 from shadowvol.raster import methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import create_context, make_current
@@ -49,7 +50,7 @@ DEFAULT_OUTPUTS = ("image", "lit", "coverage")
 
 
 @dataclass(frozen=True, eq=False)
-class RenderResult:
+class RenderResult(GroundTruthFrame):
     """One frame.  Each array is None unless asked for (`Renderer.render(outputs=...)`).
 
     image      : (H, W, 3) float32 linear RGB (direct Phong lighting; an area light's
@@ -87,22 +88,6 @@ class RenderResult:
     casters: np.ndarray | None = None
     calibration: Calibration | None = None
 
-    @property
-    def cast(self) -> np.ndarray:
-        """(L, H, W) bool: cast shadow, facing the light yet not lit (needs facing, lit)."""
-        return self.facing & ~self.lit
-
-    @property
-    def attached(self) -> np.ndarray:
-        """(L, H, W) bool: attached shadow, covered but facing away (needs facing, coverage)."""
-        return self.coverage[None] & ~self.facing
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The ground truth computed and the calibration, by their mask-file names
-        (`shadowvol.io.save_masks`)."""
-        out = {name: getattr(self, name) for name in truth.TRUTH_OUTPUTS
-               if getattr(self, name) is not None}
-        return out | self.calibration.arrays()
 
     @property
     def visibility(self) -> np.ndarray:

@@ -27,6 +27,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.cameras import intrinsics
+from shadowvol.io import GROUND_TRUTH
 from shadowvol.raster import glsl, passes
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.glsl import set_uniform
@@ -35,7 +36,7 @@ from shadowvol.raster.projection import top_row_first
 from shadowvol.raster.target import LIGHTS_PER_PAGE
 from shadowvol.scene import Camera, SpotLight
 
-TRUTH_OUTPUTS = ("depth", "distance", "normal", "object_id", "facing", "casters")
+TRUTH_OUTPUTS = GROUND_TRUTH  # the names of docs/CONVENTIONS.md, one list for both renderers
 MAX_CASTERS = 64
 LIGHTS_PER_PASS = LIGHTS_PER_PAGE  # the frame's pages: facing and lit bits exact in a float32
 
