@@ -4,8 +4,8 @@ All objects become one triangle soup (three vertices per triangle, objects one a
 The geometry pass draws its positions in one draw and keys each pixel by the triangle's index
 (gl_VertexID / 3), the key of the per-triangle storage buffer (face normal, first corner, object
 index) that the deferred shading pass reads; the z-fail near caps draw subsets of the same
-vertices in the same order, so their depths equal the geometry pass's bit for bit.  (An indexed
-mesh with gl_PrimitiveID measured 1.6x slower on llvmpipe: its draw path for primitive ids.)
+vertices in the same order, so their depths equal the geometry pass's bit for bit.  (Why not an
+indexed mesh keyed by gl_PrimitiveID: benchmarks/OPTIMISATIONS.md.)
 The soup's other per-vertex attributes (normal, first corner, object: the GPU caps and the
 planar shadows' forward passes) are built on first use, one buffer each.
 
