@@ -61,9 +61,7 @@ def _parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("render", help="ray-trace an image (Whitted: shadows, reflection, "
                                       "refraction, Phong)",
-                       description="Ray-trace SCENE into an 8-bit sRGB PNG.",
-                       epilog=status.EPILOG,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description="Ray-trace SCENE into an 8-bit sRGB PNG.")
     r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     r.add_argument("-o", "--output", required=True, metavar="PNG",
                    help="where to write the image (PNG, sRGB, row 0 at the top)")
@@ -83,9 +81,7 @@ def _parser() -> argparse.ArgumentParser:
                                    "and write them as a .npz (lit, coverage, the camera "
                                    "matrices K, world_to_camera, camera_to_world and the light "
                                    "arrays; with --outputs, the ground truth too) and a "
-                                   "picture.",
-                       epilog=status.EPILOG,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                                   "picture.")
     m.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     m.add_argument("-o", "--output", required=True, metavar="NPZ",
                    help="where to write the masks (.npz with lit (L, H, W) and coverage (H, W))")
@@ -104,9 +100,7 @@ def _parser() -> argparse.ArgumentParser:
                                    "(X, Y) — primary, shadow rays with their verdicts, "
                                    "reflected, refracted, total internal reflection — as an "
                                    "indented tree, and optionally draw them over the render "
-                                   "and in a side view.",
-                       epilog=status.EPILOG,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                                   "and in a side view.")
     t.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     t.add_argument("--pixel", nargs=2, type=int, required=True, metavar=("X", "Y"),
                    help="column X from the left, row Y from the top")
@@ -118,8 +112,6 @@ def _parser() -> argparse.ArgumentParser:
     _backend(t)
 
     e = sub.add_parser("exercise", help="a worked exercise of the course, printed and drawn",
-                       epilog=status.EPILOG,
-                       formatter_class=argparse.RawDescriptionHelpFormatter,
                        description="Print the worked solution of one of the course's "
                                    "exercises, computed with the ray tracer's own formulas, "
                                    "and optionally draw it.  plane: the ray (5,1) + λ(−1,3) "
@@ -129,6 +121,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="the exercise: " + ", ".join(EXERCISES))
     e.add_argument("-o", "--output", metavar="PNG", default=None,
                    help="also draw the exercise's 2D picture")
+    for command in sub.choices.values():  # every command's --help ends with the one table
+        command.epilog = status.EPILOG
+        command.formatter_class = argparse.RawDescriptionHelpFormatter
     return ap
 
 

@@ -42,9 +42,7 @@ def add_parsers(sub) -> None:
                        description="Mesh SCENE into patches, compute form factors by casting "
                                    "rays through Embree, solve by progressive refinement and "
                                    "show the solution from the camera.  Prints the number of "
-                                   "patches, iterations and time.",
-                       epilog=status.EPILOG,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                                   "patches, iterations and time.")
     r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
     r.add_argument("-o", "--output", required=True, metavar="PNG",
                    help="the interpolated (Gouraud) display, sRGB PNG")
