@@ -20,8 +20,10 @@ class Terminated(BaseException):
 
 
 class _Pending:
-    """The signal that arrived and has not yet stopped the command (a process fact)."""
+    """The signal that arrived and has not yet stopped the command, and how deep `handled` is
+    nested (process facts)."""
     signum: int | None = None
+    depth: int = 0
 
 
 def _handler(signum, frame):
@@ -30,21 +32,39 @@ def _handler(signum, frame):
 
 
 @contextlib.contextmanager
-def handled():
-    """While inside: SIGINT -> KeyboardInterrupt, SIGTERM -> Terminated, both remembered; the
-    previous handlers come back on the way out.  Only the main thread may install handlers
-    (Python's rule); elsewhere this changes nothing."""
+def handled(restore: bool = True):
+    """While inside: SIGINT -> KeyboardInterrupt, SIGTERM -> Terminated, both remembered.  The
+    previous handlers come back on the way out unless `restore` is False (a console script,
+    whose process ends with the command: see `finished`).  A nested use shares the outermost's
+    handlers and memory.  Only the main thread may install handlers (Python's rule);
+    elsewhere this changes nothing."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    _Pending.signum = None
+    if _Pending.depth:
+        _Pending.depth += 1
+        try:
+            yield
+        finally:
+            _Pending.depth -= 1
+        return
+    _Pending.signum, _Pending.depth = None, 1
     previous = signal.signal(signal.SIGINT, _handler), signal.signal(signal.SIGTERM, _handler)
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous[0])
-        signal.signal(signal.SIGTERM, previous[1])
-        _Pending.signum = None
+        _Pending.depth = 0
+        if restore:
+            signal.signal(signal.SIGINT, previous[0])
+            signal.signal(signal.SIGTERM, previous[1])
+
+
+def finished() -> None:
+    """The command has returned and the process is about to end: from now on a signal kills it
+    the default way (status -N).  Once the interpreter shuts down no Python handler runs, so a
+    caught signal would be lost and the status would say success."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def pending() -> BaseException | None:

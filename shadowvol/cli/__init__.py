@@ -25,17 +25,21 @@ def raytrace_entry(argv=None) -> int:
 
 
 def _enter(module: str, argv) -> int:
-    try:
-        with signals.handled():
-            try:
-                entry = importlib.import_module(module).main
-                signals.raise_pending()  # one that an import swallowed
-            except BaseException as exc:
-                raise signals.pending() or exc  # an interrupt may surface as ImportError
-    except KeyboardInterrupt:
-        print("error: interrupted", file=sys.stderr)
-        return 130
-    except signals.Terminated:
-        print("error: terminated", file=sys.stderr)
-        return 143
-    return entry(argv)
+    with signals.handled(restore=False):  # the process ends with the command
+        try:
+            entry = importlib.import_module(module).main
+            signals.raise_pending()  # one that an import swallowed
+            code = entry(argv)
+            signals.raise_pending()
+            signals.finished()
+            return code
+        except (KeyboardInterrupt, signals.Terminated, Exception) as exc:
+            signals.finished()
+            exc = signals.pending() or exc  # an interrupt may surface as ImportError
+            if isinstance(exc, KeyboardInterrupt):
+                print("error: interrupted", file=sys.stderr)
+                return 130
+            if isinstance(exc, signals.Terminated):
+                print("error: terminated", file=sys.stderr)
+                return 143
+            raise
