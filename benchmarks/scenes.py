@@ -39,10 +39,14 @@ CAMERA = Camera(eye=[0.0, 4.0, 9.0], target=[0.0, 0.8, 0.0])
 
 
 def occluder_scene(size: str, lights: int | str = 1, width: int = 1280,
-                   height: int = 720) -> Scene:
+                   height: int = 720, spheres: int | None = None) -> Scene:
     """The scene of `size` (a key of SIZES) with `lights` point lights (1..4), or one "spot" or
-    one "directional" light, at `width` x `height`."""
+    one "directional" light, at `width` x `height`.  `spheres`: only the first that many of
+    the size's spheres (the same places and sizes; named `occluders-SIZE-SPHERES`)."""
     count, subdivisions = SIZES[size]
+    kept = count if spheres is None else spheres
+    if not 0 <= kept <= count:
+        raise ValueError(f"spheres must be 0..{count} for size {size!r}, got {spheres}")
     rng = np.random.default_rng(0)
     # keep the total shadowed area about the same at every count: radius ~ 1/sqrt(count)
     scale = float(np.sqrt(20.0 / count))
@@ -56,9 +60,9 @@ def occluder_scene(size: str, lights: int | str = 1, width: int = 1280,
         light_list = [DirectionalLight(**DIRECTIONAL)]
     else:
         light_list = [PointLight(p) for p in POINT_LIGHTS[:int(lights)]]
-    return Scene(camera=CAMERA, objects=[plane("floor", size=[14, 14])] + balls,
+    return Scene(camera=CAMERA, objects=[plane("floor", size=[14, 14])] + balls[:kept],
                  lights=light_list, width=width, height=height,
-                 name=f"occluders-{size}")
+                 name=f"occluders-{size}" + ("" if spheres is None else f"-{spheres}"))
 
 
 def triangle_count(scene: Scene) -> int:

@@ -19,16 +19,14 @@ layout(std430, binding = 0) readonly buffer Triangles {
     vec4 triangle_data[];       // per triangle: (unit normal, object), (first corner, 0)
 };
 
-layout(location = 0) out float f_lit;      // bit i: lit by light i
-layout(location = 1) out float f_facing;   // bit i: faces light i
+layout(location = 0) out vec2 f_bits;  // x: bit i lit by light i; y: bit i faces light i
 
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 position = texelFetch(u_position, p, 0);
     int surface = int(position.w);
     if (surface == 0) {
-        f_lit = 0.0;
-        f_facing = 0.0;
+        f_bits = vec2(0.0);
         return;
     }
     bool front = surface > 0;
@@ -55,6 +53,5 @@ void main() {
             lit |= 1u << uint(i);
         }
     }
-    f_lit = float(lit);
-    f_facing = float(faces);
+    f_bits = vec2(float(lit), float(faces));
 }

@@ -241,7 +241,7 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
                   zfail: np.ndarray, halve: bool = False,
                   clip_planes: np.ndarray | None = None, counting=None,
-                  objects=None) -> None:
+                  objects=None, each=None) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
     `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
 
@@ -257,13 +257,18 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     (`stencil.zpass_counting`, `stencil.zfail_counting`).  The stencil-overflow check draws the
     same faces under `stencil.entering_faces_counting`.
 
-    `objects` : the casters to count (default all): the ground truth's per-caster counts
-    (`truth.count_casters`) count one at a time."""
+    `objects` : the casters to count (default all).
+
+    `each(program, i)` : count with the volumes' counting programs instead (caster_count.frag:
+    the ground truth's per-caster counts, `truth.CasterCounts`), each object drawn alone after
+    `each` is called with its program and index; the same faces in the same groups, under
+    `counting`, which must then be given.  The stencil is neither cleared nor written."""
     if counting is None:
         def counting(zfail_group: bool, depth_clamp: bool):
             return (stencil.zfail_counting(gl, depth_clamp=depth_clamp) if zfail_group
                     else stencil.zpass_counting(gl))
-    target.clear_stencil()
+    if each is None:
+        target.clear_stencil()
     target.use(colour=False, depth=False)
     ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count
     ctx.depth_func = NEARER
@@ -275,16 +280,16 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
         for p in volumes.programs:
             set_uniform(p, "u_clip_planes", clip_planes.astype(np.float32).tobytes())
         with counting(False, False), stencil.clip_distances(gl, len(clip_planes)):
-            volumes.draw_sides(by_zpass, halve=halve, clipped=True)
+            volumes.draw_sides(by_zpass, halve=halve, clipped=True, each=each)
     elif by_zpass:
         with counting(False, False):
-            volumes.draw_sides(by_zpass, halve=halve)
+            volumes.draw_sides(by_zpass, halve=halve, each=each)
     if by_zfail:
         with counting(True, True):
-            volumes.draw_sides(by_zfail)
-            volumes.draw_caps(by_zfail, near=False)
+            volumes.draw_sides(by_zfail, each=each)
+            volumes.draw_caps(by_zfail, near=False, each=each)
         with counting(True, False):
-            volumes.draw_caps(by_zfail, near=True)
+            volumes.draw_caps(by_zfail, near=True, each=each)
     target.use()
 
 

@@ -119,6 +119,7 @@ class Renderer:
         self._owned = []
         self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
         self._count_bound: int | None = None
+        self._object_bounds: np.ndarray | None = None
         self._truth: truth.TruthPass | None = None
         self._outward_convex: np.ndarray | None = None
         self._convex: np.ndarray | None = None
@@ -243,6 +244,16 @@ class Renderer:
         return self._outward_convex
 
     @property
+    def object_bounds(self) -> np.ndarray:
+        """(n_objects,) int64: `overflow.topology_bound` of each object, at most how many of
+        its triangles one segment can cross (a bound on its own count)."""
+        if self._object_bounds is None:
+            self._object_bounds = np.array(
+                [2 if convex else len(t.faces)
+                 for convex, t in zip(self.convex, self.geometry.topologies)], np.int64)
+        return self._object_bounds
+
+    @property
     def count_bound(self) -> int:
         """`overflow.count_bound` of the scene: below 256 no stencil count can wrap."""
         if self._count_bound is None:
@@ -272,6 +283,8 @@ class Renderer:
                                                    "lit_count and Renderer.facing")
         want_stencil = "stencil" in outputs
         vols = self.volumes(silhouettes)
+        if "casters" in outputs:
+            vols.counting_programs()   # before set_camera: it sets their camera too
         progs, target = self.programs, self.target
         view_proj = view_projection(camera, self.scene.aspect)
         passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
@@ -377,9 +390,8 @@ class Renderer:
             out["depth"] = depth
         if "distance" in want:
             out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
-        triangle = front = world = None
-        if want & {"normal", "object_id", "casters"}:
-            triangle, front, world = truth.read_surface(self.target, covered)
+        if want & {"normal", "object_id"}:
+            triangle, front, _ = truth.read_surface(self.target, covered)
             out |= truth.surface_outputs(self.geometry, triangle, front, want)
         if "facing" in want:
             lit = np.zeros((len(lights), h, w), bool)
@@ -397,11 +409,13 @@ class Renderer:
                 if not cast.any():
                     continue
                 light4 = light.homogeneous
-                candidates = truth.caster_candidates(self.geometry.bounds, world[cast], light4)
+                candidates = truth.caster_candidates(self.geometry.bounds,
+                                                     truth.cast_points(camera, depth, cast),
+                                                     light4)
                 vols.prepare(light4)
                 casters[i] = truth.count_casters(
-                    self.ctx, self.gl, self.target, self._truth_pass(), vols, zfail[i],
-                    candidates,
+                    self.target, self._truth_pass().casters, vols, zfail[i],
+                    candidates, self.object_bounds,
                     out["facing"][i], halve=method == "auto" and not want_stencil,
                     clip_planes=clip)
             out["casters"] = casters

@@ -53,6 +53,9 @@ GL_FRAMEBUFFER = 0x8D40
 GL_FRAMEBUFFER_BINDING = 0x8CA6
 GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
 GL_FRAMEBUFFER_COMPLETE = 0x8CD5
+GL_RED_INTEGER = 0x8D94
+GL_RG_INTEGER = 0x8228
+GL_UNSIGNED_INT = 0x1405
 # state queries used to save and restore
 _FRONT_STATE = (0x0B92, 0x0B97, 0x0B93, 0x0B94, 0x0B95, 0x0B96, 0x0B98)  # func ref vmask fail zfail zpass wmask
 _BACK_STATE = (0x8800, 0x8CA3, 0x8CA4, 0x8801, 0x8802, 0x8803, 0x8CA5)
@@ -77,6 +80,7 @@ _SIGNATURES = {
     "glFramebufferRenderbuffer": (_V, _u, _u, _u, _u),
     "glCheckFramebufferStatus": (_u, _u),
     "glClipControl": (_V, _u, _u),
+    "glClearTexSubImage": (_V, _u, _i, _i, _i, _i, _i, _i, _i, _u, _u, _p),
 }
 
 
@@ -247,6 +251,18 @@ def clear_int_attachment(gl: RawGL, framebuffer_glo: int, draw_buffer: int, valu
         gl.glClearBufferiv(GL_COLOR, draw_buffer, values)
 
 
+def clear_uint_texture(gl: RawGL, texture_glo: int, box: tuple[int, int, int, int],
+                       layers: int = 1, components: int = 1) -> None:
+    """Texels of an unsigned-integer texture (r32ui / rg32ui; a 2D texture, or the first
+    `layers` layers of an array) to 0 in `box` (x, y, w, h, GL's rows).  moderngl clears only
+    framebuffer attachments (and moderngl's Texture.write would upload the zeros)."""
+    zero = (ctypes.c_uint * 4)(0, 0, 0, 0)
+    x, y, w, h = box
+    gl.glClearTexSubImage(texture_glo, 0, x, y, 0, w, h, layers,
+                          GL_RED_INTEGER if components == 1 else GL_RG_INTEGER,
+                          GL_UNSIGNED_INT, zero)
+
+
 def read_stencil(gl: RawGL, framebuffer_glo: int, width: int, height: int, x: int = 0,
                  y: int = 0) -> np.ndarray:
     """(height, width) uint8 stencil values of the rectangle whose lower-left pixel is (x, y)
@@ -381,6 +397,21 @@ def where_shadowed(gl: RawGL) -> Iterator[None]:
     with _saved_stencil_state(gl):
         _set(gl, func=GL_NOTEQUAL, ref=0, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
              back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def caster_counting(gl: RawGL, zfail: bool, depth_clamp: bool) -> Iterator[None]:
+    """The ground truth's per-caster counts (`truth.CasterCounts`): the count of the casters
+    drawn, as `zpass_counting` / `zfail_counting` (the same `depth_clamp`) take it, for the
+    pass that counts each caster into an image too.  Its z-fail faces are drawn under the
+    COMPLEMENTARY depth test (the image counts only fragments that pass it), so z-fail's ops
+    sit in the depth-pass slot here: back faces +1, front faces -1."""
+    zpass_ops = ((GL_KEEP, GL_KEEP, GL_INCR_WRAP), (GL_KEEP, GL_KEEP, GL_DECR_WRAP))
+    front, back = zpass_ops[::-1] if zfail else zpass_ops
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_ALWAYS, ref=0, front_ops=front, back_ops=back, write_mask=0xFF,
+             depth_clamp=depth_clamp)
         yield
 
 

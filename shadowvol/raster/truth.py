@@ -13,32 +13,46 @@ casting object's shadow volumes alone.
   the facing bits and the lit bits (facing & unshadowed) together, so that `cast = facing & ~lit`
   holds bit for bit on the raster side; the frame's `lit` is taken from that pass then.
 - `casters`: after the frame, for each light with cast pixels, the objects whose box can reach
-  them (`caster_candidates`: a box test, no per-pixel work) are counted one at a time (the
-  light's volume pass restricted to that object, the same method) and their stencil read back:
-  bit j where object j's count is not 0 and the pixel faces the light.  Counts are never
-  negative (each is the number of the caster's triangles between the point and the light), so
-  the union count is 0 exactly where every object's is: `casters != 0` is `cast`.  The cost is
-  one volume pass and one stencil read per candidate, however many objects the scene holds.
+  them (`caster_candidates`: a box test, no per-pixel work) are counted each into its own
+  counter, CASTERS_PER_GROUP at a time (`CasterCounts`): one volume pass over the group's
+  volumes, the same faces, groups and depth tests as the light's stencil count, adding each
+  fragment's +-1 to its caster's layer of an integer image (caster_count.frag), then one pass
+  over the shadow's box turning the counters into the 64-bit mask (caster_bits.frag) and
+  zeroing them; one read per light.  Bit j is set where object j's count is not 0 and the
+  pixel faces the light.  Counts are never negative (each is the number of the caster's
+  triangles between the point and the light), so the stencil's count, their sum, is 0
+  exactly where every caster's is: `casters != 0` is `cast`.  The cost grows with the
+  candidates' volume fragments and the shadow's box, however many objects the scene holds.
 """
 
 from __future__ import annotations
 
+import contextlib
+
 import moderngl
 import numpy as np
 
-from shadowvol.cameras import intrinsics
+from shadowvol.cameras import intrinsics, look_at_basis
 from shadowvol.io import GROUND_TRUTH
 from shadowvol.raster import glsl, passes
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.passes import NO_CONE
-from shadowvol.raster.projection import top_row_first
+from shadowvol.raster.projection import NEARER, top_row_first
 from shadowvol.raster.target import LIGHTS_PER_PAGE
 from shadowvol.scene import Camera, SpotLight
 
 TRUTH_OUTPUTS = GROUND_TRUTH  # the names of docs/CONVENTIONS.md, one list for both renderers
 MAX_CASTERS = 64
 LIGHTS_PER_PASS = LIGHTS_PER_PAGE  # the frame's pages: facing and lit bits exact in a float32
+CASTERS_PER_GROUP = 32  # casters of one counting pass: the slots of caster_bits.frag
+# The cast points for `caster_candidates` come from the depth buffer (`cast_points`), whose
+# depths are within 3e-5 of the exact ones (tests/raster/test_groundtruth_vs_raytrace.py):
+# their box is widened by 30 times that, relative to the farthest point's distance.
+CAST_POINT_PAD = 1e-3
+# the complement of NEARER (reversed depth: ">"): a z-fail face counts where the stencil
+# pass's depth test fails, i.e. where this one passes
+NOT_NEARER = "<="
 
 
 class TruthPass:
@@ -46,21 +60,22 @@ class TruthPass:
     count) and its two bit targets.  Call `release()`."""
 
     def __init__(self, ctx: moderngl.Context, target):
-        self.ctx = ctx
+        self.ctx, self.gl = ctx, target.gl
         self.width, self.height = width, height = target.width, target.height
-        self.lit = ctx.texture((width, height), 1, dtype="f4")
-        self.facing = ctx.texture((width, height), 1, dtype="f4")
-        self.casters = ctx.texture((width, height), 4, dtype="f4")
-        for t in (self.lit, self.facing, self.casters):
-            t.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        self.fbo = ctx.framebuffer(color_attachments=[self.lit, self.facing])
-        # the casters' marks are stencil-tested against the frame's own depth-stencil buffer
-        self.casters_fbo = ctx.framebuffer(color_attachments=[self.casters])
-        target.depth_stencil.attach(self.casters_fbo.glo)
-        self.mark = glsl.program(ctx, "fullscreen.vert", "caster_bit.frag")
-        self.mark_vao = ctx.vertex_array(self.mark, [])
+        # lit bits in r, facing bits in g: one read for both
+        self.bits = ctx.texture((width, height), 2, dtype="f4")
+        self.bits.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.fbo = ctx.framebuffer(color_attachments=[self.bits])
         self._programs: dict[int, tuple] = {}
-        self._bits = np.empty((height, width), np.float32)
+        self._bits = np.empty((height, width, 2), np.float32)
+        self._casters: CasterCounts | None = None
+
+    @property
+    def casters(self) -> CasterCounts:
+        """The per-caster counters, made the first time casters are asked for."""
+        if self._casters is None:
+            self._casters = CasterCounts(self.ctx, self.gl, self.width, self.height)
+        return self._casters
 
     def program(self, lights: int) -> tuple:
         if lights not in self._programs:
@@ -92,21 +107,171 @@ class TruthPass:
         geometry.triangle_data.bind_to_storage_buffer(0)
         vao.render(moderngl.TRIANGLES, vertices=3)
         self.ctx.enable_only(moderngl.DEPTH_TEST)
-        out = []
-        for attachment in (0, 1):
-            self.fbo.read_into(self._bits, components=1, attachment=attachment, dtype="f4")
-            out.append(top_row_first(self._bits).astype(np.uint32))
+        self.fbo.read_into(self._bits, components=2, attachment=0, dtype="f4")
+        bits = top_row_first(self._bits).astype(np.uint32)
         target.use()
-        return out[0], out[1]
+        return bits[..., 0], bits[..., 1]
 
     def release(self) -> None:
         for prog, vao in self._programs.values():
             vao.release()
             prog.release()
         self._programs.clear()
-        for obj in (self.mark_vao, self.mark, self.casters_fbo, self.fbo, self.lit, self.facing,
-                    self.casters):
+        for obj in (self.fbo, self.bits):
             obj.release()
+        if self._casters is not None:
+            self._casters.release()
+            self._casters = None
+
+
+def counter_layout(bounds) -> list[tuple[int, int, int]]:
+    """(word, shift, width) of each caster's counter, for casters whose counts are at most
+    `bounds` (k,) int (`overflow.topology_bound`: 2 for a closed convex mesh, else its
+    triangles): the narrowest of 8, 16 or 32 bits holding the bound, packed into 32-bit words
+    in that order, one width a word (four 8-bit counters, two 16-bit or one 32-bit)."""
+    widths = [8 if b < 2**8 else 16 if b < 2**16 else 32 for b in bounds]
+    out: list[tuple[int, int, int] | None] = [None] * len(widths)
+    word, used = -1, 32
+    for width in (8, 16, 32):
+        used = 32   # a new word for each width
+        for k in (k for k, w in enumerate(widths) if w == width):
+            if used + width > 32:
+                word, used = word + 1, 0
+            out[k] = (word, used, width)
+            used += width
+    return out  # type: ignore[return-value]
+
+
+class CasterCounts:
+    """The ground truth's per-caster counters: an r32ui image array (a word of counters per
+    layer, `counter_layout`), the casters' two words (rg32ui) and the pass turning one into
+    the other.
+
+    A word is the sum modulo 2^32 of count << shift over its casters, so a field reads its
+    caster's count exactly when every count of the word lies in [0, 2^width).  They do
+    wherever the light's stencil count is exact (the method valid for the caster, as `auto`
+    chooses): each is then the number of the caster's triangles between the point and the
+    light, at most its bound (`counter_layout`).  Call `release()`."""
+
+    def __init__(self, ctx: moderngl.Context, gl, width: int, height: int):
+        self.ctx, self.gl, self.width, self.height = ctx, gl, width, height
+        self.counts = None      # made by `_layers` as large as a group needs
+        self.casters = ctx.texture((width, height), 2, dtype="u4")
+        self.casters_fbo = ctx.framebuffer(color_attachments=[self.casters])
+        self._bits: dict[int, tuple] = {}   # counter words -> caster_bits program, vao
+
+    def _layers(self, words: int) -> None:
+        """At least `words` layers of counters."""
+        if self.counts is not None and self.counts.size[2] >= words:
+            return
+        if self.counts is not None:
+            self.counts.release()
+        self.counts = self.ctx.texture_array((self.width, self.height, words), 1, dtype="u4")
+
+    def clear_casters(self, box: tuple[int, int, int, int]) -> None:
+        """The casters' words to 0 in `box` (x, y, w, h, GL's rows)."""
+        stencil_gl.clear_uint_texture(self.gl, self.casters.glo, box, components=2)
+
+    def count(self, target, volumes, choice: np.ndarray, group: list[int],
+              layout: list[tuple[int, int, int]], halve: bool, clip_planes,
+              box: tuple[int, int, int, int]) -> None:
+        """Counter k := object group[k]'s own count, in its field of `layout`
+        (`counter_layout`; at most CASTERS_PER_GROUP objects), and the stencil := their sum,
+        in `box` (the scissor must be set to it): the light's volume count
+        (`passes.count_volumes`, the same `choice`, `halve` and `clip_planes`) with the
+        counting programs, z-fail groups under the complementary depth test.  `volumes`
+        must be prepared for the light and its `counting_programs` made before the frame's
+        `passes.set_camera`."""
+        ctx, gl = self.ctx, self.gl
+        programs = volumes.counting_programs()
+        field = dict(zip(group, layout))
+
+        def each(program, j):
+            word, shift, _ = field[j]
+            set_uniform(program, "u_word", word)
+            set_uniform(program, "u_shift", shift)
+
+        @contextlib.contextmanager
+        def counting(zfail_group: bool, depth_clamp: bool):
+            for p in programs:
+                set_uniform(p, "u_front_step", -1 if zfail_group else 1)
+            ctx.depth_func = NOT_NEARER if zfail_group else NEARER
+            try:
+                with stencil_gl.caster_counting(gl, zfail_group, depth_clamp):
+                    yield
+            finally:
+                ctx.depth_func = NEARER
+
+        words = 1 + max(word for word, _, _ in layout)
+        self._layers(words)
+        stencil_gl.clear_uint_texture(gl, self.counts.glo, box, layers=words)
+        target.clear_stencil()   # within the scissor
+        self.counts.bind_to_image(0, read=True, write=True)
+        passes.count_volumes(ctx, gl, target, volumes, choice, halve=halve,
+                             clip_planes=clip_planes, counting=counting, objects=group,
+                             each=each)
+        ctx.memory_barrier()   # the counts, before anything reads them
+
+    def add_bits(self, target, group: list[int], layout: list[tuple[int, int, int]],
+                 everywhere: bool) -> None:
+        """caster_bits.frag over target.fbo (its scissor applies): the casters' words get the
+        bit of group[k] where its counter is not 0.  Drawn only where the group's stencil
+        count (`count`) is not 0 unless `everywhere`, which the caller sets unless the group's
+        bounds (`counter_layout`) sum to less than 256: where every count lies in [0, bound],
+        their 8-bit sum is then 0 exactly where all are 0."""
+        ctx = self.ctx
+        words = 1 + max(w for w, _, _ in layout)
+        if words not in self._bits:
+            program = glsl.program(ctx, "fullscreen.vert", "caster_bits.frag",
+                                   defines={"WORDS": words})
+            self._bits[words] = (program, ctx.vertex_array(program, []))
+        program, vao = self._bits[words]
+        width = np.zeros(words, np.int32)
+        first_slot = np.zeros(words, np.int32)
+        object_bits = np.zeros((CASTERS_PER_GROUP, 2), np.uint32)
+        slot = 0
+        for w in range(words):   # the slots of word w: its fields, in order
+            fields = sorted((s, b, j) for (w_, s, b), j in zip(layout, group) if w_ == w)
+            width[w], first_slot[w] = fields[0][1], slot
+            for _, _, j in fields:
+                object_bits[slot, j // 32] = 1 << (j % 32)
+                slot += 1
+        set_uniform(program, "u_width", width.tobytes())
+        set_uniform(program, "u_first_slot", first_slot.tobytes())
+        set_uniform(program, "u_object_bits", object_bits.tobytes())
+        self.counts.bind_to_image(0, read=True, write=False)
+        self.casters.bind_to_image(1, read=True, write=True)
+        target.use(colour=False, depth=False)
+        ctx.enable_only(moderngl.NOTHING)
+        with (contextlib.nullcontext() if everywhere else stencil_gl.where_shadowed(self.gl)):
+            vao.render(moderngl.TRIANGLES, vertices=3)
+        ctx.enable_only(moderngl.DEPTH_TEST)
+        ctx.memory_barrier()   # the casters' words, before they are read or added to
+
+    def read_casters(self, box: tuple[int, int, int, int]) -> np.ndarray:
+        """(h, w) uint64 of the casters' words in `box` (x, y, w, h, GL's rows), row 0 at
+        the top."""
+        words = np.empty((box[3], box[2], 2), np.uint32)
+        self.casters_fbo.read_into(words, viewport=box, components=2, attachment=0,
+                                   dtype="u4")
+        words = top_row_first(words).astype(np.uint64)
+        return words[..., 0] | (words[..., 1] << np.uint64(32))
+
+    def read_counts(self, layout: list[tuple[int, int, int]]) -> np.ndarray:
+        """(k, H, W) int64: the counters of `layout` as `count` left them, decoded, row 0 at
+        the top (for tests: a frame reads only the casters' words)."""
+        words = np.frombuffer(self.counts.read(), np.uint32).reshape(
+            self.counts.size[2], self.height, self.width)[:, ::-1].astype(np.int64)
+        return np.stack([(words[w] >> s) & ((1 << b) - 1) for w, s, b in layout])
+
+    def release(self) -> None:
+        for program, vao in self._bits.values():
+            vao.release()
+            program.release()
+        self._bits.clear()
+        for obj in (self.casters_fbo, self.casters, self.counts):
+            if obj is not None:
+                obj.release()
 
 
 def read_surface(target, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -159,9 +324,29 @@ def surface_outputs(geometry, triangle: np.ndarray, front: np.ndarray, want: set
     return out
 
 
+def cast_points(camera: Camera, depth: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(2, 3) float64: a box (lo, hi) around the world points of the pixels of `mask` (H, W)
+    bool, unprojected from `depth` (H, W) float32 (`read_depth`) with the camera's K and
+    basis, widened by CAST_POINT_PAD of the farthest one's distance: the box of the true
+    points lies inside it.  (No G-buffer read: the depth is read for the ground truth
+    anyway.)"""
+    h, w = depth.shape
+    K = intrinsics(camera, w, h)
+    ys, xs = np.nonzero(mask)
+    z = depth[ys, xs].astype(np.float64)
+    # OpenCV camera coordinates (x right, y down, z forward) of the pixel centres
+    x = (xs + 0.5 - K[0, 2]) / K[0, 0] * z
+    y = (ys + 0.5 - K[1, 2]) / K[1, 1] * z
+    right, up, back = look_at_basis(camera)
+    world = camera.eye + x[:, None] * right - y[:, None] * up - z[:, None] * back
+    pad = CAST_POINT_PAD * float(np.sqrt((x ** 2 + y ** 2 + z ** 2).max()))
+    return np.stack([world.min(axis=0) - pad, world.max(axis=0) + pad])
+
+
 def caster_candidates(bounds: np.ndarray, points: np.ndarray, light4: np.ndarray) -> list[int]:
     """The objects whose box (bounds (n, 2, 3) float64) can lie between some of `points`
-    (k, 3) float32 or float64 (the cast pixels' world positions) and the light (4,)
+    (k, 3) float32 or float64 (the cast pixels' world positions, or the corners of a box
+    around them: `cast_points`) and the light (4,)
     homogeneous: the box of the points joined with a point light's position, or swept toward
     a directional light (to infinity), meets the object's box.  Conservative (boxes padded by 1e-6 of their size):
     a candidate may cast nothing, a caster is never missed."""
@@ -192,49 +377,40 @@ def caster_candidates(bounds: np.ndarray, points: np.ndarray, light4: np.ndarray
     return [int(j) for j in np.flatnonzero(meets)]
 
 
-def count_casters(ctx, gl, target, truth_pass: TruthPass, volumes, choice: np.ndarray,
-                  candidates: list[int], where: np.ndarray, halve: bool, clip_planes
-                  ) -> np.ndarray:
+def count_casters(target, counter: CasterCounts, volumes, choice: np.ndarray,
+                  candidates: list[int], bounds: np.ndarray, where: np.ndarray, halve: bool,
+                  clip_planes) -> np.ndarray:
     """(H, W) uint64: bit j where candidate object j's own shadow volumes count non-zero and
-    `where` (H, W) bool (the pixels facing the light).  `volumes` must be prepared for the
-    light; `choice` (n_objects,) bool is the light's z-fail choice per caster.
+    `where` (H, W) bool (the pixels facing the light).  bounds (n_objects,) int: each
+    object's `overflow.topology_bound`.  `volumes`, `choice`, `halve` and `clip_planes` as
+    `CasterCounts.count` takes them.
 
-    Per candidate: its volume count (the stencil), then caster_bit.frag adds its bit where the
-    count is not 0; one read of the sums at the end.  Everything is drawn (scissor) and read
-    only in the box of the cast pixels (`cast_box`)."""
+    Per group of CASTERS_PER_GROUP candidates one counting pass and one bits pass; one read
+    of the casters' words at the end.  Everything is drawn (scissor), cleared and read only in
+    the box of the cast pixels (`cast_box`).  Leaves the stencil holding the last group's
+    count."""
     bits = np.zeros(where.shape, np.uint64)
+    if not candidates:
+        return bits
     rows, cols = cast_box(where)
-    h, w = rows.stop - rows.start, cols.stop - cols.start
-    box = (cols.start, target.height - rows.stop, w, h)  # GL counts rows from the bottom
-    marks = truth_pass.casters_fbo
+    box = (cols.start, target.height - rows.stop, cols.stop - cols.start,
+           rows.stop - rows.start)  # GL counts rows from the bottom
     # moderngl keeps a scissor per framebuffer and applies it when the framebuffer is bound;
-    # the volume passes draw into target.fbo (count_volumes binds it)
-    target.fbo.scissor = marks.scissor = box
+    # both passes draw into target.fbo
+    target.fbo.scissor = box
     try:
-        marks.use()
-        marks.clear(0.0, 0.0, 0.0, 0.0)  # (within the scissor)
-        for j in candidates:
-            passes.count_volumes(ctx, gl, target, volumes, choice, halve=halve,
-                                 clip_planes=clip_planes, objects=[j])
-            marks.depth_mask = False
-            marks.use()
-            ctx.enable_only(moderngl.BLEND)
-            ctx.blend_func = moderngl.ONE, moderngl.ONE
-            ctx.blend_equation = moderngl.FUNC_ADD
-            bit = [0.0] * 4
-            bit[j // 16] = float(2 ** (j % 16))
-            set_uniform(truth_pass.mark, "u_bit", tuple(bit))
-            with stencil_gl.where_shadowed(gl):
-                truth_pass.mark_vao.render(moderngl.TRIANGLES, vertices=3)
-            ctx.enable_only(moderngl.DEPTH_TEST)
-        sums = np.empty((h, w, 4), np.float32)
-        marks.read_into(sums, viewport=box, components=4, attachment=0, dtype="f4")
+        target.use()
+        counter.clear_casters(box)
+        for first in range(0, len(candidates), CASTERS_PER_GROUP):
+            group = candidates[first:first + CASTERS_PER_GROUP]
+            layout = counter_layout(bounds[group])
+            counter.count(target, volumes, choice, group, layout, halve, clip_planes, box)
+            counter.add_bits(target, group, layout,
+                             everywhere=int(bounds[group].sum()) >= 256)
+        combined = counter.read_casters(box)
     finally:
-        target.fbo.scissor = marks.scissor = None
+        target.fbo.scissor = None
         target.use()  # re-applies the framebuffer's state: no scissor
-    words = top_row_first(sums).astype(np.uint64)
-    combined = (words[..., 0] | (words[..., 1] << np.uint64(16))
-                | (words[..., 2] << np.uint64(32)) | (words[..., 3] << np.uint64(48)))
     bits[rows, cols] = np.where(where[rows, cols], combined, np.uint64(0))
     return bits
 

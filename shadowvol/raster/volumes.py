@@ -60,10 +60,13 @@ class _LightVolumes:
         self.capped: tuple[int, ...] | None = None                # objects in the index buffer
         self.index_buffer: moderngl.Buffer | None = None
         self.cap_vaos: dict[bool, moderngl.VertexArray] = {}      # near? -> vao
+        # the counting programs' (`CpuVolumes.counting_programs`), made on first use:
+        # ("sides", clipped?) and ("caps", near?) -> vao
+        self.counting_vaos: dict[tuple[str, bool], moderngl.VertexArray] = {}
 
     def release(self) -> None:
-        for obj in (*self.vaos.values(), *self.cap_vaos.values(), self.buffer,
-                    self.index_buffer):
+        for obj in (*self.vaos.values(), *self.cap_vaos.values(),
+                    *self.counting_vaos.values(), self.buffer, self.index_buffer):
             if obj is not None:
                 obj.release()
 
@@ -79,16 +82,36 @@ class CpuVolumes:
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
-        self.side_program = glsl.program(ctx, "volume_side.vert", "volume.frag")
-        self.clip_program = glsl.program(ctx, "volume_side.vert", "volume.frag",
-                                         defines={"ZPASS_CLIP": 1})
-        self.near_program = glsl.program(ctx, "scene.vert", "volume.frag")
-        self.far_program = glsl.program(ctx, "far_cap.vert", "volume.frag")
-        self.programs = (self.side_program, self.clip_program, self.near_program,
-                         self.far_program)
+        (self.side_program, self.clip_program, self.near_program,
+         self.far_program) = self._stencil = self._programs("volume.frag")
+        self._counting: tuple[moderngl.Program, ...] = ()
         self.light4 = None
         self._kept: dict[bytes, _LightVolumes] = {}   # insertion order = age
         self._current: _LightVolumes | None = None
+
+    def _programs(self, fragment: str) -> tuple[moderngl.Program, ...]:
+        """sides, sides clipped to the z-pass box, near caps, far caps."""
+        return (glsl.program(self.ctx, "volume_side.vert", fragment),
+                glsl.program(self.ctx, "volume_side.vert", fragment,
+                             defines={"ZPASS_CLIP": 1}),
+                glsl.program(self.ctx, "scene.vert", fragment),
+                glsl.program(self.ctx, "far_cap.vert", fragment))
+
+    @property
+    def programs(self) -> tuple[moderngl.Program, ...]:
+        """Every volume program (camera, light and clip uniforms go to all): the stencil's,
+        then the counting ones once made."""
+        return self._stencil + self._counting
+
+    def counting_programs(self) -> tuple[moderngl.Program, ...]:
+        """The same vertex stages with caster_count.frag (the ground truth's per-caster counts,
+        `truth.CasterCounts`), made on first use, with the prepared light; the camera is set
+        by the next `passes.set_camera`, which sees them in `programs`."""
+        if not self._counting:
+            self._counting = self._programs("caster_count.frag")
+            if self.light4 is not None:
+                _set_light(self._counting, self.light4)
+        return self._counting
 
     @property
     def _signs(self) -> list[np.ndarray]:
@@ -159,6 +182,8 @@ class CpuVolumes:
         data = np.concatenate(indices).astype(np.int32)
         for vao in cur.cap_vaos.values():
             vao.release()
+        for key in [k for k in cur.counting_vaos if k[0] == "caps"]:
+            cur.counting_vaos.pop(key).release()
         if cur.index_buffer is not None:
             cur.index_buffer.release()
         cur.index_buffer = self.ctx.buffer(data.tobytes() if len(data) else b"\0" * 12)
@@ -168,11 +193,14 @@ class CpuVolumes:
                                                         (False, self.far_program))}
         cur.capped = objects
 
-    def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
+    def draw_sides(self, objects, halve: bool = False, clipped: bool = False,
+                   each=None) -> None:
         """Draw the side quads of `objects`.  `clipped`: with the program that writes the
         distances to the z-pass clip box (`methods.zpass_clip_planes`; z-pass only).
         `halve`: draw the quads of casters whose multiplicities are all even once (m / 2
         copies), not twice.  Objects next to each other in the buffer are drawn by one call.
+        `each(program, i)`: draw with the counting programs instead, each object alone, after
+        calling `each` with the program and the object (the same quads, the same copies).
 
         Halving is for z-pass casters only, and only when the caller needs just "count == 0":
         the z-pass count at a pixel is linear in the multiplicities, so such a caster adds
@@ -182,8 +210,17 @@ class CpuVolumes:
         exactly when it was 0 before.  (The stencil's 8-bit wrap, documented in `renderer`,
         needs 256 layers either way.)  Z-fail casters must not be halved: their caps count 1
         per triangle."""
-        vao = self._current.vaos[clipped]
         sides = self._current.sides
+        if each is not None:
+            vao = self._counting_vao("sides", clipped)
+            for i in objects:
+                first, count, repeat = sides[i]
+                if count:
+                    each(vao.program, i)
+                    for _ in range(1 if halve else repeat):
+                        vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+            return
+        vao = self._current.vaos[clipped]
         # every object once, then the objects drawn twice once more: INCR_WRAP / DECR_WRAP
         # commute, so the order of the draws does not change a count
         rounds = [list(objects)]
@@ -193,7 +230,8 @@ class CpuVolumes:
             for first, count in _runs(sides[i][:2] for i in round_):
                 vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
-    def draw_caps(self, objects, near: bool) -> None:
+    def draw_caps(self, objects, near: bool, each=None) -> None:
+        """Draw the near or far caps of `objects`; `each` as in `draw_sides`."""
         if not near and self.light4[3] == 0.0:
             return  # a directional light's far cap is one point at infinity
         objects = tuple(int(i) for i in objects)
@@ -201,12 +239,36 @@ class CpuVolumes:
             return
         self._prepare_caps(objects)
         cur = self._current
-        vao = cur.cap_vaos[near]
+        vao = cur.cap_vaos[near] if each is None else self._counting_vao("caps", near)
         for sign in (1, -1):
             self.ctx.front_face = _FRONT_FACE[near, sign]
-            for first, count in _runs(cur.caps[i, sign] for i in objects):
-                vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+            if each is None:
+                for first, count in _runs(cur.caps[i, sign] for i in objects):
+                    vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+                continue
+            for i in objects:
+                first, count = cur.caps[i, sign]
+                if count:
+                    each(vao.program, i)
+                    vao.render(moderngl.TRIANGLES, vertices=count, first=first)
         self.ctx.front_face = "ccw"
+
+    def _counting_vao(self, role: str, variant: bool) -> moderngl.VertexArray:
+        """The prepared light's vao of the counting program for ("sides", clipped?) or
+        ("caps", near?), made on first use (the caps' after `_prepare_caps`)."""
+        cur = self._current
+        key = (role, variant)
+        if key not in cur.counting_vaos:
+            side, clip, near, far = self.counting_programs()
+            if role == "sides":
+                cur.counting_vaos[key] = self.ctx.vertex_array(
+                    clip if variant else side, [(cur.buffer, "4f", "in_position")])
+            else:
+                program = near if variant else far
+                cur.counting_vaos[key] = self.ctx.vertex_array(
+                    program, self.geometry.soup_bindings(program),
+                    index_buffer=cur.index_buffer, index_element_size=4)
+        return cur.counting_vaos[key]
 
     def release(self) -> None:
         for kept in self._kept.values():
@@ -235,24 +297,14 @@ class GpuVolumes:
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
-        self.edge_program = glsl.program(ctx, "edge.vert", "volume.frag", "silhouette.geom")
-        self.clip_program = glsl.program(ctx, "edge.vert", "volume.frag", "silhouette.geom",
-                                         defines={"ZPASS_CLIP": 1})
-        self.near_program = glsl.program(ctx, "caps.vert", "volume.frag")
-        self.far_program = glsl.program(ctx, "caps.vert", "volume.frag",
-                                        defines={"FAR_CAP": 1})
-        self.programs = (self.edge_program, self.clip_program, self.near_program,
-                         self.far_program)
+        (self.edge_program, self.clip_program, self.near_program,
+         self.far_program) = self._stencil = self._programs("volume.frag")
+        self._counting: tuple[moderngl.Program, ...] = ()
+        self._counting_vaos: tuple[moderngl.VertexArray, ...] = ()
         # every soup vertex also carries its triangle's other two corners (float32, as drawn)
         corners = geometry.soup_corners()                                # (M, 3, 3)
         self.corner_buffers = [ctx.buffer(np.repeat(corners[:, k], 3, axis=0).tobytes())
                                for k in (1, 2)]
-        cap_bindings = [(self.corner_buffers[0], "3f", "in_corner1"),
-                        (self.corner_buffers[1], "3f", "in_corner2")]
-        self.near_vao = ctx.vertex_array(
-            self.near_program, geometry.soup_bindings(self.near_program) + cap_bindings)
-        self.far_vao = ctx.vertex_array(
-            self.far_program, geometry.soup_bindings(self.far_program) + cap_bindings)
         records, self._records = [], {}
         n = 0
         for rng, topo in zip(geometry.ranges, geometry.topologies):
@@ -261,44 +313,87 @@ class GpuVolumes:
             self._records[rng.index] = (n, len(rec))
             n += len(rec)
         self.edge_buffer = ctx.buffer(np.concatenate(records).tobytes())
-        self.edge_vao, self.clip_vao = (ctx.vertex_array(program, [
-            (self.edge_buffer, "3f 3f 3f 3f 3f 3f 1i", "in_a", "in_b", "in_c0", "in_c1",
-             "in_c2", "in_c3", "in_count")]) for program in (self.edge_program,
-                                                             self.clip_program))
+        self.edge_vao, self.clip_vao, self.near_vao, self.far_vao = self._vaos(self._stencil)
         self.light4 = None
+
+    def _programs(self, fragment: str) -> tuple[moderngl.Program, ...]:
+        """sides (edge records), sides clipped to the z-pass box, near caps, far caps."""
+        return (glsl.program(self.ctx, "edge.vert", fragment, "silhouette.geom"),
+                glsl.program(self.ctx, "edge.vert", fragment, "silhouette.geom",
+                             defines={"ZPASS_CLIP": 1}),
+                glsl.program(self.ctx, "caps.vert", fragment),
+                glsl.program(self.ctx, "caps.vert", fragment, defines={"FAR_CAP": 1}))
+
+    def _vaos(self, programs) -> tuple[moderngl.VertexArray, ...]:
+        """The vaos of `_programs`' four programs, in their order."""
+        edge, clip, near, far = programs
+        cap_bindings = [(self.corner_buffers[0], "3f", "in_corner1"),
+                        (self.corner_buffers[1], "3f", "in_corner2")]
+        return tuple(self.ctx.vertex_array(program, [
+            (self.edge_buffer, "3f 3f 3f 3f 3f 3f 1i", "in_a", "in_b", "in_c0", "in_c1",
+             "in_c2", "in_c3", "in_count")]) for program in (edge, clip)) + tuple(
+            self.ctx.vertex_array(program, self.geometry.soup_bindings(program) + cap_bindings)
+            for program in (near, far))
+
+    @property
+    def programs(self) -> tuple[moderngl.Program, ...]:
+        """As `CpuVolumes.programs`."""
+        return self._stencil + self._counting
+
+    def counting_programs(self) -> tuple[moderngl.Program, ...]:
+        """As `CpuVolumes.counting_programs`."""
+        if not self._counting:
+            self._counting = self._programs("caster_count.frag")
+            self._counting_vaos = self._vaos(self._counting)
+            if self.light4 is not None:
+                _set_light(self._counting, self.light4)
+        return self._counting
 
     def prepare(self, light4: np.ndarray) -> None:
         self.light4 = light4  # everything else happens in the shaders
         _set_light(self.programs, light4)
 
-    def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
-        """Draw the side quads of `objects`; `clipped` as in `CpuVolumes.draw_sides`.  `halve`
-        is accepted for the common interface and ignored: the geometry shader sees one edge at
-        a time, never a whole caster's multiplicities, so it cannot know that they are all
-        even."""
-        vao = self.clip_vao if clipped else self.edge_vao
+    def draw_sides(self, objects, halve: bool = False, clipped: bool = False,
+                   each=None) -> None:
+        """Draw the side quads of `objects`; `clipped` and `each` as in
+        `CpuVolumes.draw_sides`.  `halve` is accepted for the common interface and ignored:
+        the geometry shader sees one edge at a time, never a whole caster's multiplicities, so
+        it cannot know that they are all even."""
+        if each is None:
+            vao = self.clip_vao if clipped else self.edge_vao
+        else:
+            self.counting_programs()
+            vao = self._counting_vaos[1 if clipped else 0]
         for i in objects:
             first, count = self._records[i]
             if count:
+                if each is not None:
+                    each(vao.program, i)
                 vao.render(moderngl.POINTS, vertices=count, first=first)
 
-    def draw_caps(self, objects, near: bool) -> None:
+    def draw_caps(self, objects, near: bool, each=None) -> None:
         if not near and self.light4[3] == 0.0:
             return
-        program, vao = (self.near_program, self.near_vao) if near else (self.far_program,
-                                                                         self.far_vao)
+        if each is None:
+            vao = self.near_vao if near else self.far_vao
+        else:
+            self.counting_programs()
+            vao = self._counting_vaos[2 if near else 3]
         for sign in (1, -1):
-            program["u_cap_sign"].value = sign
+            vao.program["u_cap_sign"].value = sign
             self.ctx.front_face = _FRONT_FACE[near, sign]
             for i in objects:
                 rng = self.geometry.ranges[i]
+                if each is not None:
+                    each(vao.program, i)
                 vao.render(moderngl.TRIANGLES, vertices=3 * rng.count,
                                     first=3 * rng.first)
         self.ctx.front_face = "ccw"
 
     def release(self) -> None:
-        for obj in (self.edge_vao, self.clip_vao, self.near_vao, self.far_vao, self.edge_buffer,
-                    *self.corner_buffers, *self.programs):
+        for obj in (self.edge_vao, self.clip_vao, self.near_vao, self.far_vao,
+                    *self._counting_vaos, self.edge_buffer, *self.corner_buffers,
+                    *self.programs):
             obj.release()
 
 

@@ -231,8 +231,9 @@ def test_more_than_64_objects_refuse_casters(ctx, gl_session):
 
 
 def test_casters_count_only_objects_near_the_shadow(ctx, gl_session, monkeypatch):
-    """30 balls far from the one shadow are not counted: one volume pass per candidate, the
-    ball and the floor the shadow falls on (its box holds the shadow: it could cast there)."""
+    """30 balls far from the one shadow are not counted: one counting pass over the
+    candidates, the ball and the floor the shadow falls on (its box holds the shadow: it could
+    cast there)."""
     far = [sphere(f"far{i}", [-30.0 + 2 * i, 0.5, -40.0], 0.4, subdivisions=1) for i in range(30)]
     scene = Scene(camera=Camera(eye=[0, 3, 5], target=[0, 0.3, 0], fov_y=40.0),
                   objects=[plane("floor", size=[6, 6]), sphere("ball", [0, 0.8, 0], 0.4)] + far,
@@ -248,7 +249,7 @@ def test_casters_count_only_objects_near_the_shadow(ctx, gl_session, monkeypatch
     monkeypatch.setattr(truth.passes, "count_volumes", spy)
     with Renderer(scene, gl_session) as r:
         frame = r.render(outputs=("casters",))
-    assert counted == [(0,), (1,)]
+    assert counted == [(0, 1)]
     assert (frame.casters[0] == 2).sum() > 20 and set(np.unique(frame.casters)) == {0, 2}
 
 
