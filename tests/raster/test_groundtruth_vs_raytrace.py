@@ -295,6 +295,23 @@ def test_casters_past_the_first_16_bits(ctx, gl_session, request):
         assert ((raster.casters[0] >> np.uint64(k)) & np.uint64(1)).sum() > 50, k
 
 
+def test_more_candidates_than_one_counting_pass(ctx, gl_session, request):
+    """40 boxes casting on the floor and on each other: more candidates than one counting
+    pass holds (truth.CASTERS_PER_GROUP), so two groups add their bits to the same mask."""
+    boxes = [box(f"b{k}", [0.55 * (k % 8) - 1.9, 0.3 + 0.25 * (k // 8), 0.5 * (k // 8) - 1.0],
+                 [0.3, 0.12, 0.3]) for k in range(40)]
+    scene = Scene(camera=Camera(eye=[0.0, 4.0, 4.5], target=[0.0, 0.3, 0.0], fov_y=50.0),
+                  objects=[plane("floor", size=[8, 8])] + boxes,
+                  lights=[PointLight([0.4, 5.0, 1.0])], **SIZE)
+    assert len(scene.objects) > truth.CASTERS_PER_GROUP
+    with Renderer(scene, gl_session) as r:
+        raster = r.render(outputs=ALL)
+    ref = ground_truth(scene)
+    assert not compare(request, scene, raster, ref)
+    seen = np.bitwise_or.reduce(raster.casters[0].reshape(-1))
+    assert bin(int(seen)).count("1") > truth.CASTERS_PER_GROUP
+
+
 def test_a_second_frame_keeps_nothing_of_the_first(ctx, gl_session):
     """The G-buffer is written only where geometry is: a frame that sees less (the camera
     turned away) must not show the first frame's surfaces where it sees nothing."""
