@@ -14,9 +14,16 @@ from builders import SCENES, cards_scene
 
 from shadowvol.primitives import box, plane, sphere
 from shadowvol.raster import methods, passes, truth
-from shadowvol.raster.stencil import zero_to_one_depth
 from shadowvol.raster.renderer import Renderer
-from shadowvol.scene import AreaLight, Camera, DirectionalLight, PointLight, Scene, SpotLight
+from shadowvol.raster.stencil import zero_to_one_depth
+from shadowvol.scene import (
+    AreaLight,
+    Camera,
+    DirectionalLight,
+    PointLight,
+    Scene,
+    SpotLight,
+)
 from shadowvol.scenefile import load_scene
 
 SIZE = dict(width=96, height=72)
