@@ -248,14 +248,18 @@ class CasterCounts:
         ctx.enable_only(moderngl.DEPTH_TEST)
         ctx.memory_barrier()   # the casters' words, before they are read or added to
 
-    def read_casters(self, box: tuple[int, int, int, int]) -> np.ndarray:
+    def read_casters(self, box: tuple[int, int, int, int], objects: int) -> np.ndarray:
         """(h, w) uint64 of the casters' words in `box` (x, y, w, h, GL's rows), row 0 at
-        the top."""
-        words = np.empty((box[3], box[2], 2), np.uint32)
-        self.casters_fbo.read_into(words, viewport=box, components=2, attachment=0,
-                                   dtype="u4")
-        words = top_row_first(words).astype(np.uint64)
-        return words[..., 0] | (words[..., 1] << np.uint64(32))
+        the top (a view); the first word only when the scene has at most 32 `objects`."""
+        words = np.zeros((box[3], box[2], 2), np.uint32)
+        components = 1 if objects <= 32 else 2
+        staging = words if components == 2 else np.empty((box[3], box[2]), np.uint32)
+        self.casters_fbo.read_into(staging, viewport=box, components=components,
+                                   attachment=0, dtype="u4")
+        if components == 1:
+            words[..., 0] = staging
+        # little-endian: word 0 holds bits 0-31
+        return top_row_first(words.view("<u8")[..., 0])
 
     def read_counts(self, layout: list[tuple[int, int, int]]) -> np.ndarray:
         """(k, H, W) int64: the counters of `layout` as `count` left them, decoded, row 0 at
@@ -333,14 +337,18 @@ def cast_points(camera: Camera, depth: np.ndarray, mask: np.ndarray) -> np.ndarr
     h, w = depth.shape
     K = intrinsics(camera, w, h)
     ys, xs = np.nonzero(mask)
-    z = depth[ys, xs].astype(np.float64)
-    # OpenCV camera coordinates (x right, y down, z forward) of the pixel centres
-    x = (xs + 0.5 - K[0, 2]) / K[0, 0] * z
-    y = (ys + 0.5 - K[1, 2]) / K[1, 1] * z
-    right, up, back = look_at_basis(camera)
-    world = camera.eye + x[:, None] * right - y[:, None] * up - z[:, None] * back
+    z = depth[ys, xs]
+    # OpenCV camera coordinates (x right, y down, z forward) of the pixel centres; float32:
+    # its rounding (1e-7 relative) is far inside the pad
+    x = ((xs + 0.5 - K[0, 2]) / K[0, 0]).astype(np.float32) * z
+    y = ((ys + 0.5 - K[1, 2]) / K[1, 1]).astype(np.float32) * z
+    right, up, back = (v.astype(np.float32) for v in look_at_basis(camera))
+    lo, hi = np.empty(3), np.empty(3)
+    for k in range(3):
+        world = x * right[k] - y * up[k] - z * back[k]
+        lo[k], hi[k] = world.min(), world.max()
     pad = CAST_POINT_PAD * float(np.sqrt((x ** 2 + y ** 2 + z ** 2).max()))
-    return np.stack([world.min(axis=0) - pad, world.max(axis=0) + pad])
+    return np.stack([camera.eye + lo - pad, camera.eye + hi + pad])
 
 
 def caster_candidates(bounds: np.ndarray, points: np.ndarray, light4: np.ndarray) -> list[int]:
@@ -407,7 +415,7 @@ def count_casters(target, counter: CasterCounts, volumes, choice: np.ndarray,
             counter.count(target, volumes, choice, group, layout, halve, clip_planes, box)
             counter.add_bits(target, group, layout,
                              everywhere=int(bounds[group].sum()) >= 256)
-        combined = counter.read_casters(box)
+        combined = counter.read_casters(box, len(bounds))
     finally:
         target.fbo.scissor = None
         target.use()  # re-applies the framebuffer's state: no scissor
