@@ -8,8 +8,10 @@ The scene: `occluder_scene("100k")` (a floor and 20 icospheres, 102,402 triangle
 outputs (image, lit, coverage) and then each ground-truth output added alone and all of them; the
 ray tracer: `raytrace.shadow_masks` and `raytrace.ground_truth` with each output alone and all,
 on one prebuilt Embree backend.  The variants are interleaved round by round (load slows all
-alike) and each is the median of the rounds after a warm-up.  `run.py` calls `measure` for
-BENCHMARKS.md.
+alike) and each is the median of the rounds after a warm-up.  The target of the issue, casters
+with at most 16 casting objects in at most 1 extra frame, is measured on the same generator with
+16 spheres (`occluder_scene("100k", spheres=16)`: 81,922 triangles), its frame and + casters
+interleaved in the same rounds.  `run.py` calls `measure` for BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -26,12 +28,21 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 OUTPUTS = ("depth", "distance", "normal", "object_id", "facing", "casters")
 FRAME = ("image", "lit", "coverage")
+TARGET_CASTING = 16   # the issue's target: casters with at most this many casting objects ...
+TARGET_FRAMES = 1.0   # ... costs at most this many extra frames
 
 
 def _stats(times: list[float]) -> dict:
     """Milliseconds: median, min, max of `times` (seconds), and how many."""
     ms = [t * 1e3 for t in times]
     return {"median": statistics.median(ms), "min": min(ms), "max": max(ms), "n": len(ms)}
+
+
+def casting_objects(casters) -> int:
+    """How many objects cast somewhere: the bits set in any pixel of `casters` (L, H, W)."""
+    import numpy as np
+
+    return bin(int(np.bitwise_or.reduce(casters.reshape(-1)))).count("1")
 
 
 def _interleaved(variants: dict, runs: int) -> dict:
@@ -51,22 +62,27 @@ def measure(ctx, runs: int = 5, width: int = 1280, height: int = 720,
             size: str = "100k") -> dict:
     """Both renderers' costs (see the module) on `occluder_scene(size)` with one point light.
     ctx: a GL context for the rasterizer."""
-    import numpy as np
-    from scenes import occluder_scene
-
     import raytrace
     from raytrace.masks import scene_backend
+    from scenes import SIZES, occluder_scene
     from shadowvol.raster.renderer import Renderer
 
     scene = occluder_scene(size, 1, width, height)
+    # the same generator with at most TARGET_CASTING spheres (a small size may have fewer)
+    few = occluder_scene(size, 1, width, height, spheres=min(TARGET_CASTING, SIZES[size][0]))
     labels = ["frame"] + [f"+ {n}" for n in OUTPUTS] + ["+ all"]
     extras = [()] + [(n,) for n in OUTPUTS] + [OUTPUTS]
-    with Renderer(scene, ctx) as r:
-        raster = _interleaved({label: (lambda e=e: r.render(outputs=FRAME + e))
-                               for label, e in zip(labels, extras)}, runs)
-        frame = r.render(outputs=FRAME + ("casters",))
-    bits = np.bitwise_or.reduce(frame.casters.reshape(-1))
-    casting = int(sum((int(bits) >> j) & 1 for j in range(64)))
+    with Renderer(scene, ctx) as r, Renderer(few, ctx) as r_few:
+        variants = {label: (lambda e=e: r.render(outputs=FRAME + e))
+                    for label, e in zip(labels, extras)}
+        variants["few: frame"] = lambda: r_few.render(outputs=FRAME)
+        variants["few: + casters"] = lambda: r_few.render(outputs=FRAME + ("casters",))
+        raster = _interleaved(variants, runs)
+        casting = casting_objects(r.render(outputs=FRAME + ("casters",)).casters)
+        few_casting = casting_objects(r_few.render(outputs=FRAME + ("casters",)).casters)
+    target = {"scene": few.name, "triangles": sum(len(o.faces) for o in few.objects),
+              "objects": len(few.objects), "casting_objects": few_casting,
+              "frame": raster.pop("few: frame"), "casters": raster.pop("few: + casters")}
     backend = scene_backend(scene, "embree")
     rt_variants = {"shadow_masks": lambda: raytrace.shadow_masks(scene, backend)}
     for label, e in zip(labels[1:], extras[1:]):
@@ -75,7 +91,28 @@ def measure(ctx, runs: int = 5, width: int = 1280, height: int = 720,
     return {"run": _run_info(),
             "scene": scene.name, "triangles": sum(len(o.faces) for o in scene.objects),
             "objects": len(scene.objects), "casting_objects": casting,
-            "width": width, "height": height, "raster": raster, "raytrace": ray}
+            "width": width, "height": height, "raster": raster, "raytrace": ray,
+            "target": target}
+
+
+def target_lines(res: dict) -> list[str]:
+    """Markdown lines: the casters target on the scene with at most TARGET_CASTING casting
+    objects (`measure`'s "target"), and casters' cost on the main scene beside it."""
+    t = res.get("target")
+    if not t:
+        return []
+    frame, casters = t["frame"]["median"], t["casters"]["median"]
+    extra = (casters - frame) / frame
+    main = res["raster"]
+    main_extra = (main["+ casters"]["median"] - main["frame"]["median"]) / main["frame"]["median"]
+    met = t["casting_objects"] <= TARGET_CASTING and extra <= TARGET_FRAMES
+    return [f"Target: casters with at most {TARGET_CASTING} casting objects costs at most "
+            f"{TARGET_FRAMES:g} extra frame.  `{t['scene']}` ({t['triangles']:,} triangles, "
+            f"{t['objects']} objects, {t['casting_objects']} casting), interleaved in the same "
+            f"rounds: frame {frame:.0f} ms ({t['frame']['min']:.0f}-{t['frame']['max']:.0f}), "
+            f"+ casters {casters:.0f} ms ({t['casters']['min']:.0f}-{t['casters']['max']:.0f}): "
+            f"{extra:+.2f} frames, **{'met' if met else 'not met'}**.  (`{res['scene']}`, "
+            f"{res['casting_objects']} casting: {main_extra:+.2f}.)"]
 
 
 def _run_info() -> dict:
@@ -125,6 +162,8 @@ def main(argv=None) -> int:
           f"({res['casting_objects']} casting), one point light, "
           f"{res['width']}x{res['height']}\n")
     print("\n".join(table(res)))
+    print()
+    print("\n".join(target_lines(res)))
     if args.into is not None:
         import json
 

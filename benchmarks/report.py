@@ -296,6 +296,8 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
     add("")
 
     if "groundtruth" in results:
+        import bench_groundtruth  # beside this module (run.py puts benchmarks/ on the path)
+
         g = results["groundtruth"]
         add(f"## Ground truth ({g['triangles']:,} triangles, one point light)")
         add("")
@@ -306,9 +308,9 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
             "rasterizer's `Renderer.render(outputs=...)` with the frame's image, lit and "
             "coverage plus that output, and `raytrace.ground_truth` against "
             "`raytrace.shadow_masks` on one prebuilt Embree backend.  Extra / frame: the "
-            "output's cost in frames.  casters counts each candidate caster's volumes alone "
-            "(per candidate one volume pass and one marking pass over the shadow's box; one "
-            "read per light).")
+            "output's cost in frames.  casters counts every candidate caster into its own "
+            "counter in one volume pass (image atomics), then turns the counters into the "
+            "mask in one pass over the shadow; one read per light.")
         if "run" in g:
             load = " / ".join(f"{x:.2f}" for x in g["run"]["load"])
             add("")
@@ -326,6 +328,9 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
             add(f"| {name} | {_ms(r)} | {(r['median'] - frame) / frame:+.2f} | "
                 f"{_ms(rt)} | {rt['median'] / masks:.2f} |")
         add("")
+        for line in bench_groundtruth.target_lines(g):
+            add(line)
+            add("")
 
     add("## Memory")
     add("")
