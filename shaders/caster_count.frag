@@ -6,7 +6,8 @@
 // (u_front_step = +1) counts the faces that pass the depth test, front +1 and back -1; z-fail
 // (u_front_step = -1) is drawn with the complementary depth test, so it counts the faces that
 // fail the stencil pass's, back +1 and front -1.  So each counter ends as that caster's own
-// stencil count, and they sum to the stencil's.
+// stencil count, and they sum to the stencil's.  The stencil takes the same fragments' sum at
+// the same time (stencil.caster_counting), which caster_bits.frag's pass is restricted to.
 //
 // A counter is the bit field [u_shift, u_shift + width) of word u_word of an r32ui image
 // array (several casters share a word; truth.counter_layout).  The additions are modulo 2^32
