@@ -385,11 +385,14 @@ class Renderer:
         h, w = self.scene.height, self.scene.width
         # the depth buffer is cleared every frame: it says where geometry is (the G-buffer and
         # the facing pass's targets are written only there)
-        depth, covered = truth.read_depth(self.target, camera)
-        if "depth" in want:
-            out["depth"] = depth
-        if "distance" in want:
-            out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
+        stored = truth.read_depth(self.target)
+        covered = stored > 0
+        if want & {"depth", "distance"}:
+            depth = truth.eye_depth(stored, camera)
+            if "depth" in want:
+                out["depth"] = depth
+            if "distance" in want:
+                out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
         if want & {"normal", "object_id"}:
             triangle, front, _ = truth.read_surface(self.target, covered)
             out |= truth.surface_outputs(self.geometry, triangle, front, want)
@@ -410,14 +413,14 @@ class Renderer:
                     continue
                 light4 = light.homogeneous
                 candidates = truth.caster_candidates(self.geometry.bounds,
-                                                     truth.cast_points(camera, depth, cast),
+                                                     truth.cast_points(camera, stored, cast),
                                                      light4)
                 vols.prepare(light4)
-                casters[i] = truth.count_casters(
+                truth.count_casters(
                     self.target, self._truth_pass().casters, vols, zfail[i],
                     candidates, self.object_bounds,
                     out["facing"][i], halve=method == "auto" and not want_stencil,
-                    clip_planes=clip)
+                    clip_planes=clip, out=casters[i])
             out["casters"] = casters
         return out
 

@@ -46,9 +46,9 @@ TRUTH_OUTPUTS = GROUND_TRUTH  # the names of docs/CONVENTIONS.md, one list for b
 MAX_CASTERS = 64
 LIGHTS_PER_PASS = LIGHTS_PER_PAGE  # the frame's pages: facing and lit bits exact in a float32
 CASTERS_PER_GROUP = 32  # casters of one counting pass: the slots of caster_bits.frag
-# The cast points for `caster_candidates` come from the depth buffer (`cast_points`), whose
-# depths are within 3e-5 of the exact ones (tests/raster/test_groundtruth_vs_raytrace.py):
-# their box is widened by 30 times that, relative to the farthest point's distance.
+# The cast points' depths for `caster_candidates` come from the depth buffer (`cast_points`),
+# within 3e-5 (relative) of the exact ones (tests/raster/test_groundtruth_vs_raytrace.py): the
+# depth range is widened by 30 times that.
 CAST_POINT_PAD = 1e-3
 # the complement of NEARER (reversed depth: ">"): a z-fail face counts where the stencil
 # pass's depth test fails, i.e. where this one passes
@@ -290,15 +290,18 @@ def read_surface(target, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
     return np.abs(key) - 1, key > 0, raw[..., :3]
 
 
-def read_depth(target, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
-    """(H, W) float32 eye-space depth from the depth buffer (near / stored), inf where nothing
-    is drawn (stored 0, the clear value), and covered (H, W) bool (stored > 0), row 0 at the
-    top."""
-    stored = top_row_first(stencil_gl.read_depth(target.gl, target.gbuffer_fbo.glo,
-                                                 target.width, target.height))
+def read_depth(target) -> np.ndarray:
+    """(H, W) float32: the depth buffer as stored (near / eye-space depth; 0, the clear value,
+    where nothing is drawn), row 0 at the top."""
+    return top_row_first(stencil_gl.read_depth(target.gl, target.gbuffer_fbo.glo,
+                                               target.width, target.height))
+
+
+def eye_depth(stored: np.ndarray, camera: Camera) -> np.ndarray:
+    """(H, W) float32 eye-space depth of `read_depth`'s values: near / stored, in float64 and
+    rounded once; inf where nothing is drawn."""
     with np.errstate(divide="ignore"):
-        depth = (np.float64(camera.near) / stored.astype(np.float64)).astype(np.float32)
-    return depth, stored > 0
+        return (np.float64(camera.near) / stored.astype(np.float64)).astype(np.float32)
 
 
 def ray_lengths(camera: Camera, width: int, height: int) -> np.ndarray:
@@ -328,27 +331,28 @@ def surface_outputs(geometry, triangle: np.ndarray, front: np.ndarray, want: set
     return out
 
 
-def cast_points(camera: Camera, depth: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """(2, 3) float64: a box (lo, hi) around the world points of the pixels of `mask` (H, W)
-    bool, unprojected from `depth` (H, W) float32 (`read_depth`) with the camera's K and
-    basis, widened by CAST_POINT_PAD of the farthest one's distance: the box of the true
-    points lies inside it.  (No G-buffer read: the depth is read for the ground truth
-    anyway.)"""
-    h, w = depth.shape
+def cast_points(camera: Camera, stored: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(8, 3) float64: the corners of a frustum piece holding the world points of the pixels
+    of `mask` (H, W) bool (not empty): the box of those pixels (their whole squares) between
+    the nearest and the farthest of their eye-space depths, from `stored` (H, W) float32 (the
+    depth buffer, `read_depth`), the near face moved CAST_POINT_PAD of its depth toward the
+    eye and the far face as much away.  Convex, so the box of its corners holds every point
+    (no G-buffer read, no per-pixel unprojection: the depth is read for the ground truth
+    anyway)."""
+    h, w = stored.shape
     K = intrinsics(camera, w, h)
-    ys, xs = np.nonzero(mask)
-    z = depth[ys, xs]
-    # OpenCV camera coordinates (x right, y down, z forward) of the pixel centres; float32:
-    # its rounding (1e-7 relative) is far inside the pad
-    x = ((xs + 0.5 - K[0, 2]) / K[0, 0]).astype(np.float32) * z
-    y = ((ys + 0.5 - K[1, 2]) / K[1, 1]).astype(np.float32) * z
-    right, up, back = (v.astype(np.float32) for v in look_at_basis(camera))
-    lo, hi = np.empty(3), np.empty(3)
-    for k in range(3):
-        world = x * right[k] - y * up[k] - z * back[k]
-        lo[k], hi[k] = world.min(), world.max()
-    pad = CAST_POINT_PAD * float(np.sqrt((x ** 2 + y ** 2 + z ** 2).max()))
-    return np.stack([camera.eye + lo - pad, camera.eye + hi + pad])
+    rows, cols = cast_box(mask)
+    values = stored[rows, cols][mask[rows, cols]].astype(np.float64)
+    z_near, z_far = camera.near / values.max(), camera.near / values.min()
+    right, up, back = look_at_basis(camera)
+    corners = []
+    for z in (z_near * (1.0 - CAST_POINT_PAD), z_far * (1.0 + CAST_POINT_PAD)):
+        for u in (cols.start, cols.stop):
+            for v in (rows.start, rows.stop):
+                # OpenCV camera coordinates (x right, y down, z forward) of the pixel corner
+                x, y = (u - K[0, 2]) / K[0, 0] * z, (v - K[1, 2]) / K[1, 1] * z
+                corners.append(camera.eye + x * right - y * up - z * back)
+    return np.array(corners)
 
 
 def caster_candidates(bounds: np.ndarray, points: np.ndarray, light4: np.ndarray) -> list[int]:
@@ -387,9 +391,10 @@ def caster_candidates(bounds: np.ndarray, points: np.ndarray, light4: np.ndarray
 
 def count_casters(target, counter: CasterCounts, volumes, choice: np.ndarray,
                   candidates: list[int], bounds: np.ndarray, where: np.ndarray, halve: bool,
-                  clip_planes) -> np.ndarray:
+                  clip_planes, out: np.ndarray | None = None) -> np.ndarray:
     """(H, W) uint64: bit j where candidate object j's own shadow volumes count non-zero and
-    `where` (H, W) bool (the pixels facing the light).  bounds (n_objects,) int: each
+    `where` (H, W) bool (the pixels facing the light); into `out` (H, W) uint64, zeros, when
+    given.  bounds (n_objects,) int: each
     object's `overflow.topology_bound`.  `volumes`, `choice`, `halve` and `clip_planes` as
     `CasterCounts.count` takes them.
 
@@ -397,7 +402,7 @@ def count_casters(target, counter: CasterCounts, volumes, choice: np.ndarray,
     of the casters' words at the end.  Everything is drawn (scissor), cleared and read only in
     the box of the cast pixels (`cast_box`).  Leaves the stencil holding the last group's
     count."""
-    bits = np.zeros(where.shape, np.uint64)
+    bits = np.zeros(where.shape, np.uint64) if out is None else out
     if not candidates:
         return bits
     rows, cols = cast_box(where)
