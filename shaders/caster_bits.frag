@@ -1,9 +1,9 @@
 #version 450 core
-// After a group's per-caster counts (caster_count.frag), drawn over the shadow's box where
-// the group's own stencil count is not 0 (or everywhere in it; truth.CasterCounts.add_bits):
+// After a group's per-caster counts (caster_count.frag), drawn over the shadow's box where a
+// counted fragment landed (the stencil the counting pass set; truth.CasterCounts.add_bits):
 // every caster whose counter is not 0 at the pixel sets its object's bit in the casters'
 // 64-bit mask, two uint32 words (bits 0-31, 32-63) of an rg32ui image, cleared per light and
-// added to by each group.
+// added to by each group.  A counter of w bits holds its count + 2^(w-1) (truth.FIELD_BIAS).
 //
 // Defines: WORDS — the counter words of the group (a constant, so that the loop unrolls: on
 // llvmpipe a loop over a uniform bound costs about twice as much).  Word w holds counters
@@ -23,8 +23,9 @@ uniform int u_width[WORDS];
 uniform int u_first_slot[WORDS];
 uniform uvec2 u_object_bits[SLOTS];  // slot k's object's bit in the two words
 
-// Bit f set for each field f (of `width` bits) of v that is not 0.
+// Bit f set for each field f (of `width` bits) of v that is not its bias: a count not 0.
 uint nonzero_fields(uint v, int width) {
+    v ^= width == 8 ? 0x80808080u : (width == 16 ? 0x80008000u : 0u);  // truth.FIELD_BIAS
     uint t = v | (v >> 1u);      // fold every field's bits into its lowest bit
     t |= t >> 2u;
     t |= t >> 4u;

@@ -6,14 +6,15 @@
 // (u_front_step = +1) counts the faces that pass the depth test, front +1 and back -1; z-fail
 // (u_front_step = -1) is drawn with the complementary depth test, so it counts the faces that
 // fail the stencil pass's, back +1 and front -1.  So each counter ends as that caster's own
-// stencil count, and they sum to the stencil's.  The stencil takes the same fragments' sum at
-// the same time (stencil.caster_counting), which caster_bits.frag's pass is restricted to.
+// stencil count, and they sum to the stencil's.  The stencil marks where any of these
+// fragments lands (stencil.caster_touching), and caster_bits.frag's pass runs only there.
 //
 // A counter is the bit field [u_shift, u_shift + width) of word u_word of an r32ui image
-// array (several casters share a word; truth.counter_layout).  The additions are modulo 2^32
-// and commute, so the word ends as the sum of count << shift over its casters, whatever the
-// order of the fragments; each field then holds its caster's count exactly when that count
-// lies in [0, 2^width) (truth.CasterCounts).
+// array (several casters share a word; truth.counter_layout), cleared to 2^(width-1).  The
+// additions are modulo 2^32 and commute, so the word ends as that plus the sum of
+// count << shift over its casters, whatever the order of the fragments; each field then holds
+// its caster's count + 2^(width-1) exactly while the count lies in [-2^(width-1), 2^(width-1))
+// (truth.CasterCounts).
 //
 // early_fragment_tests: the depth test runs before this shader, so only the fragments that
 // pass it count (without it a shader with side effects runs for every fragment, and the

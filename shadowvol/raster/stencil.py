@@ -252,15 +252,15 @@ def clear_int_attachment(gl: RawGL, framebuffer_glo: int, draw_buffer: int, valu
 
 
 def clear_uint_texture(gl: RawGL, texture_glo: int, box: tuple[int, int, int, int],
-                       layers: int = 1, components: int = 1) -> None:
-    """Texels of an unsigned-integer texture (r32ui / rg32ui; a 2D texture, or the first
-    `layers` layers of an array) to 0 in `box` (x, y, w, h, GL's rows).  moderngl clears only
-    framebuffer attachments (and moderngl's Texture.write would upload the zeros)."""
-    zero = (ctypes.c_uint * 4)(0, 0, 0, 0)
+                       value: int = 0, layer: int = 0, components: int = 1) -> None:
+    """Texels of an unsigned-integer texture (r32ui / rg32ui; a 2D texture, or one `layer`
+    of an array) to `value` (every component) in `box` (x, y, w, h, GL's rows).  moderngl
+    clears only framebuffer attachments (and moderngl's Texture.write would upload them)."""
+    values = (ctypes.c_uint * 4)(value, value, value, value)
     x, y, w, h = box
-    gl.glClearTexSubImage(texture_glo, 0, x, y, 0, w, h, layers,
+    gl.glClearTexSubImage(texture_glo, 0, x, y, layer, w, h, 1,
                           GL_RED_INTEGER if components == 1 else GL_RG_INTEGER,
-                          GL_UNSIGNED_INT, zero)
+                          GL_UNSIGNED_INT, values)
 
 
 def read_stencil(gl: RawGL, framebuffer_glo: int, width: int, height: int, x: int = 0,
@@ -401,16 +401,15 @@ def where_shadowed(gl: RawGL) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def caster_counting(gl: RawGL, zfail: bool, depth_clamp: bool) -> Iterator[None]:
-    """The ground truth's per-caster counts (`truth.CasterCounts`): the count of the casters
-    drawn, as `zpass_counting` / `zfail_counting` (the same `depth_clamp`) take it, for the
-    pass that counts each caster into an image too.  Its z-fail faces are drawn under the
-    COMPLEMENTARY depth test (the image counts only fragments that pass it), so z-fail's ops
-    sit in the depth-pass slot here: back faces +1, front faces -1."""
-    zpass_ops = ((GL_KEEP, GL_KEEP, GL_INCR_WRAP), (GL_KEEP, GL_KEEP, GL_DECR_WRAP))
-    front, back = zpass_ops[::-1] if zfail else zpass_ops
+def caster_touching(gl: RawGL, depth_clamp: bool) -> Iterator[None]:
+    """The ground truth's per-caster counts (`truth.CasterCounts`), which go to an image:
+    the stencil := 1 wherever a counted fragment lands (either face; the image counts the
+    fragments that pass the depth test, z-fail's under the complementary test), so a pixel
+    whose counters are not all 0 has stencil 1.  `depth_clamp` as `zpass_counting` (off)
+    and `zfail_counting` take it for the same faces."""
+    touch = (GL_KEEP, GL_KEEP, GL_REPLACE)
     with _saved_stencil_state(gl):
-        _set(gl, func=GL_ALWAYS, ref=0, front_ops=front, back_ops=back, write_mask=0xFF,
+        _set(gl, func=GL_ALWAYS, ref=1, front_ops=touch, back_ops=touch, write_mask=0xFF,
              depth_clamp=depth_clamp)
         yield
 

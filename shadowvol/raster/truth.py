@@ -46,6 +46,9 @@ TRUTH_OUTPUTS = GROUND_TRUTH  # the names of docs/CONVENTIONS.md, one list for b
 MAX_CASTERS = 64
 LIGHTS_PER_PASS = LIGHTS_PER_PAGE  # the frame's pages: facing and lit bits exact in a float32
 CASTERS_PER_GROUP = 32  # casters of one counting pass: the slots of caster_bits.frag
+# a counter field of w bits starts at 2^(w - 1) (none for 32 bits: a word of its own), so that
+# a count in [-2^(w-1), 2^(w-1)) never borrows from or carries into its neighbour
+FIELD_BIAS = {8: 0x80808080, 16: 0x80008000, 32: 0}
 # The cast points' depths for `caster_candidates` come from the depth buffer (`cast_points`),
 # within 3e-5 (relative) of the exact ones (tests/raster/test_groundtruth_vs_raytrace.py): the
 # depth range is widened by 30 times that.
@@ -127,9 +130,10 @@ class TruthPass:
 def counter_layout(bounds) -> list[tuple[int, int, int]]:
     """(word, shift, width) of each caster's counter, for casters whose counts are at most
     `bounds` (k,) int (`overflow.topology_bound`: 2 for a closed convex mesh, else its
-    triangles): the narrowest of 8, 16 or 32 bits holding the bound, packed into 32-bit words
-    in that order, one width a word (four 8-bit counters, two 16-bit or one 32-bit)."""
-    widths = [8 if b < 2**8 else 16 if b < 2**16 else 32 for b in bounds]
+    triangles): the narrowest of 8, 16 or 32 bits whose biased field (`FIELD_BIAS`) holds the
+    bound, packed into 32-bit words in that order, one width a word (four 8-bit counters, two
+    16-bit or one 32-bit)."""
+    widths = [8 if b < 2**7 else 16 if b < 2**15 else 32 for b in bounds]
     out: list[tuple[int, int, int] | None] = [None] * len(widths)
     word, used = -1, 32
     for width in (8, 16, 32):
@@ -147,11 +151,14 @@ class CasterCounts:
     layer, `counter_layout`), the casters' two words (rg32ui) and the pass turning one into
     the other.
 
-    A word is the sum modulo 2^32 of count << shift over its casters, so a field reads its
-    caster's count exactly when every count of the word lies in [0, 2^width).  They do
-    wherever the light's stencil count is exact (the method valid for the caster, as `auto`
-    chooses): each is then the number of the caster's triangles between the point and the
-    light, at most its bound (`counter_layout`).  Call `release()`."""
+    A word starts at FIELD_BIAS and ends as that plus the sum modulo 2^32 of count << shift
+    over its casters, so a field reads its caster's count exactly when every count of the
+    word lies in [-2^(width-1), 2^(width-1)).  They do: where the light's count is exact (the
+    method valid for the caster, as `auto` chooses) each is the number of the caster's
+    triangles between the point and the light, 0..bound (`counter_layout`), and elsewhere
+    (a forced z-pass, rounding at a volume's edge) a count outside [0, bound] reads exactly
+    too while it stays in the field's range, as the 8-bit stencil's reads modulo 256.  Call
+    `release()`."""
 
     def __init__(self, ctx: moderngl.Context, gl, width: int, height: int):
         self.ctx, self.gl, self.width, self.height = ctx, gl, width, height
@@ -172,12 +179,20 @@ class CasterCounts:
         """The casters' words to 0 in `box` (x, y, w, h, GL's rows)."""
         stencil_gl.clear_uint_texture(self.gl, self.casters.glo, box, components=2)
 
+    def _clear_counts(self, layout, box: tuple[int, int, int, int]) -> None:
+        """Each counter word of `layout` to its FIELD_BIAS in `box`."""
+        width = {word: bits for word, _, bits in layout}
+        for word, bits in width.items():
+            stencil_gl.clear_uint_texture(self.gl, self.counts.glo, box,
+                                          value=FIELD_BIAS[bits], layer=word)
+
     def count(self, target, volumes, choice: np.ndarray, group: list[int],
               layout: list[tuple[int, int, int]], halve: bool, clip_planes,
               box: tuple[int, int, int, int]) -> None:
         """Counter k := object group[k]'s own count, in its field of `layout`
-        (`counter_layout`; at most CASTERS_PER_GROUP objects), and the stencil := their sum,
-        in `box` (the scissor must be set to it): the light's volume count
+        (`counter_layout`; at most CASTERS_PER_GROUP objects), and the stencil := 1 where any
+        counted fragment lands, else 0, in `box` (the scissor must be set to it): the light's
+        volume count
         (`passes.count_volumes`, the same `choice`, `halve` and `clip_planes`) with the
         counting programs, z-fail groups under the complementary depth test.  `volumes`
         must be prepared for the light and its `counting_programs` made before the frame's
@@ -197,14 +212,13 @@ class CasterCounts:
                 set_uniform(p, "u_front_step", -1 if zfail_group else 1)
             ctx.depth_func = NOT_NEARER if zfail_group else NEARER
             try:
-                with stencil_gl.caster_counting(gl, zfail_group, depth_clamp):
+                with stencil_gl.caster_touching(gl, depth_clamp):
                     yield
             finally:
                 ctx.depth_func = NEARER
 
-        words = 1 + max(word for word, _, _ in layout)
-        self._layers(words)
-        stencil_gl.clear_uint_texture(gl, self.counts.glo, box, layers=words)
+        self._layers(1 + max(word for word, _, _ in layout))
+        self._clear_counts(layout, box)
         target.clear_stencil()   # within the scissor
         self.counts.bind_to_image(0, read=True, write=True)
         passes.count_volumes(ctx, gl, target, volumes, choice, halve=halve,
@@ -212,13 +226,10 @@ class CasterCounts:
                              each=each)
         ctx.memory_barrier()   # the counts, before anything reads them
 
-    def add_bits(self, target, group: list[int], layout: list[tuple[int, int, int]],
-                 everywhere: bool) -> None:
+    def add_bits(self, target, group: list[int], layout: list[tuple[int, int, int]]) -> None:
         """caster_bits.frag over target.fbo (its scissor applies): the casters' words get the
-        bit of group[k] where its counter is not 0.  Drawn only where the group's stencil
-        count (`count`) is not 0 unless `everywhere`, which the caller sets unless the group's
-        bounds (`counter_layout`) sum to less than 256: where every count lies in [0, bound],
-        their 8-bit sum is then 0 exactly where all are 0."""
+        bit of group[k] where its counter is not 0.  Drawn only where `count` left the
+        stencil 1 (a counter that no fragment reached is 0)."""
         ctx = self.ctx
         words = 1 + max(w for w, _, _ in layout)
         if words not in self._bits:
@@ -243,7 +254,7 @@ class CasterCounts:
         self.casters.bind_to_image(1, read=True, write=True)
         target.use(colour=False, depth=False)
         ctx.enable_only(moderngl.NOTHING)
-        with (contextlib.nullcontext() if everywhere else stencil_gl.where_shadowed(self.gl)):
+        with stencil_gl.where_shadowed(self.gl):
             vao.render(moderngl.TRIANGLES, vertices=3)
         ctx.enable_only(moderngl.DEPTH_TEST)
         ctx.memory_barrier()   # the casters' words, before they are read or added to
@@ -266,7 +277,11 @@ class CasterCounts:
         the top (for tests: a frame reads only the casters' words)."""
         words = np.frombuffer(self.counts.read(), np.uint32).reshape(
             self.counts.size[2], self.height, self.width)[:, ::-1].astype(np.int64)
-        return np.stack([(words[w] >> s) & ((1 << b) - 1) for w, s, b in layout])
+        out = []
+        for w, s, b in layout:
+            field = (words[w] >> s) & ((1 << b) - 1)
+            out.append(field - (1 << (b - 1)) if b < 32 else field - ((field >> 31) << 32))
+        return np.stack(out)
 
     def release(self) -> None:
         for program, vao in self._bits.values():
@@ -418,8 +433,7 @@ def count_casters(target, counter: CasterCounts, volumes, choice: np.ndarray,
             group = candidates[first:first + CASTERS_PER_GROUP]
             layout = counter_layout(bounds[group])
             counter.count(target, volumes, choice, group, layout, halve, clip_planes, box)
-            counter.add_bits(target, group, layout,
-                             everywhere=int(bounds[group].sum()) >= 256)
+            counter.add_bits(target, group, layout)
         combined = counter.read_casters(box, len(bounds))
     finally:
         target.fbo.scissor = None
