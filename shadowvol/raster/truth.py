@@ -1,7 +1,7 @@
 """The rasterizer's ground truth (docs/CONVENTIONS.md, "Ground truth"), from the frame's own
 passes: depth from the depth buffer, normal and object id from the G-buffer's triangle key,
 facing (and lit with it) from one full-screen pass over the G-buffer, casters by counting each
-casting object's shadow volumes alone.
+casting object's shadow volumes into a counter of its own.
 
 - `depth`: the reversed infinite projection stores near / d (`projection`), so d = near / stored,
   exact to float32 rounding of that projection; `distance` = depth × the length of the pixel's
@@ -16,13 +16,14 @@ casting object's shadow volumes alone.
   them (`caster_candidates`: a box test, no per-pixel work) are counted each into its own
   counter, CASTERS_PER_GROUP at a time (`CasterCounts`): one volume pass over the group's
   volumes, the same faces, groups and depth tests as the light's stencil count, adding each
-  fragment's +-1 to its caster's layer of an integer image (caster_count.frag), then one pass
-  over the shadow's box turning the counters into the 64-bit mask (caster_bits.frag) and
-  zeroing them; one read per light.  Bit j is set where object j's count is not 0 and the
-  pixel faces the light.  Counts are never negative (each is the number of the caster's
-  triangles between the point and the light), so the stencil's count, their sum, is 0
-  exactly where every caster's is: `casters != 0` is `cast`.  The cost grows with the
-  candidates' volume fragments and the shadow's box, however many objects the scene holds.
+  fragment's +-1 to its caster's bit field of an integer image (caster_count.frag), then one
+  pass where a counted fragment landed turning the counters into the 64-bit mask
+  (caster_bits.frag); one read per light.  Bit j is set where object j's count is not 0 and
+  the pixel faces the light.  Counts are never negative where the count is exact (each is
+  the number of the caster's triangles between the point and the light), so the stencil's
+  count, their sum, is 0 exactly where every caster's is: `casters != 0` is `cast`.  The
+  cost grows with the candidates' volume fragments and the shadow's box, however many
+  objects the scene holds.
 """
 
 from __future__ import annotations
@@ -153,11 +154,11 @@ class CasterCounts:
 
     A word starts at FIELD_BIAS and ends as that plus the sum modulo 2^32 of count << shift
     over its casters, so a field reads its caster's count exactly when every count of the
-    word lies in [-2^(width-1), 2^(width-1)).  They do: where the light's count is exact (the
-    method valid for the caster, as `auto` chooses) each is the number of the caster's
-    triangles between the point and the light, 0..bound (`counter_layout`), and elsewhere
-    (a forced z-pass, rounding at a volume's edge) a count outside [0, bound] reads exactly
-    too while it stays in the field's range, as the 8-bit stencil's reads modulo 256.  Call
+    word lies in [-2^(width-1), 2^(width-1)).  Where the light's count is exact (the method
+    valid for the caster, as `auto` chooses) each count is the number of the caster's
+    triangles between the point and the light, 0..bound (`counter_layout`): exact.  A wrong
+    count (a forced z-pass) reads exactly too while it stays in the field's range; beyond it
+    the field is as wrong as the 8-bit stencil, which counts modulo 256.  Call
     `release()`."""
 
     def __init__(self, ctx: moderngl.Context, gl, width: int, height: int):
