@@ -29,11 +29,28 @@ from PIL import Image
 from shadowvol import signals
 
 
+# Values encoded at a time by `encode_srgb` and `png16_bytes`: the float64 temporaries of the
+# curve stay this small (a few MiB) whatever the image, so encoding adds only its output to
+# the memory an image needs (`shadowvol.memory`).
+ENCODE_CHUNK = 1 << 18
+
+
+def _srgb_curve(linear: np.ndarray, scale: float, dtype) -> np.ndarray:
+    """The IEC 61966-2-1 transfer curve of `linear` (clipped to 0..1), times `scale`, rounded
+    to `dtype`, computed ENCODE_CHUNK values at a time (the same values as all at once)."""
+    linear = np.asarray(linear)
+    out = np.empty(linear.shape, dtype)
+    flat_in, flat_out = linear.reshape(-1), out.reshape(-1)
+    for at in range(0, flat_in.size, ENCODE_CHUNK):
+        c = np.clip(np.asarray(flat_in[at:at + ENCODE_CHUNK], dtype=np.float64), 0.0, 1.0)
+        s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
+        flat_out[at:at + ENCODE_CHUNK] = np.round(s * scale)
+    return out
+
+
 def encode_srgb(linear: np.ndarray) -> np.ndarray:
     """(H, W, 3) float linear RGB -> (H, W, 3) uint8 sRGB (IEC 61966-2-1 transfer curve)."""
-    c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-    return np.round(s * 255.0).astype(np.uint8)
+    return _srgb_curve(linear, 255.0, np.uint8)
 
 
 class WriteError(OSError):
@@ -130,11 +147,10 @@ def png16_bytes(linear: np.ndarray) -> bytes:
     """A 16-bit RGB PNG of an (H, W, 3) float linear RGB image, sRGB-encoded (clipped to 0..1,
     rounded to 0..65535, with an sRGB chunk), row 0 at the top.  Written here because Pillow
     writes 16 bits per channel only for grey images."""
-    c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    if c.ndim != 3 or c.shape[2] != 3:
-        raise ValueError(f"png16_bytes wants an (H, W, 3) image, got shape {c.shape}")
-    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-    pixels = np.round(s * 65535.0).astype(">u2")
+    linear = np.asarray(linear)
+    if linear.ndim != 3 or linear.shape[2] != 3:
+        raise ValueError(f"png16_bytes wants an (H, W, 3) image, got shape {linear.shape}")
+    pixels = _srgb_curve(linear, 65535.0, ">u2")
     h, w = pixels.shape[:2]
     rows = np.zeros((h, 1 + 6 * w), np.uint8)  # filter type 0 (None) first on each row
     rows[:, 1:] = pixels.reshape(h, -1).view(np.uint8)
