@@ -27,7 +27,7 @@ import numpy as np
 from PIL import Image
 
 from shadowvol import signals
-
+from shadowvol.errors import out_of_memory_while
 
 # Values encoded at a time by `encode_srgb` and `png16_bytes`: the float64 temporaries of the
 # curve stay this small (a few MiB) whatever the image, so encoding adds only its output to
@@ -166,9 +166,10 @@ def png16_bytes(linear: np.ndarray) -> bytes:
 
 def save_png16(path: str | Path, image: np.ndarray) -> None:
     """Write an (H, W, 3) float linear RGB image as a 16-bit sRGB PNG (`png16_bytes`)."""
-    data = png16_bytes(image)
-    with atomic_write(path) as f:
-        f.write(data)
+    with out_of_memory_while(f"writing {path}"):
+        data = png16_bytes(image)
+        with atomic_write(path) as f:
+            f.write(data)
 
 
 # OpenEXR's ZIP compression packs this many scanlines in a block.
@@ -222,9 +223,10 @@ def exr_bytes(image: np.ndarray) -> bytes:
 
 def save_exr(path: str | Path, image: np.ndarray) -> None:
     """Write an (H, W, 3) float linear RGB image as OpenEXR (`exr_bytes`), atomically."""
-    data = exr_bytes(image)
-    with atomic_write(path) as f:
-        f.write(data)
+    with out_of_memory_while(f"writing {path}"):
+        data = exr_bytes(image)
+        with atomic_write(path) as f:
+            f.write(data)
 
 
 # The ground-truth outputs a frame may carry, by name, in this order (docs/CONVENTIONS.md).
@@ -273,7 +275,7 @@ MASK_ARRAYS = {
 
 def write_bytes(path: str | Path, data: bytes) -> None:
     """Write `data` to `path` atomically (see `atomic_write`)."""
-    with atomic_write(path) as f:
+    with out_of_memory_while(f"writing {path}"), atomic_write(path) as f:
         f.write(data)
 
 
@@ -362,18 +364,20 @@ def tar_bytes(members: list[tuple[str, bytes]]) -> bytes:
 
 def save_png(path: str | Path, image: np.ndarray) -> None:
     """Write an image: uint8 pixels as they are, float pixels as linear RGB encoded to sRGB."""
-    arr = np.asarray(image)
-    if np.issubdtype(arr.dtype, np.floating):
-        arr = encode_srgb(arr)
-    data = png_bytes(arr)
-    with atomic_write(path) as f:
-        f.write(data)
+    with out_of_memory_while(f"writing {path}"):
+        arr = np.asarray(image)
+        if np.issubdtype(arr.dtype, np.floating):
+            arr = encode_srgb(arr)
+        data = png_bytes(arr)
+        with atomic_write(path) as f:
+            f.write(data)
 
 
 def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
                arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> None:
     """Write a mask file (`masks_bytes`), atomically."""
-    write_bytes(path, masks_bytes(lit, coverage, arrays, light_samples))
+    with out_of_memory_while(f"writing {path}"):
+        write_bytes(path, masks_bytes(lit, coverage, arrays, light_samples))
 
 
 def load_masks(path: str | Path) -> tuple[np.ndarray, np.ndarray]:

@@ -189,8 +189,9 @@ def whitted(scene: Scene, written=("png",)) -> Estimate:
 
 def path_traced(scene: Scene, spp: int, written=("png",)) -> Estimate:
     """`raytrace.pathtrace.render`: the float64 sums and squares, then the mean, the variance
-    and their temporaries (6 x 24 B/px at the end), and the files written."""
-    per = {"sums, mean, variance (float64)": 6 * 24} | \
+    and their temporaries (6 x 24 B/px at the end; one more as the margin measured: the
+    tiles' results added into the sums), and the files written."""
+    per = {"sums, mean, variance (float64)": 7 * 24} | \
         _written(written, len(scene.lights), (), float64=True)
     fixed = {"tiles in flight": threads() * max(PATH_TILE_PATHS, scene.width * spp)
              * PATH_RAY_BYTES}
@@ -198,10 +199,11 @@ def path_traced(scene: Scene, spp: int, written=("png",)) -> Estimate:
                     _terms(scene.width * scene.height, per, fixed))
 
 
-def radiosity_display(scene: Scene, written=("png",)) -> Estimate:
+def radiosity_display(scene: Scene, written=("png",), flat: bool = False) -> Estimate:
     """`raytrace.radiosity.display`, untiled: every pixel's ray float64 (origin, direction,
-    their unit copy), the hits, the image and the barycentric blend's per-pixel arrays."""
-    per = {"rays (float64)": 3 * 24 + 8 + 8, "image float64": 24,
+    their unit copy), the hits, the image and the barycentric blend's per-pixel arrays; with
+    `flat` the interpolated image is kept while the flat one is made."""
+    per = {"rays (float64)": 3 * 24 + 8 + 8, "image float64": 24 * (1 + flat),
            # p, corners (3x3), e1, e2, q, 7 dot products, u v w, products, the mask arrays
            "barycentric blend": 24 + 72 + 72 + 72 + 56 + 24 + 72 + 32} | \
         _written(written, len(scene.lights), (), float64=True)
@@ -210,14 +212,21 @@ def radiosity_display(scene: Scene, written=("png",)) -> Estimate:
 
 
 def compare(scene: Scene, gl_in_host: bool = True) -> Estimate:
-    """`shadowvol compare`: the rasterizer's frame and the ray tracer's masks, both kept, and
-    the picture (the two images, the difference, float64 colours of one panel, its PNG)."""
+    """`shadowvol compare` (`shadowvol.compare.comparison`): the rasterizer's frame and one
+    float32 image per light (a list, then an array of them), the ray tracer's masks and one
+    float64 Whitted image per light (the same), and the picture: per light a row of three
+    uint8 panels (two sRGB encodings, the difference), the row, the joined rows, its PNG."""
+    L = max(len(scene.lights), 1)
+    px = scene.width * scene.height
     a = raster(scene, gl_in_host=gl_in_host, written=())
     b = ray_masks(scene, picture=False)
-    b = tuple((f"ray tracer: {n}", v) for n, v in b.terms if not n.startswith("writing"))
-    px = scene.width * scene.height
-    picture = (("picture (3 panels, float64 panel, PNG)", int((3 * 3 + 24 + 24 + 3 * PNG) * px)),)
-    return Estimate("shadowvol compare", scene.width, scene.height, a.terms + b + picture)
+    tiles = max(_tiles(scene.width, MASK_TILE_RAYS, MASK_RAY_BYTES, threads()),
+                _tiles(scene.width, WHITTED_TILE_RAYS, WHITTED_RAY_BYTES, threads()))
+    per = {"raster image per light": 2 * 12 * L, "ray-traced image per light": 2 * 24 * L,
+           "picture": L * (3 * 3 + 2 * 9 + 3 * PNG)}
+    terms = (a.terms + tuple((f"ray tracer: {n}", v) for n, v in b.terms
+                             if n.startswith("lit")) + _terms(px, per, {"tiles in flight": tiles}))
+    return Estimate("shadowvol compare", scene.width, scene.height, terms)
 
 
 # ---- the budget --------------------------------------------------------------------------------
@@ -274,3 +283,17 @@ def check(estimate: Estimate, limit: int | str | None = None, file: str | None =
                      f"{estimate.what} (model: {estimate.describe()}, + {size(BASE)} for the "
                      f"process), more than the memory budget of {size(allowed)} (set {ENV}, "
                      "e.g. 32GiB, or --memory-budget to change it)", file)
+
+
+def gl_in_host(renderer_name: str) -> bool:
+    """Whether a GL of this GL_RENDERER string keeps its frames in the process's memory (a
+    software renderer, `SOFTWARE_GL`)."""
+    return any(name in renderer_name.lower() for name in SOFTWARE_GL)
+
+
+def add_option(parser) -> None:
+    """The `--memory-budget SIZE` option of the commands that check one."""
+    parser.add_argument(
+        "--memory-budget", metavar="SIZE", default=None,
+        help=f"refuse an image whose estimated memory (shadowvol.memory) exceeds SIZE, e.g. "
+             f"12GiB (default: ${ENV}, else {DEFAULT_FRACTION * 100:.0f}%% of this machine's memory)")
