@@ -170,8 +170,9 @@ def ray_masks(scene: Scene, outputs=(), picture: bool = True) -> Estimate:
                             + (L + 1) * bool(truth)),
            # soft lights: lit_count uint16 and facing per light
            "lit_count": 3 * L if any(len(hard_lights(lt)) > 1 for lt in scene.lights) else 0,
-           # one panel per light and per output, RGB uint8, float64 colours of one panel
-           "picture": ((L + len(truth)) * 3 + 24 + PNG) if picture else 0}
+           # one RGB uint8 panel per light (and per output), the joined picture, its PNG;
+           # the outputs' heat maps colour one panel at a time in float64
+           "picture": ((L + len(truth)) * 3 * 2 + 24 * bool(truth) + PNG) if picture else 0}
     per |= _written(("masks",), L, truth, float64=False)
     fixed = {"tiles in flight": _tiles(scene.width, MASK_TILE_RAYS, MASK_RAY_BYTES, threads())}
     return Estimate("the ray tracer's masks", scene.width, scene.height,
