@@ -24,8 +24,8 @@ TABLE = (
     (OK, "success"),
     (OVER_BUDGET, "a comparison over its budget (compare --max-interior)"),
     (BAD_INPUT, "bad input: a scene file, a mesh, an argument, an output path, a scene beyond "
-                "the documented limits, or a missing optional extra (named with the pip "
-                "command that installs it)"),
+                "the documented limits or an image over the memory budget, or a missing "
+                "optional extra (named with the pip command that installs it)"),
     (RENDER_FAILED, "rendering failed: no usable EGL/OpenGL 4.5, a GL error, out of memory, a "
                     "stencil overflow"),
     (INTERRUPTED, "interrupted (Ctrl-C)"),
