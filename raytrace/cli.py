@@ -112,6 +112,7 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", metavar="PNG", default=None,
                    help="also draw the tree: the rays over the ray-traced image and a side view")
     _backend(t)
+    memory.add_option(t)
 
     e = sub.add_parser("exercise", help="a worked exercise of the course, printed and drawn",
                        description="Print the worked solution of one of the course's "
@@ -203,6 +204,8 @@ def _tree(args) -> int:
     if not (0 <= x < scene.width and 0 <= y < scene.height):
         raise SceneError("--pixel", f"{x} {y} is outside the {scene.width}x{scene.height} "
                                     "image")
+    if args.output:
+        memory.check(memory.whitted(scene), args.memory_budget, args.scene)
     tree = ray_tree(scene, x, y, max_depth=args.depth, backend=args.backend)
     print(format_tree(tree, scene))
     if args.output:

@@ -134,6 +134,8 @@ OVER_BUDGET = {  # command -> (argv, what must not run)
     "raytrace path": (["render", "S", "-o", "O/x.png", "--integrator", "path", "--spp", "4"],
                       (raytrace.pathtrace, "render")),
     "raytrace radiosity": (["radiosity", "S", "-o", "O/x.png"], (raytrace.radiosity, "solve")),
+    "raytrace tree": (["tree", "S", "--pixel", "3", "3", "-o", "O/x.png"],
+                      (raytrace.cli, "ray_tree")),
 }
 
 
