@@ -63,6 +63,11 @@ CASES = {  # name -> (tool, scene, argv, the model of it)
         "shadowvol", "stack.toml", ["render", "SCENE", "-o", "OUT.png", "--outputs", "all"],
         lambda s: memory.raster(s, ("image", "lit", "coverage") + EVERY,
                                 written=("png", "masks"))),
+    "shadowvol render, every file": (
+        "shadowvol", "stack.toml",
+        ["render", "SCENE", "-o", "OUT.png", "--stencil", "--volumes", "--exr", "--png16"],
+        lambda s: memory.raster(s, written=("png", "stencil", "volumes", "exr", "png16"),
+                                stencil=True, volumes=True)),
     "shadowvol compare": ("shadowvol", "stack.toml", ["compare", "SCENE", "-o", "OUT.png"],
                           lambda s: memory.compare(s)),
     "raytrace masks": ("raytrace", "cage.toml", ["masks", "SCENE", "-o", "OUT.npz"],
@@ -73,6 +78,10 @@ CASES = {  # name -> (tool, scene, argv, the model of it)
     "raytrace render (Whitted)": ("raytrace", "whitted.toml",
                                   ["render", "SCENE", "-o", "OUT.png", "--no-progress"],
                                   lambda s: memory.whitted(s)),
+    "raytrace render (Whitted), every file": (
+        "raytrace", "stack.toml", ["render", "SCENE", "-o", "OUT.png", "--exr", "OUT.exr",
+                                   "--png16", "OUT-16.png", "--no-progress"],
+        lambda s: memory.whitted(s, ("png", "exr", "png16"))),
     "raytrace render (path)": ("raytrace", "cornell.toml",
                                ["render", "SCENE", "-o", "OUT.png", "--integrator", "path",
                                 "--spp", "1", "--no-progress"],
