@@ -41,7 +41,9 @@ SOFTWARE_GL = ("llvmpipe", "softpipe", "swrast", "lavapipe")
 
 # rays traced together (raytrace.masks.MASK_TILE_RAYS, whitted.TILE_RAYS, pathtrace.TILE_PATHS;
 # a test checks they agree) and the bytes one ray's tile arrays take at their peak (the hit
-# records, the shading and shadow-ray arrays of a tile: counted from the code, rounded up)
+# records, the shading and shadow-ray arrays of a tile, a few dozen float64 values a ray):
+# bounds from the measured growth less the per-pixel terms (100-400 B a ray; Whitted on
+# scenes/whitted.toml at depth 5, glass and mirrors), rounded up
 MASK_TILE_RAYS, WHITTED_TILE_RAYS, PATH_TILE_PATHS = 1 << 15, 1 << 15, 1 << 16
 MASK_RAY_BYTES, WHITTED_RAY_BYTES, PATH_RAY_BYTES = 512, 1024, 512
 
@@ -96,6 +98,7 @@ def _tiles(width: int, tile_rays: int, ray_bytes: int, threads: int) -> int:
 
 
 def threads() -> int:
+    """The ray tracer's threads: one per core this process may use."""
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                else os.cpu_count() or 1)
 
@@ -137,7 +140,8 @@ def raster(scene: Scene, outputs=("image", "lit", "coverage"), *, gl_in_host: bo
     if stencil:
         t["stencil counts"] = 4 * L + 4
     if volumes:
-        t["volume view"] = 16 + 12 + GL_FRAME_BYTES_PER_PIXEL * 0 + 12
+        # its frame's image, the RGBA read (a copy of the staging), its RGB copy
+        t["volume view"] = 12 + 16 + 12
     t |= _written(written, L, truth, float64=False, stencil=stencil)
     return Estimate("the rasterizer", scene.width, scene.height,
                     _terms(scene.width * scene.height, t))
