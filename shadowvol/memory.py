@@ -73,8 +73,8 @@ class Estimate:
         """The model in words: bytes per pixel of each term, biggest first."""
         px = self.width * self.height
         parts = sorted((t for t in self.terms if t[1]), key=lambda t: -t[1])
-        text = ", ".join(f"{name} {b / px:.0f} B/px" if b >= px else f"{name} {size(b)}"
-                         for name, b in parts[:4])
+        text = ", ".join(f"{name} {size(b)}" if "tiles" in name else f"{name} {b / px:.0f} B/px"
+                         for name, b in parts[:4])  # the tiles do not grow with the image
         return text + (f", {len(parts) - 4} more" if len(parts) > 4 else "")
 
 
