@@ -272,6 +272,7 @@ class Renderer:
                                                    "lit_count and Renderer.facing")
         want_stencil = "stencil" in outputs
         vols = self.volumes(silhouettes)
+        vols.new_frame()
         progs, target = self.programs, self.target
         view_proj = view_projection(camera, self.scene.aspect)
         passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
