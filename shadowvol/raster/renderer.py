@@ -337,11 +337,14 @@ class Renderer:
         lit = lit_count = None
         if "lit" in outputs:
             lit_count = np.zeros((len(lights), h, w), np.uint16)
-            one = np.empty((h, w), bool)
+            # each light's samples in a page are neighbouring bits: one count of the set bits
+            # per light and page, not one pass per sample
+            masks: dict[tuple[int, int], int] = {}
             for k, (i, _) in enumerate(hard):
                 page, bit = divmod(k, LIGHTS_PER_PAGE)
-                np.not_equal(pages[page] & np.uint32(1 << (bit + 1)), 0, out=one)
-                lit_count[i] += one
+                masks[i, page] = masks.get((i, page), 0) | 1 << (bit + 1)
+            for (i, page), mask in masks.items():
+                lit_count[i] += _bit_count(pages[page] & np.uint32(mask))
             lit = lit_count == samples[:, None, None]
         extra = self._ground_truth(outputs, camera, lights, truth_pages, zfail, vols,
                                    method, clip, want_stencil)
@@ -451,6 +454,19 @@ class Renderer:
 
     def __exit__(self, *exc) -> None:
         self.release()
+
+
+# set bits of every byte (numpy < 2 has no bitwise_count)
+_BYTE_BITS = np.unpackbits(np.arange(256, dtype=np.uint8)[:, None], axis=1).sum(axis=1,
+                                                                                dtype=np.uint8)
+
+
+def _bit_count(x: np.ndarray) -> np.ndarray:
+    """(H, W) uint32 -> (H, W) uint8: how many bits of each are set."""
+    if hasattr(np, "bitwise_count"):
+        return np.bitwise_count(x)
+    b = _BYTE_BITS[np.ascontiguousarray(x).view(np.uint8)].reshape(*x.shape, 4)
+    return b.sum(axis=-1, dtype=np.uint8)
 
 
 def _check_outputs(outputs, stencil: bool) -> set[str]:

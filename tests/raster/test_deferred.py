@@ -267,3 +267,17 @@ def test_one_area_light_gives_the_same_frame_every_time(ctx, samples):
         np.testing.assert_array_equal(f.lit_count[0], alone)
         np.testing.assert_array_equal(f.image, frames[0].image)
     assert 0 < frames[0].lit_count.max() and (frames[0].penumbra.any())
+
+
+@pytest.mark.parametrize("numpy_has_it", [True, False])
+def test_bit_count_counts_set_bits(monkeypatch, numpy_has_it):
+    """An area light's lit count is the set bits of its samples in a page (`_bit_count`, with
+    numpy's bitwise_count or the byte table where numpy has none)."""
+    from shadowvol.raster import renderer
+    if not numpy_has_it:
+        monkeypatch.delattr(np, "bitwise_count", raising=False)
+    rng = np.random.default_rng(0)
+    x = rng.integers(0, 2 ** 32, (37, 53), dtype=np.uint64).astype(np.uint32)
+    x[0, :3] = (0, 2 ** 32 - 1, 2 ** 31)
+    expected = np.array([bin(int(v)).count("1") for v in x.ravel()]).reshape(x.shape)
+    np.testing.assert_array_equal(renderer._bit_count(x), expected)
