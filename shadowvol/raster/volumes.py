@@ -77,18 +77,20 @@ class _LightVolumes:
 class CpuVolumes:
     """Shadow volumes from CPU silhouettes.  Programs are made here; call `release()`.
 
-    The volumes of the lights in use are kept (keyed by the homogeneous light), up to
-    `KEPT_BYTES` of signs, side-quad and cap buffers: the scene's casters never move, so a light
-    that comes back (every sample of an area light in every frame, a light in the next camera
-    of a turntable) reuses its side quads and cap lists as they were uploaded.  The least
-    recently used go first, but never one used since `new_frame()`: a frame whose lights need
-    more than `KEPT_BYTES` (many samples of a large scene) keeps those it prepared first and
-    rebuilds only the others in every frame, where plain LRU over a cycle longer than the
-    cache would rebuild all of them."""
+    The volumes of the lights in use are kept (keyed by the homogeneous light): the scene's
+    casters never move, so a light that comes back (every sample of an area light in every
+    frame, a light in the next camera of a turntable) reuses its side quads and cap lists as
+    they were uploaded.  Kept: every light of this frame and the last (`new_frame()` starts a
+    frame) and the most recent others within `KEPT_OLDER_BYTES` (what a moving light leaves
+    behind), all within `KEPT_BYTES` of signs, side-quad and cap buffers.  Over the bytes the least
+    recently used go first, but never one this frame has used: a frame whose lights need more
+    (many samples of a large scene) keeps those it prepared first and rebuilds only the others
+    in every frame, where plain LRU over a cycle longer than the cache would rebuild all."""
 
     # one light holds about 3 bytes per triangle (signs, side quads); 64 samples of a million
     # triangles fit, and z-fail cap lists (12 bytes per capped triangle) for some of them
     KEPT_BYTES = 256 << 20
+    KEPT_OLDER_BYTES = 32 << 20
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
@@ -140,7 +142,17 @@ class CpuVolumes:
     def _fit(self) -> None:
         """Release the least recently used volumes until the kept ones fit in KEPT_BYTES,
         sparing this frame's; if they alone do not fit, the current one is not kept (it is
-        released at the next `prepare`)."""
+        released at the next `prepare`).  Before that, of the lights used in neither this
+        frame nor the last, the least recently used go until the rest fit in
+        KEPT_OLDER_BYTES."""
+        older = [k for k, v in self._kept.items() if v.frame < self._frame - 1]
+        total = sum(self._kept[k].nbytes for k in older)
+        for key in older:   # oldest first
+            if total <= self.KEPT_OLDER_BYTES:
+                break
+            old = self._kept.pop(key)
+            total -= old.nbytes
+            old.release()
         total = sum(v.nbytes for v in self._kept.values())
         for key in list(self._kept):   # oldest first; this frame's come last
             if total <= self.KEPT_BYTES:

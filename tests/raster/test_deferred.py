@@ -203,6 +203,26 @@ def test_kept_volumes_fit_in_their_budget(ctx):
         assert list(vols._kept) == [x.tobytes() for x in lights[-3:]]
 
 
+def test_a_moving_light_leaves_little_behind(ctx):
+    """A light that moves every frame: the last two frames' volumes are kept, and of the older
+    ones only the most recent within KEPT_OLDER_BYTES."""
+    scene = scene_of(0, lights=1)
+    lights = [np.array([0.5 * k, 7.0, 1.0, 1.0]) for k in range(11)]
+    with Renderer(scene, ctx) as r:
+        vols = r.volumes("cpu")
+        vols.prepare(lights[0])
+        one = vols._current.nbytes
+        vols.KEPT_OLDER_BYTES = 2 * one + one // 2
+        for light4 in lights:
+            vols.new_frame()
+            vols.prepare(light4)
+        assert list(vols._kept) == [x.tobytes() for x in lights[-4:]]
+        vols.KEPT_OLDER_BYTES = 0
+        vols.new_frame()
+        vols.prepare(lights[0])        # this frame's and the last frame's light stay
+        assert list(vols._kept) == [lights[-1].tobytes(), lights[0].tobytes()]
+
+
 def test_a_frame_over_the_budget_keeps_its_first_lights(ctx, monkeypatch):
     scene = scene_of(0, lights=1)
     lights = [np.array([0.5 * k, 7.0, 1.0, 1.0]) for k in range(5)]
