@@ -82,10 +82,10 @@ class CpuVolumes:
     frame, a light in the next camera of a turntable) reuses its side quads and cap lists as
     they were uploaded.  Kept: every light of this frame and the last (`new_frame()` starts a
     frame) and the most recent others within `KEPT_OLDER_BYTES` (what a moving light leaves
-    behind), all within `KEPT_BYTES` of signs, side-quad and cap buffers.  Over the bytes the least
-    recently used go first, but never one this frame has used: a frame whose lights need more
-    (many samples of a large scene) keeps those it prepared first and rebuilds only the others
-    in every frame, where plain LRU over a cycle longer than the cache would rebuild all."""
+    behind), all within `KEPT_BYTES` of signs, side-quad and cap buffers.  Over the bytes the
+    least recently used go first, but never one this frame has used: a frame whose lights need
+    more (many samples of a large scene) keeps those it prepared first and rebuilds only the
+    others in every frame, where plain LRU over a cycle longer than the cache rebuilds all."""
 
     # one light holds about 3 bytes per triangle (signs, side quads); 64 samples of a million
     # triangles fit, and z-fail cap lists (12 bytes per capped triangle) for some of them
@@ -145,7 +145,8 @@ class CpuVolumes:
         released at the next `prepare`).  Before that, of the lights used in neither this
         frame nor the last, the least recently used go until the rest fit in
         KEPT_OLDER_BYTES."""
-        older = [k for k, v in self._kept.items() if v.frame < self._frame - 1]
+        older = [k for k, v in self._kept.items()
+                 if v.frame < self._frame - 1 and v is not self._current]
         total = sum(self._kept[k].nbytes for k in older)
         for key in older:   # oldest first
             if total <= self.KEPT_OLDER_BYTES:
