@@ -112,6 +112,9 @@ class Renderer:
     context too if the renderer created it.
     """
 
+    # stencil-overflow bounds (`overflow.light_bound`, 0.1-0.6 s each) computed in one frame
+    BOUNDS_PER_FRAME = 1
+
     def __init__(self, scene: Scene, ctx: moderngl.Context | None = None):
         self.scene = scene
         self._own_ctx = ctx is None
@@ -197,7 +200,10 @@ class Renderer:
         A light's bound costs more than one re-check (0.1-0.6 s), so it is computed the second
         time the light is used, with twice the slack this camera needs, and kept while later
         cameras need no more slack.  An area light's samples are lights of their own here: a
-        sample's position never changes, so its bound is kept like a point light's."""
+        sample's position never changes, so its bound is kept like a point light's.  At most
+        `BOUNDS_PER_FRAME` bounds are computed in one frame (the others are re-checked until
+        their turn comes), so no frame pays for 16 or 64 samples' bounds at once: a frame costs
+        at most one bound more than its re-checks."""
         if not self.check_overflow or self.count_bound < overflow.STENCIL_LIMIT:
             return []
         camera = self.scene.camera if camera is None else camera
@@ -208,6 +214,7 @@ class Renderer:
             self._slack = (key, overflow.world_slack(camera, self.scene.height, corners))
         needed = self._slack[1]
         doubled = None   # one (M,) array shared by the bounds computed in this frame
+        computed = 0
         out = []
         for i, light in enumerate(lights):
             for k, hard in enumerate(hard_lights(light)):
@@ -218,6 +225,10 @@ class Renderer:
                     continue
                 kept = self._light_bounds[key]
                 if kept is None or not (needed <= kept[0]).all():
+                    if computed == self.BOUNDS_PER_FRAME:   # later: re-check it meanwhile
+                        out.append((i, k))
+                        continue
+                    computed += 1
                     doubled = 2.0 * needed if doubled is None else doubled
                     kept = (doubled, overflow.light_bound(corners, self.geometry.object_of,
                                                           self.convex, hard.homogeneous,

@@ -240,21 +240,26 @@ def _area(samples: int = 4) -> AreaLight:
 
 def test_an_area_lights_samples_keep_their_light_bounds(ctx, monkeypatch):
     """The shallow stack of strips under a 4-sample rect light: the first frame re-checks
-    every sample, the second computes each sample's `light_bound` (10 layers: far below 256)
-    and re-checks none, nor does the third; the counts are the same every time."""
+    every sample; each later frame computes one sample's `light_bound` (10 layers: far below
+    256; `Renderer.BOUNDS_PER_FRAME`) and re-checks the samples still without one, so the
+    frames re-check 4, 3, 2, 1, then none; the counts are the same every time."""
     scene = strip_stack().replace(lights=[_area()])
     calls = []
     original = overflow.find_wrapped
     monkeypatch.setattr(overflow, "find_wrapped",
                         lambda *a, **k: calls.append(1) or original(*a, **k))
+    rechecked = []
     with Renderer(scene, ctx) as r:
-        assert r.count_bound >= 256
+        assert r.count_bound >= 256 and r.BOUNDS_PER_FRAME == 1
         first = r.render()
-        assert len(calls) == 4
-        frames = [r.render() for _ in range(2)]
+        rechecked.append(len(calls))
+        frames = []
+        for _ in range(5):
+            frames.append(r.render())
+            rechecked.append(len(calls) - sum(rechecked))
         assert len(r._light_bounds) == 4
         assert all(kept[1] < 256 for kept in r._light_bounds.values())
-    assert len(calls) == 4
+    assert rechecked == [4, 3, 2, 1, 0, 0]
     assert 0 < first.penumbra.sum() and (first.lit_count == 0).any()
     for frame in frames:
         np.testing.assert_array_equal(frame.lit_count, first.lit_count)
@@ -262,10 +267,11 @@ def test_an_area_lights_samples_keep_their_light_bounds(ctx, monkeypatch):
 
 def test_an_area_light_over_256_sheets_raises_in_every_frame(ctx):
     """256 sheets under a 4-sample rect light: every sample's bound reaches 256, so the
-    per-sample bounds kept from the second frame on still leave every sample re-checked."""
+    per-sample bounds (one more each frame from the second on) still leave every sample
+    re-checked."""
     scene = stack(256).replace(lights=[_area()])
     with Renderer(scene, ctx) as r:
-        for _ in range(3):
+        for _ in range(1 + 4 * r.BOUNDS_PER_FRAME):
             with pytest.raises(overflow.StencilOverflowError, match="light 0"):
                 r.render()
         assert len(r._light_bounds) == 4
