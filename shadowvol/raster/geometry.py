@@ -10,7 +10,11 @@ The soup's other per-vertex attributes (normal, first corner, object: the GPU ca
 planar shadows' forward passes) are built on first use, one buffer each.
 
 float32 is used on the GPU because that is what GL rasterizes; normals and corners are computed
-in float64 and rounded once.  Edge topology (CPU, float64) is computed here too, once per object.
+in float64 and rounded once, positions in the float32 frame of the eye (`projection.to_frame`:
+float64 world minus `origin`, the ray tracer's frame too).  When a frame's eye moves, `move_to`
+rewrites the buffers that hold positions (the soup's positions and first corners, the
+per-triangle data) in place; normals, objects and the float64 world corners and topology stay.
+Edge topology (CPU, float64, world space) is computed here too, once per object.
 """
 
 from __future__ import annotations
@@ -20,11 +24,13 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
+from shadowvol.cameras import frame_origin
 from shadowvol.errors import RenderError
+from shadowvol.raster.projection import to_frame
 from shadowvol.raster.topology import Topology
+from shadowvol.scene import Scene
 
 MAX_TRIANGLES = 2 ** 24  # the G-buffer's surface key is a float32 integer (target.py)
-from shadowvol.scene import Scene
 
 
 @dataclass(frozen=True)
@@ -36,15 +42,22 @@ class ObjectRange:
     count: int
 
 
+# the soup's attributes that hold positions, rewritten when the frame moves
+_FRAMED = ("in_position", "in_corner")
+
+
 class SceneGeometry:
     """GPU buffers of a scene's triangles plus each object's topology.  Call `release()`.
 
-    bounds : (n_objects, 2, 3) float64 axis-aligned box (min, max) of each object
+    bounds : (n_objects, 2, 3) float64 axis-aligned box (min, max) of each object (world)
     extent : float, the scene's length scale (`Scene.extent`)
+    origin : (3,) float64, the world point the GPU's positions are measured from (`move_to`)
     """
 
     def __init__(self, ctx: moderngl.Context, scene: Scene):
         self.ctx = ctx
+        self.origin = frame_origin(scene.camera)
+        self.moves = 0   # how many times `move_to` rewrote the buffers (their version)
         tris = [o.triangles for o in scene.objects]                       # (m, 3, 3) each
         corners = np.concatenate(tris)                                    # (M, 3, 3) float64
         self._corners = corners
@@ -76,7 +89,8 @@ class SceneGeometry:
         per_triangle = np.zeros((self.triangle_count, 2, 4), np.float32)
         per_triangle[:, 0, :3] = normals
         per_triangle[:, 0, 3] = np.repeat(np.arange(len(tris)), counts)
-        per_triangle[:, 1, :3] = corners[:, 0]
+        per_triangle[:, 1, :3] = to_frame(corners[:, 0], self.origin)
+        self._per_triangle = per_triangle
         self.triangle_data = self._buffer(per_triangle)
         materials = np.zeros((len(scene.objects), 3, 4), np.float32)
         for i, o in enumerate(scene.objects):
@@ -94,18 +108,37 @@ class SceneGeometry:
     def _soup_buffer(self, name: str) -> moderngl.Buffer:
         """The soup's attribute `name`, uploaded on first use."""
         if name not in self._soup:
-            corners = self._corners
-            if name == "in_position":
-                data = corners.reshape(-1, 3).astype(np.float32)
+            if name in _FRAMED:
+                data = self._framed(name)
             elif name == "in_normal":
                 data = np.repeat(self._normals, 3, axis=0).astype(np.float32)
-            elif name == "in_corner":
-                data = np.repeat(corners[:, 0], 3, axis=0).astype(np.float32)
             else:
                 data = np.repeat(np.arange(len(self.ranges), dtype=np.int32),
                                  [3 * r.count for r in self.ranges])
             self._soup[name] = self._buffer(data)
         return self._soup[name]
+
+    def _framed(self, name: str) -> np.ndarray:
+        """The soup attribute `name` (one of _FRAMED) in the current frame, float32."""
+        if name == "in_position":
+            return to_frame(self._corners.reshape(-1, 3), self.origin)
+        return np.repeat(to_frame(self._corners[:, 0], self.origin), 3, axis=0)
+
+    def move_to(self, origin: np.ndarray) -> bool:
+        """Express the GPU's positions in the frame of `origin` (3,) float64 (a frame's
+        `frame_origin`), rewriting the buffers that hold positions if it moved.  Returns
+        whether it moved.  Volumes check `moves` and rewrite their own buffers on use."""
+        origin = np.asarray(origin, np.float64)
+        if np.array_equal(origin, self.origin):
+            return False
+        self.origin = origin.copy()
+        self.moves += 1
+        for name, buf in self._soup.items():
+            if name in _FRAMED:
+                buf.write(np.ascontiguousarray(self._framed(name)).tobytes())
+        self._per_triangle[:, 1, :3] = to_frame(self._corners[:, 0], origin)
+        self.triangle_data.write(self._per_triangle.tobytes())
+        return True
 
     @property
     def positions(self) -> moderngl.Buffer:
@@ -114,7 +147,7 @@ class SceneGeometry:
 
     @property
     def soup_corners_f64(self) -> np.ndarray:
-        """(M, 3, 3) float64: every triangle's corners, objects one after another."""
+        """(M, 3, 3) float64: every triangle's world corners, objects one after another."""
         return self._corners
 
     @property
@@ -123,8 +156,9 @@ class SceneGeometry:
         return np.repeat(np.arange(len(self.ranges)), [r.count for r in self.ranges])
 
     def soup_corners(self) -> np.ndarray:
-        """(M, 3, 3) float32: the corners of every soup triangle, exactly as uploaded."""
-        return self._corners.astype(np.float32)
+        """(M, 3, 3) float32: the corners of every soup triangle in the current frame, exactly
+        as uploaded."""
+        return to_frame(self._corners, self.origin)
 
     def soup_bindings(self, program: moderngl.Program) -> list[tuple]:
         """The (buffer, format, name) triples of the soup's attributes that `program` uses."""

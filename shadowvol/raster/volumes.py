@@ -34,6 +34,7 @@ import numpy as np
 
 from shadowvol.raster import glsl
 from shadowvol.raster.geometry import SceneGeometry
+from shadowvol.raster.projection import in_frame, to_frame
 from shadowvol.raster.silhouettes import (
     edge_multiplicity,
     quads_to_triangles,
@@ -54,6 +55,8 @@ class _LightVolumes:
     def __init__(self):
         self.signs: list[np.ndarray] = []                         # per object
         self.sides: dict[int, tuple[int, int, int]] = {}          # object -> (first, n, repeat)
+        self.corners: np.ndarray | None = None   # (n, 4) float64 world side triangles' corners
+        self.moves = -1                          # the geometry's `moves` the buffer is in
         self.buffer: moderngl.Buffer | None = None
         self.vaos: dict[bool, moderngl.VertexArray] = {}          # clipped? -> vao
         self.caps: dict[tuple[int, int], tuple[int, int]] = {}    # (object, sign) -> (first, n)
@@ -73,7 +76,9 @@ class CpuVolumes:
 
     The volumes of the last `KEPT_LIGHTS` lights are kept (keyed by the homogeneous light):
     the scene's casters never move, so a light that comes back, in the next frame or the next
-    camera of a turntable, reuses its side quads and cap lists as they were uploaded."""
+    camera of a turntable, reuses its side quads and cap lists.  They are kept in float64 world
+    space; when the frame moves (`SceneGeometry.move_to`) the kept buffer is rewritten in the
+    new frame on its next `prepare`, nothing recomputed."""
 
     KEPT_LIGHTS = 8
 
@@ -105,13 +110,16 @@ class CpuVolumes:
         programs."""
         light4 = np.asarray(light4, np.float64)
         self.light4 = light4
-        _set_light(self.programs, light4)
+        _set_light(self.programs, light4, self.geometry.origin)
         key = light4.tobytes()
         kept = self._kept.pop(key, None)
         if kept is None:
             kept = self._build(light4)
             while len(self._kept) >= self.KEPT_LIGHTS:
                 self._kept.pop(next(iter(self._kept))).release()
+        elif kept.moves != self.geometry.moves and len(kept.corners):
+            kept.buffer.write(self._framed(kept.corners).tobytes())
+        kept.moves = self.geometry.moves
         self._kept[key] = kept
         self._current = kept
 
@@ -131,14 +139,20 @@ class CpuVolumes:
             sides.append(tris)
             out.sides[rng.index] = (n_side, len(tris), repeat)
             n_side += len(tris)
-        # float32 at upload: what GL draws; the quads were built in float64 from the welded
-        # positions, which are the drawn vertices exactly, so edges meet the caps exactly
-        data = np.concatenate(sides).astype(np.float32)
+        # float32 at upload, in the frame: what GL draws; the quads were built in float64 from
+        # the welded positions, which minus the origin round to the drawn vertices exactly, so
+        # edges meet the caps exactly
+        out.corners = np.concatenate(sides)
+        data = self._framed(out.corners)
         out.buffer = self.ctx.buffer(data.tobytes() if len(data) else b"\0" * 16)
         out.vaos = {clipped: self.ctx.vertex_array(program, [(out.buffer, "4f", "in_position")])
                     for clipped, program in ((False, self.side_program),
                                              (True, self.clip_program))}
         return out
+
+    def _framed(self, corners: np.ndarray) -> np.ndarray:
+        """(n, 4) float64 world homogeneous corners -> float32 in the geometry's frame."""
+        return np.ascontiguousarray(in_frame(corners, self.geometry.origin), np.float32)
 
     def _prepare_caps(self, objects: tuple[int, ...]) -> None:
         """Upload the cap index lists (the soup vertices of the triangles of each sign) of
@@ -244,32 +258,43 @@ class GpuVolumes:
         self.programs = (self.edge_program, self.clip_program, self.near_program,
                          self.far_program)
         # every soup vertex also carries its triangle's other two corners (float32, as drawn)
-        corners = geometry.soup_corners()                                # (M, 3, 3)
-        self.corner_buffers = [ctx.buffer(np.repeat(corners[:, k], 3, axis=0).tobytes())
-                               for k in (1, 2)]
+        self.corner_buffers = [ctx.buffer(data.tobytes()) for data in self._corner_data()]
         cap_bindings = [(self.corner_buffers[0], "3f", "in_corner1"),
                         (self.corner_buffers[1], "3f", "in_corner2")]
         self.near_vao = ctx.vertex_array(
             self.near_program, geometry.soup_bindings(self.near_program) + cap_bindings)
         self.far_vao = ctx.vertex_array(
             self.far_program, geometry.soup_bindings(self.far_program) + cap_bindings)
-        records, self._records = [], {}
+        self._records = {}
         n = 0
         for rng, topo in zip(geometry.ranges, geometry.topologies):
-            rec = edge_records(topo)
-            records.append(rec)
-            self._records[rng.index] = (n, len(rec))
-            n += len(rec)
-        self.edge_buffer = ctx.buffer(np.concatenate(records).tobytes())
+            count = len(edge_records(topo, geometry.origin, counts_only=True))
+            self._records[rng.index] = (n, count)
+            n += count
+        self.edge_buffer = ctx.buffer(self._edge_data().tobytes())
+        self._moves = geometry.moves
         self.edge_vao, self.clip_vao = (ctx.vertex_array(program, [
             (self.edge_buffer, "3f 3f 3f 3f 3f 3f 1i", "in_a", "in_b", "in_c0", "in_c1",
              "in_c2", "in_c3", "in_count")]) for program in (self.edge_program,
                                                              self.clip_program))
         self.light4 = None
 
+    def _corner_data(self) -> list[np.ndarray]:
+        corners = self.geometry.soup_corners()                           # (M, 3, 3) float32
+        return [np.repeat(corners[:, k], 3, axis=0) for k in (1, 2)]
+
+    def _edge_data(self) -> np.ndarray:
+        return np.concatenate([edge_records(topo, self.geometry.origin)
+                               for topo in self.geometry.topologies])
+
     def prepare(self, light4: np.ndarray) -> None:
         self.light4 = light4  # everything else happens in the shaders
-        _set_light(self.programs, light4)
+        _set_light(self.programs, light4, self.geometry.origin)
+        if self._moves != self.geometry.moves:   # the frame moved: positions in the new one
+            for buf, data in zip(self.corner_buffers, self._corner_data()):
+                buf.write(data.tobytes())
+            self.edge_buffer.write(self._edge_data().tobytes())
+            self._moves = self.geometry.moves
 
     def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
         """Draw the side quads of `objects`; `clipped` as in `CpuVolumes.draw_sides`.  `halve`
@@ -308,9 +333,12 @@ EDGE_RECORD = np.dtype([("a", "<f4", 3), ("b", "<f4", 3), ("c", "<f4", (MAX_OPPO
                         ("count", "<i4")])
 
 
-def edge_records(topo) -> np.ndarray:
-    """(r,) EDGE_RECORD: every edge with its opposite vertices, MAX_OPPOSITE per record; an
-    edge on n triangles takes ceil(n / MAX_OPPOSITE) records (multiplicity is additive)."""
+def edge_records(topo, origin: np.ndarray | None = None, counts_only: bool = False
+                 ) -> np.ndarray:
+    """(r,) EDGE_RECORD: every edge with its opposite vertices, MAX_OPPOSITE per record, in the
+    frame of `origin` (3,) float64 (default: world space); an edge on n triangles takes ceil(n / MAX_OPPOSITE) records
+    (multiplicity is additive).  `counts_only`: the records' count is right, not their
+    positions (cheap)."""
     per_edge = topo.triangles_per_edge                                  # (e,)
     n_rec = -(-per_edge // MAX_OPPOSITE)
     rec_first = np.concatenate([[0], np.cumsum(n_rec)[:-1]])
@@ -319,14 +347,19 @@ def edge_records(topo) -> np.ndarray:
     rec = rec_first[topo.inc_edge] + rank // MAX_OPPOSITE
     out = np.zeros(int(n_rec.sum()), EDGE_RECORD)
     rec_edge = np.repeat(np.arange(len(per_edge)), n_rec)
-    out["a"] = topo.vertices[topo.edges[rec_edge, 0]]
-    out["b"] = topo.vertices[topo.edges[rec_edge, 1]]
-    out["c"][rec, rank % MAX_OPPOSITE] = topo.vertices[topo.inc_opposite]
     out["count"] = np.bincount(rec, minlength=len(out))
+    if counts_only:
+        return out
+    vertices = to_frame(topo.vertices, np.zeros(3) if origin is None else origin)
+    out["a"] = vertices[topo.edges[rec_edge, 0]]
+    out["b"] = vertices[topo.edges[rec_edge, 1]]
+    out["c"][rec, rank % MAX_OPPOSITE] = vertices[topo.inc_opposite]
     return out
 
 
-def _set_light(programs, light4: np.ndarray) -> None:
-    """The one place `u_light` of the volume programs is set: by the builder that holds it."""
+def _set_light(programs, light4: np.ndarray, origin: np.ndarray) -> None:
+    """The one place `u_light` of the volume programs is set: by the builder that holds it,
+    in the frame of `origin`."""
+    light = in_frame(light4, origin)
     for p in programs:
-        glsl.set_uniform(p, "u_light", tuple(float(x) for x in light4))
+        glsl.set_uniform(p, "u_light", tuple(float(x) for x in light))
