@@ -125,10 +125,10 @@ def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, s
         ends = np.concatenate([change, [len(ranges)]])
         runs = [(int(a), int(b), bool(cull[a])) for a, b in zip(starts, ends)]
     for a, b, culled in runs:
-        first = ranges[a].first
-        count = ranges[b - 1].first + ranges[b - 1].count - first
         ctx.enable_only(moderngl.DEPTH_TEST | (moderngl.CULL_FACE if culled else 0))
-        progs.gbuffer_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
+        # the soup but the huge triangles, then their pieces (`SceneGeometry.set_view`)
+        for first, count in progs.geometry.spans(range(a, b)):
+            progs.gbuffer_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
     ctx.enable_only(moderngl.DEPTH_TEST)
     target.use()
 
@@ -238,7 +238,8 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
     set_uniform(progs.ambient, "u_ambient", tuple(float(x) for x in scene.ambient))
     progs.geometry.materials.use(0)
     set_uniform(progs.ambient, "u_materials", 0)
-    progs.ambient_vao.render(moderngl.TRIANGLES)
+    # the soup's own triangles (the buffers may hold pieces of huge ones after them)
+    progs.ambient_vao.render(moderngl.TRIANGLES, vertices=3 * progs.geometry.triangle_count)
 
 
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
@@ -321,7 +322,7 @@ def add_light(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: S
     progs.geometry.materials.use(0)
     set_uniform(progs.phong, "u_materials", 0)
     with stencil_test(gl):
-        progs.phong_vao.render(moderngl.TRIANGLES)
+        progs.phong_vao.render(moderngl.TRIANGLES, vertices=3 * progs.geometry.triangle_count)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     target.use()

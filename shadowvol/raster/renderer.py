@@ -277,6 +277,7 @@ class Renderer:
         # tracer's frame for the same camera: the geometry is re-expressed when the eye moves
         view_proj, origin = frame_view_projection(camera, self.scene.aspect)
         self.geometry.move_to(origin)
+        self.geometry.set_view(view_proj, camera.near)   # huge triangles cut (`guard`)
         passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera, origin)
         cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
                                 self.geometry.extent) if self.cull_back_faces else None
@@ -383,6 +384,7 @@ class Renderer:
         triangle = front = world = None
         if want & {"normal", "object_id", "casters"}:
             triangle, front, world = truth.read_surface(self.target, covered)
+            triangle = self.geometry.triangle_of_key(triangle)   # a piece's key: its triangle
             out |= truth.surface_outputs(self.geometry, triangle, front, want)
         if "facing" in want:
             lit = np.zeros((len(lights), h, w), bool)

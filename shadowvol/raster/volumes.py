@@ -59,8 +59,9 @@ class _LightVolumes:
         self.moves = -1                          # the geometry's `moves` the buffer is in
         self.buffer: moderngl.Buffer | None = None
         self.vaos: dict[bool, moderngl.VertexArray] = {}          # clipped? -> vao
-        self.caps: dict[tuple[int, int], tuple[int, int]] = {}    # (object, sign) -> (first, n)
+        self.caps: dict[tuple, tuple[int, int]] = {}  # (object, sign, near) -> (first, n)
         self.capped: tuple[int, ...] | None = None                # objects in the index buffer
+        self.cuts = -1                                            # the geometry's cuts then
         self.index_buffer: moderngl.Buffer | None = None
         self.cap_vaos: dict[bool, moderngl.VertexArray] = {}      # near? -> vao
 
@@ -158,18 +159,28 @@ class CpuVolumes:
         """Upload the cap index lists (the soup vertices of the triangles of each sign) of
         `objects` for the prepared light."""
         cur = self._current
-        if cur.capped == objects:
+        if cur.capped == objects and cur.cuts == self.geometry.cuts:
             return
         indices, n_index = [], 0
         cur.caps.clear()
-        for sign in (1, -1):   # each sign's lists one after another: one draw per sign
-            for i in objects:
-                rng = self.geometry.ranges[i]
-                t = np.flatnonzero(cur.signs[i] == sign) + rng.first
-                idx = (3 * t[:, None] + np.arange(3)).reshape(-1)
-                indices.append(idx)
-                cur.caps[i, sign] = (n_index, len(idx))
-                n_index += len(idx)
+        geometry = self.geometry
+        # near caps: a huge triangle's pieces in its place (`SceneGeometry.set_view`), as the
+        # geometry pass drew them, for the tie; far caps: the whole triangle, whose projection
+        # from the light the pieces' is not.  (The part of the near cap left out meets no view
+        # ray: the counts at every pixel are those of the closed volume.)  Without huge
+        # triangles both use the same lists.
+        for near in (True, False) if len(geometry.holes) else (True,):
+            for sign in (1, -1):   # each sign's lists one after another: one draw per sign
+                for i in objects:
+                    t = np.flatnonzero(cur.signs[i] == sign) + geometry.ranges[i].first
+                    if near:
+                        t = geometry.pieces_of(t)
+                    idx = (3 * t[:, None] + np.arange(3)).reshape(-1)
+                    indices.append(idx)
+                    cur.caps[i, sign, near] = (n_index, len(idx))
+                    n_index += len(idx)
+        if not len(geometry.holes):
+            cur.caps.update({(i, sign, False): v for (i, sign, _), v in list(cur.caps.items())})
         data = np.concatenate(indices).astype(np.int32)
         for vao in cur.cap_vaos.values():
             vao.release()
@@ -181,6 +192,7 @@ class CpuVolumes:
             index_element_size=4) for near, program in ((True, self.near_program),
                                                         (False, self.far_program))}
         cur.capped = objects
+        cur.cuts = self.geometry.cuts
 
     def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
         """Draw the side quads of `objects`.  `clipped`: with the program that writes the
@@ -218,7 +230,7 @@ class CpuVolumes:
         vao = cur.cap_vaos[near]
         for sign in (1, -1):
             self.ctx.front_face = _FRONT_FACE[near, sign]
-            for first, count in _runs(cur.caps[i, sign] for i in objects):
+            for first, count in _runs(cur.caps[i, sign, near] for i in objects):
                 vao.render(moderngl.TRIANGLES, vertices=count, first=first)
         self.ctx.front_face = "ccw"
 
@@ -272,7 +284,7 @@ class GpuVolumes:
             self._records[rng.index] = (n, count)
             n += count
         self.edge_buffer = ctx.buffer(self._edge_data().tobytes())
-        self._moves = geometry.moves
+        self._moves, self._cuts = geometry.moves, geometry.cuts
         self.edge_vao, self.clip_vao = (ctx.vertex_array(program, [
             (self.edge_buffer, "3f 3f 3f 3f 3f 3f 1i", "in_a", "in_b", "in_c0", "in_c1",
              "in_c2", "in_c3", "in_count")]) for program in (self.edge_program,
@@ -280,8 +292,10 @@ class GpuVolumes:
         self.light4 = None
 
     def _corner_data(self) -> list[np.ndarray]:
+        """The soup's, then the pieces' (their triangle's) second and third corners."""
         corners = self.geometry.soup_corners()                           # (M, 3, 3) float32
-        return [np.repeat(corners[:, k], 3, axis=0) for k in (1, 2)]
+        t = np.concatenate([np.arange(len(corners)), self.geometry.piece_of])
+        return [np.repeat(corners[t, k], 3, axis=0) for k in (1, 2)]
 
     def _edge_data(self) -> np.ndarray:
         return np.concatenate([edge_records(topo, self.geometry.origin)
@@ -290,11 +304,16 @@ class GpuVolumes:
     def prepare(self, light4: np.ndarray) -> None:
         self.light4 = light4  # everything else happens in the shaders
         _set_light(self.programs, light4, self.geometry.origin)
-        if self._moves != self.geometry.moves:   # the frame moved: positions in the new one
+        geometry = self.geometry
+        if self._moves != geometry.moves or self._cuts != geometry.cuts:
+            # the frame moved or the pieces of huge triangles changed: rewrite, growing
             for buf, data in zip(self.corner_buffers, self._corner_data()):
+                if data.nbytes > buf.size:
+                    buf.orphan(data.nbytes)
                 buf.write(data.tobytes())
+        if self._moves != geometry.moves:
             self.edge_buffer.write(self._edge_data().tobytes())
-            self._moves = self.geometry.moves
+        self._moves, self._cuts = geometry.moves, geometry.cuts
 
     def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
         """Draw the side quads of `objects`; `clipped` as in `CpuVolumes.draw_sides`.  `halve`
@@ -315,10 +334,13 @@ class GpuVolumes:
         for sign in (1, -1):
             program["u_cap_sign"].value = sign
             self.ctx.front_face = _FRONT_FACE[near, sign]
-            for i in objects:
-                rng = self.geometry.ranges[i]
-                vao.render(moderngl.TRIANGLES, vertices=3 * rng.count,
-                                    first=3 * rng.first)
+            # near caps as the geometry pass drew them (huge triangles' pieces); far caps whole
+            # (see `CpuVolumes._prepare_caps`)
+            spans = (self.geometry.spans(sorted(int(i) for i in objects)) if near else
+                     [(self.geometry.ranges[i].first, self.geometry.ranges[i].count)
+                      for i in objects])
+            for first, count in spans:
+                vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
         self.ctx.front_face = "ccw"
 
     def release(self) -> None:
