@@ -73,6 +73,8 @@ class SceneGeometry:
         self.piece_of = np.zeros(0, np.int64)
         self.pieces = np.zeros((0, 3, 3), np.float32)
         self.cuts = 0
+        self.guard = None   # (planes (5, 4), near) of the last `set_view`
+        self.views = 0      # how many times `set_view` was called (the view's version)
         tris = [o.triangles for o in scene.objects]                       # (m, 3, 3) each
         corners = np.concatenate(tris)                                    # (M, 3, 3) float64
         self._corners = corners
@@ -133,8 +135,7 @@ class SceneGeometry:
     def _frame_corners(self) -> None:
         """The float32 corners in the current frame, and each triangle's reach from the eye."""
         self.frame_corners = to_frame(self._corners, self.origin)          # (M, 3, 3) float32
-        self._reach = np.sqrt((self.frame_corners.astype(np.float64) ** 2).sum(axis=2)
-                              ).max(axis=1)
+        self._reach = guard.reach(self.frame_corners)
 
     def _framed(self, name: str) -> np.ndarray:
         """The soup attribute `name` (one of _FRAMED) in the current frame, float32."""
@@ -177,6 +178,8 @@ class SceneGeometry:
         for the frame's draws.  view_proj : (4, 4) float64 frame -> clip; near : the near
         distance.  Call after `move_to`."""
         planes = guard.guard_planes(view_proj, near)
+        self.guard = (planes, near)   # for the volumes' side triangles (`CpuVolumes`)
+        self.views += 1
         holes = guard.huge(self.frame_corners.astype(np.float64), self._reach, planes, near)
         if len(holes) == 0 and len(self.holes) == 0:
             return
@@ -192,9 +195,9 @@ class SceneGeometry:
             self._write_pieces(buf, self._soup_base(name), name)
         self._write_pieces(self.triangle_data, self._per_triangle, "triangle_data")
 
-    def spans(self, objects) -> list[tuple[int, int]]:
+    def spans(self, objects, pieces: bool = True) -> list[tuple[int, int]]:
         """(first, count) triangle spans of the draws of `objects` (ascending indices): their
-        soup triangles but the holes, then their pieces (keys M..), runs merged."""
+        soup triangles but the holes, then (`pieces`) their pieces (keys M..), runs merged."""
         out: list[list[int]] = []
 
         def add(first: int, count: int) -> None:
@@ -213,7 +216,7 @@ class SceneGeometry:
                 add(start, int(h) - start)
                 start = int(h) + 1
             add(start, end - start)
-        if len(self.piece_of):
+        if pieces and len(self.piece_of):
             mine = np.isin(self.triangle_objects[self.piece_of], objects)
             for k in np.flatnonzero(mine):
                 add(self.triangle_count + int(k), 1)

@@ -48,26 +48,47 @@ def guard_planes(view_proj: np.ndarray, near: float) -> np.ndarray:
     return planes
 
 
-def huge(corners: np.ndarray, reach: np.ndarray, planes: np.ndarray, near: float
+def reach(corners: np.ndarray) -> np.ndarray:
+    """(M,) float64: the largest distance from the eye (the frame's origin) of each triangle's
+    corners, (M, 3, 3) points or (M, 3, 4) homogeneous with w 1 or 0 (a point at infinity, a
+    direction, counts 0: its size says nothing about its precision)."""
+    c = np.asarray(corners, np.float64)
+    length = np.sqrt((c[..., :3] ** 2).sum(axis=-1))
+    if c.shape[-1] == 4:
+        length = np.where(c[..., 3] != 0.0, length, 0.0)
+    return length.max(axis=1)
+
+
+def huge(corners: np.ndarray, reaches: np.ndarray, planes: np.ndarray, near: float
          ) -> np.ndarray:
-    """(k,) int64: the triangles to cut.  corners (M, 3, 3) float64 in the frame; reach (M,)
-    float64 the largest distance of each triangle's corners from the eye (the frame's
-    origin); planes : `guard_planes`."""
-    far = np.flatnonzero(reach > HUGE_REACH * near)
+    """(k,) int64: the triangles to cut.  corners (M, 3, 3) float64 points or (M, 3, 4)
+    homogeneous, in the frame; reaches (M,) their `reach`; planes : `guard_planes`."""
+    far = np.flatnonzero(reaches > HUGE_REACH * near)
     if len(far) == 0:
         return far
-    c = corners[far]
-    inside = (np.einsum("mkj,pj->mkp", c, planes[:, :3]) + planes[:, 3] >= 0.0).all(axis=(1, 2))
+    c = _homogeneous(corners[far])
+    inside = (np.einsum("mkj,pj->mkp", c, planes) >= 0.0).all(axis=(1, 2))
     return far[~inside]
 
 
+def _homogeneous(points: np.ndarray) -> np.ndarray:
+    points = np.asarray(points, np.float64)
+    if points.shape[-1] == 4:
+        return points
+    return np.concatenate([points, np.ones(points.shape[:-1] + (1,))], axis=-1)
+
+
 def clip_polygon(polygon: np.ndarray, planes: np.ndarray) -> np.ndarray:
-    """(n, 3) float64 convex polygon -> (k, 3) float64, its part where every plane (p, 4)
-    a . x + d >= 0 (Sutherland-Hodgman, in float64), in the same order; k = 0 if none."""
+    """(n, 3) points or (n, 4) homogeneous (w >= 0) float64 convex polygon -> (k, 3 or 4)
+    float64, its part where every plane (p, 4) a . x + d w >= 0 (Sutherland-Hodgman, in
+    float64; linear in homogeneous coordinates, so a side quad reaching infinity is clipped as
+    it is drawn), in the same order; k = 0 if none."""
+    width = polygon.shape[1]
+    polygon = _homogeneous(polygon)
     for a in planes:
         if len(polygon) == 0:
             break
-        dist = polygon @ a[:3] + a[3]
+        dist = polygon @ a
         keep = []
         for i in range(len(polygon)):
             j = (i + 1) % len(polygon)
@@ -76,15 +97,16 @@ def clip_polygon(polygon: np.ndarray, planes: np.ndarray) -> np.ndarray:
             if (dist[i] >= 0.0) != (dist[j] >= 0.0):
                 t = dist[i] / (dist[i] - dist[j])
                 keep.append(polygon[i] + t * (polygon[j] - polygon[i]))
-        polygon = np.array(keep).reshape(-1, 3)
-    return polygon
+        polygon = np.array(keep).reshape(-1, 4)
+    return polygon[:, :width]
 
 
 def cut(corners: np.ndarray, planes: np.ndarray) -> np.ndarray:
-    """(3, 3) float64 triangle -> (p, 3, 3) float64 triangles tiling its part inside the guard
-    pyramid, wound as it is (a fan from the clipped polygon's first corner)."""
+    """(3, k) float64 triangle (k = 3 points, 4 homogeneous) -> (p, 3, k) float64 triangles
+    tiling its part inside the guard pyramid, wound as it is (a fan from the clipped polygon's
+    first corner)."""
     poly = clip_polygon(corners, planes)
     if len(poly) < 3:
-        return np.zeros((0, 3, 3))
+        return np.zeros((0, 3, corners.shape[1]))
     fan = np.arange(1, len(poly) - 1)
     return np.stack([np.repeat(poly[:1], len(fan), axis=0), poly[fan], poly[fan + 1]], axis=1)

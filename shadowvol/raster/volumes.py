@@ -32,7 +32,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from shadowvol.raster import glsl
+from shadowvol.raster import glsl, guard
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.projection import in_frame, to_frame
 from shadowvol.raster.silhouettes import (
@@ -57,6 +57,14 @@ class _LightVolumes:
         self.sides: dict[int, tuple[int, int, int]] = {}          # object -> (first, n, repeat)
         self.corners: np.ndarray | None = None   # (n, 4) float64 world side triangles' corners
         self.moves = -1                          # the geometry's `moves` the buffer is in
+        # huge side triangles cut to the view's guard band (`CpuVolumes._guard_sides`): the
+        # view they were cut for, their reach from the eye (and the frame it is in), the
+        # pieces' vertex ranges per object after the side triangles
+        self.view = -1
+        self.reach: np.ndarray | None = None
+        self.reach_moves = -1
+        self.extra: dict[int, tuple[int, int]] = {}
+        self.far_extra: dict[int, tuple[int, int]] = {}   # the same for huge far caps
         self.buffer: moderngl.Buffer | None = None
         self.vaos: dict[bool, moderngl.VertexArray] = {}          # clipped? -> vao
         self.caps: dict[tuple, tuple[int, int]] = {}  # (object, sign, near) -> (first, n)
@@ -120,7 +128,9 @@ class CpuVolumes:
                 self._kept.pop(next(iter(self._kept))).release()
         elif kept.moves != self.geometry.moves and len(kept.corners):
             kept.buffer.write(self._framed(kept.corners).tobytes())
+            kept.view = -1   # huge side triangles to be cut again, in the new frame
         kept.moves = self.geometry.moves
+        self._guard_sides(kept)
         self._kept[key] = kept
         self._current = kept
 
@@ -151,6 +161,58 @@ class CpuVolumes:
                                              (True, self.clip_program))}
         return out
 
+    def _guard_sides(self, kept: _LightVolumes) -> None:
+        """Cut the side triangles that reach far outside the view to its guard band, as the
+        geometry pass's huge triangles are (`guard`): GL's float32 clipping of a ground
+        quad's silhouette edges 1e6 away lost their z-fail counts at the image border.  The
+        part cut away meets no view ray, so every pixel's count is unchanged.  The cut
+        triangles are zeroed in the buffer (GL draws nothing of them) and their pieces follow
+        the side triangles (`draw_sides` draws them with their object)."""
+        geometry = self.geometry
+        if geometry.guard is None or kept.view == geometry.views or not len(kept.corners):
+            return
+        kept.view = geometry.views
+        if kept.reach_moves != geometry.moves:
+            frame = in_frame(kept.corners, geometry.origin).reshape(-1, 3, 4)
+            kept.reach, kept.reach_moves = guard.reach(frame), geometry.moves
+        planes, near = geometry.guard
+        far = np.flatnonzero(kept.reach > guard.HUGE_REACH * near)
+        if not len(far) and not kept.extra and not len(geometry.holes) and not kept.far_extra:
+            return
+        frame = in_frame(kept.corners.reshape(-1, 3, 4)[far], geometry.origin)
+        cut = np.isin(np.arange(len(far)), guard.huge(frame, kept.reach[far], planes, near))
+        holes = far[cut]
+        if not len(holes) and not kept.extra and not len(geometry.holes) and not kept.far_extra:
+            return
+        data = self._framed(kept.corners).reshape(-1, 3, 4)
+        data[holes] = 0.0
+        # the object of every side triangle, from the per-object vertex ranges
+        owner = np.zeros(len(data), np.int64)
+        for i, (first, n, _) in kept.sides.items():
+            owner[first // 3:(first + n) // 3] = i
+        pieces, kept.extra, at = [], {}, 3 * len(data)
+        for i in np.unique(owner[holes]):
+            mine = [guard.cut(frame[k], planes) for k in np.flatnonzero(cut)
+                    if owner[far[k]] == i]
+            tris = np.concatenate(mine).reshape(-1, 4).astype(np.float32)
+            pieces.append(tris)
+            kept.extra[int(i)] = (at, len(tris))
+            at += len(tris)
+        # the far caps of the huge triangles the geometry pass cut: their projections from a
+        # point light to infinity (V - L, 0), cut to the guard pyramid in homogeneous
+        # coordinates, wound so that they face out of the volume with the sides' front face
+        # (ccw: a sign-1 far cap is drawn cw, `_FRONT_FACE`); no ties at infinity, so the
+        # order of their corners is free.  `draw_caps` draws them; the index lists skip them.
+        kept.far_extra = {}
+        for i, tris in far_cap_pieces(geometry, self.light4, kept.signs):
+            pieces.append(tris)
+            kept.far_extra[i] = (at, len(tris))
+            at += len(tris)
+        data = np.concatenate([data.reshape(-1, 4)] + pieces)
+        if data.nbytes > kept.buffer.size:
+            kept.buffer.orphan(data.nbytes)
+        kept.buffer.write(np.ascontiguousarray(data).tobytes())
+
     def _framed(self, corners: np.ndarray) -> np.ndarray:
         """(n, 4) float64 world homogeneous corners -> float32 in the geometry's frame."""
         return np.ascontiguousarray(in_frame(corners, self.geometry.origin), np.float32)
@@ -175,6 +237,8 @@ class CpuVolumes:
                     t = np.flatnonzero(cur.signs[i] == sign) + geometry.ranges[i].first
                     if near:
                         t = geometry.pieces_of(t)
+                    elif len(geometry.holes):   # drawn cut (`_guard_sides`)
+                        t = t[~np.isin(t, geometry.holes)]
                     idx = (3 * t[:, None] + np.arange(3)).reshape(-1)
                     indices.append(idx)
                     cur.caps[i, sign, near] = (n_index, len(idx))
@@ -215,8 +279,10 @@ class CpuVolumes:
         rounds = [list(objects)]
         if not halve:
             rounds.append([i for i in objects if sides[i][2] == 2])
+        extra = self._current.extra   # pieces of huge side triangles (`_guard_sides`)
         for round_ in rounds:
-            for first, count in _runs(sides[i][:2] for i in round_):
+            spans = [sides[i][:2] for i in round_] + [extra[i] for i in round_ if i in extra]
+            for first, count in _runs(spans):
                 vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def draw_caps(self, objects, near: bool) -> None:
@@ -233,6 +299,9 @@ class CpuVolumes:
             for first, count in _runs(cur.caps[i, sign, near] for i in objects):
                 vao.render(moderngl.TRIANGLES, vertices=count, first=first)
         self.ctx.front_face = "ccw"
+        if not near and cur.far_extra:   # huge triangles' far caps, cut (`_guard_sides`)
+            for first, count in _runs(cur.far_extra[i] for i in objects if i in cur.far_extra):
+                cur.vaos[False].render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def release(self) -> None:
         for kept in self._kept.values():
@@ -240,6 +309,36 @@ class CpuVolumes:
         self._kept.clear()
         for obj in self.programs:
             obj.release()
+
+
+def far_cap_pieces(geometry: SceneGeometry, light4: np.ndarray, signs: list[np.ndarray]
+                   ) -> list[tuple[int, np.ndarray]]:
+    """The far caps of the huge triangles the geometry pass cut (`SceneGeometry.holes`), for a
+    point light: each triangle projected to infinity, (V - L, 0), cut to the guard pyramid in
+    homogeneous coordinates (`guard.cut`), wound to face out of its volume when drawn with the
+    front face ccw (a sign-1 far cap is drawn cw: `_FRONT_FACE`; at infinity there are no
+    depth ties, so the order of its corners is free).  signs : per object, the triangles'
+    signs.  Returns (object, (n, 4) float32 homogeneous frame corners) per object; none for a
+    directional light (its far cap is a point)."""
+    light = in_frame(light4, geometry.origin)
+    out = []
+    if light[3] == 0.0 or not len(geometry.holes):
+        return out
+    planes = geometry.guard[0]
+    objects = geometry.triangle_objects[geometry.holes]
+    for i in np.unique(objects):
+        mine = []
+        for t in geometry.holes[objects == i]:
+            sign = signs[i][t - geometry.ranges[i].first]
+            if sign == 0:
+                continue
+            cap = np.zeros((3, 4))
+            cap[:, :3] = geometry.frame_corners[t].astype(np.float64) * light[3] - light[:3]
+            tris = guard.cut(cap, planes)
+            mine.append(tris[:, ::-1] if sign == 1 else tris)
+        if mine:
+            out.append((int(i), np.concatenate(mine).reshape(-1, 4).astype(np.float32)))
+    return out
 
 
 def _runs(ranges) -> list[tuple[int, int]]:
@@ -267,8 +366,14 @@ class GpuVolumes:
         self.near_program = glsl.program(ctx, "caps.vert", "volume.frag")
         self.far_program = glsl.program(ctx, "caps.vert", "volume.frag",
                                         defines={"FAR_CAP": 1})
+        # the cut far caps of huge triangles (`far_cap_pieces`), homogeneous triangles
+        self.piece_program = glsl.program(ctx, "volume_side.vert", "volume.frag")
         self.programs = (self.edge_program, self.clip_program, self.near_program,
-                         self.far_program)
+                         self.far_program, self.piece_program)
+        self._far: dict[int, tuple[int, int]] = {}
+        self._far_key = None
+        self._far_buffer: moderngl.Buffer | None = None
+        self._far_vao: moderngl.VertexArray | None = None
         # every soup vertex also carries its triangle's other two corners (float32, as drawn)
         self.corner_buffers = [ctx.buffer(data.tobytes()) for data in self._corner_data()]
         cap_bindings = [(self.corner_buffers[0], "3f", "in_corner1"),
@@ -314,6 +419,31 @@ class GpuVolumes:
         if self._moves != geometry.moves:
             self.edge_buffer.write(self._edge_data().tobytes())
         self._moves, self._cuts = geometry.moves, geometry.cuts
+        key = (geometry.views, np.asarray(light4, np.float64).tobytes())
+        if self._far_key != key:
+            self._far_key, self._far = key, {}
+            if len(geometry.holes):
+                # the signs in float64 from the topology, as the CPU silhouettes'; the GPU's
+                # own (float32, tri_sign) could differ only for a triangle edge-on to the light
+                signs = {int(i): topology_signs(geometry.topologies[i], light4)
+                         for i in np.unique(geometry.triangle_objects[geometry.holes])}
+                pieces = far_cap_pieces(geometry, light4, signs)
+                data, at = [], 0
+                for i, tris in pieces:
+                    self._far[i] = (at, len(tris))
+                    data.append(tris)
+                    at += len(tris)
+                if data:
+                    self._write_far(np.concatenate(data))
+
+    def _write_far(self, data: np.ndarray) -> None:
+        if self._far_buffer is None:
+            self._far_buffer = self.ctx.buffer(reserve=data.nbytes)
+            self._far_vao = self.ctx.vertex_array(
+                self.piece_program, [(self._far_buffer, "4f", "in_position")])
+        elif data.nbytes > self._far_buffer.size:
+            self._far_buffer.orphan(data.nbytes)
+        self._far_buffer.write(np.ascontiguousarray(data).tobytes())
 
     def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
         """Draw the side quads of `objects`; `clipped` as in `CpuVolumes.draw_sides`.  `halve`
@@ -336,14 +466,19 @@ class GpuVolumes:
             self.ctx.front_face = _FRONT_FACE[near, sign]
             # near caps as the geometry pass drew them (huge triangles' pieces); far caps whole
             # (see `CpuVolumes._prepare_caps`)
-            spans = (self.geometry.spans(sorted(int(i) for i in objects)) if near else
-                     [(self.geometry.ranges[i].first, self.geometry.ranges[i].count)
-                      for i in objects])
+            # (see `CpuVolumes._prepare_caps`): huge ones' far caps cut, drawn below
+            spans = self.geometry.spans(sorted(int(i) for i in objects), pieces=near)
             for first, count in spans:
                 vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
         self.ctx.front_face = "ccw"
+        if not near and self._far:
+            for first, count in _runs(self._far[i] for i in objects if i in self._far):
+                self._far_vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def release(self) -> None:
+        for obj in (self._far_vao, self._far_buffer):
+            if obj is not None:
+                obj.release()
         for obj in (self.edge_vao, self.clip_vao, self.near_vao, self.far_vao, self.edge_buffer,
                     *self.corner_buffers, *self.programs):
             obj.release()
