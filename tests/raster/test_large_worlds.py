@@ -23,13 +23,14 @@ import numpy as np
 import pytest
 from builders import ROOT, TEST_OUTPUT
 from exact import check_exact, exact_masks
-from hypothesis import given, note
+from hypothesis import assume, given, note
 from strategies import (
     cards_by_lights,
     far_kerbs,
     grazing_creases,
     huge_ground_views,
     profile,
+    rounding_tie,
 )
 from worlds import card_by_light, grazing_crease, kerbs, lamp_room
 
@@ -207,7 +208,11 @@ def test_grazing_light_at_an_almost_flat_crease(request, ctx, assert_masks_match
 # ---- properties -----------------------------------------------------------------------------
 
 def check_property(ctx, scene, kind: str) -> None:
-    """Zero interior mismatches against the exact check, every run."""
+    """Zero interior mismatches against the exact check, every run.  Rounding ties (a face
+    parallel to the sun but for the last bit, `strategies.rounding_tie`: the long run drew a
+    sun whose z was 4e-310, 0 in float32) are left out, as in test_random_scenes.py: the known
+    limit of docs/robustness.md."""
+    assume(not rounding_tie(scene))
     exact = exact_masks(scene)
     for run, res in raster_masks(ctx, scene, RUNS[:2]).items():
         report = mask_report(res.lit, res.coverage, *exact)
