@@ -335,7 +335,8 @@ def far_cap_pieces(geometry: SceneGeometry, light4: np.ndarray, signs: list[np.n
             cap = np.zeros((3, 4))
             cap[:, :3] = geometry.frame_corners[t].astype(np.float64) * light[3] - light[:3]
             tris = guard.cut(cap, planes)
-            mine.append(tris[:, ::-1] if sign == 1 else tris)
+            if len(tris):   # a far cap wholly outside the guard pyramid leaves none
+                mine.append(tris[:, ::-1] if sign == 1 else tris)
         if mine:
             out.append((int(i), np.concatenate(mine).reshape(-1, 4).astype(np.float32)))
     return out

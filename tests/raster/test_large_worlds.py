@@ -182,6 +182,19 @@ def test_the_guard_band_cuts_only_huge_triangles(ctx):
         assert len(r.geometry.holes) == 0
 
 
+def test_a_view_where_a_huge_far_cap_leaves_no_piece(ctx):
+    """Looking up into the lamp shade from below it on a 1e5 ground: the ground is cut, and its
+    far cap (the directions from the light down through it) lies wholly outside the guard
+    pyramid (the long property run found this; it raised in the GPU silhouettes' upload of no
+    pieces)."""
+    scene = lamp_room(1e5, size=(48, 36)).replace(
+        camera=Camera(eye=[0.0, 0.5, 0.0], target=[0.0, 1.5, 0.5], fov_y=30.0))
+    exact = exact_masks(scene)
+    for run, res in raster_masks(ctx, scene).items():
+        report = mask_report(res.lit, res.coverage, *exact)
+        assert not any(r["interior"] for r in report), (run, report)
+
+
 # ---- near a point light, grazing creases ----------------------------------------------------
 
 @pytest.mark.parametrize("offset", [0.0, 1e3])
