@@ -182,6 +182,27 @@ def test_the_guard_band_cuts_only_huge_triangles(ctx):
         assert len(r.geometry.holes) == 0
 
 
+@pytest.mark.parametrize("ground, seed", [(1e7, 6), (1e6, 15)])
+def test_huge_ground_pieces_keep_their_ground_truth(ctx, ground, seed):
+    """A piece of a cut triangle is its triangle in the ground truth: the same object id and
+    normal as the ray tracer's, and depth to CONVENTIONS' relative 3e-5, away from edges."""
+    scene = random_ground_view(ground, seed)
+    want = ("depth", "normal", "object_id", "facing", "casters")
+    with Renderer(scene, ctx) as r:
+        got = r.render(outputs=want)
+        assert len(r.geometry.holes)
+    ref = raytrace.ground_truth(scene, outputs=want)
+    edges = np.logical_or.reduce([edge_pixels(got.object_id == k) | edge_pixels(ref.object_id == k)
+                                  for k in range(len(scene.objects) + 1)])
+    assert not ((got.object_id != ref.object_id) & ~edges).any()
+    same = (got.object_id == ref.object_id) & ref.coverage & ~edges
+    assert (np.abs(got.depth[same] / ref.depth[same] - 1) <= 3e-5).all()
+    assert (got.normal[same] == ref.normal[same]).all()
+    for i in range(len(scene.lights)):
+        near = edges | edge_pixels(got.casters[i] != 0) | edge_pixels(ref.casters[i] != 0)
+        assert not ((got.casters[i] != ref.casters[i]) & ~near).any()
+
+
 def test_a_view_where_a_huge_far_cap_leaves_no_piece(ctx):
     """Looking up into the lamp shade from below it on a 1e5 ground: the ground is cut, and its
     far cap (the directions from the light down through it) lies wholly outside the guard
