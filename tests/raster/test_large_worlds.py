@@ -41,7 +41,7 @@ from shadowvol.compare.maskdiff import edge_pixels, mask_report
 from shadowvol.raster import guard
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.renderer import Renderer
-from shadowvol.scene import Camera
+from shadowvol.scene import Camera, DirectionalLight
 from shadowvol.scenefile import load_scene, save_scene
 
 RUNS = [("auto", "cpu"), ("zfail", "gpu"), ("zfail", "cpu")]
@@ -242,11 +242,14 @@ def test_grazing_light_at_an_almost_flat_crease(request, ctx, assert_masks_match
 # ---- properties -----------------------------------------------------------------------------
 
 def check_property(ctx, scene, kind: str) -> None:
-    """Zero interior mismatches against the exact check, every run.  Rounding ties (a face
-    parallel to the sun but for the last bit, `strategies.rounding_tie`: the long run drew a
-    sun whose z was 4e-310, 0 in float32) are left out, as in test_random_scenes.py: the known
-    limit of docs/robustness.md."""
-    assume(not rounding_tie(scene))
+    """Zero interior mismatches against the exact check, every run.  Rounding ties of a sun
+    (a face parallel to it but for the last bit, `strategies.rounding_tie`: the long run drew
+    a sun whose z was 4e-310, 0 in float32) are left out, as in test_random_scenes.py: the
+    known limit of docs/robustness.md.  Only the suns': seen from the far corners of a ground
+    1e6 wide, the lamp's point light lies within rounding_tie's 1e-6 of the ground's plane,
+    which is no tie (it is 1.5 above it)."""
+    suns = [lt for lt in scene.lights if isinstance(lt, DirectionalLight)]
+    assume(not (suns and rounding_tie(scene.replace(lights=suns))))
     exact = exact_masks(scene)
     for run, res in raster_masks(ctx, scene, RUNS[:2]).items():
         report = mask_report(res.lit, res.coverage, *exact)
