@@ -75,6 +75,7 @@ class SceneGeometry:
         self.cuts = 0
         self.guard = None   # (planes (5, 4), near) of the last `set_view`
         self.views = 0      # how many times `set_view` was called (the view's version)
+        self.far_objects = np.zeros(0, np.int64)   # objects that may hold huge triangles
         tris = [o.triangles for o in scene.objects]                       # (m, 3, 3) each
         corners = np.concatenate(tris)                                    # (M, 3, 3) float64
         self._corners = corners
@@ -135,7 +136,7 @@ class SceneGeometry:
     def _frame_corners(self) -> None:
         """The float32 corners in the current frame, and each triangle's reach from the eye."""
         self.frame_corners = to_frame(self._corners, self.origin)          # (M, 3, 3) float32
-        self._reach = guard.reach(self.frame_corners)
+        self._reach: dict[int, np.ndarray] = {}   # per far object, its triangles' reach
 
     def _framed(self, name: str) -> np.ndarray:
         """The soup attribute `name` (one of _FRAMED) in the current frame, float32."""
@@ -180,7 +181,21 @@ class SceneGeometry:
         planes = guard.guard_planes(view_proj, near)
         self.guard = (planes, near)   # for the volumes' side triangles (`CpuVolumes`)
         self.views += 1
-        holes = guard.huge(self.frame_corners.astype(np.float64), self._reach, planes, near)
+        # only an object whose box reaches beyond HUGE_REACH near distances from the eye can
+        # hold a huge triangle: the per-triangle test runs on those objects alone
+        box_reach = np.linalg.norm(np.maximum(np.abs(self.bounds[:, 0] - self.origin),
+                                              np.abs(self.bounds[:, 1] - self.origin)), axis=1)
+        self.far_objects = np.flatnonzero(box_reach > guard.HUGE_REACH * near)
+        if len(self.far_objects) == 0 and len(self.holes) == 0:
+            return
+        found = [np.zeros(0, np.int64)]
+        for i in self.far_objects:
+            rng = self.ranges[i]
+            corners = self.frame_corners[rng.first:rng.first + rng.count]
+            if i not in self._reach:
+                self._reach[i] = guard.reach(corners)
+            found.append(guard.huge(corners, self._reach[i], planes, near) + rng.first)
+        holes = np.concatenate(found)
         if len(holes) == 0 and len(self.holes) == 0:
             return
         cut = [guard.cut(self.frame_corners[t].astype(np.float64), planes) for t in holes]

@@ -95,10 +95,24 @@ def in_frame(points4: np.ndarray, origin: np.ndarray) -> np.ndarray:
     return out
 
 
+def in_frame32(points4: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """`in_frame` rounded to float32 once (the subtraction in float64, written as float32
+    without a float64 copy)."""
+    points4 = np.asarray(points4, np.float64)
+    out = np.empty(points4.shape, np.float32)
+    np.subtract(points4[..., :3], points4[..., 3:] * origin, out=out[..., :3],
+                casting="unsafe")
+    out[..., 3] = points4[..., 3]
+    return out
+
+
 def to_frame(points: np.ndarray, origin: np.ndarray) -> np.ndarray:
     """World points (..., 3) float64 -> float32 in the frame of `origin`: subtracted in
     float64, rounded once.  What both renderers' triangles are."""
-    return (np.asarray(points, np.float64) - origin).astype(np.float32)
+    points = np.asarray(points, np.float64)
+    out = np.empty(points.shape, np.float32)
+    np.subtract(points, origin, out=out, casting="unsafe")   # in float64, rounded once
+    return out
 
 
 def planes_in_frame(planes: np.ndarray, origin: np.ndarray) -> np.ndarray:

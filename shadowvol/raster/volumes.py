@@ -34,7 +34,7 @@ import numpy as np
 
 from shadowvol.raster import glsl, guard
 from shadowvol.raster.geometry import SceneGeometry
-from shadowvol.raster.projection import in_frame, to_frame
+from shadowvol.raster.projection import in_frame, in_frame32, to_frame
 from shadowvol.raster.silhouettes import (
     edge_multiplicity,
     quads_to_triangles,
@@ -58,11 +58,8 @@ class _LightVolumes:
         self.corners: np.ndarray | None = None   # (n, 4) float64 world side triangles' corners
         self.moves = -1                          # the geometry's `moves` the buffer is in
         # huge side triangles cut to the view's guard band (`CpuVolumes._guard_sides`): the
-        # view they were cut for, their reach from the eye (and the frame it is in), the
-        # pieces' vertex ranges per object after the side triangles
+        # view they were cut for, the pieces' vertex ranges per object after the sides
         self.view = -1
-        self.reach: np.ndarray | None = None
-        self.reach_moves = -1
         self.extra: dict[int, tuple[int, int]] = {}
         self.far_extra: dict[int, tuple[int, int]] = {}   # the same for huge far caps
         self.buffer: moderngl.Buffer | None = None
@@ -172,15 +169,15 @@ class CpuVolumes:
         if geometry.guard is None or kept.view == geometry.views or not len(kept.corners):
             return
         kept.view = geometry.views
-        if kept.reach_moves != geometry.moves:
-            frame = in_frame(kept.corners, geometry.origin).reshape(-1, 3, 4)
-            kept.reach, kept.reach_moves = guard.reach(frame), geometry.moves
-        planes, near = geometry.guard
-        far = np.flatnonzero(kept.reach > guard.HUGE_REACH * near)
-        if not len(far) and not kept.extra and not len(geometry.holes) and not kept.far_extra:
+        far_objects = geometry.far_objects   # only their side triangles can be huge
+        if not len(far_objects) and not kept.extra and not kept.far_extra:
             return
+        planes, near = geometry.guard
+        far = np.concatenate([np.zeros(0, np.int64)] + [
+            np.arange(kept.sides[i][0] // 3, (kept.sides[i][0] + kept.sides[i][1]) // 3)
+            for i in far_objects])
         frame = in_frame(kept.corners.reshape(-1, 3, 4)[far], geometry.origin)
-        cut = np.isin(np.arange(len(far)), guard.huge(frame, kept.reach[far], planes, near))
+        cut = np.isin(np.arange(len(far)), guard.huge(frame, guard.reach(frame), planes, near))
         holes = far[cut]
         if not len(holes) and not kept.extra and not len(geometry.holes) and not kept.far_extra:
             return
@@ -215,7 +212,7 @@ class CpuVolumes:
 
     def _framed(self, corners: np.ndarray) -> np.ndarray:
         """(n, 4) float64 world homogeneous corners -> float32 in the geometry's frame."""
-        return np.ascontiguousarray(in_frame(corners, self.geometry.origin), np.float32)
+        return in_frame32(corners, self.geometry.origin)
 
     def _prepare_caps(self, objects: tuple[int, ...]) -> None:
         """Upload the cap index lists (the soup vertices of the triangles of each sign) of
