@@ -134,7 +134,8 @@ class SceneGeometry:
         return self._soup[name]
 
     def _frame_corners(self) -> None:
-        """The float32 corners in the current frame, and each triangle's reach from the eye."""
+        """The float32 corners in the current frame (the far objects' reach is recomputed on
+        use)."""
         self.frame_corners = to_frame(self._corners, self.origin)          # (M, 3, 3) float32
         self._reach: dict[int, np.ndarray] = {}   # per far object, its triangles' reach
 

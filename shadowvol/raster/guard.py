@@ -2,11 +2,14 @@
 
 Why: llvmpipe loses coverage at the image border for a triangle reaching ~1e6 times the near
 distance from the eye (a ground quad 1e5-1e7 wide seen from a few units up: up to hundreds of
-pixels of a 96x72 image uncovered, `tests/raster/test_large_worlds.py`).  GL clips such a
-triangle itself, in float32 clip coordinates of the size of its far corners, and float32 there
-is too coarse: the clipped polygon's edges land inside the view.  Clipped here first, in
-float64, the triangle GL receives lies within GUARD of the view's edges and beyond half the
-near distance, with coordinates GL clips exactly enough.
+pixels of a 96x72 image uncovered, `tests/raster/test_large_worlds.py`), and so do such a
+triangle's shadow volume faces (its silhouette's side quads, its far cap: z-fail counts lost in
+the same band).  By diagnosis GL clips such a triangle itself, in float32 clip coordinates of
+the size of its far corners, too coarse for them: the clipped polygon's edges land inside the
+view.  (Not the world-space upload: the loss stays in the eye's frame; cut here first, in
+float64, to within GUARD of the view's edges and beyond half the near distance, every loss
+seen is gone.)  The same cut is applied to the volumes in homogeneous coordinates
+(`CpuVolumes._guard_sides`, `volumes.far_cap_pieces`).
 
 Why it changes nothing that is seen: every pixel's view ray runs from the eye inside the view
 pyramid, which lies inside the guard pyramid; the part of a triangle outside the guard pyramid
