@@ -128,10 +128,12 @@ def gpu_silhouette_times(renderer: Renderer, repeat: int, lights=None) -> dict:
     ctx = renderer.ctx
     vols = renderer.volumes("gpu")
     from shadowvol.raster.context import make_current
-    from shadowvol.raster.projection import view_projection
+    from shadowvol.raster.projection import frame_view_projection
     make_current(ctx)
     scene = renderer.scene
-    passes.set_camera(vols.programs, view_projection(scene.camera, scene.aspect), scene.camera)
+    view_proj, origin = frame_view_projection(scene.camera, scene.aspect)
+    renderer.geometry.move_to(origin)
+    passes.set_camera(vols.programs, view_proj, scene.camera, origin)
     objects = [r.index for r in renderer.geometry.ranges]
 
     lights = scene.lights if lights is None else lights
@@ -140,7 +142,6 @@ def gpu_silhouette_times(renderer: Renderer, repeat: int, lights=None) -> dict:
         for light in lights:
             light4 = light.homogeneous
             vols.prepare(light4)
-            passes.set_uniform(vols.edge_program, "u_light", tuple(float(x) for x in light4))
             vols.draw_sides(objects)
 
     ctx.enable(moderngl.RASTERIZER_DISCARD)

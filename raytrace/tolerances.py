@@ -81,6 +81,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from shadowvol import cameras
+
 # float32's relative spacing: the distance from 1.0 to the next float32.
 FLOAT32_EPS = float(np.finfo(np.float32).eps)  # 2**-23
 
@@ -133,8 +135,9 @@ def surface_offset(scene) -> float:
 
 
 def frame_origin(scene) -> np.ndarray:
-    """The origin of the masks' float32 frame: the camera's eye, (3,) float64."""
-    return np.array(scene.camera.eye, dtype=np.float64)
+    """The origin of the masks' float32 frame: the camera's eye, (3,) float64 -- the
+    rasterizer's frame too (`shadowvol.cameras.frame_origin`, the one definition)."""
+    return cameras.frame_origin(scene.camera)
 
 
 def error_weight(normals: np.ndarray, corners: np.ndarray) -> np.ndarray:

@@ -20,6 +20,10 @@ pipeline without knowing our look-at camera:
   rect or disk light's normal (the side it emits to), (0, 0, 0) for a point or sphere light.
 
 All float64.  The basis is the look-at basis of CONVENTIONS.md ("Camera and pixels").
+
+`frame_origin` is the origin of the float32 frame both renderers draw and trace in (the eye):
+the one definition, so that both round the same float64 differences to the same float32
+triangles (docs/CONVENTIONS.md, "The float32 frame").
 """
 
 from __future__ import annotations
@@ -47,6 +51,13 @@ class Calibration(NamedTuple):
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays by their file names (`shadowvol.io.save_masks`)."""
         return self._asdict()
+
+
+def frame_origin(camera: Camera) -> np.ndarray:
+    """(3,) float64: the origin of the float32 frame of a frame seen by `camera`, its eye.
+    Both renderers express every position as float64 world minus this, rounded to float32
+    once, so a world far from its origin is drawn and traced as exactly as one at it."""
+    return np.array(camera.eye, dtype=np.float64)
 
 
 def look_at_basis(camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

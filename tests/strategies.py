@@ -260,3 +260,15 @@ def grazing_creases(draw):
     rotation = [draw(st.floats(-180.0, 180.0)) for _ in range(3)]
     offset = draw(st.one_of(st.just([0.0, 0.0, 0.0]), _far_offset(2.0, 4.0)))
     return grazing_crease(rise, elevation, rotation=rotation, offset=offset, size=(48, 36))
+
+
+@st.composite
+def huge_ground_views(draw):
+    """`huge_grounds` seen by a random camera a few units from the room (1e5..1e7 wide ground
+    quads lost coverage at the image border in the rasterizer under such cameras: issue 10)."""
+    scene = draw(huge_grounds())
+    eye = [draw(st.floats(-5.0, 5.0)), draw(st.floats(0.2, 6.0)), draw(st.floats(-5.0, 5.0))]
+    target = [draw(st.floats(-5.0, 5.0)), draw(st.floats(-1.0, 1.5)),
+              draw(st.floats(-5.0, 5.0))]
+    assume(np.hypot(eye[0] - target[0], eye[2] - target[2]) > 1e-3)  # not looking along up
+    return scene.replace(camera=Camera(eye=eye, target=target, fov_y=draw(st.floats(30.0, 90.0))))

@@ -28,7 +28,7 @@ import numpy as np
 from shadowvol.raster import glsl, stencil
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.glsl import set_uniform
-from shadowvol.raster.projection import NEARER, gl_matrix
+from shadowvol.raster.projection import NEARER, gl_matrix, in_frame, planes_in_frame
 from shadowvol.raster.target import Target
 from shadowvol.scene import AreaSample, Camera, Light, Scene, SpotLight
 
@@ -96,10 +96,12 @@ class ScenePrograms:
             obj.release()
 
 
-def set_camera(programs, view_proj: np.ndarray, camera: Camera) -> None:
+def set_camera(programs, view_proj: np.ndarray, camera: Camera, origin: np.ndarray) -> None:
+    """The camera's uniforms in the frame of `origin` (3,): view_proj (4, 4) frame -> clip
+    (`projection.frame_view_projection`), and the eye."""
     for p in programs:
         set_uniform(p, "u_view_proj", gl_matrix(view_proj))
-        set_uniform(p, "u_eye", tuple(float(x) for x in camera.eye))
+        set_uniform(p, "u_eye", tuple(float(x) for x in camera.eye - origin))
 
 
 def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, scene: Scene,
@@ -123,10 +125,10 @@ def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, s
         ends = np.concatenate([change, [len(ranges)]])
         runs = [(int(a), int(b), bool(cull[a])) for a, b in zip(starts, ends)]
     for a, b, culled in runs:
-        first = ranges[a].first
-        count = ranges[b - 1].first + ranges[b - 1].count - first
         ctx.enable_only(moderngl.DEPTH_TEST | (moderngl.CULL_FACE if culled else 0))
-        progs.gbuffer_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
+        # the soup but the huge triangles, then their pieces (`SceneGeometry.set_view`)
+        for first, count in progs.geometry.spans(range(a, b)):
+            progs.gbuffer_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
     ctx.enable_only(moderngl.DEPTH_TEST)
     target.use()
 
@@ -178,13 +180,14 @@ def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: Scene
         ctx.blend_func = moderngl.ONE, moderngl.ONE
         ctx.blend_equation = moderngl.FUNC_ADD
     _only_where_covered(ctx)
-    set_uniform(prog, "u_eye", tuple(float(x) for x in camera.eye))
+    origin = progs.geometry.origin   # positions in the geometry's frame, as the G-buffer's
+    set_uniform(prog, "u_eye", tuple(float(x) for x in camera.eye - origin))
     set_uniform(prog, "u_first_page", first_page)
     # uniform arrays as packed float32 (glUniform*fv): the same float32 values the forward
     # pass's single uniforms hold
     spot = [isinstance(l, SpotLight) for l in lights]
     arrays = {
-        "u_light": [l.homogeneous for l in lights],
+        "u_light": [in_frame(l.homogeneous, origin) for l in lights],
         "u_radiance": [l.radiance for l in lights],
         "u_spot_direction": [l.direction if s else (0.0, 0.0, 1.0) for l, s in zip(lights, spot)],
         "u_spot_cos": [l.cos_cutoff if s else NO_CONE for l, s in zip(lights, spot)],
@@ -235,7 +238,8 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
     set_uniform(progs.ambient, "u_ambient", tuple(float(x) for x in scene.ambient))
     progs.geometry.materials.use(0)
     set_uniform(progs.ambient, "u_materials", 0)
-    progs.ambient_vao.render(moderngl.TRIANGLES)
+    # the soup's own triangles (the buffers may hold pieces of huge ones after them)
+    progs.ambient_vao.render(moderngl.TRIANGLES, vertices=3 * progs.geometry.triangle_count)
 
 
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
@@ -277,8 +281,9 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     by_zpass = [int(i) for i in np.flatnonzero(~zfail & chosen)]
     by_zfail = [int(i) for i in np.flatnonzero(zfail & chosen)]
     if by_zpass and clip_planes is not None:
+        frame_planes = planes_in_frame(clip_planes, volumes.geometry.origin)
         for p in volumes.programs:
-            set_uniform(p, "u_clip_planes", clip_planes.astype(np.float32).tobytes())
+            set_uniform(p, "u_clip_planes", frame_planes.astype(np.float32).tobytes())
         with counting(False, False), stencil.clip_distances(gl, len(clip_planes)):
             volumes.draw_sides(by_zpass, halve=halve, clipped=True, each=each)
     elif by_zpass:
@@ -293,8 +298,10 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     target.use()
 
 
-def light_uniforms(program: moderngl.Program, light: Light) -> None:
-    set_uniform(program, "u_light", tuple(float(x) for x in light.homogeneous))
+def light_uniforms(program: moderngl.Program, light: Light, origin: np.ndarray) -> None:
+    """A light's uniforms of the forward Phong pass, in the frame of `origin` (3,)."""
+    set_uniform(program, "u_light", tuple(float(x) for x in in_frame(light.homogeneous,
+                                                                       origin)))
     set_uniform(program, "u_radiance", tuple(float(x) for x in light.radiance))
     set_uniform(program, "u_emitter_cosine", 1.0 if isinstance(light, AreaSample) else 0.0)
     if isinstance(light, SpotLight):
@@ -316,11 +323,11 @@ def add_light(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: S
     ctx.blend_func = moderngl.ONE, moderngl.ONE
     ctx.blend_equation = moderngl.FUNC_ADD
     ctx.front_face = "ccw"
-    light_uniforms(progs.phong, light)
+    light_uniforms(progs.phong, light, progs.geometry.origin)
     progs.geometry.materials.use(0)
     set_uniform(progs.phong, "u_materials", 0)
     with stencil_test(gl):
-        progs.phong_vao.render(moderngl.TRIANGLES)
+        progs.phong_vao.render(moderngl.TRIANGLES, vertices=3 * progs.geometry.triangle_count)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     target.use()

@@ -42,8 +42,10 @@ from shadowvol.raster.context import make_current
 from shadowvol.raster.projection import (
     NEARER,
     NEARER_OR_EQUAL,
+    frame_view_projection,
     gl_matrix,
-    view_projection,
+    in_frame,
+    planes_in_frame,
 )
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import Camera, Light, Parallelogram, Scene
@@ -166,8 +168,9 @@ class PlanarShadows:
         r = self.renderer
         camera = scene.camera if camera is None else camera
         lights = scene.lights if lights is None else tuple(lights)
-        view_proj = view_projection(camera, scene.aspect)
-        passes.set_camera((r.programs.ambient, r.programs.phong), view_proj, camera)
+        view_proj, origin = frame_view_projection(camera, scene.aspect)
+        r.geometry.move_to(origin)
+        passes.set_camera((r.programs.ambient, r.programs.phong), view_proj, camera, origin)
         passes.depth_ambient(r.ctx, r.target, r.programs, scene)
         lit, counts = [], []
         for light in lights:
@@ -203,7 +206,10 @@ class PlanarShadows:
     def _project_shadows(self, index: int, plane: np.ndarray, light: Light,
                          view_proj: np.ndarray) -> None:
         r = self.renderer
-        light4 = light.homogeneous
+        # in the geometry's frame (`projection`), as the soup's positions are
+        origin = r.geometry.origin
+        light4 = in_frame(light.homogeneous, origin)
+        plane = planes_in_frame(plane[None], origin)[0]
         try:
             m = projection_matrix(-plane[:3] * plane[3], plane[:3], light4)
         except ValueError:

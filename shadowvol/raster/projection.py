@@ -10,14 +10,23 @@ square of the distance; shadow boundaries on surfaces nearly parallel to a volum
 light) depend on exactly that precision.  Nearer means GREATER depth: see NEARER.
 GL samples each pixel at its centre, which is the contract's ndc ((x + 0.5) / W * 2 - 1, ...);
 GL rows run bottom-up, so every read-back is flipped once (`target`; `top_row_first`).
+
+The GPU works in the float32 FRAME of the eye (`shadowvol.cameras.frame_origin`), as the ray
+tracer's masks do: every position it is given -- the soup, side quads, caps' corners, lights,
+the eye, clip planes -- is float64 world minus the origin, rounded once (`to_frame`, `in_frame`,
+`planes_in_frame`), and the matrices are built in float64 in that frame
+(`frame_view_projection`).  World-space float32 would round a vertex 1e6 from the origin by
+~0.03; in the frame, only its distance from the eye sets its rounding.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
+from shadowvol.cameras import frame_origin
 from shadowvol.scene import Camera
 
 NEARER = ">"              # depth test passing a fragment nearer than what is stored
@@ -64,6 +73,54 @@ def infinite_projection(fov_y: float, aspect: float, near: float) -> np.ndarray:
 def view_projection(camera: Camera, aspect: float) -> np.ndarray:
     """(4, 4) float64 world -> clip space."""
     return infinite_projection(camera.fov_y, aspect, camera.near) @ view_matrix(camera)
+
+
+def frame_camera(camera: Camera, origin: np.ndarray) -> Camera:
+    """`camera` with its eye and target expressed in the frame of `origin` (3,) float64."""
+    return dataclasses.replace(camera, eye=camera.eye - origin, target=camera.target - origin)
+
+
+def frame_view_projection(camera: Camera, aspect: float) -> tuple[np.ndarray, np.ndarray]:
+    """(4, 4) float64 frame -> clip space for `camera`, and its frame origin (3,) float64."""
+    origin = frame_origin(camera)
+    return view_projection(frame_camera(camera, origin), aspect), origin
+
+
+def in_frame(points4: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """Homogeneous world points (..., 4) float64 -> the frame of `origin`: x - w·origin (a
+    point at infinity, w = 0, is a direction and stays as it is)."""
+    points4 = np.asarray(points4, np.float64)
+    out = points4.copy()
+    out[..., :3] -= points4[..., 3:] * origin
+    return out
+
+
+def in_frame32(points4: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """`in_frame` rounded to float32 once (the subtraction in float64, written as float32
+    without a float64 copy)."""
+    points4 = np.asarray(points4, np.float64)
+    out = np.empty(points4.shape, np.float32)
+    np.subtract(points4[..., :3], points4[..., 3:] * origin, out=out[..., :3],
+                casting="unsafe")
+    out[..., 3] = points4[..., 3]
+    return out
+
+
+def to_frame(points: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """World points (..., 3) float64 -> float32 in the frame of `origin`: subtracted in
+    float64, rounded once.  What both renderers' triangles are."""
+    points = np.asarray(points, np.float64)
+    out = np.empty(points.shape, np.float32)
+    np.subtract(points, origin, out=out, casting="unsafe")   # in float64, rounded once
+    return out
+
+
+def planes_in_frame(planes: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """Planes (k, 4) float64 (n, d), n . x + d w >= 0, of world points -> the same planes of
+    the points' frame coordinates x' = x - w·origin: d' = d + n . origin."""
+    out = np.array(planes, np.float64)
+    out[:, 3] += out[:, :3] @ origin
+    return out
 
 
 def gl_matrix(m: np.ndarray) -> bytes:

@@ -28,7 +28,7 @@ from shadowvol.raster import methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import create_context, make_current
 from shadowvol.raster.geometry import SceneGeometry
-from shadowvol.raster.projection import view_projection
+from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
 from shadowvol.raster.volumes import CpuVolumes, GpuVolumes
 from shadowvol.scene import (
@@ -300,8 +300,12 @@ class Renderer:
             vols.counting_programs()   # before set_camera: it sets their camera too
         vols.new_frame()
         progs, target = self.programs, self.target
-        view_proj = view_projection(camera, self.scene.aspect)
-        passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
+        # the GPU draws in the float32 frame of this camera's eye (`projection`), the ray
+        # tracer's frame for the same camera: the geometry is re-expressed when the eye moves
+        view_proj, origin = frame_view_projection(camera, self.scene.aspect)
+        self.geometry.move_to(origin)
+        self.geometry.set_view(view_proj, camera.near)   # huge triangles cut (`guard`)
+        passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera, origin)
         cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
                                 self.geometry.extent) if self.cull_back_faces else None
         # an area light is its samples, each counted and shaded as a point light
@@ -412,6 +416,7 @@ class Renderer:
                 out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
         if want & {"normal", "object_id"}:
             triangle, front, _ = truth.read_surface(self.target, covered)
+            triangle = self.geometry.triangle_of_key(triangle)   # a piece's key: its triangle
             out |= truth.surface_outputs(self.geometry, triangle, front, want)
         if "facing" in want:
             lit = np.zeros((len(lights), h, w), bool)

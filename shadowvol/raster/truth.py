@@ -39,7 +39,7 @@ from shadowvol.raster import glsl, passes
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.passes import NO_CONE
-from shadowvol.raster.projection import NEARER, top_row_first
+from shadowvol.raster.projection import NEARER, in_frame, top_row_first
 from shadowvol.raster.target import LIGHTS_PER_PAGE
 from shadowvol.scene import Camera, SpotLight
 
@@ -95,7 +95,7 @@ class TruthPass:
         prog, vao = self.program(len(lights))
         spot = [isinstance(lt, SpotLight) for lt in lights]
         arrays = {
-            "u_light": [lt.homogeneous for lt in lights],
+            "u_light": [in_frame(lt.homogeneous, geometry.origin) for lt in lights],
             "u_spot_direction": [lt.direction if s else (0.0, 0.0, 1.0)
                                  for lt, s in zip(lights, spot)],
             "u_spot_cos": [lt.cos_cutoff if s else NO_CONE for lt, s in zip(lights, spot)]}

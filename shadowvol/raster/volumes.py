@@ -32,8 +32,9 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from shadowvol.raster import glsl
+from shadowvol.raster import glsl, guard
 from shadowvol.raster.geometry import SceneGeometry
+from shadowvol.raster.projection import in_frame, in_frame32, to_frame
 from shadowvol.raster.silhouettes import (
     edge_multiplicity,
     quads_to_triangles,
@@ -54,10 +55,18 @@ class _LightVolumes:
     def __init__(self):
         self.signs: list[np.ndarray] = []                         # per object
         self.sides: dict[int, tuple[int, int, int]] = {}          # object -> (first, n, repeat)
+        self.corners: np.ndarray | None = None   # (n, 4) float64 world side triangles' corners
+        self.moves = -1                          # the geometry's `moves` the buffer is in
+        # huge side triangles cut to the view's guard band (`CpuVolumes._guard_sides`): the
+        # view they were cut for, the pieces' vertex ranges per object after the sides
+        self.view = -1
+        self.extra: dict[int, tuple[int, int]] = {}
+        self.far_extra: dict[int, tuple[int, int]] = {}   # the same for huge far caps
         self.buffer: moderngl.Buffer | None = None
         self.vaos: dict[bool, moderngl.VertexArray] = {}          # clipped? -> vao
-        self.caps: dict[tuple[int, int], tuple[int, int]] = {}    # (object, sign) -> (first, n)
+        self.caps: dict[tuple, tuple[int, int]] = {}  # (object, sign, near) -> (first, n)
         self.capped: tuple[int, ...] | None = None                # objects in the index buffer
+        self.cuts = -1                                            # the geometry's cuts then
         self.index_buffer: moderngl.Buffer | None = None
         self.cap_vaos: dict[bool, moderngl.VertexArray] = {}      # near? -> vao
         # the counting programs' (`CpuVolumes.counting_programs`), made on first use:
@@ -68,6 +77,7 @@ class _LightVolumes:
 
     def count_bytes(self) -> None:
         self.nbytes = (sum(s.nbytes for s in self.signs)
+                       + (0 if self.corners is None else self.corners.nbytes)
                        + sum(b.size for b in (self.buffer, self.index_buffer) if b is not None))
 
     def release(self) -> None:
@@ -85,13 +95,16 @@ class CpuVolumes:
     frame, a light in the next camera of a turntable) reuses its side quads and cap lists as
     they were uploaded.  Kept: every light of this frame and the last (`new_frame()` starts a
     frame) and the most recent others within `KEPT_OLDER_BYTES` (what a moving light leaves
-    behind), all within `KEPT_BYTES` of signs, side-quad and cap buffers.  Over the bytes the
-    least recently used go first, but never one this frame has used: a frame whose lights need
-    more (many samples of a large scene) keeps those it prepared first and rebuilds only the
-    others in every frame, where plain LRU over a cycle longer than the cache rebuilds all."""
+    behind), all within `KEPT_BYTES` of signs, side corners, side-quad and cap buffers.  Over
+    the bytes the least recently used go first, but never one this frame has used: a frame
+    whose lights need more (many samples of a large scene) keeps those it prepared first and
+    rebuilds only the others in every frame, where plain LRU over a cycle longer than the
+    cache rebuilds all.  The side corners are kept in float64 world space; when the frame
+    moves (`SceneGeometry.move_to`) a kept buffer is rewritten in the new frame on its next
+    `prepare`, nothing recomputed."""
 
-    # one light holds about 3 bytes per triangle (signs, side quads); 64 samples of a million
-    # triangles fit, and z-fail cap lists (12 bytes per capped triangle) for some of them
+    # one light holds about 3 bytes per triangle (signs, side quads) and 32 bytes per side
+    # corner (float64 world, to re-frame); 64 samples of a million triangles fit, and z-fail cap lists (12 bytes per capped triangle) for some of them
     KEPT_BYTES = 256 << 20
     KEPT_OLDER_BYTES = 32 << 20
 
@@ -127,7 +140,7 @@ class CpuVolumes:
         if not self._counting:
             self._counting = self._programs("caster_count.frag")
             if self.light4 is not None:
-                _set_light(self._counting, self.light4)
+                _set_light(self._counting, self.light4, self.geometry.origin)
         return self._counting
 
     @property
@@ -149,7 +162,7 @@ class CpuVolumes:
         programs."""
         light4 = np.asarray(light4, np.float64)
         self.light4 = light4
-        _set_light(self.programs, light4)
+        _set_light(self.programs, light4, self.geometry.origin)
         if self._transient is not None:   # drawn already (GL keeps a buffer its draws use)
             self._transient.release()
             self._transient = None
@@ -157,7 +170,13 @@ class CpuVolumes:
         kept = self._kept.pop(key, None)
         if kept is None:
             kept = self._build(light4)
+        elif kept.moves != self.geometry.moves and len(kept.corners):
+            kept.buffer.write(self._framed(kept.corners).tobytes())
+            kept.view = -1   # huge side triangles to be cut again, in the new frame
+        kept.moves = self.geometry.moves
+        self._guard_sides(kept)
         kept.frame = self._frame
+        kept.count_bytes()   # the guard's pieces may have grown its buffer
         self._kept[key] = kept
         self._current = kept
         self._fit()
@@ -207,9 +226,11 @@ class CpuVolumes:
             sides.append(tris)
             out.sides[rng.index] = (n_side, len(tris), repeat)
             n_side += len(tris)
-        # float32 at upload: what GL draws; the quads were built in float64 from the welded
-        # positions, which are the drawn vertices exactly, so edges meet the caps exactly
-        data = np.concatenate(sides).astype(np.float32)
+        # float32 at upload, in the frame: what GL draws; the quads were built in float64 from
+        # the welded positions, which minus the origin round to the drawn vertices exactly, so
+        # edges meet the caps exactly
+        out.corners = np.concatenate(sides)
+        data = self._framed(out.corners)
         out.buffer = self.ctx.buffer(data.tobytes() if len(data) else b"\0" * 16)
         out.vaos = {clipped: self.ctx.vertex_array(program, [(out.buffer, "4f", "in_position")])
                     for clipped, program in ((False, self.side_program),
@@ -217,22 +238,90 @@ class CpuVolumes:
         out.count_bytes()
         return out
 
+    def _guard_sides(self, kept: _LightVolumes) -> None:
+        """Cut the side triangles that reach far outside the view to its guard band, as the
+        geometry pass's huge triangles are (`guard`): GL's float32 clipping of a ground
+        quad's silhouette edges 1e6 away lost their z-fail counts at the image border.  The
+        part cut away meets no view ray, so every pixel's count is unchanged.  The cut
+        triangles are zeroed in the buffer (GL draws nothing of them) and their pieces follow
+        the side triangles (`draw_sides` draws them with their object)."""
+        geometry = self.geometry
+        if geometry.guard is None or kept.view == geometry.views or not len(kept.corners):
+            return
+        kept.view = geometry.views
+        far_objects = geometry.far_objects   # only their side triangles can be huge
+        if not len(far_objects) and not kept.extra and not kept.far_extra:
+            return
+        planes, near = geometry.guard
+        far = np.concatenate([np.zeros(0, np.int64)] + [
+            np.arange(kept.sides[i][0] // 3, (kept.sides[i][0] + kept.sides[i][1]) // 3)
+            for i in far_objects])
+        frame = in_frame(kept.corners.reshape(-1, 3, 4)[far], geometry.origin)
+        cut = np.isin(np.arange(len(far)), guard.huge(frame, guard.reach(frame), planes, near))
+        holes = far[cut]
+        if not len(holes) and not kept.extra and not len(geometry.holes) and not kept.far_extra:
+            return
+        data = self._framed(kept.corners).reshape(-1, 3, 4)
+        data[holes] = 0.0
+        # the object of every side triangle, from the per-object vertex ranges
+        owner = np.zeros(len(data), np.int64)
+        for i, (first, n, _) in kept.sides.items():
+            owner[first // 3:(first + n) // 3] = i
+        pieces, kept.extra, at = [], {}, 3 * len(data)
+        for i in np.unique(owner[holes]):
+            mine = [guard.cut(frame[k], planes) for k in np.flatnonzero(cut)
+                    if owner[far[k]] == i]
+            tris = np.concatenate(mine).reshape(-1, 4).astype(np.float32)
+            pieces.append(tris)
+            kept.extra[int(i)] = (at, len(tris))
+            at += len(tris)
+        # the far caps of the huge triangles the geometry pass cut: their projections from a
+        # point light to infinity (V - L, 0), cut to the guard pyramid in homogeneous
+        # coordinates, wound so that they face out of the volume with the sides' front face
+        # (ccw: a sign-1 far cap is drawn cw, `_FRONT_FACE`); no ties at infinity, so the
+        # order of their corners is free.  `draw_caps` draws them; the index lists skip them.
+        kept.far_extra = {}
+        for i, tris in far_cap_pieces(geometry, self.light4, kept.signs):
+            pieces.append(tris)
+            kept.far_extra[i] = (at, len(tris))
+            at += len(tris)
+        data = np.concatenate([data.reshape(-1, 4)] + pieces)
+        if data.nbytes > kept.buffer.size:
+            kept.buffer.orphan(data.nbytes)
+        kept.buffer.write(np.ascontiguousarray(data).tobytes())
+
+    def _framed(self, corners: np.ndarray) -> np.ndarray:
+        """(n, 4) float64 world homogeneous corners -> float32 in the geometry's frame."""
+        return in_frame32(corners, self.geometry.origin)
+
     def _prepare_caps(self, objects: tuple[int, ...]) -> None:
         """Upload the cap index lists (the soup vertices of the triangles of each sign) of
         `objects` for the prepared light."""
         cur = self._current
-        if cur.capped == objects:
+        if cur.capped == objects and cur.cuts == self.geometry.cuts:
             return
         indices, n_index = [], 0
         cur.caps.clear()
-        for sign in (1, -1):   # each sign's lists one after another: one draw per sign
-            for i in objects:
-                rng = self.geometry.ranges[i]
-                t = np.flatnonzero(cur.signs[i] == sign) + rng.first
-                idx = (3 * t[:, None] + np.arange(3)).reshape(-1)
-                indices.append(idx)
-                cur.caps[i, sign] = (n_index, len(idx))
-                n_index += len(idx)
+        geometry = self.geometry
+        # near caps: a huge triangle's pieces in its place (`SceneGeometry.set_view`), as the
+        # geometry pass drew them, for the tie; far caps: the whole triangle, whose projection
+        # from the light the pieces' is not.  (The part of the near cap left out meets no view
+        # ray: the counts at every pixel are those of the closed volume.)  Without huge
+        # triangles both use the same lists.
+        for near in (True, False) if len(geometry.holes) else (True,):
+            for sign in (1, -1):   # each sign's lists one after another: one draw per sign
+                for i in objects:
+                    t = np.flatnonzero(cur.signs[i] == sign) + geometry.ranges[i].first
+                    if near:
+                        t = geometry.pieces_of(t)
+                    elif len(geometry.holes):   # drawn cut (`_guard_sides`)
+                        t = t[~np.isin(t, geometry.holes)]
+                    idx = (3 * t[:, None] + np.arange(3)).reshape(-1)
+                    indices.append(idx)
+                    cur.caps[i, sign, near] = (n_index, len(idx))
+                    n_index += len(idx)
+        if not len(geometry.holes):
+            cur.caps.update({(i, sign, False): v for (i, sign, _), v in list(cur.caps.items())})
         data = np.concatenate(indices).astype(np.int32)
         for vao in cur.cap_vaos.values():
             vao.release()
@@ -246,6 +335,7 @@ class CpuVolumes:
             index_element_size=4) for near, program in ((True, self.near_program),
                                                         (False, self.far_program))}
         cur.capped = objects
+        cur.cuts = self.geometry.cuts
         cur.count_bytes()
         if cur is not self._transient:
             self._fit()
@@ -268,14 +358,16 @@ class CpuVolumes:
         needs 256 layers either way.)  Z-fail casters must not be halved: their caps count 1
         per triangle."""
         sides = self._current.sides
+        extra = self._current.extra   # pieces of huge side triangles (`_guard_sides`)
         if each is not None:
             vao = self._counting_vao("sides", clipped)
             for i in objects:
-                first, count, repeat = sides[i]
-                if count:
+                spans = [s for s in (sides[i][:2], extra.get(i, (0, 0))) if s[1]]
+                if spans:
                     each(vao.program, i)
-                    for _ in range(1 if halve else repeat):
-                        vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+                    for _ in range(1 if halve else sides[i][2]):
+                        for first, count in spans:
+                            vao.render(moderngl.TRIANGLES, vertices=count, first=first)
             return
         vao = self._current.vaos[clipped]
         # every object once, then the objects drawn twice once more: INCR_WRAP / DECR_WRAP
@@ -284,7 +376,8 @@ class CpuVolumes:
         if not halve:
             rounds.append([i for i in objects if sides[i][2] == 2])
         for round_ in rounds:
-            for first, count in _runs(sides[i][:2] for i in round_):
+            spans = [sides[i][:2] for i in round_] + [extra[i] for i in round_ if i in extra]
+            for first, count in _runs(spans):
                 vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def draw_caps(self, objects, near: bool, each=None) -> None:
@@ -300,15 +393,26 @@ class CpuVolumes:
         for sign in (1, -1):
             self.ctx.front_face = _FRONT_FACE[near, sign]
             if each is None:
-                for first, count in _runs(cur.caps[i, sign] for i in objects):
+                for first, count in _runs(cur.caps[i, sign, near] for i in objects):
                     vao.render(moderngl.TRIANGLES, vertices=count, first=first)
                 continue
             for i in objects:
-                first, count = cur.caps[i, sign]
+                first, count = cur.caps[i, sign, near]
                 if count:
                     each(vao.program, i)
                     vao.render(moderngl.TRIANGLES, vertices=count, first=first)
         self.ctx.front_face = "ccw"
+        if not near and cur.far_extra:   # huge triangles' far caps, cut (`_guard_sides`)
+            if each is None:
+                for first, count in _runs(cur.far_extra[i] for i in objects
+                                          if i in cur.far_extra):
+                    cur.vaos[False].render(moderngl.TRIANGLES, vertices=count, first=first)
+                return
+            vao = self._counting_vao("sides", False)
+            for i in (i for i in objects if i in cur.far_extra):
+                each(vao.program, i)
+                first, count = cur.far_extra[i]
+                vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def _counting_vao(self, role: str, variant: bool) -> moderngl.VertexArray:
         """The prepared light's vao of the counting program for ("sides", clipped?) or
@@ -336,6 +440,37 @@ class CpuVolumes:
             obj.release()
 
 
+def far_cap_pieces(geometry: SceneGeometry, light4: np.ndarray, signs: list[np.ndarray]
+                   ) -> list[tuple[int, np.ndarray]]:
+    """The far caps of the huge triangles the geometry pass cut (`SceneGeometry.holes`), for a
+    point light: each triangle projected to infinity, (V - L, 0), cut to the guard pyramid in
+    homogeneous coordinates (`guard.cut`), wound to face out of its volume when drawn with the
+    front face ccw (a sign-1 far cap is drawn cw: `_FRONT_FACE`; at infinity there are no
+    depth ties, so the order of its corners is free).  signs : per object, the triangles'
+    signs.  Returns (object, (n, 4) float32 homogeneous frame corners) per object; none for a
+    directional light (its far cap is a point)."""
+    light = in_frame(light4, geometry.origin)
+    out = []
+    if light[3] == 0.0 or not len(geometry.holes):
+        return out
+    planes = geometry.guard[0]
+    objects = geometry.triangle_objects[geometry.holes]
+    for i in np.unique(objects):
+        mine = []
+        for t in geometry.holes[objects == i]:
+            sign = signs[i][t - geometry.ranges[i].first]
+            if sign == 0:
+                continue
+            cap = np.zeros((3, 4))
+            cap[:, :3] = geometry.frame_corners[t].astype(np.float64) * light[3] - light[:3]
+            tris = guard.cut(cap, planes)
+            if len(tris):   # a far cap wholly outside the guard pyramid leaves none
+                mine.append(tris[:, ::-1] if sign == 1 else tris)
+        if mine:
+            out.append((int(i), np.concatenate(mine).reshape(-1, 4).astype(np.float32)))
+    return out
+
+
 def _runs(ranges) -> list[tuple[int, int]]:
     """(first, count) ranges, empty ones dropped and ranges that continue each other merged:
     one draw call per run instead of one per object."""
@@ -356,22 +491,30 @@ class GpuVolumes:
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
         (self.edge_program, self.clip_program, self.near_program,
-         self.far_program) = self._stencil = self._programs("volume.frag")
+         self.far_program) = self._programs("volume.frag")
+        # the cut far caps of huge triangles (`far_cap_pieces`), homogeneous triangles
+        self.piece_program = glsl.program(ctx, "volume_side.vert", "volume.frag")
+        self._stencil = (self.edge_program, self.clip_program, self.near_program,
+                         self.far_program, self.piece_program)
         self._counting: tuple[moderngl.Program, ...] = ()
         self._counting_vaos: tuple[moderngl.VertexArray, ...] = ()
+        self._counting_far_vao: moderngl.VertexArray | None = None
+        self._far: dict[int, tuple[int, int]] = {}
+        self._far_key = None
+        self._far_buffer: moderngl.Buffer | None = None
+        self._far_vao: moderngl.VertexArray | None = None
         # every soup vertex also carries its triangle's other two corners (float32, as drawn)
-        corners = geometry.soup_corners()                                # (M, 3, 3)
-        self.corner_buffers = [ctx.buffer(np.repeat(corners[:, k], 3, axis=0).tobytes())
-                               for k in (1, 2)]
-        records, self._records = [], {}
+        self.corner_buffers = [ctx.buffer(data.tobytes()) for data in self._corner_data()]
+        self._records = {}
         n = 0
         for rng, topo in zip(geometry.ranges, geometry.topologies):
-            rec = edge_records(topo)
-            records.append(rec)
-            self._records[rng.index] = (n, len(rec))
-            n += len(rec)
-        self.edge_buffer = ctx.buffer(np.concatenate(records).tobytes())
-        self.edge_vao, self.clip_vao, self.near_vao, self.far_vao = self._vaos(self._stencil)
+            count = len(edge_records(topo, geometry.origin, counts_only=True))
+            self._records[rng.index] = (n, count)
+            n += count
+        self.edge_buffer = ctx.buffer(self._edge_data().tobytes())
+        self._moves, self._cuts = geometry.moves, geometry.cuts
+        self.edge_vao, self.clip_vao, self.near_vao, self.far_vao = self._vaos(
+            self._stencil[:4])
         self.light4 = None
 
     def _programs(self, fragment: str) -> tuple[moderngl.Program, ...]:
@@ -401,17 +544,64 @@ class GpuVolumes:
     def counting_programs(self) -> tuple[moderngl.Program, ...]:
         """As `CpuVolumes.counting_programs`."""
         if not self._counting:
-            self._counting = self._programs("caster_count.frag")
-            self._counting_vaos = self._vaos(self._counting)
+            self._counting = self._programs("caster_count.frag") + (
+                glsl.program(self.ctx, "volume_side.vert", "caster_count.frag"),)
+            self._counting_vaos = self._vaos(self._counting[:4])
             if self.light4 is not None:
-                _set_light(self._counting, self.light4)
+                _set_light(self._counting, self.light4, self.geometry.origin)
         return self._counting
+
     def new_frame(self) -> None:
         """Nothing is kept per light (the common interface)."""
 
+    def _corner_data(self) -> list[np.ndarray]:
+        """The soup's, then the pieces' (their triangle's) second and third corners."""
+        corners = self.geometry.soup_corners()                           # (M, 3, 3) float32
+        t = np.concatenate([np.arange(len(corners)), self.geometry.piece_of])
+        return [np.repeat(corners[t, k], 3, axis=0) for k in (1, 2)]
+
+    def _edge_data(self) -> np.ndarray:
+        return np.concatenate([edge_records(topo, self.geometry.origin)
+                               for topo in self.geometry.topologies])
+
     def prepare(self, light4: np.ndarray) -> None:
         self.light4 = light4  # everything else happens in the shaders
-        _set_light(self.programs, light4)
+        _set_light(self.programs, light4, self.geometry.origin)
+        geometry = self.geometry
+        if self._moves != geometry.moves or self._cuts != geometry.cuts:
+            # the frame moved or the pieces of huge triangles changed: rewrite, growing
+            for buf, data in zip(self.corner_buffers, self._corner_data()):
+                if data.nbytes > buf.size:
+                    buf.orphan(data.nbytes)
+                buf.write(data.tobytes())
+        if self._moves != geometry.moves:
+            self.edge_buffer.write(self._edge_data().tobytes())
+        self._moves, self._cuts = geometry.moves, geometry.cuts
+        key = (geometry.views, np.asarray(light4, np.float64).tobytes())
+        if self._far_key != key:
+            self._far_key, self._far = key, {}
+            if len(geometry.holes):
+                # the signs in float64 from the topology, as the CPU silhouettes'; the GPU's
+                # own (float32, tri_sign) could differ only for a triangle edge-on to the light
+                signs = {int(i): topology_signs(geometry.topologies[i], light4)
+                         for i in np.unique(geometry.triangle_objects[geometry.holes])}
+                pieces = far_cap_pieces(geometry, light4, signs)
+                data, at = [], 0
+                for i, tris in pieces:
+                    self._far[i] = (at, len(tris))
+                    data.append(tris)
+                    at += len(tris)
+                if data:
+                    self._write_far(np.concatenate(data))
+
+    def _write_far(self, data: np.ndarray) -> None:
+        if self._far_buffer is None:
+            self._far_buffer = self.ctx.buffer(reserve=data.nbytes)
+            self._far_vao = self.ctx.vertex_array(
+                self.piece_program, [(self._far_buffer, "4f", "in_position")])
+        elif data.nbytes > self._far_buffer.size:
+            self._far_buffer.orphan(data.nbytes)
+        self._far_buffer.write(np.ascontiguousarray(data).tobytes())
 
     def draw_sides(self, objects, halve: bool = False, clipped: bool = False,
                    each=None) -> None:
@@ -442,15 +632,35 @@ class GpuVolumes:
         for sign in (1, -1):
             vao.program["u_cap_sign"].value = sign
             self.ctx.front_face = _FRONT_FACE[near, sign]
+            # near caps as the geometry pass drew them (huge triangles' pieces); far caps whole
+            # (see `CpuVolumes._prepare_caps`): huge ones' far caps cut, drawn below
+            if each is None:
+                spans = self.geometry.spans(sorted(int(i) for i in objects), pieces=near)
+                for first, count in spans:
+                    vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
+                continue
             for i in objects:
-                rng = self.geometry.ranges[i]
-                if each is not None:
-                    each(vao.program, i)
-                vao.render(moderngl.TRIANGLES, vertices=3 * rng.count,
-                                    first=3 * rng.first)
+                each(vao.program, i)
+                for first, count in self.geometry.spans([int(i)], pieces=near):
+                    vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
         self.ctx.front_face = "ccw"
+        if not near and self._far:
+            if each is None:
+                for first, count in _runs(self._far[i] for i in objects if i in self._far):
+                    self._far_vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+                return
+            if self._counting_far_vao is None:   # the buffer is made once, then orphaned
+                self._counting_far_vao = self.ctx.vertex_array(
+                    self._counting[4], [(self._far_buffer, "4f", "in_position")])
+            for i in (i for i in objects if i in self._far):
+                each(self._counting[4], i)
+                first, count = self._far[i]
+                self._counting_far_vao.render(moderngl.TRIANGLES, vertices=count, first=first)
 
     def release(self) -> None:
+        for obj in (self._far_vao, self._counting_far_vao, self._far_buffer):
+            if obj is not None:
+                obj.release()
         for obj in (self.edge_vao, self.clip_vao, self.near_vao, self.far_vao,
                     *self._counting_vaos, self.edge_buffer, *self.corner_buffers,
                     *self.programs):
@@ -463,9 +673,12 @@ EDGE_RECORD = np.dtype([("a", "<f4", 3), ("b", "<f4", 3), ("c", "<f4", (MAX_OPPO
                         ("count", "<i4")])
 
 
-def edge_records(topo) -> np.ndarray:
-    """(r,) EDGE_RECORD: every edge with its opposite vertices, MAX_OPPOSITE per record; an
-    edge on n triangles takes ceil(n / MAX_OPPOSITE) records (multiplicity is additive)."""
+def edge_records(topo, origin: np.ndarray | None = None, counts_only: bool = False
+                 ) -> np.ndarray:
+    """(r,) EDGE_RECORD: every edge with its opposite vertices, MAX_OPPOSITE per record, in the
+    frame of `origin` (3,) float64 (default: world space); an edge on n triangles takes ceil(n / MAX_OPPOSITE) records
+    (multiplicity is additive).  `counts_only`: the records' count is right, not their
+    positions (cheap)."""
     per_edge = topo.triangles_per_edge                                  # (e,)
     n_rec = -(-per_edge // MAX_OPPOSITE)
     rec_first = np.concatenate([[0], np.cumsum(n_rec)[:-1]])
@@ -474,14 +687,19 @@ def edge_records(topo) -> np.ndarray:
     rec = rec_first[topo.inc_edge] + rank // MAX_OPPOSITE
     out = np.zeros(int(n_rec.sum()), EDGE_RECORD)
     rec_edge = np.repeat(np.arange(len(per_edge)), n_rec)
-    out["a"] = topo.vertices[topo.edges[rec_edge, 0]]
-    out["b"] = topo.vertices[topo.edges[rec_edge, 1]]
-    out["c"][rec, rank % MAX_OPPOSITE] = topo.vertices[topo.inc_opposite]
     out["count"] = np.bincount(rec, minlength=len(out))
+    if counts_only:
+        return out
+    vertices = to_frame(topo.vertices, np.zeros(3) if origin is None else origin)
+    out["a"] = vertices[topo.edges[rec_edge, 0]]
+    out["b"] = vertices[topo.edges[rec_edge, 1]]
+    out["c"][rec, rank % MAX_OPPOSITE] = vertices[topo.inc_opposite]
     return out
 
 
-def _set_light(programs, light4: np.ndarray) -> None:
-    """The one place `u_light` of the volume programs is set: by the builder that holds it."""
+def _set_light(programs, light4: np.ndarray, origin: np.ndarray) -> None:
+    """The one place `u_light` of the volume programs is set: by the builder that holds it,
+    in the frame of `origin`."""
+    light = in_frame(light4, origin)
     for p in programs:
-        glsl.set_uniform(p, "u_light", tuple(float(x) for x in light4))
+        glsl.set_uniform(p, "u_light", tuple(float(x) for x in light))

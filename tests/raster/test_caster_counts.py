@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from builders import SCENES, cards_scene
+from worlds import lamp_room
 
 from shadowvol.primitives import box, plane, sphere
 from shadowvol.raster import passes, truth
@@ -48,6 +49,10 @@ def scene_cases() -> dict[str, Scene]:
         + list(cards_scene(**SIZE).objects[1:]),
         lights=[PointLight([0.3, 4.0, 2.0]), DirectionalLight([-0.6, -1.0, -0.3]), spot],
         **SIZE)
+    # a ground quad 1e7 wide: cut into pieces near the eye, its far cap cut too (large worlds)
+    out["huge ground"] = lamp_room(1e7, offset=[2e6, 0.0, -1e6], turn=30.0,
+                                   size=(SIZE["width"], SIZE["height"])).replace(
+        camera=Camera(eye=[3.0, 2.5, 4.0], target=[-1.0, 0.2, -0.5], fov_y=60.0))
     return out
 
 
