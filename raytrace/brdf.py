@@ -87,15 +87,27 @@ def around(axis: np.ndarray, cos_theta: np.ndarray, phi: np.ndarray) -> np.ndarr
 
 
 def cosine_hemisphere_rows(rng: np.random.Generator, n: np.ndarray) -> np.ndarray:
-    """Directions (3, k) about unit normals n (3, k) with density cos(theta) / pi."""
+    """Directions (3, k) about unit normals n (3, k) with density cos(theta) / pi: n plus a
+    uniform point of the unit sphere, normalised (the unit sphere through the origin centred on
+    n, seen from the origin: uniform area there is density cos(theta) / pi; no tangent frame).
+    The measure-zero case n + s = 0 gives n."""
     k = n.shape[1]
     u1, u2 = rng.random(k), rng.random(k)
-    return around_rows(n, np.sqrt(1.0 - u1), 2.0 * math.pi * u2)
+    z = 1.0 - 2.0 * u1
+    r = np.sqrt(np.maximum(1.0 - z * z, 0.0))
+    phi = 2.0 * math.pi * u2
+    w = np.stack([n[0] + r * np.cos(phi), n[1] + r * np.sin(phi), n[2] + z])
+    length2 = dot_rows(w, w)
+    ok = length2 > 0.0
+    w *= 1.0 / np.sqrt(np.where(ok, length2, 1.0))
+    return np.where(ok, w, n)
 
 
 def cosine_hemisphere(rng: np.random.Generator, n: np.ndarray) -> np.ndarray:
-    """Directions (k, 3) about unit normals n (k, 3) with density cos(theta) / pi."""
-    return _rows(cosine_hemisphere_rows(rng, _rows(n)))
+    """Directions (k, 3) about unit normals n (k, 3) with density cos(theta) / pi (by a
+    tangent frame, `around`: radiosity's form-factor rays)."""
+    u1, u2 = rng.random(len(n)), rng.random(len(n))
+    return around(n, np.sqrt(1.0 - u1), 2.0 * math.pi * u2)
 
 
 def mirror_rows(wo: np.ndarray, n: np.ndarray) -> np.ndarray:

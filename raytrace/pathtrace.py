@@ -59,7 +59,7 @@ from .tolerances import surface_offset
 RR_START_BOUNCE = 3  # Russian roulette from the third bounce on
 RR_MAX_SURVIVAL = 0.95  # never certain survival: bounds the expected path length
 DEFAULT_MAX_DEPTH = 64  # bounces; the truncation bias is below rho^64 of the image
-TILE_PATHS = 1 << 16  # paths traced together: bounds memory, sets the progress step
+TILE_PATHS = 1 << 14  # paths traced together: their arrays stay in cache; progress step
 LEAVING_STANDOFF = 10.0  # `radiance_leaving` starts its rays this many surface offsets out
 
 
@@ -78,8 +78,9 @@ class PathWorld:
     p_diffuse : (K,);  emission : (K, 3)
     emitters : (E,) int, emissive triangles;  emitter_cdf : (E,) float64, cumulative choice
     probability (area x mean emission)
-    The tracer's tables per triangle (`tri_*`), vectors as (3, M) rows: what a hit needs is one
-    gather by triangle from a small table, no per-object indirection.
+    The tracer's own tables, vectors as rows: per triangle (`surface`) and per emitter
+    (`sample_emitters`), each packed into one small (P, M) array, so that what a hit needs is
+    one gather by triangle, no per-object indirection; tri_emission (3, M).
     """
 
     def __init__(self, scene: Scene, backend: str = "embree", parallel: bool = True):
@@ -109,28 +110,53 @@ class PathWorld:
         self.light_pdf_area = np.zeros(len(self.area))
         self.light_pdf_area[self.emitters] = self.emitter_prob / self.area[self.emitters]
         self.lights = scene.lights
-        # per triangle, vectors as rows (3, M)
+        # per triangle, one packed table (rows: `surface`), only the rows this scene needs
         ob = self.tri_object
-        rows = lambda a: np.ascontiguousarray(a[ob].T)  # noqa: E731
-        self.tri_normal = np.ascontiguousarray(self.tracer.normals.T)
-        self.tri_plane_d = self.tracer.plane_d
-        self.tri_kd, self.tri_ks, self.tri_emission = rows(self.kd), rows(self.ks), \
-            rows(self.emission)
-        self.tri_shininess, self.tri_p_diffuse = self.shininess[ob], self.p_diffuse[ob]
-        self.tri_refl, self.tri_transp, self.tri_ior = self.refl[ob], self.transp[ob], \
-            self.ior[ob]
-        self.tri_phong = 1.0 - self.tri_refl - self.tri_transp  # the Phong lobes' weight
-        self.tri_glossy = self.ks[ob].max(axis=1) > 0.0
-        self.tri_emits = self.emission[ob].max(axis=1) > 0.0
-        self.any_glossy = bool(self.tri_glossy.any())
-        self.any_delta = bool((self.tri_refl > 0.0).any() or (self.tri_transp > 0.0).any())
+        tri_emission = self.emission[ob]
+        self.tri_emits = self.light_pdf_area > 0.0
+        self.any_glossy = bool((self.ks[ob] > 0.0).any())
+        self.any_delta = bool((self.refl[ob] > 0.0).any() or (self.transp[ob] > 0.0).any())
         self.any_emits = bool(self.tri_emits.any())
-        # per emitter: its corners as rows (3, E) and p_A of a point on it
+        table = [("normal", self.tracer.normals.T), ("plane_d", self.tracer.plane_d),
+                 ("kd", self.kd[ob].T)]
+        if self.any_glossy:
+            table += [("ks", self.ks[ob].T), ("shininess", self.shininess[ob]),
+                      ("p_diffuse", self.p_diffuse[ob]),
+                      ("glossy", self.ks[ob].max(axis=1) > 0.0)]
+        if self.any_delta:
+            table += [("phong", 1.0 - self.refl[ob] - self.transp[ob]),
+                      ("refl", self.refl[ob]), ("transp", self.transp[ob]),
+                      ("ior", self.ior[ob])]
+        if self.any_emits:
+            table += [("emits", self.tri_emits.astype(np.float64))]
+        self._tri_table, self._tri_rows = _pack(table)
+        self.tri_emission = np.ascontiguousarray(tri_emission.T)
+        # per emitter: a corner, two edges, the normal, the radiance, p_A of a point on it
         e = self.emitters
-        self.emitter_corners = [np.ascontiguousarray(self.corners[e, i].T) for i in range(3)]
-        self.emitter_normal = np.ascontiguousarray(self.tracer.normals[e].T)
-        self.emitter_pdf_area = self.emitter_prob / self.area[e] if len(e) else np.zeros(0)
-        self.emitter_radiance = np.ascontiguousarray(self.emission[self.tri_object[e]].T)
+        c = self.corners[e]
+        self._emitter_table, self._emitter_rows = _pack([
+            ("a", c[:, 0].T), ("ab", (c[:, 1] - c[:, 0]).T), ("ac", (c[:, 2] - c[:, 0]).T),
+            ("normal", self.tracer.normals[e].T), ("radiance", tri_emission[e].T),
+            ("pdf_area", self.emitter_prob / self.area[e] if len(e) else np.zeros(0))])
+
+    def surface(self, tri: np.ndarray) -> dict:
+        """What the path tracer needs of triangles tri (k,) int (>= 0), from one gather:
+        normal (3, k) by winding, plane_d (k,), kd (3, k); ks (3, k), shininess, p_diffuse (k,)
+        if the scene has a glossy material (else None, None, 1.0), and glossy (m,), the indices
+        of those with a glossy lobe (`brdf.phong_eval_rows`); phong (the Phong lobes'
+        weight), refl, transp, ior (k,) if it has a mirror or glass (else 1.0, None, None,
+        None); emits (k,) bool if it has emitters (else None)."""
+        rows = _unpack(np.take(self._tri_table, tri, axis=1), self._tri_rows)
+        rows.setdefault("ks", None)
+        rows.setdefault("shininess", None)
+        rows.setdefault("p_diffuse", 1.0)
+        rows.setdefault("phong", 1.0)
+        for name in ("refl", "transp", "ior"):
+            rows.setdefault(name, None)
+        rows["emits"] = rows["emits"] > 0.0 if "emits" in rows else None
+        rows["glossy"] = np.flatnonzero(rows["glossy"]) if "glossy" in rows else \
+            np.zeros(0, np.int64)
+        return rows
 
     def intersect(self, o: np.ndarray, d: np.ndarray):
         """Closest hits of rays o, d (n, 3) float64: t (n,) (inf: miss), tri (n,) int (-1: miss),
@@ -154,15 +180,30 @@ class PathWorld:
         return self.tracer.occluded(o.T, d.T, tmax, parallel=self.parallel)
 
     def sample_emitters(self, rng: np.random.Generator, k: int):
-        """k points on the emitters: y (3, k), their index j (k,) into `emitters`, and p_A(y)
-        (k,), the area density of the choice."""
+        """k points on the emitters: y (3, k), the emitters' unit normals (3, k) by winding
+        and radiance (3, k), and p_A(y) (k,), the area density of the choice."""
         j = np.minimum(np.searchsorted(self.emitter_cdf, rng.random(k), side="right"),
                        len(self.emitters) - 1)
         u1, u2 = rng.random(k), rng.random(k)
         r = np.sqrt(u1)
-        a, b, c = (_take(x, j) for x in self.emitter_corners)
-        y = (1.0 - r) * a + (r * (1.0 - u2)) * b + (r * u2) * c
-        return y, j, _take(self.emitter_pdf_area, j)
+        e = _unpack(np.take(self._emitter_table, j, axis=1), self._emitter_rows)
+        y = e["a"] + (r * (1.0 - u2)) * e["ab"] + (r * u2) * e["ac"]
+        return y, e["normal"], e["radiance"], e["pdf_area"]
+
+
+def _pack(columns) -> tuple[np.ndarray, dict]:
+    """Rows (n,) or (m, n) stacked into one (P, n) float64 table, and each name's row slice."""
+    rows, slices, at = [], {}, 0
+    for name, value in columns:
+        value = np.atleast_2d(np.asarray(value, np.float64))
+        rows.append(value)
+        slices[name] = slice(at, at + len(value)) if len(value) > 1 else at
+        at += len(value)
+    return np.ascontiguousarray(np.concatenate(rows)), slices
+
+
+def _unpack(table: np.ndarray, slices: dict) -> dict:
+    return {name: table[s] for name, s in slices.items()}
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,27 +228,25 @@ def _scatter_add(L: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
         L[c, index] += values[c]
 
 
-def next_event(world: PathWorld, rng, p, n, wo, tri, beta, glossy, mis: bool = True
+def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, mis: bool = True
                ) -> tuple[np.ndarray, int]:
-    """Direct light (3, k) at vertices p (3, k) with normals n (3, k) facing wo (3, k), on
-    triangles tri (k,), throughputs beta (3, k), from one emitter sample each and every delta
-    light; glossy: the indices of the vertices with a glossy lobe (`phong_eval_rows`).
-    mis: weigh the emitter sample by its MIS share (False at the last bounce, where no BSDF
-    sample follows to take the rest).  Returns the contributions and the shadow rays traced."""
+    """Direct light (3, k) at vertices p (3, k) with normals n (3, k) facing wo (3, k), of
+    surfaces surf (`PathWorld.surface`), throughputs beta (3, k), from one emitter sample each
+    and every delta light.  mis: weigh the emitter sample by its MIS share (False at the last
+    bounce, where no BSDF sample follows to take the rest).  Returns the contributions and the
+    shadow rays traced."""
     k = p.shape[1]
     out = np.zeros((3, k))
-    w_phong = _take(world.tri_phong, tri)
-    kd, ks, s = _take(world.tri_kd, tri), _take(world.tri_ks, tri), \
-        _take(world.tri_shininess, tri)
+    w_phong, glossy = surf["phong"], surf["glossy"]
+    kd, ks, s = surf["kd"], surf["ks"], surf["shininess"]
     start = p + world.offset * n
     rays = 0
     with np.errstate(divide="ignore", invalid="ignore"):
         if len(world.emitters):
-            y, j, p_area = world.sample_emitters(rng, k)
+            y, n_y, radiance, p_area = world.sample_emitters(rng, k)
             to_y = y - p
             dist2 = dot_rows(to_y, to_y)
             wi = to_y * (1.0 / np.sqrt(np.maximum(dist2, 1e-300)))
-            n_y = _take(world.emitter_normal, j)
             cos_x = dot_rows(n, wi)
             cos_y = -dot_rows(n_y, wi)
             side = np.where(cos_y >= 0.0, world.offset, -world.offset)  # toward x
@@ -223,11 +262,11 @@ def next_event(world: PathWorld, rng, p, n, wo, tri, beta, glossy, mis: bool = T
             g = cos_x * cos_y / (dist2 * p_area)
             if mis:
                 p_light = p_area * dist2 / cos_y
-                p_bsdf = w_phong * phong_pdf_rows(_take(world.tri_p_diffuse, tri), s, n, wo, wi,
-                                                  glossy, cos_t=cos_x)
+                p_bsdf = w_phong * phong_pdf_rows(surf["p_diffuse"], s, n, wo, wi, glossy,
+                                                  cos_t=cos_x)
                 g *= p_light / (p_light + p_bsdf)
             g = np.where(lit, g * w_phong, 0.0)
-            out += beta * f * _take(world.emitter_radiance, j) * g
+            out += beta * f * radiance * g
         for light in world.lights:
             if isinstance(light, DirectionalLight):
                 wi = np.repeat(-np.asarray(light.direction, float)[:, None], k, axis=1)
@@ -264,7 +303,7 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
     return np.ascontiguousarray(L.T), rays
 
 
-def _delta_bounce(world, d, n, entering, tri, p, is_mirror, is_glass, new_o, new_d):
+def _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, new_d):
     """Directions (and, through glass, starts) of the mirror and glass bounces, in place in
     new_o, new_d (3, k).  Rare: done on (m, 3) copies with the Whitted formulas."""
     m = np.flatnonzero(is_mirror)
@@ -272,7 +311,7 @@ def _delta_bounce(world, d, n, entering, tri, p, is_mirror, is_glass, new_o, new
         new_d[:, m] = reflect(_take(d, m).T, _take(n, m).T).T
     g = np.flatnonzero(is_glass)
     if len(g):
-        ior = _take(world.tri_ior, _take(tri, g))
+        ior = _take(surf["ior"], g)
         eta = np.where(_take(entering, g), 1.0 / ior, ior)
         ng = _take(n, g)
         t, tir = refract(_take(d, g).T, ng.T, eta)
@@ -306,19 +345,18 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
                 break
             o, d, tri, path, beta, count_emission, bsdf_pdf = (
                 _take(x, h) for x in (o, d, tri, path, beta, count_emission, bsdf_pdf))
-        geo_n = _take(world.tri_normal, tri)
+        surf = world.surface(tri)
+        geo_n = surf["normal"]
         d_n = dot_rows(geo_n, d)
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = (_take(world.tri_plane_d, tri) - dot_rows(geo_n, o)) / d_n  # backends.refine
+            t = (surf["plane_d"] - dot_rows(geo_n, o)) / d_n  # as backends.refine
         t = np.where(np.isfinite(t), t, 0.0)
         p = o + t * d
         entering = d_n < 0.0
         n = geo_n * np.where(entering, 1.0, -1.0)  # faces the ray's origin
         wo = -d
-        glossy = np.flatnonzero(_take(world.tri_glossy, tri)) if world.any_glossy else \
-            np.zeros(0, np.int64)
         if world.any_emits:
-            emits = _take(world.tri_emits, tri)
+            emits = surf["emits"]
             e = np.flatnonzero(count_emission & emits)
             if len(e):
                 _scatter_add(L, _take(path, e),
@@ -333,8 +371,7 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
                 w = pe / (pe + p_light)
                 _scatter_add(L, _take(path, e),
                              _take(beta, e) * _take(world.tri_emission, te) * w)
-        direct, shadow = next_event(world, rng, p, n, wo, tri, beta, glossy,
-                                    mis=bounce < max_depth)
+        direct, shadow = next_event(world, rng, p, n, wo, surf, beta, mis=bounce < max_depth)
         rays += shadow
         _scatter_add(L, path, direct)
         if bounce == max_depth:
@@ -342,28 +379,25 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
         k = len(tri)
         new_o = p + world.offset * n
         if world.any_delta:
-            refl, transp = _take(world.tri_refl, tri), _take(world.tri_transp, tri)
             u = rng.random(k)
-            is_mirror = u < refl
-            is_glass = ~is_mirror & (u < refl + transp)
+            is_mirror = u < surf["refl"]
+            is_glass = ~is_mirror & (u < surf["refl"] + surf["transp"])
             is_phong = ~is_mirror & ~is_glass
         else:
             is_phong = np.ones(k, bool)
         # the Phong lobes for all (cheaper than gathering); the delta bounces overwrite theirs
-        s = _take(world.tri_shininess, tri)
-        p_d = _take(world.tri_p_diffuse, tri)
+        s, p_d, glossy = surf["shininess"], surf["p_diffuse"], surf["glossy"]
         new_d = phong_sample_rows(rng, p_d, s, n, wo, glossy)
         cos = dot_rows(n, new_d)
-        f = phong_eval_rows(_take(world.tri_kd, tri), _take(world.tri_ks, tri), s, n, wo, new_d,
-                            glossy, cos_t=cos)
+        f = phong_eval_rows(surf["kd"], surf["ks"], s, n, wo, new_d, glossy, cos_t=cos)
         pdf = phong_pdf_rows(p_d, s, n, wo, new_d, glossy, cos_t=cos)
         ok = (cos > 0.0) & (pdf > 0.0)
         factor = f * np.where(ok, cos / np.where(ok, pdf, 1.0), 0.0)
-        pdf_next = _take(world.tri_phong, tri) * pdf
+        pdf_next = surf["phong"] * pdf
         if world.any_delta:
             factor[:, ~is_phong] = 1.0
             pdf_next[~is_phong] = 0.0
-            _delta_bounce(world, d, n, entering, tri, p, is_mirror, is_glass, new_o, new_d)
+            _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, new_d)
         beta = beta * factor
         strongest = np.maximum(np.maximum(beta[0], beta[1]), beta[2])
         alive = strongest > 0.0
