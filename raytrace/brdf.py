@@ -58,7 +58,7 @@ def _rows(v: np.ndarray) -> np.ndarray:
 def frame_rows(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit tangents t, b (3, k) with (t, b, n) orthonormal, for unit n (3, k)
     (Duff et al. 2017, "Building an orthonormal basis, revisited": no branch, no division by 0)."""
-    sign = np.where(n[2] >= 0.0, 1.0, -1.0)
+    sign = np.where(n[2] >= 0.0, n.dtype.type(1.0), n.dtype.type(-1.0))
     a = -1.0 / (sign + n[2])
     b = n[0] * n[1] * a
     t = np.stack([1.0 + sign * n[0] ** 2 * a, sign * b, -sign * n[0]])
@@ -94,7 +94,8 @@ def cosine_hemisphere_rows(rng: np.random.Generator, n: np.ndarray) -> np.ndarra
     (numpy's float64 sin and cos are ~20 times slower): the direction moves by ~1e-7 rad, far
     below any image's noise; the rest is float64."""
     k = n.shape[1]
-    u1, u2 = rng.random(k), rng.random(k, dtype=np.float32)
+    u1 = rng.random(k, dtype=n.dtype if n.dtype == np.float32 else np.float64)
+    u2 = rng.random(k, dtype=np.float32)
     z = 1.0 - 2.0 * u1
     r = np.sqrt(np.maximum(1.0 - z * z, 0.0))
     phi = np.float32(2.0 * math.pi) * u2
@@ -146,7 +147,7 @@ def phong_eval_rows(kd, ks, s, n, wo, wi, glossy=None, cos_t=None) -> np.ndarray
             f[:, glossy] += lobe
     if cos_t is None:
         cos_t = dot_rows(n, wi)
-    return np.where(cos_t > 0.0, f, 0.0)
+    return f * (cos_t > 0.0)  # f is finite: a product, cheaper than np.where
 
 
 def phong_eval(kd, ks, s, n, wo, wi) -> np.ndarray:

@@ -29,6 +29,17 @@ light the scene.  `scene.ambient` is ignored (the integrator computes what ambie
 Every object is traced as its triangles (spheres as their icospheres), so the emitter that NEE
 samples is exactly the surface that rays hit.  Random numbers: one `numpy` generator per tile,
 spawned from `SeedSequence(seed)`, so an image depends on the seed only (not on the threads).
+
+Layout and precision.  The path state is rows, (3, k) arrays (`brdf`'s `_rows` kernels), in
+float32 (`STATE`): Embree traces float32 anyway, and numpy's float32 loops are about twice as
+fast.  What float32 costs here is bounded: a hit point lies within a few float32 spacings of
+`length_scale` (<= ~4e-7 of it) of its float64 value, and every ray leaves a surface
+`surface_offset` = 1e-4 of `length_scale` out, so a ray cannot start behind the surface it left
+(Whitted's own margin; these images are not masks, CONVENTIONS.md's exact segments are the
+masks'); directions, cosines, densities and throughputs carry ~1e-7 relative errors, far below
+any image's noise; random numbers are float32 (24 bits) except the emitter choice and the camera
+jitter; each path's radiance is float32 and is summed per pixel, and squared for the variance,
+in float64.
 """
 
 from __future__ import annotations
@@ -61,6 +72,10 @@ RR_MAX_SURVIVAL = 0.95  # never certain survival: bounds the expected path lengt
 DEFAULT_MAX_DEPTH = 64  # bounces; the truncation bias is below rho^64 of the image
 TILE_PATHS = 1 << 14  # paths traced together: their arrays stay in cache; progress step
 LEAVING_STANDOFF = 10.0  # `radiance_leaving` starts its rays this many surface offsets out
+# The path state's precision (rays, hit points, throughputs, the tables; see the module
+# docstring) and the smallest value a float32 division below is kept from dividing by.
+STATE = np.float32
+STATE_TINY = 1e-30
 
 
 def _take(a: np.ndarray, index: np.ndarray) -> np.ndarray:
@@ -128,9 +143,9 @@ class PathWorld:
                       ("refl", self.refl[ob]), ("transp", self.transp[ob]),
                       ("ior", self.ior[ob])]
         if self.any_emits:
-            table += [("emits", self.tri_emits.astype(np.float64))]
+            table += [("emits", self.tri_emits), ("light_pdf", self.light_pdf_area)]
         self._tri_table, self._tri_rows = _pack(table)
-        self.tri_emission = np.ascontiguousarray(tri_emission.T)
+        self.tri_emission = np.ascontiguousarray(tri_emission.T, STATE)
         # per emitter: a corner, two edges, the normal, the radiance, p_A of a point on it
         e = self.emitters
         c = self.corners[e]
@@ -145,7 +160,8 @@ class PathWorld:
         if the scene has a glossy material (else None, None, 1.0), and glossy (m,), the indices
         of those with a glossy lobe (`brdf.phong_eval_rows`); phong (the Phong lobes'
         weight), refl, transp, ior (k,) if it has a mirror or glass (else 1.0, None, None,
-        None); emits (k,) bool if it has emitters (else None)."""
+        None); emits (k,) bool and light_pdf (k,), `light_pdf_area`, if it has emitters (else
+        None).  Vectors and numbers are `STATE`."""
         rows = _unpack(np.take(self._tri_table, tri, axis=1), self._tri_rows)
         rows.setdefault("ks", None)
         rows.setdefault("shininess", None)
@@ -184,7 +200,7 @@ class PathWorld:
         and radiance (3, k), and p_A(y) (k,), the area density of the choice."""
         j = np.minimum(np.searchsorted(self.emitter_cdf, rng.random(k), side="right"),
                        len(self.emitters) - 1)
-        u1, u2 = rng.random(k), rng.random(k)
+        u1, u2 = rng.random(k, dtype=STATE), rng.random(k, dtype=STATE)
         r = np.sqrt(u1)
         e = _unpack(np.take(self._emitter_table, j, axis=1), self._emitter_rows)
         y = e["a"] + (r * (1.0 - u2)) * e["ab"] + (r * u2) * e["ac"]
@@ -192,10 +208,10 @@ class PathWorld:
 
 
 def _pack(columns) -> tuple[np.ndarray, dict]:
-    """Rows (n,) or (m, n) stacked into one (P, n) float64 table, and each name's row slice."""
+    """Rows (n,) or (m, n) stacked into one (P, n) `STATE` table, and each name's row slice."""
     rows, slices, at = [], {}, 0
     for name, value in columns:
-        value = np.atleast_2d(np.asarray(value, np.float64))
+        value = np.atleast_2d(np.asarray(value, np.float64)).astype(STATE)
         rows.append(value)
         slices[name] = slice(at, at + len(value)) if len(value) > 1 else at
         at += len(value)
@@ -236,7 +252,7 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, mis: bool = Tr
     bounce, where no BSDF sample follows to take the rest).  Returns the contributions and the
     shadow rays traced."""
     k = p.shape[1]
-    out = np.zeros((3, k))
+    out = np.zeros((3, k), STATE)
     w_phong, glossy = surf["phong"], surf["glossy"]
     kd, ks, s = surf["kd"], surf["ks"], surf["shininess"]
     start = p + world.offset * n
@@ -246,10 +262,10 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, mis: bool = Tr
             y, n_y, radiance, p_area = world.sample_emitters(rng, k)
             to_y = y - p
             dist2 = dot_rows(to_y, to_y)
-            wi = to_y * (1.0 / np.sqrt(np.maximum(dist2, 1e-300)))
+            wi = to_y * (1.0 / np.sqrt(np.maximum(dist2, STATE_TINY)))
             cos_x = dot_rows(n, wi)
             cos_y = -dot_rows(n_y, wi)
-            side = np.where(cos_y >= 0.0, world.offset, -world.offset)  # toward x
+            side = np.where(cos_y >= 0.0, STATE(world.offset), STATE(-world.offset))  # to x
             cos_y = np.abs(cos_y)
             c = np.flatnonzero((cos_x > 0.0) & (cos_y > 0.0) & (w_phong > 0.0) & (dist2 > 0.0))
             seg = y + side * n_y - start
@@ -269,16 +285,16 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, mis: bool = Tr
             out += beta * f * radiance * g
         for light in world.lights:
             if isinstance(light, DirectionalLight):
-                wi = np.repeat(-np.asarray(light.direction, float)[:, None], k, axis=1)
+                wi = np.repeat(-np.asarray(light.direction, STATE)[:, None], k, axis=1)
                 direction, tmax = wi, None
             else:
-                to_l = np.asarray(light.position, float)[:, None] - p
+                to_l = np.asarray(light.position, STATE)[:, None] - p
                 wi = to_l * (1.0 / np.sqrt(dot_rows(to_l, to_l)))
-                direction, tmax = np.asarray(light.position, float)[:, None] - start, 1.0
+                direction, tmax = np.asarray(light.position, STATE)[:, None] - start, 1.0
             cos_x = dot_rows(n, wi)
             ok = (cos_x > 0.0) & (w_phong > 0.0)
             if isinstance(light, SpotLight):
-                ok &= -dot_rows(wi, np.asarray(light.direction, float)[:, None]) \
+                ok &= -dot_rows(wi, np.asarray(light.direction, STATE)[:, None]) \
                     >= light.cos_cutoff
             c = np.flatnonzero(ok)
             blocked = world.occluded_rows(_take(start, c), _take(direction, c), tmax)
@@ -287,7 +303,7 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, mis: bool = Tr
             lit[c] = ~blocked
             f = phong_eval_rows(kd, ks, s, n, wo, wi, glossy, cos_t=cos_x)
             g = np.where(lit, w_phong * cos_x, 0.0)
-            out += beta * f * (math.pi * np.asarray(light.radiance, float)[:, None]) * g
+            out += beta * f * (math.pi * np.asarray(light.radiance, STATE)[:, None]) * g
     return out, rays
 
 
@@ -297,10 +313,8 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
     """Radiance (n, 3) float64 arriving along rays o, d (n, 3) float64 (unit d), one path each,
     and the number of rays traced.  rr_start: first bounce of Russian roulette (a number above
     max_depth turns it off)."""
-    L, rays = trace_rows(world, np.ascontiguousarray(np.asarray(o, np.float64).T),
-                         np.ascontiguousarray(np.asarray(d, np.float64).T), rng, max_depth,
-                         rr_start)
-    return np.ascontiguousarray(L.T), rays
+    L, rays = trace_rows(world, np.asarray(o).T, np.asarray(d).T, rng, max_depth, rr_start)
+    return np.ascontiguousarray(L.T, np.float64), rays
 
 
 def _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, new_d):
@@ -322,15 +336,17 @@ def _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, ne
 def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
                max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE
                ) -> tuple[np.ndarray, int]:
-    """`trace_paths` with rays and radiance as rows: o, d (3, n) -> L (3, n)."""
+    """`trace_paths` with rays and radiance as rows: o, d (3, n) float -> L (3, n) `STATE`."""
+    o = np.ascontiguousarray(o, STATE)
+    d = np.ascontiguousarray(d, STATE)
     n_paths = o.shape[1]
-    L = np.zeros((3, n_paths))
-    background = np.asarray(world.scene.background, np.float64)[:, None]
+    L = np.zeros((3, n_paths), STATE)
+    background = np.asarray(world.scene.background, STATE)[:, None]
     shows_background = bool(background.any())
     path = np.arange(n_paths)
-    beta = np.ones((3, n_paths))
+    beta = np.ones((3, n_paths), STATE)
     count_emission = np.ones(n_paths, bool)  # camera or delta ray: emission counts fully
-    bsdf_pdf = np.zeros(n_paths)  # solid-angle density of the last Phong-sampled direction
+    bsdf_pdf = np.zeros(n_paths, STATE)  # solid-angle density of the last Phong-sampled direction
     rays = 0
     for bounce in range(1, max_depth + 1):
         tri = world.closest_rows(o, d)
@@ -353,7 +369,7 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
         t = np.where(np.isfinite(t), t, 0.0)
         p = o + t * d
         entering = d_n < 0.0
-        n = geo_n * np.where(entering, 1.0, -1.0)  # faces the ray's origin
+        n = geo_n * np.where(entering, STATE(1.0), STATE(-1.0))  # faces the ray's origin
         wo = -d
         if world.any_emits:
             emits = surf["emits"]
@@ -365,8 +381,8 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
             if len(e):  # an emitter found by BSDF sampling: its MIS share
                 te = _take(tri, e)
                 cos_y = np.abs(_take(d_n, e))
-                p_light = (_take(world.light_pdf_area, te) * _take(t, e) ** 2
-                           / np.maximum(cos_y, 1e-300))
+                p_light = (_take(surf["light_pdf"], e) * _take(t, e) ** 2
+                           / np.maximum(cos_y, STATE_TINY))
                 pe = _take(bsdf_pdf, e)
                 w = pe / (pe + p_light)
                 _scatter_add(L, _take(path, e),
@@ -379,7 +395,7 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
         k = len(tri)
         new_o = p + world.offset * n
         if world.any_delta:
-            u = rng.random(k)
+            u = rng.random(k, dtype=STATE)
             is_mirror = u < surf["refl"]
             is_glass = ~is_mirror & (u < surf["refl"] + surf["transp"])
             is_phong = ~is_mirror & ~is_glass
@@ -403,7 +419,7 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
         alive = strongest > 0.0
         if bounce >= rr_start:
             survive = np.minimum(strongest, RR_MAX_SURVIVAL)
-            alive &= rng.random(k) < survive
+            alive &= rng.random(k, dtype=STATE) < survive
             beta = beta * (1.0 / np.where(alive, survive, 1.0))
         keep = np.flatnonzero(alive)
         if len(keep) == 0:
@@ -477,7 +493,7 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
         pixel = np.repeat(np.arange(first, last), spp)  # spp paths per pixel, pixel by pixel
         o, d = camera_rays(scene.camera, W, H, pixel // W, pixel % W, rng if jitter else None)
         L, rays = trace_rows(world, o, d, rng, max_depth, rr_start)
-        L = L.reshape(3, last - first, spp)
+        L = L.astype(np.float64).reshape(3, last - first, spp)
         return slice(first, last), L.sum(axis=2), (L * L).sum(axis=2), rays
 
     with Progress(len(tiles), f"path trace {scene.name}", enabled=progress) as bar:
