@@ -38,8 +38,8 @@ fast.  What float32 costs here is bounded: a hit point lies within a few float32
 (Whitted's own margin; these images are not masks, CONVENTIONS.md's exact segments are the
 masks'); directions, cosines, densities and throughputs carry ~1e-7 relative errors, far below
 any image's noise; random numbers are float32 (24 bits) except the emitter choice and the camera
-jitter; each path's radiance is float32 and is summed per pixel, and squared for the variance,
-in float64.
+jitter; what a path gathers is float32, its radiance sums it in float64 (so that the background
+seen directly is exact), as do the per-pixel sums and squares.
 """
 
 from __future__ import annotations
@@ -152,7 +152,8 @@ class PathWorld:
         self._emitter_table, self._emitter_rows = _pack([
             ("a", c[:, 0].T), ("ab", (c[:, 1] - c[:, 0]).T), ("ac", (c[:, 2] - c[:, 0]).T),
             ("normal", self.tracer.normals[e].T), ("radiance", tri_emission[e].T),
-            ("pdf_area", self.emitter_prob / self.area[e] if len(e) else np.zeros(0))])
+            ("pdf_area", self.emitter_prob / self.area[e] if len(e) else np.zeros(0))],
+            constants=True)  # one rect light: the normal, radiance and density are constants
 
     def surface(self, tri: np.ndarray) -> dict:
         """What the path tracer needs of triangles tri (k,) int (>= 0), from one gather:
@@ -197,29 +198,38 @@ class PathWorld:
 
     def sample_emitters(self, rng: np.random.Generator, k: int):
         """k points on the emitters: y (3, k), the emitters' unit normals (3, k) by winding
-        and radiance (3, k), and p_A(y) (k,), the area density of the choice."""
+        and radiance (3, k), and p_A(y) (k,), the area density of the choice (each of the last
+        three (3, 1) or (1,) where it is the same on all emitters)."""
         j = np.minimum(np.searchsorted(self.emitter_cdf, rng.random(k), side="right"),
                        len(self.emitters) - 1)
         u1, u2 = rng.random(k, dtype=STATE), rng.random(k, dtype=STATE)
         r = np.sqrt(u1)
-        e = _unpack(np.take(self._emitter_table, j, axis=1), self._emitter_rows)
+        e = _unpack(np.take(self._emitter_table, j, axis=1) if len(self._emitter_table)
+                    else self._emitter_table, self._emitter_rows)
         y = e["a"] + (r * (1.0 - u2)) * e["ab"] + (r * u2) * e["ac"]
         return y, e["normal"], e["radiance"], e["pdf_area"]
 
 
-def _pack(columns) -> tuple[np.ndarray, dict]:
-    """Rows (n,) or (m, n) stacked into one (P, n) `STATE` table, and each name's row slice."""
+def _pack(columns, constants: bool = False) -> tuple[np.ndarray, dict]:
+    """Rows (n,) or (m, n) stacked into one (P, n) `STATE` table, and each name's row slice.
+    constants: an entry equal for all n items is left out of the table and kept as a (m, 1) or
+    (1,) array, to broadcast instead of being gathered (only for callers that never index a
+    gathered entry themselves)."""
     rows, slices, at = [], {}, 0
     for name, value in columns:
         value = np.atleast_2d(np.asarray(value, np.float64)).astype(STATE)
+        if constants and value.shape[1] and (value == value[:, :1]).all():
+            slices[name] = value[:, :1] if len(value) > 1 else value[0, :1]
+            continue
         rows.append(value)
         slices[name] = slice(at, at + len(value)) if len(value) > 1 else at
         at += len(value)
-    return np.ascontiguousarray(np.concatenate(rows)), slices
+    table = np.concatenate(rows) if rows else np.zeros((0, 0), STATE)
+    return np.ascontiguousarray(table), slices
 
 
 def _unpack(table: np.ndarray, slices: dict) -> dict:
-    return {name: table[s] for name, s in slices.items()}
+    return {name: s if isinstance(s, np.ndarray) else table[s] for name, s in slices.items()}
 
 
 @dataclass(frozen=True, eq=False)
@@ -336,12 +346,12 @@ def _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, ne
 def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
                max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE
                ) -> tuple[np.ndarray, int]:
-    """`trace_paths` with rays and radiance as rows: o, d (3, n) float -> L (3, n) `STATE`."""
+    """`trace_paths` with rays and radiance as rows: o, d (3, n) float -> L (3, n) float64."""
     o = np.ascontiguousarray(o, STATE)
     d = np.ascontiguousarray(d, STATE)
     n_paths = o.shape[1]
-    L = np.zeros((3, n_paths), STATE)
-    background = np.asarray(world.scene.background, STATE)[:, None]
+    L = np.zeros((3, n_paths))  # float64: a background pixel shows the background exactly
+    background = np.asarray(world.scene.background, np.float64)[:, None]
     shows_background = bool(background.any())
     path = np.arange(n_paths)
     beta = np.ones((3, n_paths), STATE)
@@ -370,7 +380,7 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
         p = o + t * d
         entering = d_n < 0.0
         n = geo_n * np.where(entering, STATE(1.0), STATE(-1.0))  # faces the ray's origin
-        wo = -d
+        wo = -d if world.any_glossy else None  # only the glossy lobe looks at wo
         if world.any_emits:
             emits = surf["emits"]
             e = np.flatnonzero(count_emission & emits)
@@ -493,7 +503,7 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
         pixel = np.repeat(np.arange(first, last), spp)  # spp paths per pixel, pixel by pixel
         o, d = camera_rays(scene.camera, W, H, pixel // W, pixel % W, rng if jitter else None)
         L, rays = trace_rows(world, o, d, rng, max_depth, rr_start)
-        L = L.astype(np.float64).reshape(3, last - first, spp)
+        L = L.reshape(3, last - first, spp)
         return slice(first, last), L.sum(axis=2), (L * L).sum(axis=2), rays
 
     with Progress(len(tiles), f"path trace {scene.name}", enabled=progress) as bar:
