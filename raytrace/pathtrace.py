@@ -254,18 +254,17 @@ def _scatter_add(L: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
         L[c, index] += values[c]
 
 
-def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, mis: bool = True
+def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, start, mis: bool = True
                ) -> tuple[np.ndarray, int]:
     """Direct light (3, k) at vertices p (3, k) with normals n (3, k) facing wo (3, k), of
     surfaces surf (`PathWorld.surface`), throughputs beta (3, k), from one emitter sample each
-    and every delta light.  mis: weigh the emitter sample by its MIS share (False at the last
-    bounce, where no BSDF sample follows to take the rest).  Returns the contributions and the
-    shadow rays traced."""
+    and every delta light; shadow rays leave from start (3, k), p + offset n.  mis: weigh the
+    emitter sample by its MIS share (False at the last bounce, where no BSDF sample follows to
+    take the rest).  Returns the contributions and the shadow rays traced."""
     k = p.shape[1]
     out = np.zeros((3, k), STATE)
     w_phong, glossy = surf["phong"], surf["glossy"]
     kd, ks, s = surf["kd"], surf["ks"], surf["shininess"]
-    start = p + world.offset * n
     rays = 0
     with np.errstate(divide="ignore", invalid="ignore"):
         if len(world.emitters):
@@ -284,15 +283,21 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, mis: bool = Tr
             lit = np.zeros(k, bool)
             lit[c] = ~blocked
             # computed for all k, kept where lit (cheaper than gathering the lit ones)
-            f = phong_eval_rows(kd, ks, s, n, wo, wi, glossy, cos_t=cos_x)
             g = cos_x * cos_y / (dist2 * p_area)
             if mis:
                 p_light = p_area * dist2 / cos_y
                 p_bsdf = w_phong * phong_pdf_rows(surf["p_diffuse"], s, n, wo, wi, glossy,
                                                   cos_t=cos_x)
                 g *= p_light / (p_light + p_bsdf)
-            g = np.where(lit, g * w_phong, 0.0)
-            out += beta * f * radiance * g
+            g = np.where(lit, g * w_phong, 0.0)  # lit implies cos_x > 0
+            if world.any_glossy:
+                out = beta * phong_eval_rows(kd, ks, s, n, wo, wi, glossy, cos_t=cos_x)
+                out *= radiance
+                out *= g
+            else:  # Lambert: f = kd / pi
+                out = beta * kd
+                out *= radiance
+                out *= g * STATE(1.0 / math.pi)
         for light in world.lights:
             if isinstance(light, DirectionalLight):
                 wi = np.repeat(-np.asarray(light.direction, STATE)[:, None], k, axis=1)
@@ -397,13 +402,14 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
                 w = pe / (pe + p_light)
                 _scatter_add(L, _take(path, e),
                              _take(beta, e) * _take(world.tri_emission, te) * w)
-        direct, shadow = next_event(world, rng, p, n, wo, surf, beta, mis=bounce < max_depth)
+        new_o = p + world.offset * n  # where shadow rays and the next ray start
+        direct, shadow = next_event(world, rng, p, n, wo, surf, beta, new_o,
+                                    mis=bounce < max_depth)
         rays += shadow
         _scatter_add(L, path, direct)
         if bounce == max_depth:
             break
         k = len(tri)
-        new_o = p + world.offset * n
         if world.any_delta:
             u = rng.random(k, dtype=STATE)
             is_mirror = u < surf["refl"]
@@ -415,10 +421,13 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
         s, p_d, glossy = surf["shininess"], surf["p_diffuse"], surf["glossy"]
         new_d = phong_sample_rows(rng, p_d, s, n, wo, glossy)
         cos = dot_rows(n, new_d)
-        f = phong_eval_rows(surf["kd"], surf["ks"], s, n, wo, new_d, glossy, cos_t=cos)
         pdf = phong_pdf_rows(p_d, s, n, wo, new_d, glossy, cos_t=cos)
-        ok = (cos > 0.0) & (pdf > 0.0)
-        factor = f * np.where(ok, cos / np.where(ok, pdf, 1.0), 0.0)
+        if world.any_glossy:
+            f = phong_eval_rows(surf["kd"], surf["ks"], s, n, wo, new_d, glossy, cos_t=cos)
+            ok = (cos > 0.0) & (pdf > 0.0)
+            factor = f * np.where(ok, cos / np.where(ok, pdf, 1.0), 0.0)
+        else:  # Lambert: f cos / pdf = (kd / pi) cos / (cos / pi) = kd where pdf > 0
+            factor = surf["kd"] * (pdf > 0.0)
         pdf_next = surf["phong"] * pdf
         if world.any_delta:
             factor[:, ~is_phong] = 1.0
@@ -500,8 +509,10 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
         rows, seq = job
         rng = np.random.default_rng(seq)
         first, last = rows.start * W, rows.stop * W
-        pixel = np.repeat(np.arange(first, last), spp)  # spp paths per pixel, pixel by pixel
-        o, d = camera_rays(scene.camera, W, H, pixel // W, pixel % W, rng if jitter else None)
+        # spp paths per pixel, pixel by pixel, row by row
+        row = np.repeat(np.arange(rows.start, rows.stop), W * spp)
+        col = np.tile(np.repeat(np.arange(W), spp), rows.stop - rows.start)
+        o, d = camera_rays(scene.camera, W, H, row, col, rng if jitter else None)
         L, rays = trace_rows(world, o, d, rng, max_depth, rr_start)
         L = L.reshape(3, last - first, spp)
         return slice(first, last), L.sum(axis=2), (L * L).sum(axis=2), rays
