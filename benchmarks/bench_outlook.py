@@ -14,7 +14,11 @@
      queries, in the same batches, float32 as Embree gets them), each thread replaying the
      batches one of the path tracer's tile threads cast, on a pool of the same size: the path
      tracer's time with its shading made free.
-   The three are interleaved round by round (path trace, raw, replay), medians reported.
+   The three are interleaved round by round (path trace, raw, replay), medians reported, in
+   wall time and in this process's CPU time (`time.process_time`, all threads): other sessions
+   on the same cores stretch wall times unevenly (a thread pool waits for its slowest thread),
+   CPU times much less, so `cpu_ratio_to_raw` is the steadier figure under load; on an idle
+   machine the two ratios agree when both sides keep the cores equally busy.
 2. Radiosity time (meshing, form factors, solve, as `raytrace radiosity` runs it) at about 1k,
    4k and 16k triangles (each triangle is two patches, one per face).
 
@@ -41,8 +45,9 @@ CORNELL = ROOT / "scenes" / "cornell.toml"
 PATCH_TARGETS = (1000, 4000, 16000)  # triangles
 
 
-def raw_embree_seconds(scene, n_rays: int, runs: int) -> float:
-    """Median seconds for embreex to trace n_rays closest-hit rays inside the scene's box."""
+def raw_embree_seconds(scene, n_rays: int, runs: int, cpu: list | None = None) -> float:
+    """Median seconds for embreex to trace n_rays closest-hit rays inside the scene's box
+    (with cpu, a list: each run's CPU seconds are appended to it)."""
     from embreex import rtcore_scene
     from embreex.mesh_construction import TriangleMesh
 
@@ -63,9 +68,11 @@ def raw_embree_seconds(scene, n_rays: int, runs: int) -> float:
     times = []
     with ThreadPoolExecutor(threads) as pool:
         for _ in range(runs):
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             list(pool.map(lambda s: es.run(o[s], d[s]), parts))
             times.append(time.perf_counter() - t)
+            if cpu is not None:
+                cpu.append(time.process_time() - c)
     return statistics.median(times)
 
 
@@ -98,16 +105,17 @@ def _recorded_batches(scene, spp: int, seed: int) -> list[list[tuple]]:
     return list(per_thread.values())
 
 
-def replay_seconds(es, batches: list[list[tuple]]) -> float:
-    """Seconds for embreex scene `es` to cast the recorded batches, one thread per list."""
+def replay_seconds(es, batches: list[list[tuple]]) -> tuple[float, float]:
+    """Wall and CPU seconds for embreex scene `es` to cast the recorded batches, one thread per
+    list."""
     def cast(queue):
         for query, o, d, tmax in queue:
             es.run(o, d, dists=tmax, query=query)
 
     with ThreadPoolExecutor(len(batches)) as pool:
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         list(pool.map(cast, batches))
-        return time.perf_counter() - t
+        return time.perf_counter() - t, time.process_time() - c
 
 
 def path_tracing(size: int, spp: int, runs: int) -> dict:
@@ -124,16 +132,22 @@ def path_tracing(size: int, spp: int, runs: int) -> dict:
     es = rtcore_scene.EmbreeScene()
     TriangleMesh(es, vertices.astype(np.float32), faces.astype(np.int32))
     es.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))  # the BVH
-    results, raw, replay = [], [], []
+    results, cpu, raw, raw_cpu, replay, replay_cpu = [], [], [], [], [], []
     for i in range(runs):
+        c = time.process_time()
         results.append(render(scene, spp=spp, seed=i, progress=False))
-        raw.append(raw_embree_seconds(scene, results[-1].rays, 1))
+        cpu.append(time.process_time() - c)
+        raw.append(raw_embree_seconds(scene, results[-1].rays, 1, cpu=raw_cpu))
         batches = _recorded_batches(scene, spp, seed=i)
-        replay.append(replay_seconds(es, batches))
+        wall, c = replay_seconds(es, batches)
+        replay.append(wall)
+        replay_cpu.append(c)
         del batches
     seconds = statistics.median(r.seconds for r in results)
     rays = int(statistics.median(r.rays for r in results))
     raw_s, replay_s = statistics.median(raw), statistics.median(replay)
+    cpu_s, raw_cpu_s = statistics.median(cpu), statistics.median(raw_cpu)
+    replay_cpu_s = statistics.median(replay_cpu)
     return {"size": size, "spp": spp, "threads": cpu_threads(), "rays": rays,
             "seconds": seconds, "seconds_min_max": [min(r.seconds for r in results),
                                                     max(r.seconds for r in results)],
@@ -142,6 +156,9 @@ def path_tracing(size: int, spp: int, runs: int) -> dict:
             "replay_embree_seconds": replay_s,
             "replay_embree_mrays_per_s": rays / replay_s / 1e6,
             "ratio_to_replay": replay_s / seconds, "target_ratio": 0.6,
+            "cpu_seconds": cpu_s, "raw_embree_cpu_seconds": raw_cpu_s,
+            "replay_embree_cpu_seconds": replay_cpu_s, "cpu_ratio_to_raw": raw_cpu_s / cpu_s,
+            "cpu_ratio_to_replay": replay_cpu_s / cpu_s,
             "load_average": list(os.getloadavg())}
 
 
