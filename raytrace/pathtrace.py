@@ -70,7 +70,7 @@ from .tolerances import surface_offset
 RR_START_BOUNCE = 3  # Russian roulette from the third bounce on
 RR_MAX_SURVIVAL = 0.95  # never certain survival: bounds the expected path length
 DEFAULT_MAX_DEPTH = 64  # bounces; the truncation bias is below rho^64 of the image
-TILE_PATHS = 1 << 14  # paths traced together: their arrays stay in cache; progress step
+TILE_PATHS = 1 << 15  # paths traced together: ~10 MB of arrays; sets the progress step
 LEAVING_STANDOFF = 10.0  # `radiance_leaving` starts its rays this many surface offsets out
 # The path state's precision (rays, hit points, throughputs, the tables; see the module
 # docstring) and the smallest value a float32 division below is kept from dividing by.
