@@ -509,13 +509,14 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
         rows, seq = job
         rng = np.random.default_rng(seq)
         first, last = rows.start * W, rows.stop * W
-        # spp paths per pixel, pixel by pixel, row by row
-        row = np.repeat(np.arange(rows.start, rows.stop), W * spp)
-        col = np.tile(np.repeat(np.arange(W), spp), rows.stop - rows.start)
+        # the tile's pixels row by row, spp times over: a pixel's samples are summed over
+        # a middle axis (numpy's reductions over a short last axis are slow)
+        row = np.tile(np.repeat(np.arange(rows.start, rows.stop), W), spp)
+        col = np.tile(np.arange(W), (rows.stop - rows.start) * spp)
         o, d = camera_rays(scene.camera, W, H, row, col, rng if jitter else None)
         L, rays = trace_rows(world, o, d, rng, max_depth, rr_start)
-        L = L.reshape(3, last - first, spp)
-        return slice(first, last), L.sum(axis=2), (L * L).sum(axis=2), rays
+        L = L.reshape(3, spp, last - first)
+        return slice(first, last), L.sum(axis=1), (L * L).sum(axis=1), rays
 
     with Progress(len(tiles), f"path trace {scene.name}", enabled=progress) as bar:
         pool = ThreadPoolExecutor(threads) if threads > 1 else None
