@@ -21,7 +21,7 @@ import io
 import sys
 from pathlib import Path
 
-from shadowvol import __version__
+from shadowvol import __version__, memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import outputs, status
 from shadowvol.io import (
@@ -71,6 +71,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--png16", metavar="PNG", default=None,
                    help="also write the image as a 16-bit sRGB PNG")
     _backend(r)
+    memory.add_option(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
     cli_outlook.add_options(r)
@@ -94,6 +95,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="ground truth to add to the .npz, comma-separated: "
                         f"{','.join(GROUND_TRUTH)} (or all); see docs/CONVENTIONS.md")
     _backend(m)
+    memory.add_option(m)
 
     t = sub.add_parser("tree", help="the ray tree of one pixel (the course's exercise)",
                        description="Print every ray the Whitted tracer follows for pixel "
@@ -110,6 +112,7 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("-o", "--output", metavar="PNG", default=None,
                    help="also draw the tree: the rays over the ray-traced image and a side view")
     _backend(t)
+    memory.add_option(t)
 
     e = sub.add_parser("exercise", help="a worked exercise of the course, printed and drawn",
                        description="Print the worked solution of one of the course's "
@@ -152,6 +155,8 @@ def _render(args) -> int:
     if args.max_depth is not None and args.max_depth < 0:
         raise SceneError("--max-depth", f"must be >= 0, got {args.max_depth}")
     scene = load_scene(args.scene)
+    memory.check(memory.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
+                 args.memory_budget, args.scene)
     image = render(scene, max_depth=args.max_depth, backend=args.backend,
                    progress=False if args.no_progress else None)
     save_png(args.output, image)
@@ -170,6 +175,8 @@ def _masks(args) -> int:
         paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
     outputs.check(paths, {"masks": "-o", "picture": "--png"})
     scene = load_scene(args.scene)
+    memory.check(memory.ray_masks(scene, wanted, picture="picture" in paths),
+                 args.memory_budget, args.scene)
     if wanted:
         truth = ground_truth(scene, check_outputs(scene, wanted), backend=args.backend)
         lit, coverage, arrays = truth.lit, truth.coverage, truth.arrays()
@@ -197,6 +204,8 @@ def _tree(args) -> int:
     if not (0 <= x < scene.width and 0 <= y < scene.height):
         raise SceneError("--pixel", f"{x} {y} is outside the {scene.width}x{scene.height} "
                                     "image")
+    if args.output:
+        memory.check(memory.whitted(scene), args.memory_budget, args.scene)
     tree = ray_tree(scene, x, y, max_depth=args.depth, backend=args.backend)
     print(format_tree(tree, scene))
     if args.output:

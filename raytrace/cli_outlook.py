@@ -13,6 +13,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from shadowvol import memory
 from shadowvol.cli import outputs, status
 from shadowvol.io import save_exr, save_png
 from shadowvol.scene import SceneError
@@ -63,6 +64,7 @@ def add_parsers(sub) -> None:
     r.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
     r.add_argument("--backend", choices=("numpy", "embree"), default="embree",
                    help="triangle intersection (default: embree)")
+    memory.add_option(r)
 
 
 def path_traced(args) -> int:
@@ -77,6 +79,8 @@ def path_traced(args) -> int:
     if depth is not None and depth < 1:
         raise SceneError("--max-depth", f"must be >= 1 for path tracing, got {depth}")
     scene = load_scene(args.scene)
+    memory.check(memory.path_traced(scene, args.spp, tuple(paths.keys() - {"image"}) + ("png",)),
+                 args.memory_budget, args.scene)
     kwargs = {} if depth is None else {"max_depth": depth}
     result = pathtrace.render(scene, spp=args.spp, seed=args.seed, backend=args.backend,
                               progress=False if args.no_progress else None, **kwargs)
@@ -104,6 +108,9 @@ def radiosity_command(args) -> int:
         if not ok:
             raise SceneError(flag, f"must be {rule}, got {value}")
     scene = load_scene(args.scene)
+    memory.check(memory.radiosity_display(scene, ("exr",) if args.exr else ("png",),
+                                          flat=bool(args.flat)),
+                 args.memory_budget, args.scene)
     try:
         solution = radiosity.solve(scene, level=args.level, rays_per_patch=args.rays,
                                    tol=args.tol, shots=args.shots, seed=args.seed,

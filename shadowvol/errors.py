@@ -6,12 +6,36 @@ ray tracer and the CLI can name them without importing GL.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 
 
 class RenderError(RuntimeError):
     """Rendering failed for a reason other than the input: no usable EGL/GL, a GL error, a
     stencil count that cannot be trusted.  Exit status 3."""
+
+
+class OutOfMemory(MemoryError):
+    """A MemoryError that says what was being done ("writing out.png"); exit status 3."""
+
+    def __init__(self, doing: str, detail: str = ""):
+        super().__init__(doing, detail)
+        self.doing, self.detail = doing, detail
+
+    def __str__(self) -> str:
+        return f"while {self.doing}" + (f" ({self.detail})" if self.detail else "")
+
+
+@contextlib.contextmanager
+def out_of_memory_while(doing: str):
+    """Turn a MemoryError inside into OutOfMemory(doing) (one that already says what it was
+    doing is left as it is)."""
+    try:
+        yield
+    except OutOfMemory:
+        raise
+    except MemoryError as exc:
+        raise OutOfMemory(doing, str(exc)) from None
 
 
 class MissingExtra(ImportError):

@@ -27,13 +27,30 @@ import numpy as np
 from PIL import Image
 
 from shadowvol import signals
+from shadowvol.errors import out_of_memory_while
+
+# Values encoded at a time by `encode_srgb` and `png16_bytes`: the float64 temporaries of the
+# curve stay this small (a few MiB) whatever the image, so encoding adds only its output to
+# the memory an image needs (`shadowvol.memory`).
+ENCODE_CHUNK = 1 << 18
+
+
+def _srgb_curve(linear: np.ndarray, scale: float, dtype) -> np.ndarray:
+    """The IEC 61966-2-1 transfer curve of `linear` (clipped to 0..1), times `scale`, rounded
+    to `dtype`, computed ENCODE_CHUNK values at a time (the same values as all at once)."""
+    linear = np.asarray(linear)
+    out = np.empty(linear.shape, dtype)
+    flat_in, flat_out = linear.reshape(-1), out.reshape(-1)
+    for at in range(0, flat_in.size, ENCODE_CHUNK):
+        c = np.clip(np.asarray(flat_in[at:at + ENCODE_CHUNK], dtype=np.float64), 0.0, 1.0)
+        s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
+        flat_out[at:at + ENCODE_CHUNK] = np.round(s * scale)
+    return out
 
 
 def encode_srgb(linear: np.ndarray) -> np.ndarray:
     """(H, W, 3) float linear RGB -> (H, W, 3) uint8 sRGB (IEC 61966-2-1 transfer curve)."""
-    c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-    return np.round(s * 255.0).astype(np.uint8)
+    return _srgb_curve(linear, 255.0, np.uint8)
 
 
 class WriteError(OSError):
@@ -130,11 +147,10 @@ def png16_bytes(linear: np.ndarray) -> bytes:
     """A 16-bit RGB PNG of an (H, W, 3) float linear RGB image, sRGB-encoded (clipped to 0..1,
     rounded to 0..65535, with an sRGB chunk), row 0 at the top.  Written here because Pillow
     writes 16 bits per channel only for grey images."""
-    c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    if c.ndim != 3 or c.shape[2] != 3:
-        raise ValueError(f"png16_bytes wants an (H, W, 3) image, got shape {c.shape}")
-    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-    pixels = np.round(s * 65535.0).astype(">u2")
+    linear = np.asarray(linear)
+    if linear.ndim != 3 or linear.shape[2] != 3:
+        raise ValueError(f"png16_bytes wants an (H, W, 3) image, got shape {linear.shape}")
+    pixels = _srgb_curve(linear, 65535.0, ">u2")
     h, w = pixels.shape[:2]
     rows = np.zeros((h, 1 + 6 * w), np.uint8)  # filter type 0 (None) first on each row
     rows[:, 1:] = pixels.reshape(h, -1).view(np.uint8)
@@ -150,9 +166,10 @@ def png16_bytes(linear: np.ndarray) -> bytes:
 
 def save_png16(path: str | Path, image: np.ndarray) -> None:
     """Write an (H, W, 3) float linear RGB image as a 16-bit sRGB PNG (`png16_bytes`)."""
-    data = png16_bytes(image)
-    with atomic_write(path) as f:
-        f.write(data)
+    with out_of_memory_while(f"writing {path}"):
+        data = png16_bytes(image)
+        with atomic_write(path) as f:
+            f.write(data)
 
 
 # OpenEXR's ZIP compression packs this many scanlines in a block.
@@ -206,9 +223,10 @@ def exr_bytes(image: np.ndarray) -> bytes:
 
 def save_exr(path: str | Path, image: np.ndarray) -> None:
     """Write an (H, W, 3) float linear RGB image as OpenEXR (`exr_bytes`), atomically."""
-    data = exr_bytes(image)
-    with atomic_write(path) as f:
-        f.write(data)
+    with out_of_memory_while(f"writing {path}"):
+        data = exr_bytes(image)
+        with atomic_write(path) as f:
+            f.write(data)
 
 
 # The ground-truth outputs a frame may carry, by name, in this order (docs/CONVENTIONS.md).
@@ -257,7 +275,7 @@ MASK_ARRAYS = {
 
 def write_bytes(path: str | Path, data: bytes) -> None:
     """Write `data` to `path` atomically (see `atomic_write`)."""
-    with atomic_write(path) as f:
+    with out_of_memory_while(f"writing {path}"), atomic_write(path) as f:
         f.write(data)
 
 
@@ -346,18 +364,20 @@ def tar_bytes(members: list[tuple[str, bytes]]) -> bytes:
 
 def save_png(path: str | Path, image: np.ndarray) -> None:
     """Write an image: uint8 pixels as they are, float pixels as linear RGB encoded to sRGB."""
-    arr = np.asarray(image)
-    if np.issubdtype(arr.dtype, np.floating):
-        arr = encode_srgb(arr)
-    data = png_bytes(arr)
-    with atomic_write(path) as f:
-        f.write(data)
+    with out_of_memory_while(f"writing {path}"):
+        arr = np.asarray(image)
+        if np.issubdtype(arr.dtype, np.floating):
+            arr = encode_srgb(arr)
+        data = png_bytes(arr)
+        with atomic_write(path) as f:
+            f.write(data)
 
 
 def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
                arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> None:
     """Write a mask file (`masks_bytes`), atomically."""
-    write_bytes(path, masks_bytes(lit, coverage, arrays, light_samples))
+    with out_of_memory_while(f"writing {path}"):
+        write_bytes(path, masks_bytes(lit, coverage, arrays, light_samples))
 
 
 def load_masks(path: str | Path) -> tuple[np.ndarray, np.ndarray]:

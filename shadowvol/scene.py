@@ -22,7 +22,10 @@ import numpy as np
 
 # Geometric tolerances of the scene model itself (renderer tolerances live with each renderer).
 PARALLEL_TOLERANCE = 1e-9  # |sin| of the angle below which `up` counts as parallel to the view
-MAX_IMAGE_PIXELS = 1 << 26  # 64 Mpixel: beyond this the per-pixel arrays stop being practical
+# An absolute cap on the pixels of an image, 16384 x 16384 (the largest frame llvmpipe makes):
+# below it the memory budget decides what fits (`shadowvol.memory`); above it an image is
+# refused as a limit whatever the machine's memory (a typo such as 1e6 x 1e6 among them).
+MAX_IMAGE_PIXELS = 1 << 28
 # The float32 range the renderers use: every number of a scene has |x| <= MAX_MAGNITUDE, and
 # every length that must be positive (near, radius, sizes, scale) is >= MIN_POSITIVE, so that
 # x, 1/x, x*x and sums of a few squares are all normal float32 numbers (float32 ends at 3.4e38

@@ -19,6 +19,7 @@ from typing import NamedTuple
 import numpy as np
 
 from shadowvol import primitives
+from shadowvol.errors import out_of_memory_while
 from shadowvol.io import atomic_write
 from shadowvol.scene import (
     AreaLight,
@@ -74,6 +75,11 @@ def load_scene(path: str | Path, *, max_bytes: int = MAX_SCENE_FILE_BYTES,
     """Read a scene from a `.toml` or `.json` file, which must be a regular file of at most
     `max_bytes` (its meshes: `max_mesh_bytes` each).  Raises SceneError (a ValueError)."""
     path = Path(path)
+    with out_of_memory_while(f"reading {path}"):
+        return _load_scene(path, max_bytes, max_mesh_bytes)
+
+
+def _load_scene(path: Path, max_bytes: int, max_mesh_bytes: int) -> Scene:
     if path.suffix.lower() not in (".json", ".toml"):
         raise SceneError("", "a scene file must end in .toml or .json", str(path))
     try:

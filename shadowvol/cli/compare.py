@@ -8,10 +8,12 @@ import re
 import sys
 from pathlib import Path
 
+from shadowvol import memory
 from shadowvol.cli import outputs, status
 from shadowvol.compare import pyrender_peer
 from shadowvol.compare.comparison import compare
 from shadowvol.io import atomic_write, save_png
+from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 EPILOG = """\
@@ -63,6 +65,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "point-light shadows; needs the [peer] extra)")
     p.add_argument("--size", type=_size, metavar="WxH",
                    help="render at this size instead of the scene's image size")
+    memory.add_option(p)
     p.set_defaults(func=command)
     return p
 
@@ -76,7 +79,12 @@ def command(args) -> int:
         pyrender_peer.import_pyrender()  # a missing [peer] extra is reported before any work
     scene = load_scene(args.scene)
     if args.size is not None:
-        scene = scene.replace(width=args.size[0], height=args.size[1])
+        try:
+            scene = scene.replace(width=args.size[0], height=args.size[1])
+        except SceneError as exc:
+            raise SceneError("--size", exc.problem) from None
+    # the GL frame is counted as this process's memory: the context is made later
+    memory.check(memory.compare(scene), args.memory_budget, args.scene)
     result = compare(scene, method=args.method, pyrender=args.pyrender)
     print(result.table())
     save_png(args.output, result.picture())

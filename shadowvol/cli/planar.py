@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from shadowvol import memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import outputs, status
 from shadowvol.io import save_masks, save_png
@@ -32,6 +33,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--masks", metavar="NPZ", default=None,
                    help="also write the masks (.npz: lit (L, H, W), coverage (H, W)); lit is "
                         "False only in the projected shadows on the receiver")
+    memory.add_option(p)
     p.set_defaults(func=command)
     return p
 
@@ -42,6 +44,9 @@ def command(args) -> int:
         paths["masks"] = Path(args.masks)
     outputs.check(paths, {"image": "-o", "masks": "--masks"})
     scene = load_scene(args.scene)
+    memory.check(memory.raster(scene, written=tuple(k for k in ("png", "masks")
+                                                    if k in paths or k == "png")),
+                 args.memory_budget, args.scene)
     try:
         result = render_planar(scene, args.receiver)
     except ReceiverError as exc:

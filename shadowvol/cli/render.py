@@ -7,7 +7,9 @@ import re
 import sys
 from pathlib import Path
 
+from shadowvol import memory
 from shadowvol.cli import outputs, status
+from shadowvol.errors import OutOfMemory, RenderError
 from shadowvol.io import encode_srgb, save_exr, save_masks, save_png, save_png16
 from shadowvol.pictures import heat_maps
 from shadowvol.raster.context import create_context
@@ -79,6 +81,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--png16", metavar="PNG", nargs="?", const=True,
                    help="also write the image as a 16-bit sRGB PNG; without a name, beside the "
                         "image (NAME-16bit.png)")
+    memory.add_option(p)
     p.set_defaults(func=command)
     return p
 
@@ -162,6 +165,16 @@ def command(args) -> int:
     return code
 
 
+def _check_gl(ctx) -> None:
+    """A GL allocation that failed sets GL_OUT_OF_MEMORY and carries on (moderngl raises
+    nothing): such a frame is not written."""
+    error = ctx.error
+    if error == "GL_OUT_OF_MEMORY":
+        raise OutOfMemory("rendering", "the GL reported GL_OUT_OF_MEMORY")
+    if error != "GL_NO_ERROR":
+        raise RenderError(f"the GL reported {error} while rendering")
+
+
 def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
     """Load, render and write one scene; returns (exit status, the GL context to reuse).
     Errors are reported here, one line each, naming the scene when there are several."""
@@ -173,12 +186,20 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
         if max(scene.width, scene.height) > limit:
             raise SceneError("image", f"{scene.width}x{scene.height} is larger than this GL "
                                       f"allows ({limit} pixels per side)", scene_path)
+        written = tuple(k for k in ("png", "masks", "exr", "png16", "stencil", "volumes")
+                        if k in out or k == "png")
+        memory.check(memory.raster(scene, ("image", "lit", "coverage") + args.truth,
+                                   gl_in_host=memory.gl_in_host(ctx.info["GL_RENDERER"]),
+                                   written=written, stencil="stencil" in out,
+                                   volumes="volumes" in out),
+                     args.memory_budget, scene_path)
         with Renderer(scene, ctx) as renderer:
             result = renderer.render(args.method, args.silhouettes,
                                      stencil="stencil" in out,
                                      outputs=("image", "lit", "coverage") + args.truth)
             volumes = (renderer.volume_view(args.method, args.silhouettes)
                        if "volumes" in out else None)
+            _check_gl(ctx)
         save_png(out["image"], result.image)
         if "masks" in out:
             save_masks(out["masks"], result.lit, result.coverage,

@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 
 from shadowvol import signals
-from shadowvol.errors import MissingExtra, RenderError
+from shadowvol.errors import MissingExtra, OutOfMemory, RenderError
 from shadowvol.scene import SceneError
 
 OK = 0
@@ -24,8 +24,8 @@ TABLE = (
     (OK, "success"),
     (OVER_BUDGET, "a comparison over its budget (compare --max-interior)"),
     (BAD_INPUT, "bad input: a scene file, a mesh, an argument, an output path, a scene beyond "
-                "the documented limits, or a missing optional extra (named with the pip "
-                "command that installs it)"),
+                "the documented limits or an image over the memory budget, or a missing "
+                "optional extra (named with the pip command that installs it)"),
     (RENDER_FAILED, "rendering failed: no usable EGL/OpenGL 4.5, a GL error, out of memory, a "
                     "stencil overflow"),
     (INTERRUPTED, "interrupted (Ctrl-C)"),
@@ -56,8 +56,10 @@ def status_of(exc: BaseException) -> int | None:
 
 def message(exc: BaseException) -> str:
     if isinstance(exc, MemoryError):
-        return ("out of memory" + (f": {exc}" if str(exc) else "") +
-                "; try a smaller image or fewer triangles")
+        # numpy's says how much it could not allocate: "Unable to allocate 3.00 GiB for ..."
+        what = str(exc) if isinstance(exc, OutOfMemory) else \
+            "while rendering" + (f" ({exc})" if str(exc) else "")
+        return f"out of memory {what}; try a smaller image or fewer triangles"
     if isinstance(exc, KeyboardInterrupt):
         return "interrupted"
     if isinstance(exc, signals.Terminated):

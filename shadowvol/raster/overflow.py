@@ -143,7 +143,9 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
     `renderer`'s frame `result` drew lit: a saturating pass per light counts the faces by
     which view rays enter volumes (`find_wrapped`), and a pixel found there is cleared by any
     other valid counting (z-fail; z-pass where the near plane cuts no volume) that stays below
-    255."""
+    255.  `only`: the (light, sample) indices to check (a hard light is its own sample 0);
+    None: all."""
+    only = None if only is None else set(only)
     camera = renderer.scene.camera if camera is None else camera
     vols = renderer.volumes(silhouettes)
     clip = methods.zpass_clip_planes(renderer.geometry.bounds, camera, renderer.scene.aspect,
@@ -152,8 +154,9 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
     # an area light's samples are checked one by one against every pixel any sample lit (a
     # superset of the sample's own lit pixels: it may raise where it need not, never the other
     # way); the casters its samples counted with z-fail stay z-fail (valid)
-    for i, light in ((i, hard) for i, lt in enumerate(lights) for hard in hard_lights(lt)):
-        if only is not None and i not in only:
+    for i, k, light in ((i, k, hard) for i, lt in enumerate(lights)
+                        for k, hard in enumerate(hard_lights(lt))):
+        if only is not None and (i, k) not in only:
             continue   # its `light_bound` is below STENCIL_LIMIT
         light4 = light.homogeneous
         if vols.light4 is None or not np.array_equal(vols.light4, light4):

@@ -112,6 +112,9 @@ class Renderer:
     context too if the renderer created it.
     """
 
+    # stencil-overflow bounds (`overflow.light_bound`, 0.1-0.6 s each) computed in one frame
+    BOUNDS_PER_FRAME = 1
+
     def __init__(self, scene: Scene, ctx: moderngl.Context | None = None):
         self.scene = scene
         self._own_ctx = ctx is None
@@ -190,12 +193,17 @@ class Renderer:
                 result = replace(result, lit=None, lit_count=None)
             return result
 
-    def _lights_to_check(self, camera, lights) -> list[int]:
-        """Indices of the lights whose stencil count might reach 256 in this frame: none when
-        the scene's bound is below it, else those whose `overflow.light_bound` is not.  A
-        light's bound costs more than one re-check (0.1-0.6 s), so it is computed the second
+    def _lights_to_check(self, camera, lights) -> list[tuple[int, int]]:
+        """(light, sample) indices of the hard lights (an area light's samples; any other
+        light is its own sample 0) whose stencil count might reach 256 in this frame: none
+        when the scene's bound is below it, else those whose `overflow.light_bound` is not.
+        A light's bound costs more than one re-check (0.1-0.6 s), so it is computed the second
         time the light is used, with twice the slack this camera needs, and kept while later
-        cameras need no more slack."""
+        cameras need no more slack.  An area light's samples are lights of their own here: a
+        sample's position never changes, so its bound is kept like a point light's.  At most
+        `BOUNDS_PER_FRAME` bounds are computed in one frame (the others are re-checked until
+        their turn comes), so no frame pays for 16 or 64 samples' bounds at once: a frame costs
+        at most one bound more than its re-checks."""
         if not self.check_overflow or self.count_bound < overflow.STENCIL_LIMIT:
             return []
         camera = self.scene.camera if camera is None else camera
@@ -205,24 +213,29 @@ class Renderer:
         if self._slack is None or self._slack[0] != key:   # a pass over every corner: once
             self._slack = (key, overflow.world_slack(camera, self.scene.height, corners))
         needed = self._slack[1]
+        doubled = None   # one (M,) array shared by the bounds computed in this frame
+        computed = 0
         out = []
         for i, light in enumerate(lights):
-            if isinstance(light, AreaLight):
-                out.append(i)   # its samples are re-checked (no per-sample bound is kept)
-                continue
-            key = light.homogeneous.tobytes()
-            if key not in self._light_bounds:
-                self._light_bounds[key] = None      # seen once: re-check this frame
-                out.append(i)
-                continue
-            kept = self._light_bounds[key]
-            if kept is None or not (needed <= kept[0]).all():
-                slack = 2.0 * needed
-                kept = (slack, overflow.light_bound(corners, self.geometry.object_of,
-                                                    self.convex, light.homogeneous, slack))
-                self._light_bounds[key] = kept
-            if kept[1] >= overflow.STENCIL_LIMIT:
-                out.append(i)
+            for k, hard in enumerate(hard_lights(light)):
+                key = hard.homogeneous.tobytes()
+                if key not in self._light_bounds:
+                    self._light_bounds[key] = None      # seen once: re-check this frame
+                    out.append((i, k))
+                    continue
+                kept = self._light_bounds[key]
+                if kept is None or not (needed <= kept[0]).all():
+                    if computed == self.BOUNDS_PER_FRAME:   # later: re-check it meanwhile
+                        out.append((i, k))
+                        continue
+                    computed += 1
+                    doubled = 2.0 * needed if doubled is None else doubled
+                    kept = (doubled, overflow.light_bound(corners, self.geometry.object_of,
+                                                          self.convex, hard.homogeneous,
+                                                          doubled))
+                    self._light_bounds[key] = kept
+                if kept[1] >= overflow.STENCIL_LIMIT:
+                    out.append((i, k))
         return out
 
     @property
@@ -272,6 +285,7 @@ class Renderer:
                                                    "lit_count and Renderer.facing")
         want_stencil = "stencil" in outputs
         vols = self.volumes(silhouettes)
+        vols.new_frame()
         progs, target = self.programs, self.target
         view_proj = view_projection(camera, self.scene.aspect)
         passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera)
@@ -334,11 +348,14 @@ class Renderer:
         lit = lit_count = None
         if "lit" in outputs:
             lit_count = np.zeros((len(lights), h, w), np.uint16)
-            one = np.empty((h, w), bool)
+            # each light's samples in a page are neighbouring bits: one count of the set bits
+            # per light and page, not one pass per sample
+            masks: dict[tuple[int, int], int] = {}
             for k, (i, _) in enumerate(hard):
                 page, bit = divmod(k, LIGHTS_PER_PAGE)
-                np.not_equal(pages[page] & np.uint32(1 << (bit + 1)), 0, out=one)
-                lit_count[i] += one
+                masks[i, page] = masks.get((i, page), 0) | 1 << (bit + 1)
+            for (i, page), mask in masks.items():
+                lit_count[i] += _bit_count(pages[page] & np.uint32(mask))
             lit = lit_count == samples[:, None, None]
         extra = self._ground_truth(outputs, camera, lights, truth_pages, zfail, vols,
                                    method, clip, want_stencil)
@@ -448,6 +465,19 @@ class Renderer:
 
     def __exit__(self, *exc) -> None:
         self.release()
+
+
+# set bits of every byte (numpy < 2 has no bitwise_count)
+_BYTE_BITS = np.unpackbits(np.arange(256, dtype=np.uint8)[:, None], axis=1).sum(axis=1,
+                                                                                dtype=np.uint8)
+
+
+def _bit_count(x: np.ndarray) -> np.ndarray:
+    """(H, W) uint32 -> (H, W) uint8: how many bits of each are set."""
+    if hasattr(np, "bitwise_count"):
+        return np.bitwise_count(x)
+    b = _BYTE_BITS[np.ascontiguousarray(x).view(np.uint8)].reshape(*x.shape, 4)
+    return b.sum(axis=-1, dtype=np.uint8)
 
 
 def _check_outputs(outputs, stencil: bool) -> set[str]:

@@ -60,6 +60,12 @@ class _LightVolumes:
         self.capped: tuple[int, ...] | None = None                # objects in the index buffer
         self.index_buffer: moderngl.Buffer | None = None
         self.cap_vaos: dict[bool, moderngl.VertexArray] = {}      # near? -> vao
+        self.frame = 0                                            # the frame it was last used in
+        self.nbytes = 0   # what keeping it holds: signs (CPU), side and cap buffers (GPU)
+
+    def count_bytes(self) -> None:
+        self.nbytes = (sum(s.nbytes for s in self.signs)
+                       + sum(b.size for b in (self.buffer, self.index_buffer) if b is not None))
 
     def release(self) -> None:
         for obj in (*self.vaos.values(), *self.cap_vaos.values(), self.buffer,
@@ -71,11 +77,20 @@ class _LightVolumes:
 class CpuVolumes:
     """Shadow volumes from CPU silhouettes.  Programs are made here; call `release()`.
 
-    The volumes of the last `KEPT_LIGHTS` lights are kept (keyed by the homogeneous light):
-    the scene's casters never move, so a light that comes back, in the next frame or the next
-    camera of a turntable, reuses its side quads and cap lists as they were uploaded."""
+    The volumes of the lights in use are kept (keyed by the homogeneous light): the scene's
+    casters never move, so a light that comes back (every sample of an area light in every
+    frame, a light in the next camera of a turntable) reuses its side quads and cap lists as
+    they were uploaded.  Kept: every light of this frame and the last (`new_frame()` starts a
+    frame) and the most recent others within `KEPT_OLDER_BYTES` (what a moving light leaves
+    behind), all within `KEPT_BYTES` of signs, side-quad and cap buffers.  Over the bytes the
+    least recently used go first, but never one this frame has used: a frame whose lights need
+    more (many samples of a large scene) keeps those it prepared first and rebuilds only the
+    others in every frame, where plain LRU over a cycle longer than the cache rebuilds all."""
 
-    KEPT_LIGHTS = 8
+    # one light holds about 3 bytes per triangle (signs, side quads); 64 samples of a million
+    # triangles fit, and z-fail cap lists (12 bytes per capped triangle) for some of them
+    KEPT_BYTES = 256 << 20
+    KEPT_OLDER_BYTES = 32 << 20
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
@@ -87,8 +102,10 @@ class CpuVolumes:
         self.programs = (self.side_program, self.clip_program, self.near_program,
                          self.far_program)
         self.light4 = None
-        self._kept: dict[bytes, _LightVolumes] = {}   # insertion order = age
+        self._kept: dict[bytes, _LightVolumes] = {}   # insertion order = last use
         self._current: _LightVolumes | None = None
+        self._transient: _LightVolumes | None = None  # the current one when it is not kept
+        self._frame = 0
 
     @property
     def _signs(self) -> list[np.ndarray]:
@@ -98,6 +115,10 @@ class CpuVolumes:
     def _sides(self) -> dict[int, tuple[int, int, int]]:
         return self._current.sides
 
+    def new_frame(self) -> None:
+        """A frame begins: the volumes it prepares are kept before any earlier frame's."""
+        self._frame += 1
+
     def prepare(self, light4: np.ndarray) -> None:
         """Select this light's side quads, computing and uploading them unless they are kept.
         Cap index lists are built on the first `draw_caps` (most frames z-fail few casters or
@@ -106,14 +127,46 @@ class CpuVolumes:
         light4 = np.asarray(light4, np.float64)
         self.light4 = light4
         _set_light(self.programs, light4)
+        if self._transient is not None:   # drawn already (GL keeps a buffer its draws use)
+            self._transient.release()
+            self._transient = None
         key = light4.tobytes()
         kept = self._kept.pop(key, None)
         if kept is None:
             kept = self._build(light4)
-            while len(self._kept) >= self.KEPT_LIGHTS:
-                self._kept.pop(next(iter(self._kept))).release()
+        kept.frame = self._frame
         self._kept[key] = kept
         self._current = kept
+        self._fit()
+
+    def _fit(self) -> None:
+        """Release the least recently used volumes until the kept ones fit in KEPT_BYTES,
+        sparing this frame's; if they alone do not fit, the current one is not kept (it is
+        released at the next `prepare`).  Before that, of the lights used in neither this
+        frame nor the last, the least recently used go until the rest fit in
+        KEPT_OLDER_BYTES."""
+        older = [k for k, v in self._kept.items()
+                 if v.frame < self._frame - 1 and v is not self._current]
+        total = sum(self._kept[k].nbytes for k in older)
+        for key in older:   # oldest first
+            if total <= self.KEPT_OLDER_BYTES:
+                break
+            old = self._kept.pop(key)
+            total -= old.nbytes
+            old.release()
+        total = sum(v.nbytes for v in self._kept.values())
+        for key in list(self._kept):   # oldest first; this frame's come last
+            if total <= self.KEPT_BYTES:
+                return
+            old = self._kept[key]
+            if old.frame == self._frame or old is self._current:
+                break
+            total -= old.nbytes
+            del self._kept[key]
+            old.release()
+        if total > self.KEPT_BYTES:
+            key = next(reversed(self._kept))   # the current one: the last prepared
+            self._transient = self._kept.pop(key)
 
     def _build(self, light4: np.ndarray) -> _LightVolumes:
         out = _LightVolumes()
@@ -138,6 +191,7 @@ class CpuVolumes:
         out.vaos = {clipped: self.ctx.vertex_array(program, [(out.buffer, "4f", "in_position")])
                     for clipped, program in ((False, self.side_program),
                                              (True, self.clip_program))}
+        out.count_bytes()
         return out
 
     def _prepare_caps(self, objects: tuple[int, ...]) -> None:
@@ -167,6 +221,9 @@ class CpuVolumes:
             index_element_size=4) for near, program in ((True, self.near_program),
                                                         (False, self.far_program))}
         cur.capped = objects
+        cur.count_bytes()
+        if cur is not self._transient:
+            self._fit()
 
     def draw_sides(self, objects, halve: bool = False, clipped: bool = False) -> None:
         """Draw the side quads of `objects`.  `clipped`: with the program that writes the
@@ -209,9 +266,10 @@ class CpuVolumes:
         self.ctx.front_face = "ccw"
 
     def release(self) -> None:
-        for kept in self._kept.values():
+        for kept in (*self._kept.values(), *([self._transient] if self._transient else [])):
             kept.release()
         self._kept.clear()
+        self._transient = None
         for obj in self.programs:
             obj.release()
 
@@ -266,6 +324,9 @@ class GpuVolumes:
              "in_c2", "in_c3", "in_count")]) for program in (self.edge_program,
                                                              self.clip_program))
         self.light4 = None
+
+    def new_frame(self) -> None:
+        """Nothing is kept per light (the common interface)."""
 
     def prepare(self, light4: np.ndarray) -> None:
         self.light4 = light4  # everything else happens in the shaders

@@ -130,7 +130,7 @@ def test_out_of_memory_is_status_3_with_a_message(tmp_path, capsys, monkeypatch)
 
 
 def test_an_image_too_big_is_bad_input(tmp_path, capsys):
-    """Beyond Scene.MAX_IMAGE_PIXELS (64 Mpixel) the loader refuses; beyond the GL's largest
+    """Beyond Scene.MAX_IMAGE_PIXELS (16384 x 16384) the loader refuses; beyond the GL's largest
     renderbuffer the command refuses before allocating anything."""
     data = json.loads((lambda p: (save_scene(small_scene(), p), p.read_text())[1])(
         tmp_path / "s.json"))
@@ -142,7 +142,7 @@ def test_an_image_too_big_is_bad_input(tmp_path, capsys):
                      "-o", str(tmp_path / "out")])
     err = capsys.readouterr().err
     assert code == 2
-    assert "huge.json: image: 100000x100000 is more than 67108864 pixels" in err
+    assert "huge.json: image: 100000x100000 is more than 268435456 pixels" in err
     assert "wide.json: image: 40000x8 is larger than this GL allows" in err
 
 

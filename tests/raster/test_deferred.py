@@ -7,8 +7,9 @@
 - Back-face culling of closed convex casters (`methods.cullable`, opt-in): only where the box is
   beyond the near plane; on these scenes masks and image identical to the frame without it
   (it is not exact everywhere: a back face that won a float32 depth tie is culled).
-- Side quads kept per light (`CpuVolumes.KEPT_LIGHTS`): frames with kept volumes equal fresh
-  ones.
+- Side quads kept per light (`CpuVolumes.KEPT_BYTES`, every sample of an area light): frames
+  with kept volumes equal fresh ones; the kept ones fit in the budget, and a frame that needs
+  more keeps its first lights rather than none.
 - The sRGB image from the GPU: within one code of `io.encode_srgb`.
 """
 
@@ -26,6 +27,7 @@ from shadowvol.raster.renderer import OUTPUTS, Renderer
 from shadowvol.raster.target import LIGHTS_PER_PAGE
 from shadowvol.raster.volumes import CpuVolumes
 from shadowvol.scene import (
+    AreaLight,
     Camera,
     DirectionalLight,
     Material,
@@ -177,13 +179,88 @@ def test_kept_side_quads_give_the_same_frames(ctx, monkeypatch):
     np.testing.assert_array_equal(other.image, fresh_other.image)
 
 
-def test_only_the_last_lights_are_kept(ctx):
+def _counting_builds(monkeypatch) -> list:
+    built = []
+    original = CpuVolumes._build
+    monkeypatch.setattr(CpuVolumes, "_build",
+                        lambda self, light4: built.append(1) or original(self, light4))
+    return built
+
+
+def test_kept_volumes_fit_in_their_budget(ctx):
     scene = scene_of(0, lights=1)
+    lights = [np.array([0.5 * k, 7.0, 1.0, 1.0]) for k in range(11)]
     with Renderer(scene, ctx) as r:
         vols = r.volumes("cpu")
-        for k in range(CpuVolumes.KEPT_LIGHTS + 3):
-            vols.prepare(np.array([0.5 * k, 7.0, 1.0, 1.0]))
-        assert len(vols._kept) == CpuVolumes.KEPT_LIGHTS
+        vols.prepare(lights[0])
+        one = vols._current.nbytes
+        assert one > 0
+        vols.KEPT_BYTES = 3 * one + one // 2
+        for light4 in lights:       # one light per frame: the least recently used go
+            vols.new_frame()
+            vols.prepare(light4)
+            assert sum(v.nbytes for v in vols._kept.values()) <= vols.KEPT_BYTES
+        assert list(vols._kept) == [x.tobytes() for x in lights[-3:]]
+
+
+def test_a_moving_light_leaves_little_behind(ctx):
+    """A light that moves every frame: the last two frames' volumes are kept, and of the older
+    ones only the most recent within KEPT_OLDER_BYTES."""
+    scene = scene_of(0, lights=1)
+    lights = [np.array([0.5 * k, 7.0, 1.0, 1.0]) for k in range(11)]
+    with Renderer(scene, ctx) as r:
+        vols = r.volumes("cpu")
+        vols.prepare(lights[0])
+        one = vols._current.nbytes
+        vols.KEPT_OLDER_BYTES = 2 * one + one // 2
+        for light4 in lights:
+            vols.new_frame()
+            vols.prepare(light4)
+        assert list(vols._kept) == [x.tobytes() for x in lights[-4:]]
+        vols.KEPT_OLDER_BYTES = 0
+        vols.new_frame()
+        vols.prepare(lights[0])        # this frame's and the last frame's light stay
+        assert list(vols._kept) == [lights[-1].tobytes(), lights[0].tobytes()]
+
+
+def test_a_frame_over_the_budget_keeps_its_first_lights(ctx, monkeypatch):
+    scene = scene_of(0, lights=1)
+    lights = [np.array([0.5 * k, 7.0, 1.0, 1.0]) for k in range(5)]
+    with Renderer(scene, ctx) as r:
+        vols = r.volumes("cpu")
+        vols.prepare(lights[0])
+        vols.KEPT_BYTES = 3 * vols._current.nbytes + vols._current.nbytes // 2
+        built = _counting_builds(monkeypatch)
+        for _ in range(3):          # five lights per frame, three fit: two rebuilt per frame
+            built.clear()
+            vols.new_frame()
+            for light4 in lights:
+                vols.prepare(light4)
+                assert vols._current is not None and vols._current.buffer is not None
+            assert list(vols._kept) == [x.tobytes() for x in lights[:3]]
+        assert len(built) == 2
+
+
+def test_an_area_lights_samples_are_kept_between_frames(ctx, monkeypatch):
+    scene = scene_of(1, lights=1)
+    light = AreaLight("rect", [0.5, 6.0, 1.0], normal=[0, -1, 0], size=[1.5, 1.0],
+                      samples=16)
+    scene = replace(scene, lights=(light,))
+    outputs = ("image", "lit")
+    with Renderer(scene, ctx) as r:
+        first = r.render(outputs=outputs)
+        built = _counting_builds(monkeypatch)
+        again = r.render(outputs=outputs)
+        assert built == []          # all 16 samples' volumes were kept
+    with Renderer(scene, ctx) as fresh:
+        fresh.volumes("cpu").KEPT_BYTES = 0   # nothing kept: every sample rebuilt
+        built = _counting_builds(monkeypatch)
+        rebuilt = fresh.render(outputs=outputs)
+        assert len(built) == 16 and not fresh.volumes("cpu")._kept
+    for res in (again, rebuilt):
+        np.testing.assert_array_equal(res.lit_count, first.lit_count)
+        np.testing.assert_array_equal(res.image, first.image)
+    assert 0 < first.penumbra.sum()
 
 
 def test_cross3_is_np_cross_bit_for_bit():
@@ -210,3 +287,17 @@ def test_one_area_light_gives_the_same_frame_every_time(ctx, samples):
         np.testing.assert_array_equal(f.lit_count[0], alone)
         np.testing.assert_array_equal(f.image, frames[0].image)
     assert 0 < frames[0].lit_count.max() and (frames[0].penumbra.any())
+
+
+@pytest.mark.parametrize("numpy_has_it", [True, False])
+def test_bit_count_counts_set_bits(monkeypatch, numpy_has_it):
+    """An area light's lit count is the set bits of its samples in a page (`_bit_count`, with
+    numpy's bitwise_count or the byte table where numpy has none)."""
+    from shadowvol.raster import renderer
+    if not numpy_has_it:
+        monkeypatch.delattr(np, "bitwise_count", raising=False)
+    rng = np.random.default_rng(0)
+    x = rng.integers(0, 2 ** 32, (37, 53), dtype=np.uint64).astype(np.uint32)
+    x[0, :3] = (0, 2 ** 32 - 1, 2 ** 31)
+    expected = np.array([bin(int(v)).count("1") for v in x.ravel()]).reshape(x.shape)
+    np.testing.assert_array_equal(renderer._bit_count(x), expected)

@@ -13,7 +13,7 @@ from shadowvol.compare.maskdiff import mask_report
 from shadowvol.primitives import box, mesh, plane
 from shadowvol.raster import overflow
 from shadowvol.raster.renderer import Renderer
-from shadowvol.scene import Camera, Material, PointLight, Scene
+from shadowvol.scene import AreaLight, Camera, Material, PointLight, Scene
 from shadowvol.scenefile import save_scene
 
 SIZE = dict(width=64, height=48)
@@ -163,18 +163,24 @@ def test_the_light_bound_bounds_the_counts(ctx, layers):
                     r.render()
 
 
-def test_the_light_bound_skips_the_recheck_of_shallow_stacks(ctx, monkeypatch):
-    """A 1,000-triangle mesh (scene bound 1,000) of 10 layers: the first frame re-checks, later
-    frames do not; the masks are the same either way."""
+def strip_stack() -> Scene:
+    """`stack(10)` with each sheet split into 50 strips: 1,000 triangles (a scene bound of
+    1,000), still 10 layers."""
     scene = stack(10)
     tiles = []
-    for k in range(50):   # split each sheet into 50 strips: 1,000 triangles, still 10 layers
+    for k in range(50):
         x0, x1 = -0.5 + k / 50, -0.5 + (k + 1) / 50
         tiles.append(np.array([[x0, 0, -0.5], [x1, 0, -0.5], [x1, 0, 0.5], [x0, 0, 0.5]]))
     z = np.linspace(1.0, 2.0, 10)
     v = np.concatenate([t + [0, h, 0] for h in z for t in tiles])
     f = (np.array([[0, 1, 2], [0, 2, 3]])[None] + 4 * np.arange(len(v) // 4)[:, None, None])
-    scene = scene.replace(objects=[scene.objects[0], mesh("strips", v, f.reshape(-1, 3))])
+    return scene.replace(objects=[scene.objects[0], mesh("strips", v, f.reshape(-1, 3))])
+
+
+def test_the_light_bound_skips_the_recheck_of_shallow_stacks(ctx, monkeypatch):
+    """A 1,000-triangle mesh (scene bound 1,000) of 10 layers: the first frame re-checks, later
+    frames do not; the masks are the same either way."""
+    scene = strip_stack()
     calls = []
     original = overflow.find_wrapped
     monkeypatch.setattr(overflow, "find_wrapped",
@@ -225,3 +231,48 @@ def test_the_light_bound_bounds_random_counts(ctx, seed):
                                      scene.lights[0].homogeneous, slack)
         counts = r.render("zfail", stencil=True).stencil
     assert counts.min() >= 0 and counts.max() <= bound < 256
+
+
+def _area(samples: int = 4) -> AreaLight:
+    return AreaLight("rect", [0.1, 4.0, 0.05], normal=[0, -1, 0], size=[0.4, 0.3],
+                     samples=samples)
+
+
+def test_an_area_lights_samples_keep_their_light_bounds(ctx, monkeypatch):
+    """The shallow stack of strips under a 4-sample rect light: the first frame re-checks
+    every sample; each later frame computes one sample's `light_bound` (10 layers: far below
+    256; `Renderer.BOUNDS_PER_FRAME`) and re-checks the samples still without one, so the
+    frames re-check 4, 3, 2, 1, then none; the counts are the same every time."""
+    scene = strip_stack().replace(lights=[_area()])
+    calls = []
+    original = overflow.find_wrapped
+    monkeypatch.setattr(overflow, "find_wrapped",
+                        lambda *a, **k: calls.append(1) or original(*a, **k))
+    rechecked = []
+    with Renderer(scene, ctx) as r:
+        assert r.count_bound >= 256 and r.BOUNDS_PER_FRAME == 1
+        first = r.render()
+        rechecked.append(len(calls))
+        frames = []
+        for _ in range(5):
+            frames.append(r.render())
+            rechecked.append(len(calls) - sum(rechecked))
+        assert len(r._light_bounds) == 4
+        assert all(kept[1] < 256 for kept in r._light_bounds.values())
+    assert rechecked == [4, 3, 2, 1, 0, 0]
+    assert 0 < first.penumbra.sum() and (first.lit_count == 0).any()
+    for frame in frames:
+        np.testing.assert_array_equal(frame.lit_count, first.lit_count)
+
+
+def test_an_area_light_over_256_sheets_raises_in_every_frame(ctx):
+    """256 sheets under a 4-sample rect light: every sample's bound reaches 256, so the
+    per-sample bounds (one more each frame from the second on) still leave every sample
+    re-checked."""
+    scene = stack(256).replace(lights=[_area()])
+    with Renderer(scene, ctx) as r:
+        for _ in range(1 + 4 * r.BOUNDS_PER_FRAME):
+            with pytest.raises(overflow.StencilOverflowError, match="light 0"):
+                r.render()
+        assert len(r._light_bounds) == 4
+        assert all(kept is not None and kept[1] >= 256 for kept in r._light_bounds.values())

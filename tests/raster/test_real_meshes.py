@@ -1,4 +1,5 @@
-"""Real meshes from ../shared/models (bunny, teapot, Suzanne, Spot, lamp shade) in scenes built
+"""Real meshes from ../shared/models or $SHADOWVOL_MODELS (`builders.MODELS`: bunny, teapot,
+Suzanne, Spot, lamp shade) in scenes built
 here: the rasterizer's masks against the ray tracer's, and the ray tracer against the exact
 float64 check on a crop of Suzanne.
 
@@ -13,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from builders import ROOT
+from builders import MODELS
 from exact import check_exact
 
 import raytrace
@@ -28,7 +29,6 @@ from shadowvol.scene import (
     SpotLight,
 )
 
-MODELS = ROOT.parent / "shared" / "models"
 NAMES = ("bunny", "teapot", "suzanne", "spot", "lampshade")
 RUNS = [("auto", "cpu"), ("zfail", "cpu"), ("auto", "gpu")]
 LIGHTS = (PointLight([1.5, 3.5, 1.0], intensity=0.5), DirectionalLight([-0.4, -1.0, -0.3]),
