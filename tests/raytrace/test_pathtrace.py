@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from builders import QUADRATURE_ALLOWANCE, block_means, cornell, furnace, z_limit
 
-from raytrace import brdf
+from raytrace import brdf, pathtrace
 from raytrace.direct import direct_lighting
 from raytrace.pathtrace import render
 
@@ -69,6 +69,43 @@ def test_same_seed_same_image_other_seed_other_image():
     c = render(scene, spp=2, seed=8)
     assert np.array_equal(a.image, b.image)
     assert not np.array_equal(a.image, c.image)
+
+
+def test_the_image_does_not_depend_on_the_threads(monkeypatch):
+    """Tiles of whole rows, one random stream each, summed in tile order: one thread or two
+    give the same bytes."""
+    monkeypatch.setattr(pathtrace, "TILE_PATHS", 64)  # 16x16 at spp 2: 8 tiles
+    scene = cornell(16)
+    images = []
+    for threads in (1, 2):
+        monkeypatch.setattr(pathtrace, "cpu_threads", lambda threads=threads: threads)
+        images.append(render(scene, spp=2, seed=5, progress=False))
+    assert np.array_equal(images[0].image, images[1].image)
+    assert np.array_equal(images[0].variance, images[1].variance)
+    assert images[0].rays == images[1].rays
+
+
+def test_cosine_sampling_has_the_cosine_lobe_moments():
+    """The path tracer's cosine sampler (n plus a uniform point of the sphere, normalised) and
+    the framed one radiosity uses: E[cos] = 2/3, E[cos^2] = 1/2, never below the surface, the
+    azimuth uniform (E[t] = E[b] = 0 about any normal), 4e5 samples each, 5 sigma."""
+    rng = np.random.default_rng(4)
+    k = 400_000
+    axis = np.array([0.3, -0.8, 0.52])
+    axis /= np.linalg.norm(axis)
+    n = np.tile(axis, (k, 1))
+    t, b = brdf.frame(n[:1])
+    for wi in (brdf.cosine_hemisphere_rows(rng, np.ascontiguousarray(n.T, np.float32)).T,
+               brdf.cosine_hemisphere_rows(rng, np.ascontiguousarray(n.T)).T,
+               brdf.cosine_hemisphere(rng, n)):
+        wi = wi.astype(np.float64)
+        np.testing.assert_allclose(np.linalg.norm(wi, axis=1), 1.0, atol=1e-6)
+        c = wi @ axis
+        assert c.min() >= -1e-6
+        for moment, expected, sd in ((c, 2 / 3, np.sqrt(1 / 2 - 4 / 9)),
+                                     (c * c, 1 / 2, np.sqrt(1 / 3 - 1 / 4)),
+                                     (wi @ t[0], 0.0, 0.5), (wi @ b[0], 0.0, 0.5)):
+            assert abs(moment.mean() - expected) < 5 * sd / np.sqrt(k), (expected, moment.mean())
 
 
 def test_phong_normalisation_conserves_energy():
