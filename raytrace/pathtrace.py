@@ -8,7 +8,8 @@ once, per tile, like `raytrace.whitted`):
 * next-event estimation at every non-delta vertex: one point y on the emissive triangles, chosen
   with probability proportional to area x mean emitted radiance and uniformly within the
   triangle, adds  f(wo, wi) L_e cos_x cos_y / (|x − y|^2 p_A(y))  if the segment is unblocked;
-  each point / spot / directional light of `scene.lights` adds  f · pi · radiance · cos_x
+  each point / spot / directional light of `scene.lights` (an area light: each of its samples,
+  also weighted by its cosine at the light, as in `raytrace.whitted`) adds  f · pi · radiance · cos_x
   (these delta lights keep the Whitted convention: irradiance pi · radiance · n·l, no distance
   fall-off, so a Lambertian surface gets kd · radiance · n·l as in Whitted);
 * the next direction is drawn from the material (`raytrace.brdf`); emission found by a ray drawn
@@ -51,7 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shadowvol.scene import DirectionalLight, Scene, SpotLight
+from shadowvol.scene import AreaSample, DirectionalLight, Scene, SpotLight, hard_lights
 
 from .backends import cpu_threads, make_backend
 from .brdf import (
@@ -124,7 +125,8 @@ class PathWorld:
         # p_A(y) of `sample_emitters` for a point on each triangle (0 off the emitters)
         self.light_pdf_area = np.zeros(len(self.area))
         self.light_pdf_area[self.emitters] = self.emitter_prob / self.area[self.emitters]
-        self.lights = scene.lights
+        # an area light of `scene.lights` is its samples (as in `raytrace.whitted`)
+        self.lights = tuple(hard for lt in scene.lights for hard in hard_lights(lt))
         # per triangle, one packed table (rows: `surface`), only the rows this scene needs
         ob = self.tri_object
         tri_emission = self.emission[ob]
@@ -309,8 +311,8 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, start, mis: bo
             cos_x = dot_rows(n, wi)
             ok = (cos_x > 0.0) & (w_phong > 0.0)
             if isinstance(light, SpotLight):
-                ok &= -dot_rows(wi, np.asarray(light.direction, STATE)[:, None]) \
-                    >= light.cos_cutoff
+                cos_light = -dot_rows(wi, np.asarray(light.direction, STATE)[:, None])
+                ok &= cos_light >= light.cos_cutoff
             c = np.flatnonzero(ok)
             blocked = world.occluded_rows(_take(start, c), _take(direction, c), tmax)
             rays += len(c)
@@ -318,6 +320,8 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, start, mis: bo
             lit[c] = ~blocked
             f = phong_eval_rows(kd, ks, s, n, wo, wi, glossy, cos_t=cos_x)
             g = np.where(lit, w_phong * cos_x, 0.0)
+            if isinstance(light, AreaSample):   # weighted by its cosine at the light
+                g *= np.maximum(cos_light, 0.0)
             out += beta * f * (math.pi * np.asarray(light.radiance, STATE)[:, None]) * g
     return out, rays
 

@@ -12,6 +12,9 @@ from builders import QUADRATURE_ALLOWANCE, block_means, cornell, furnace, z_limi
 from raytrace import brdf, pathtrace
 from raytrace.direct import direct_lighting
 from raytrace.pathtrace import render
+from raytrace.whitted import render as whitted_render
+from shadowvol.primitives import box, plane
+from shadowvol.scene import AreaLight, Camera, Material, Scene
 
 
 def test_furnace_converges_to_emission_over_one_minus_albedo():
@@ -140,3 +143,29 @@ def test_kd_plus_ks_above_one_is_scaled_down():
 def test_bad_spp_is_refused(bad):
     with pytest.raises(ValueError, match="spp"):
         render(cornell(8), spp=bad)
+
+
+def test_an_area_light_is_its_samples_as_in_whitted():
+    """An area light in `scene.lights` (not emissive geometry): the path tracer's next-event
+    estimate sums its samples, each weighted by its cosine at the light, as the Whitted
+    tracer's direct term does.  Lambertian, no ambient, pixel centres, depth 1: nothing is
+    random, so the two images are equal but for float32 rounding and shadow-edge pixels (the
+    two tracers offset their shadow rays differently)."""
+    lambert = Material(diffuse=[0.7, 0.6, 0.5], specular=[0, 0, 0])
+    light = AreaLight("rect", [0.4, 3.0, 0.2], normal=[0.3, -1.0, 0.1], size=[1.2, 0.8],
+                      samples=9, intensity=2.0)
+    scene = Scene(camera=Camera(eye=[0.0, 3.0, 4.0], target=[0.0, 0.3, 0.0], fov_y=50.0),
+                  objects=[plane("floor", size=(8.0, 8.0), material=lambert),
+                           box("box", center=(0.0, 0.6, 0.0), size=(0.8, 1.2, 0.8),
+                               material=lambert)],
+                  lights=[light], width=48, height=36, ambient=[0, 0, 0],
+                  background=[0, 0, 0])
+    traced = render(scene, spp=1, seed=0, max_depth=1, jitter=False).image
+    whitted = whitted_render(scene, max_depth=0)
+    close = np.isclose(traced, whitted, rtol=1e-4, atol=1e-6).all(axis=2)
+    assert close.mean() > 0.97, f"{(~close).sum()} pixels differ"
+    # the test is sharp: the cosine at the light matters (the light is tilted), and the box's
+    # penumbra is in the picture
+    assert (whitted > 0).any(axis=2).mean() > 0.5
+    levels = np.unique(np.round(whitted[..., 0], 6))
+    assert len(levels) > 40
