@@ -3,10 +3,22 @@
     python benchmarks/bench_outlook.py [--size 512] [--spp 4] [--runs 3]
 
 1. Path tracing throughput: `raytrace.pathtrace.render` of scenes/cornell.toml at size x size,
-   Mrays/s counting every ray it traced (camera, bounce and shadow rays), against raw embreex
-   casts of the same number of rays (closest hit, random origins inside the box and random
-   directions, float32 arrays prepared before the clock, one chunk per core on a thread pool as
-   `raytrace.backends` does).  Target: path tracing >= 0.6x raw.
+   Mrays/s counting every ray it traced (camera, bounce and shadow rays), against two raw
+   embreex baselines, each on as many threads as the path tracer uses (`cpu_threads()`):
+   * `raw`: the same number of closest-hit rays, random origins inside the box and random
+     directions, float32 arrays prepared before the clock, one chunk per thread on a thread
+     pool as `raytrace.backends` does (the issue's "raw Embree casts"; target: path tracing
+     >= 0.6x raw);
+   * `replay`: the very rays the path tracer cast (recorded in an untimed render of the same
+     seed: camera and bounce rays as closest-hit queries, shadow rays as bounded occlusion
+     queries, in the same batches, float32 as Embree gets them), each thread replaying the
+     batches one of the path tracer's tile threads cast, on a pool of the same size: the path
+     tracer's time with its shading made free.
+   The three are interleaved round by round (path trace, raw, replay), medians reported, in
+   wall time and in this process's CPU time (`time.process_time`, all threads): other sessions
+   on the same cores stretch wall times unevenly (a thread pool waits for its slowest thread),
+   CPU times much less, so `cpu_ratio_to_raw` is the steadier figure under load; on an idle
+   machine the two ratios agree when both sides keep the cores equally busy.
 2. Radiosity time (meshing, form factors, solve, as `raytrace radiosity` runs it) at about 1k,
    4k and 16k triangles (each triangle is two patches, one per face).
 
@@ -17,8 +29,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import sys
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -31,8 +45,9 @@ CORNELL = ROOT / "scenes" / "cornell.toml"
 PATCH_TARGETS = (1000, 4000, 16000)  # triangles
 
 
-def raw_embree_seconds(scene, n_rays: int, runs: int) -> float:
-    """Median seconds for embreex to trace n_rays closest-hit rays inside the scene's box."""
+def raw_embree_seconds(scene, n_rays: int, runs: int, cpu: list | None = None) -> float:
+    """Median seconds for embreex to trace n_rays closest-hit rays inside the scene's box
+    (with cpu, a list: each run's CPU seconds are appended to it)."""
     from embreex import rtcore_scene
     from embreex.mesh_construction import TriangleMesh
 
@@ -53,26 +68,98 @@ def raw_embree_seconds(scene, n_rays: int, runs: int) -> float:
     times = []
     with ThreadPoolExecutor(threads) as pool:
         for _ in range(runs):
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             list(pool.map(lambda s: es.run(o[s], d[s]), parts))
             times.append(time.perf_counter() - t)
+            if cpu is not None:
+                cpu.append(time.process_time() - c)
     return statistics.median(times)
 
 
+def _recorded_batches(scene, spp: int, seed: int) -> list[list[tuple]]:
+    """The Embree queries of one path-traced render, per thread that cast them, in order:
+    (query, origins (n, 3) float32, directions (n, 3) float32, tfar or None)."""
+    from raytrace import pathtrace
+
+    per_thread: dict[int, list[tuple]] = {}
+
+    class Recording(pathtrace.PathWorld):
+        def _log(self, query, o, d, tmax):
+            per_thread.setdefault(threading.get_ident(), []).append(
+                (query, np.ascontiguousarray(o.T, np.float32),
+                 np.ascontiguousarray(d.T, np.float32), tmax))
+
+        def closest_rows(self, o, d):
+            self._log("INTERSECT", o, d, None)
+            return super().closest_rows(o, d)
+
+        def occluded_rows(self, o, d, tmax):
+            self._log("OCCLUDED", o, d, tmax)
+            return super().occluded_rows(o, d, tmax)
+
+    original, pathtrace.PathWorld = pathtrace.PathWorld, Recording
+    try:
+        pathtrace.render(scene, spp=spp, seed=seed, progress=False)
+    finally:
+        pathtrace.PathWorld = original
+    return list(per_thread.values())
+
+
+def replay_seconds(es, batches: list[list[tuple]]) -> tuple[float, float]:
+    """Wall and CPU seconds for embreex scene `es` to cast the recorded batches, one thread per
+    list."""
+    def cast(queue):
+        for query, o, d, tmax in queue:
+            es.run(o, d, dists=tmax, query=query)
+
+    with ThreadPoolExecutor(len(batches)) as pool:
+        t, c = time.perf_counter(), time.process_time()
+        list(pool.map(cast, batches))
+        return time.perf_counter() - t, time.process_time() - c
+
+
 def path_tracing(size: int, spp: int, runs: int) -> dict:
+    from embreex import rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+
+    from raytrace.backends import cpu_threads
     from raytrace.pathtrace import render
     from shadowvol.scenefile import load_scene
 
     scene = load_scene(CORNELL).replace(width=size, height=size)
     render(scene.replace(width=16, height=16), spp=1)  # warm-up (imports, first BVH)
-    results = [render(scene, spp=spp, seed=i, progress=False) for i in range(runs)]
+    vertices, faces, _ = scene.triangles()
+    es = rtcore_scene.EmbreeScene()
+    TriangleMesh(es, vertices.astype(np.float32), faces.astype(np.int32))
+    es.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))  # the BVH
+    results, cpu, raw, raw_cpu, replay, replay_cpu = [], [], [], [], [], []
+    for i in range(runs):
+        c = time.process_time()
+        results.append(render(scene, spp=spp, seed=i, progress=False))
+        cpu.append(time.process_time() - c)
+        raw.append(raw_embree_seconds(scene, results[-1].rays, 1, cpu=raw_cpu))
+        batches = _recorded_batches(scene, spp, seed=i)
+        wall, c = replay_seconds(es, batches)
+        replay.append(wall)
+        replay_cpu.append(c)
+        del batches
     seconds = statistics.median(r.seconds for r in results)
     rays = int(statistics.median(r.rays for r in results))
-    raw = raw_embree_seconds(scene, rays, runs)
-    return {"size": size, "spp": spp, "rays": rays, "seconds": seconds,
-            "mrays_per_s": rays / seconds / 1e6, "raw_embree_seconds": raw,
-            "raw_embree_mrays_per_s": rays / raw / 1e6, "ratio_to_raw": raw / seconds,
-            "target_ratio": 0.6}
+    raw_s, replay_s = statistics.median(raw), statistics.median(replay)
+    cpu_s, raw_cpu_s = statistics.median(cpu), statistics.median(raw_cpu)
+    replay_cpu_s = statistics.median(replay_cpu)
+    return {"size": size, "spp": spp, "threads": cpu_threads(), "rays": rays,
+            "seconds": seconds, "seconds_min_max": [min(r.seconds for r in results),
+                                                    max(r.seconds for r in results)],
+            "mrays_per_s": rays / seconds / 1e6, "raw_embree_seconds": raw_s,
+            "raw_embree_mrays_per_s": rays / raw_s / 1e6, "ratio_to_raw": raw_s / seconds,
+            "replay_embree_seconds": replay_s,
+            "replay_embree_mrays_per_s": rays / replay_s / 1e6,
+            "ratio_to_replay": replay_s / seconds, "target_ratio": 0.6,
+            "cpu_seconds": cpu_s, "raw_embree_cpu_seconds": raw_cpu_s,
+            "replay_embree_cpu_seconds": replay_cpu_s, "cpu_ratio_to_raw": raw_cpu_s / cpu_s,
+            "cpu_ratio_to_replay": replay_cpu_s / cpu_s,
+            "load_average": list(os.getloadavg())}
 
 
 def radiosity_times(targets=PATCH_TARGETS, rays_per_patch: int = 256) -> list[dict]:

@@ -8,7 +8,8 @@ once, per tile, like `raytrace.whitted`):
 * next-event estimation at every non-delta vertex: one point y on the emissive triangles, chosen
   with probability proportional to area x mean emitted radiance and uniformly within the
   triangle, adds  f(wo, wi) L_e cos_x cos_y / (|x − y|^2 p_A(y))  if the segment is unblocked;
-  each point / spot / directional light of `scene.lights` adds  f · pi · radiance · cos_x
+  each point / spot / directional light of `scene.lights` (an area light: each of its samples,
+  also weighted by its cosine at the light, as in `raytrace.whitted`) adds  f · pi · radiance · cos_x
   (these delta lights keep the Whitted convention: irradiance pi · radiance · n·l, no distance
   fall-off, so a Lambertian surface gets kd · radiance · n·l as in Whitted);
 * the next direction is drawn from the material (`raytrace.brdf`); emission found by a ray drawn
@@ -29,6 +30,17 @@ light the scene.  `scene.ambient` is ignored (the integrator computes what ambie
 Every object is traced as its triangles (spheres as their icospheres), so the emitter that NEE
 samples is exactly the surface that rays hit.  Random numbers: one `numpy` generator per tile,
 spawned from `SeedSequence(seed)`, so an image depends on the seed only (not on the threads).
+
+Layout and precision.  The path state is rows, (3, k) arrays (`brdf`'s `_rows` kernels), in
+float32 (`STATE`): Embree traces float32 anyway, and numpy's float32 loops are about twice as
+fast.  What float32 costs here is bounded: a hit point lies within a few float32 spacings of
+`length_scale` (<= ~4e-7 of it) of its float64 value, and every ray leaves a surface
+`surface_offset` = 1e-4 of `length_scale` out, so a ray cannot start behind the surface it left
+(Whitted's own margin; these images are not masks, CONVENTIONS.md's exact segments are the
+masks'); directions, cosines, densities and throughputs carry ~1e-7 relative errors, far below
+any image's noise; random numbers are float32 (24 bits) except the emitter choice and the camera
+jitter; what a path gathers is float32, its radiance sums it in float64 (so that the background
+seen directly is exact), as do the per-pixel sums and squares.
 """
 
 from __future__ import annotations
@@ -40,37 +52,51 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shadowvol.scene import DirectionalLight, Scene, SpotLight
+from shadowvol.scene import AreaSample, DirectionalLight, Scene, SpotLight, hard_lights
 
 from .backends import cpu_threads, make_backend
 from .brdf import (
     diffuse_probability,
+    dot_rows,
     normalised_phong,
-    phong_eval,
-    phong_pdf,
-    phong_sample,
+    phong_eval_rows,
+    phong_pdf_rows,
+    phong_sample_rows,
 )
 from .camera import camera_basis
-from .intersect import dot, reflect, refract
+from .intersect import reflect, refract
 from .progress import Progress
 from .tolerances import surface_offset
 
 RR_START_BOUNCE = 3  # Russian roulette from the third bounce on
 RR_MAX_SURVIVAL = 0.95  # never certain survival: bounds the expected path length
 DEFAULT_MAX_DEPTH = 64  # bounces; the truncation bias is below rho^64 of the image
-TILE_PATHS = 1 << 16  # paths traced together: bounds memory, sets the progress step
+TILE_PATHS = 1 << 15  # paths traced together: ~10 MB of arrays; sets the progress step
 LEAVING_STANDOFF = 10.0  # `radiance_leaving` starts its rays this many surface offsets out
+# The path state's precision (rays, hit points, throughputs, the tables; see the module
+# docstring) and the smallest value a float32 division below is kept from dividing by.
+STATE = np.float32
+STATE_TINY = 1e-30
+
+
+def _take(a: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Columns `index` of a (3, k) array, or entries of a (k,) one (np.take: a fancy index on
+    the last axis of a (3, k) array is several times slower)."""
+    return np.take(a, index, axis=-1)
 
 
 class PathWorld:
     """The scene as the path tracer and radiosity see it: all objects' triangles in one backend,
-    per-object material arrays, and the emitters to sample.
+    per-object material arrays, the same per triangle, and the emitters to sample.
 
     tri_object : (M,) int, the object of each triangle;  area : (M,) float64
     kd, ks : (K, 3) normalised Phong (`brdf.normalised_phong`);  shininess, refl, transp, ior,
     p_diffuse : (K,);  emission : (K, 3)
     emitters : (E,) int, emissive triangles;  emitter_cdf : (E,) float64, cumulative choice
     probability (area x mean emission)
+    The tracer's own tables, vectors as rows: per triangle (`surface`) and per emitter
+    (`sample_emitters`), each packed into one small (P, M) array, so that what a hit needs is
+    one gather by triangle, no per-object indirection; tri_emission (3, M).
     """
 
     def __init__(self, scene: Scene, backend: str = "embree", parallel: bool = True):
@@ -99,7 +125,57 @@ class PathWorld:
         # p_A(y) of `sample_emitters` for a point on each triangle (0 off the emitters)
         self.light_pdf_area = np.zeros(len(self.area))
         self.light_pdf_area[self.emitters] = self.emitter_prob / self.area[self.emitters]
-        self.lights = scene.lights
+        # an area light of `scene.lights` is its samples (as in `raytrace.whitted`)
+        self.lights = tuple(hard for lt in scene.lights for hard in hard_lights(lt))
+        # per triangle, one packed table (rows: `surface`), only the rows this scene needs
+        ob = self.tri_object
+        tri_emission = self.emission[ob]
+        self.tri_emits = self.light_pdf_area > 0.0
+        self.any_glossy = bool((self.ks[ob] > 0.0).any())
+        self.any_delta = bool((self.refl[ob] > 0.0).any() or (self.transp[ob] > 0.0).any())
+        self.any_emits = bool(self.tri_emits.any())
+        table = [("normal", self.tracer.normals.T), ("plane_d", self.tracer.plane_d),
+                 ("kd", self.kd[ob].T)]
+        if self.any_glossy:
+            table += [("ks", self.ks[ob].T), ("shininess", self.shininess[ob]),
+                      ("p_diffuse", self.p_diffuse[ob]),
+                      ("glossy", self.ks[ob].max(axis=1) > 0.0)]
+        if self.any_delta:
+            table += [("phong", 1.0 - self.refl[ob] - self.transp[ob]),
+                      ("refl", self.refl[ob]), ("transp", self.transp[ob]),
+                      ("ior", self.ior[ob])]
+        if self.any_emits:
+            table += [("emits", self.tri_emits), ("light_pdf", self.light_pdf_area)]
+        self._tri_table, self._tri_rows = _pack(table)
+        self.tri_emission = np.ascontiguousarray(tri_emission.T, STATE)
+        # per emitter: a corner, two edges, the normal, the radiance, p_A of a point on it
+        e = self.emitters
+        c = self.corners[e]
+        self._emitter_table, self._emitter_rows = _pack([
+            ("a", c[:, 0].T), ("ab", (c[:, 1] - c[:, 0]).T), ("ac", (c[:, 2] - c[:, 0]).T),
+            ("normal", self.tracer.normals[e].T), ("radiance", tri_emission[e].T),
+            ("pdf_area", self.emitter_prob / self.area[e] if len(e) else np.zeros(0))],
+            constants=True)  # one rect light: the normal, radiance and density are constants
+
+    def surface(self, tri: np.ndarray) -> dict:
+        """What the path tracer needs of triangles tri (k,) int (>= 0), from one gather:
+        normal (3, k) by winding, plane_d (k,), kd (3, k); ks (3, k), shininess, p_diffuse (k,)
+        if the scene has a glossy material (else None, None, 1.0), and glossy (m,), the indices
+        of those with a glossy lobe (`brdf.phong_eval_rows`); phong (the Phong lobes'
+        weight), refl, transp, ior (k,) if it has a mirror or glass (else 1.0, None, None,
+        None); emits (k,) bool and light_pdf (k,), `light_pdf_area`, if it has emitters (else
+        None).  Vectors and numbers are `STATE`."""
+        rows = _unpack(np.take(self._tri_table, tri, axis=1), self._tri_rows)
+        rows.setdefault("ks", None)
+        rows.setdefault("shininess", None)
+        rows.setdefault("p_diffuse", 1.0)
+        rows.setdefault("phong", 1.0)
+        for name in ("refl", "transp", "ior"):
+            rows.setdefault(name, None)
+        rows["emits"] = rows["emits"] > 0.0 if "emits" in rows else None
+        rows["glossy"] = np.flatnonzero(rows["glossy"]) if "glossy" in rows else \
+            np.zeros(0, np.int64)
+        return rows
 
     def intersect(self, o: np.ndarray, d: np.ndarray):
         """Closest hits of rays o, d (n, 3) float64: t (n,) (inf: miss), tri (n,) int (-1: miss),
@@ -110,21 +186,52 @@ class PathWorld:
         normal[h] = self.tracer.normals[hits.tri[h]]
         return hits.t, hits.tri, normal
 
+    def closest_rows(self, o: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """The triangle (k,) int64 (-1: miss) that rays o, d (3, k) float64 hit first (float32
+        in Embree, as every backend traces)."""
+        return self.tracer.closest_triangle(o.T, d.T, parallel=self.parallel)
+
     def occluded(self, o: np.ndarray, d: np.ndarray, tmax) -> np.ndarray:
         return self.tracer.occluded(o, d, tmax, parallel=self.parallel)
 
+    def occluded_rows(self, o: np.ndarray, d: np.ndarray, tmax) -> np.ndarray:
+        """`occluded` for rays o, d (3, k)."""
+        return self.tracer.occluded(o.T, d.T, tmax, parallel=self.parallel)
+
     def sample_emitters(self, rng: np.random.Generator, k: int):
-        """k points on the emitters: y (k, 3), their triangles (k,) int, and p_A(y) (k,), the
-        area density of the choice."""
+        """k points on the emitters: y (3, k), the emitters' unit normals (3, k) by winding
+        and radiance (3, k), and p_A(y) (k,), the area density of the choice (each of the last
+        three (3, 1) or (1,) where it is the same on all emitters)."""
         j = np.minimum(np.searchsorted(self.emitter_cdf, rng.random(k), side="right"),
                        len(self.emitters) - 1)
-        tri = self.emitters[j]
-        u1, u2 = rng.random(k), rng.random(k)
+        u1, u2 = rng.random(k, dtype=STATE), rng.random(k, dtype=STATE)
         r = np.sqrt(u1)
-        c = self.corners[tri]
-        y = ((1.0 - r)[:, None] * c[:, 0] + (r * (1.0 - u2))[:, None] * c[:, 1]
-             + (r * u2)[:, None] * c[:, 2])
-        return y, tri, self.emitter_prob[j] / self.area[tri]
+        e = _unpack(np.take(self._emitter_table, j, axis=1) if len(self._emitter_table)
+                    else self._emitter_table, self._emitter_rows)
+        y = e["a"] + (r * (1.0 - u2)) * e["ab"] + (r * u2) * e["ac"]
+        return y, e["normal"], e["radiance"], e["pdf_area"]
+
+
+def _pack(columns, constants: bool = False) -> tuple[np.ndarray, dict]:
+    """Rows (n,) or (m, n) stacked into one (P, n) `STATE` table, and each name's row slice.
+    constants: an entry equal for all n items is left out of the table and kept as a (m, 1) or
+    (1,) array, to broadcast instead of being gathered (only for callers that never index a
+    gathered entry themselves)."""
+    rows, slices, at = [], {}, 0
+    for name, value in columns:
+        value = np.atleast_2d(np.asarray(value, np.float64)).astype(STATE)
+        if constants and value.shape[1] and (value == value[:, :1]).all():
+            slices[name] = value[:, :1] if len(value) > 1 else value[0, :1]
+            continue
+        rows.append(value)
+        slices[name] = slice(at, at + len(value)) if len(value) > 1 else at
+        at += len(value)
+    table = np.concatenate(rows) if rows else np.zeros((0, 0), STATE)
+    return np.ascontiguousarray(table), slices
+
+
+def _unpack(table: np.ndarray, slices: dict) -> dict:
+    return {name: s if isinstance(s, np.ndarray) else table[s] for name, s in slices.items()}
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,63 +250,79 @@ class PathImage:
     seconds: float
 
 
-def _add(L: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+def _scatter_add(L: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+    """L[:, index] += values for L (3, n), distinct indices (k,), values (3, k)."""
     for c in range(3):
-        L[:, c] += np.bincount(index, weights=values[:, c], minlength=len(L))
+        L[c, index] += values[c]
 
 
-def next_event(world: PathWorld, rng, p, n, wo, obj, beta, mis: bool = True
+def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, start, mis: bool = True
                ) -> tuple[np.ndarray, int]:
-    """Direct light (k, 3) at vertices p (k, 3) with normals n (k, 3) facing wo (k, 3), objects
-    obj (k,), throughputs beta (k, 3), from one emitter sample each and every delta light.
-    mis: weigh the emitter sample by its MIS share (False at the last bounce, where no BSDF
-    sample follows to take the rest).  Returns the contributions and the shadow rays traced."""
-    k = len(p)
-    out = np.zeros((k, 3))
-    w_phong = 1.0 - world.refl[obj] - world.transp[obj]
-    kd, ks, s = world.kd[obj], world.ks[obj], world.shininess[obj]
-    start = p + world.offset * n
+    """Direct light (3, k) at vertices p (3, k) with normals n (3, k) facing wo (3, k), of
+    surfaces surf (`PathWorld.surface`), throughputs beta (3, k), from one emitter sample each
+    and every delta light; shadow rays leave from start (3, k), p + offset n.  mis: weigh the
+    emitter sample by its MIS share (False at the last bounce, where no BSDF sample follows to
+    take the rest).  Returns the contributions and the shadow rays traced."""
+    k = p.shape[1]
+    out = np.zeros((3, k), STATE)
+    w_phong, glossy = surf["phong"], surf["glossy"]
+    kd, ks, s = surf["kd"], surf["ks"], surf["shininess"]
     rays = 0
-    if len(world.emitters):
-        y, tri, p_area = world.sample_emitters(rng, k)
-        to_y = y - p
-        dist2 = dot(to_y, to_y)
-        wi = to_y / np.sqrt(np.maximum(dist2, 1e-300))[:, None]
-        n_y = world.tracer.normals[tri]
-        cos_x = dot(n, wi)
-        cos_y = -dot(n_y, wi)
-        side = np.where(cos_y >= 0.0, 1.0, -1.0)  # the emitter's face toward x
-        cos_y = np.abs(cos_y)
-        c = np.flatnonzero((cos_x > 0.0) & (cos_y > 0.0) & (w_phong > 0.0) & (dist2 > 0.0))
-        end = y[c] + world.offset * side[c, None] * n_y[c]
-        blocked = world.occluded(start[c], end - start[c], 1.0)
-        rays += len(c)
-        c = c[~blocked]
-        f = phong_eval(kd[c], ks[c], s[c], n[c], wo[c], wi[c]) * w_phong[c, None]
-        g = cos_x[c] * cos_y[c] / (dist2[c] * p_area[c])
-        p_light = p_area[c] * dist2[c] / cos_y[c]
-        p_bsdf = w_phong[c] * phong_pdf(world.p_diffuse[obj[c]], s[c], n[c], wo[c], wi[c])
-        if mis:
-            g *= p_light / (p_light + p_bsdf)
-        out[c] += beta[c] * f * world.emission[world.tri_object[tri[c]]] * g[:, None]
-    for light in world.lights:
-        if isinstance(light, DirectionalLight):
-            wi = np.broadcast_to(-light.direction, p.shape)
-            direction, tmax = wi, None
-        else:
-            wi = light.position - p
-            wi = wi / np.linalg.norm(wi, axis=1)[:, None]
-            direction, tmax = light.position - start, 1.0
-        cos_x = dot(n, wi)
-        ok = (cos_x > 0.0) & (w_phong > 0.0)
-        if isinstance(light, SpotLight):
-            ok &= dot(-wi, light.direction) >= light.cos_cutoff
-        c = np.flatnonzero(ok)
-        blocked = world.occluded(start[c], direction[c], tmax)
-        rays += len(c)
-        c = c[~blocked]
-        f = phong_eval(kd[c], ks[c], s[c], n[c], wo[c], wi[c]) * w_phong[c, None]
-        out[c] += beta[c] * f * (math.pi * light.radiance) * cos_x[c, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if len(world.emitters):
+            y, n_y, radiance, p_area = world.sample_emitters(rng, k)
+            to_y = y - p
+            dist2 = dot_rows(to_y, to_y)
+            wi = to_y * (1.0 / np.sqrt(np.maximum(dist2, STATE_TINY)))
+            cos_x = dot_rows(n, wi)
+            cos_y = -dot_rows(n_y, wi)
+            side = np.where(cos_y >= 0.0, STATE(world.offset), STATE(-world.offset))  # to x
+            cos_y = np.abs(cos_y)
+            c = np.flatnonzero((cos_x > 0.0) & (cos_y > 0.0) & (w_phong > 0.0) & (dist2 > 0.0))
+            seg = y + side * n_y - start
+            blocked = world.occluded_rows(_take(start, c), _take(seg, c), 1.0)
+            rays += len(c)
+            lit = np.zeros(k, bool)
+            lit[c] = ~blocked
+            # computed for all k, kept where lit (cheaper than gathering the lit ones)
+            g = cos_x * cos_y / (dist2 * p_area)
+            if mis:
+                p_light = p_area * dist2 / cos_y
+                p_bsdf = w_phong * phong_pdf_rows(surf["p_diffuse"], s, n, wo, wi, glossy,
+                                                  cos_t=cos_x)
+                g *= p_light / (p_light + p_bsdf)
+            g = np.where(lit, g * w_phong, 0.0)  # lit implies cos_x > 0
+            if world.any_glossy:
+                out = beta * phong_eval_rows(kd, ks, s, n, wo, wi, glossy, cos_t=cos_x)
+                out *= radiance
+                out *= g
+            else:  # Lambert: f = kd / pi
+                out = beta * kd
+                out *= radiance
+                out *= g * STATE(1.0 / math.pi)
+        for light in world.lights:
+            if isinstance(light, DirectionalLight):
+                wi = np.repeat(-np.asarray(light.direction, STATE)[:, None], k, axis=1)
+                direction, tmax = wi, None
+            else:
+                to_l = np.asarray(light.position, STATE)[:, None] - p
+                wi = to_l * (1.0 / np.sqrt(dot_rows(to_l, to_l)))
+                direction, tmax = np.asarray(light.position, STATE)[:, None] - start, 1.0
+            cos_x = dot_rows(n, wi)
+            ok = (cos_x > 0.0) & (w_phong > 0.0)
+            if isinstance(light, SpotLight):
+                cos_light = -dot_rows(wi, np.asarray(light.direction, STATE)[:, None])
+                ok &= cos_light >= light.cos_cutoff
+            c = np.flatnonzero(ok)
+            blocked = world.occluded_rows(_take(start, c), _take(direction, c), tmax)
+            rays += len(c)
+            lit = np.zeros(k, bool)
+            lit[c] = ~blocked
+            f = phong_eval_rows(kd, ks, s, n, wo, wi, glossy, cos_t=cos_x)
+            g = np.where(lit, w_phong * cos_x, 0.0)
+            if isinstance(light, AreaSample):   # weighted by its cosine at the light
+                g *= np.maximum(cos_light, 0.0)
+            out += beta * f * (math.pi * np.asarray(light.radiance, STATE)[:, None]) * g
     return out, rays
 
 
@@ -209,82 +332,126 @@ def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.G
     """Radiance (n, 3) float64 arriving along rays o, d (n, 3) float64 (unit d), one path each,
     and the number of rays traced.  rr_start: first bounce of Russian roulette (a number above
     max_depth turns it off)."""
-    n_paths = len(o)
-    L = np.zeros((n_paths, 3))
-    background = world.scene.background
+    L, rays = trace_rows(world, np.asarray(o).T, np.asarray(d).T, rng, max_depth, rr_start)
+    return np.ascontiguousarray(L.T, np.float64), rays
+
+
+def _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, new_d):
+    """Directions (and, through glass, starts) of the mirror and glass bounces, in place in
+    new_o, new_d (3, k).  Rare: done on (m, 3) copies with the Whitted formulas."""
+    m = np.flatnonzero(is_mirror)
+    if len(m):
+        new_d[:, m] = reflect(_take(d, m).T, _take(n, m).T).T
+    g = np.flatnonzero(is_glass)
+    if len(g):
+        ior = _take(surf["ior"], g)
+        eta = np.where(_take(entering, g), 1.0 / ior, ior)
+        ng = _take(n, g)
+        t, tir = refract(_take(d, g).T, ng.T, eta)
+        new_d[:, g] = t.T
+        new_o[:, g] = _take(p, g) + np.where(tir, 1.0, -1.0) * world.offset * ng
+
+
+def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
+               max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE
+               ) -> tuple[np.ndarray, int]:
+    """`trace_paths` with rays and radiance as rows: o, d (3, n) float -> L (3, n) float64."""
+    o = np.ascontiguousarray(o, STATE)
+    d = np.ascontiguousarray(d, STATE)
+    n_paths = o.shape[1]
+    L = np.zeros((3, n_paths))  # float64: a background pixel shows the background exactly
+    background = np.asarray(world.scene.background, np.float64)[:, None]
+    shows_background = bool(background.any())
     path = np.arange(n_paths)
-    beta = np.ones((n_paths, 3))
+    beta = np.ones((3, n_paths), STATE)
     count_emission = np.ones(n_paths, bool)  # camera or delta ray: emission counts fully
-    bsdf_pdf = np.zeros(n_paths)  # solid-angle density of the last Phong-sampled direction
+    bsdf_pdf = np.zeros(n_paths, STATE)  # solid-angle density of the last Phong-sampled direction
     rays = 0
     for bounce in range(1, max_depth + 1):
-        t, tri, geo_n = world.intersect(o, d)
-        rays += len(o)
+        tri = world.closest_rows(o, d)
+        rays += len(tri)
         hit = tri >= 0
-        seen = ~hit & count_emission
-        L[path[seen]] += beta[seen] * background  # a path's index occurs once per bounce
         h = np.flatnonzero(hit)
-        if len(h) == 0:
-            break
-        o, d, t, tri, geo_n = o[h], d[h], t[h], tri[h], geo_n[h]
-        path, beta, count_emission, bsdf_pdf = path[h], beta[h], count_emission[h], bsdf_pdf[h]
-        obj = world.tri_object[tri]
-        p = o + t[:, None] * d
-        entering = dot(geo_n, d) < 0.0
-        n = np.where(entering[:, None], geo_n, -geo_n)  # faces the ray's origin
-        wo = -d
-        e = np.flatnonzero(count_emission)
-        L[path[e]] += beta[e] * world.emission[obj[e]]
-        e = np.flatnonzero(~count_emission & (world.light_pdf_area[tri] > 0.0))
-        if len(e):  # an emitter found by BSDF sampling: its MIS share
-            cos_y = np.abs(dot(geo_n[e], d[e]))
-            p_light = world.light_pdf_area[tri[e]] * t[e] ** 2 / np.maximum(cos_y, 1e-300)
-            w = bsdf_pdf[e] / (bsdf_pdf[e] + p_light)
-            L[path[e]] += beta[e] * world.emission[obj[e]] * w[:, None]
-        direct, shadow = next_event(world, rng, p, n, wo, obj, beta, mis=bounce < max_depth)
+        if len(h) < len(tri):  # compact to the hits (a camera ray through the open front)
+            if shows_background:
+                seen = np.flatnonzero(~hit & count_emission)
+                _scatter_add(L, _take(path, seen), _take(beta, seen) * background)
+            if len(h) == 0:
+                break
+            o, d, tri, path, beta, count_emission, bsdf_pdf = (
+                _take(x, h) for x in (o, d, tri, path, beta, count_emission, bsdf_pdf))
+        surf = world.surface(tri)
+        geo_n = surf["normal"]
+        d_n = dot_rows(geo_n, d)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (surf["plane_d"] - dot_rows(geo_n, o)) / d_n  # as backends.refine
+        t = np.where(np.isfinite(t), t, 0.0)
+        p = o + t * d
+        entering = d_n < 0.0
+        n = geo_n * np.where(entering, STATE(1.0), STATE(-1.0))  # faces the ray's origin
+        wo = -d if world.any_glossy else None  # only the glossy lobe looks at wo
+        if world.any_emits:
+            emits = surf["emits"]
+            e = np.flatnonzero(count_emission & emits)
+            if len(e):
+                _scatter_add(L, _take(path, e),
+                             _take(beta, e) * _take(world.tri_emission, _take(tri, e)))
+            e = np.flatnonzero(~count_emission & emits)
+            if len(e):  # an emitter found by BSDF sampling: its MIS share
+                te = _take(tri, e)
+                cos_y = np.abs(_take(d_n, e))
+                p_light = (_take(surf["light_pdf"], e) * _take(t, e) ** 2
+                           / np.maximum(cos_y, STATE_TINY))
+                pe = _take(bsdf_pdf, e)
+                w = pe / (pe + p_light)
+                _scatter_add(L, _take(path, e),
+                             _take(beta, e) * _take(world.tri_emission, te) * w)
+        new_o = p + world.offset * n  # where shadow rays and the next ray start
+        direct, shadow = next_event(world, rng, p, n, wo, surf, beta, new_o,
+                                    mis=bounce < max_depth)
         rays += shadow
-        L[path] += direct
+        _scatter_add(L, path, direct)
         if bounce == max_depth:
             break
-        k = len(p)
-        refl, transp = world.refl[obj], world.transp[obj]
-        u = rng.random(k)
-        is_mirror = u < refl
-        is_glass = ~is_mirror & (u < refl + transp)
-        is_phong = ~is_mirror & ~is_glass
-        new_d = np.empty((k, 3))
-        new_o = p + world.offset * n
-        factor = np.ones((k, 3))
-        pdf_next = np.zeros(k)
-        m = np.flatnonzero(is_mirror)
-        new_d[m] = reflect(d[m], n[m])
-        g = np.flatnonzero(is_glass)
-        if len(g):
-            eta = np.where(entering[g], 1.0 / world.ior[obj[g]], world.ior[obj[g]])
-            new_d[g], tir = refract(d[g], n[g], eta)
-            new_o[g] = p[g] + np.where(tir, 1.0, -1.0)[:, None] * world.offset * n[g]
-        q = np.flatnonzero(is_phong)
-        if len(q):
-            oq = obj[q]
-            wi = phong_sample(rng, world.p_diffuse[oq], world.shininess[oq], n[q], wo[q])
-            f = phong_eval(world.kd[oq], world.ks[oq], world.shininess[oq], n[q], wo[q], wi)
-            pdf = phong_pdf(world.p_diffuse[oq], world.shininess[oq], n[q], wo[q], wi)
-            cos = dot(n[q], wi)
+        k = len(tri)
+        if world.any_delta:
+            u = rng.random(k, dtype=STATE)
+            is_mirror = u < surf["refl"]
+            is_glass = ~is_mirror & (u < surf["refl"] + surf["transp"])
+            is_phong = ~is_mirror & ~is_glass
+        else:
+            is_phong = np.ones(k, bool)
+        # the Phong lobes for all (cheaper than gathering); the delta bounces overwrite theirs
+        s, p_d, glossy = surf["shininess"], surf["p_diffuse"], surf["glossy"]
+        new_d = phong_sample_rows(rng, p_d, s, n, wo, glossy)
+        cos = dot_rows(n, new_d)
+        pdf = phong_pdf_rows(p_d, s, n, wo, new_d, glossy, cos_t=cos)
+        if world.any_glossy:
+            f = phong_eval_rows(surf["kd"], surf["ks"], s, n, wo, new_d, glossy, cos_t=cos)
             ok = (cos > 0.0) & (pdf > 0.0)
-            factor[q] = np.where(ok[:, None], f * (cos / np.where(ok, pdf, 1.0))[:, None], 0.0)
-            new_d[q] = wi
-            pdf_next[q] = (1.0 - refl[q] - transp[q]) * pdf
+            factor = f * np.where(ok, cos / np.where(ok, pdf, 1.0), 0.0)
+        else:  # Lambert: f cos / pdf = (kd / pi) cos / (cos / pi) = kd where pdf > 0
+            factor = surf["kd"] * (pdf > 0.0)
+        pdf_next = surf["phong"] * pdf
+        if world.any_delta:
+            factor[:, ~is_phong] = 1.0
+            pdf_next[~is_phong] = 0.0
+            _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, new_d)
         beta = beta * factor
-        alive = beta.max(axis=1) > 0.0
+        strongest = np.maximum(np.maximum(beta[0], beta[1]), beta[2])
+        alive = strongest > 0.0
         if bounce >= rr_start:
-            survive = np.minimum(beta.max(axis=1), RR_MAX_SURVIVAL)
-            alive &= rng.random(k) < survive
-            beta = beta / np.where(alive, survive, 1.0)[:, None]
+            survive = np.minimum(strongest, RR_MAX_SURVIVAL)
+            alive &= rng.random(k, dtype=STATE) < survive
+            beta = beta * (1.0 / np.where(alive, survive, 1.0))
         keep = np.flatnonzero(alive)
         if len(keep) == 0:
             break
-        o, d, path, beta = new_o[keep], new_d[keep], path[keep], beta[keep]
-        count_emission, bsdf_pdf = ~is_phong[keep], pdf_next[keep]
+        if len(keep) == k:
+            o, d, count_emission, bsdf_pdf = new_o, new_d, ~is_phong, pdf_next
+        else:
+            o, d, path, beta, count_emission, bsdf_pdf = (
+                _take(x, keep) for x in (new_o, new_d, path, beta, ~is_phong, pdf_next))
     return L, rays
 
 
@@ -304,17 +471,17 @@ def camera_rays(camera, width: int, height: int, rows: np.ndarray, cols: np.ndar
                 rng: np.random.Generator | None) -> tuple[np.ndarray, np.ndarray]:
     """Rays through pixels (rows[i], cols[i]) (k,) int: at a uniformly random point of the pixel
     (rng given) or its centre (rng None, as the masks sample), starting on the near plane
-    (CONVENTIONS.md).  Returns origins, unit directions (k, 3) float64."""
+    (CONVENTIONS.md).  Returns origins, unit directions as rows (3, k) float64."""
     right, up, back = camera_basis(camera)
-    jx = rng.random(len(rows)) if rng is not None else np.full(len(rows), 0.5)
-    jy = rng.random(len(rows)) if rng is not None else np.full(len(rows), 0.5)
+    jx = rng.random(len(rows)) if rng is not None else 0.5
+    jy = rng.random(len(rows)) if rng is not None else 0.5
     half_h = math.tan(math.radians(camera.fov_y) / 2.0)
     half_w = half_h * width / height
     sx = ((cols + jx) / width * 2.0 - 1.0) * half_w
     sy = (1.0 - (rows + jy) / height * 2.0) * half_h
-    d = sx[:, None] * right + sy[:, None] * up - back
-    o = camera.eye + camera.near * d
-    return o, d / np.linalg.norm(d, axis=1)[:, None]
+    d = sx * right[:, None] + sy * up[:, None] - back[:, None]
+    o = np.asarray(camera.eye, np.float64)[:, None] + camera.near * d
+    return o, d / np.sqrt(dot_rows(d, d))
 
 
 def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_MAX_DEPTH,
@@ -324,7 +491,8 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
 
     jitter : sample each pixel at random points (True) or always at its centre (False: then the
              image converges to the pixel-centre image that the masks and Whitted sample).
-    The result depends on (scene, spp, seed, max_depth, rr_start, jitter) only.
+    The result depends on (scene, spp, seed, max_depth, rr_start, jitter) only: tiles of whole
+    rows, one random stream each, summed in tile order whatever the threads.
     """
     for name, value, low in (("spp", spp, 1), ("max_depth", max_depth, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
@@ -337,32 +505,36 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
     seeds = np.random.SeedSequence(seed).spawn(len(tiles))
     threads = min(cpu_threads(), len(tiles))
     world = PathWorld(scene, backend, parallel=threads == 1)
-    total = np.zeros((H * W, 3))
-    squares = np.zeros((H * W, 3))
+    total = np.zeros((3, H * W))  # sums of the samples per pixel, and of their squares
+    squares = np.zeros((3, H * W))
     counted = [0]
 
     def tile(job):
         rows, seq = job
         rng = np.random.default_rng(seq)
-        y, x = np.divmod(np.arange(rows.start * W, rows.stop * W), W)
-        pixel = np.repeat(y * W + x, spp)
-        o, d = camera_rays(scene.camera, W, H, pixel // W, pixel % W, rng if jitter else None)
-        L, rays = trace_paths(world, o, d, rng, max_depth, rr_start)
-        return pixel, L, rays
+        first, last = rows.start * W, rows.stop * W
+        # the tile's pixels row by row, spp times over: a pixel's samples are summed over
+        # a middle axis (numpy's reductions over a short last axis are slow)
+        row = np.tile(np.repeat(np.arange(rows.start, rows.stop), W), spp)
+        col = np.tile(np.arange(W), (rows.stop - rows.start) * spp)
+        o, d = camera_rays(scene.camera, W, H, row, col, rng if jitter else None)
+        L, rays = trace_rows(world, o, d, rng, max_depth, rr_start)
+        L = L.reshape(3, spp, last - first)
+        return slice(first, last), L.sum(axis=1), (L * L).sum(axis=1), rays
 
     with Progress(len(tiles), f"path trace {scene.name}", enabled=progress) as bar:
         pool = ThreadPoolExecutor(threads) if threads > 1 else None
         done = (pool.map if pool else map)(tile, zip(tiles, seeds))
         try:
-            for pixel, L, rays in done:
-                _add(total, pixel, L)
-                _add(squares, pixel, L * L)
+            for pixels, sum_l, sum_l2, rays in done:
+                total[:, pixels] = sum_l
+                squares[:, pixels] = sum_l2
                 counted[0] += rays
                 bar.update()
         finally:
             if pool:
                 pool.shutdown(cancel_futures=True)
-    mean = total / spp
-    var = np.maximum(squares / spp - mean ** 2, 0.0) / max(spp - 1, 1)
+    mean = total.T / spp
+    var = np.maximum(squares.T / spp - mean ** 2, 0.0) / max(spp - 1, 1)
     return PathImage(mean.reshape(H, W, 3), var.reshape(H, W, 3), spp, counted[0],
                      time.perf_counter() - start)

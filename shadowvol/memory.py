@@ -44,7 +44,7 @@ SOFTWARE_GL = ("llvmpipe", "softpipe", "swrast", "lavapipe")
 # records, the shading and shadow-ray arrays of a tile, a few dozen float64 values a ray):
 # bounds from the measured growth less the per-pixel terms (100-400 B a ray; Whitted on
 # scenes/whitted.toml at depth 5, glass and mirrors), rounded up
-MASK_TILE_RAYS, WHITTED_TILE_RAYS, PATH_TILE_PATHS = 1 << 15, 1 << 15, 1 << 16
+MASK_TILE_RAYS, WHITTED_TILE_RAYS, PATH_TILE_PATHS = 1 << 15, 1 << 15, 1 << 15
 MASK_RAY_BYTES, WHITTED_RAY_BYTES, PATH_RAY_BYTES = 512, 1024, 512
 
 # encoders (shadowvol.io), bytes per pixel of an RGB image: the sRGB bytes (3), Pillow's RGBX

@@ -231,7 +231,7 @@ OUT_OF_MEMORY = {  # command -> (tool, argv, [(module, name)] to fail, "while ..
                           [(raytrace.cli.exercise, "solve_plane")], "while rendering ("),
     "raytrace path": ("raytrace", ["render", "R", "-o", "O/x.png", "--integrator", "path",
                                    "--spp", "1", "--no-progress"],
-                      [(raytrace.pathtrace, "trace_paths")], "while rendering ("),
+                      [(raytrace.pathtrace, "trace_rows")], "while rendering ("),
     "raytrace radiosity": ("raytrace", ["radiosity", "R", "-o", "O/x.png", "--level", "0",
                                         "--rays", "8"],
                            [(raytrace.radiosity, "display")], "while rendering ("),

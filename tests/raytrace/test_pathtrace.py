@@ -9,9 +9,12 @@ import numpy as np
 import pytest
 from builders import QUADRATURE_ALLOWANCE, block_means, cornell, furnace, z_limit
 
-from raytrace import brdf
+from raytrace import brdf, pathtrace
 from raytrace.direct import direct_lighting
 from raytrace.pathtrace import render
+from raytrace.whitted import render as whitted_render
+from shadowvol.primitives import box, plane
+from shadowvol.scene import AreaLight, Camera, Material, Scene
 
 
 def test_furnace_converges_to_emission_over_one_minus_albedo():
@@ -71,6 +74,43 @@ def test_same_seed_same_image_other_seed_other_image():
     assert not np.array_equal(a.image, c.image)
 
 
+def test_the_image_does_not_depend_on_the_threads(monkeypatch):
+    """Tiles of whole rows, one random stream each, summed in tile order: one thread or two
+    give the same bytes."""
+    monkeypatch.setattr(pathtrace, "TILE_PATHS", 64)  # 16x16 at spp 2: 8 tiles
+    scene = cornell(16)
+    images = []
+    for threads in (1, 2):
+        monkeypatch.setattr(pathtrace, "cpu_threads", lambda threads=threads: threads)
+        images.append(render(scene, spp=2, seed=5, progress=False))
+    assert np.array_equal(images[0].image, images[1].image)
+    assert np.array_equal(images[0].variance, images[1].variance)
+    assert images[0].rays == images[1].rays
+
+
+def test_cosine_sampling_has_the_cosine_lobe_moments():
+    """The path tracer's cosine sampler (n plus a uniform point of the sphere, normalised) and
+    the framed one radiosity uses: E[cos] = 2/3, E[cos^2] = 1/2, never below the surface, the
+    azimuth uniform (E[t] = E[b] = 0 about any normal), 4e5 samples each, 5 sigma."""
+    rng = np.random.default_rng(4)
+    k = 400_000
+    axis = np.array([0.3, -0.8, 0.52])
+    axis /= np.linalg.norm(axis)
+    n = np.tile(axis, (k, 1))
+    t, b = brdf.frame(n[:1])
+    for wi in (brdf.cosine_hemisphere_rows(rng, np.ascontiguousarray(n.T, np.float32)).T,
+               brdf.cosine_hemisphere_rows(rng, np.ascontiguousarray(n.T)).T,
+               brdf.cosine_hemisphere(rng, n)):
+        wi = wi.astype(np.float64)
+        np.testing.assert_allclose(np.linalg.norm(wi, axis=1), 1.0, atol=1e-6)
+        c = wi @ axis
+        assert c.min() >= -1e-6
+        for moment, expected, sd in ((c, 2 / 3, np.sqrt(1 / 2 - 4 / 9)),
+                                     (c * c, 1 / 2, np.sqrt(1 / 3 - 1 / 4)),
+                                     (wi @ t[0], 0.0, 0.5), (wi @ b[0], 0.0, 0.5)):
+            assert abs(moment.mean() - expected) < 5 * sd / np.sqrt(k), (expected, moment.mean())
+
+
 def test_phong_normalisation_conserves_energy():
     """Directional albedo of the normalised glossy lobe: ks at normal incidence, below ks at
     grazing, never above (estimated by sampling the lobe itself, 4e5 samples per case)."""
@@ -103,3 +143,29 @@ def test_kd_plus_ks_above_one_is_scaled_down():
 def test_bad_spp_is_refused(bad):
     with pytest.raises(ValueError, match="spp"):
         render(cornell(8), spp=bad)
+
+
+def test_an_area_light_is_its_samples_as_in_whitted():
+    """An area light in `scene.lights` (not emissive geometry): the path tracer's next-event
+    estimate sums its samples, each weighted by its cosine at the light, as the Whitted
+    tracer's direct term does.  Lambertian, no ambient, pixel centres, depth 1: nothing is
+    random, so the two images are equal but for float32 rounding and shadow-edge pixels (the
+    two tracers offset their shadow rays differently)."""
+    lambert = Material(diffuse=[0.7, 0.6, 0.5], specular=[0, 0, 0])
+    light = AreaLight("rect", [0.4, 3.0, 0.2], normal=[0.3, -1.0, 0.1], size=[1.2, 0.8],
+                      samples=9, intensity=2.0)
+    scene = Scene(camera=Camera(eye=[0.0, 3.0, 4.0], target=[0.0, 0.3, 0.0], fov_y=50.0),
+                  objects=[plane("floor", size=(8.0, 8.0), material=lambert),
+                           box("box", center=(0.0, 0.6, 0.0), size=(0.8, 1.2, 0.8),
+                               material=lambert)],
+                  lights=[light], width=48, height=36, ambient=[0, 0, 0],
+                  background=[0, 0, 0])
+    traced = render(scene, spp=1, seed=0, max_depth=1, jitter=False).image
+    whitted = whitted_render(scene, max_depth=0)
+    close = np.isclose(traced, whitted, rtol=1e-4, atol=1e-6).all(axis=2)
+    assert close.mean() > 0.97, f"{(~close).sum()} pixels differ"
+    # the test is sharp: the cosine at the light matters (the light is tilted), and the box's
+    # penumbra is in the picture
+    assert (whitted > 0).any(axis=2).mean() > 0.5
+    levels = np.unique(np.round(whitted[..., 0], 6))
+    assert len(levels) > 40

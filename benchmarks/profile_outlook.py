@@ -1,0 +1,104 @@
+"""Profile (not a test): where a path-traced frame of the Cornell box spends its time, by stage.
+
+    python benchmarks/profile_outlook.py [--size 512] [--spp 1]
+
+One thread (tiles in turn, Embree on the calling thread), so that the stages add up to the
+frame: each stage is a function of `raytrace.pathtrace` / `raytrace.brdf` timed exclusively (a
+stage's time leaves out the stages it calls).  "paths: hit point, MIS, roulette, compaction" is
+what `trace_rows` does itself.  Prints a table and the time of the Embree casts beside the
+rest.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
+CORNELL = ROOT / "scenes" / "cornell.toml"
+
+# (module attribute or PathWorld method, stage name)
+STAGES = (
+    ("camera_rays", "camera rays"),
+    ("PathWorld.closest_rows", "Embree: closest hits"),
+    ("PathWorld.occluded_rows", "Embree: shadow rays"),
+    ("PathWorld.surface", "hit: surface gather"),
+    ("PathWorld.sample_emitters", "NEE: light sampling"),
+    ("next_event", "NEE: shading, MIS weight"),
+    ("phong_sample_rows", "BSDF: sampling"),
+    ("phong_eval_rows", "BSDF: f"),
+    ("phong_pdf_rows", "BSDF: pdf"),
+    ("_scatter_add", "accumulation into the paths' radiance"),
+    ("trace_rows", "paths: hit point, MIS, roulette, compaction"),
+    ("render", "tiles: set-up and sums per pixel"),
+)
+
+
+def profile(size: int, spp: int) -> list[tuple[str, float]]:
+    from raytrace import pathtrace
+    from shadowvol.scenefile import load_scene
+
+    scene = load_scene(CORNELL).replace(width=size, height=size)
+    pathtrace.render(scene.replace(width=16, height=16), spp=1)  # warm-up
+    spent = {name: 0.0 for _, name in STAGES}
+    stack: list[float] = []  # time spent in the children of each open stage
+
+    def timed(fn, name):
+        def wrapper(*args, **kwargs):
+            stack.append(0.0)
+            start = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                total = time.perf_counter() - start
+                children = stack.pop()
+                spent[name] += total - children
+                if stack:
+                    stack[-1] += total
+        return wrapper
+
+    patched = []
+    for target, name in STAGES:
+        owner, attr = (pathtrace.PathWorld, target.split(".")[1]) if "." in target else \
+            (pathtrace, target)
+        patched.append((owner, attr, getattr(owner, attr)))
+        setattr(owner, attr, timed(getattr(owner, attr), name))
+    cpu_threads, pathtrace.cpu_threads = pathtrace.cpu_threads, lambda: 1
+    init = pathtrace.PathWorld.__init__
+
+    def serial_init(self, *args, **kwargs):  # Embree on the calling thread too
+        init(self, *args, **{**kwargs, "parallel": False})
+
+    pathtrace.PathWorld.__init__ = serial_init
+    try:
+        result = pathtrace.render(scene, spp=spp, seed=0, progress=False)
+    finally:
+        pathtrace.PathWorld.__init__ = init
+        pathtrace.cpu_threads = cpu_threads
+        for owner, attr, fn in patched:
+            setattr(owner, attr, fn)
+    return [(name, spent[name]) for _, name in STAGES], result
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--size", type=int, default=512)
+    ap.add_argument("--spp", type=int, default=1)
+    args = ap.parse_args(argv)
+    rows, result = profile(args.size, args.spp)
+    total = sum(t for _, t in rows)
+    print(f"{result.rays} rays in {result.seconds:.3f} s, one thread "
+          f"({result.rays / result.seconds / 1e6:.2f} Mrays/s)")
+    for name, t in rows:
+        print(f"  {name:46s} {1e3 * t:8.1f} ms  {100 * t / total:5.1f} %")
+    embree = sum(t for name, t in rows if name.startswith("Embree"))
+    print(f"  {'Embree casts / everything else':46s} {1e3 * embree:8.1f} / "
+          f"{1e3 * (total - embree):.1f} ms")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
