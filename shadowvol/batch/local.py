@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import queue
 from collections import OrderedDict, deque
 from collections.abc import Iterable, Iterator
 from multiprocessing.connection import wait
@@ -34,6 +35,7 @@ from shadowvol.scenefile import load_scene
 START_METHODS = ("spawn", "forkserver", "fork")
 IN_FLIGHT = 2          # tasks sent ahead to each worker: the one it renders and the next
 SHUTDOWN_WAIT_S = 30   # for a worker to release its context after its last task
+PARENT_CHECK_S = 1.0   # how often an idle worker looks whether its parent is still there
 
 
 def in_process(tasks: Iterable[list[dict]], scenes: dict, egl_device=None) -> Iterator[dict]:
@@ -49,16 +51,26 @@ def in_process(tasks: Iterable[list[dict]], scenes: dict, egl_device=None) -> It
 
 def _serve(tasks, results, egl_device, environment: dict[str, str], label: str) -> None:
     """A pool process: (scenes to add, task) from `tasks` until None; each task's results to
-    `results` (its own pipe, so a worker that dies takes no lock with it)."""
+    `results` (its own pipe, so a worker that dies takes no lock with it).  It ends on its own
+    when the parent is gone (killed with no chance to stop it)."""
     os.environ.update(environment)  # before GL is loaded: Mesa reads LP_NUM_THREADS then
+    parent = multiprocessing.parent_process()
     worker = Worker({}, egl_device, label=label)
     try:
-        while (message := tasks.get()) is not None:
+        while True:
+            try:
+                message = tasks.get(timeout=PARENT_CHECK_S)
+            except queue.Empty:
+                if parent is not None and not parent.is_alive():
+                    return
+                continue
+            if message is None:
+                return
             scenes, task = message
             worker.scenes.update(scenes)
             results.send([worker.render(spec) for spec in task])
-    except KeyboardInterrupt:  # Ctrl-C reaches the whole process group; the parent reports it
-        pass
+    except (KeyboardInterrupt, BrokenPipeError):  # Ctrl-C reaches the whole process group
+        pass                                      # (the parent reports it), or it is gone
     finally:
         worker.close()
 

@@ -1,17 +1,22 @@
 """The local pool: each worker's own contiguous lane of frames, taking over the far end of the
 others' when its own is done; the thread settings of a worker; a worker killed mid-run fails
 only the frames it held and the others make the rest; a scene the parent cannot load fails in
-the workers as it does in one process."""
+the workers as it does in one process; workers whose parent was killed end on their own."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import signal
+import subprocess
+import sys
+import time
 from collections import deque
+from pathlib import Path
 
 import pytest
-from builders import job_lines, write_jobs
+from builders import ROOT, job_lines, write_jobs
 
 from shadowvol import batch
 from shadowvol.batch import frames, local
@@ -84,3 +89,38 @@ def test_a_scene_that_does_not_load_fails_in_the_pool_as_in_one_process(tmp_path
     for summary in runs.values():
         assert (summary.rendered, summary.failed, summary.status) == (2, 2, status.BAD_INPUT)
     assert runs[1].errors == runs[2].errors and "nope.obj" in runs[1].errors[0]
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (FileNotFoundError, IndexError):
+        return False
+
+
+@pytest.mark.gl
+def test_workers_end_when_their_parent_is_killed(tmp_path):
+    jobs = write_jobs(tmp_path / "jobs.jsonl", job_lines(frames=16, size=(64, 48),
+                                                         raytrace=False))
+    manifest = tmp_path / "out" / "manifest.jsonl"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(ROOT)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]))
+    run = subprocess.Popen([sys.executable, "-m", "shadowvol", "batch", str(jobs), "-o",
+                            str(tmp_path / "out"), "--workers", "2"], env=env,
+                           stderr=subprocess.DEVNULL)
+    pids: set[int] = set()
+    deadline = time.monotonic() + 120
+    while len(pids) < 2 and run.poll() is None:   # both workers have sent frames
+        assert time.monotonic() < deadline, "the workers made no frames in 120 s"
+        if manifest.exists():
+            for line in manifest.read_text().splitlines():
+                if line.startswith('{"id"') and line.endswith("}"):
+                    pids.add(int(re.search(r"pid (\d+)", json.loads(line)["worker"]).group(1)))
+        time.sleep(0.005)
+    assert run.poll() is None, "the run ended before both workers were seen: make it longer"
+    os.kill(run.pid, signal.SIGKILL)   # the parent alone: nothing tells the workers
+    run.wait()
+    deadline = time.monotonic() + 60
+    while any(_alive(pid) for pid in pids):
+        assert time.monotonic() < deadline, f"workers {pids} outlived their parent by 60 s"
+        time.sleep(0.05)
