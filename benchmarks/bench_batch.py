@@ -1,12 +1,14 @@
 """Benchmark (not a test): `shadowvol batch` throughput and the cost of its machinery.
 
     python benchmarks/bench_batch.py [--models DIR] [--frames 36] [--width 640 --height 480]
-                                     [--json out.json]
+                                     [--rounds 3] [--no-ray] [--json out.json]
 
 The scene: the five shared meshes (../shared/models beside the checkout, or $SHADOWVOL_MODELS,
 or --models: bunny, teapot, Suzanne, Spot, lamp shade, ~84k triangles) in a row on a floor,
 three lights (point, directional, spot), a turntable of 36 views at 640x480, image + masks.
-`measure()` returns a dict; it times, each from a fresh output folder:
+`measure()` returns a dict; it times, each from a fresh output folder, every variant once per
+round for `--rounds` rounds, interleaved (medians, min-max, and the 2-worker / 1-worker ratio
+of each round):
 
 * 1 worker (this process), 2 worker processes, 2 shards run in parallel as two `shadowvol batch
   --shard I/2` commands, and Ray with 2 actors (a local ray.init(num_cpus=2), its start-up
@@ -110,8 +112,43 @@ def _env() -> dict:
     return dict(os.environ, PYTHONPATH=os.pathsep.join(paths))
 
 
+def _one_run(label: str, jobs: Path, out: Path, frames: int) -> dict:
+    """One run of `label` into the fresh folder `out`: seconds, and CPU seconds per frame of
+    this process and its children (None for Ray, whose actors are not our children)."""
+    import shadowvol.batch as batch
+
+    cpu, start = _cpu(), time.perf_counter()
+    if label == "shards_2":
+        shards = [subprocess.Popen([sys.executable, "-m", "shadowvol", "batch", str(jobs), "-o",
+                                    str(out), "--shard", f"{i}/2"], env=_env(),
+                                   stderr=subprocess.DEVNULL) for i in (0, 1)]
+        assert [p.wait() for p in shards] == [0, 0]
+    else:
+        kwargs = {"workers_1": {}, "workers_2": {"workers": 2},
+                  "ray_2": {"workers": 2, "ray": True}}[label]
+        summary = batch.run(jobs, out, progress=False, **kwargs)
+        assert summary.status == 0 and summary.rendered == frames, summary.errors
+    seconds = time.perf_counter() - start
+    return {"seconds": seconds,
+            "cpu_s_per_frame": None if label == "ray_2" else (_cpu() - cpu) / frames}
+
+
+def _summary(runs: list[dict], frames: int) -> dict:
+    seconds = [r["seconds"] for r in runs]
+    median = statistics.median(seconds)
+    cpu = [r["cpu_s_per_frame"] for r in runs if r["cpu_s_per_frame"] is not None]
+    return {"seconds": median, "min_s": min(seconds), "max_s": max(seconds),
+            "frames_per_s": frames / median, "runs": runs,
+            "cpu_s_per_frame": statistics.median(cpu) if cpu else None,
+            "cores": statistics.median(r["cpu_s_per_frame"] * frames / r["seconds"]
+                                       for r in runs) if cpu else None}
+
+
 def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: int = 480,
-            ray: bool = True) -> dict:
+            ray: bool = True, rounds: int = 3) -> dict:
+    """Every run variant once per round, interleaved (each round starts with the next variant,
+    so that a drift of the machine's load falls on all of them); medians over the rounds, and
+    the 2-worker / 1-worker ratio of each round."""
     if not all((models / f"{n}.obj").is_file() for n in NAMES):
         return {"skipped": f"the shared models are missing: {models} does not hold "
                            f"{', '.join(n + '.obj' for n in NAMES)} (set $SHADOWVOL_MODELS or "
@@ -129,54 +166,48 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
     result = {"frames": frames, "size": [width, height], "lights": len(scene.lights),
               "triangles": int(sum(len(o.faces) for o in scene.objects)),
               "cores": len(os.sched_getaffinity(0)), "load_before": os.getloadavg()[0],
-              "autogroup": _autogroup()}
+              "autogroup": _autogroup(), "rounds": rounds}
 
-    def timed(label, **kwargs):
-        out = tmp / label
-        cpu, start = _cpu(), time.perf_counter()
-        summary = batch.run(jobs, out, progress=False, **kwargs)
-        seconds = time.perf_counter() - start
-        assert summary.status == 0 and summary.rendered == frames, summary.errors
-        result[label] = {"seconds": seconds, "frames_per_s": frames / seconds,
-                         # Ray's actors are not our children: their CPU is not seen here
-                         "cpu_s_per_frame": None if "ray" in kwargs else
-                         (_cpu() - cpu) / frames}
-        return out
-
-    one = timed("workers_1")
-    timed("workers_2", workers=2)
-
-    cpu, start = _cpu(), time.perf_counter()
-    shards = [subprocess.Popen([sys.executable, "-m", "shadowvol", "batch", str(jobs), "-o",
-                                str(tmp / "shards_2"), "--shard", f"{i}/2"], env=_env(),
-                               stderr=subprocess.DEVNULL) for i in (0, 1)]
-    assert [p.wait() for p in shards] == [0, 0]
-    seconds = time.perf_counter() - start
-    result["shards_2"] = {"seconds": seconds, "frames_per_s": frames / seconds,
-                          "cpu_s_per_frame": (_cpu() - cpu) / frames}
-
+    labels = ["workers_1", "workers_2", "shards_2"]
+    ray_module = None
     if ray:
         try:
             import ray as ray_module
         except ImportError:
             result["ray_2"] = {"skipped": "ray is not installed (pip install 'shadowvol[ray]')"}
         else:
-            start = time.perf_counter()
-            ray_module.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
-            result["ray_init_s"] = time.perf_counter() - start
-            try:
-                timed("ray_2", workers=2, ray=True)
-            finally:
-                ray_module.shutdown()
+            labels.append("ray_2")
+    runs: dict[str, list[dict]] = {label: [] for label in labels}
+    ray_init = []
+    for r in range(rounds):
+        for label in labels[r % len(labels):] + labels[:r % len(labels)]:
+            out = tmp / f"{label}-{r}"
+            if label == "ray_2":  # up only for its own run: its daemons would load the others
+                start = time.perf_counter()
+                ray_module.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+                ray_init.append(time.perf_counter() - start)
+                try:
+                    runs[label].append(_one_run(label, jobs, out, frames))
+                finally:
+                    ray_module.shutdown()
+            else:
+                runs[label].append(_one_run(label, jobs, out, frames))
+    for label in labels:
+        result[label] = _summary(runs[label], frames)
+    if ray_init:
+        result["ray_init_s"] = statistics.median(ray_init)
 
     # the same outputs whichever way they were made
+    one = tmp / "workers_1-0"
     ref = [(r["id"], r["files"]) for r in _records(one)]
     for label in ("workers_2", "ray_2"):
-        if (tmp / label / "manifest.jsonl").exists():
-            assert [(r["id"], r["files"]) for r in _records(tmp / label)] == ref, label
-    merged = batch.run(jobs, tmp / "shards_2", progress=False)
+        for r in range(rounds):
+            if (tmp / f"{label}-{r}" / "manifest.jsonl").exists():
+                assert [(x["id"], x["files"]) for x in _records(tmp / f"{label}-{r}")] == ref, \
+                    label
+    merged = batch.run(jobs, tmp / "shards_2-0", progress=False)
     assert merged.skipped == frames and [(r["id"], r["files"]) for r in
-                                         _records(tmp / "shards_2")] == ref
+                                         _records(tmp / "shards_2-0")] == ref
 
     # the bare loop: one Renderer, the same cameras, nothing encoded or written
     cameras = [r["camera"] for r in _records(one)]
@@ -188,7 +219,7 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
             renderer.render(camera=Camera(**cam))
             bare.append(time.perf_counter() - t)
     frame = statistics.median(bare)
-    records = _records(one)
+    records = [x for r in range(rounds) for x in _records(tmp / f"workers_1-{r}")]
     render = statistics.median(r["seconds"]["render"] for r in records)
     encode = statistics.median(r["seconds"]["encode"] for r in records)
     write = statistics.median(r["seconds"]["write"] for r in records)  # sha256 + atomic writes
@@ -206,6 +237,10 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
     w1 = result["workers_1"]["frames_per_s"]
     result["speedup_workers_2"] = result["workers_2"]["frames_per_s"] / w1
     result["speedup_shards_2"] = result["shards_2"]["frames_per_s"] / w1
+    per_round = [a["seconds"] / b["seconds"] for a, b in zip(runs["workers_1"],
+                                                              runs["workers_2"])]
+    result["speedup_workers_2_per_round"] = {"median": statistics.median(per_round),
+                                             "min": min(per_round), "max": max(per_round)}
     if "frames_per_s" in result.get("ray_2", {}):
         result["ray_vs_pool"] = result["ray_2"]["frames_per_s"] / \
             result["workers_2"]["frames_per_s"]
@@ -222,10 +257,13 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=36)
     ap.add_argument("--width", type=int, default=640)
     ap.add_argument("--height", type=int, default=480)
-    ap.add_argument("--no-ray", action="store_true", help="leave out the Ray run")
+    ap.add_argument("--no-ray", action="store_true", help="leave out the Ray runs")
+    ap.add_argument("--rounds", type=int, default=3,
+                    help="rounds of every variant, interleaved (default 3)")
     ap.add_argument("--json", type=Path, help="also write the results here")
     args = ap.parse_args(argv)
-    r = measure(args.models, args.frames, args.width, args.height, ray=not args.no_ray)
+    r = measure(args.models, args.frames, args.width, args.height, ray=not args.no_ray,
+                rounds=args.rounds)
     if "skipped" in r:
         print(f"skipped: {r['skipped']}", file=sys.stderr)
         return 0
@@ -242,12 +280,20 @@ def main(argv=None) -> int:
         x = r.get(label, {})
         if "frames_per_s" in x:
             cpu = x["cpu_s_per_frame"]
-            used = "" if cpu is None else f"{cpu * r['frames'] / x['seconds']:.2f}"
+            used = "" if cpu is None else f"{x['cores']:.2f}"
             cpu = "" if cpu is None else f"{cpu:.2f}"
             print(f"| {what} | {x['seconds']:.1f} | {x['frames_per_s']:.2f} | "
                   f"{x['frames_per_s'] / r['workers_1']['frames_per_s']:.2f}x | {cpu} | {used} |")
     p = r["per_frame"]
     print()
+    spread = ", ".join(f"{what} {r[label]['min_s']:.1f}-{r[label]['max_s']:.1f}"
+                       for label, what in (("workers_1", "1 worker"), ("workers_2", "2 workers"),
+                                           ("shards_2", "2 shards"), ("ray_2", "Ray"))
+                       if "frames_per_s" in r.get(label, {}))
+    q = r["speedup_workers_2_per_round"]
+    print(f"medians of {r['rounds']} rounds, the variants interleaved; seconds min-max: "
+          f"{spread}; 2 workers / 1 worker in each round: median {q['median']:.2f}x "
+          f"({q['min']:.2f}-{q['max']:.2f})")
     if "ray_init_s" in r:
         print(f"Ray start-up (not in the Ray row): {r['ray_init_s']:.1f} s; Ray / pool: "
               f"{r['ray_vs_pool']:.2f}")

@@ -7,23 +7,30 @@ callable class runs `__call__` on another thread in some Ray versions).  In Ray 
 (max_concurrency=1) actor runs `__init__` and every method on its main thread; the worker
 refuses to be called from another thread rather than render on a context it does not hold.
 
-Tasks (runs of frames of one scene) are fed to the actors from a queue, two in flight per actor
-(ray.util.ActorPool's scheme, which cannot re-run a dead actor's tasks): when an actor dies its
-tasks go back on the queue for the others, and a replacement actor is started, up to
-MAX_REPLACEMENTS times in a run.  Actors return bytes; the driver writes the files, so OUT need
-be on the driver's machine only.
+Tasks (runs of frames of one scene) are fed to the actors two in flight per actor
+(ray.util.ActorPool's scheme, which cannot re-run a dead actor's tasks), each actor from its
+own contiguous lane of the frames as in the local pool (`local.lanes`): neighbouring views keep
+its Renderer's per-camera caches valid.  When an actor dies its tasks go back to the front of
+its lane, and a replacement actor takes the lane over, up to MAX_REPLACEMENTS times in a run
+(the others help with the far ends of every lane).  The driver loads each scene once, puts it
+in the object store and passes it with an actor's first task of it, so no actor parses mesh
+files (a scene that does not load here goes as its path, and the actor records the error).
+Actors return bytes; the driver writes the files, so OUT need be on the driver's machine only.
 """
 
 from __future__ import annotations
 
 import os
 import threading
-from collections import deque
+from collections import OrderedDict, deque
 from collections.abc import Iterator
 
-from shadowvol.batch.worker import Worker, thread_settings
+from shadowvol.batch.local import lanes, next_task
+from shadowvol.batch.worker import MAX_RENDERERS, Worker, thread_settings
 from shadowvol.cli import status
 from shadowvol.errors import require
+from shadowvol.scene import Scene
+from shadowvol.scenefile import load_scene
 
 MAX_REPLACEMENTS = 4
 IN_FLIGHT_PER_ACTOR = 2
@@ -37,12 +44,17 @@ class FrameActor:
         self.args = (scenes, egl_device, label)
         self.workers: dict[int, Worker] = {}
 
-    def render(self, task: list[dict]) -> list[dict]:
+    def render(self, task: list[dict], scene=None) -> list[dict]:
+        """The frames of `task`; `scene` (a Scene or a path, or None when sent before) is the
+        scene of its frames."""
         thread = threading.get_ident()
         if thread not in self.workers:  # made on the thread that renders
             scenes, egl_device, label = self.args
-            self.workers[thread] = Worker(scenes, egl_device, label=label)
-        return [self.workers[thread].render(spec) for spec in task]
+            self.workers[thread] = Worker(dict(scenes), egl_device, label=label)
+        worker = self.workers[thread]
+        if scene is not None:
+            worker.scenes[task[0]["scene"]] = scene
+        return [worker.render(spec) for spec in task]
 
     def pid(self) -> int:
         return os.getpid()
@@ -72,54 +84,83 @@ def _run(ray, tasks, scenes, actors, egl_device, num_gpus) -> Iterator[dict]:
 
 
 class _Pool:
-    """Actors, a queue of tasks, IN_FLIGHT_PER_ACTOR tasks in flight per actor."""
+    """Actors, each with its lane of tasks (by slot: a replacement takes the dead actor's),
+    IN_FLIGHT_PER_ACTOR tasks in flight per actor."""
 
     def __init__(self, ray, scenes, actors, egl_device, num_gpus):
         self.ray = ray
         self.remote = ray.remote(num_cpus=1, num_gpus=num_gpus)(FrameActor)
-        # big Scene objects go to the object store once; an actor holds one CPU of the cluster
-        self.args = (ray.put(scenes), egl_device, thread_settings(actors, cores=1))
+        # Scene objects the caller gave go to the object store once; an actor holds one CPU of
+        # the cluster
+        self.sources = scenes
+        self.args = (ray.put({k: v for k, v in scenes.items() if isinstance(v, Scene)}),
+                     egl_device, thread_settings(actors, cores=1))
         self.made = 0
         self.replacements = MAX_REPLACEMENTS
-        self.actors = [self._start() for _ in range(max(1, actors))]
-        self.queue: deque = deque()
-        self.flying: dict = {}  # object ref -> (actor, task)
+        self.actors = [self._start() for _ in range(max(1, actors))]  # None: a dead slot
+        self.sent: dict[int, set[str]] = {}   # slot -> the scene keys its actor was sent
+        self.kept: OrderedDict = OrderedDict()  # scene key -> object ref (or the path)
+        self.lanes: list[deque] = []
+        self.flying: dict = {}  # object ref -> (slot, actor, task)
 
     def _start(self):
         self.made += 1
         return self.remote.remote(*self.args, f"Ray actor {self.made}")
 
+    def _scene(self, key: str):
+        source = self.sources[key]
+        if isinstance(source, Scene):
+            return None   # every actor has it from its constructor
+        if key not in self.kept:
+            try:
+                self.kept[key] = self.ray.put(load_scene(source))
+            except Exception:  # noqa: BLE001 - the actor loads it again and records why
+                self.kept[key] = source
+            while len(self.kept) > MAX_RENDERERS:
+                self.kept.popitem(last=False)
+        self.kept.move_to_end(key)
+        return self.kept[key]
+
     def _feed(self) -> None:
-        for actor in self.actors:
-            while self.queue and sum(a is actor for a, _ in self.flying.values()) < \
+        for slot, actor in enumerate(self.actors):
+            while actor is not None and sum(s == slot for s, _, _ in self.flying.values()) < \
                     IN_FLIGHT_PER_ACTOR:
-                task = self.queue.popleft()
-                self.flying[actor.render.remote(task)] = (actor, task)
+                task = next_task(self.lanes, slot)
+                if task is None:
+                    return
+                key = task[0]["scene"]
+                sent = self.sent.setdefault(slot, set())
+                scene = None if key in sent else self._scene(key)
+                sent.add(key)
+                self.flying[actor.render.remote(task, scene)] = (slot, actor, task)
 
     def results(self, tasks) -> Iterator[dict]:
-        self.queue.extend(tasks)
+        self.lanes = lanes(tasks, len(self.actors))
         self._feed()
         while self.flying:
             (ref,), _ = self.ray.wait(list(self.flying), num_returns=1)
-            actor, task = self.flying.pop(ref)
+            slot, actor, task = self.flying.pop(ref)
             try:
                 done = self.ray.get(ref)
             except self.ray.exceptions.RayActorError as exc:
-                self.queue.appendleft(task)  # made again by another actor
-                if any(a is actor for a in self.actors):
-                    self.actors = [a for a in self.actors if a is not actor]
+                self.lanes[slot].appendleft(task)  # made again, by its replacement or another
+                if self.actors[slot] is actor:
+                    self.sent.pop(slot, None)
+                    self.actors[slot] = None
                     if self.replacements > 0:
                         self.replacements -= 1
-                        self.actors.append(self._start())
-                if not self.actors:
-                    while self.queue:
-                        for spec in self.queue.popleft():
-                            yield {"id": spec["id"], "status": status.RENDER_FAILED,
-                                   "error": f"every Ray actor died ({type(exc).__name__})"}
+                        self.actors[slot] = self._start()
+                if all(a is None for a in self.actors):
+                    for lane in self.lanes:
+                        while lane:
+                            for spec in lane.popleft():
+                                yield {"id": spec["id"], "status": status.RENDER_FAILED,
+                                       "error": f"every Ray actor died ({type(exc).__name__})"}
                 done = []
             yield from done
             self._feed()
 
     def kill(self) -> None:
         for actor in self.actors:
-            self.ray.kill(actor)
+            if actor is not None:
+                self.ray.kill(actor)

@@ -43,12 +43,17 @@ THREAD_VARIABLES = ("LP_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
 
 
 def thread_settings(workers: int, cores: int | None = None) -> dict[str, str]:
-    """Environment for one of `workers` processes sharing this machine's cores: llvmpipe's
-    rasterizer threads (LP_NUM_THREADS) and the BLAS pools get cores // workers each (at
-    least 1).  Variables the user has set are left as they are."""
+    """Environment for one of `workers` processes sharing this machine's cores: the BLAS pools
+    get cores // workers threads each (at least 1), and so do llvmpipe's rasterizer threads
+    (LP_NUM_THREADS), except that a share of one core is LP_NUM_THREADS=0: llvmpipe then
+    rasterizes on the thread that draws, where one rasterizer thread would only add a hand-off
+    and a wait per draw call (benchmarks/OPTIMISATIONS.md).  Variables the user has set are
+    left as they are."""
     cores = cores or len(os.sched_getaffinity(0))
-    share = str(max(1, cores // max(1, workers)))
-    return {name: share for name in THREAD_VARIABLES if name not in os.environ}
+    share = max(1, cores // max(1, workers))
+    values = {name: str(share) for name in THREAD_VARIABLES}
+    values["LP_NUM_THREADS"] = str(share if share > 1 else 0)
+    return {name: value for name, value in values.items() if name not in os.environ}
 
 
 def _version(package: str) -> str | None:
