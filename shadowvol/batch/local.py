@@ -27,6 +27,7 @@ from collections import OrderedDict, deque
 from collections.abc import Iterable, Iterator
 from multiprocessing.connection import wait
 
+from shadowvol import memory
 from shadowvol.batch.worker import MAX_RENDERERS, Worker, thread_settings
 from shadowvol.cli import status
 from shadowvol.scene import Scene
@@ -38,9 +39,10 @@ SHUTDOWN_WAIT_S = 30   # for a worker to release its context after its last task
 PARENT_CHECK_S = 1.0   # how often an idle worker looks whether its parent is still there
 
 
-def in_process(tasks: Iterable[list[dict]], scenes: dict, egl_device=None) -> Iterator[dict]:
+def in_process(tasks: Iterable[list[dict]], scenes: dict, egl_device=None,
+               budget: int | str | None = None) -> Iterator[dict]:
     """Render every frame of `tasks` here, in order, on one worker (this thread)."""
-    worker = Worker(scenes, egl_device, label="in-process worker")
+    worker = Worker(scenes, egl_device, label="in-process worker", budget=budget)
     try:
         for task in tasks:
             for spec in task:
@@ -150,7 +152,7 @@ def _died(child: _Child) -> list[dict]:
 
 
 def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
-         start_method: str = "spawn") -> Iterator[dict]:
+         start_method: str = "spawn", budget: int | str | None = None) -> Iterator[dict]:
     """Render `tasks` on `workers` processes; yields each frame's result as its task ends.
     A worker that dies fails the frames it held (the next run makes them); the others take
     over the rest of its lane."""
@@ -161,6 +163,8 @@ def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
     count = max(1, min(workers, len(tasks)))
     runs = lanes(tasks, count)
     environment = thread_settings(workers)
+    # the workers render at once: each gets its share of the memory budget
+    environment[memory.ENV] = str(memory.budget(budget) // count)
     children = [_Child(context, i, egl_device, environment) for i in range(count)]
     source = _Scenes(scenes)
     finished = False

@@ -25,6 +25,7 @@ import threading
 from collections import OrderedDict, deque
 from collections.abc import Iterator
 
+from shadowvol import memory
 from shadowvol.batch.local import lanes, next_task
 from shadowvol.batch.worker import MAX_RENDERERS, Worker, thread_settings
 from shadowvol.cli import status
@@ -61,22 +62,26 @@ class FrameActor:
 
 
 def results(tasks: list[list[dict]], scenes: dict, actors: int, address: str | None = None,
-            egl_device=None, num_gpus: float = 0) -> Iterator[dict]:
+            egl_device=None, num_gpus: float = 0, budget: int | str | None = None
+            ) -> Iterator[dict]:
     """Render `tasks` on `actors` Ray actors; yields each frame's result as its task ends.
-    Uses the Ray this process is connected to, or ray.init(address) and shuts it down after."""
+    Uses the Ray this process is connected to, or ray.init(address) and shuts it down after.
+    Each actor's memory budget is `budget` (this machine's default when None) divided by the
+    actors: conservative on a cluster, where they do not all share one machine."""
     ray = require("ray", "shadowvol batch --ray", "ray")
     started = not ray.is_initialized()
     if started:
         ray.init(address=address, include_dashboard=False, log_to_driver=True)
     try:
-        yield from _run(ray, tasks, scenes, actors, egl_device, num_gpus)
+        yield from _run(ray, tasks, scenes, actors, egl_device, num_gpus,
+                        memory.budget(budget) // max(1, actors))
     finally:
         if started:
             ray.shutdown()
 
 
-def _run(ray, tasks, scenes, actors, egl_device, num_gpus) -> Iterator[dict]:
-    pool = _Pool(ray, scenes, actors, egl_device, num_gpus)
+def _run(ray, tasks, scenes, actors, egl_device, num_gpus, budget: int) -> Iterator[dict]:
+    pool = _Pool(ray, scenes, actors, egl_device, num_gpus, budget)
     try:
         yield from pool.results(tasks)
     finally:  # free the cluster's CPUs now, not when the handles are collected
@@ -87,14 +92,14 @@ class _Pool:
     """Actors, each with its lane of tasks (by slot: a replacement takes the dead actor's),
     IN_FLIGHT_PER_ACTOR tasks in flight per actor."""
 
-    def __init__(self, ray, scenes, actors, egl_device, num_gpus):
+    def __init__(self, ray, scenes, actors, egl_device, num_gpus, budget: int):
         self.ray = ray
         self.remote = ray.remote(num_cpus=1, num_gpus=num_gpus)(FrameActor)
         # Scene objects the caller gave go to the object store once; an actor holds one CPU of
         # the cluster
         self.sources = scenes
         self.args = (ray.put({k: v for k, v in scenes.items() if isinstance(v, Scene)}),
-                     egl_device, thread_settings(actors, cores=1))
+                     egl_device, thread_settings(actors, cores=1) | {memory.ENV: str(budget)})
         self.made = 0
         self.replacements = MAX_REPLACEMENTS
         self.actors = [self._start() for _ in range(max(1, actors))]  # None: a dead slot

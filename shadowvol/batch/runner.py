@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from shadowvol import memory
 from shadowvol.batch import egl, frames, local, manifest
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.store import FORMATS, FileStore, TarStore
@@ -121,7 +122,8 @@ def _bar(total: int, progress: bool | None):
 def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), ray=None,
         egl_device=None, format: str = "files",
         samples_per_tar: int = DEFAULT_SAMPLES_PER_TAR, progress: bool | None = None,
-        start_method: str = "spawn", gpus_per_worker: float = 0) -> Summary:
+        start_method: str = "spawn", gpus_per_worker: float = 0,
+        memory_budget: int | str | None = None) -> Summary:
     """Render `jobs` (a JSONL file, or job dicts, see `batch.jobs`) into the folder `out`.
 
     workers      : processes on this machine (1: this process), or Ray actors with `ray`
@@ -134,6 +136,10 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
                    that has made a GL context)
     gpus_per_worker : with `ray`, the GPUs each actor asks Ray for (Ray then sets the actor's
                    CUDA_VISIBLE_DEVICES, which egl_device="auto" follows)
+    memory_budget : the memory the run's frames may take at once (`shadowvol.memory.budget`:
+                   bytes or "12GiB"; default SHADOWVOL_MEMORY_BUDGET or 3/4 of the machine),
+                   shared by the workers; a frame over its worker's share is recorded as an
+                   error (status 2) and not rendered
     Returns a Summary; a bad job or frame is recorded in the manifest and the others go on.
     """
     began = time.perf_counter()
@@ -147,6 +153,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
             samples_per_tar < 1:
         raise SceneError("--samples-per-tar", f"must be a whole number >= 1, got "
                                               f"{samples_per_tar!r}")
+    memory.budget(memory_budget)  # a bad budget is an error now, not one per frame
     if egl.parse(egl_device) is not None and not ray:
         egl.choose(egl_device)  # a bad index is an error naming this machine's devices, now
     out = Path(out)
@@ -188,7 +195,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         waiting = {u: {} for u in todo}  # webdataset: unit -> id -> result, until complete
         bar = _bar(len(todo_specs), progress)
         for result in _results(todo_specs, scenes, workers, ray, egl_device, start_method,
-                               gpus_per_worker):
+                               gpus_per_worker, memory_budget):
             spec = by_id[result["id"]]
             if format == "files":
                 _record(journal, done, summary, spec, result, hashes, store)
@@ -294,7 +301,7 @@ def _record(journal, done, summary, spec, result, hashes, store, files=None) -> 
     done[spec["id"]] = record
 
 
-def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_worker):
+def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_worker, budget):
     if not specs:
         return iter(())
     if ray:
@@ -303,7 +310,8 @@ def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_wor
         address = None if ray is True else ray
         return ray_backend.results(local.chunks(specs, workers), scenes, actors=workers,
                                    address=address, egl_device=egl_device,
-                                   num_gpus=gpus_per_worker)
+                                   num_gpus=gpus_per_worker, budget=budget)
     if workers == 1 and start_method == "spawn":
-        return local.in_process(local.chunks(specs, 1), scenes, egl_device)
-    return local.pool(local.chunks(specs, workers), scenes, workers, egl_device, start_method)
+        return local.in_process(local.chunks(specs, 1), scenes, egl_device, budget)
+    return local.pool(local.chunks(specs, workers), scenes, workers, egl_device, start_method,
+                      budget)

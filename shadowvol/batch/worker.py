@@ -22,7 +22,7 @@ from importlib import metadata
 
 import numpy as np
 
-from shadowvol import __version__, signals
+from shadowvol import __version__, memory, signals
 from shadowvol.batch import egl, frames
 from shadowvol.batch.outputs import OUTPUTS, fields_of
 from shadowvol.cameras import calibration
@@ -85,8 +85,10 @@ class Worker:
     Not thread-safe: one thread renders (the one that made the context).
     """
 
-    def __init__(self, scenes: dict, egl_device=None, label: str = "worker", log=None):
+    def __init__(self, scenes: dict, egl_device=None, label: str = "worker", log=None,
+                 budget: int | str | None = None):
         self.scenes = scenes
+        self.budget = budget     # each frame's memory budget (`memory.budget`)
         self.egl_device = egl_device
         self.label = label
         self.log = log if log is not None else (lambda text: print(text, file=sys.stderr,
@@ -181,9 +183,32 @@ class Worker:
                                          spec["index"])
         return scene, camera, lights
 
+    def _check_memory(self, spec, frame_scene: Scene, wanted, truth) -> None:
+        """Refuse the frame (a SceneError naming its scene file and `image`, status 2) when
+        its `memory` estimate exceeds this worker's budget: `self.budget`, else `memory.ENV`,
+        which a pool or Ray sets to the run's budget divided by its workers."""
+        written = tuple(name for name, asks in (("png", "image" in wanted),
+                                                ("masks", bool({"lit", "coverage"} & wanted)))
+                        if asks)
+        if spec["renderer"] == "raytrace":
+            parts = [memory.whitted(frame_scene, written=())] if "image" in wanted else []
+            if truth or {"lit", "coverage"} & wanted:
+                parts.append(memory.ray_masks(frame_scene, truth, picture=False))
+            estimate = memory.Estimate("the ray tracer", frame_scene.width, frame_scene.height,
+                                       tuple(t for part in parts for t in part.terms))
+        else:
+            asked = tuple(name for name in wanted if name in RASTER_OUTPUTS)
+            estimate = memory.raster(frame_scene, asked, written=written, gl_in_host=(
+                self.gl_renderer is None or memory.gl_in_host(self.gl_renderer)))
+        source = self.scenes.get(spec["scene"])
+        memory.check(estimate, self.budget, source if isinstance(source, (str, os.PathLike))
+                     else spec["scene"])
+
     def _arrays(self, spec, scene: Scene, camera: Camera, lights) -> dict[str, np.ndarray]:
         wanted = fields_of(spec["outputs"])
         truth = [name for name in GROUND_TRUTH if name in wanted]
+        self._check_memory(spec, scene.replace(camera=camera, lights=lights), set(wanted),
+                           truth)
         if spec["renderer"] == "raytrace":
             import raytrace
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from shadowvol import memory
 from shadowvol.batch.runner import DEFAULT_SAMPLES_PER_TAR, parse_shard, run
 from shadowvol.batch.store import FORMATS
 from shadowvol.cli import status
@@ -57,6 +58,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help=f"frames per webdataset tar (default {DEFAULT_SAMPLES_PER_TAR})")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="a progress bar with frames/s and ETA (default: only on a terminal)")
+    memory.add_option(p)
     p.set_defaults(func=command)
     return p
 
@@ -65,7 +67,7 @@ def command(args) -> int:
     summary = run(args.jobs, args.output, workers=args.workers, shard=parse_shard(args.shard),
                   ray=args.ray, egl_device=args.egl_device, format=args.format,
                   samples_per_tar=args.samples_per_tar, progress=args.progress,
-                  gpus_per_worker=args.gpus_per_worker)
+                  gpus_per_worker=args.gpus_per_worker, memory_budget=args.memory_budget)
     for line in summary.errors[:10]:
         print(f"error: {line}", file=sys.stderr)
     if len(summary.errors) > 10:

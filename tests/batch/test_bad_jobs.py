@@ -8,9 +8,10 @@ import json
 import pytest
 from builders import SCENES, job_lines, write_jobs
 
-from shadowvol import batch
+from shadowvol import batch, memory
 from shadowvol.cli import status
 from shadowvol.cli.main import main
+from shadowvol.scenefile import load_scene
 
 pytestmark = pytest.mark.gl
 
@@ -64,3 +65,28 @@ def test_arguments_are_checked_before_any_work(tmp_path, capsys):
         assert words in capsys.readouterr().err
     assert main(["batch", str(tmp_path / "none.jsonl"), "-o", str(tmp_path / "o")]) == \
         status.BAD_INPUT
+
+
+def test_a_frame_over_the_memory_budget_is_refused_and_the_others_go_on(tmp_path):
+    """`--memory-budget` (shadowvol.memory): a frame whose estimate exceeds its worker's share
+    is recorded with the one-line refusal (status 2) before anything is rendered; the frames
+    that fit are made.  With two workers each has half the budget."""
+    small = job_lines(frames=1, size=(32, 24), raytrace=False)[0]
+    big = dict(small, name="big", size=[2000, 1500])
+    jobs = write_jobs(tmp_path / "jobs.jsonl", [small, big])
+    scene = load_scene(small["scene"]).replace(width=2000, height=1500)
+    need = memory.raster(scene, written=("png", "masks")).total + memory.BASE
+    out = tmp_path / "out"
+    summary = batch.run(jobs, out, progress=False, memory_budget=need // 2)
+    assert (summary.rendered, summary.failed, summary.status) == (1, 1, status.BAD_INPUT)
+    record = [json.loads(line) for line in (out / "manifest.jsonl").read_text().splitlines()
+              if "big" in line][0]
+    assert "image: 2000x1500 needs about" in record["error"]
+    assert "more than the memory budget" in record["error"]
+    assert not list(out.glob("big/*.png"))
+    # the whole budget is enough for one worker, not for each of two
+    one = batch.run([big], tmp_path / "one", progress=False, memory_budget=need * 3 // 2)
+    assert one.status == status.OK, one.errors
+    two = batch.run([dict(big, cameras={"orbit": {**big["cameras"]["orbit"], "frames": 2}})],
+                    tmp_path / "two", workers=2, progress=False, memory_budget=need * 3 // 2)
+    assert (two.failed, two.status) == (2, status.BAD_INPUT), two.errors
