@@ -2,7 +2,8 @@
 growth (VmHWM, reset through /proc/self/clear_refs) of one command in a fresh process, after a
 small run of the same command has paid for the imports, the GL driver and Embree.
 
-The model must be an upper bound, and at most FACTOR times the measured growth.  FACTOR is 3:
+The model must be an upper bound at every size, and at the largest at most FACTOR times the
+measured growth.  FACTOR is 3:
 the model counts worst cases the measurement rarely meets: PNG and npz streams as large as
 the raw pixels (deflate of a flat mask shrinks them 10-100x), numpy's np.empty staging as if
 every page were touched, and every thread's tile at its peak at once.  (Measured ratios here:
@@ -113,7 +114,11 @@ def test_the_model_bounds_the_measured_peak(name):
                      f"{estimate.total / MIB:.0f} MiB ({estimate.describe()})")
         assert measured["growth"] <= estimate.total, "the model is not an upper bound: " + \
             "; ".join(lines)
-        assert estimate.total <= FACTOR * measured["growth"], \
-            f"the model is more than {FACTOR}x the measurement: " + "; ".join(lines)
+        # how loose the model is, judged at the largest size, where the terms per pixel
+        # dominate: at the smaller one the ray tracer's fixed allowance for its tiles (every
+        # thread's at its peak at once, 32 MiB) may alone be 2-3x a growth of 15 MiB
+        if (width, height) == max(SIZES, key=lambda s: s[0] * s[1]):
+            assert estimate.total <= FACTOR * measured["growth"], \
+                f"the model is more than {FACTOR}x the measurement: " + "; ".join(lines)
         # the fixed allowance for the process covers its first, tiny run
         assert measured["first"] <= memory.BASE, (measured["first"] / MIB, lines)
