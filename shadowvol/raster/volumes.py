@@ -104,9 +104,13 @@ class CpuVolumes:
     `prepare`, nothing recomputed."""
 
     # one light holds about 3 bytes per triangle (signs, side quads) and 32 bytes per side
-    # corner (float64 world, to re-frame); 64 samples of a million triangles fit, and z-fail cap lists (12 bytes per capped triangle) for some of them
+    # corner (float64 world, to re-frame when the eye moves): 0.72 MB a sample at 100k
+    # triangles, 0.41 MB of it the corners; ~350 samples of 100k fit, and z-fail cap lists (12
+    # bytes per capped triangle) for some of them.  The older lights' allowance keeps the ~100
+    # lights at 100k that 32 MiB kept before the corners were kept (a rotation of a few light
+    # sets, as the soft-shadow benchmark's interleaved variants are)
     KEPT_BYTES = 256 << 20
-    KEPT_OLDER_BYTES = 32 << 20
+    KEPT_OLDER_BYTES = 80 << 20
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
