@@ -349,3 +349,24 @@ def test_numpy_allocation_error_is_a_memory_error():
     """What the tests above fake is what numpy raises."""
     with pytest.raises(MemoryError, match="Unable to allocate"):
         np.empty(1 << 62, np.uint8)
+
+
+@pytest.mark.parametrize("how", ["option", "variable"])
+def test_demo_slides_over_the_budget_are_refused_before_rendering(how, tmp_path, monkeypatch,
+                                                                  capsys):
+    """`shadowvol demo --size`: each example scene is estimated as `compare` of it at the slide
+    size; over the budget, one line naming the scene and exit 2, before any picture."""
+    import shadowvol.cli.demo
+    monkeypatch.setattr(shadowvol.cli.demo, "build_gallery", _boom)
+    out = tmp_path / "out"
+    argv = ["demo", "-o", str(out), "--size", "4000x3000"]
+    if how == "option":
+        argv += ["--memory-budget", "64MiB"]
+    else:
+        monkeypatch.setenv(memory.ENV, "64MiB")
+    assert shadowvol_main(argv) == status.BAD_INPUT
+    line = _one_error_line(capsys.readouterr().err)
+    assert re.fullmatch(r"error: .+\.toml: image: 4000x3000 needs about [\d.]+ [MG]iB for "
+                        r"shadowvol compare \(model: .+\), more than the memory budget of "
+                        r"64 MiB .+", line), line
+    assert not out.exists() or not any(out.iterdir())
