@@ -134,8 +134,9 @@ def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, s
 
 
 def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
-                    progs: ScenePrograms, bit: int) -> None:
-    """Add 2^bit to the unshadowed bits where the stencil count is 0."""
+                    progs: ScenePrograms, bit: int, restore: bool = True) -> None:
+    """Add 2^bit to the unshadowed bits where the stencil count is 0; `restore`: bind the
+    target's main framebuffer after (else `target.mark_fbo` stays bound)."""
     target.mark_fbo.depth_mask = False
     target.mark_fbo.color_mask = (True,) * 4
     target.mark_fbo.use()
@@ -148,7 +149,8 @@ def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
         progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
-    target.use()
+    if restore:
+        target.use()
 
 
 def _only_where_covered(ctx: moderngl.Context) -> None:
@@ -245,7 +247,7 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
                   zfail: np.ndarray, halve: bool = False,
                   clip_planes: np.ndarray | None = None, counting=None,
-                  objects=None, each=None) -> None:
+                  objects=None, each=None, fbo=None) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
     `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
 
@@ -266,14 +268,27 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     `each(program, i)` : count with the volumes' counting programs instead (caster_count.frag:
     the ground truth's per-caster counts, `truth.CasterCounts`), each object drawn alone after
     `each` is called with its program and index; the same faces in the same groups, under
-    `counting`, which must then be given.  The stencil is neither cleared nor written."""
+    `counting`, which must then be given.  The stencil is neither cleared nor written.
+
+    `fbo` : count in this framebuffer of the target (one sharing its depth-stencil buffer,
+    e.g. `target.mark_fbo`) with colour writes off, and leave it bound, instead of the
+    target's main one: a frame that marks after each count then changes no framebuffer
+    between lights, and llvmpipe, which flushes its scene at every change, bins the volume and
+    mark passes of all its lights together."""
     if counting is None:
         def counting(zfail_group: bool, depth_clamp: bool):
             return (stencil.zfail_counting(gl, depth_clamp=depth_clamp) if zfail_group
                     else stencil.zpass_counting(gl))
-    if each is None:
-        target.clear_stencil()
-    target.use(colour=False, depth=False)
+    if fbo is not None:
+        fbo.depth_mask = False
+        fbo.color_mask = (False,) * 4
+        fbo.use()
+        if each is None:
+            stencil.clear_stencil(gl, fbo.glo)
+    else:
+        if each is None:
+            target.clear_stencil()
+        target.use(colour=False, depth=False)
     ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count
     ctx.depth_func = NEARER
     chosen = np.ones(len(zfail), bool) if objects is None else np.isin(
@@ -295,7 +310,8 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
             volumes.draw_caps(by_zfail, near=False, each=each)
         with counting(True, False):
             volumes.draw_caps(by_zfail, near=True, each=each)
-    target.use()
+    if fbo is None:
+        target.use()
 
 
 def light_uniforms(program: moderngl.Program, light: Light, origin: np.ndarray) -> None:

@@ -342,13 +342,18 @@ class Renderer:
                     # the counts themselves are not returned (see passes.count_volumes)
                     passes.count_volumes(self.ctx, self.gl, target, vols, choice,
                                          halve=method == "auto" and not want_stencil,
-                                         clip_planes=clip)
+                                         clip_planes=clip,
+                                         # counted where it is marked: no framebuffer
+                                         # change between the page's lights (llvmpipe
+                                         # flushes at each)
+                                         fbo=None if want_stencil else target.mark_fbo)
                 else:
                     target.clear_stencil()
                 if want_stencil:
                     counts.append(target.read_stencil())
                 if bit < len(page_lights) - 1:   # the last light's stencil is read by `shade`
-                    passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit)
+                    passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit,
+                                           restore=False)
                 zfail[hard[first + bit][0]] |= choice
             passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
                          first_page=not first, colour=colour)
