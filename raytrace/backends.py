@@ -273,6 +273,18 @@ def cpu_threads() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def for_each_tile(work, tiles: list, tracer) -> None:
+    """work(tile) for every tile, on a pool of the tracer's `threads` (at most one per tile;
+    Embree and numpy's large operations release the GIL); a tile's exception is raised here."""
+    threads = min(getattr(tracer, "threads", 1), len(tiles))
+    if threads <= 1:
+        for tile in tiles:
+            work(tile)
+    else:
+        with ThreadPoolExecutor(threads) as pool:
+            list(pool.map(work, tiles))  # list(): re-raises a tile's exception here
+
+
 # Below this many rays the thread pool costs more than it saves.
 MIN_RAYS_PER_THREAD = 4096
 

@@ -18,7 +18,6 @@ light gets a SceneError for them (`raytrace.soft_masks` has its facing); the oth
 from __future__ import annotations
 
 import dataclasses
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -26,7 +25,7 @@ from shadowvol.cameras import Calibration, calibration
 from shadowvol.io import GROUND_TRUTH, GroundTruthFrame
 from shadowvol.scene import AreaLight, Scene, SceneError
 
-from .backends import NumpyBackend, TriangleBackend, make_backend
+from .backends import NumpyBackend, TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
 from .masks import (
     MASK_TILE_RAYS,
@@ -193,13 +192,7 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
                     else seg.direction[:, b], None if tmax is None else tmax[b], own[b],
                     fragile[b])
 
-    threads = min(getattr(tracer, "threads", 1), len(tiles))
-    if threads == 1:
-        for rows in tiles:
-            trace_tile(rows)
-    else:
-        with ThreadPoolExecutor(threads) as pool:
-            list(pool.map(trace_tile, tiles))  # list(): re-raises a tile's exception here
+    for_each_tile(trace_tile, tiles, tracer)
     if area:  # "every sample reaches the pixel", as raytrace.shadow_masks says
         from .soft import lit_counts, sample_counts
 

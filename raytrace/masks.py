@@ -10,14 +10,13 @@ sphere is for images only.
 from __future__ import annotations
 
 import dataclasses
-from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import numpy as np
 
 from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 
-from .backends import TriangleBackend, make_backend
+from .backends import TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
 from .tolerances import (
     OWN_HIT_RETRIES,
@@ -110,7 +109,6 @@ def shadow_masks(scene: Scene, backend: str | MaskTracer = "embree"
     coverage = np.zeros((H, W), bool)
     rows_per_tile = max(1, MASK_TILE_RAYS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
-    threads = min(getattr(tracer, "threads", 1), len(tiles))
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
                                  target=scene.camera.target - origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
@@ -121,12 +119,7 @@ def shadow_masks(scene: Scene, backend: str | MaskTracer = "embree"
         lit[:, rows], coverage[rows] = _tile_masks(scene, tracer, triangles, grids, rows, reach,
                                                    lights)
 
-    if threads == 1:
-        for rows in tiles:
-            trace_tile(rows)
-    else:
-        with ThreadPoolExecutor(threads) as pool:
-            list(pool.map(trace_tile, tiles))  # list(): re-raises a tile's exception here
+    for_each_tile(trace_tile, tiles, tracer)
     return lit, coverage
 
 
