@@ -12,7 +12,6 @@ from shadowvol.course.gallery import SCENES, build_gallery, index_html, parse_si
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE
 from shadowvol.io import atomic_write, save_png
 from shadowvol.scene import SceneError
-from shadowvol.scenefile import load_scene
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -46,11 +45,9 @@ def command(args) -> int:
     if args.size and args.small:
         raise SceneError("--size", "give --size or --small, not both")
     size = parse_size(args.size) if args.size else None
-    check_memory(args.scenes, size or (SMALL_SLIDE if args.small else SLIDE),
-                 args.memory_budget)
     skipped = []
     pictures = build_gallery(args.small, args.scenes, progress=progress, size=size,
-                             skipped=skipped)
+                             skipped=skipped, memory_budget=args.memory_budget)
     for name, why in skipped:
         print(f"  {name}: left out: {why}", file=sys.stderr)
     out = Path(args.output)
@@ -61,16 +58,3 @@ def command(args) -> int:
     print(f"wrote {len(pictures)} pictures and {out / 'index.html'}", file=sys.stderr)
     return status.OK
 
-
-def check_memory(scenes: Path, size: tuple[int, int], limit) -> None:
-    """Refuse slides whose pictures would not fit the memory budget (`shadowvol.memory`): a
-    slide's largest picture is a scene rendered by both renderers at the slide's size, so each
-    example scene is estimated as `shadowvol compare` of it at that size."""
-    budget = memory.budget(limit)
-    for path in sorted(Path(scenes).glob("*.toml")):
-        try:
-            scene = load_scene(path)
-        except SceneError:
-            continue   # the gallery leaves it out and says why
-        memory.check(memory.compare(scene.replace(width=size[0], height=size[1])), budget,
-                     str(path))

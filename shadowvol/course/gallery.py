@@ -17,6 +17,7 @@ import html
 import time
 from pathlib import Path
 
+from shadowvol import memory
 from shadowvol.course import demos_tracing, demos_volumes, soft_gallery
 from shadowvol.course.picture import Picture
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE, SUPERSAMPLE, Layout
@@ -70,18 +71,44 @@ class Gallery:
     def __init__(self, small: bool = False, scenes: Path = SCENES, ctx=None,
                  size: tuple[int, int] | None = None):
         self.small = small
+        self.size = size or (SMALL_SLIDE if small else SLIDE)
         # --small is for CI: one sample per pixel there
-        self.layout = Layout(*(size or (SMALL_SLIDE if small else SLIDE)),
-                             supersample=1 if small else SUPERSAMPLE)
+        self.layout = Layout(*self.size, supersample=1 if small else SUPERSAMPLE)
         self.scenes = Path(scenes)
         if not self.scenes.is_dir():
             raise SceneError("--scenes", f"no scenes folder at {self.scenes} (pass --scenes DIR)")
         self._own_ctx = ctx is None
-        self.ctx = create_context() if ctx is None else ctx
+        self._ctx = ctx
+        self._loaded: dict[str, object] = {}
+
+    @property
+    def ctx(self):
+        """The GL context the demos draw with, made on first use."""
+        if self._ctx is None:
+            self._ctx = create_context()
+        return self._ctx
 
     def scene(self, name: str):
-        """scenes/<name>.toml (the demos fit it to their panels)."""
-        return load_scene(self.scenes / f"{name}.toml")
+        """scenes/<name>.toml (the demos fit it to their panels), read once: a Scene and its
+        arrays are immutable."""
+        if name not in self._loaded:
+            self._loaded[name] = load_scene(self.scenes / f"{name}.toml")
+        return self._loaded[name]
+
+    def check_memory(self, limit=None) -> None:
+        """Refuse slides whose pictures would not fit the memory budget (`shadowvol.memory`,
+        SceneError naming the scene file, exit 2): a slide's largest picture is a scene drawn
+        by both renderers at most at the slide's size, so each scene of the folder is
+        estimated as `shadowvol compare` of it at that size.  A scene that does not load is
+        left to the demo that needs it."""
+        budget = memory.budget(limit)
+        for path in sorted(self.scenes.glob("*.toml")):
+            try:
+                scene = self.scene(path.stem)
+            except SceneError:
+                continue
+            memory.check(memory.compare(scene.replace(width=self.size[0],
+                                                      height=self.size[1])), budget, str(path))
 
     def path(self, name: str) -> str:
         """How a command names the scene file: scenes/<name>.toml in a checkout."""
@@ -89,20 +116,23 @@ class Gallery:
         return f"{folder}/{name}.toml"
 
     def release(self) -> None:
-        if self._own_ctx and self.ctx is not None:
-            self.ctx.release()
-        self.ctx = None
+        if self._own_ctx and self._ctx is not None:
+            self._ctx.release()
+        self._ctx = None
 
 
 def build_gallery(small: bool = False, scenes: Path = SCENES, ctx=None, progress=None,
-                  size: tuple[int, int] | None = None, skipped: list | None = None
-                  ) -> list[Picture]:
+                  size: tuple[int, int] | None = None, skipped: list | None = None,
+                  memory_budget=None) -> list[Picture]:
     """Every demo's pictures, in the course's order.  `progress(name, seconds)` is called after
     each demo when given.  A demo needing a missing optional extra (pyrender) is left out and
-    its (name, message) appended to `skipped` when given; otherwise MissingExtra is raised."""
+    its (name, message) appended to `skipped` when given; otherwise MissingExtra is raised.
+    Slides over the memory budget (`memory_budget`, see `Gallery.check_memory`) are refused
+    before any demo runs."""
     g = Gallery(small, scenes, ctx, size)
     pictures = []
     try:
+        g.check_memory(memory_budget)
         for demo in DEMOS:
             start = time.perf_counter()
             try:

@@ -356,8 +356,8 @@ def test_demo_slides_over_the_budget_are_refused_before_rendering(how, tmp_path,
                                                                   capsys):
     """`shadowvol demo --size`: each example scene is estimated as `compare` of it at the slide
     size; over the budget, one line naming the scene and exit 2, before any picture."""
-    import shadowvol.cli.demo
-    monkeypatch.setattr(shadowvol.cli.demo, "build_gallery", _boom)
+    import shadowvol.course.gallery
+    monkeypatch.setattr(shadowvol.course.gallery, "DEMOS", (_boom,))
     out = tmp_path / "out"
     argv = ["demo", "-o", str(out), "--size", "4000x3000"]
     if how == "option":
