@@ -88,7 +88,9 @@ class Worker:
     def __init__(self, scenes: dict, egl_device=None, label: str = "worker", log=None,
                  budget: int | str | None = None):
         self.scenes = scenes
-        self.budget = budget     # each frame's memory budget (`memory.budget`)
+        # each frame's memory budget in bytes, read once (`memory.budget`: the environment
+        # or the machine's memory when None)
+        self.budget = memory.budget(budget)
         self.egl_device = egl_device
         self.label = label
         self.log = log if log is not None else (lambda text: print(text, file=sys.stderr,
@@ -185,7 +187,7 @@ class Worker:
 
     def _check_memory(self, spec, frame_scene: Scene, wanted, truth) -> None:
         """Refuse the frame (a SceneError naming its scene file and `image`, status 2) when
-        its `memory` estimate exceeds this worker's budget: `self.budget`, else `memory.ENV`,
+        its `memory` estimate exceeds this worker's budget: the one given, else `memory.ENV`,
         which a pool or Ray sets to the run's budget divided by its workers."""
         written = tuple(name for name, asks in (("png", "image" in wanted),
                                                 ("masks", bool({"lit", "coverage"} & wanted)))
