@@ -43,13 +43,16 @@ def stats(times_s: list[float]) -> dict:
     return {"median": statistics.median(ms), "min": min(ms), "max": max(ms), "n": len(ms)}
 
 
-def interleaved(fns: dict, repeat: int, warmup: int) -> dict:
+def interleaved(fns: dict, repeat: int, warmup: int, alternate: bool = False) -> dict:
     """{name: stats} of each function, `warmup` untimed rounds then `repeat` timed ones; the
     functions take turns within each round, so load from other processes on the machine hurts
-    all of them alike and their ratios stay meaningful."""
+    all of them alike and their ratios stay meaningful.  `alternate`: every other round runs
+    them in reverse order, so that no variant always follows the same one (what a variant
+    leaves in the caches and in llvmpipe's state then weighs on both alike)."""
     times = defaultdict(list)
     for r in range(warmup + repeat):
-        for name, fn in fns.items():
+        order = list(fns.items())
+        for name, fn in (order[::-1] if alternate and r % 2 else order):
             t0 = time.perf_counter()
             fn()
             if r >= warmup:

@@ -107,7 +107,7 @@ class PlainFrame:
         self.fbo.read_into(self.out, components=4)
         return self.out
 
-    def __enter__(self) -> "PlainFrame":
+    def __enter__(self):
         return self
 
     def __exit__(self, *exc) -> None:
@@ -116,4 +116,50 @@ class PlainFrame:
     def release(self) -> None:
         for obj in (self.vao, self.fbo, self.colour, self.depth, self.ibo, self.nbo, self.vbo,
                     self.program):
+            obj.release()
+
+
+DEPTH_VERTEX = """
+#version 330
+uniform mat4 u_mvp;
+in vec3 in_position;
+void main() {
+    gl_Position = u_mvp * vec4(in_position, 1.0);
+}
+"""
+
+
+class DepthFloor:
+    """`DepthFloor(ctx, plain_frame)()`: the least GL work of ANY exact shadowed frame of the
+    scene: one indexed draw of every triangle into depth only, with NO back-face culling (an
+    exact frame cannot cull: in float32 a back face can win the depth test at a silhouette,
+    `shadowvol.raster.methods.cullable`), an empty fragment shader, no colour, no read-back,
+    then glFinish.  The plain frame's buffers and camera (`PlainFrame`), so it draws the same
+    triangles.  A shadow-volume frame pays at least this plus its volume passes."""
+
+    def __init__(self, ctx: moderngl.Context, plain: PlainFrame):
+        self.ctx = ctx
+        self.program = ctx.program(vertex_shader=DEPTH_VERTEX,
+                                   fragment_shader="#version 330\nvoid main() {}\n")
+        self.program["u_mvp"].write(plain.program["u_mvp"].read())
+        self.vao = ctx.vertex_array(self.program, [(plain.vbo, "3f", "in_position")],
+                                    index_buffer=plain.ibo, index_element_size=4)
+        self.fbo = ctx.framebuffer(depth_attachment=plain.depth)
+
+    def __call__(self) -> None:
+        self.fbo.use()
+        self.ctx.enable_only(moderngl.DEPTH_TEST)
+        self.ctx.depth_func = "<"
+        self.fbo.clear(depth=1.0)
+        self.vao.render(moderngl.TRIANGLES)
+        self.ctx.finish()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def release(self) -> None:
+        for obj in (self.vao, self.fbo, self.program):
             obj.release()

@@ -56,7 +56,9 @@ FULL = dict(
     # (warm-up, timed) rounds per size: fewer at 1M, where one round takes seconds
     repeat={"1k": (2, 9), "100k": (2, 9), "1M": (1, 4)},
     phase_repeat={"1k": 5, "100k": 5, "1M": 2},
-    overflow_meshes=("bunny", "teapot", "spot"), overflow_repeat=(2, 9),
+    # the check's cost is a few % of a 30-90 ms frame: more rounds than the frames, in
+    # alternating order
+    overflow_meshes=("bunny", "teapot", "spot"), overflow_repeat=(2, 25),
     turntable=dict(views=36, size=(640, 480)),
     pyrender_sizes=("1k", "100k", "1M"),
     pyrender_repeat={"1k": (2, 5), "100k": (2, 5), "1M": (1, 2)},
@@ -148,11 +150,13 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
         scene = scenes.occluder_scene(size, max(cfg["lights"]), width, height)
         one = scene.lights[:1]
         t0 = time.perf_counter()
-        with Renderer(scene, ctx) as r, plain.PlainFrame(ctx, scene) as pf:
+        with Renderer(scene, ctx) as r, plain.PlainFrame(ctx, scene) as pf, \
+                plain.DepthFloor(ctx, pf) as depth_floor:
             setup = time.perf_counter() - t0
             frames.check_same_scene(r)
             r.render()          # lazily built programs, kept side quads
-            fns = {"plain": pf, "floor": lambda: r.render(shadows=False, lights=one)}
+            fns = {"plain": pf, "depth floor": depth_floor,
+                   "floor": lambda: r.render(shadows=False, lights=one)}
             for n in cfg["lights"]:
                 lights = scene.lights[:n]
                 fns[f"auto/cpu x{n}"] = lambda lights=lights: r.render(lights=lights)
@@ -209,7 +213,7 @@ def overflow_section(ctx, cfg) -> list:
                 return r.render()
             fns = {"plain": pf, "checked": lambda: checked(True),
                    "unchecked": lambda: checked(False)}
-            times = frames.interleaved(fns, rep, warm)
+            times = frames.interleaved(fns, rep, warm, alternate=True)
             bounds = [v[1] for v in r._light_bounds.values() if v is not None]
             out.append({"mesh": name, "triangles": scenes.triangle_count(scene),
                         "count_bound": r.count_bound, "light_bounds": bounds, "times": times,
