@@ -133,6 +133,35 @@ def _one_run(label: str, jobs: Path, out: Path, frames: int) -> dict:
             "cpu_s_per_frame": None if label == "ray_2" else (_cpu() - cpu) / frames}
 
 
+# a fixed single-threaded CPU job (zlib over 1 MB of numbers, no GL, no threads): what the
+# machine itself gives two processes at once
+_PROBE = """
+import time, zlib
+data = bytes(range(256)) * 4096
+t = time.perf_counter()
+for _ in range(%d):
+    zlib.compress(data, 6)
+print(time.perf_counter() - t)
+"""
+PROBE_LOOPS = 300
+
+
+def _probe() -> dict:
+    """The machine's own scaling: the probe job alone, then two copies at once; the throughput
+    of the pair over the one (2.0 on two free, independent cores).  No program of two
+    processes scales better on this machine at that moment."""
+    code = _PROBE % PROBE_LOOPS
+
+    def run(n: int) -> list[float]:
+        procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                                  text=True) for _ in range(n)]
+        return [float(p.communicate()[0]) for p in procs]
+
+    alone = run(1)[0]
+    pair = run(2)
+    return {"alone_s": alone, "pair_s": pair, "scaling": 2 * alone / max(pair)}
+
+
 def _summary(runs: list[dict], frames: int) -> dict:
     seconds = [r["seconds"] for r in runs]
     median = statistics.median(seconds)
@@ -178,8 +207,9 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
         else:
             labels.append("ray_2")
     runs: dict[str, list[dict]] = {label: [] for label in labels}
-    ray_init = []
+    ray_init, probes = [], []
     for r in range(rounds):
+        probes.append(_probe())
         for label in labels[r % len(labels):] + labels[:r % len(labels)]:
             out = tmp / f"{label}-{r}"
             if label == "ray_2":  # up only for its own run: its daemons would load the others
@@ -196,6 +226,12 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
         result[label] = _summary(runs[label], frames)
     if ray_init:
         result["ray_init_s"] = statistics.median(ray_init)
+    scaling = [p["scaling"] for p in probes]
+    result["probe"] = {"scaling": statistics.median(scaling), "min": min(scaling),
+                       "max": max(scaling), "runs": probes}
+    # 2 workers can at best use what the machine gives two processes, at the 1-worker frame's
+    # CPU cost: (probe scaling) / (cores 1 worker already uses) times its frames
+    result["ceiling_workers_2"] = result["probe"]["scaling"] / result["workers_1"]["cores"]
 
     # the same outputs whichever way they were made
     one = tmp / "workers_1-0"
@@ -294,6 +330,12 @@ def main(argv=None) -> int:
     print(f"medians of {r['rounds']} rounds, the variants interleaved; seconds min-max: "
           f"{spread}; 2 workers / 1 worker in each round: median {q['median']:.2f}x "
           f"({q['min']:.2f}-{q['max']:.2f})")
+    pr = r["probe"]
+    print(f"the machine's own 2-process scaling (a single-threaded zlib job alone, then two "
+          f"copies at once, once per round): {pr['scaling']:.2f}x ({pr['min']:.2f}-"
+          f"{pr['max']:.2f}); 1 worker already uses {r['workers_1']['cores']:.2f} cores, so 2 "
+          f"workers can reach at most {pr['scaling']:.2f} / {r['workers_1']['cores']:.2f} = "
+          f"{r['ceiling_workers_2']:.2f}x one (with frames of the same CPU cost; target 1.6x)")
     if "ray_init_s" in r:
         print(f"Ray start-up (not in the Ray row): {r['ray_init_s']:.1f} s; Ray / pool: "
               f"{r['ray_vs_pool']:.2f}")
