@@ -126,9 +126,11 @@ class Renderer:
         self._truth: truth.TruthPass | None = None
         self._outward_convex: np.ndarray | None = None
         self._convex: np.ndarray | None = None
-        # light -> None (used once) or (the slack (M,) it was computed with, the bound)
+        # light -> None (used once) or (the slack (M,) it was computed with, the bound, the
+        # least of that slack in each object (n_objects,))
         self._light_bounds: dict[bytes, tuple | None] = {}
         self._slack: tuple | None = None   # (camera key, `overflow.world_slack`)
+        self._largest: float | None = None  # max |world corner|: the float32 part of the slack
         # back-face culling in the geometry pass for closed convex casters beyond the near
         # plane (`methods.cullable`): 14-22% of a frame here, but OFF by default because it is
         # not exact at float32 depth ties: where a silhouette's back face won the depth test by
@@ -210,10 +212,23 @@ class Renderer:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else lights
         corners = self.geometry.soup_corners_f64
-        key = (camera.eye.tobytes(), float(camera.fov_y))
-        if self._slack is None or self._slack[0] != key:   # a pass over every corner: once
-            self._slack = (key, overflow.world_slack(camera, self.scene.height, corners))
-        needed = self._slack[1]
+        if self._largest is None:
+            self._largest = float(np.abs(corners).max())
+        # the slack this camera needs: per object from the boxes (8 points each), and per
+        # triangle (a pass over every corner) only where that does not settle it
+        by_object = overflow.object_slack(camera, self.scene.height, self.geometry.bounds,
+                                          self._largest)
+
+        def needed() -> np.ndarray:
+            key = (camera.eye.tobytes(), float(camera.fov_y))
+            if self._slack is None or self._slack[0] != key:   # once per camera
+                self._slack = (key, overflow.world_slack(camera, self.scene.height, corners,
+                                                         self._largest))
+            return self._slack[1]
+
+        def covers(kept) -> bool:   # the kept slack is at least what this camera needs
+            return bool((by_object <= kept[2]).all() or (needed() <= kept[0]).all())
+
         doubled = None   # one (M,) array shared by the bounds computed in this frame
         computed = 0
         out = []
@@ -225,15 +240,18 @@ class Renderer:
                     out.append((i, k))
                     continue
                 kept = self._light_bounds[key]
-                if kept is None or not (needed <= kept[0]).all():
+                if kept is None or not covers(kept):
                     if computed == self.BOUNDS_PER_FRAME:   # later: re-check it meanwhile
                         out.append((i, k))
                         continue
                     computed += 1
-                    doubled = 2.0 * needed if doubled is None else doubled
+                    if doubled is None:
+                        doubled = 2.0 * needed()
+                        least = np.full(len(self.geometry.ranges), np.inf)
+                        np.minimum.at(least, self.geometry.object_of, doubled)
                     kept = (doubled, overflow.light_bound(corners, self.geometry.object_of,
                                                           self.convex, hard.homogeneous,
-                                                          doubled))
+                                                          doubled), least)
                     self._light_bounds[key] = kept
                 if kept[1] >= overflow.STENCIL_LIMIT:
                     out.append((i, k))

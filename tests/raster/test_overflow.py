@@ -276,3 +276,54 @@ def test_an_area_light_over_256_sheets_raises_in_every_frame(ctx):
                 r.render()
         assert len(r._light_bounds) == 4
         assert all(kept is not None and kept[1] >= 256 for kept in r._light_bounds.values())
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_slack_of_an_object_covers_each_of_its_triangles(seed):
+    """`object_slack` (from the object's box) >= `world_slack` of every triangle in it, for
+    eyes outside, inside and far from the boxes: the per-frame test it makes may pass only when
+    the exact per-triangle test would."""
+    rng = np.random.default_rng(seed)
+    objects = [mesh(f"m{i}", rng.uniform(-1, 1, (30, 3)) * rng.uniform(0.1, 3.0) +
+                    rng.uniform(-5, 5, 3), rng.integers(0, 30, (40, 3))) for i in range(6)]
+    corners = np.concatenate([o.triangles for o in objects])
+    object_of = np.repeat(np.arange(len(objects)), [len(o.faces) for o in objects])
+    bounds = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)] for o in objects])
+    largest = float(np.abs(corners).max())
+    for eye in [*rng.uniform(-6, 6, (20, 3)), objects[0].vertices.mean(axis=0), [1e4, 0, 0]]:
+        camera = Camera(eye=eye, target=np.asarray(eye) + [0.0, 0.0, -1.0],
+                        fov_y=float(rng.uniform(20, 90)))
+        exact = overflow.world_slack(camera, 240, corners)
+        coarse = overflow.object_slack(camera, 240, bounds, largest)
+        assert (coarse[object_of] >= exact).all()
+        np.testing.assert_array_equal(exact, overflow.world_slack(camera, 240, corners, largest))
+
+
+def test_an_orbiting_camera_keeps_the_light_bound_without_a_pass_over_every_corner(
+        ctx, monkeypatch):
+    """The strip stack seen from cameras on a circle: from the third frame on the kept bound
+    is accepted by the objects' boxes alone (no per-triangle slack, no re-check), and the masks
+    are those of fresh renderers that re-check every frame; a camera three times as far needs
+    the per-triangle slack again."""
+    scene = strip_stack()
+    passes_over_corners, rechecks = [], []
+    slack, find = overflow.world_slack, overflow.find_wrapped
+    monkeypatch.setattr(overflow, "world_slack",
+                        lambda *a, **k: passes_over_corners.append(1) or slack(*a, **k))
+    monkeypatch.setattr(overflow, "find_wrapped",
+                        lambda *a, **k: rechecks.append(1) or find(*a, **k))
+    cameras = [Camera(eye=[3.0 * np.sin(a), 2.0, 3.0 * np.cos(a)], target=[0, 1.2, 0],
+                      fov_y=50) for a in np.linspace(0, 2 * np.pi, 8, endpoint=False)]
+    with Renderer(scene, ctx) as r:
+        assert r.count_bound >= 256
+        r.render(camera=cameras[0])
+        r.render(camera=cameras[0])      # the bound is computed here
+        before = len(passes_over_corners), len(rechecks)
+        lits = [r.render(camera=cam).lit for cam in cameras[1:]]
+        assert (len(passes_over_corners), len(rechecks)) == before
+        far = Camera(eye=3.0 * cameras[1].eye, target=[0, 1.2, 0], fov_y=50)
+        r.render(camera=far)
+        assert len(passes_over_corners) > before[0]
+    for cam, lit in zip(cameras[1:], lits):
+        with Renderer(scene.replace(camera=cam), ctx) as fresh:
+            np.testing.assert_array_equal(fresh.render().lit, lit)
