@@ -295,6 +295,24 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
             f"pixels differing between the two per view: median "
             f"{t['pixels_differing_median']}, max {t['pixels_differing_max']} (mask edges).")
         add("")
+        ph = t.get("phases")
+        if ph:
+            names = list(ph)
+            add("Where a view's time goes (glFinish-bracketed phases of "
+                f"{ph[names[0]]['n']} instrumented views, ms; the volume pass is all "
+                f"{t['lights']} lights'):")
+            add("")
+            add("| " + " | ".join(names) + " |")
+            add("|" + "---:|" * len(names))
+            add("| " + " | ".join(_ms(ph[n]) for n in names) + " |")
+            add("")
+            need = t["raytrace"]["median"] / 3.0
+            vol = ph["volume pass"]["median"]
+            add(f"A 3x speed-up needs a view in {need:.1f} ms; the volume passes alone take "
+                f"{vol:.1f} ms and the geometry pass {ph['geometry pass']['median']:.1f} ms "
+                f"(the meshes are open or have holes, so their side quads cannot be halved "
+                f"and each silhouette loop's quads fill the screen down to the floor).")
+            add("")
 
     if results.get("pyrender"):
         add("## pyrender 0.1.45, the same scenes")

@@ -36,6 +36,7 @@ import resource
 import subprocess
 import sys
 import time
+from collections import defaultdict
 from importlib import metadata
 from pathlib import Path
 
@@ -253,11 +254,22 @@ def turntable_section(ctx, cfg) -> dict:
             ray.append(time.perf_counter() - t0)
             make_current(ctx)
             differ.append(int((lit != res.lit).sum()))
+        # where a view's time goes: glFinish-bracketed phases of instrumented views
+        phase_runs = defaultdict(list)
+        for cam in cameras[::max(1, len(cameras) // 6)]:
+            sink = defaultdict(float)
+            with frames._phase_clock(r, sink):
+                t0 = time.perf_counter()
+                r.render(camera=cam)
+                phase_runs["instrumented view"].append(time.perf_counter() - t0)
+            for phase in frames.PHASES:
+                phase_runs[phase].append(sink[phase])
     out = {"views": len(cameras), "width": w, "height": h,
            "triangles": scenes.triangle_count(scene), "lights": len(scene.lights),
            "ours": frames.stats(ours), "ours_masks": frames.stats(masks_only),
            "raytrace": frames.stats(ray), "ours_total_s": sum(ours), "raytrace_total_s": sum(ray),
-           "pixels_differing_max": max(differ), "pixels_differing_median": sorted(differ)[len(differ) // 2]}
+           "pixels_differing_max": max(differ), "pixels_differing_median": sorted(differ)[len(differ) // 2],
+           "phases": {k: frames.stats(v) for k, v in phase_runs.items()}}
     log(f"turntable: ours {out['ours']['median']:.1f} ms/view, raytrace "
         f"{out['raytrace']['median']:.1f} ms/view")
     return out
