@@ -38,20 +38,16 @@ void main() {
     uint lit = 0u;
     uint faces = 0u;
     for (int i = 0; i < LIGHTS; ++i) {
+        // the visible side faces the light (n . l > 0) and lies inside a spot's cone; every
+        // pixel evaluates it all and selects (shade.frag says why)
         float facing = dot(normal, u_light[i].xyz - u_light[i].w * corner);
         float side = front ? facing : -facing;
-        if (side <= 0.0) {
-            continue;  // the light is behind the visible side (n . l <= 0)
-        }
         vec3 to_light = u_light[i].xyz - u_light[i].w * world;
         vec3 l = normalize(to_light);
-        if (u_spot_cos[i] > -2.0 && dot(-l, u_spot_direction[i]) < u_spot_cos[i]) {
-            continue;  // outside the spot's cone
-        }
-        faces |= 1u << uint(i);
-        if ((unshadowed & (1u << uint(i))) != 0u) {
-            lit |= 1u << uint(i);
-        }
+        bool faced = side > 0.0 &&
+                     !(u_spot_cos[i] > -2.0 && dot(-l, u_spot_direction[i]) < u_spot_cos[i]);
+        faces |= faced ? 1u << uint(i) : 0u;
+        lit |= faced && (unshadowed & (1u << uint(i))) != 0u ? 1u << uint(i) : 0u;
     }
     f_bits = vec2(float(lit), float(faces));
 }
