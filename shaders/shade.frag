@@ -22,7 +22,6 @@ uniform bool u_last_unshadowed; // the last light's: the stencil still holds its
                                 // pass is drawn twice, where it is 0 (true) and where not
 uniform vec3 u_eye;
 uniform vec3 u_ambient;
-uniform vec3 u_background;
 uniform bool u_first_page;      // the first page of lights: ambient and the coverage bit
 #if LIGHTS > 0
 uniform vec4 u_light[LIGHTS];           // (position, 1) or (-direction, 0)
@@ -42,12 +41,10 @@ layout(location = 1) out float f_bits;     // bit 0 covered, bit i + 1 lit by li
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 position = texelFetch(u_position, p, 0);
+    // never 0 (uncovered) here: the pass is depth-tested to the covered pixels
+    // (passes._only_where_covered), which is also why it has no branch for them (a per-pixel
+    // branch costs llvmpipe 15% of the pass, taken or not)
     int surface = int(position.w);
-    if (surface == 0) {  // (not reached: the pass is depth-tested to covered pixels)
-        f_colour = vec4(u_first_page ? u_background : vec3(0.0), 0.0);
-        f_bits = 0.0;
-        return;
-    }
     bool front = surface > 0;
     int t = abs(surface) - 1;
     vec4 normal_object = triangle_data[2 * t];

@@ -198,7 +198,6 @@ def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: Scene
         set_uniform(prog, name, np.array([np.asarray(v, np.float64) for v in values],
                                          np.float32).tobytes())
     set_uniform(prog, "u_ambient", tuple(float(x) for x in scene.ambient))
-    set_uniform(prog, "u_background", tuple(float(x) for x in scene.background))
     progs.geometry.materials.use(0)
     target.position.use(1)
     target.unshadowed.use(2)
