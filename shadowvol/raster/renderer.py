@@ -388,6 +388,7 @@ class Renderer:
         lit = lit_count = None
         if "lit" in outputs:
             lit_count = np.zeros((len(lights), h, w), np.uint16)
+            lit = np.empty((len(lights), h, w), bool)
             # each light's samples in a page are neighbouring bits: one count of the set bits
             # per light and page, not one pass per sample
             masks: dict[tuple[int, int], int] = {}
@@ -395,8 +396,13 @@ class Renderer:
                 page, bit = divmod(k, LIGHTS_PER_PAGE)
                 masks[i, page] = masks.get((i, page), 0) | 1 << (bit + 1)
             for (i, page), mask in masks.items():
-                lit_count[i] += _bit_count(pages[page] & np.uint32(mask))
-            lit = lit_count == samples[:, None, None]
+                if samples[i] == 1:   # a hard light: its one bit is lit, its count lit too
+                    np.not_equal(pages[page] & np.uint32(mask), 0, out=lit[i])
+                    lit_count[i] = lit[i]
+                else:
+                    lit_count[i] += _bit_count(pages[page] & np.uint32(mask))
+            soft = samples > 1
+            lit[soft] = lit_count[soft] == samples[soft, None, None]
         extra = self._ground_truth(outputs, camera, lights, truth_pages, zfail, vols,
                                    method, clip, want_stencil)
         if facing_pass:
