@@ -36,6 +36,14 @@ def further_light(row, n: int, key: str = "auto/cpu") -> float:
     return (_med(row, f"{key} x{n}") - _med(row, f"{key} x1")) / (n - 1)
 
 
+def _mitsuba(results: dict) -> dict | None:
+    """bench_mitsuba.py's results in this run's extras, if it ran."""
+    for row in results.get("extras", []):
+        if row["script"] == "bench_mitsuba.py":
+            return row.get("results")
+    return None
+
+
 def lower_bounds(results: dict) -> list[dict]:
     """Per size: the plain frame, the depth floor (interleaved rounds) and the CPU-silhouette
     volume pass (instrumented frames), medians in ms, and the bound they give (see write)."""
@@ -149,8 +157,23 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
     for what, value, target, ok in headline(results):
         add(f"| {what} | {value:.2f} | {target} | {_met(ok)} |")
     add("")
-    add("Mitsuba 3 (`llvm_ad_rgb`) is an optional peer the issue names; it is not installed "
-        "here and not timed.")
+    mitsuba = _mitsuba(results)
+    if mitsuba is None or "skipped" in mitsuba:
+        add("Mitsuba 3 (`llvm_ad_rgb`) is an optional peer the issue names (`pip install "
+            "'.[bench]'`); it was not installed for this run and is not timed.")
+    else:
+        add("Mask-only frames against Mitsuba 3's `llvm_ad_rgb` masks of the same scenes "
+            "(`bench_mitsuba.py`, below: its own interleaved rounds, warm kernels):")
+        add("")
+        add("| scene | ours, masks only (ms) | Mitsuba 3 (ms) | ours / Mitsuba | target | |")
+        add("|---|---:|---:|---:|---|---|")
+        for sc in mitsuba["scenes"]:
+            if "skipped" in sc:
+                continue
+            ours, peer = sc["ms"]["ours, masks only"], sc["ms"]["Mitsuba 3"]
+            r = ours["median"] / peer["median"]
+            add(f"| {sc['scene']} ({sc['triangles']:,} triangles) | {_ms(ours)} | "
+                f"{_ms(peer)} | {r:.2f} | < 1 | {_met(r < 1)} |")
     add("")
 
     size_wh = "{}x{}".format(*results["config"]["size"])

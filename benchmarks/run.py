@@ -35,6 +35,7 @@ import platform
 import resource
 import subprocess
 import sys
+import tempfile
 import time
 from collections import defaultdict
 from importlib import metadata
@@ -107,7 +108,7 @@ def machine(ctx) -> dict:
         pass
     versions = {}
     for pkg in ("numpy", "moderngl", "glcontext", "embreex", "pyrender", "PyOpenGL", "trimesh",
-                "matplotlib"):
+                "matplotlib", "mitsuba", "numba"):
         try:
             versions[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
@@ -390,6 +391,9 @@ def raytrace_section(cfg) -> dict:
 # command in the same run and reported verbatim: (name, arguments, what it measures).  The
 # ground truth's (bench_groundtruth.py) is measured in the run itself: its own section.
 EXTRAS = (
+    ("bench_mitsuba.py", ["--json", "{json}"],
+     "mask-only frames against Mitsuba 3's llvm_ad_rgb masks (an optional peer: the bench "
+     "extra) and raytrace.shadow_masks, bunny, 100k and 1M (issue: frame cost)"),
     ("bench_soft.py", ["--size", "100k"],
      "soft shadows: a rect light of N = 1, 4, 16, 64 samples against point lights, and the "
      "raster against the ray tracer's lit_count (issue: soft shadows)"),
@@ -409,6 +413,9 @@ def extras_section() -> list[dict]:
     """Run every EXTRAS script once, in this run, one after another; keep what it prints."""
     rows = []
     for script, args, what in EXTRAS:
+        # "{json}": a file the script writes its results to, kept in results.json
+        json_path = Path(tempfile.mkstemp(suffix=".json")[1]) if "{json}" in args else None
+        args = [str(json_path) if a == "{json}" else a for a in args]
         command = [sys.executable, str(ROOT / "benchmarks" / script), *args]
         log(f"extra: {script} {' '.join(args)}")
         start = time.perf_counter()
@@ -419,9 +426,19 @@ def extras_section() -> list[dict]:
                 done.returncode
         except subprocess.TimeoutExpired as exc:
             output, rc = f"timed out after {exc.timeout} s", None
+        data = None
+        if json_path is not None:
+            try:
+                data = json.loads(json_path.read_text() or "null")
+            except (OSError, ValueError):
+                data = None
+            json_path.unlink(missing_ok=True)
+        shown = [a for a in args if a != str(json_path)] if json_path else args
+        if json_path is not None:
+            shown = [a for a in shown if a != "--json"]
         rows.append({"script": script, "command": "python benchmarks/" + " ".join(
-            [script, *args]), "what": what, "seconds": time.perf_counter() - start,
-            "returncode": rc, "output": output.strip()})
+            [script, *shown]), "what": what, "seconds": time.perf_counter() - start,
+            "returncode": rc, "output": output.strip(), "results": data})
     return rows
 
 

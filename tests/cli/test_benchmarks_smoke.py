@@ -43,3 +43,26 @@ def test_quick_benchmark_run_writes_the_report(tmp_path):
     # every headline row has a number and a verdict
     rows = md.split("## Headline ratios and targets")[1].split("##")[0]
     assert rows.count("**met**") + rows.count("not met") >= 2
+
+
+def test_the_mitsuba_peer_runs_or_says_why_not(tmp_path):
+    """bench_mitsuba.py on a tiny scene: with Mitsuba 3 installed (the bench extra) a row of
+    times and pixel counts; without it, the reason, and exit status 0 either way."""
+    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_mitsuba.py"),
+                           "--sizes", "1k", "--width", "64", "--height", "48", "--runs", "1",
+                           "--json", str(tmp_path / "m.json")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    results = json.loads((tmp_path / "m.json").read_text())
+    try:
+        import mitsuba  # noqa: F401
+    except ImportError:
+        assert "Mitsuba 3 is not installed" in results["skipped"]
+        assert done.stdout.startswith("skipped:")
+        return
+    (row,) = results["scenes"]
+    assert row["triangles"] == 962
+    assert set(row["ms"]) == {"ours, masks only", "raytrace.shadow_masks", "Mitsuba 3"}
+    # the same scene, the same pixel-centre rays: the masks agree but for a few edge pixels
+    assert row["differing_mitsuba"] < 0.05 * 64 * 48 and row["differing_ours"] < 0.05 * 64 * 48
+    assert "| occluders-1k |" in done.stdout
