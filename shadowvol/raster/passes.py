@@ -134,9 +134,12 @@ def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, s
 
 
 def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
-                    progs: ScenePrograms, bit: int, restore: bool = True) -> None:
+                    progs: ScenePrograms, bit: int, restore: bool = True,
+                    zero: bool = False) -> None:
     """Add 2^bit to the unshadowed bits where the stencil count is 0; `restore`: bind the
-    target's main framebuffer after (else `target.mark_fbo` stays bound)."""
+    target's main framebuffer after (else `target.mark_fbo` stays bound).  `zero`: also set
+    every other count to 0 (`stencil.where_unshadowed_zeroing`), so that the next light's
+    count needs no clear (`count_volumes(clear=False)`)."""
     target.mark_fbo.depth_mask = False
     target.mark_fbo.color_mask = (True,) * 4
     target.mark_fbo.use()
@@ -145,7 +148,7 @@ def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
     ctx.blend_equation = moderngl.FUNC_ADD
     set_uniform(progs.mark, "u_bit", float(2 ** bit))
     _only_where_covered(ctx)
-    with stencil.where_unshadowed(gl):
+    with (stencil.where_unshadowed_zeroing if zero else stencil.where_unshadowed)(gl):
         progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
@@ -246,7 +249,7 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
                   zfail: np.ndarray, halve: bool = False,
                   clip_planes: np.ndarray | None = None, counting=None,
-                  objects=None, each=None, fbo=None) -> None:
+                  objects=None, each=None, fbo=None, clear: bool = True) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
     `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
 
@@ -273,7 +276,10 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     e.g. `target.mark_fbo`) with colour writes off, and leave it bound, instead of the
     target's main one: a frame that marks after each count then changes no framebuffer
     between lights, and llvmpipe, which flushes its scene at every change, bins the volume and
-    mark passes of all its lights together."""
+    mark passes of all its lights together.
+
+    `clear=False`: the stencil is known to be 0 already (the geometry pass's clear, or a
+    zeroing mark), and is not cleared again."""
     if counting is None:
         def counting(zfail_group: bool, depth_clamp: bool):
             return (stencil.zfail_counting(gl, depth_clamp=depth_clamp) if zfail_group
@@ -282,10 +288,10 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
         fbo.depth_mask = False
         fbo.color_mask = (False,) * 4
         fbo.use()
-        if each is None:
+        if each is None and clear:
             stencil.clear_stencil(gl, fbo.glo)
     else:
-        if each is None:
+        if each is None and clear:
             target.clear_stencil()
         target.use(colour=False, depth=False)
     ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count

@@ -345,6 +345,9 @@ class Renderer:
         zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
         # hard lights go in pages of LIGHTS_PER_PAGE: each one's volume count marks its
         # unshadowed bit, then one shading pass per page (one for any usual frame)
+        # the stencil is all 0: the geometry pass cleared it, and each mark but a page's last
+        # zeroes it again (no clear, each one a flush of llvmpipe's scene, before a count)
+        stencil_zero = True
         for first in range(0, max(len(hard), 1), LIGHTS_PER_PAGE):
             page_lights = [sample for _, sample in hard[first:first + LIGHTS_PER_PAGE]]
             if first:
@@ -364,17 +367,22 @@ class Renderer:
                                          # counted where it is marked: no framebuffer
                                          # change between the page's lights (llvmpipe
                                          # flushes at each)
-                                         fbo=None if want_stencil else target.mark_fbo)
-                else:
+                                         fbo=None if want_stencil else target.mark_fbo,
+                                         clear=not stencil_zero)
+                    stencil_zero = False
+                elif not stencil_zero:
                     target.clear_stencil()
+                    stencil_zero = True
                 if want_stencil:
                     counts.append(target.read_stencil())
                 if bit < len(page_lights) - 1:   # the last light's stencil is read by `shade`
                     passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit,
-                                           restore=False)
+                                           restore=False, zero=True)
+                    stencil_zero = True
                 zfail[hard[first + bit][0]] |= choice
             passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
                          first_page=not first, colour=colour)
+            stencil_zero = stencil_zero and not page_lights
             if need_bits:
                 pages.append(target.read_bits())
             if facing_pass and page_lights:

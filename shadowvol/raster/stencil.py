@@ -35,6 +35,7 @@ GL_DEPTH_STENCIL = 0x84F9
 GL_FRONT = 0x0404
 GL_BACK = 0x0405
 GL_KEEP = 0x1E00
+GL_ZERO = 0
 GL_INCR_WRAP = 0x8507
 GL_DECR_WRAP = 0x8508
 GL_ALWAYS = 0x0207
@@ -387,6 +388,18 @@ def where_unshadowed(gl: RawGL) -> Iterator[None]:
     with _saved_stencil_state(gl):
         _set(gl, func=GL_EQUAL, ref=0, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
              back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def where_unshadowed_zeroing(gl: RawGL) -> Iterator[None]:
+    """`where_unshadowed`, and the count of every pixel the draw covers where it is not 0 set
+    to 0 (the stencil test's fail operation, which GL applies before and whatever the depth
+    test): after a full-screen draw the stencil is 0 everywhere, as a clear would leave it,
+    without the clear (a flush of llvmpipe's scene)."""
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_EQUAL, ref=0, front_ops=(GL_ZERO, GL_KEEP, GL_KEEP),
+             back_ops=(GL_ZERO, GL_KEEP, GL_KEEP), write_mask=0xFF, depth_clamp=False)
         yield
 
 
