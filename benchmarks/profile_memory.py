@@ -80,7 +80,11 @@ class Steps:
             self._reset()
 
     def wrap(self, owner, attr: str, name: str | None = None):
-        original = getattr(owner, attr)
+        """Time `owner.attr` as a step (nothing if it has no such attribute: an older
+        checkout, profiled for comparison)."""
+        original = getattr(owner, attr, None)
+        if original is None:
+            return
         label = name or f"{getattr(owner, '__name__', owner)}.{attr}"
 
         def wrapped(*args, **kwargs):
@@ -154,7 +158,8 @@ def main(argv=None) -> int:
     renderer.create_context = context.create_context
     steps.wrap(geometry.SceneGeometry, "__init__", "SceneGeometry (soup, normals, uploads)")
     steps.wrap(topology.Topology, "build", "Topology.build (one object)")
-    steps.wrap(geometry.SceneGeometry, "_new_buffer", "soup buffer (chunked upload)")
+    steps.wrap(geometry.SceneGeometry, "_soup_buffer", "soup buffer upload")
+    steps.wrap(geometry.SceneGeometry, "_frame_corners", "frame corners (float32, kept)")
     steps.wrap(target.Target, "__init__", "Target (G-buffer)")
     steps.wrap(passes.ScenePrograms, "__init__", "ScenePrograms")
     steps.wrap(volumes.CpuVolumes, "__init__", "CpuVolumes")
