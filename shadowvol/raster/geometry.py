@@ -13,7 +13,10 @@ float32 is used on the GPU because that is what GL rasterizes; normals and corne
 in float64 and rounded once, positions in the float32 frame of the eye (`projection.to_frame`:
 float64 world minus `origin`, the ray tracer's frame too).  When a frame's eye moves, `move_to`
 rewrites the buffers that hold positions (the soup's positions and first corners, the
-per-triangle data) in place; normals, objects and the float64 world corners and topology stay.
+per-triangle data) in place, from the scene's float64 vertices; normals, objects and topology
+stay.  No host copy of what was uploaded is kept (on a software GL, llvmpipe, a buffer is host
+memory already): the buffers are written CHUNK triangles at a time, and `frame_corners`
+recomputes any triangles' float32 corners, bit for bit as uploaded, when they are needed.
 Edge topology (CPU, float64, world space) is computed here too, once per object.
 
 Huge triangles (`guard`): per frame, `set_view` cuts the triangles that reach far outside the
@@ -50,8 +53,16 @@ class ObjectRange:
     count: int
 
 
-# the soup's attributes that hold positions, rewritten when the frame moves
-_FRAMED = ("in_position", "in_corner")
+# the soup's attributes that hold positions, rewritten when the frame moves (and the
+# per-triangle data, which holds the first corner)
+_FRAMED = ("in_position", "in_corner", "triangle_data")
+# bytes per triangle of each soup buffer (three vertices each, but the per-triangle data)
+_BYTES = {"in_position": 36, "in_corner": 36, "in_normal": 36, "in_object": 12,
+          "triangle_data": 32}
+# triangles built at a time when a soup buffer is written: no array of the whole soup but the
+# per-triangle normals and objects is made on the host (on a software GL a buffer is host
+# memory too, so a kept copy would be a second one)
+CHUNK = 1 << 16
 
 
 class SceneGeometry:
@@ -60,6 +71,13 @@ class SceneGeometry:
     bounds : (n_objects, 2, 3) float64 axis-aligned box (min, max) of each object (world)
     extent : float, the scene's length scale (`Scene.extent`)
     origin : (3,) float64, the world point the GPU's positions are measured from (`move_to`)
+    face_normals32 : (M, 3) float32, every triangle's world unit normal (computed in float64,
+        rounded once), for the lighting and the ground truth's normal
+    triangle_objects : (M,) int32, every triangle's object
+
+    The positions are not kept on the host: every buffer that holds them is written from the
+    scene's own float64 vertices and faces, CHUNK triangles at a time (`frame_corners` gives
+    any of them as uploaded).
     """
 
     def __init__(self, ctx: moderngl.Context, scene: Scene):
@@ -76,14 +94,10 @@ class SceneGeometry:
         self.guard = None   # (planes (5, 4), near) of the last `set_view`
         self.views = 0      # how many times `set_view` was called (the view's version)
         self.far_objects = np.zeros(0, np.int64)   # objects that may hold huge triangles
-        tris = [o.triangles for o in scene.objects]                       # (m, 3, 3) each
-        corners = np.concatenate(tris)                                    # (M, 3, 3) float64
-        self._corners = corners
-        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        length = np.linalg.norm(normals, axis=1, keepdims=True)
-        normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
-        counts = [len(t) for t in tris]
-        firsts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        # the scene's own arrays (no copies): (n, 3) float64 world vertices, (m, 3) faces
+        self._objects = tuple((o.vertices, o.faces) for o in scene.objects)
+        counts = [len(f) for _, f in self._objects]
+        firsts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
         self.ranges = tuple(ObjectRange(i, int(f), int(c))
                             for i, (f, c) in enumerate(zip(firsts, counts)))
         self.triangle_count = int(sum(counts))
@@ -94,23 +108,23 @@ class SceneGeometry:
         self.bounds = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)]
                                 for o in scene.objects])
         self.extent = scene.extent  # a property of the scene that walks every vertex: once
-        self._frame_corners()
+        self._reach: dict[int, np.ndarray] = {}     # per far object, its triangles' reach
+        self._far_corners: dict[int, np.ndarray] = {}   # and its frame corners (`set_view`)
+        self._corners64: np.ndarray | None = None   # `soup_corners_f64`, made on first use
         self._buffers = []
-        self._normals = normals
-        # per triangle: its world-space unit normal (float64) and its object, for the ground
-        # truth's normal and object id (`truth.surface_outputs`)
-        self.face_normals = normals
-        self.face_normals32 = normals.astype(np.float32)
-        self.triangle_objects = np.repeat(np.arange(len(tris), dtype=np.int64), counts)
+        # per triangle: its world-space unit normal, in float64 then rounded once, and its
+        # object: the lighting's (the per-triangle data, `in_normal`) and the ground truth's
+        # (`truth.surface_outputs`)
+        self.face_normals32 = np.empty((self.triangle_count, 3), np.float32)
+        for rng, (v, f) in zip(self.ranges, self._objects):
+            for a in range(0, rng.count, CHUNK):
+                self.face_normals32[rng.first + a:rng.first + a + len(f[a:a + CHUNK])] = \
+                    _unit_normals(np.take(v, f[a:a + CHUNK], axis=0))
+        self.triangle_objects = np.repeat(np.arange(len(counts), dtype=np.int32), counts)
         self._soup: dict[str, moderngl.Buffer] = {}
         # per triangle, std430 vec4 pairs: (unit normal, object index), (first corner, 0);
         # float32 as the soup's flat attributes were, so the lighting pass sees the same numbers
-        per_triangle = np.zeros((self.triangle_count, 2, 4), np.float32)
-        per_triangle[:, 0, :3] = normals
-        per_triangle[:, 0, 3] = np.repeat(np.arange(len(tris)), counts)
-        per_triangle[:, 1, :3] = to_frame(corners[:, 0], self.origin)
-        self._per_triangle = per_triangle
-        self.triangle_data = self._buffer(per_triangle)
+        self.triangle_data = self._new_buffer("triangle_data")
         materials = np.zeros((len(scene.objects), 3, 4), np.float32)
         for i, o in enumerate(scene.objects):
             m = o.material
@@ -119,61 +133,99 @@ class SceneGeometry:
         self.materials = ctx.texture((3, len(scene.objects)), 4, materials.tobytes(), dtype="f4")
         self.materials.filter = (moderngl.NEAREST, moderngl.NEAREST)
 
-    def _buffer(self, data: np.ndarray) -> moderngl.Buffer:
-        buf = self.ctx.buffer(np.ascontiguousarray(data).tobytes())
+    def _new_buffer(self, name: str) -> moderngl.Buffer:
+        """A buffer of the soup's data `name` (and the pieces' after it), written in chunks."""
+        buf = self.ctx.buffer(reserve=max(self.triangle_count * _BYTES[name], 4))
         self._buffers.append(buf)
+        self._write_soup([(name, buf)])
+        if len(self.piece_of):
+            self._write_pieces(buf, name)
         return buf
 
     def _soup_buffer(self, name: str) -> moderngl.Buffer:
         """The soup's attribute `name`, uploaded on first use."""
         if name not in self._soup:
-            data = self._soup_base(name)
-            self._soup[name] = buf = self._buffer(data)
-            if len(self.piece_of):
-                self._write_pieces(buf, data, name)
+            self._soup[name] = self._new_buffer(name)
         return self._soup[name]
 
-    def _frame_corners(self) -> None:
-        """The float32 corners in the current frame (the far objects' reach is recomputed on
-        use)."""
-        self.frame_corners = to_frame(self._corners, self.origin)          # (M, 3, 3) float32
-        self._reach: dict[int, np.ndarray] = {}   # per far object, its triangles' reach
+    def _write_soup(self, targets: list[tuple[str, moderngl.Buffer]]) -> None:
+        """Write the soup's data `name` (a key of _BYTES) into `buf` for each (name, buf) of
+        `targets`, in the current frame, CHUNK triangles at a time (each chunk's corners
+        framed once for all of them)."""
+        framed = any(name in _FRAMED for name, _ in targets)
+        for rng, (v, f) in zip(self.ranges, self._objects):
+            # the vertices framed, then gathered: the same float32 numbers as framing every
+            # corner (an elementwise subtraction and rounding), at a fraction of the work
+            vertices = to_frame(v, self.origin) if framed else None
+            for a in range(0, rng.count, CHUNK):
+                faces = f[a:a + CHUNK]
+                t = slice(rng.first + a, rng.first + a + len(faces))
+                corners = np.take(vertices, faces, axis=0) if framed else None
+                for name, buf in targets:
+                    buf.write(self._data(name, t, corners), offset=t.start * _BYTES[name])
 
-    def _framed(self, name: str) -> np.ndarray:
-        """The soup attribute `name` (one of _FRAMED) in the current frame, float32."""
+    def _data(self, name: str, t, corners: np.ndarray | None) -> np.ndarray:
+        """The data `name` of triangles `t` (a slice or (k,) soup indices) whose frame corners
+        are `corners` (k, 3, 3) float32 (None unless `name` is in _FRAMED)."""
         if name == "in_position":
-            return self.frame_corners.reshape(-1, 3)
-        return np.repeat(self.frame_corners[:, 0], 3, axis=0)
+            return corners.reshape(-1, 3)
+        if name == "in_corner":
+            return np.repeat(corners[:, 0], 3, axis=0)
+        if name == "in_normal":
+            return np.repeat(self.face_normals32[t], 3, axis=0)
+        if name == "in_object":
+            return np.repeat(self.triangle_objects[t], 3)
+        out = np.zeros((len(corners), 2, 4), np.float32)         # triangle_data
+        out[:, 0, :3] = self.face_normals32[t]
+        out[:, 0, 3] = self.triangle_objects[t]
+        out[:, 1, :3] = corners[:, 0]
+        return out
+
+    def frame_corners(self, triangles: np.ndarray | None = None) -> np.ndarray:
+        """(k, 3, 3) float32: the corners of `triangles` ((k,) soup indices; default every
+        triangle, (M, 3, 3)) in the current frame, exactly as uploaded.  Computed from the
+        scene's float64 vertices on each call, not kept."""
+        if triangles is None:
+            out = np.empty((self.triangle_count, 3, 3), np.float32)
+            for rng, (v, f) in zip(self.ranges, self._objects):
+                np.take(to_frame(v, self.origin), f, axis=0,
+                        out=out[rng.first:rng.first + rng.count])
+            return out
+        triangles = np.asarray(triangles, np.int64)
+        out = np.empty((len(triangles), 3, 3), np.float32)
+        objects = self.triangle_objects[triangles]
+        for i in np.unique(objects):
+            mine = objects == i
+            v, f = self._objects[i]
+            faces = f[triangles[mine] - self.ranges[i].first]
+            out[mine] = to_frame(np.take(v, faces, axis=0), self.origin)
+        return out
+
+    def _object_frame_corners(self, i: int) -> np.ndarray:
+        """(count, 3, 3) float32: object i's frame corners, kept for a far object until the
+        frame moves (`set_view` tests them every frame)."""
+        if i not in self._far_corners:
+            v, f = self._objects[i]
+            self._far_corners[i] = np.take(to_frame(v, self.origin), f, axis=0)
+        return self._far_corners[i]
 
     def _piece_data(self, name: str) -> np.ndarray:
-        """The attribute `name` of the pieces (three vertices each): their own positions, the
-        rest their triangle's."""
-        t = self.piece_of
+        """The data `name` of the pieces (three vertices each; one per-triangle record): their
+        own positions, the rest their triangle's."""
         if name == "in_position":
             return self.pieces.reshape(-1, 3)
-        if name == "in_corner":
-            return np.repeat(self.frame_corners[t, 0], 3, axis=0)
-        if name == "in_normal":
-            return np.repeat(self._normals[t], 3, axis=0).astype(np.float32)
-        if name == "triangle_data":
-            return self._per_triangle[t]
-        return np.repeat(self.triangle_objects[t].astype(np.int32), 3)
+        t = self.piece_of
+        return self._data(name, t, self.frame_corners(t) if name in _FRAMED else None)
 
-    def _write_pieces(self, buf: moderngl.Buffer, base: np.ndarray, name: str) -> None:
-        """Put the pieces' `name` after the soup's `base` data in `buf`, growing it if needed."""
+    def _write_pieces(self, buf: moderngl.Buffer, name: str) -> None:
+        """Put the pieces' `name` after the soup's data in `buf`, growing it if needed."""
         tail = np.ascontiguousarray(self._piece_data(name))
-        if base.nbytes + tail.nbytes > buf.size:
-            buf.orphan(base.nbytes + tail.nbytes)
-            buf.write(np.ascontiguousarray(base).tobytes())
+        base = self.triangle_count * _BYTES[name]
+        if base + tail.nbytes > buf.size:
+            buf.orphan(base + tail.nbytes)
+            self._write_soup([(name, buf)])
         if tail.nbytes:
-            buf.write(tail.tobytes(), offset=base.nbytes)
-
-    def _soup_base(self, name: str) -> np.ndarray:
-        if name in _FRAMED:
-            return self._framed(name)
-        if name == "in_normal":
-            return np.repeat(self._normals, 3, axis=0).astype(np.float32)
-        return np.repeat(self.triangle_objects.astype(np.int32), 3)
+            buf.write(tail, offset=base)
 
     def set_view(self, view_proj: np.ndarray, near: float) -> None:
         """Cut the triangles that reach far outside this view to its guard band (`guard`),
@@ -192,14 +244,14 @@ class SceneGeometry:
         found = [np.zeros(0, np.int64)]
         for i in self.far_objects:
             rng = self.ranges[i]
-            corners = self.frame_corners[rng.first:rng.first + rng.count]
+            corners = self._object_frame_corners(int(i))
             if i not in self._reach:
                 self._reach[i] = guard.reach(corners)
             found.append(guard.huge(corners, self._reach[i], planes, near) + rng.first)
         holes = np.concatenate(found)
         if len(holes) == 0 and len(self.holes) == 0:
             return
-        cut = [guard.cut(self.frame_corners[t].astype(np.float64), planes) for t in holes]
+        cut = [guard.cut(c.astype(np.float64), planes) for c in self.frame_corners(holes)]
         self.holes = holes
         self.piece_of = np.repeat(holes, [len(c) for c in cut]).astype(np.int64)
         self.pieces = (np.concatenate(cut) if cut else np.zeros((0, 3, 3))).astype(np.float32)
@@ -208,8 +260,8 @@ class SceneGeometry:
                               f"pieces of huge ones: at most {MAX_TRIANGLES - 1:,}")
         self.cuts += 1
         for name, buf in self._soup.items():
-            self._write_pieces(buf, self._soup_base(name), name)
-        self._write_pieces(self.triangle_data, self._per_triangle, "triangle_data")
+            self._write_pieces(buf, name)
+        self._write_pieces(self.triangle_data, "triangle_data")
 
     def spans(self, objects, pieces: bool = True) -> list[tuple[int, int]]:
         """(first, count) triangle spans of the draws of `objects` (ascending indices): their
@@ -265,12 +317,9 @@ class SceneGeometry:
             return False
         self.origin = origin.copy()
         self.moves += 1
-        self._frame_corners()
-        for name, buf in self._soup.items():
-            if name in _FRAMED:
-                buf.write(np.ascontiguousarray(self._framed(name)).tobytes())
-        self._per_triangle[:, 1, :3] = to_frame(self._corners[:, 0], origin)
-        self.triangle_data.write(self._per_triangle.tobytes())
+        self._reach, self._far_corners = {}, {}
+        self._write_soup([(name, buf) for name, buf in self._soup.items() if name in _FRAMED]
+                         + [("triangle_data", self.triangle_data)])
         return True
 
     @property
@@ -280,8 +329,11 @@ class SceneGeometry:
 
     @property
     def soup_corners_f64(self) -> np.ndarray:
-        """(M, 3, 3) float64: every triangle's world corners, objects one after another."""
-        return self._corners
+        """(M, 3, 3) float64: every triangle's world corners, objects one after another (the
+        stencil-overflow bounds' input: made on first use and kept)."""
+        if self._corners64 is None:
+            self._corners64 = np.concatenate([np.take(v, f, axis=0) for v, f in self._objects])
+        return self._corners64
 
     @property
     def object_of(self) -> np.ndarray:
@@ -290,8 +342,8 @@ class SceneGeometry:
 
     def soup_corners(self) -> np.ndarray:
         """(M, 3, 3) float32: the corners of every soup triangle in the current frame, exactly
-        as uploaded."""
-        return self.frame_corners
+        as uploaded (computed, not kept: `frame_corners`)."""
+        return self.frame_corners()
 
     def soup_bindings(self, program: moderngl.Program) -> list[tuple]:
         """The (buffer, format, name) triples of the soup's attributes that `program` uses."""
@@ -304,3 +356,11 @@ class SceneGeometry:
             buf.release()
         self._buffers.clear()
         self.materials.release()
+
+
+def _unit_normals(corners: np.ndarray) -> np.ndarray:
+    """(k, 3, 3) float64 corners -> (k, 3) float64 unit normals (b - a) x (c - a); 0 for a
+    degenerate triangle."""
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    return np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)

@@ -22,18 +22,25 @@ from functools import cached_property
 
 import numpy as np
 
+INDEX = np.int32         # the dtype of every index a topology holds
+INDEX_LIMIT = 2 ** 31
+
 
 @dataclass(frozen=True, eq=False)
 class Topology:
     """
     vertices   : (k, 3) float64 welded positions
-    remap      : (n,) int64, original vertex -> welded vertex
-    faces      : (m, 3) int64, triangles on welded vertices, original winding
-    edges      : (e, 2) int64, a < b, sorted
-    inc_edge   : (i,) int64, the edge of each incidence, sorted ascending
-    inc_face   : (i,) int64, its triangle
-    inc_opposite : (i,) int64, the triangle's third (welded) vertex
+    remap      : (n,) int32, original vertex -> welded vertex
+    faces      : (m, 3) int32, triangles on welded vertices, original winding
+    edges      : (e, 2) int32, a < b, sorted
+    inc_edge   : (i,) int32, the edge of each incidence, sorted ascending
+    inc_face   : (i,) int32, its triangle
+    inc_opposite : (i,) int32, the triangle's third (welded) vertex
     inc_parity : (i,) int8, +1 if the triangle runs a -> b, -1 if b -> a
+
+    Indices are int32 (a mesh has fewer than 2^31 vertices and triangles: the rasterizer
+    draws at most `geometry.MAX_TRIANGLES`): half the memory of int64, and numpy indexes
+    with them as fast.
     """
 
     vertices: np.ndarray
@@ -62,22 +69,26 @@ class Topology:
     def build(cls, vertices: np.ndarray, faces: np.ndarray) -> "Topology":
         """From an (n, 3) float64 vertex array and (m, 3) int64 faces."""
         welded, remap = np.unique(np.asarray(vertices, np.float64), axis=0, return_inverse=True)
-        remap = remap.reshape(-1).astype(np.int64)
+        if len(welded) >= INDEX_LIMIT or len(faces) * 3 >= INDEX_LIMIT:
+            raise ValueError(f"{len(welded):,} vertices, {len(faces):,} triangles: a topology "
+                             f"indexes them with int32, fewer than {INDEX_LIMIT:,}")
+        remap = remap.reshape(-1).astype(INDEX)
         f = remap[np.asarray(faces, np.int64)]
         m = len(f)
         # the three directed edges of each triangle as wound, and the opposite corner
         start = f[:, [0, 1, 2]].reshape(-1)
         end = f[:, [1, 2, 0]].reshape(-1)
         opposite = f[:, [2, 0, 1]].reshape(-1)
-        face = np.repeat(np.arange(m, dtype=np.int64), 3)
+        face = np.repeat(np.arange(m, dtype=INDEX), 3)
         keep = start != end
         start, end, opposite, face = start[keep], end[keep], opposite[keep], face[keep]
         parity = np.where(start < end, 1, -1).astype(np.int8)
         a, b = np.minimum(start, end), np.maximum(start, end)
-        key = a * len(welded) + b
+        key = a.astype(np.int64) * len(welded) + b   # int64: up to k^2
         edge_keys, inc_edge = np.unique(key, return_inverse=True)
-        edges = np.stack([edge_keys // len(welded), edge_keys % len(welded)], axis=1)
+        edges = np.stack([edge_keys // len(welded), edge_keys % len(welded)],
+                         axis=1).astype(INDEX)
         order = np.argsort(inc_edge, kind="stable")
         return cls(vertices=welded, remap=remap, faces=f, edges=edges,
-                   inc_edge=inc_edge.reshape(-1)[order].astype(np.int64), inc_face=face[order],
+                   inc_edge=inc_edge.reshape(-1)[order].astype(INDEX), inc_face=face[order],
                    inc_opposite=opposite[order], inc_parity=parity[order])

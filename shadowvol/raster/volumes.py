@@ -459,14 +459,15 @@ def far_cap_pieces(geometry: SceneGeometry, light4: np.ndarray, signs: list[np.n
         return out
     planes = geometry.guard[0]
     objects = geometry.triangle_objects[geometry.holes]
+    corners = geometry.frame_corners(geometry.holes)
     for i in np.unique(objects):
         mine = []
-        for t in geometry.holes[objects == i]:
+        for t, frame in zip(geometry.holes[objects == i], corners[objects == i]):
             sign = signs[i][t - geometry.ranges[i].first]
             if sign == 0:
                 continue
             cap = np.zeros((3, 4))
-            cap[:, :3] = geometry.frame_corners[t].astype(np.float64) * light[3] - light[:3]
+            cap[:, :3] = frame.astype(np.float64) * light[3] - light[:3]
             tris = guard.cut(cap, planes)
             if len(tris):   # a far cap wholly outside the guard pyramid leaves none
                 mine.append(tris[:, ::-1] if sign == 1 else tris)

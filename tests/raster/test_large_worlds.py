@@ -171,7 +171,7 @@ def test_the_guard_band_cuts_only_huge_triangles(ctx):
                 >= -1e-6 * np.abs(corners).max()).all()
         # a horizontal ground: the pieces' y is the triangle's float32 y, exactly
         np.testing.assert_array_equal(geo.pieces[..., 1],
-                                      geo.frame_corners[geo.piece_of][..., 1])
+                                      geo.frame_corners(geo.piece_of)[..., 1])
     # the scenes of scenes/ and the kerbs have nothing to cut
     for path in SCENE_FILES:
         with Renderer(load_scene(path).replace(width=32, height=24), ctx) as r:
