@@ -46,6 +46,7 @@ seen directly is exact), as do the per-pixel sums and squares.
 from __future__ import annotations
 
 import math
+import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -77,6 +78,9 @@ LEAVING_STANDOFF = 10.0  # `radiance_leaving` starts its rays this many surface 
 # docstring) and the smallest value a float32 division below is kept from dividing by.
 STATE = np.float32
 STATE_TINY = 1e-30
+# the environment variable that picks the per-bounce shading (`shading`): auto, numpy, numba
+SHADING_ENV = "SHADOWVOL_PATHTRACE"
+SHADINGS = ("numpy", "numba")
 
 
 def _take(a: np.ndarray, index: np.ndarray) -> np.ndarray:
@@ -241,6 +245,7 @@ class PathImage:
     image    : (H, W, 3) float64 linear RGB, the mean of `spp` samples per pixel
     variance : (H, W, 3) float64, the variance of that mean (sample variance / spp)
     rays     : total rays traced (camera, bounce and shadow rays);  seconds : wall time
+    shading  : "numpy" or "numba" (`shading`), the per-bounce shading that ran
     """
 
     image: np.ndarray
@@ -248,6 +253,7 @@ class PathImage:
     spp: int
     rays: int
     seconds: float
+    shading: str = "numpy"
 
 
 def _scatter_add(L: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
@@ -327,12 +333,13 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, start, mis: bo
 
 
 def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
-                max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE
-                ) -> tuple[np.ndarray, int]:
+                max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE,
+                shading_name: str | None = None) -> tuple[np.ndarray, int]:
     """Radiance (n, 3) float64 arriving along rays o, d (n, 3) float64 (unit d), one path each,
     and the number of rays traced.  rr_start: first bounce of Russian roulette (a number above
-    max_depth turns it off)."""
-    L, rays = trace_rows(world, np.asarray(o).T, np.asarray(d).T, rng, max_depth, rr_start)
+    max_depth turns it off); shading_name: as for `trace_rows`."""
+    L, rays = trace_rows(world, np.asarray(o).T, np.asarray(d).T, rng, max_depth, rr_start,
+                         shading_name)
     return np.ascontiguousarray(L.T, np.float64), rays
 
 
@@ -352,10 +359,52 @@ def _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, ne
         new_o[:, g] = _take(p, g) + np.where(tir, 1.0, -1.0) * world.offset * ng
 
 
+def _kernels():
+    """`raytrace.pathkernels` (numba's compiled shading), or None where numba is missing."""
+    try:
+        from . import pathkernels
+    except ImportError:  # numba absent, or too old or new for this numpy
+        return None
+    return pathkernels
+
+
+def shading(choice: str | None = None) -> str:
+    """Which per-bounce shading the path tracer runs: "numba" (`raytrace.pathkernels`, the
+    `fast` extra) or "numpy" (the reference below).  choice None: $SHADOWVOL_PATHTRACE, and
+    where that is unset or "auto", numba when it imports, else numpy.  Both give the same
+    samples (`raytrace.pathkernels`)."""
+    if choice is None:
+        choice = os.environ.get(SHADING_ENV, "auto").strip().lower() or "auto"
+        where = f"${SHADING_ENV}"
+    else:
+        where = "shading"
+    if choice not in SHADINGS + ("auto",):
+        raise ValueError(f"{where}: unknown path-tracer shading {choice!r} (one of: auto, "
+                         f"{', '.join(SHADINGS)})")
+    if choice == "numpy":
+        return "numpy"
+    if _kernels() is not None:
+        return "numba"
+    if choice == "numba":
+        raise ValueError(f"{where}: numba shading asked for, but numba does not import "
+                         "(pip install 'shadowvol[fast]')")
+    return "numpy"
+
+
 def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
-               max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE
-               ) -> tuple[np.ndarray, int]:
-    """`trace_paths` with rays and radiance as rows: o, d (3, n) float -> L (3, n) float64."""
+               max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE,
+               shading_name: str | None = None) -> tuple[np.ndarray, int]:
+    """`trace_paths` with rays and radiance as rows: o, d (3, n) float -> L (3, n) float64.
+    shading_name: "numpy", "numba" or None (`shading()` decides)."""
+    if shading(shading_name) == "numba":
+        return _kernels().trace_rows(world, o, d, rng, max_depth, rr_start)
+    return _trace_rows_numpy(world, o, d, rng, max_depth, rr_start)
+
+
+def _trace_rows_numpy(world: PathWorld, o: np.ndarray, d: np.ndarray,
+                      rng: np.random.Generator, max_depth: int, rr_start: int
+                      ) -> tuple[np.ndarray, int]:
+    """The numpy reference of `trace_rows`: every stage a few whole-array passes."""
     o = np.ascontiguousarray(o, STATE)
     d = np.ascontiguousarray(d, STATE)
     n_paths = o.shape[1]
@@ -486,17 +535,20 @@ def camera_rays(camera, width: int, height: int, rows: np.ndarray, cols: np.ndar
 
 def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_MAX_DEPTH,
            rr_start: int = RR_START_BOUNCE, jitter: bool = True, backend: str = "embree",
-           progress: bool | None = None) -> PathImage:
+           progress: bool | None = None, shading_name: str | None = None) -> PathImage:
     """Path-trace `scene` with `spp` paths per pixel; see the module docstring.
 
     jitter : sample each pixel at random points (True) or always at its centre (False: then the
              image converges to the pixel-centre image that the masks and Whitted sample).
+    shading_name : "numpy", "numba" or None ($SHADOWVOL_PATHTRACE, else numba if installed).
     The result depends on (scene, spp, seed, max_depth, rr_start, jitter) only: tiles of whole
-    rows, one random stream each, summed in tile order whatever the threads.
+    rows, one random stream each, summed in tile order whatever the threads (and the same
+    samples from either shading: `raytrace.pathkernels`).
     """
     for name, value, low in (("spp", spp, 1), ("max_depth", max_depth, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
             raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
+    used = shading(shading_name)
     start = time.perf_counter()
     H, W = scene.height, scene.width
     per_row = W * spp
@@ -518,7 +570,7 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
         row = np.tile(np.repeat(np.arange(rows.start, rows.stop), W), spp)
         col = np.tile(np.arange(W), (rows.stop - rows.start) * spp)
         o, d = camera_rays(scene.camera, W, H, row, col, rng if jitter else None)
-        L, rays = trace_rows(world, o, d, rng, max_depth, rr_start)
+        L, rays = trace_rows(world, o, d, rng, max_depth, rr_start, used)
         L = L.reshape(3, spp, last - first)
         return slice(first, last), L.sum(axis=1), (L * L).sum(axis=1), rays
 
@@ -537,4 +589,4 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
     mean = total.T / spp
     var = np.maximum(squares.T / spp - mean ** 2, 0.0) / max(spp - 1, 1)
     return PathImage(mean.reshape(H, W, 3), var.reshape(H, W, 3), spp, counted[0],
-                     time.perf_counter() - start)
+                     time.perf_counter() - start, used)

@@ -1,0 +1,549 @@
+"""The path tracer's per-bounce shading compiled with numba (the optional `fast` extra).
+
+`trace_rows` here is `raytrace.pathtrace.trace_rows` with the numpy stages between the Embree
+calls replaced by a few `@njit` loops over the rays of a bounce: the hit (compaction to the hits,
+surface gather, hit point, emission seen and its MIS share), the emitter sample of next-event
+estimation (its shadow rays, then its shading), each delta light's shadow rays and shading, and
+the bounce (BSDF sample, delta bounces, Russian roulette, compaction to the survivors).  Embree
+still traces each bounce's closest hits and each group of shadow rays as one batch, through
+`PathWorld.closest_rows` / `occluded_rows`.
+
+Same estimator, same random numbers, same arithmetic.  The random numbers are drawn in numpy,
+from the same generator, in the same order and dtypes as the numpy path, and handed to the
+kernels; so are the transcendental functions of them (the azimuths' cos and sin, the glossy
+lobe's u^(1/(s+1))), because numpy's SIMD versions and the C library's, which compiled code
+calls, may differ in the last bit.  The kernels do each float32 (`STATE`) / float64 operation
+of the numpy path in its order and precision (float32 constants, no `fastmath`, so LLVM neither
+reassociates nor contracts to FMA).  The image is then bit-identical to the numpy path's where
+no power is taken (Lambertian scenes, such as the Cornell box and the furnace); the glossy
+lobe's cos^s is the one power computed in a kernel (libm's powf where numpy may use SVML), so a
+glossy scene agrees to float32 rounding, and where that rounding flips a Russian-roulette or
+lobe choice a path differs (tests/raytrace/test_pathkernels.py states the budget).
+
+Kernels release the GIL (`nogil`), so `pathtrace.render`'s tiles run on its thread pool;
+`cache=True` keeps the compiled code next to this file, or in numba's user-wide cache directory
+(`NUMBA_CACHE_DIR`) where that is not writable; with neither, they compile on every run.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .pathtrace import RR_MAX_SURVIVAL, STATE, STATE_TINY
+
+# rows of the per-triangle table (`tables`)
+NORMAL, PLANE_D, KD, KS, SHININESS, P_DIFFUSE, GLOSSY, PHONG, REFL, TRANSP, IOR, EMITS, \
+    LIGHT_PDF = 0, 3, 4, 7, 10, 11, 12, 13, 14, 15, 16, 17, 18
+# rows of the per-emitter table
+E_A, E_AB, E_AC, E_NORMAL, E_RADIANCE, E_PDF = 0, 3, 6, 9, 12, 15
+# delta light kinds
+DIRECTIONAL, POINT, SPOT, AREA = 0, 1, 2, 3
+
+F0, F1, F2 = np.float32(0.0), np.float32(1.0), np.float32(2.0)
+INV_PI = np.float32(1.0 / math.pi)
+INV_2PI_DENOM = np.float32(2.0 * math.pi)  # divided by, as numpy divides by the float32 of it
+TINY = np.float32(STATE_TINY)
+RR_MAX = np.float32(RR_MAX_SURVIVAL)
+
+
+def _jit(fn):
+    """njit, releasing the GIL, cached on disk where numba finds a writable cache directory
+    (numba refuses `cache=True` with a RuntimeError where it finds none)."""
+    try:
+        return numba.njit(cache=True, nogil=True)(fn)
+    except RuntimeError:
+        return numba.njit(nogil=True)(fn)
+
+
+def _f32(rows) -> np.ndarray:
+    """Rows (n,) or (m, n) stacked into one contiguous (P, n) float32 table, each converted as
+    `pathtrace._pack` converts them (float64 first), so the values are the numpy path's."""
+    return np.ascontiguousarray(np.concatenate(
+        [np.atleast_2d(np.asarray(v, np.float64)).astype(STATE) for v in rows]))
+
+
+def tables(world) -> tuple[np.ndarray, np.ndarray]:
+    """The kernels' tables of a `pathtrace.PathWorld`: per triangle (19, M) float32, every row
+    (NORMAL ... LIGHT_PDF) whatever the scene needs, and per emitter (16, E) float32."""
+    cached = getattr(world, "_kernel_tables", None)
+    if cached is not None:
+        return cached
+    ob = world.tri_object
+    tri = _f32([world.tracer.normals.T, world.tracer.plane_d, world.kd[ob].T, world.ks[ob].T,
+                world.shininess[ob], world.p_diffuse[ob], world.ks[ob].max(axis=1) > 0.0,
+                1.0 - world.refl[ob] - world.transp[ob], world.refl[ob], world.transp[ob],
+                world.ior[ob], world.tri_emits, world.light_pdf_area])
+    e = world.emitters
+    c = world.corners[e]
+    em = _f32([c[:, 0].T, (c[:, 1] - c[:, 0]).T, (c[:, 2] - c[:, 0]).T,
+               world.tracer.normals[e].T, world.emission[world.tri_object][e].T,
+               world.emitter_prob / world.area[e] if len(e) else np.zeros(0)]) \
+        if len(e) else np.zeros((16, 0), STATE)
+    world._kernel_tables = (tri, em)
+    return world._kernel_tables
+
+
+# ---- the BRDF, per ray (`raytrace.brdf`'s `_rows` kernels, operation for operation) ----------
+
+@_jit
+def _cos_alpha(tab, t, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2):
+    """max(r . wi, 0), r = wo mirrored about n (`brdf.mirror_rows`)."""
+    two_dn = F2 * (n0 * wo0 + n1 * wo1 + n2 * wo2)
+    c = (two_dn * n0 - wo0) * wi0 + (two_dn * n1 - wo1) * wi1 + (two_dn * n2 - wo2) * wi2
+    return c if c > F0 else F0
+
+
+@_jit
+def _phong_f(tab, t, glossy_scene, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2, cos_t):
+    """`brdf.phong_eval_rows` for one ray: f (3 float32)."""
+    f0, f1, f2 = tab[KD, t] * INV_PI, tab[KD + 1, t] * INV_PI, tab[KD + 2, t] * INV_PI
+    if glossy_scene and tab[GLOSSY, t] > F0:
+        ss = tab[SHININESS, t]
+        c = (ss + F2) / INV_2PI_DENOM * \
+            _cos_alpha(tab, t, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2) ** ss
+        f0 = f0 + tab[KS, t] * c
+        f1 = f1 + tab[KS + 1, t] * c
+        f2 = f2 + tab[KS + 2, t] * c
+    if not cos_t > F0:
+        return F0 * f0, F0 * f1, F0 * f2
+    return f0, f1, f2
+
+
+@_jit
+def _phong_pdf(tab, t, glossy_scene, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2, cos_t):
+    """`brdf.phong_pdf_rows` for one ray (float32)."""
+    p_d = tab[P_DIFFUSE, t]
+    pdf = p_d * (cos_t if cos_t > F0 else F0) * INV_PI
+    if glossy_scene and tab[GLOSSY, t] > F0:
+        ss = tab[SHININESS, t]
+        pdf = pdf + (F1 - p_d) * (ss + F1) / INV_2PI_DENOM * \
+            _cos_alpha(tab, t, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2) ** ss
+    return pdf
+
+
+# ---- the stages of one bounce ----------------------------------------------------------------
+
+@_jit
+def _hits(o, d, tri, path, beta, count_em, bsdf_pdf, L, background, shows_background, tab,
+          tri_emission, any_emits, offset, out_tri, out_path, out_beta, out_d, out_p, out_n,
+          out_entering, out_start):
+    """The hits of a bounce's rays, compacted in order into the out_ arrays; the background
+    seen by the misses and the emission seen by the hits added to L (3, n_paths) float64.
+    Returns how many hit."""
+    k = 0
+    for i in range(tri.shape[0]):
+        t_i = tri[i]
+        q = path[i]
+        if t_i < 0:
+            if shows_background and count_em[i]:
+                for c in range(3):
+                    L[c, q] += np.float64(beta[c, i]) * background[c]
+            continue
+        g0, g1, g2 = tab[NORMAL, t_i], tab[NORMAL + 1, t_i], tab[NORMAL + 2, t_i]
+        d0, d1, d2 = d[0, i], d[1, i], d[2, i]
+        d_n = g0 * d0 + g1 * d1 + g2 * d2
+        t = (tab[PLANE_D, t_i] - (g0 * o[0, i] + g1 * o[1, i] + g2 * o[2, i])) / d_n
+        if not np.isfinite(t):
+            t = F0
+        entering = d_n < F0
+        sign = F1 if entering else -F1
+        for c in range(3):
+            p_c = o[c, i] + t * d[c, i]
+            n_c = tab[NORMAL + c, t_i] * sign
+            out_p[c, k] = p_c
+            out_n[c, k] = n_c
+            out_start[c, k] = p_c + offset * n_c
+            out_d[c, k] = d[c, i]
+            out_beta[c, k] = beta[c, i]
+        out_entering[k] = entering
+        out_tri[k] = t_i
+        out_path[k] = q
+        if any_emits and tab[EMITS, t_i] > F0:
+            if count_em[i]:
+                for c in range(3):
+                    L[c, q] += np.float64(beta[c, i] * tri_emission[c, t_i])
+            else:  # found by BSDF sampling: its MIS share
+                cos_y = abs(d_n)
+                p_light = tab[LIGHT_PDF, t_i] * (t * t) / (cos_y if cos_y > TINY else TINY)
+                pe = bsdf_pdf[i]
+                w = pe / (pe + p_light)
+                for c in range(3):
+                    L[c, q] += np.float64(beta[c, i] * tri_emission[c, t_i] * w)
+        k += 1
+    return k
+
+
+@_jit
+def _emitter_rays(k, p, n, start, tri, tab, etab, cdf, r, u1, u2, offset, wi, cos_x, cos_y,
+                  dist2, jem, cand, so, sd):
+    """One point on the emitters per vertex (`PathWorld.sample_emitters`, its random numbers r
+    (k,) float64, u1, u2 (k,) float32): wi, cos_x, cos_y, dist2, the emitter jem, and the
+    shadow rays (so, sd (3, m), as `pathtrace.next_event` casts them) of the candidates cand.
+    Returns m."""
+    n_e = cdf.shape[0]
+    m = 0
+    for i in range(k):
+        lo, hi = 0, n_e  # np.searchsorted(cdf, r, side="right")
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if cdf[mid] <= r[i]:
+                lo = mid + 1
+            else:
+                hi = mid
+        j = min(lo, n_e - 1)
+        jem[i] = j
+        rr = np.sqrt(u1[i])
+        a = rr * (F1 - u2[i])
+        b = rr * u2[i]
+        y0 = etab[E_A, j] + a * etab[E_AB, j] + b * etab[E_AC, j]
+        y1 = etab[E_A + 1, j] + a * etab[E_AB + 1, j] + b * etab[E_AC + 1, j]
+        y2 = etab[E_A + 2, j] + a * etab[E_AB + 2, j] + b * etab[E_AC + 2, j]
+        t0, t1, t2 = y0 - p[0, i], y1 - p[1, i], y2 - p[2, i]
+        l2 = t0 * t0 + t1 * t1 + t2 * t2
+        inv = F1 / np.sqrt(l2 if l2 > TINY else TINY)
+        w0, w1, w2 = t0 * inv, t1 * inv, t2 * inv
+        cx = n[0, i] * w0 + n[1, i] * w1 + n[2, i] * w2
+        ny0, ny1, ny2 = etab[E_NORMAL, j], etab[E_NORMAL + 1, j], etab[E_NORMAL + 2, j]
+        cy = -(ny0 * w0 + ny1 * w1 + ny2 * w2)
+        side = offset if cy >= F0 else -offset
+        cy = abs(cy)
+        wi[0, i], wi[1, i], wi[2, i] = w0, w1, w2
+        cos_x[i], cos_y[i], dist2[i] = cx, cy, l2
+        if cx > F0 and cy > F0 and tab[PHONG, tri[i]] > F0 and l2 > F0:
+            cand[m] = i
+            so[0, m], so[1, m], so[2, m] = start[0, i], start[1, i], start[2, i]
+            sd[0, m] = y0 + side * ny0 - start[0, i]
+            sd[1, m] = y1 + side * ny1 - start[1, i]
+            sd[2, m] = y2 + side * ny2 - start[2, i]
+            m += 1
+    return m
+
+
+@_jit
+def _emitter_shade(direct, beta, tri, tab, etab, n, d, jem, wi, cos_x, cos_y, dist2, cand,
+                   blocked, m, mis, glossy_scene, delta_scene):
+    """The emitter sample's contribution (`pathtrace.next_event`) into direct (3, k) (zero on
+    entry) for the unblocked candidates."""
+    for idx in range(m):
+        if blocked[idx]:
+            continue
+        i = cand[idx]
+        t_i, j = tri[i], jem[i]
+        cx, cy, l2 = cos_x[i], cos_y[i], dist2[i]
+        p_area = etab[E_PDF, j]
+        n0, n1, n2 = n[0, i], n[1, i], n[2, i]
+        wo0, wo1, wo2 = -d[0, i], -d[1, i], -d[2, i]
+        wi0, wi1, wi2 = wi[0, i], wi[1, i], wi[2, i]
+        w_phong = tab[PHONG, t_i] if delta_scene else F1
+        g = cx * cy / (l2 * p_area)
+        if mis:
+            p_light = p_area * l2 / cy
+            p_bsdf = w_phong * _phong_pdf(tab, t_i, glossy_scene, n0, n1, n2, wo0, wo1, wo2,
+                                          wi0, wi1, wi2, cx)
+            g *= p_light / (p_light + p_bsdf)
+        g = g * w_phong
+        if glossy_scene:
+            f0, f1, f2 = _phong_f(tab, t_i, glossy_scene, n0, n1, n2, wo0, wo1, wo2,
+                                  wi0, wi1, wi2, cx)
+            direct[0, i] = beta[0, i] * f0 * etab[E_RADIANCE, j] * g
+            direct[1, i] = beta[1, i] * f1 * etab[E_RADIANCE + 1, j] * g
+            direct[2, i] = beta[2, i] * f2 * etab[E_RADIANCE + 2, j] * g
+        else:  # Lambert: f = kd / pi
+            gl = g * INV_PI
+            for c in range(3):
+                direct[c, i] = beta[c, i] * tab[KD + c, t_i] * etab[E_RADIANCE + c, j] * gl
+
+
+@_jit
+def _light_rays(k, kind, position, direction, cos_cutoff, p, n, start, tri, tab, delta_scene,
+                wi, cos_x, cos_light, cand, so, sd):
+    """A delta light's directions wi, cosines and the shadow rays (so, sd (3, m)) of its
+    candidates cand (`pathtrace.next_event`).  Returns m."""
+    m = 0
+    for i in range(k):
+        if kind == DIRECTIONAL:
+            w0, w1, w2 = -direction[0], -direction[1], -direction[2]
+        else:
+            t0 = position[0] - p[0, i]
+            t1 = position[1] - p[1, i]
+            t2 = position[2] - p[2, i]
+            inv = F1 / np.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+            w0, w1, w2 = t0 * inv, t1 * inv, t2 * inv
+        cx = n[0, i] * w0 + n[1, i] * w1 + n[2, i] * w2
+        w_phong = tab[PHONG, tri[i]] if delta_scene else F1
+        ok = cx > F0 and w_phong > F0
+        cl = F0
+        if kind == SPOT or kind == AREA:
+            cl = -(w0 * direction[0] + w1 * direction[1] + w2 * direction[2])
+            ok = ok and cl >= cos_cutoff
+        wi[0, i], wi[1, i], wi[2, i] = w0, w1, w2
+        cos_x[i], cos_light[i] = cx, cl
+        if ok:
+            cand[m] = i
+            for c in range(3):
+                so[c, m] = start[c, i]
+                sd[c, m] = wi[c, i] if kind == DIRECTIONAL else position[c] - start[c, i]
+            m += 1
+    return m
+
+
+@_jit
+def _light_add(direct, beta, tri, tab, n, d, wi, cos_x, cos_light, cand, blocked, m,
+               pi_radiance, is_area, glossy_scene, delta_scene):
+    """A delta light's contribution added into direct (3, k) for its unblocked candidates."""
+    for idx in range(m):
+        if blocked[idx]:
+            continue
+        i = cand[idx]
+        t_i = tri[i]
+        cx = cos_x[i]
+        f0, f1, f2 = _phong_f(tab, t_i, glossy_scene, n[0, i], n[1, i], n[2, i],
+                              -d[0, i], -d[1, i], -d[2, i], wi[0, i], wi[1, i], wi[2, i], cx)
+        g = (tab[PHONG, t_i] if delta_scene else F1) * cx
+        if is_area:
+            cl = cos_light[i]
+            g *= cl if cl > F0 else F0
+        direct[0, i] += beta[0, i] * f0 * pi_radiance[0] * g
+        direct[1, i] += beta[1, i] * f1 * pi_radiance[1] * g
+        direct[2, i] += beta[2, i] * f2 * pi_radiance[2] * g
+
+
+@_jit
+def _add_direct(L, path, direct, k):
+    for i in range(k):
+        for c in range(3):
+            L[c, path[i]] += np.float64(direct[c, i])
+
+
+@_jit
+def _reflect(d0, d1, d2, n0, n1, n2):
+    """`intersect.reflect` in float32: d - 2 (n.d) n."""
+    two = F2 * (n0 * d0 + n1 * d1 + n2 * d2)
+    return d0 - two * n0, d1 - two * n1, d2 - two * n2
+
+
+@_jit
+def _bounce(k, L, direct, tri, path, beta, d, p, n, entering, start, tab, glossy_scene,
+            delta_scene, u_delta, u1, cos_phi, sin_phi, gl_index, gl_cos_theta, gl_cos_phi,
+            gl_sin_phi, roulette, u_rr, offset64, out_o, out_d, out_path, out_beta,
+            out_count_em, out_pdf):
+    """Add direct (3, k) into L, then the next direction of every path (`pathtrace.trace_rows`:
+    BSDF sample, the mirror and glass bounces, Russian roulette with u_rr), the survivors
+    compacted in order into the out_ arrays.  gl_index (g,) the sorted vertices that sample the
+    glossy lobe, with its cos(theta) and the azimuth's cos, sin (float64).  Returns how many
+    survive."""
+    count = 0
+    gp = 0
+    n_gl = gl_index.shape[0]
+    for i in range(k):
+        q = path[i]
+        for c in range(3):
+            L[c, q] += np.float64(direct[c, i])
+        t_i = tri[i]
+        n0, n1, n2 = n[0, i], n[1, i], n[2, i]
+        d0, d1, d2 = d[0, i], d[1, i], d[2, i]
+        wo0, wo1, wo2 = -d0, -d1, -d2
+        is_mirror = is_glass = False
+        if delta_scene:
+            u = u_delta[i]
+            is_mirror = u < tab[REFL, t_i]
+            is_glass = not is_mirror and u < tab[REFL, t_i] + tab[TRANSP, t_i]
+        is_phong = not is_mirror and not is_glass
+        # the cosine lobe (`brdf.cosine_hemisphere_rows`)
+        z = F1 - F2 * u1[i]
+        r2 = F1 - z * z
+        r = np.sqrt(r2 if r2 > F0 else F0)
+        w0, w1, w2 = n0 + r * cos_phi[i], n1 + r * sin_phi[i], n2 + z
+        l2 = w0 * w0 + w1 * w1 + w2 * w2
+        if l2 > F0:
+            inv = F1 / np.sqrt(l2)
+            w0, w1, w2 = w0 * inv, w1 * inv, w2 * inv
+        else:
+            w0, w1, w2 = n0, n1, n2
+        if gp < n_gl and gl_index[gp] == i:  # the glossy lobe (`brdf.around_rows`)
+            two_dn = F2 * (n0 * wo0 + n1 * wo1 + n2 * wo2)
+            a0, a1, a2 = two_dn * n0 - wo0, two_dn * n1 - wo1, two_dn * n2 - wo2
+            sign = F1 if a2 >= F0 else -F1
+            fa = -F1 / (sign + a2)
+            fb = a0 * a1 * fa
+            ct = gl_cos_theta[gp]
+            st2 = 1.0 - ct * ct
+            st = np.sqrt(st2 if st2 > 0.0 else 0.0)
+            x, y = st * gl_cos_phi[gp], st * gl_sin_phi[gp]
+            tx, ty, tz = F1 + sign * (a0 * a0) * fa, sign * fb, -sign * a0
+            bx, by, bz = fb, sign + (a1 * a1) * fa, -a1
+            w0 = np.float32(x * np.float64(tx) + y * np.float64(bx) + ct * np.float64(a0))
+            w1 = np.float32(x * np.float64(ty) + y * np.float64(by) + ct * np.float64(a1))
+            w2 = np.float32(x * np.float64(tz) + y * np.float64(bz) + ct * np.float64(a2))
+            gp += 1
+        cos = n0 * w0 + n1 * w1 + n2 * w2
+        pdf = _phong_pdf(tab, t_i, glossy_scene, n0, n1, n2, wo0, wo1, wo2, w0, w1, w2, cos)
+        if glossy_scene:
+            f0, f1, f2 = _phong_f(tab, t_i, glossy_scene, n0, n1, n2, wo0, wo1, wo2,
+                                  w0, w1, w2, cos)
+            s = cos / pdf if cos > F0 and pdf > F0 else F0
+            fac0, fac1, fac2 = f0 * s, f1 * s, f2 * s
+        elif pdf > F0:
+            fac0, fac1, fac2 = tab[KD, t_i], tab[KD + 1, t_i], tab[KD + 2, t_i]
+        else:
+            fac0, fac1, fac2 = tab[KD, t_i] * F0, tab[KD + 1, t_i] * F0, tab[KD + 2, t_i] * F0
+        pdf_next = (tab[PHONG, t_i] if delta_scene else F1) * pdf
+        o0, o1, o2 = start[0, i], start[1, i], start[2, i]
+        if not is_phong:
+            fac0 = fac1 = fac2 = F1
+            pdf_next = F0
+            if is_mirror:
+                w0, w1, w2 = _reflect(d0, d1, d2, n0, n1, n2)
+            else:  # glass (`intersect.refract`, in float64 as there)
+                ior = tab[IOR, t_i]
+                eta = np.float64(F1 / ior if entering[i] else ior)
+                cos1 = -(n0 * d0 + n1 * d1 + n2 * d2)
+                kk = 1.0 - eta * eta * np.float64(F1 - cos1 * cos1)
+                if kk < 0.0:  # total internal reflection
+                    w0, w1, w2 = _reflect(d0, d1, d2, n0, n1, n2)
+                    side = offset64
+                else:
+                    s = eta * np.float64(cos1) - np.sqrt(kk)
+                    w0 = np.float32(eta * np.float64(d0) + s * np.float64(n0))
+                    w1 = np.float32(eta * np.float64(d1) + s * np.float64(n1))
+                    w2 = np.float32(eta * np.float64(d2) + s * np.float64(n2))
+                    side = -offset64
+                o0 = np.float32(np.float64(p[0, i]) + side * np.float64(n0))
+                o1 = np.float32(np.float64(p[1, i]) + side * np.float64(n1))
+                o2 = np.float32(np.float64(p[2, i]) + side * np.float64(n2))
+        b0, b1, b2 = beta[0, i] * fac0, beta[1, i] * fac1, beta[2, i] * fac2
+        strongest = max(max(b0, b1), b2)
+        alive = strongest > F0
+        if roulette:
+            survive = strongest if strongest < RR_MAX else RR_MAX
+            alive = alive and u_rr[i] < survive
+            if alive:
+                inv = F1 / survive
+                b0, b1, b2 = b0 * inv, b1 * inv, b2 * inv
+        if not alive:
+            continue
+        out_o[0, count], out_o[1, count], out_o[2, count] = o0, o1, o2
+        out_d[0, count], out_d[1, count], out_d[2, count] = w0, w1, w2
+        out_beta[0, count], out_beta[1, count], out_beta[2, count] = b0, b1, b2
+        out_path[count] = q
+        out_count_em[count] = not is_phong
+        out_pdf[count] = pdf_next
+        count += 1
+    return count
+
+
+# ---- the path loop ---------------------------------------------------------------------------
+
+def _lights(world) -> list[tuple]:
+    """The delta lights as the kernels take them: (light, kind, position, direction (3,)
+    float32, cos_cutoff float32, pi x radiance (3,) float32, tmax of its shadow rays)."""
+    from shadowvol.scene import AreaSample, DirectionalLight, SpotLight
+
+    out = []
+    for light in world.lights:
+        zero = np.zeros(3, STATE)
+        if isinstance(light, DirectionalLight):
+            kind, pos, direction, tmax = DIRECTIONAL, zero, light.direction, None
+        else:
+            kind = AREA if isinstance(light, AreaSample) else \
+                SPOT if isinstance(light, SpotLight) else POINT
+            pos, tmax = light.position, 1.0
+            direction = light.direction if kind != POINT else zero
+        cutoff = STATE(light.cos_cutoff) if kind in (SPOT, AREA) else STATE(0.0)
+        out.append((kind, np.asarray(pos, STATE), np.asarray(direction, STATE), cutoff,
+                    math.pi * np.asarray(light.radiance, STATE), tmax))
+    return out
+
+
+def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
+               max_depth: int, rr_start: int) -> tuple[np.ndarray, int]:
+    """`raytrace.pathtrace.trace_rows` (same arguments, same result) with compiled shading.
+    The kernels write compacted rays into whole buffers and are told how many are valid (all
+    their arrays stay C-contiguous: one compiled version each); only Embree sees slices."""
+    tab, etab = tables(world)
+    lights = _lights(world)
+    offset = STATE(world.offset)
+    glossy, delta, emits = world.any_glossy, world.any_delta, world.any_emits
+    has_emitters = len(world.emitters) > 0
+    cdf = np.ascontiguousarray(world.emitter_cdf, np.float64)
+    o = np.ascontiguousarray(o, STATE)
+    d = np.ascontiguousarray(d, STATE)
+    n_paths = o.shape[1]
+    L = np.zeros((3, n_paths))
+    background = np.ascontiguousarray(world.scene.background, np.float64)
+    shows_background = bool(background.any())
+    path = np.arange(n_paths)
+    beta = np.ones((3, n_paths), STATE)
+    count_em = np.ones(n_paths, np.bool_)
+    bsdf_pdf = np.zeros(n_paths, STATE)
+    no_f32, no_f64, no_int = np.zeros(0, STATE), np.zeros(0), np.zeros(0, np.int64)
+    n = n_paths  # rays in flight: the first n columns of o, d, path, beta, ...
+    rays = 0
+    for bounce in range(1, max_depth + 1):
+        tri = world.closest_rows(o[:, :n], d[:, :n])
+        rays += n
+        h_tri, h_path = np.empty(n, np.int64), np.empty(n, np.int64)
+        h_beta, h_d, h_p, h_n, h_start = (np.empty((3, n), STATE) for _ in range(5))
+        h_entering = np.empty(n, np.bool_)
+        k = _hits(o, d, tri, path, beta, count_em, bsdf_pdf, L, background, shows_background,
+                  tab, world.tri_emission, emits, offset, h_tri, h_path, h_beta, h_d, h_p,
+                  h_n, h_entering, h_start)
+        if k == 0:
+            break
+        direct = np.zeros((3, n), STATE)
+        wi = np.empty((3, n), STATE)
+        cos_x, cos_y, dist2 = np.empty(n, STATE), np.empty(n, STATE), np.empty(n, STATE)
+        cand = np.empty(n, np.int64)
+        so, sd = np.empty((3, n), STATE), np.empty((3, n), STATE)
+        if has_emitters:  # the random numbers of `PathWorld.sample_emitters`
+            r = rng.random(k)
+            u1, u2 = rng.random(k, dtype=STATE), rng.random(k, dtype=STATE)
+            jem = np.empty(n, np.int64)
+            m = _emitter_rays(k, h_p, h_n, h_start, h_tri, tab, etab, cdf, r, u1, u2, offset,
+                              wi, cos_x, cos_y, dist2, jem, cand, so, sd)
+            blocked = world.occluded_rows(so[:, :m], sd[:, :m], 1.0)
+            rays += m
+            _emitter_shade(direct, h_beta, h_tri, tab, etab, h_n, h_d, jem, wi, cos_x, cos_y,
+                           dist2, cand, blocked, m, bounce < max_depth, glossy, delta)
+        for kind, pos, direction, cutoff, pi_radiance, tmax in lights:
+            m = _light_rays(k, kind, pos, direction, cutoff, h_p, h_n, h_start, h_tri, tab,
+                            delta, wi, cos_x, cos_y, cand, so, sd)
+            blocked = world.occluded_rows(so[:, :m], sd[:, :m], tmax)
+            rays += m
+            _light_add(direct, h_beta, h_tri, tab, h_n, h_d, wi, cos_x, cos_y, cand, blocked,
+                       m, pi_radiance, kind == AREA, glossy, delta)
+        if bounce == max_depth:
+            _add_direct(L, h_path, direct, k)
+            break
+        # the random numbers of the bounce, in the numpy path's order
+        u_delta = rng.random(k, dtype=STATE) if delta else no_f32
+        u1 = rng.random(k, dtype=STATE)
+        phi = np.float32(2.0 * math.pi) * rng.random(k, dtype=STATE)
+        cos_phi, sin_phi = np.cos(phi), np.sin(phi)
+        gl_index, gl_cos_theta, gl_cos_phi, gl_sin_phi = no_int, no_f64, no_f64, no_f64
+        if glossy:
+            candidates = np.flatnonzero(np.take(tab[GLOSSY], h_tri[:k]) > 0.0)
+            if len(candidates):
+                tc = np.take(h_tri, candidates)
+                gl_index = candidates[rng.random(len(candidates)) >= np.take(tab[P_DIFFUSE], tc)]
+                if len(gl_index):
+                    gu1, gu2 = rng.random(len(gl_index)), rng.random(len(gl_index))
+                    s = np.take(tab[SHININESS], np.take(h_tri, gl_index))
+                    gl_cos_theta = gu1 ** (1.0 / (s + 1.0))
+                    gl_phi = 2.0 * math.pi * gu2
+                    gl_cos_phi, gl_sin_phi = np.cos(gl_phi), np.sin(gl_phi)
+        roulette = bounce >= rr_start
+        u_rr = rng.random(k, dtype=STATE) if roulette else no_f32
+        o, d = np.empty((3, k), STATE), np.empty((3, k), STATE)
+        path, beta = np.empty(k, np.int64), np.empty((3, k), STATE)
+        count_em, bsdf_pdf = np.empty(k, np.bool_), np.empty(k, STATE)
+        n = _bounce(k, L, direct, h_tri, h_path, h_beta, h_d, h_p, h_n, h_entering, h_start,
+                    tab, glossy, delta, u_delta, u1, cos_phi, sin_phi, gl_index, gl_cos_theta,
+                    gl_cos_phi, gl_sin_phi, roulette, u_rr, float(world.offset), o, d, path,
+                    beta, count_em, bsdf_pdf)
+        if n == 0:
+            break
+    return L, rays
