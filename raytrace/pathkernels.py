@@ -53,21 +53,23 @@ def _jit(fn):
     """njit, releasing the GIL, cached on disk where numba finds a writable cache directory
     (numba refuses `cache=True` with a RuntimeError where it finds none)."""
     try:
-        return numba.njit(cache=True, nogil=True)(fn)
+        return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
     except RuntimeError:
-        return numba.njit(nogil=True)(fn)
+        return numba.njit(nogil=True, error_model="numpy")(fn)
 
 
 def _f32(rows) -> np.ndarray:
-    """Rows (n,) or (m, n) stacked into one contiguous (P, n) float32 table, each converted as
-    `pathtrace._pack` converts them (float64 first), so the values are the numpy path's."""
+    """Rows (n,) or (m, n) stacked into one contiguous (n, P) float32 table, one line per item,
+    each converted as `pathtrace._pack` converts them (float64 first), so the values are the
+    numpy path's."""
     return np.ascontiguousarray(np.concatenate(
-        [np.atleast_2d(np.asarray(v, np.float64)).astype(STATE) for v in rows]))
+        [np.atleast_2d(np.asarray(v, np.float64)).astype(STATE) for v in rows]).T)
 
 
-def tables(world) -> tuple[np.ndarray, np.ndarray]:
-    """The kernels' tables of a `pathtrace.PathWorld`: per triangle (19, M) float32, every row
-    (NORMAL ... LIGHT_PDF) whatever the scene needs, and per emitter (16, E) float32."""
+def tables(world) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The kernels' tables of a `pathtrace.PathWorld`: per triangle (M, 19) float32, every
+    column (NORMAL ... LIGHT_PDF) whatever the scene needs, its emission (M, 3) float32, and per
+    emitter (E, 16) float32: what a hit needs on one or two cache lines."""
     cached = getattr(world, "_kernel_tables", None)
     if cached is not None:
         return cached
@@ -81,8 +83,8 @@ def tables(world) -> tuple[np.ndarray, np.ndarray]:
     em = _f32([c[:, 0].T, (c[:, 1] - c[:, 0]).T, (c[:, 2] - c[:, 0]).T,
                world.tracer.normals[e].T, world.emission[world.tri_object][e].T,
                world.emitter_prob / world.area[e] if len(e) else np.zeros(0)]) \
-        if len(e) else np.zeros((16, 0), STATE)
-    world._kernel_tables = (tri, em)
+        if len(e) else np.zeros((0, 16), STATE)
+    world._kernel_tables = (tri, np.ascontiguousarray(world.tri_emission.T), em)
     return world._kernel_tables
 
 
@@ -99,14 +101,14 @@ def _cos_alpha(tab, t, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2):
 @_jit
 def _phong_f(tab, t, glossy_scene, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2, cos_t):
     """`brdf.phong_eval_rows` for one ray: f (3 float32)."""
-    f0, f1, f2 = tab[KD, t] * INV_PI, tab[KD + 1, t] * INV_PI, tab[KD + 2, t] * INV_PI
-    if glossy_scene and tab[GLOSSY, t] > F0:
-        ss = tab[SHININESS, t]
+    f0, f1, f2 = tab[t, KD] * INV_PI, tab[t, KD + 1] * INV_PI, tab[t, KD + 2] * INV_PI
+    if glossy_scene and tab[t, GLOSSY] > F0:
+        ss = tab[t, SHININESS]
         c = (ss + F2) / INV_2PI_DENOM * \
             _cos_alpha(tab, t, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2) ** ss
-        f0 = f0 + tab[KS, t] * c
-        f1 = f1 + tab[KS + 1, t] * c
-        f2 = f2 + tab[KS + 2, t] * c
+        f0 = f0 + tab[t, KS] * c
+        f1 = f1 + tab[t, KS + 1] * c
+        f2 = f2 + tab[t, KS + 2] * c
     if not cos_t > F0:
         return F0 * f0, F0 * f1, F0 * f2
     return f0, f1, f2
@@ -115,10 +117,10 @@ def _phong_f(tab, t, glossy_scene, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2, cos
 @_jit
 def _phong_pdf(tab, t, glossy_scene, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2, cos_t):
     """`brdf.phong_pdf_rows` for one ray (float32)."""
-    p_d = tab[P_DIFFUSE, t]
+    p_d = tab[t, P_DIFFUSE]
     pdf = p_d * (cos_t if cos_t > F0 else F0) * INV_PI
-    if glossy_scene and tab[GLOSSY, t] > F0:
-        ss = tab[SHININESS, t]
+    if glossy_scene and tab[t, GLOSSY] > F0:
+        ss = tab[t, SHININESS]
         pdf = pdf + (F1 - p_d) * (ss + F1) / INV_2PI_DENOM * \
             _cos_alpha(tab, t, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2) ** ss
     return pdf
@@ -131,7 +133,7 @@ def _hits(o, d, tri, path, beta, count_em, bsdf_pdf, L, background, shows_backgr
           tri_emission, any_emits, offset, out_tri, out_path, out_beta, out_d, out_p, out_n,
           out_entering, out_start):
     """The hits of a bounce's rays, compacted in order into the out_ arrays; the background
-    seen by the misses and the emission seen by the hits added to L (3, n_paths) float64.
+    seen by the misses and the emission seen by the hits added to L (n_paths, 3) float64.
     Returns how many hit."""
     k = 0
     for i in range(tri.shape[0]):
@@ -140,38 +142,38 @@ def _hits(o, d, tri, path, beta, count_em, bsdf_pdf, L, background, shows_backgr
         if t_i < 0:
             if shows_background and count_em[i]:
                 for c in range(3):
-                    L[c, q] += np.float64(beta[c, i]) * background[c]
+                    L[q, c] += np.float64(beta[i, c]) * background[c]
             continue
-        g0, g1, g2 = tab[NORMAL, t_i], tab[NORMAL + 1, t_i], tab[NORMAL + 2, t_i]
-        d0, d1, d2 = d[0, i], d[1, i], d[2, i]
+        g0, g1, g2 = tab[t_i, NORMAL], tab[t_i, NORMAL + 1], tab[t_i, NORMAL + 2]
+        d0, d1, d2 = d[i, 0], d[i, 1], d[i, 2]
         d_n = g0 * d0 + g1 * d1 + g2 * d2
-        t = (tab[PLANE_D, t_i] - (g0 * o[0, i] + g1 * o[1, i] + g2 * o[2, i])) / d_n
+        t = (tab[t_i, PLANE_D] - (g0 * o[i, 0] + g1 * o[i, 1] + g2 * o[i, 2])) / d_n
         if not np.isfinite(t):
             t = F0
         entering = d_n < F0
         sign = F1 if entering else -F1
         for c in range(3):
-            p_c = o[c, i] + t * d[c, i]
-            n_c = tab[NORMAL + c, t_i] * sign
-            out_p[c, k] = p_c
-            out_n[c, k] = n_c
-            out_start[c, k] = p_c + offset * n_c
-            out_d[c, k] = d[c, i]
-            out_beta[c, k] = beta[c, i]
+            p_c = o[i, c] + t * d[i, c]
+            n_c = tab[t_i, NORMAL + c] * sign
+            out_p[k, c] = p_c
+            out_n[k, c] = n_c
+            out_start[k, c] = p_c + offset * n_c
+            out_d[k, c] = d[i, c]
+            out_beta[k, c] = beta[i, c]
         out_entering[k] = entering
         out_tri[k] = t_i
         out_path[k] = q
-        if any_emits and tab[EMITS, t_i] > F0:
+        if any_emits and tab[t_i, EMITS] > F0:
             if count_em[i]:
                 for c in range(3):
-                    L[c, q] += np.float64(beta[c, i] * tri_emission[c, t_i])
+                    L[q, c] += np.float64(beta[i, c] * tri_emission[t_i, c])
             else:  # found by BSDF sampling: its MIS share
                 cos_y = abs(d_n)
-                p_light = tab[LIGHT_PDF, t_i] * (t * t) / (cos_y if cos_y > TINY else TINY)
+                p_light = tab[t_i, LIGHT_PDF] * (t * t) / (cos_y if cos_y > TINY else TINY)
                 pe = bsdf_pdf[i]
                 w = pe / (pe + p_light)
                 for c in range(3):
-                    L[c, q] += np.float64(beta[c, i] * tri_emission[c, t_i] * w)
+                    L[q, c] += np.float64(beta[i, c] * tri_emission[t_i, c] * w)
         k += 1
     return k
 
@@ -181,7 +183,7 @@ def _emitter_rays(k, p, n, start, tri, tab, etab, cdf, r, u1, u2, offset, wi, co
                   dist2, jem, cand, so, sd):
     """One point on the emitters per vertex (`PathWorld.sample_emitters`, its random numbers r
     (k,) float64, u1, u2 (k,) float32): wi, cos_x, cos_y, dist2, the emitter jem, and the
-    shadow rays (so, sd (3, m), as `pathtrace.next_event` casts them) of the candidates cand.
+    shadow rays (so, sd (m, 3), as `pathtrace.next_event` casts them) of the candidates cand.
     Returns m."""
     n_e = cdf.shape[0]
     m = 0
@@ -198,26 +200,26 @@ def _emitter_rays(k, p, n, start, tri, tab, etab, cdf, r, u1, u2, offset, wi, co
         rr = np.sqrt(u1[i])
         a = rr * (F1 - u2[i])
         b = rr * u2[i]
-        y0 = etab[E_A, j] + a * etab[E_AB, j] + b * etab[E_AC, j]
-        y1 = etab[E_A + 1, j] + a * etab[E_AB + 1, j] + b * etab[E_AC + 1, j]
-        y2 = etab[E_A + 2, j] + a * etab[E_AB + 2, j] + b * etab[E_AC + 2, j]
-        t0, t1, t2 = y0 - p[0, i], y1 - p[1, i], y2 - p[2, i]
+        y0 = etab[j, E_A] + a * etab[j, E_AB] + b * etab[j, E_AC]
+        y1 = etab[j, E_A + 1] + a * etab[j, E_AB + 1] + b * etab[j, E_AC + 1]
+        y2 = etab[j, E_A + 2] + a * etab[j, E_AB + 2] + b * etab[j, E_AC + 2]
+        t0, t1, t2 = y0 - p[i, 0], y1 - p[i, 1], y2 - p[i, 2]
         l2 = t0 * t0 + t1 * t1 + t2 * t2
         inv = F1 / np.sqrt(l2 if l2 > TINY else TINY)
         w0, w1, w2 = t0 * inv, t1 * inv, t2 * inv
-        cx = n[0, i] * w0 + n[1, i] * w1 + n[2, i] * w2
-        ny0, ny1, ny2 = etab[E_NORMAL, j], etab[E_NORMAL + 1, j], etab[E_NORMAL + 2, j]
+        cx = n[i, 0] * w0 + n[i, 1] * w1 + n[i, 2] * w2
+        ny0, ny1, ny2 = etab[j, E_NORMAL], etab[j, E_NORMAL + 1], etab[j, E_NORMAL + 2]
         cy = -(ny0 * w0 + ny1 * w1 + ny2 * w2)
         side = offset if cy >= F0 else -offset
         cy = abs(cy)
-        wi[0, i], wi[1, i], wi[2, i] = w0, w1, w2
+        wi[i, 0], wi[i, 1], wi[i, 2] = w0, w1, w2
         cos_x[i], cos_y[i], dist2[i] = cx, cy, l2
-        if cx > F0 and cy > F0 and tab[PHONG, tri[i]] > F0 and l2 > F0:
+        if cx > F0 and cy > F0 and tab[tri[i], PHONG] > F0 and l2 > F0:
             cand[m] = i
-            so[0, m], so[1, m], so[2, m] = start[0, i], start[1, i], start[2, i]
-            sd[0, m] = y0 + side * ny0 - start[0, i]
-            sd[1, m] = y1 + side * ny1 - start[1, i]
-            sd[2, m] = y2 + side * ny2 - start[2, i]
+            so[m, 0], so[m, 1], so[m, 2] = start[i, 0], start[i, 1], start[i, 2]
+            sd[m, 0] = y0 + side * ny0 - start[i, 0]
+            sd[m, 1] = y1 + side * ny1 - start[i, 1]
+            sd[m, 2] = y2 + side * ny2 - start[i, 2]
             m += 1
     return m
 
@@ -225,7 +227,7 @@ def _emitter_rays(k, p, n, start, tri, tab, etab, cdf, r, u1, u2, offset, wi, co
 @_jit
 def _emitter_shade(direct, beta, tri, tab, etab, n, d, jem, wi, cos_x, cos_y, dist2, cand,
                    blocked, m, mis, glossy_scene, delta_scene):
-    """The emitter sample's contribution (`pathtrace.next_event`) into direct (3, k) (zero on
+    """The emitter sample's contribution (`pathtrace.next_event`) into direct (k, 3) (zero on
     entry) for the unblocked candidates."""
     for idx in range(m):
         if blocked[idx]:
@@ -233,11 +235,11 @@ def _emitter_shade(direct, beta, tri, tab, etab, n, d, jem, wi, cos_x, cos_y, di
         i = cand[idx]
         t_i, j = tri[i], jem[i]
         cx, cy, l2 = cos_x[i], cos_y[i], dist2[i]
-        p_area = etab[E_PDF, j]
-        n0, n1, n2 = n[0, i], n[1, i], n[2, i]
-        wo0, wo1, wo2 = -d[0, i], -d[1, i], -d[2, i]
-        wi0, wi1, wi2 = wi[0, i], wi[1, i], wi[2, i]
-        w_phong = tab[PHONG, t_i] if delta_scene else F1
+        p_area = etab[j, E_PDF]
+        n0, n1, n2 = n[i, 0], n[i, 1], n[i, 2]
+        wo0, wo1, wo2 = -d[i, 0], -d[i, 1], -d[i, 2]
+        wi0, wi1, wi2 = wi[i, 0], wi[i, 1], wi[i, 2]
+        w_phong = tab[t_i, PHONG] if delta_scene else F1
         g = cx * cy / (l2 * p_area)
         if mis:
             p_light = p_area * l2 / cy
@@ -248,44 +250,44 @@ def _emitter_shade(direct, beta, tri, tab, etab, n, d, jem, wi, cos_x, cos_y, di
         if glossy_scene:
             f0, f1, f2 = _phong_f(tab, t_i, glossy_scene, n0, n1, n2, wo0, wo1, wo2,
                                   wi0, wi1, wi2, cx)
-            direct[0, i] = beta[0, i] * f0 * etab[E_RADIANCE, j] * g
-            direct[1, i] = beta[1, i] * f1 * etab[E_RADIANCE + 1, j] * g
-            direct[2, i] = beta[2, i] * f2 * etab[E_RADIANCE + 2, j] * g
+            direct[i, 0] = beta[i, 0] * f0 * etab[j, E_RADIANCE] * g
+            direct[i, 1] = beta[i, 1] * f1 * etab[j, E_RADIANCE + 1] * g
+            direct[i, 2] = beta[i, 2] * f2 * etab[j, E_RADIANCE + 2] * g
         else:  # Lambert: f = kd / pi
             gl = g * INV_PI
             for c in range(3):
-                direct[c, i] = beta[c, i] * tab[KD + c, t_i] * etab[E_RADIANCE + c, j] * gl
+                direct[i, c] = beta[i, c] * tab[t_i, KD + c] * etab[j, E_RADIANCE + c] * gl
 
 
 @_jit
 def _light_rays(k, kind, position, direction, cos_cutoff, p, n, start, tri, tab, delta_scene,
                 wi, cos_x, cos_light, cand, so, sd):
-    """A delta light's directions wi, cosines and the shadow rays (so, sd (3, m)) of its
+    """A delta light's directions wi, cosines and the shadow rays (so, sd (m, 3)) of its
     candidates cand (`pathtrace.next_event`).  Returns m."""
     m = 0
     for i in range(k):
         if kind == DIRECTIONAL:
             w0, w1, w2 = -direction[0], -direction[1], -direction[2]
         else:
-            t0 = position[0] - p[0, i]
-            t1 = position[1] - p[1, i]
-            t2 = position[2] - p[2, i]
+            t0 = position[0] - p[i, 0]
+            t1 = position[1] - p[i, 1]
+            t2 = position[2] - p[i, 2]
             inv = F1 / np.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
             w0, w1, w2 = t0 * inv, t1 * inv, t2 * inv
-        cx = n[0, i] * w0 + n[1, i] * w1 + n[2, i] * w2
-        w_phong = tab[PHONG, tri[i]] if delta_scene else F1
+        cx = n[i, 0] * w0 + n[i, 1] * w1 + n[i, 2] * w2
+        w_phong = tab[tri[i], PHONG] if delta_scene else F1
         ok = cx > F0 and w_phong > F0
         cl = F0
         if kind == SPOT or kind == AREA:
             cl = -(w0 * direction[0] + w1 * direction[1] + w2 * direction[2])
             ok = ok and cl >= cos_cutoff
-        wi[0, i], wi[1, i], wi[2, i] = w0, w1, w2
+        wi[i, 0], wi[i, 1], wi[i, 2] = w0, w1, w2
         cos_x[i], cos_light[i] = cx, cl
         if ok:
             cand[m] = i
             for c in range(3):
-                so[c, m] = start[c, i]
-                sd[c, m] = wi[c, i] if kind == DIRECTIONAL else position[c] - start[c, i]
+                so[m, c] = start[i, c]
+                sd[m, c] = wi[i, c] if kind == DIRECTIONAL else position[c] - start[i, c]
             m += 1
     return m
 
@@ -293,29 +295,29 @@ def _light_rays(k, kind, position, direction, cos_cutoff, p, n, start, tri, tab,
 @_jit
 def _light_add(direct, beta, tri, tab, n, d, wi, cos_x, cos_light, cand, blocked, m,
                pi_radiance, is_area, glossy_scene, delta_scene):
-    """A delta light's contribution added into direct (3, k) for its unblocked candidates."""
+    """A delta light's contribution added into direct (k, 3) for its unblocked candidates."""
     for idx in range(m):
         if blocked[idx]:
             continue
         i = cand[idx]
         t_i = tri[i]
         cx = cos_x[i]
-        f0, f1, f2 = _phong_f(tab, t_i, glossy_scene, n[0, i], n[1, i], n[2, i],
-                              -d[0, i], -d[1, i], -d[2, i], wi[0, i], wi[1, i], wi[2, i], cx)
-        g = (tab[PHONG, t_i] if delta_scene else F1) * cx
+        f0, f1, f2 = _phong_f(tab, t_i, glossy_scene, n[i, 0], n[i, 1], n[i, 2],
+                              -d[i, 0], -d[i, 1], -d[i, 2], wi[i, 0], wi[i, 1], wi[i, 2], cx)
+        g = (tab[t_i, PHONG] if delta_scene else F1) * cx
         if is_area:
             cl = cos_light[i]
             g *= cl if cl > F0 else F0
-        direct[0, i] += beta[0, i] * f0 * pi_radiance[0] * g
-        direct[1, i] += beta[1, i] * f1 * pi_radiance[1] * g
-        direct[2, i] += beta[2, i] * f2 * pi_radiance[2] * g
+        direct[i, 0] += beta[i, 0] * f0 * pi_radiance[0] * g
+        direct[i, 1] += beta[i, 1] * f1 * pi_radiance[1] * g
+        direct[i, 2] += beta[i, 2] * f2 * pi_radiance[2] * g
 
 
 @_jit
 def _add_direct(L, path, direct, k):
     for i in range(k):
         for c in range(3):
-            L[c, path[i]] += np.float64(direct[c, i])
+            L[path[i], c] += np.float64(direct[i, c])
 
 
 @_jit
@@ -330,7 +332,7 @@ def _bounce(k, L, direct, tri, path, beta, d, p, n, entering, start, tab, glossy
             delta_scene, u_delta, u1, cos_phi, sin_phi, gl_index, gl_cos_theta, gl_cos_phi,
             gl_sin_phi, roulette, u_rr, offset64, out_o, out_d, out_path, out_beta,
             out_count_em, out_pdf):
-    """Add direct (3, k) into L, then the next direction of every path (`pathtrace.trace_rows`:
+    """Add direct (k, 3) into L, then the next direction of every path (`pathtrace.trace_rows`:
     BSDF sample, the mirror and glass bounces, Russian roulette with u_rr), the survivors
     compacted in order into the out_ arrays.  gl_index (g,) the sorted vertices that sample the
     glossy lobe, with its cos(theta) and the azimuth's cos, sin (float64).  Returns how many
@@ -341,16 +343,16 @@ def _bounce(k, L, direct, tri, path, beta, d, p, n, entering, start, tab, glossy
     for i in range(k):
         q = path[i]
         for c in range(3):
-            L[c, q] += np.float64(direct[c, i])
+            L[q, c] += np.float64(direct[i, c])
         t_i = tri[i]
-        n0, n1, n2 = n[0, i], n[1, i], n[2, i]
-        d0, d1, d2 = d[0, i], d[1, i], d[2, i]
+        n0, n1, n2 = n[i, 0], n[i, 1], n[i, 2]
+        d0, d1, d2 = d[i, 0], d[i, 1], d[i, 2]
         wo0, wo1, wo2 = -d0, -d1, -d2
         is_mirror = is_glass = False
         if delta_scene:
             u = u_delta[i]
-            is_mirror = u < tab[REFL, t_i]
-            is_glass = not is_mirror and u < tab[REFL, t_i] + tab[TRANSP, t_i]
+            is_mirror = u < tab[t_i, REFL]
+            is_glass = not is_mirror and u < tab[t_i, REFL] + tab[t_i, TRANSP]
         is_phong = not is_mirror and not is_glass
         # the cosine lobe (`brdf.cosine_hemisphere_rows`)
         z = F1 - F2 * u1[i]
@@ -387,18 +389,18 @@ def _bounce(k, L, direct, tri, path, beta, d, p, n, entering, start, tab, glossy
             s = cos / pdf if cos > F0 and pdf > F0 else F0
             fac0, fac1, fac2 = f0 * s, f1 * s, f2 * s
         elif pdf > F0:
-            fac0, fac1, fac2 = tab[KD, t_i], tab[KD + 1, t_i], tab[KD + 2, t_i]
+            fac0, fac1, fac2 = tab[t_i, KD], tab[t_i, KD + 1], tab[t_i, KD + 2]
         else:
-            fac0, fac1, fac2 = tab[KD, t_i] * F0, tab[KD + 1, t_i] * F0, tab[KD + 2, t_i] * F0
-        pdf_next = (tab[PHONG, t_i] if delta_scene else F1) * pdf
-        o0, o1, o2 = start[0, i], start[1, i], start[2, i]
+            fac0, fac1, fac2 = tab[t_i, KD] * F0, tab[t_i, KD + 1] * F0, tab[t_i, KD + 2] * F0
+        pdf_next = (tab[t_i, PHONG] if delta_scene else F1) * pdf
+        o0, o1, o2 = start[i, 0], start[i, 1], start[i, 2]
         if not is_phong:
             fac0 = fac1 = fac2 = F1
             pdf_next = F0
             if is_mirror:
                 w0, w1, w2 = _reflect(d0, d1, d2, n0, n1, n2)
             else:  # glass (`intersect.refract`, in float64 as there)
-                ior = tab[IOR, t_i]
+                ior = tab[t_i, IOR]
                 eta = np.float64(F1 / ior if entering[i] else ior)
                 cos1 = -(n0 * d0 + n1 * d1 + n2 * d2)
                 kk = 1.0 - eta * eta * np.float64(F1 - cos1 * cos1)
@@ -411,10 +413,10 @@ def _bounce(k, L, direct, tri, path, beta, d, p, n, entering, start, tab, glossy
                     w1 = np.float32(eta * np.float64(d1) + s * np.float64(n1))
                     w2 = np.float32(eta * np.float64(d2) + s * np.float64(n2))
                     side = -offset64
-                o0 = np.float32(np.float64(p[0, i]) + side * np.float64(n0))
-                o1 = np.float32(np.float64(p[1, i]) + side * np.float64(n1))
-                o2 = np.float32(np.float64(p[2, i]) + side * np.float64(n2))
-        b0, b1, b2 = beta[0, i] * fac0, beta[1, i] * fac1, beta[2, i] * fac2
+                o0 = np.float32(np.float64(p[i, 0]) + side * np.float64(n0))
+                o1 = np.float32(np.float64(p[i, 1]) + side * np.float64(n1))
+                o2 = np.float32(np.float64(p[i, 2]) + side * np.float64(n2))
+        b0, b1, b2 = beta[i, 0] * fac0, beta[i, 1] * fac1, beta[i, 2] * fac2
         strongest = max(max(b0, b1), b2)
         alive = strongest > F0
         if roulette:
@@ -425,9 +427,9 @@ def _bounce(k, L, direct, tri, path, beta, d, p, n, entering, start, tab, glossy
                 b0, b1, b2 = b0 * inv, b1 * inv, b2 * inv
         if not alive:
             continue
-        out_o[0, count], out_o[1, count], out_o[2, count] = o0, o1, o2
-        out_d[0, count], out_d[1, count], out_d[2, count] = w0, w1, w2
-        out_beta[0, count], out_beta[1, count], out_beta[2, count] = b0, b1, b2
+        out_o[count, 0], out_o[count, 1], out_o[count, 2] = o0, o1, o2
+        out_d[count, 0], out_d[count, 1], out_d[count, 2] = w0, w1, w2
+        out_beta[count, 0], out_beta[count, 1], out_beta[count, 2] = b0, b1, b2
         out_path[count] = q
         out_count_em[count] = not is_phong
         out_pdf[count] = pdf_next
@@ -458,92 +460,116 @@ def _lights(world) -> list[tuple]:
     return out
 
 
+class _Buffers:
+    """Every array the path loop needs, allocated once for n rays (fresh large arrays each
+    bounce cost a page fault per 4 KiB on first touch, as much as the kernels themselves);
+    a bounce uses the first k rows.  The rays' state is double-buffered: `state` in, `spare`
+    out, swapped after each bounce."""
+
+    def __init__(self, n: int):
+        def state():
+            return [np.empty((n, 3), STATE), np.empty((n, 3), STATE), np.empty(n, np.int64),
+                    np.empty((n, 3), STATE), np.empty(n, np.bool_), np.empty(n, STATE)]
+
+        self.state, self.spare = state(), state()  # o, d, path, beta, count_em, bsdf_pdf
+        self.tri, self.path = np.empty(n, np.int64), np.empty(n, np.int64)
+        self.beta, self.d, self.p, self.n, self.start, self.direct, self.wi, self.so, \
+            self.sd = (np.empty((n, 3), STATE) for _ in range(9))
+        self.entering = np.empty(n, np.bool_)
+        self.cos_x, self.cos_y, self.dist2, self.u1, self.u2, self.u3, self.u4 = \
+            (np.empty(n, STATE) for _ in range(7))
+        self.r = np.empty(n)
+        self.cand, self.jem = np.empty(n, np.int64), np.empty(n, np.int64)
+
+
 def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
                max_depth: int, rr_start: int) -> tuple[np.ndarray, int]:
     """`raytrace.pathtrace.trace_rows` (same arguments, same result) with compiled shading.
-    The kernels write compacted rays into whole buffers and are told how many are valid (all
-    their arrays stay C-contiguous: one compiled version each); only Embree sees slices."""
-    tab, etab = tables(world)
+    The kernels' vectors are (n, 3) float32, one ray's on one cache line: rows of (3, n)
+    arrays, 2^15 apart in a tile, alias in the cache and made them twice as slow.  They write
+    compacted rays into the first rows of whole buffers and are told how many are valid (every
+    array stays C-contiguous: one compiled version each)."""
+    tab, tri_emission, etab = tables(world)
     lights = _lights(world)
     offset = STATE(world.offset)
     glossy, delta, emits = world.any_glossy, world.any_delta, world.any_emits
     has_emitters = len(world.emitters) > 0
     cdf = np.ascontiguousarray(world.emitter_cdf, np.float64)
-    o = np.ascontiguousarray(o, STATE)
-    d = np.ascontiguousarray(d, STATE)
-    n_paths = o.shape[1]
-    L = np.zeros((3, n_paths))
+    n = np.shape(o)[1]  # rays in flight: the first n rows of the state
+    b = _Buffers(n)
+    rays_o, rays_d, path, beta, count_em, bsdf_pdf = b.state
+    rays_o[:] = np.asarray(o).T
+    rays_d[:] = np.asarray(d).T
+    path[:] = np.arange(n)
+    beta[:] = 1.0
+    count_em[:] = True
+    bsdf_pdf[:] = 0.0
+    L = np.zeros((n, 3))
     background = np.ascontiguousarray(world.scene.background, np.float64)
     shows_background = bool(background.any())
-    path = np.arange(n_paths)
-    beta = np.ones((3, n_paths), STATE)
-    count_em = np.ones(n_paths, np.bool_)
-    bsdf_pdf = np.zeros(n_paths, STATE)
-    no_f32, no_f64, no_int = np.zeros(0, STATE), np.zeros(0), np.zeros(0, np.int64)
-    n = n_paths  # rays in flight: the first n columns of o, d, path, beta, ...
+    no_f64, no_int = np.zeros(0), np.zeros(0, np.int64)
     rays = 0
     for bounce in range(1, max_depth + 1):
-        tri = world.closest_rows(o[:, :n], d[:, :n])
+        rays_o, rays_d, path, beta, count_em, bsdf_pdf = b.state
+        tri = world.closest_rows(rays_o[:n].T, rays_d[:n].T)
         rays += n
-        h_tri, h_path = np.empty(n, np.int64), np.empty(n, np.int64)
-        h_beta, h_d, h_p, h_n, h_start = (np.empty((3, n), STATE) for _ in range(5))
-        h_entering = np.empty(n, np.bool_)
-        k = _hits(o, d, tri, path, beta, count_em, bsdf_pdf, L, background, shows_background,
-                  tab, world.tri_emission, emits, offset, h_tri, h_path, h_beta, h_d, h_p,
-                  h_n, h_entering, h_start)
+        k = _hits(rays_o, rays_d, tri, path, beta, count_em, bsdf_pdf, L, background,
+                  shows_background, tab, tri_emission, emits, offset, b.tri, b.path, b.beta,
+                  b.d, b.p, b.n, b.entering, b.start)
         if k == 0:
             break
-        direct = np.zeros((3, n), STATE)
-        wi = np.empty((3, n), STATE)
-        cos_x, cos_y, dist2 = np.empty(n, STATE), np.empty(n, STATE), np.empty(n, STATE)
-        cand = np.empty(n, np.int64)
-        so, sd = np.empty((3, n), STATE), np.empty((3, n), STATE)
+        direct = b.direct
+        direct[:k] = 0.0
         if has_emitters:  # the random numbers of `PathWorld.sample_emitters`
-            r = rng.random(k)
-            u1, u2 = rng.random(k, dtype=STATE), rng.random(k, dtype=STATE)
-            jem = np.empty(n, np.int64)
-            m = _emitter_rays(k, h_p, h_n, h_start, h_tri, tab, etab, cdf, r, u1, u2, offset,
-                              wi, cos_x, cos_y, dist2, jem, cand, so, sd)
-            blocked = world.occluded_rows(so[:, :m], sd[:, :m], 1.0)
+            rng.random(out=b.r[:k])
+            rng.random(dtype=STATE, out=b.u1[:k])
+            rng.random(dtype=STATE, out=b.u2[:k])
+            m = _emitter_rays(k, b.p, b.n, b.start, b.tri, tab, etab, cdf, b.r, b.u1, b.u2,
+                              offset, b.wi, b.cos_x, b.cos_y, b.dist2, b.jem, b.cand, b.so, b.sd)
+            blocked = world.occluded_rows(b.so[:m].T, b.sd[:m].T, 1.0)
             rays += m
-            _emitter_shade(direct, h_beta, h_tri, tab, etab, h_n, h_d, jem, wi, cos_x, cos_y,
-                           dist2, cand, blocked, m, bounce < max_depth, glossy, delta)
+            _emitter_shade(direct, b.beta, b.tri, tab, etab, b.n, b.d, b.jem, b.wi, b.cos_x,
+                           b.cos_y, b.dist2, b.cand, blocked, m, bounce < max_depth, glossy,
+                           delta)
         for kind, pos, direction, cutoff, pi_radiance, tmax in lights:
-            m = _light_rays(k, kind, pos, direction, cutoff, h_p, h_n, h_start, h_tri, tab,
-                            delta, wi, cos_x, cos_y, cand, so, sd)
-            blocked = world.occluded_rows(so[:, :m], sd[:, :m], tmax)
+            m = _light_rays(k, kind, pos, direction, cutoff, b.p, b.n, b.start, b.tri, tab,
+                            delta, b.wi, b.cos_x, b.cos_y, b.cand, b.so, b.sd)
+            blocked = world.occluded_rows(b.so[:m].T, b.sd[:m].T, tmax)
             rays += m
-            _light_add(direct, h_beta, h_tri, tab, h_n, h_d, wi, cos_x, cos_y, cand, blocked,
-                       m, pi_radiance, kind == AREA, glossy, delta)
+            _light_add(direct, b.beta, b.tri, tab, b.n, b.d, b.wi, b.cos_x, b.cos_y, b.cand,
+                       blocked, m, pi_radiance, kind == AREA, glossy, delta)
         if bounce == max_depth:
-            _add_direct(L, h_path, direct, k)
+            _add_direct(L, b.path, direct, k)
             break
         # the random numbers of the bounce, in the numpy path's order
-        u_delta = rng.random(k, dtype=STATE) if delta else no_f32
-        u1 = rng.random(k, dtype=STATE)
-        phi = np.float32(2.0 * math.pi) * rng.random(k, dtype=STATE)
-        cos_phi, sin_phi = np.cos(phi), np.sin(phi)
+        if delta:
+            rng.random(dtype=STATE, out=b.u3[:k])
+        rng.random(dtype=STATE, out=b.u1[:k])
+        phi = b.u2[:k]
+        rng.random(dtype=STATE, out=phi)
+        phi *= np.float32(2.0 * math.pi)  # as numpy's float32 product, in place
+        cos_phi, sin_phi = np.cos(phi, out=b.cos_x[:k]), np.sin(phi, out=b.cos_y[:k])
         gl_index, gl_cos_theta, gl_cos_phi, gl_sin_phi = no_int, no_f64, no_f64, no_f64
         if glossy:
-            candidates = np.flatnonzero(np.take(tab[GLOSSY], h_tri[:k]) > 0.0)
+            candidates = np.flatnonzero(np.take(tab[:, GLOSSY], b.tri[:k]) > 0.0)
             if len(candidates):
-                tc = np.take(h_tri, candidates)
-                gl_index = candidates[rng.random(len(candidates)) >= np.take(tab[P_DIFFUSE], tc)]
+                tc = np.take(b.tri, candidates)
+                lobe = rng.random(len(candidates)) >= np.take(tab[:, P_DIFFUSE], tc)
+                gl_index = candidates[lobe]
                 if len(gl_index):
                     gu1, gu2 = rng.random(len(gl_index)), rng.random(len(gl_index))
-                    s = np.take(tab[SHININESS], np.take(h_tri, gl_index))
+                    s = np.take(tab[:, SHININESS], np.take(b.tri, gl_index))
                     gl_cos_theta = gu1 ** (1.0 / (s + 1.0))
                     gl_phi = 2.0 * math.pi * gu2
                     gl_cos_phi, gl_sin_phi = np.cos(gl_phi), np.sin(gl_phi)
         roulette = bounce >= rr_start
-        u_rr = rng.random(k, dtype=STATE) if roulette else no_f32
-        o, d = np.empty((3, k), STATE), np.empty((3, k), STATE)
-        path, beta = np.empty(k, np.int64), np.empty((3, k), STATE)
-        count_em, bsdf_pdf = np.empty(k, np.bool_), np.empty(k, STATE)
-        n = _bounce(k, L, direct, h_tri, h_path, h_beta, h_d, h_p, h_n, h_entering, h_start,
-                    tab, glossy, delta, u_delta, u1, cos_phi, sin_phi, gl_index, gl_cos_theta,
-                    gl_cos_phi, gl_sin_phi, roulette, u_rr, float(world.offset), o, d, path,
-                    beta, count_em, bsdf_pdf)
+        if roulette:
+            rng.random(dtype=STATE, out=b.u4[:k])
+        out = b.spare
+        n = _bounce(k, L, direct, b.tri, b.path, b.beta, b.d, b.p, b.n, b.entering, b.start,
+                    tab, glossy, delta, b.u3, b.u1, cos_phi, sin_phi, gl_index, gl_cos_theta,
+                    gl_cos_phi, gl_sin_phi, roulette, b.u4, float(world.offset), *out)
+        b.state, b.spare = b.spare, b.state
         if n == 0:
             break
-    return L, rays
+    return np.ascontiguousarray(L.T), rays
