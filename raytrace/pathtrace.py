@@ -567,9 +567,13 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
         first, last = rows.start * W, rows.stop * W
         # the tile's pixels row by row, spp times over: a pixel's samples are summed over
         # a middle axis (numpy's reductions over a short last axis are slow)
-        row = np.tile(np.repeat(np.arange(rows.start, rows.stop), W), spp)
-        col = np.tile(np.arange(W), (rows.stop - rows.start) * spp)
-        o, d = camera_rays(scene.camera, W, H, row, col, rng if jitter else None)
+        if used == "numba":  # the same rays, compiled
+            o, d = _kernels().camera_rays(scene.camera, W, H, rows, spp,
+                                          rng if jitter else None)
+        else:
+            row = np.tile(np.repeat(np.arange(rows.start, rows.stop), W), spp)
+            col = np.tile(np.arange(W), (rows.stop - rows.start) * spp)
+            o, d = camera_rays(scene.camera, W, H, row, col, rng if jitter else None)
         L, rays = trace_rows(world, o, d, rng, max_depth, rr_start, used)
         L = L.reshape(3, spp, last - first)
         return slice(first, last), L.sum(axis=1), (L * L).sum(axis=1), rays
