@@ -53,7 +53,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shadowvol.scene import AreaSample, DirectionalLight, Scene, SpotLight, hard_lights
+from shadowvol.errors import MissingExtra
+from shadowvol.scene import (
+    AreaSample,
+    DirectionalLight,
+    Scene,
+    SceneError,
+    SpotLight,
+    hard_lights,
+)
 
 from .backends import cpu_threads, make_backend
 from .brdf import (
@@ -372,22 +380,22 @@ def shading(choice: str | None = None) -> str:
     """Which per-bounce shading the path tracer runs: "numba" (`raytrace.pathkernels`, the
     `fast` extra) or "numpy" (the reference below).  choice None: $SHADOWVOL_PATHTRACE, and
     where that is unset or "auto", numba when it imports, else numpy.  Both give the same
-    samples (`raytrace.pathkernels`)."""
+    samples (`raytrace.pathkernels`).  An unknown name is a SceneError naming where it came
+    from; numba asked for but missing is a MissingExtra (exit status 2 in the CLI)."""
+    where = "shading"
     if choice is None:
-        choice = os.environ.get(SHADING_ENV, "auto").strip().lower() or "auto"
-        where = f"${SHADING_ENV}"
-    else:
-        where = "shading"
+        choice, where = os.environ.get(SHADING_ENV, "auto").strip().lower() or "auto", \
+            SHADING_ENV
     if choice not in SHADINGS + ("auto",):
-        raise ValueError(f"{where}: unknown path-tracer shading {choice!r} (one of: auto, "
-                         f"{', '.join(SHADINGS)})")
+        raise SceneError(where, f"unknown path-tracer shading {choice!r} (one of: auto, "
+                                f"{', '.join(SHADINGS)})")
     if choice == "numpy":
         return "numpy"
     if _kernels() is not None:
         return "numba"
     if choice == "numba":
-        raise ValueError(f"{where}: numba shading asked for, but numba does not import "
-                         "(pip install 'shadowvol[fast]')")
+        raise MissingExtra(f"{where}=numba (the path tracer's compiled shading)", "numba",
+                           "fast")
     return "numpy"
 
 
