@@ -31,6 +31,12 @@ Every object is traced as its triangles (spheres as their icospheres), so the em
 samples is exactly the surface that rays hit.  Random numbers: one `numpy` generator per tile,
 spawned from `SeedSequence(seed)`, so an image depends on the seed only (not on the threads).
 
+Two shadings, one estimator.  What happens between the Embree casts of a bounce runs either as
+the numpy passes below (the reference, and the fallback) or compiled by numba
+(`raytrace.pathkernels`, the `fast` extra), which draws the same random numbers here in numpy and
+repeats the same float32 arithmetic: the same samples (`shading` picks one; $SHADOWVOL_PATHTRACE
+forces it).
+
 Layout and precision.  The path state is rows, (3, k) arrays (`brdf`'s `_rows` kernels), in
 float32 (`STATE`): Embree traces float32 anyway, and numpy's float32 loops are about twice as
 fast.  What float32 costs here is bounded: a hit point lies within a few float32 spacings of
