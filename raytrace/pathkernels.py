@@ -28,6 +28,7 @@ Kernels release the GIL (`nogil`), so `pathtrace.render`'s tiles run on its thre
 from __future__ import annotations
 
 import math
+import threading
 
 import numba
 import numpy as np
@@ -504,9 +505,11 @@ class _Buffers:
     """Every array the path loop needs, allocated once for n rays (fresh large arrays each
     bounce cost a page fault per 4 KiB on first touch, as much as the kernels themselves);
     a bounce uses the first k rows.  The rays' state is double-buffered: `state` in, `spare`
-    out, swapped after each bounce."""
+    out, swapped after each bounce.  `buffers` keeps one set per thread for its next tile."""
 
     def __init__(self, n: int):
+        self.size = n
+
         def state():
             return [np.empty((n, 3), STATE), np.empty((n, 3), STATE), np.empty(n, np.int64),
                     np.empty((n, 3), STATE), np.empty(n, np.bool_), np.empty(n, STATE)]
@@ -520,6 +523,16 @@ class _Buffers:
             (np.empty(n, STATE) for _ in range(7))
         self.r = np.empty(n)
         self.cand, self.jem = np.empty(n, np.int64), np.empty(n, np.int64)
+
+
+def buffers(world, n: int) -> _Buffers:
+    """This thread's buffers for n rays, kept on `world` for the thread's next tile (the tiles
+    of `pathtrace.render` run one at a time on each thread of its pool)."""
+    pool = world.__dict__.setdefault("_kernel_buffers", {})
+    b = pool.get(threading.get_ident())
+    if b is None or b.size < n:
+        b = pool[threading.get_ident()] = _Buffers(n)
+    return b
 
 
 def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
@@ -536,14 +549,14 @@ def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
     has_emitters = len(world.emitters) > 0
     cdf = np.ascontiguousarray(world.emitter_cdf, np.float64)
     n = np.shape(o)[1]  # rays in flight: the first n rows of the state
-    b = _Buffers(n)
+    b = buffers(world, n)
     rays_o, rays_d, path, beta, count_em, bsdf_pdf = b.state
-    rays_o[:] = np.asarray(o).T
-    rays_d[:] = np.asarray(d).T
-    path[:] = np.arange(n)
-    beta[:] = 1.0
-    count_em[:] = True
-    bsdf_pdf[:] = 0.0
+    rays_o[:n] = np.asarray(o).T
+    rays_d[:n] = np.asarray(d).T
+    path[:n] = np.arange(n)
+    beta[:n] = 1.0
+    count_em[:n] = True
+    bsdf_pdf[:n] = 0.0
     L = np.zeros((n, 3))
     background = np.ascontiguousarray(world.scene.background, np.float64)
     shows_background = bool(background.any())
