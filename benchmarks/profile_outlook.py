@@ -3,9 +3,10 @@
     python benchmarks/profile_outlook.py [--size 512] [--spp 1] [--shading numpy|numba]
 
 One thread (tiles in turn, Embree on the calling thread), so that the stages add up to the
-frame: each stage is a function of `raytrace.pathtrace` / `raytrace.brdf` (the numpy shading)
-or a kernel of `raytrace.pathkernels` (the numba shading) timed exclusively (a stage's time
-leaves out the stages it calls).  "paths: ..." is what the path loop (`trace_rows`) does
+frame, in that thread's CPU time (`time.thread_time`: other processes' load on the cores does
+not count, as it does in wall time): each stage is a function of `raytrace.pathtrace` /
+`raytrace.brdf` (the numpy shading) or a kernel of `raytrace.pathkernels` (the numba shading)
+timed exclusively (a stage's time leaves out the stages it calls).  "paths: ..." is what the path loop (`trace_rows`) does
 itself: with numba, drawing the random numbers (in numpy, as the numpy path draws them) and
 the azimuths' cos and sin.  Prints a table and the time of the Embree casts beside the rest.
 """
@@ -38,7 +39,7 @@ STAGES = (
 )
 # the same for the numba shading: kernels of raytrace.pathkernels ("k." prefix)
 NUMBA_STAGES = (
-    ("camera_rays", "camera rays"),
+    ("k.camera_rays", "camera rays (kernel; the jitter drawn in numpy)"),
     ("PathWorld.closest_rows", "Embree: closest hits"),
     ("PathWorld.occluded_rows", "Embree: shadow rays"),
     ("k._hits", "hit: compaction, gather, emission (kernel)"),
@@ -69,11 +70,11 @@ def profile(size: int, spp: int, shading: str = "numpy") -> list[tuple[str, floa
     def timed(fn, name):
         def wrapper(*args, **kwargs):
             stack.append(0.0)
-            start = time.perf_counter()
+            start = time.thread_time()
             try:
                 return fn(*args, **kwargs)
             finally:
-                total = time.perf_counter() - start
+                total = time.thread_time() - start
                 children = stack.pop()
                 spent[name] += total - children
                 if stack:
@@ -113,7 +114,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     rows, result = profile(args.size, args.spp, args.shading)
     total = sum(t for _, t in rows)
-    print(f"{result.rays} rays in {result.seconds:.3f} s, one thread, {args.shading} shading "
+    print(f"{result.rays} rays in {result.seconds:.3f} s wall ({total:.3f} s CPU), one thread, "
+          f"{args.shading} shading "
           f"({result.rays / result.seconds / 1e6:.2f} Mrays/s)")
     for name, t in rows:
         print(f"  {name:46s} {1e3 * t:8.1f} ms  {100 * t / total:5.1f} %")

@@ -442,28 +442,30 @@ def _bounce(k, L, direct, tri, path, beta, d, p, n, entering, start, tab, glossy
 def _camera(eye, right, up, back, near, half_w, half_h, width, height, row0, rows, spp, jx, jy,
             o, d):
     """`pathtrace.camera_rays` for a tile's pixels (rows row0 .. row0 + rows, every column,
-    spp times over, as `pathtrace.render` orders them) into o, d (3, n) float64; jx, jy (n,)
+    spp times over, as `pathtrace.render` orders them) into o, d (n, 3) float64; jx, jy (n,)
     the jitter (0.5: the centres)."""
-    m = rows * width
-    for s in range(spp):
-        for j in range(m):
-            i = s * m + j
-            sx = ((j % width + jx[i]) / width * 2.0 - 1.0) * half_w
-            sy = (1.0 - (row0 + j // width + jy[i]) / height * 2.0) * half_h
-            v0 = sx * right[0] + sy * up[0] - back[0]
-            v1 = sx * right[1] + sy * up[1] - back[1]
-            v2 = sx * right[2] + sy * up[2] - back[2]
-            o[0, i] = eye[0] + near * v0
-            o[1, i] = eye[1] + near * v1
-            o[2, i] = eye[2] + near * v2
-            length = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-            d[0, i], d[1, i], d[2, i] = v0 / length, v1 / length, v2 / length
+    i = 0  # the ray of (row, col) in sample s: the order of `pathtrace.render`'s tiles
+    for _ in range(spp):
+        for row in range(row0, row0 + rows):
+            for col in range(width):
+                sx = ((col + jx[i]) / width * 2.0 - 1.0) * half_w
+                sy = (1.0 - (row + jy[i]) / height * 2.0) * half_h
+                v0 = sx * right[0] + sy * up[0] - back[0]
+                v1 = sx * right[1] + sy * up[1] - back[1]
+                v2 = sx * right[2] + sy * up[2] - back[2]
+                o[i, 0] = eye[0] + near * v0
+                o[i, 1] = eye[1] + near * v1
+                o[i, 2] = eye[2] + near * v2
+                length = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+                d[i, 0], d[i, 1], d[i, 2] = v0 / length, v1 / length, v2 / length
+                i += 1
 
 
 def camera_rays(camera, width: int, height: int, rows: slice, spp: int,
                 rng: np.random.Generator | None) -> tuple[np.ndarray, np.ndarray]:
     """`pathtrace.camera_rays` of the pixels of rows `rows`, every column, `spp` times over
-    (the order `pathtrace.render` traces them): the same random numbers, the same rays."""
+    (the order `pathtrace.render` traces them): the same random numbers, the same rays,
+    origins and directions (3, n) float64 (views of (n, 3) arrays)."""
     from .camera import camera_basis
 
     right, up, back = camera_basis(camera)
@@ -471,11 +473,11 @@ def camera_rays(camera, width: int, height: int, rows: slice, spp: int,
     jx = rng.random(n) if rng is not None else np.full(n, 0.5)
     jy = rng.random(n) if rng is not None else np.full(n, 0.5)
     half_h = math.tan(math.radians(camera.fov_y) / 2.0)
-    o, d = np.empty((3, n)), np.empty((3, n))
+    o, d = np.empty((n, 3)), np.empty((n, 3))  # rows of (3, n) would alias in the cache
     _camera(np.asarray(camera.eye, np.float64), right, up, back, float(camera.near),
             half_h * width / height, half_h, width, height, rows.start,
             rows.stop - rows.start, spp, jx, jy, o, d)
-    return o, d
+    return o.T, d.T
 
 
 # ---- the path loop ---------------------------------------------------------------------------
