@@ -15,14 +15,16 @@ lobe's u^(1/(s+1))), because numpy's SIMD versions and the C library's, which co
 calls, may differ in the last bit.  The kernels do each float32 (`STATE`) / float64 operation
 of the numpy path in its order and precision (float32 constants, no `fastmath`, so LLVM neither
 reassociates nor contracts to FMA).  The image is then bit-identical to the numpy path's where
-no power is taken (Lambertian scenes, such as the Cornell box and the furnace); the glossy
-lobe's cos^s is the one power computed in a kernel (libm's powf where numpy may use SVML), so a
-glossy scene agrees to float32 rounding, and where that rounding flips a Russian-roulette or
-lobe choice a path differs (tests/raytrace/test_pathkernels.py states the budget).
+no power is taken (Lambertian, mirror and glass materials, every kind of light: the Cornell box,
+the furnace); the glossy lobe's cos^s is the one power computed in a kernel (libm's powf where
+numpy uses its SIMD power), so a glossy scene agrees to float32 rounding, and where that
+rounding flips a Russian-roulette choice a path differs (tests/raytrace/test_pathkernels.py
+states the budget).  `camera_rays` is `pathtrace.camera_rays` compiled, bit-identical too.
 
 Kernels release the GIL (`nogil`), so `pathtrace.render`'s tiles run on its thread pool;
-`cache=True` keeps the compiled code next to this file, or in numba's user-wide cache directory
-(`NUMBA_CACHE_DIR`) where that is not writable; with neither, they compile on every run.
+`cache=True` keeps the compiled code next to this file, or under $NUMBA_CACHE_DIR, or in
+numba's user-wide cache directory, whichever is writable first; where none is (numba then
+refuses `cache=True`), they compile in every process.
 """
 
 from __future__ import annotations
