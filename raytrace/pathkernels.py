@@ -22,9 +22,9 @@ rounding flips a Russian-roulette choice a path differs (tests/raytrace/test_pat
 states the budget).  `camera_rays` is `pathtrace.camera_rays` compiled, bit-identical too.
 
 Kernels release the GIL (`nogil`), so `pathtrace.render`'s tiles run on its thread pool;
-`cache=True` keeps the compiled code next to this file, or under $NUMBA_CACHE_DIR, or in
-numba's user-wide cache directory, whichever is writable first; where none is (numba then
-refuses `cache=True`), they compile in every process.
+`cache=True` keeps the compiled code under $NUMBA_CACHE_DIR where that is set, else next to
+this file, else in numba's user-wide cache directory, whichever is writable first; where none
+is (numba then refuses `cache=True`), they compile in every process.
 """
 
 from __future__ import annotations
