@@ -14,8 +14,12 @@
      queries, in the same batches, float32 as Embree gets them), each thread replaying the
      batches one of the path tracer's tile threads cast, on a pool of the same size: the path
      tracer's time with its shading made free.
-   The three are interleaved round by round (path trace, raw, replay), medians reported, in
-   wall time and in this process's CPU time (`time.process_time`, all threads): other sessions
+   Both per-bounce shadings of the path tracer (`raytrace.pathtrace.shading`: numpy, and numba
+   where it imports) are timed; the top-level figures, and the target, are the default one's
+   (numba when installed; `by_shading` has both, and whether their images are identical), and
+   `numba_compile_seconds` the first numba render's time with a cold and a warm cache.
+   All are interleaved round by round (path trace numpy, numba, raw, replay), medians
+   reported, in wall time and in this process's CPU time (`time.process_time`, all threads): other sessions
    on the same cores stretch wall times unevenly (a thread pool waits for its slowest thread),
    CPU times much less, so `cpu_ratio_to_raw` is the steadier figure under load; on an idle
    machine the two ratios agree when both sides keep the cores equally busy.
@@ -118,47 +122,99 @@ def replay_seconds(es, batches: list[list[tuple]]) -> tuple[float, float]:
         return time.perf_counter() - t, time.process_time() - c
 
 
+def compile_seconds() -> dict:
+    """Seconds of the first numba-shaded render of a 16x16 Cornell box in a fresh process with
+    an empty numba cache (`cold`: every kernel compiled) and again in a second process with the
+    cache it left (`cached`: loaded from disk), each with the process's imports excluded; the
+    numpy-shaded render of the same size in the second process for scale (`numpy`)."""
+    import subprocess
+    import tempfile
+
+    code = ("import sys, time; sys.path.insert(0, sys.argv[1]); "
+            "from raytrace.pathtrace import render; from shadowvol.scenefile import load_scene; "
+            "s = load_scene(sys.argv[2]).replace(width=16, height=16); out = []\n"
+            "for name in ('numba', 'numpy'):\n"
+            "    t = time.perf_counter(); render(s, spp=1, shading_name=name, progress=False)\n"
+            "    out.append(time.perf_counter() - t)\n"
+            "print(out[0], out[1])")
+    times = []
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        for _ in range(2):
+            done = subprocess.run([sys.executable, "-c", code, str(ROOT), str(CORNELL)],
+                                  env=env, capture_output=True, text=True, check=True)
+            times.append([float(x) for x in done.stdout.split()])
+    return {"cold": times[0][0], "cached": times[1][0], "numpy": times[1][1]}
+
+
 def path_tracing(size: int, spp: int, runs: int) -> dict:
+    """Both shadings (numpy, numba where it imports) interleaved with the raw and replayed
+    Embree casts, round by round; the top-level figures are the default shading's."""
     from embreex import rtcore_scene
     from embreex.mesh_construction import TriangleMesh
 
     from raytrace.backends import cpu_threads
-    from raytrace.pathtrace import render
+    from raytrace.pathtrace import render, shading
     from shadowvol.scenefile import load_scene
 
+    default = shading()
+    shadings = ["numpy"] + (["numba"] if shading("auto") == "numba" else [])
     scene = load_scene(CORNELL).replace(width=size, height=size)
-    render(scene.replace(width=16, height=16), spp=1)  # warm-up (imports, first BVH)
+    for name in shadings:  # warm-up (imports, the first BVH, numba's compile or cache load)
+        render(scene.replace(width=16, height=16), spp=1, shading_name=name, progress=False)
     vertices, faces, _ = scene.triangles()
     es = rtcore_scene.EmbreeScene()
     TriangleMesh(es, vertices.astype(np.float32), faces.astype(np.int32))
     es.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))  # the BVH
-    results, cpu, raw, raw_cpu, replay, replay_cpu = [], [], [], [], [], []
+    results = {name: [] for name in shadings}
+    cpu = {name: [] for name in shadings}
+    raw, raw_cpu, replay, replay_cpu = [], [], [], []
     for i in range(runs):
-        c = time.process_time()
-        results.append(render(scene, spp=spp, seed=i, progress=False))
-        cpu.append(time.process_time() - c)
-        raw.append(raw_embree_seconds(scene, results[-1].rays, 1, cpu=raw_cpu))
+        for name in shadings:
+            c = time.process_time()
+            results[name].append(render(scene, spp=spp, seed=i, shading_name=name,
+                                        progress=False))
+            cpu[name].append(time.process_time() - c)
+        rays = results[shadings[0]][-1].rays
+        raw.append(raw_embree_seconds(scene, rays, 1, cpu=raw_cpu))
         batches = _recorded_batches(scene, spp, seed=i)
         wall, c = replay_seconds(es, batches)
         replay.append(wall)
         replay_cpu.append(c)
         del batches
-    seconds = statistics.median(r.seconds for r in results)
-    rays = int(statistics.median(r.rays for r in results))
     raw_s, replay_s = statistics.median(raw), statistics.median(replay)
-    cpu_s, raw_cpu_s = statistics.median(cpu), statistics.median(raw_cpu)
-    replay_cpu_s = statistics.median(replay_cpu)
-    return {"size": size, "spp": spp, "threads": cpu_threads(), "rays": rays,
-            "seconds": seconds, "seconds_min_max": [min(r.seconds for r in results),
-                                                    max(r.seconds for r in results)],
-            "mrays_per_s": rays / seconds / 1e6, "raw_embree_seconds": raw_s,
-            "raw_embree_mrays_per_s": rays / raw_s / 1e6, "ratio_to_raw": raw_s / seconds,
+    raw_cpu_s, replay_cpu_s = statistics.median(raw_cpu), statistics.median(replay_cpu)
+    by_shading = {}
+    for name in shadings:
+        rs = results[name]
+        seconds = statistics.median(r.seconds for r in rs)
+        cpu_s = statistics.median(cpu[name])
+        rays = int(statistics.median(r.rays for r in rs))
+        by_shading[name] = {
+            "rays": rays, "seconds": seconds,
+            "seconds_min_max": [min(r.seconds for r in rs), max(r.seconds for r in rs)],
+            "mrays_per_s": rays / seconds / 1e6, "ratio_to_raw": raw_s / seconds,
+            "ratio_to_raw_min_max": [min(raw) / max(r.seconds for r in rs),
+                                     max(raw) / min(r.seconds for r in rs)],
+            "ratio_to_replay": replay_s / seconds, "cpu_seconds": cpu_s,
+            "cpu_ratio_to_raw": raw_cpu_s / cpu_s, "cpu_ratio_to_replay": replay_cpu_s / cpu_s}
+    same = all(np.array_equal(a.image, b.image) for a, b in
+               zip(results["numpy"], results.get("numba", results["numpy"])))
+    top = by_shading[default]
+    return {"size": size, "spp": spp, "threads": cpu_threads(), "shading": default,
+            **{key: top[key] for key in ("rays", "seconds", "seconds_min_max", "mrays_per_s")},
+            "raw_embree_seconds": raw_s, "raw_embree_mrays_per_s": top["rays"] / raw_s / 1e6,
+            "ratio_to_raw": top["ratio_to_raw"],
             "replay_embree_seconds": replay_s,
-            "replay_embree_mrays_per_s": rays / replay_s / 1e6,
-            "ratio_to_replay": replay_s / seconds, "target_ratio": 0.6,
-            "cpu_seconds": cpu_s, "raw_embree_cpu_seconds": raw_cpu_s,
-            "replay_embree_cpu_seconds": replay_cpu_s, "cpu_ratio_to_raw": raw_cpu_s / cpu_s,
-            "cpu_ratio_to_replay": replay_cpu_s / cpu_s,
+            "replay_embree_mrays_per_s": top["rays"] / replay_s / 1e6,
+            "ratio_to_replay": top["ratio_to_replay"], "target_ratio": 0.6,
+            "target_met": top["ratio_to_raw"] >= 0.6,
+            "cpu_seconds": top["cpu_seconds"], "raw_embree_cpu_seconds": raw_cpu_s,
+            "replay_embree_cpu_seconds": replay_cpu_s,
+            "cpu_ratio_to_raw": top["cpu_ratio_to_raw"],
+            "cpu_ratio_to_replay": top["cpu_ratio_to_replay"],
+            "by_shading": by_shading, "images_identical_across_shadings": same,
+            "numba_compile_seconds": compile_seconds() if "numba" in shadings else None,
             "load_average": list(os.getloadavg())}
 
 
@@ -188,9 +244,10 @@ def radiosity_times(targets=PATCH_TARGETS, rays_per_patch: int = 256) -> list[di
     return rows
 
 
-def measure(size: int = 512, spp: int = 4, runs: int = 3) -> dict:
+def measure(size: int = 512, spp: int = 4, runs: int = 3, radiosity: bool = True) -> dict:
     """Both benchmarks: {"path_tracing": {...}, "radiosity": [{...} per size]}."""
-    return {"path_tracing": path_tracing(size, spp, runs), "radiosity": radiosity_times()}
+    return {"path_tracing": path_tracing(size, spp, runs),
+            "radiosity": radiosity_times() if radiosity else None}
 
 
 def main(argv=None) -> int:
@@ -198,8 +255,9 @@ def main(argv=None) -> int:
     ap.add_argument("--size", type=int, default=512)
     ap.add_argument("--spp", type=int, default=4)
     ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--no-radiosity", action="store_true", help="path tracing only")
     args = ap.parse_args(argv)
-    print(json.dumps(measure(args.size, args.spp, args.runs), indent=1))
+    print(json.dumps(measure(args.size, args.spp, args.runs, not args.no_radiosity), indent=1))
     return 0
 
 

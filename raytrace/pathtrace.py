@@ -31,6 +31,12 @@ Every object is traced as its triangles (spheres as their icospheres), so the em
 samples is exactly the surface that rays hit.  Random numbers: one `numpy` generator per tile,
 spawned from `SeedSequence(seed)`, so an image depends on the seed only (not on the threads).
 
+Two shadings, one estimator.  What happens between the Embree casts of a bounce runs either as
+the numpy passes below (the reference, and the fallback) or compiled by numba
+(`raytrace.pathkernels`, the `fast` extra), which draws the same random numbers here in numpy and
+repeats the same float32 arithmetic: the same samples (`shading` picks one; $SHADOWVOL_PATHTRACE
+forces it).
+
 Layout and precision.  The path state is rows, (3, k) arrays (`brdf`'s `_rows` kernels), in
 float32 (`STATE`): Embree traces float32 anyway, and numpy's float32 loops are about twice as
 fast.  What float32 costs here is bounded: a hit point lies within a few float32 spacings of
@@ -46,13 +52,22 @@ seen directly is exact), as do the per-pixel sums and squares.
 from __future__ import annotations
 
 import math
+import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
-from shadowvol.scene import AreaSample, DirectionalLight, Scene, SpotLight, hard_lights
+from shadowvol.errors import MissingExtra
+from shadowvol.scene import (
+    AreaSample,
+    DirectionalLight,
+    Scene,
+    SceneError,
+    SpotLight,
+    hard_lights,
+)
 
 from .backends import cpu_threads, make_backend
 from .brdf import (
@@ -77,6 +92,9 @@ LEAVING_STANDOFF = 10.0  # `radiance_leaving` starts its rays this many surface 
 # docstring) and the smallest value a float32 division below is kept from dividing by.
 STATE = np.float32
 STATE_TINY = 1e-30
+# the environment variable that picks the per-bounce shading (`shading`): auto, numpy, numba
+SHADING_ENV = "SHADOWVOL_PATHTRACE"
+SHADINGS = ("numpy", "numba")
 
 
 def _take(a: np.ndarray, index: np.ndarray) -> np.ndarray:
@@ -241,6 +259,7 @@ class PathImage:
     image    : (H, W, 3) float64 linear RGB, the mean of `spp` samples per pixel
     variance : (H, W, 3) float64, the variance of that mean (sample variance / spp)
     rays     : total rays traced (camera, bounce and shadow rays);  seconds : wall time
+    shading  : "numpy" or "numba" (`shading`), the per-bounce shading that ran
     """
 
     image: np.ndarray
@@ -248,6 +267,7 @@ class PathImage:
     spp: int
     rays: int
     seconds: float
+    shading: str = "numpy"
 
 
 def _scatter_add(L: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
@@ -327,12 +347,13 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, start, mis: bo
 
 
 def trace_paths(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
-                max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE
-                ) -> tuple[np.ndarray, int]:
+                max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE,
+                shading_name: str | None = None) -> tuple[np.ndarray, int]:
     """Radiance (n, 3) float64 arriving along rays o, d (n, 3) float64 (unit d), one path each,
     and the number of rays traced.  rr_start: first bounce of Russian roulette (a number above
-    max_depth turns it off)."""
-    L, rays = trace_rows(world, np.asarray(o).T, np.asarray(d).T, rng, max_depth, rr_start)
+    max_depth turns it off); shading_name: as for `trace_rows`."""
+    L, rays = trace_rows(world, np.asarray(o).T, np.asarray(d).T, rng, max_depth, rr_start,
+                         shading_name)
     return np.ascontiguousarray(L.T, np.float64), rays
 
 
@@ -352,10 +373,52 @@ def _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, ne
         new_o[:, g] = _take(p, g) + np.where(tir, 1.0, -1.0) * world.offset * ng
 
 
+def _kernels():
+    """`raytrace.pathkernels` (numba's compiled shading), or None where numba is missing."""
+    try:
+        from . import pathkernels
+    except ImportError:  # numba absent, or too old or new for this numpy
+        return None
+    return pathkernels
+
+
+def shading(choice: str | None = None) -> str:
+    """Which per-bounce shading the path tracer runs: "numba" (`raytrace.pathkernels`, the
+    `fast` extra) or "numpy" (the reference below).  choice None: $SHADOWVOL_PATHTRACE, and
+    where that is unset or "auto", numba when it imports, else numpy.  Both give the same
+    samples (`raytrace.pathkernels`).  An unknown name is a SceneError naming where it came
+    from; numba asked for but missing is a MissingExtra (exit status 2 in the CLI)."""
+    where = "shading"
+    if choice is None:
+        choice, where = os.environ.get(SHADING_ENV, "auto").strip().lower() or "auto", \
+            SHADING_ENV
+    if choice not in SHADINGS + ("auto",):
+        raise SceneError(where, f"unknown path-tracer shading {choice!r} (one of: auto, "
+                                f"{', '.join(SHADINGS)})")
+    if choice == "numpy":
+        return "numpy"
+    if _kernels() is not None:
+        return "numba"
+    if choice == "numba":
+        raise MissingExtra(f"{where}=numba (the path tracer's compiled shading)", "numba",
+                           "fast")
+    return "numpy"
+
+
 def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
-               max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE
-               ) -> tuple[np.ndarray, int]:
-    """`trace_paths` with rays and radiance as rows: o, d (3, n) float -> L (3, n) float64."""
+               max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE,
+               shading_name: str | None = None) -> tuple[np.ndarray, int]:
+    """`trace_paths` with rays and radiance as rows: o, d (3, n) float -> L (3, n) float64.
+    shading_name: "numpy", "numba" or None (`shading()` decides)."""
+    if shading(shading_name) == "numba":
+        return _kernels().trace_rows(world, o, d, rng, max_depth, rr_start)
+    return _trace_rows_numpy(world, o, d, rng, max_depth, rr_start)
+
+
+def _trace_rows_numpy(world: PathWorld, o: np.ndarray, d: np.ndarray,
+                      rng: np.random.Generator, max_depth: int, rr_start: int
+                      ) -> tuple[np.ndarray, int]:
+    """The numpy reference of `trace_rows`: every stage a few whole-array passes."""
     o = np.ascontiguousarray(o, STATE)
     d = np.ascontiguousarray(d, STATE)
     n_paths = o.shape[1]
@@ -486,17 +549,20 @@ def camera_rays(camera, width: int, height: int, rows: np.ndarray, cols: np.ndar
 
 def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_MAX_DEPTH,
            rr_start: int = RR_START_BOUNCE, jitter: bool = True, backend: str = "embree",
-           progress: bool | None = None) -> PathImage:
+           progress: bool | None = None, shading_name: str | None = None) -> PathImage:
     """Path-trace `scene` with `spp` paths per pixel; see the module docstring.
 
     jitter : sample each pixel at random points (True) or always at its centre (False: then the
              image converges to the pixel-centre image that the masks and Whitted sample).
+    shading_name : "numpy", "numba" or None ($SHADOWVOL_PATHTRACE, else numba if installed).
     The result depends on (scene, spp, seed, max_depth, rr_start, jitter) only: tiles of whole
-    rows, one random stream each, summed in tile order whatever the threads.
+    rows, one random stream each, summed in tile order whatever the threads (and the same
+    samples from either shading: `raytrace.pathkernels`).
     """
     for name, value, low in (("spp", spp, 1), ("max_depth", max_depth, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
             raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
+    used = shading(shading_name)
     start = time.perf_counter()
     H, W = scene.height, scene.width
     per_row = W * spp
@@ -515,10 +581,14 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
         first, last = rows.start * W, rows.stop * W
         # the tile's pixels row by row, spp times over: a pixel's samples are summed over
         # a middle axis (numpy's reductions over a short last axis are slow)
-        row = np.tile(np.repeat(np.arange(rows.start, rows.stop), W), spp)
-        col = np.tile(np.arange(W), (rows.stop - rows.start) * spp)
-        o, d = camera_rays(scene.camera, W, H, row, col, rng if jitter else None)
-        L, rays = trace_rows(world, o, d, rng, max_depth, rr_start)
+        if used == "numba":  # the same rays, compiled
+            o, d = _kernels().camera_rays(scene.camera, W, H, rows, spp,
+                                          rng if jitter else None)
+        else:
+            row = np.tile(np.repeat(np.arange(rows.start, rows.stop), W), spp)
+            col = np.tile(np.arange(W), (rows.stop - rows.start) * spp)
+            o, d = camera_rays(scene.camera, W, H, row, col, rng if jitter else None)
+        L, rays = trace_rows(world, o, d, rng, max_depth, rr_start, used)
         L = L.reshape(3, spp, last - first)
         return slice(first, last), L.sum(axis=1), (L * L).sum(axis=1), rays
 
@@ -537,4 +607,4 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
     mean = total.T / spp
     var = np.maximum(squares.T / spp - mean ** 2, 0.0) / max(spp - 1, 1)
     return PathImage(mean.reshape(H, W, 3), var.reshape(H, W, 3), spp, counted[0],
-                     time.perf_counter() - start)
+                     time.perf_counter() - start, used)

@@ -50,6 +50,18 @@ def _no_gl_unless_marked(request, monkeypatch):
     yield
 
 
+@pytest.fixture(params=["numpy", "numba"])
+def path_shading(request, monkeypatch):
+    """The path tracer's per-bounce shading (`raytrace.pathtrace.shading`), set for the test
+    through $SHADOWVOL_PATHTRACE: a test that takes this runs on both; the numba one skips,
+    saying why, where numba is not installed (the `fast` extra; the `test` extra has it)."""
+    if request.param == "numba":
+        pytest.importorskip("numba", reason="the numba shading needs numba: "
+                            "pip install 'shadowvol[fast]'")
+    monkeypatch.setenv("SHADOWVOL_PATHTRACE", request.param)
+    return request.param
+
+
 @pytest.fixture(scope="session")
 def gl_session():
     from shadowvol.raster.context import create_context

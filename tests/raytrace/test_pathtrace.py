@@ -17,10 +17,11 @@ from shadowvol.primitives import box, plane
 from shadowvol.scene import AreaLight, Camera, Material, Scene
 
 
-def test_furnace_converges_to_emission_over_one_minus_albedo():
+def test_furnace_converges_to_emission_over_one_minus_albedo(path_shading):
     rho, emitted = np.array([0.3, 0.5, 0.7]), 1.0
     expected = emitted / (1.0 - rho)
     result = render(furnace(rho, [emitted] * 3), spp=128, seed=1)
+    assert result.shading == path_shading
     mean, var = block_means(result.image, result.variance, block=4)
     whole, whole_var = block_means(result.image, result.variance, block=16)
     z = np.concatenate([((mean - expected) / np.sqrt(var)).ravel(),
@@ -30,9 +31,10 @@ def test_furnace_converges_to_emission_over_one_minus_albedo():
     assert (z_limit(z.size) * np.sqrt(whole_var) < 0.02 * expected).all()
 
 
-def test_depth_one_equals_direct_lighting_from_the_masks():
+def test_depth_one_equals_direct_lighting_from_the_masks(path_shading):
     scene = cornell(48)
     result = render(scene, spp=64, seed=3, max_depth=1, jitter=False)
+    assert result.shading == path_shading
     reference = direct_lighting(scene, splits=3)
     mean, var = block_means(result.image, result.variance, block=4)
     ref, _ = block_means(reference, np.zeros_like(reference), block=4)
@@ -45,7 +47,7 @@ def test_depth_one_equals_direct_lighting_from_the_masks():
     assert (np.abs(0.05 * ref) > allowed).sum() > 0.25 * ref.size
 
 
-def test_russian_roulette_is_unbiased():
+def test_russian_roulette_is_unbiased(path_shading):
     """Mean over seeds with roulette from the first bounce vs a render without roulette (same
     depth bound): a z-test per 4x4-pixel region and channel, false alarm FALSE_ALARM."""
     scene = cornell(24)
@@ -54,6 +56,7 @@ def test_russian_roulette_is_unbiased():
     low = np.mean([r.image for r in runs], axis=0)
     low_var = np.sum([r.variance for r in runs], axis=0) / len(runs) ** 2
     ref = render(scene, spp=384, seed=100, max_depth=depth, rr_start=depth + 1)
+    assert ref.shading == path_shading
     z = []
     for block in (4, 24):  # regions, and the whole image
         a, va = block_means(low, low_var, block)
@@ -65,16 +68,17 @@ def test_russian_roulette_is_unbiased():
     assert (0.06 * b > z_limit(z.size) * np.sqrt(va + vb)).all(), np.sqrt(va + vb) / b
 
 
-def test_same_seed_same_image_other_seed_other_image():
+def test_same_seed_same_image_other_seed_other_image(path_shading):
     scene = cornell(16)
     a = render(scene, spp=2, seed=7)
     b = render(scene, spp=2, seed=7)
     c = render(scene, spp=2, seed=8)
+    assert a.shading == path_shading
     assert np.array_equal(a.image, b.image)
     assert not np.array_equal(a.image, c.image)
 
 
-def test_the_image_does_not_depend_on_the_threads(monkeypatch):
+def test_the_image_does_not_depend_on_the_threads(monkeypatch, path_shading):
     """Tiles of whole rows, one random stream each, summed in tile order: one thread or two
     give the same bytes."""
     monkeypatch.setattr(pathtrace, "TILE_PATHS", 64)  # 16x16 at spp 2: 8 tiles
@@ -86,6 +90,7 @@ def test_the_image_does_not_depend_on_the_threads(monkeypatch):
     assert np.array_equal(images[0].image, images[1].image)
     assert np.array_equal(images[0].variance, images[1].variance)
     assert images[0].rays == images[1].rays
+    assert images[0].shading == path_shading
 
 
 def test_cosine_sampling_has_the_cosine_lobe_moments():
@@ -145,7 +150,7 @@ def test_bad_spp_is_refused(bad):
         render(cornell(8), spp=bad)
 
 
-def test_an_area_light_is_its_samples_as_in_whitted():
+def test_an_area_light_is_its_samples_as_in_whitted(path_shading):
     """An area light in `scene.lights` (not emissive geometry): the path tracer's next-event
     estimate sums its samples, each weighted by its cosine at the light, as the Whitted
     tracer's direct term does.  Lambertian, no ambient, pixel centres, depth 1: nothing is
@@ -160,7 +165,9 @@ def test_an_area_light_is_its_samples_as_in_whitted():
                                material=lambert)],
                   lights=[light], width=48, height=36, ambient=[0, 0, 0],
                   background=[0, 0, 0])
-    traced = render(scene, spp=1, seed=0, max_depth=1, jitter=False).image
+    traced = render(scene, spp=1, seed=0, max_depth=1, jitter=False)
+    assert traced.shading == path_shading
+    traced = traced.image
     whitted = whitted_render(scene, max_depth=0)
     close = np.isclose(traced, whitted, rtol=1e-4, atol=1e-6).all(axis=2)
     assert close.mean() > 0.97, f"{(~close).sum()} pixels differ"

@@ -139,7 +139,7 @@ def test_parallel_squares_match_the_analytic_form_factor():
     assert abs(estimate - analytic) < z_limit(1) * sigma, (estimate, analytic)
 
 
-def test_path_tracing_and_radiosity_agree_on_the_diffuse_cornell_box():
+def test_path_tracing_and_radiosity_agree_on_the_diffuse_cornell_box(path_shading):
     """Area-averaged radiance of every object (its camera-side face): radiosity at level 3 (2048 rays a patch)
     against 20000 path-traced points per object, within z_limit standard errors plus
     PT_RADIOSITY_RELATIVE."""
