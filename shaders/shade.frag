@@ -8,7 +8,8 @@
 // forward passes' bit for bit.  Terms are added in light order, as the forward passes blended
 // them.
 //
-// MASKS_ONLY: the lit bits alone, no colour.
+// MASKS_ONLY: the lit bits alone, no colour.  SRGB_OUT: the colour encoded to 8-bit sRGB (a
+// frame of one page whose float image is not asked for).
 
 #ifndef LIGHTS
 #define LIGHTS 1        // lights in this page, at most 23 (lit bits 1..23 and coverage: exact
@@ -98,7 +99,14 @@ void main() {
 #endif
     }
 #endif
-#ifndef MASKS_ONLY
+#if !defined(MASKS_ONLY) && defined(SRGB_OUT)
+    // srgb.frag's encoding of the same float32 colour (keep the expressions identical): the
+    // pixel the sRGB pass would have written from the stored colour
+    vec3 c = clamp(colour, 0.0, 1.0);
+    vec3 s = mix(1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, 12.92 * c,
+                 vec3(lessThanEqual(c, vec3(0.0031308))));
+    f_colour = vec4(floor(s * 255.0 + 0.5) / 255.0, 1.0);
+#elif !defined(MASKS_ONLY)
     f_colour = vec4(colour, u_first_page ? 1.0 : 0.0);
 #else
     f_colour = vec4(0.0);

@@ -49,17 +49,20 @@ class ScenePrograms:
         self.gbuffer_vao = ctx.vertex_array(self.gbuffer, geometry.soup_bindings(self.gbuffer))
         self.mark = glsl.program(ctx, "fullscreen.vert", "mark.frag")
         self.mark_vao = ctx.vertex_array(self.mark, [])
-        self._shade: dict[tuple[int, bool], tuple] = {}  # (lights, colour) -> program, vao
+        # (lights, colour, sRGB out) -> program, vao
+        self._shade: dict[tuple[int, bool, bool], tuple] = {}
         self.srgb = glsl.program(ctx, "fullscreen.vert", "srgb.frag")
         self.srgb_vao = ctx.vertex_array(self.srgb, [])
         self._forward = None
 
-    def shading(self, lights: int, colour: bool) -> tuple:
+    def shading(self, lights: int, colour: bool, srgb: bool = False) -> tuple:
         """(program, vao) of the shading pass for a page of `lights` lights (a constant in the
-        shader: its loop unrolls), with colour or the lit bits only; made on first use."""
-        key = (lights, colour)
+        shader: its loop unrolls), with colour or the lit bits only, the colour as linear
+        float or (`srgb`) encoded to 8-bit sRGB; made on first use."""
+        key = (lights, colour, srgb)
         if key not in self._shade:
-            defines = {"LIGHTS": lights} | ({} if colour else {"MASKS_ONLY": 1})
+            defines = ({"LIGHTS": lights} | ({} if colour else {"MASKS_ONLY": 1}) |
+                       ({"SRGB_OUT": 1} if srgb else {}))
             program = glsl.program(self.ctx, "fullscreen.vert", "shade.frag", defines=defines)
             self._shade[key] = (program, self.ctx.vertex_array(program, []))
         return self._shade[key]
@@ -105,12 +108,16 @@ def set_camera(programs, view_proj: np.ndarray, camera: Camera, origin: np.ndarr
 
 
 def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, scene: Scene,
-                  cull: np.ndarray | None = None, marks: bool = True) -> None:
+                  cull: np.ndarray | None = None, marks: bool = True,
+                  srgb_background: tuple[int, int, int] | None = None) -> None:
     """Clear the G-buffer, depth and stencil, then every triangle of the soup: one draw per run
     of objects with the same `cull` (n_objects,) bool, back faces culled where it is True (one
     draw for all when None or all alike).  `marks`: some light will be marked (more than one
-    light in a page)."""
+    light in a page).  `srgb_background`: the shading pass will write 8-bit sRGB; its target
+    is cleared to this code (`srgb_code` of the background)."""
     target.clear_gbuffer(scene.background, marks)
+    if srgb_background is not None:
+        target.clear_srgb(srgb_background)
     target.use_gbuffer()
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
@@ -166,18 +173,21 @@ def _only_where_covered(ctx: moderngl.Context) -> None:
 
 
 def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
-          scene: Scene, camera: Camera, lights, first_page: bool, colour: bool = True) -> None:
+          scene: Scene, camera: Camera, lights, first_page: bool, colour: bool = True,
+          srgb: bool = False) -> None:
     """The one shading pass for `lights` (at most LIGHTS_PER_PAGE): colour and bits of every
     pixel.  The unshadowed target holds bits 0.. of all but the last light; the stencil holds
     the last light's count, and the pass is drawn where it is 0 and where it is not (each
     pixel once), which spares the last light its marking pass and, for one light, the
     unshadowed fetch.  A page after the first is added to the first (additive blending; no
     ambient, no coverage) and its bits must be cleared before.  `colour=False`: the lit bits
-    only."""
-    prog, vao = progs.shading(len(lights), colour)
-    target.fbo.depth_mask = False
-    target.fbo.color_mask = [(colour,) * 4, (True,) * 4]
-    target.fbo.use()
+    only.  `srgb`: the colour encoded to 8-bit sRGB into `target.srgb` instead (one page only:
+    pages add up in float), exactly as `encode_srgb` would encode it."""
+    prog, vao = progs.shading(len(lights), colour, srgb)
+    fbo = target.srgb_shade_fbo if srgb else target.fbo
+    fbo.depth_mask = False
+    fbo.color_mask = [(colour,) * 4, (True,) * 4]
+    fbo.use()
     if first_page:
         ctx.enable_only(moderngl.NOTHING)
     else:
@@ -219,6 +229,26 @@ def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: Scene
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     target.use()
+
+
+def srgb_code(ctx: moderngl.Context, progs: ScenePrograms, rgb) -> tuple[int, int, int]:
+    """The 8-bit sRGB code of the linear colour `rgb` (3,) as srgb.frag encodes it (on the GPU,
+    so that a pixel cleared to it is the pixel the sRGB pass would have written)."""
+    src = ctx.texture((1, 1), 4, np.array([*rgb, 0.0], np.float32).tobytes(), dtype="f4")
+    out = ctx.texture((1, 1), 4, dtype="f1")
+    fbo = ctx.framebuffer(color_attachments=[out])
+    try:
+        fbo.use()
+        ctx.enable_only(moderngl.NOTHING)
+        src.use(0)
+        set_uniform(progs.srgb, "u_colour", 0)
+        progs.srgb_vao.render(moderngl.TRIANGLES, vertices=3)
+        code = np.frombuffer(fbo.read(components=3, dtype="f1"), np.uint8)
+    finally:
+        for obj in (fbo, out, src):
+            obj.release()
+        ctx.enable_only(moderngl.DEPTH_TEST)
+    return tuple(int(c) for c in code)
 
 
 def encode_srgb(ctx: moderngl.Context, target: Target, progs: ScenePrograms) -> None:

@@ -131,6 +131,7 @@ class Renderer:
         self._light_bounds: dict[bytes, tuple | None] = {}
         self._slack: tuple | None = None   # (camera key, `overflow.world_slack`)
         self._largest: float | None = None  # max |world corner|: the float32 part of the slack
+        self._srgb_code: tuple[int, int, int] | None = None   # `_srgb_background`
         # back-face culling in the geometry pass for closed convex casters beyond the near
         # plane (`methods.cullable`): 14-22% of a frame here, but OFF by default because it is
         # not exact at float32 depth ties: where a silhouette's back face won the depth test by
@@ -291,6 +292,12 @@ class Renderer:
             self._count_bound = overflow.count_bound(self.geometry.topologies)
         return self._count_bound
 
+    def _srgb_background(self) -> tuple[int, int, int]:
+        """The background's 8-bit sRGB code as the sRGB pass encodes it (once per renderer)."""
+        if self._srgb_code is None:
+            self._srgb_code = passes.srgb_code(self.ctx, self.programs, self.scene.background)
+        return self._srgb_code
+
     def _truth_pass(self) -> truth.TruthPass:
         if self._truth is None:
             self._truth = self._own(truth.TruthPass(self.ctx, self.target))
@@ -330,8 +337,13 @@ class Renderer:
         hard = [(i, sample) for i, lt in enumerate(lights) for sample in hard_lights(lt)]
         # the unshadowed bits are cleared when some light of the first page is marked
         # (and always for the facing pass, which marks every light)
+        # the 8-bit image straight from the shading pass when the float one is not asked for
+        # and one page holds every light (pages add up in float)
+        srgb_direct = ("image_srgb" in outputs and "image" not in outputs
+                       and len(hard) <= LIGHTS_PER_PAGE)
         passes.geometry_pass(self.ctx, target, progs, self.scene, cull,
-                             marks=len(hard) > 1 or facing_pass)
+                             marks=len(hard) > 1 or facing_pass,
+                             srgb_background=self._srgb_background() if srgb_direct else None)
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(
@@ -381,7 +393,7 @@ class Renderer:
                     stencil_zero = True
                 zfail[hard[first + bit][0]] |= choice
             passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
-                         first_page=not first, colour=colour)
+                         first_page=not first, colour=colour, srgb=srgb_direct)
             stencil_zero = stencil_zero and not page_lights
             if need_bits:
                 pages.append(target.read_bits())
@@ -421,7 +433,9 @@ class Renderer:
             if "facing" not in asked:  # computed for casters only
                 extra.pop("facing")
         srgb = None
-        if "image_srgb" in outputs:
+        if srgb_direct:
+            srgb = target.read_srgb(flipped=False)
+        elif "image_srgb" in outputs:
             passes.encode_srgb(self.ctx, target, progs)
             srgb = target.read_srgb()
         return RenderResult(

@@ -239,9 +239,15 @@ def clear_colour_attachment(gl: RawGL, framebuffer_glo: int, draw_buffer: int,
     """Float colour attachment `draw_buffer` (its index among the draw buffers) to `value` in
     every channel, under the current colour write mask (moderngl clears all attachments with
     one colour)."""
-    values = (ctypes.c_float * 4)(value, value, value, value)
+    clear_colour_attachment_values(gl, framebuffer_glo, draw_buffer, (value,) * 4)
+
+
+def clear_colour_attachment_values(gl: RawGL, framebuffer_glo: int, draw_buffer: int,
+                                   values) -> None:
+    """Colour attachment `draw_buffer` to the 4 floats `values` (a normalised one stores
+    round(255 v)), under the current colour write mask."""
     with bound_framebuffer(gl, framebuffer_glo):
-        gl.glClearBufferfv(GL_COLOR, draw_buffer, values)
+        gl.glClearBufferfv(GL_COLOR, draw_buffer, (ctypes.c_float * 4)(*values))
 
 
 def clear_int_attachment(gl: RawGL, framebuffer_glo: int, draw_buffer: int, value: int) -> None:

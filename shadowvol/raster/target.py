@@ -14,10 +14,14 @@
 - depth-stencil: DEPTH32F_STENCIL8, a raw-GL renderbuffer (see `stencil`: moderngl has no
   stencil API) shared by every framebuffer here; float depth for the reversed depth of
   `camera.infinite_projection`.
-- srgb (RGBA8, its own framebuffer): the image encoded to 8-bit sRGB by a full-screen pass.
+- srgb (RGBA8): the image encoded to 8-bit sRGB, either by a full-screen pass over colour
+  (`srgb_fbo`, rows flipped) or, when the frame is one page and the float image is not asked
+  for, by the shading pass itself (`srgb_shade_fbo`: srgb and bits, with the depth-stencil;
+  GL's row order), which then writes no float colour at all.
 
 A pass never samples a texture attached to the framebuffer it draws into (undefined in GL), so
-each pass has its framebuffer: `gbuffer_fbo`, `mark_fbo`, `fbo` (colour and bits), `srgb_fbo`.
+each pass has its framebuffer: `gbuffer_fbo`, `mark_fbo`, `fbo` (colour and bits), `srgb_fbo`,
+`srgb_shade_fbo`.
 No multisampling: every mask is sampled at pixel centres (CONVENTIONS.md).  Read-backs go into
 buffers allocated once and come out row 0 at the top (one flip, here, or none for the sRGB
 image, whose pass writes the rows flipped).
@@ -78,7 +82,9 @@ class Target:
         self.fbo = ctx.framebuffer(color_attachments=[self.colour, self.bits])
         self.lit_fbo = ctx.framebuffer(color_attachments=[self.bits])
         self.srgb_fbo = ctx.framebuffer(color_attachments=[self.srgb])
-        self._fbos = (self.gbuffer_fbo, self.mark_fbo, self.fbo, self.lit_fbo, self.srgb_fbo)
+        self.srgb_shade_fbo = ctx.framebuffer(color_attachments=[self.srgb, self.bits])
+        self._fbos = (self.gbuffer_fbo, self.mark_fbo, self.fbo, self.lit_fbo, self.srgb_fbo,
+                      self.srgb_shade_fbo)
         # read-back staging, GL's row order (bottom row first), allocated once
         self._rgba = np.empty((height, width, 4), np.float32)
         self._rgb = np.empty((height, width, 3), np.float32)
@@ -87,6 +93,7 @@ class Target:
             self.depth_stencil = stencil.DepthStencilBuffer(gl, self.fbo.glo, width, height)
             self.depth_stencil.attach(self.gbuffer_fbo.glo)
             self.depth_stencil.attach(self.mark_fbo.glo)
+            self.depth_stencil.attach(self.srgb_shade_fbo.glo)
         except Exception:
             for obj in (*self._fbos, *self._textures):
                 obj.release()
@@ -155,10 +162,19 @@ class Target:
         """(H, W) bool, row 0 at the top: the one light of a forward lighting pass."""
         return self.read_bits() > 0
 
-    def read_srgb(self) -> np.ndarray:
-        """(H, W, 3) uint8 sRGB, written by the sRGB pass with the rows already flipped."""
+    def read_srgb(self, flipped: bool = True) -> np.ndarray:
+        """(H, W, 3) uint8 sRGB, row 0 at the top: `flipped`, as the sRGB pass writes it (the
+        rows already flipped), else in GL's order (the shading pass's), flipped here."""
         raw = self.srgb_fbo.read(components=3, attachment=0, dtype="f1")
-        return np.frombuffer(raw, np.uint8).reshape(self.height, self.width, 3).copy()
+        image = np.frombuffer(raw, np.uint8).reshape(self.height, self.width, 3)
+        return image.copy() if flipped else image[::-1].copy()
+
+    def clear_srgb(self, code) -> None:
+        """The srgb attachment to the 8-bit code (3,) in every pixel (alpha 255): what the
+        shading pass leaves where no geometry is."""
+        self.srgb_shade_fbo.color_mask = [(True,) * 4, (True,) * 4]
+        value = [int(c) / 255.0 for c in code] + [1.0]
+        stencil.clear_colour_attachment_values(self.gl, self.srgb_shade_fbo.glo, 0, value)
 
     def read_stencil(self) -> np.ndarray:
         """(H, W) int16: the signed stencil count (the 8-bit value read as two's complement, so
@@ -170,7 +186,7 @@ class Target:
         # what a failed allocation made so far is released too
         made = [getattr(self, n, None) for n in ("colour", "bits", "position", "unshadowed",
                                                  "srgb", "gbuffer_fbo", "mark_fbo", "fbo",
-                                                 "lit_fbo", "srgb_fbo")]
+                                                 "lit_fbo", "srgb_fbo", "srgb_shade_fbo")]
         self._textures = tuple(o for o in made[:5] if o is not None)
         self._fbos = tuple(o for o in made[5:] if o is not None)
         if self.ctx.fbo in self._fbos:
@@ -182,7 +198,7 @@ class Target:
         for obj in (*self._fbos, *self._textures):
             obj.release()
         for name in ("colour", "bits", "position", "unshadowed", "srgb", "gbuffer_fbo",
-                     "mark_fbo", "fbo", "lit_fbo", "srgb_fbo"):
+                     "mark_fbo", "fbo", "lit_fbo", "srgb_fbo", "srgb_shade_fbo"):
             if hasattr(self, name):
                 delattr(self, name)
         self._textures, self._fbos, self.depth_stencil = (), (), None

@@ -301,3 +301,32 @@ def test_bit_count_counts_set_bits(monkeypatch, numpy_has_it):
     x[0, :3] = (0, 2 ** 32 - 1, 2 ** 31)
     expected = np.array([bin(int(v)).count("1") for v in x.ravel()]).reshape(x.shape)
     np.testing.assert_array_equal(renderer._bit_count(x), expected)
+
+
+@pytest.mark.parametrize("lights", [1, 3, LIGHTS_PER_PAGE + 2, "area"])
+def test_the_srgb_image_from_the_shading_pass_is_the_srgb_passs(ctx, lights, monkeypatch):
+    """Without the float image, a frame of one page writes the 8-bit image in its shading pass
+    (no float colour, no sRGB pass, the background's code cleared): byte for byte the image
+    the sRGB pass encodes from the float colour, background pixels included; a frame of more
+    than one page still goes through the float colour."""
+    from shadowvol.raster import passes
+    scene = scene_of(4, 3 if lights == "area" else lights)
+    if lights == "area":
+        scene = scene.replace(lights=[AreaLight("rect", [0.5, 6.0, 1.0], normal=[0, -1, 0],
+                                                size=[1.0, 0.8], samples=9)])
+    scene = scene.replace(background=np.array([0.05, 0.3, 0.6]))
+    encodes = []
+    original = passes.encode_srgb
+    monkeypatch.setattr(passes, "encode_srgb",
+                        lambda *a, **k: encodes.append(1) or original(*a, **k))
+    with Renderer(scene, ctx) as r:
+        both = r.render(outputs=("image", "image_srgb", "lit", "coverage"))
+        assert len(encodes) == 1
+        alone = r.render(outputs=("image_srgb", "lit", "coverage"))
+    one_page = lights == "area" or lights <= LIGHTS_PER_PAGE
+    assert len(encodes) == (1 if one_page else 2)
+    np.testing.assert_array_equal(alone.image_srgb, both.image_srgb)
+    np.testing.assert_array_equal(alone.lit, both.lit)
+    assert (~both.coverage).any() and both.coverage.any()
+    background = both.image_srgb[~both.coverage]
+    assert (background == background[0]).all() and background[0].tolist() != [0, 0, 0]
