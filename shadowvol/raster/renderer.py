@@ -335,12 +335,12 @@ class Renderer:
                                 self.geometry.extent) if self.cull_back_faces else None
         # an area light is its samples, each counted and shaded as a point light
         hard = [(i, sample) for i, lt in enumerate(lights) for sample in hard_lights(lt)]
-        # the unshadowed bits are cleared when some light of the first page is marked
-        # (and always for the facing pass, which marks every light)
         # the 8-bit image straight from the shading pass when the float one is not asked for
         # and one page holds every light (pages add up in float)
         srgb_direct = ("image_srgb" in outputs and "image" not in outputs
                        and len(hard) <= LIGHTS_PER_PAGE)
+        # the unshadowed bits are cleared when some light of the first page is marked
+        # (and always for the facing pass, which marks every light)
         passes.geometry_pass(self.ctx, target, progs, self.scene, cull,
                              marks=len(hard) > 1 or facing_pass,
                              srgb_background=self._srgb_background() if srgb_direct else None)
