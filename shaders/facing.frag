@@ -24,11 +24,9 @@ layout(location = 0) out vec2 f_bits;  // x: bit i lit by light i; y: bit i face
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 position = texelFetch(u_position, p, 0);
+    // never 0 (uncovered): the pass is depth-tested to the covered pixels (truth.TruthPass.run),
+    // and the others keep the clear value 0
     int surface = int(position.w);
-    if (surface == 0) {
-        f_bits = vec2(0.0);
-        return;
-    }
     bool front = surface > 0;
     int t = abs(surface) - 1;
     vec3 normal = triangle_data[2 * t].xyz;

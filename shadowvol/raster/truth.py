@@ -38,7 +38,7 @@ from shadowvol.io import GROUND_TRUTH
 from shadowvol.raster import glsl, passes
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.glsl import set_uniform
-from shadowvol.raster.passes import NO_CONE
+from shadowvol.raster.passes import FARTHER_THAN_NOTHING, NO_CONE
 from shadowvol.raster.projection import NEARER, in_frame, top_row_first
 from shadowvol.raster.target import LIGHTS_PER_PAGE
 from shadowvol.scene import Camera, SpotLight
@@ -70,6 +70,8 @@ class TruthPass:
         self.bits = ctx.texture((width, height), 2, dtype="f4")
         self.bits.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.fbo = ctx.framebuffer(color_attachments=[self.bits])
+        # the frame's depth (and stencil): the pass is depth-tested to the covered pixels
+        target.depth_stencil.attach(self.fbo.glo)
         self._programs: dict[int, tuple] = {}
         self._bits = np.empty((height, width, 2), np.float32)
         self._casters: CasterCounts | None = None
@@ -102,17 +104,24 @@ class TruthPass:
         for name, values in arrays.items():
             set_uniform(prog, name, np.array([np.asarray(v, np.float64) for v in values],
                                              np.float32).tobytes())
+        # uncovered pixels keep the clear value 0; the pass draws only where geometry is
+        # (the full-screen triangle at the depth of nothing drawn, depth test "<", as the
+        # shading pass), so facing.frag has no branch for them
+        self.fbo.depth_mask = False
+        self.fbo.color_mask = (True,) * 4
+        stencil_gl.clear_colour_attachment(self.gl, self.fbo.glo, 0, 0.0)
         self.fbo.use()
-        self.ctx.enable_only(moderngl.NOTHING)
+        self.ctx.enable_only(moderngl.DEPTH_TEST)
+        self.ctx.depth_func = FARTHER_THAN_NOTHING
         target.position.use(1)
         target.unshadowed.use(2)
         set_uniform(prog, "u_position", 1)
         set_uniform(prog, "u_unshadowed", 2)
         geometry.triangle_data.bind_to_storage_buffer(0)
         vao.render(moderngl.TRIANGLES, vertices=3)
-        self.ctx.enable_only(moderngl.DEPTH_TEST)
+        self.ctx.depth_func = NEARER
         self.fbo.read_into(self._bits, components=2, attachment=0, dtype="f4")
-        bits = top_row_first(self._bits).astype(np.uint32)
+        bits = self._bits[::-1].astype(np.uint32)   # the one flip, with the conversion
         target.use()
         return bits[..., 0], bits[..., 1]
 
