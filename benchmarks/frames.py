@@ -43,12 +43,14 @@ def stats(times_s: list[float]) -> dict:
     return {"median": statistics.median(ms), "min": min(ms), "max": max(ms), "n": len(ms)}
 
 
-def interleaved(fns: dict, repeat: int, warmup: int, alternate: bool = False) -> dict:
+def interleaved(fns: dict, repeat: int, warmup: int, alternate: bool = False,
+                raw: dict | None = None) -> dict:
     """{name: stats} of each function, `warmup` untimed rounds then `repeat` timed ones; the
     functions take turns within each round, so load from other processes on the machine hurts
     all of them alike and their ratios stay meaningful.  `alternate`: every other round runs
     them in reverse order, so that no variant always follows the same one (what a variant
-    leaves in the caches and in llvmpipe's state then weighs on both alike)."""
+    leaves in the caches and in llvmpipe's state then weighs on both alike).  `raw`: a dict
+    that receives each function's timed seconds, round by round (for paired statistics)."""
     times = defaultdict(list)
     for r in range(warmup + repeat):
         order = list(fns.items())
@@ -57,6 +59,8 @@ def interleaved(fns: dict, repeat: int, warmup: int, alternate: bool = False) ->
             fn()
             if r >= warmup:
                 times[name].append(time.perf_counter() - t0)
+    if raw is not None:
+        raw.update(times)
     return {name: stats(ts) for name, ts in times.items()}
 
 

@@ -33,6 +33,7 @@ import json
 import os
 import platform
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -215,10 +216,16 @@ def overflow_section(ctx, cfg) -> list:
                 return r.render()
             fns = {"plain": pf, "checked": lambda: checked(True),
                    "unchecked": lambda: checked(False)}
-            times = frames.interleaved(fns, rep, warm, alternate=True)
+            raw: dict = {}
+            times = frames.interleaved(fns, rep, warm, alternate=True, raw=raw)
+            # checked and unchecked run next to each other in every round (in either order):
+            # their per-round ratio cancels the machine's drift between rounds
+            paired = [c / u for c, u in zip(raw["checked"], raw["unchecked"])]
             bounds = [v[1] for v in r._light_bounds.values() if v is not None]
             out.append({"mesh": name, "triangles": scenes.triangle_count(scene),
                         "count_bound": r.count_bound, "light_bounds": bounds, "times": times,
+                        "paired_ratio": {"median": statistics.median(paired),
+                                         "min": min(paired), "max": max(paired)},
                         "checks": r.count_bound >= 256 and (not bounds or max(bounds) >= 256)})
         log(f"overflow {name}: checked {times['checked']['median']:.1f} ms, unchecked "
             f"{times['unchecked']['median']:.1f} ms (bound {out[-1]['count_bound']})")
