@@ -27,6 +27,7 @@ import os
 import statistics
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -74,8 +75,6 @@ class MitsubaMasks:
             shapes[f"object{i}"] = m
         self.scene = mi.load_dict(shapes)
         camera = scene.camera
-        from dataclasses import replace
-
         framed = replace(camera, eye=camera.eye - origin, target=camera.target - origin)
         o, d = primary_rays(framed, scene.width, scene.height, dtype=np.float32)
         self.origins, self.directions = np.ascontiguousarray(o.T), np.ascontiguousarray(d.T)

@@ -419,10 +419,10 @@ EXTRA_TIMEOUT_S = 900
 def extras_section() -> list[dict]:
     """Run every EXTRAS script once, in this run, one after another; keep what it prints."""
     rows = []
-    for script, args, what in EXTRAS:
+    for script, listed, what in EXTRAS:
         # "{json}": a file the script writes its results to, kept in results.json
-        json_path = Path(tempfile.mkstemp(suffix=".json")[1]) if "{json}" in args else None
-        args = [str(json_path) if a == "{json}" else a for a in args]
+        json_path = Path(tempfile.mkstemp(suffix=".json")[1]) if "{json}" in listed else None
+        args = [str(json_path) if a == "{json}" else a for a in listed]
         command = [sys.executable, str(ROOT / "benchmarks" / script), *args]
         log(f"extra: {script} {' '.join(args)}")
         start = time.perf_counter()
@@ -440,9 +440,7 @@ def extras_section() -> list[dict]:
             except (OSError, ValueError):
                 data = None
             json_path.unlink(missing_ok=True)
-        shown = [a for a in args if a != str(json_path)] if json_path else args
-        if json_path is not None:
-            shown = [a for a in shown if a != "--json"]
+        shown = [a for a in listed if a not in ("--json", "{json}")]
         rows.append({"script": script, "command": "python benchmarks/" + " ".join(
             [script, *shown]), "what": what, "seconds": time.perf_counter() - start,
             "returncode": rc, "output": output.strip(), "results": data})

@@ -145,7 +145,7 @@ def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
                     zero: bool = False) -> None:
     """Add 2^bit to the unshadowed bits where the stencil count is 0; `restore`: bind the
     target's main framebuffer after (else `target.mark_fbo` stays bound).  `zero`: also set
-    every other count to 0 (`stencil.where_unshadowed_zeroing`), so that the next light's
+    every other count to 0 (`stencil.where_unshadowed`), so that the next light's
     count needs no clear (`count_volumes(clear=False)`)."""
     target.mark_fbo.depth_mask = False
     target.mark_fbo.color_mask = (True,) * 4
@@ -155,7 +155,7 @@ def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
     ctx.blend_equation = moderngl.FUNC_ADD
     set_uniform(progs.mark, "u_bit", float(2 ** bit))
     _only_where_covered(ctx)
-    with (stencil.where_unshadowed_zeroing if zero else stencil.where_unshadowed)(gl):
+    with stencil.where_unshadowed(gl, zero=zero):
         progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER

@@ -358,7 +358,8 @@ class Renderer:
         # hard lights go in pages of LIGHTS_PER_PAGE: each one's volume count marks its
         # unshadowed bit, then one shading pass per page (one for any usual frame)
         # the stencil is all 0: the geometry pass cleared it, and each mark but a page's last
-        # zeroes it again (no clear, each one a flush of llvmpipe's scene, before a count)
+        # zeroes it again (no clear, each one a flush of llvmpipe's scene, before a count); a
+        # page's last count stays for `shade`, so the next page clears it
         stencil_zero = True
         for first in range(0, max(len(hard), 1), LIGHTS_PER_PAGE):
             page_lights = [sample for _, sample in hard[first:first + LIGHTS_PER_PAGE]]
@@ -394,7 +395,6 @@ class Renderer:
                 zfail[hard[first + bit][0]] |= choice
             passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
                          first_page=not first, colour=colour, srgb=srgb_direct)
-            stencil_zero = stencil_zero and not page_lights
             if need_bits:
                 pages.append(target.read_bits())
             if facing_pass and page_lights:

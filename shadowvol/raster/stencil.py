@@ -389,23 +389,17 @@ def entering_faces_counting(gl: RawGL, zfail: bool, depth_clamp: bool) -> Iterat
 
 
 @contextlib.contextmanager
-def where_unshadowed(gl: RawGL) -> Iterator[None]:
-    """Lighting: draw only where the stencil count is 0; the stencil itself is left unchanged."""
+def where_unshadowed(gl: RawGL, zero: bool = False) -> Iterator[None]:
+    """Lighting: draw only where the stencil count is 0; the stencil itself is left unchanged.
+    `zero`: the count of every other pixel the draw covers is set to 0 instead (the stencil
+    test's fail operation, which GL applies before and whatever the depth test): after a
+    full-screen draw the stencil is 0 everywhere, as a clear would leave it, without the clear
+    (a flush of llvmpipe's scene)."""
+    fail = GL_ZERO if zero else GL_KEEP
     with _saved_stencil_state(gl):
-        _set(gl, func=GL_EQUAL, ref=0, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
-             back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
-        yield
-
-
-@contextlib.contextmanager
-def where_unshadowed_zeroing(gl: RawGL) -> Iterator[None]:
-    """`where_unshadowed`, and the count of every pixel the draw covers where it is not 0 set
-    to 0 (the stencil test's fail operation, which GL applies before and whatever the depth
-    test): after a full-screen draw the stencil is 0 everywhere, as a clear would leave it,
-    without the clear (a flush of llvmpipe's scene)."""
-    with _saved_stencil_state(gl):
-        _set(gl, func=GL_EQUAL, ref=0, front_ops=(GL_ZERO, GL_KEEP, GL_KEEP),
-             back_ops=(GL_ZERO, GL_KEEP, GL_KEEP), write_mask=0xFF, depth_clamp=False)
+        _set(gl, func=GL_EQUAL, ref=0, front_ops=(fail, GL_KEEP, GL_KEEP),
+             back_ops=(fail, GL_KEEP, GL_KEEP), write_mask=0xFF if zero else 0x00,
+             depth_clamp=False)
         yield
 
 

@@ -44,6 +44,11 @@ LIGHTS_PER_PAGE = 23  # lit bits 1..23 and the coverage bit of a float32: exact
 BYTES_PER_PIXEL = 16 + 4 + 16 + 4 + 4 + 8
 
 
+# the attributes a Target owns (what `release` frees, also after a failed allocation)
+_TEXTURES = ("colour", "bits", "position", "unshadowed", "srgb")
+_FRAMEBUFFERS = ("gbuffer_fbo", "mark_fbo", "fbo", "lit_fbo", "srgb_fbo", "srgb_shade_fbo")
+
+
 class FrameAllocationError(RenderError):
     """The GL could not allocate the frame's buffers (out of GPU memory, or a size the driver
     refuses)."""
@@ -184,11 +189,9 @@ class Target:
 
     def release(self) -> None:
         # what a failed allocation made so far is released too
-        made = [getattr(self, n, None) for n in ("colour", "bits", "position", "unshadowed",
-                                                 "srgb", "gbuffer_fbo", "mark_fbo", "fbo",
-                                                 "lit_fbo", "srgb_fbo", "srgb_shade_fbo")]
-        self._textures = tuple(o for o in made[:5] if o is not None)
-        self._fbos = tuple(o for o in made[5:] if o is not None)
+        made = [getattr(self, n, None) for n in _TEXTURES + _FRAMEBUFFERS]
+        self._textures = tuple(o for o in made[:len(_TEXTURES)] if o is not None)
+        self._fbos = tuple(o for o in made[len(_TEXTURES):] if o is not None)
         if self.ctx.fbo in self._fbos:
             # moderngl re-binds its record of the bound framebuffer after creating the next
             # one; leaving it pointing at a deleted framebuffer raises GL_INVALID_OPERATION
@@ -197,8 +200,7 @@ class Target:
             self.depth_stencil.release()
         for obj in (*self._fbos, *self._textures):
             obj.release()
-        for name in ("colour", "bits", "position", "unshadowed", "srgb", "gbuffer_fbo",
-                     "mark_fbo", "fbo", "lit_fbo", "srgb_fbo", "srgb_shade_fbo"):
+        for name in _TEXTURES + _FRAMEBUFFERS:
             if hasattr(self, name):
                 delattr(self, name)
         self._textures, self._fbos, self.depth_stencil = (), (), None
