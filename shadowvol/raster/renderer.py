@@ -29,6 +29,7 @@ from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import create_context, make_current
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.projection import frame_view_projection
+from shadowvol.raster.recycle import ArrayPool
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
 from shadowvol.raster.volumes import CpuVolumes, GpuVolumes
 from shadowvol.scene import (
@@ -132,6 +133,9 @@ class Renderer:
         self._slack: tuple | None = None   # (camera key, `overflow.world_slack`)
         self._largest: float | None = None  # max |world corner|: the float32 part of the slack
         self._srgb_code: tuple[int, int, int] | None = None   # `_srgb_background`
+        # the arrays frames return (`recycle`), and the frames' own scratch (`_scratch`)
+        self._pool = ArrayPool()
+        self._scratches: list[np.ndarray] = []
         # back-face culling in the geometry pass for closed convex casters beyond the near
         # plane (`methods.cullable`): 14-22% of a frame here, but OFF by default because it is
         # not exact at float32 depth ties: where a silhouette's back face won the depth test by
@@ -298,6 +302,13 @@ class Renderer:
             self._srgb_code = passes.srgb_code(self.ctx, self.programs, self.scene.background)
         return self._srgb_code
 
+    def _scratch(self, k: int) -> np.ndarray:
+        """(H, W) uint32 scratch k of this renderer (0: masked bits, 1..: a page's bits), for
+        work within one frame; never returned."""
+        while len(self._scratches) <= k:
+            self._scratches.append(np.empty((self.scene.height, self.scene.width), np.uint32))
+        return self._scratches[k]
+
     def _truth_pass(self) -> truth.TruthPass:
         if self._truth is None:
             self._truth = self._own(truth.TruthPass(self.ctx, self.target))
@@ -395,20 +406,28 @@ class Renderer:
                 zfail[hard[first + bit][0]] |= choice
             passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
                          first_page=not first, colour=colour, srgb=srgb_direct)
-            if need_bits:
-                pages.append(target.read_bits())
+            if need_bits:   # the frame's own scratch: read, used and dropped in this frame
+                pages.append(target.read_bits(out=self._scratch(len(pages) + 1)))
             if facing_pass and page_lights:
                 # the facing pass reads every light's unshadowed bit: mark the last one's too
                 # (the stencil still holds its count)
                 passes.mark_unshadowed(self.ctx, self.gl, target, progs, len(page_lights) - 1)
                 truth_pages.append(self._truth_pass().run(target, self.geometry, page_lights))
-        image = target.read_image() if "image" in outputs else None
-        coverage = (pages[0] & 1).astype(bool) if "coverage" in outputs else None
+        # what the caller gets comes from the pool (`recycle`); numpy's temporaries go to
+        # the scratch (3 MB of new memory costs a millisecond here)
+        pool, masked = self._pool, self._scratch(0)
+        image = (target.read_image(out=pool.empty((h, w, 3), np.float32))
+                 if "image" in outputs else None)
+        coverage = None
+        if "coverage" in outputs:
+            coverage = pool.empty((h, w), bool)
+            np.not_equal(np.bitwise_and(pages[0], np.uint32(1), out=masked), 0, out=coverage)
         samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
         lit = lit_count = None
         if "lit" in outputs:
-            lit_count = np.zeros((len(lights), h, w), np.uint16)
-            lit = np.empty((len(lights), h, w), bool)
+            lit_count = pool.empty((len(lights), h, w), np.uint16)
+            lit = pool.empty((len(lights), h, w), bool)
+            lit_count[samples > 1] = 0   # an area light's counts add up over its pages
             # each light's samples in a page are neighbouring bits: one count of the set bits
             # per light and page, not one pass per sample
             masks: dict[tuple[int, int], int] = {}
@@ -416,11 +435,12 @@ class Renderer:
                 page, bit = divmod(k, LIGHTS_PER_PAGE)
                 masks[i, page] = masks.get((i, page), 0) | 1 << (bit + 1)
             for (i, page), mask in masks.items():
+                np.bitwise_and(pages[page], np.uint32(mask), out=masked)
                 if samples[i] == 1:   # a hard light: its one bit is lit, its count lit too
-                    np.not_equal(pages[page] & np.uint32(mask), 0, out=lit[i])
+                    np.not_equal(masked, 0, out=lit[i])
                     lit_count[i] = lit[i]
                 else:
-                    lit_count[i] += _bit_count(pages[page] & np.uint32(mask))
+                    lit_count[i] += _bit_count(masked)
             soft = samples > 1
             lit[soft] = lit_count[soft] == samples[soft, None, None]
         extra = self._ground_truth(outputs, camera, lights, truth_pages, zfail, vols,
@@ -434,10 +454,10 @@ class Renderer:
                 extra.pop("facing")
         srgb = None
         if srgb_direct:
-            srgb = target.read_srgb(flipped=False)
+            srgb = target.read_srgb(flipped=False, out=pool.empty((h, w, 3), np.uint8))
         elif "image_srgb" in outputs:
             passes.encode_srgb(self.ctx, target, progs)
-            srgb = target.read_srgb()
+            srgb = target.read_srgb(out=pool.empty((h, w, 3), np.uint8))
         return RenderResult(
             image=image, lit=lit, coverage=coverage,
             stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if want_stencil
@@ -529,6 +549,8 @@ class Renderer:
         make_current(self.ctx)
         while self._owned:
             self._owned.pop().release()
+        self._pool.clear()
+        self._scratches.clear()
         if self._own_ctx:
             self.ctx.release()
         self.ctx = None

@@ -94,6 +94,7 @@ class Target:
         self._rgba = np.empty((height, width, 4), np.float32)
         self._rgb = np.empty((height, width, 3), np.float32)
         self._bits = np.empty((height, width), np.float32)
+        self._srgb8 = np.empty((height, width, 3), np.uint8)
         try:
             self.depth_stencil = stencil.DepthStencilBuffer(gl, self.fbo.glo, width, height)
             self.depth_stencil.attach(self.gbuffer_fbo.glo)
@@ -152,27 +153,40 @@ class Target:
         self.fbo.read_into(self._rgba, components=4, attachment=0, dtype="f4")
         return np.ascontiguousarray(self._rgba[::-1])
 
-    def read_image(self) -> np.ndarray:
-        """(H, W, 3) float32 linear RGB, row 0 at the top (GL packs RGB; one contiguous copy
-        flips the rows: a strided numpy copy of RGB out of RGBA costs 5x more)."""
+    def read_image(self, out: np.ndarray | None = None) -> np.ndarray:
+        """(H, W, 3) float32 linear RGB, row 0 at the top, into `out` if given (GL packs RGB;
+        one contiguous copy flips the rows: a strided numpy copy of RGB out of RGBA costs 5x
+        more)."""
         self.fbo.read_into(self._rgb, components=3, attachment=0, dtype="f4")
-        return self._rgb[::-1].copy()
+        if out is None:
+            return self._rgb[::-1].copy()
+        np.copyto(out, self._rgb[::-1])
+        return out
 
-    def read_bits(self) -> np.ndarray:
-        """(H, W) uint32 of the bits attachment, row 0 at the top."""
+    def read_bits(self, out: np.ndarray | None = None) -> np.ndarray:
+        """(H, W) uint32 of the bits attachment, row 0 at the top, into `out` if given."""
         self.fbo.read_into(self._bits, components=1, attachment=1, dtype="f4")
-        return self._bits[::-1].astype(np.uint32)
+        if out is None:
+            return self._bits[::-1].astype(np.uint32)
+        np.copyto(out, self._bits[::-1], casting="unsafe")   # integers below 2^24: exact
+        return out
 
     def read_lit(self) -> np.ndarray:
         """(H, W) bool, row 0 at the top: the one light of a forward lighting pass."""
         return self.read_bits() > 0
 
-    def read_srgb(self, flipped: bool = True) -> np.ndarray:
-        """(H, W, 3) uint8 sRGB, row 0 at the top: `flipped`, as the sRGB pass writes it (the
-        rows already flipped), else in GL's order (the shading pass's), flipped here."""
-        raw = self.srgb_fbo.read(components=3, attachment=0, dtype="f1")
-        image = np.frombuffer(raw, np.uint8).reshape(self.height, self.width, 3)
-        return image.copy() if flipped else image[::-1].copy()
+    def read_srgb(self, flipped: bool = True, out: np.ndarray | None = None) -> np.ndarray:
+        """(H, W, 3) uint8 sRGB, row 0 at the top, into `out` if given: `flipped`, as the sRGB
+        pass writes it (the rows already flipped), else in GL's order (the shading pass's),
+        flipped here."""
+        if out is None:
+            out = np.empty((self.height, self.width, 3), np.uint8)
+        if flipped:
+            self.srgb_fbo.read_into(out, components=3, attachment=0, dtype="f1")
+        else:
+            self.srgb_fbo.read_into(self._srgb8, components=3, attachment=0, dtype="f1")
+            np.copyto(out, self._srgb8[::-1])
+        return out
 
     def clear_srgb(self, code) -> None:
         """The srgb attachment to the 8-bit code (3,) in every pixel (alpha 255): what the
