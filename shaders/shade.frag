@@ -14,6 +14,13 @@
 #ifndef LIGHTS
 #define LIGHTS 1        // lights in this page, at most 23 (lit bits 1..23 and coverage: exact
 #endif                  // in a float32); a constant, so that the loop unrolls
+#ifndef SPOT_LIGHTS
+#define SPOT_LIGHTS 0   // bit i: light i is a spot (has a cone); constants too, so that the
+#endif                  // unrolled loop has no cone test where there is no cone, and no
+#ifndef EMITTER_LIGHTS  // emitter cosine but for an area light's samples (otherwise the same
+#define EMITTER_LIGHTS 0 // values as the uniforms' NO_CONE and 0 would give: 10% of the pass)
+#endif
+#define HAS(lights, i) ((((lights) >> (i)) & 1) != 0)
 
 uniform sampler2D u_materials;  // row = object: texel 0 ka, 1 kd, 2 (ks, shininess)
 uniform sampler2D u_position;   // world position (xyz) of the visible surface; w: the surface,
@@ -84,7 +91,8 @@ void main() {
         vec3 to_light = u_light[i].xyz - u_light[i].w * world;
         vec3 l = normalize(to_light);
         bool on = (unshadowed & (1u << uint(i))) != 0u && side > 0.0 &&
-                  !(u_spot_cos[i] > -2.0 && dot(-l, u_spot_direction[i]) < u_spot_cos[i]);
+                  !(HAS(SPOT_LIGHTS, i) && u_spot_cos[i] > -2.0 &&
+                    dot(-l, u_spot_direction[i]) < u_spot_cos[i]);
         lit |= on ? 2u << uint(i) : 0u;
 #ifndef MASKS_ONLY
         float n_dot_l = max(dot(n, l), 0.0);
@@ -92,8 +100,8 @@ void main() {
         float r_dot_v = max(dot(r, v), 0.0);
         // x^0 is 1 (as in numpy), which GLSL's pow leaves undefined at x = 0
         float highlight = ks.a == 0.0 ? 1.0 : pow(r_dot_v, ks.a);
-        float at_light = u_emitter_cosine[i] > 0.0 ? max(dot(-l, u_spot_direction[i]), 0.0)
-                                                   : 1.0;
+        float at_light = HAS(EMITTER_LIGHTS, i) && u_emitter_cosine[i] > 0.0
+                         ? max(dot(-l, u_spot_direction[i]), 0.0) : 1.0;
         vec3 term = (kd * n_dot_l + ks.rgb * highlight) * u_radiance[i] * at_light;
         colour = on ? colour + term : colour;
 #endif

@@ -49,19 +49,23 @@ class ScenePrograms:
         self.gbuffer_vao = ctx.vertex_array(self.gbuffer, geometry.soup_bindings(self.gbuffer))
         self.mark = glsl.program(ctx, "fullscreen.vert", "mark.frag")
         self.mark_vao = ctx.vertex_array(self.mark, [])
-        # (lights, colour, sRGB out) -> program, vao
-        self._shade: dict[tuple[int, bool, bool], tuple] = {}
+        # (lights, colour, sRGB out, spot lights, emitter lights) -> program, vao
+        self._shade: dict[tuple[int, bool, bool, int, int], tuple] = {}
         self.srgb = glsl.program(ctx, "fullscreen.vert", "srgb.frag")
         self.srgb_vao = ctx.vertex_array(self.srgb, [])
         self._forward = None
 
-    def shading(self, lights: int, colour: bool, srgb: bool = False) -> tuple:
+    def shading(self, lights: int, colour: bool, srgb: bool = False, spots: int = 0,
+                emitters: int = 0) -> tuple:
         """(program, vao) of the shading pass for a page of `lights` lights (a constant in the
         shader: its loop unrolls), with colour or the lit bits only, the colour as linear
-        float or (`srgb`) encoded to 8-bit sRGB; made on first use."""
-        key = (lights, colour, srgb)
+        float or (`srgb`) encoded to 8-bit sRGB; `spots`, `emitters`: bit i set where light i
+        is a spot light, an area light's sample (constants too: see shade.frag); made on first
+        use."""
+        key = (lights, colour, srgb, spots, emitters)
         if key not in self._shade:
-            defines = ({"LIGHTS": lights} | ({} if colour else {"MASKS_ONLY": 1}) |
+            defines = ({"LIGHTS": lights, "SPOT_LIGHTS": spots, "EMITTER_LIGHTS": emitters} |
+                       ({} if colour else {"MASKS_ONLY": 1}) |
                        ({"SRGB_OUT": 1} if srgb else {}))
             program = glsl.program(self.ctx, "fullscreen.vert", "shade.frag", defines=defines)
             self._shade[key] = (program, self.ctx.vertex_array(program, []))
@@ -183,7 +187,10 @@ def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: Scene
     ambient, no coverage) and its bits must be cleared before.  `colour=False`: the lit bits
     only.  `srgb`: the colour encoded to 8-bit sRGB into `target.srgb` instead (one page only:
     pages add up in float), exactly as `encode_srgb` would encode it."""
-    prog, vao = progs.shading(len(lights), colour, srgb)
+    prog, vao = progs.shading(
+        len(lights), colour, srgb,
+        spots=sum(1 << i for i, l in enumerate(lights) if isinstance(l, SpotLight)),
+        emitters=sum(1 << i for i, l in enumerate(lights) if isinstance(l, AreaSample)))
     fbo = target.srgb_shade_fbo if srgb else target.fbo
     fbo.depth_mask = False
     fbo.color_mask = [(colour,) * 4, (True,) * 4]
@@ -208,7 +215,12 @@ def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: Scene
         "u_spot_cos": [l.cos_cutoff if s else NO_CONE for l, s in zip(lights, spot)],
         "u_emitter_cosine": [1.0 if isinstance(l, AreaSample) else 0.0 for l in lights]}
     for name, values in arrays.items() if lights else ():
-        set_uniform(prog, name, np.array([np.asarray(v, np.float64) for v in values],
+        if name not in prog:
+            continue
+        # the linker keeps an array up to the last element the shader reads (the spots' up to
+        # the last spot's)
+        kept = values[:prog[name].array_length]
+        set_uniform(prog, name, np.array([np.asarray(v, np.float64) for v in kept],
                                          np.float32).tobytes())
     set_uniform(prog, "u_ambient", tuple(float(x) for x in scene.ambient))
     progs.geometry.materials.use(0)
