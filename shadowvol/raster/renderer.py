@@ -53,6 +53,8 @@ DEFAULT_OUTPUTS = ("image", "lit", "coverage")
 @dataclass(frozen=True, eq=False)
 class RenderResult(GroundTruthFrame):
     """One frame.  Each array is None unless asked for (`Renderer.render(outputs=...)`).
+    The arrays are the caller's: a later frame writes only into memory nothing refers to any
+    more (`recycle.ArrayPool`).
 
     image      : (H, W, 3) float32 linear RGB (direct Phong lighting; an area light's
                  samples summed: soft shadows)
