@@ -130,8 +130,9 @@ def measure(names, width: int, height: int, runs: int) -> dict:
         backend = scene_backend(scene, "embree")
         with Renderer(scene) as r, plain.PlainFrame(r.ctx, scene) as flat, \
                 plain.DepthFloor(r.ctx, flat) as depth_floor:
-            r.render(outputs=("lit", "coverage"))
-            r.render(outputs=("lit", "coverage"))
+            for _ in range(2):   # warm: programs, kernels, first-touch memory
+                r.render(outputs=("lit", "coverage"))
+                depth_floor()
             fns = {"ours, masks only": lambda: r.render(outputs=("lit", "coverage")),
                    "raytrace.shadow_masks": lambda: shadow_masks(scene, backend),
                    "Mitsuba 3": peer,

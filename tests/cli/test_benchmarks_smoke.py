@@ -47,7 +47,8 @@ def test_quick_benchmark_run_writes_the_report(tmp_path):
 
 def test_the_mitsuba_peer_runs_or_says_why_not(tmp_path):
     """bench_mitsuba.py on a tiny scene: with Mitsuba 3 installed (the bench extra) a row of
-    times and pixel counts; without it, the reason, and exit status 0 either way."""
+    times (ours, the ray tracer's, Mitsuba's, and the bound: depth floor and volume pass) and
+    pixel counts; without it, the reason, and exit status 0 either way."""
     done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_mitsuba.py"),
                            "--sizes", "1k", "--width", "64", "--height", "48", "--runs", "1",
                            "--json", str(tmp_path / "m.json")],
@@ -62,7 +63,9 @@ def test_the_mitsuba_peer_runs_or_says_why_not(tmp_path):
         return
     (row,) = results["scenes"]
     assert row["triangles"] == 962
-    assert set(row["ms"]) == {"ours, masks only", "raytrace.shadow_masks", "Mitsuba 3"}
+    assert set(row["ms"]) == {"ours, masks only", "raytrace.shadow_masks", "Mitsuba 3",
+                              "depth floor", "volume pass"}
+    assert all(row["ms"][k]["median"] > 0 for k in ("depth floor", "volume pass"))
     # the same scene, the same pixel-centre rays: the masks agree but for a few edge pixels
     assert row["differing_mitsuba"] < 0.05 * 64 * 48 and row["differing_ours"] < 0.05 * 64 * 48
     assert "| occluders-1k |" in done.stdout
