@@ -425,11 +425,12 @@ class Renderer:
             coverage = pool.empty((h, w), bool)
             np.not_equal(np.bitwise_and(pages[0], np.uint32(1), out=masked), 0, out=coverage)
         samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
+        soft = samples > 1
         lit = lit_count = None
         if "lit" in outputs:
             lit_count = pool.empty((len(lights), h, w), np.uint16)
             lit = pool.empty((len(lights), h, w), bool)
-            lit_count[samples > 1] = 0   # an area light's counts add up over its pages
+            lit_count[soft] = 0   # an area light's counts add up over its pages
             # each light's samples in a page are neighbouring bits: one count of the set bits
             # per light and page, not one pass per sample
             masks: dict[tuple[int, int], int] = {}
@@ -443,7 +444,6 @@ class Renderer:
                     lit_count[i] = lit[i]
                 else:
                     lit_count[i] += _bit_count(masked)
-            soft = samples > 1
             lit[soft] = lit_count[soft] == samples[soft, None, None]
         extra = self._ground_truth(outputs, camera, lights, truth_pages, zfail, vols,
                                    method, clip, want_stencil)
@@ -455,11 +455,11 @@ class Renderer:
             if "facing" not in asked:  # computed for casters only
                 extra.pop("facing")
         srgb = None
-        if srgb_direct:
-            srgb = target.read_srgb(flipped=False, out=pool.empty((h, w, 3), np.uint8))
-        elif "image_srgb" in outputs:
-            passes.encode_srgb(self.ctx, target, progs)
-            srgb = target.read_srgb(out=pool.empty((h, w, 3), np.uint8))
+        if "image_srgb" in outputs:
+            if not srgb_direct:   # encoded from the float image, by its own pass
+                passes.encode_srgb(self.ctx, target, progs)
+            srgb = target.read_srgb(flipped=not srgb_direct,
+                                    out=pool.empty((h, w, 3), np.uint8))
         return RenderResult(
             image=image, lit=lit, coverage=coverage,
             stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if want_stencil
