@@ -11,7 +11,7 @@
 #endif
 
 uniform sampler2D u_position;   // world position (xyz); w: +-(triangle + 1), 0: uncovered
-uniform sampler2D u_unshadowed; // bit i: light i's stencil count is 0 here
+uniform usampler2D u_unshadowed; // bit i: light i's stencil count is 0 here
 uniform vec4 u_light[LIGHTS];           // (position, 1) or (-direction, 0)
 uniform vec3 u_spot_direction[LIGHTS];  // unit; used when u_spot_cos > -2
 uniform float u_spot_cos[LIGHTS];       // cos of the cone's half-angle; -2 for no cone
@@ -32,7 +32,7 @@ void main() {
     vec3 normal = triangle_data[2 * t].xyz;
     vec3 corner = triangle_data[2 * t + 1].xyz;
     vec3 world = position.xyz;
-    uint unshadowed = uint(texelFetch(u_unshadowed, p, 0).r);
+    uint unshadowed = texelFetch(u_unshadowed, p, 0).r;
     uint lit = 0u;
     uint faces = 0u;
     for (int i = 0; i < LIGHTS; ++i) {

@@ -1,13 +1,15 @@
 #version 450 core
-// After a light's volume pass, drawn over the whole screen where the stencil count is 0 (the
-// stencil test is set by the pass): adds the light's bit 2^i to the unshadowed bits (additive
-// blending; distinct powers of two sum exactly in float32 up to 2^24).  shade.frag turns them
-// into lit bits and light.
+// After a light's volume pass, drawn over the whole screen with a colour logic op into the
+// unsigned-integer bits (the stencil test and the op are set by the pass):
+// - the deferred frame's marks: OR where the stencil count is 0, adding the light's bit 2^i to
+//   the unshadowed bits (shade.frag turns them into lit bits and light);
+// - the mask pass's clears: AND-NOT where the count is not 0, removing the light's lit bit
+//   2^(i + 1) that the geometry pass set (shade.frag's MASK_PASS).
 
-uniform float u_bit;
+uniform uint u_bit;
 
-layout(location = 0) out float f_unshadowed;
+layout(location = 0) out uint f_bits;
 
 void main() {
-    f_unshadowed = u_bit;
+    f_bits = u_bit;
 }

@@ -6,8 +6,10 @@
 // surface it lies on (see shadowvol/volumes.py for why the tie must count as "behind").
 
 uniform mat4 u_view_proj;   // world -> clip, infinite far plane
+#ifndef MASK_PASS           // (the mask pass's shade.frag has the page's lights as u_light[])
 uniform vec4 u_light;       // (position, 1) for a point or spot light, (-direction, 0) for a
                             // directional light: the homogeneous point the light sits at
+#endif
 
 in vec3 in_position;        // world space (float32: what the GPU draws)
 in vec3 in_normal;          // unit face normal, cross(v1 - v0, v2 - v0) as wound
@@ -29,7 +31,9 @@ void main() {
     v_normal = in_normal;
     // Per triangle, not per pixel: the sign of n . l is constant over a flat triangle, and the
     // three vertices compute the same value from the same flat inputs.
+#ifndef MASK_PASS
     v_facing = dot(in_normal, u_light.xyz - u_light.w * in_corner);
+#endif
     v_object = in_object;
     v_triangle = gl_VertexID / 3;
 }

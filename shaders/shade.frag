@@ -10,6 +10,14 @@
 //
 // MASKS_ONLY: the lit bits alone, no colour.  SRGB_OUT: the colour encoded to 8-bit sRGB (a
 // frame of one page whose float image is not asked for).
+//
+// MASK_PASS (with MASKS_ONLY): the geometry pass of a mask-only frame (scene.vert over the
+// soup), before any volume count.  The same tests on the same inputs, taken from the
+// rasterizer instead of the G-buffer (the interpolated world position the geometry pass would
+// have stored, its triangle, gl_FrontFacing), with every light taken as unshadowed: it writes
+// coverage and "faces the light" bits, and after each light's count the mark pass clears that
+// light's bit where the count is not 0 (passes.clear_shadowed).  Only the pixels that survive
+// the depth test keep their bits, so they are the deferred frame's lit bits exactly.
 
 #ifndef LIGHTS
 #define LIGHTS 1        // lights in this page, at most 23 (lit bits 1..23 and coverage: exact
@@ -23,9 +31,14 @@
 #define HAS(lights, i) ((((lights) >> (i)) & 1) != 0)
 
 uniform sampler2D u_materials;  // row = object: texel 0 ka, 1 kd, 2 (ks, shininess)
+#ifdef MASK_PASS
+in vec3 v_world;                // scene.vert's: what gbuffer.frag stores
+flat in int v_triangle;
+#else
 uniform sampler2D u_position;   // world position (xyz) of the visible surface; w: the surface,
                                 // +-(triangle + 1), negative for a back face; 0: uncovered
-uniform sampler2D u_unshadowed; // bit i: light i's stencil count is 0 here (i < LIGHTS - 1)
+uniform usampler2D u_unshadowed; // bit i: light i's stencil count is 0 here (i < LIGHTS - 1)
+#endif
 uniform bool u_last_unshadowed; // the last light's: the stencil still holds its count, and the
                                 // pass is drawn twice, where it is 0 (true) and where not
 uniform vec3 u_eye;
@@ -43,12 +56,22 @@ layout(std430, binding = 0) readonly buffer Triangles {
     vec4 triangle_data[];       // per triangle: (unit normal, object), (first corner, 0)
 };
 
+#ifdef MASK_PASS
+layout(location = 0) out uint f_lit_bits;  // bit 0 covered, bit i + 1 faces light i
+#else
 layout(location = 0) out vec4 f_colour;
 layout(location = 1) out float f_bits;     // bit 0 covered, bit i + 1 lit by light i
+#endif
 
 void main() {
+#ifdef MASK_PASS
+    // gbuffer.frag's surface, +-(triangle + 1), as it would have stored it
+    float key = float(v_triangle + 1);
+    vec4 position = vec4(v_world, gl_FrontFacing ? key : -key);
+#else
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 position = texelFetch(u_position, p, 0);
+#endif
     // never 0 (uncovered) here: the pass is depth-tested to the covered pixels
     // (passes._only_where_covered), which is also why it has no branch for them (a per-pixel
     // branch costs llvmpipe 15% of the pass, taken or not)
@@ -60,12 +83,14 @@ void main() {
     int object = int(normal_object.w);
     vec3 corner = triangle_data[2 * t + 1].xyz;
     vec3 world = position.xyz;
-#if LIGHTS > 1
-    uint unshadowed = uint(texelFetch(u_unshadowed, p, 0).r);
+#if defined(MASK_PASS)
+    uint unshadowed = 0xFFFFFFFFu;   // the counts come after this pass
+#elif LIGHTS > 1
+    uint unshadowed = texelFetch(u_unshadowed, p, 0).r;
 #else
     uint unshadowed = 0u;
 #endif
-#if LIGHTS > 0
+#if LIGHTS > 0 && !defined(MASK_PASS)
     if (u_last_unshadowed) {
         unshadowed |= 1u << uint(LIGHTS - 1);
     }
@@ -116,8 +141,12 @@ void main() {
     f_colour = vec4(floor(s * 255.0 + 0.5) / 255.0, 1.0);
 #elif !defined(MASKS_ONLY)
     f_colour = vec4(colour, u_first_page ? 1.0 : 0.0);
-#else
+#elif !defined(MASK_PASS)
     f_colour = vec4(0.0);
 #endif
+#ifdef MASK_PASS
+    f_lit_bits = lit;
+#else
     f_bits = float(lit);
+#endif
 }

@@ -113,8 +113,9 @@ def raster(scene: Scene, outputs=("image", "lit", "coverage"), *, gl_in_host: bo
     pages = max(1, math.ceil(samples / 23))   # target.LIGHTS_PER_PAGE
     outputs = set(outputs)
     t = {"GL frame" + ("" if gl_in_host else " (GPU)"): GL_FRAME_BYTES_PER_PIXEL * gl_in_host,
-         # target: RGBA and RGB float32 and bits float32 read-back staging, allocated once
-         "read-back staging": 16 + 12 + 4,
+         # target: RGBA and RGB float32, bits float32 and uint32 read-back staging, allocated
+         # once
+         "read-back staging": 16 + 12 + 4 + 4,
          "lit bits (uint32 per page)": 4 * pages,
          "coverage": (4 + 1) if "coverage" in outputs or "lit" in outputs else 0,
          "image float32": 12 if "image" in outputs else 0,

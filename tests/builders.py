@@ -23,8 +23,16 @@ from statistics import NormalDist
 import numpy as np
 
 from shadowvol.compare.maskdiff import count_edges, edge_pixels
-from shadowvol.primitives import box, plane
-from shadowvol.scene import AreaLight, Camera, DirectionalLight, Material, Scene
+from shadowvol.primitives import box, plane, sphere
+from shadowvol.scene import (
+    AreaLight,
+    Camera,
+    DirectionalLight,
+    Material,
+    PointLight,
+    Scene,
+    SpotLight,
+)
 from shadowvol.scenefile import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -325,3 +333,24 @@ def cards_scene(width=160, height=120, light=None) -> Scene:
                           card("B", *CARDS["B"])],
                  lights=[light or DirectionalLight([0.0, -1.0, 0.0])],
                  width=width, height=height)
+
+
+def mixed_scene(seed: int, lights: int = 3) -> Scene:
+    """A floor, closed spheres and boxes (cullable, `methods.cullable`), `lights` lights of every
+    kind above them in turn (point, directional, spot), 96 x 72: the deferred frame's and the
+    mask pass's tests."""
+    rng = np.random.default_rng(seed)
+    objects = [plane("floor", size=[12, 12])]
+    for i in range(4):
+        c = [rng.uniform(-3, 3), rng.uniform(0.5, 2.0), rng.uniform(-3, 2)]
+        m = Material(diffuse=rng.uniform(0.2, 0.9, 3), specular=[0.3] * 3, shininess=20)
+        objects.append(sphere(f"s{i}", c, rng.uniform(0.3, 0.8), m, subdivisions=2) if i % 2
+                       else box(f"b{i}", c, rng.uniform(0.3, 1.2, 3), m))
+    kinds = [lambda: PointLight([rng.uniform(-4, 4), rng.uniform(5, 8), rng.uniform(-2, 4)],
+                                intensity=0.3),
+             lambda: DirectionalLight([rng.uniform(-0.5, 0.5), -1, rng.uniform(-0.5, 0.5)],
+                                      intensity=0.3),
+             lambda: SpotLight([rng.uniform(-2, 2), 6, 2], [0, -1, -0.3], cone_angle=50,
+                               intensity=0.3)]
+    return Scene(camera=Camera(eye=[0, 4, 9], target=[0, 0.8, 0]), objects=objects,
+                 lights=[kinds[i % 3]() for i in range(lights)], width=96, height=72)

@@ -10,6 +10,11 @@
    spot's cone), the lit bits and coverage (up to LIGHTS_PER_PAGE lights a pass).
 4. `encode_srgb`, when the 8-bit image is asked for.
 
+A mask-only frame (the lit bits and coverage alone, one page of lights) has no G-buffer and no
+shading pass: `mask_pass` is its geometry pass, writing shade.frag's lit bits (MASK_PASS) as if
+no light were shadowed, and after each light's count `clear_shadowed` removes that light's bit
+where the count is not 0 (a colour logic op on the unsigned-integer bits).
+
 The forward passes (`depth_ambient`, then per light `add_light` over the soup with depth test
 EQUAL) remain for the planar shadows.  Both compute the same numbers: the same depths (the same
 invariant vertex shader on the same vertices in the same order) and the same lighting
@@ -28,7 +33,13 @@ import numpy as np
 from shadowvol.raster import glsl, stencil
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.glsl import set_uniform
-from shadowvol.raster.projection import NEARER, gl_matrix, in_frame, planes_in_frame
+from shadowvol.raster.projection import (
+    FAR_DEPTH,
+    NEARER,
+    gl_matrix,
+    in_frame,
+    planes_in_frame,
+)
 from shadowvol.raster.target import Target
 from shadowvol.scene import AreaSample, Camera, Light, Scene, SpotLight
 
@@ -51,6 +62,8 @@ class ScenePrograms:
         self.mark_vao = ctx.vertex_array(self.mark, [])
         # (lights, colour, sRGB out, spot lights, emitter lights) -> program, vao
         self._shade: dict[tuple[int, bool, bool, int, int], tuple] = {}
+        # (lights, spot lights) -> program, vao of the mask pass
+        self._masks: dict[tuple[int, int], tuple] = {}
         self.srgb = glsl.program(ctx, "fullscreen.vert", "srgb.frag")
         self.srgb_vao = ctx.vertex_array(self.srgb, [])
         self._forward = None
@@ -70,6 +83,18 @@ class ScenePrograms:
             program = glsl.program(self.ctx, "fullscreen.vert", "shade.frag", defines=defines)
             self._shade[key] = (program, self.ctx.vertex_array(program, []))
         return self._shade[key]
+
+    def mask_pass(self, lights: int, spots: int) -> tuple:
+        """(program, vao) of a mask-only frame's geometry pass for a page of `lights` lights,
+        bit i of `spots` set where light i is a spot (shade.frag's MASK_PASS); made on first
+        use."""
+        key = (lights, spots)
+        if key not in self._masks:
+            program = glsl.program(self.ctx, "scene.vert", "shade.frag", defines={
+                "LIGHTS": lights, "SPOT_LIGHTS": spots, "MASKS_ONLY": 1, "MASK_PASS": 1})
+            self._masks[key] = (program, self.ctx.vertex_array(
+                program, self.geometry.soup_bindings(program)))
+        return self._masks[key]
 
     def _forward_programs(self):
         if self._forward is None:
@@ -99,6 +124,7 @@ class ScenePrograms:
     def release(self) -> None:
         for obj in (self.gbuffer_vao, self.mark_vao, self.srgb_vao, self.gbuffer, self.mark,
                     self.srgb, *(x for pv in self._shade.values() for x in pv[::-1]),
+                    *(x for pv in self._masks.values() for x in pv[::-1]),
                     *(self._forward or ())):
             obj.release()
 
@@ -123,11 +149,21 @@ def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, s
     if srgb_background is not None:
         target.clear_srgb(srgb_background)
     target.use_gbuffer()
+    _draw_soup(ctx, progs.geometry, progs.gbuffer_vao, cull)
+    target.use()
+
+
+def _draw_soup(ctx: moderngl.Context, geometry: SceneGeometry, vao: moderngl.VertexArray,
+               cull: np.ndarray | None) -> None:
+    """Every triangle of the soup through `vao` (scene.vert), depth test NEARER with depth
+    writes as the bound framebuffer has them: one draw per run of objects with the same `cull`
+    (n_objects,) bool, back faces culled where it is True (one draw for all when None or all
+    alike)."""
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     ctx.front_face = "ccw"
     ctx.cull_face = "back"
-    ranges = progs.geometry.ranges
+    ranges = geometry.ranges
     if cull is None or not cull.any():
         runs = [(0, len(ranges), False)]
     else:
@@ -138,28 +174,73 @@ def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, s
     for a, b, culled in runs:
         ctx.enable_only(moderngl.DEPTH_TEST | (moderngl.CULL_FACE if culled else 0))
         # the soup but the huge triangles, then their pieces (`SceneGeometry.set_view`)
-        for first, count in progs.geometry.spans(range(a, b)):
-            progs.gbuffer_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
+        for first, count in geometry.spans(range(a, b)):
+            vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
     ctx.enable_only(moderngl.DEPTH_TEST)
-    target.use()
+
+
+def mask_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
+              view_proj: np.ndarray, camera: Camera, lights,
+              cull: np.ndarray | None = None) -> None:
+    """The geometry pass of a mask-only frame for `lights` (one page) seen by `camera`
+    (`view_proj` as `set_camera` takes it): depth and stencil cleared, then every triangle of
+    the soup as `geometry_pass` draws it (the same vertex shader and vertices: the same
+    depths), writing into `target.unshadowed` bit 0 (covered) and bit i + 1 where the visible
+    side faces light i (n . l > 0, inside a spot's cone) by shade.frag's own tests
+    (MASK_PASS); pixels no triangle covers keep 0.  `target.mark_fbo` is left bound, for the
+    counts and `clear_shadowed`."""
+    prog, vao = progs.mask_pass(
+        len(lights), spots=sum(1 << i for i, l in enumerate(lights)
+                               if isinstance(l, SpotLight)))
+    fbo = target.mark_fbo
+    fbo.depth_mask = True
+    fbo.color_mask = (True,) * 4
+    stencil.clear_depth_stencil(gl, fbo.glo, FAR_DEPTH)
+    stencil.clear_uint_attachment(gl, fbo.glo, 0, 0)
+    fbo.use()
+    origin = progs.geometry.origin
+    set_camera((prog,), view_proj, camera, origin)
+    set_uniform(prog, "u_first_page", True)
+    _light_arrays(prog, lights, origin)
+    progs.geometry.triangle_data.bind_to_storage_buffer(0)
+    _draw_soup(ctx, progs.geometry, vao, cull)
+
+
+def clear_shadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
+                   progs: ScenePrograms, bit: int, zero: bool = False) -> None:
+    """After light `bit`'s count in a mask-only frame (`mask_pass`): its lit bit (2^(bit + 1)
+    of `target.unshadowed`) cleared at every covered pixel whose count is not 0, by a
+    full-screen pass with the logic op AND-NOT.  `zero`: every count is left 0, as a clear
+    would (`stencil.where_shadowed`), for the next light's count.  `target.mark_fbo` stays
+    bound."""
+    fbo = target.mark_fbo
+    fbo.depth_mask = False
+    fbo.color_mask = (True,) * 4
+    fbo.use()
+    ctx.enable_only(moderngl.NOTHING)
+    set_uniform(progs.mark, "u_bit", 2 << bit)
+    _only_where_covered(ctx)
+    with stencil.where_shadowed(gl, zero=zero), stencil.logic_op(gl, stencil.GL_AND_INVERTED):
+        progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = NEARER
 
 
 def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
                     progs: ScenePrograms, bit: int, restore: bool = True,
                     zero: bool = False) -> None:
-    """Add 2^bit to the unshadowed bits where the stencil count is 0; `restore`: bind the
+    """Set bit `bit` of the unshadowed bits where the stencil count is 0 (a full-screen pass,
+    logic op OR); `restore`: bind the
     target's main framebuffer after (else `target.mark_fbo` stays bound).  `zero`: also set
     every other count to 0 (`stencil.where_unshadowed`), so that the next light's
     count needs no clear (`count_volumes(clear=False)`)."""
     target.mark_fbo.depth_mask = False
     target.mark_fbo.color_mask = (True,) * 4
     target.mark_fbo.use()
-    ctx.enable_only(moderngl.BLEND)
-    ctx.blend_func = moderngl.ONE, moderngl.ONE
-    ctx.blend_equation = moderngl.FUNC_ADD
-    set_uniform(progs.mark, "u_bit", float(2 ** bit))
+    ctx.enable_only(moderngl.NOTHING)
+    set_uniform(progs.mark, "u_bit", 1 << bit)
     _only_where_covered(ctx)
-    with stencil.where_unshadowed(gl, zero=zero):
+    with stencil.where_unshadowed(gl, zero=zero), stencil.logic_op(gl, stencil.GL_OR):
         progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
@@ -205,23 +286,7 @@ def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: Scene
     origin = progs.geometry.origin   # positions in the geometry's frame, as the G-buffer's
     set_uniform(prog, "u_eye", tuple(float(x) for x in camera.eye - origin))
     set_uniform(prog, "u_first_page", first_page)
-    # uniform arrays as packed float32 (glUniform*fv): the same float32 values the forward
-    # pass's single uniforms hold
-    spot = [isinstance(l, SpotLight) for l in lights]
-    arrays = {
-        "u_light": [in_frame(l.homogeneous, origin) for l in lights],
-        "u_radiance": [l.radiance for l in lights],
-        "u_spot_direction": [l.direction if s else (0.0, 0.0, 1.0) for l, s in zip(lights, spot)],
-        "u_spot_cos": [l.cos_cutoff if s else NO_CONE for l, s in zip(lights, spot)],
-        "u_emitter_cosine": [1.0 if isinstance(l, AreaSample) else 0.0 for l in lights]}
-    for name, values in arrays.items() if lights else ():
-        if name not in prog:
-            continue
-        # the linker keeps an array up to the last element the shader reads (the spots' up to
-        # the last spot's)
-        kept = values[:prog[name].array_length]
-        set_uniform(prog, name, np.array([np.asarray(v, np.float64) for v in kept],
-                                         np.float32).tobytes())
+    _light_arrays(prog, lights, origin)
     set_uniform(prog, "u_ambient", tuple(float(x) for x in scene.ambient))
     progs.geometry.materials.use(0)
     target.position.use(1)
@@ -241,6 +306,27 @@ def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: Scene
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     target.use()
+
+
+def _light_arrays(prog: moderngl.Program, lights, origin: np.ndarray) -> None:
+    """shade.frag's per-light uniform arrays for `lights`, in the frame of `origin` (3,)."""
+    # uniform arrays as packed float32 (glUniform*fv): the same float32 values the forward
+    # pass's single uniforms hold
+    spot = [isinstance(l, SpotLight) for l in lights]
+    arrays = {
+        "u_light": [in_frame(l.homogeneous, origin) for l in lights],
+        "u_radiance": [l.radiance for l in lights],
+        "u_spot_direction": [l.direction if s else (0.0, 0.0, 1.0) for l, s in zip(lights, spot)],
+        "u_spot_cos": [l.cos_cutoff if s else NO_CONE for l, s in zip(lights, spot)],
+        "u_emitter_cosine": [1.0 if isinstance(l, AreaSample) else 0.0 for l in lights]}
+    for name, values in arrays.items() if lights else ():
+        if name not in prog:
+            continue
+        # the linker keeps an array up to the last element the shader reads (the spots' up to
+        # the last spot's)
+        kept = values[:prog[name].array_length]
+        set_uniform(prog, name, np.array([np.asarray(v, np.float64) for v in kept],
+                                         np.float32).tobytes())
 
 
 def srgb_code(ctx: moderngl.Context, progs: ScenePrograms, rgb) -> tuple[int, int, int]:

@@ -352,11 +352,6 @@ class Renderer:
         # and one page holds every light (pages add up in float)
         srgb_direct = ("image_srgb" in outputs and "image" not in outputs
                        and len(hard) <= LIGHTS_PER_PAGE)
-        # the unshadowed bits are cleared when some light of the first page is marked
-        # (and always for the facing pass, which marks every light)
-        passes.geometry_pass(self.ctx, target, progs, self.scene, cull,
-                             marks=len(hard) > 1 or facing_pass,
-                             srgb_background=self._srgb_background() if srgb_direct else None)
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(
@@ -364,57 +359,16 @@ class Renderer:
         h, w = self.scene.height, self.scene.width
         if want_stencil and any(isinstance(light, AreaLight) for light in lights):
             raise ValueError("stencil counts are per hard light: not for area lights")
-        colour = bool({"image", "image_srgb"} & outputs)
-        need_bits = "lit" in outputs or "coverage" in outputs or not colour
-        pages, counts, truth_pages = [], [], []
         zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
-        # hard lights go in pages of LIGHTS_PER_PAGE: each one's volume count marks its
-        # unshadowed bit, then one shading pass per page (one for any usual frame)
-        # the stencil is all 0: the geometry pass cleared it, and each mark but a page's last
-        # zeroes it again (no clear, each one a flush of llvmpipe's scene, before a count); a
-        # page's last count stays for `shade`, so the next page clears it
-        stencil_zero = True
-        for first in range(0, max(len(hard), 1), LIGHTS_PER_PAGE):
-            page_lights = [sample for _, sample in hard[first:first + LIGHTS_PER_PAGE]]
-            if first:
-                target.clear_unshadowed()
-                target.clear_lit()
-            for bit, light in enumerate(page_lights):
-                light4 = light.homogeneous
-                choice = methods.choose(method, self.geometry.bounds, camera,
-                                        self.scene.aspect, light4, self.geometry.extent)
-                if shadows:
-                    vols.prepare(light4)
-                    # halving is safe only for casters `auto` chose z-pass for, and only when
-                    # the counts themselves are not returned (see passes.count_volumes)
-                    passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                         halve=method == "auto" and not want_stencil,
-                                         clip_planes=clip,
-                                         # counted where it is marked: no framebuffer
-                                         # change between the page's lights (llvmpipe
-                                         # flushes at each)
-                                         fbo=None if want_stencil else target.mark_fbo,
-                                         clear=not stencil_zero)
-                    stencil_zero = False
-                elif not stencil_zero:
-                    target.clear_stencil()
-                    stencil_zero = True
-                if want_stencil:
-                    counts.append(target.read_stencil())
-                if bit < len(page_lights) - 1:   # the last light's stencil is read by `shade`
-                    passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit,
-                                           restore=False, zero=True)
-                    stencil_zero = True
-                zfail[hard[first + bit][0]] |= choice
-            passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
-                         first_page=not first, colour=colour, srgb=srgb_direct)
-            if need_bits:   # the frame's own scratch: read, used and dropped in this frame
-                pages.append(target.read_bits(out=self._scratch(len(pages) + 1)))
-            if facing_pass and page_lights:
-                # the facing pass reads every light's unshadowed bit: mark the last one's too
-                # (the stencil still holds its count)
-                passes.mark_unshadowed(self.ctx, self.gl, target, progs, len(page_lights) - 1)
-                truth_pages.append(self._truth_pass().run(target, self.geometry, page_lights))
+        truth_pages: list = []
+        counts: list[np.ndarray] = []
+        if outputs <= {"lit", "coverage"} and len(hard) <= LIGHTS_PER_PAGE:
+            # the masks alone, one page: no G-buffer and no shading pass
+            pages = [self._mask_frame(method, camera, view_proj, hard, shadows, vols, clip,
+                                      cull, zfail)]
+        else:
+            pages = self._deferred_frame(method, camera, hard, shadows, vols, clip, cull,
+                                         zfail, outputs, srgb_direct, truth_pages, counts)
         # what the caller gets comes from the pool (`recycle`); numpy's temporaries go to
         # the scratch (3 MB of new memory costs a millisecond here)
         pool, masked = self._pool, self._scratch(0)
@@ -467,6 +421,101 @@ class Renderer:
             zfail=zfail, lit_count=lit_count, samples=samples, image_srgb=srgb,
             calibration=calibration(self.scene.replace(camera=camera, lights=lights)),
             **extra)
+
+    def _mask_frame(self, method, camera, view_proj, hard, shadows, vols, clip, cull,
+                    zfail) -> np.ndarray:
+        """The lit bits of a mask-only frame of the hard lights `hard` ((light index, hard
+        light) pairs, one page): (H, W) uint32 in this renderer's scratch, bit 0 covered, bit
+        k + 1 lit by hard[k], as the deferred frame's.  No G-buffer and no shading pass
+        (`passes.mask_pass`); every light counted and its bit cleared where its count is not
+        0 in one framebuffer, so that llvmpipe bins all of them in one scene.  Fills
+        `zfail`."""
+        progs, target = self.programs, self.target
+        passes.mask_pass(self.ctx, self.gl, target, progs, view_proj, camera,
+                         [sample for _, sample in hard], cull)
+        for k, (i, light) in enumerate(hard):
+            light4 = light.homogeneous
+            choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
+                                    light4, self.geometry.extent)
+            if shadows:
+                vols.prepare(light4)
+                # the stencil is 0: the mask pass cleared it, and each light's clear but the
+                # last zeroes it again (`stencil.where_shadowed`)
+                passes.count_volumes(self.ctx, self.gl, target, vols, choice,
+                                     halve=method == "auto", clip_planes=clip,
+                                     fbo=target.mark_fbo, clear=False)
+                passes.clear_shadowed(self.ctx, self.gl, target, progs, k,
+                                      zero=k < len(hard) - 1)
+            zfail[i] |= choice
+        bits = target.read_unshadowed(out=self._scratch(1))
+        target.use()
+        return bits
+
+    def _deferred_frame(self, method, camera, hard, shadows, vols, clip, cull, zfail, outputs,
+                        srgb_direct, truth_pages, counts) -> list[np.ndarray]:
+        """The deferred frame (`passes`): the lit bits of each page of LIGHTS_PER_PAGE hard
+        lights (as `_mask_frame`'s; none when neither masks nor coverage are asked for and
+        the colour is).  Fills `zfail`, `truth_pages` (the facing pass's, for the ground
+        truth) and `counts` (each hard light's stencil counts, when asked for)."""
+        progs, target = self.programs, self.target
+        want_stencil = "stencil" in outputs
+        facing_pass = "facing" in outputs
+        colour = bool({"image", "image_srgb"} & outputs)
+        need_bits = "lit" in outputs or "coverage" in outputs or not colour
+        # the unshadowed bits are cleared when some light of the first page is marked
+        # (and always for the facing pass, which marks every light)
+        passes.geometry_pass(self.ctx, target, progs, self.scene, cull,
+                             marks=len(hard) > 1 or facing_pass,
+                             srgb_background=self._srgb_background() if srgb_direct else None)
+        pages = []
+        # hard lights go in pages of LIGHTS_PER_PAGE: each one's volume count marks its
+        # unshadowed bit, then one shading pass per page (one for any usual frame)
+        # the stencil is all 0: the geometry pass cleared it, and each mark but a page's last
+        # zeroes it again (no clear, each one a flush of llvmpipe's scene, before a count); a
+        # page's last count stays for `shade`, so the next page clears it
+        stencil_zero = True
+        for first in range(0, max(len(hard), 1), LIGHTS_PER_PAGE):
+            page_lights = [sample for _, sample in hard[first:first + LIGHTS_PER_PAGE]]
+            if first:
+                target.clear_unshadowed()
+                target.clear_lit()
+            for bit, light in enumerate(page_lights):
+                light4 = light.homogeneous
+                choice = methods.choose(method, self.geometry.bounds, camera,
+                                        self.scene.aspect, light4, self.geometry.extent)
+                if shadows:
+                    vols.prepare(light4)
+                    # halving is safe only for casters `auto` chose z-pass for, and only when
+                    # the counts themselves are not returned (see passes.count_volumes)
+                    passes.count_volumes(self.ctx, self.gl, target, vols, choice,
+                                         halve=method == "auto" and not want_stencil,
+                                         clip_planes=clip,
+                                         # counted where it is marked: no framebuffer
+                                         # change between the page's lights (llvmpipe
+                                         # flushes at each)
+                                         fbo=None if want_stencil else target.mark_fbo,
+                                         clear=not stencil_zero)
+                    stencil_zero = False
+                elif not stencil_zero:
+                    target.clear_stencil()
+                    stencil_zero = True
+                if want_stencil:
+                    counts.append(target.read_stencil())
+                if bit < len(page_lights) - 1:   # the last light's stencil is read by `shade`
+                    passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit,
+                                           restore=False, zero=True)
+                    stencil_zero = True
+                zfail[hard[first + bit][0]] |= choice
+            passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
+                         first_page=not first, colour=colour, srgb=srgb_direct)
+            if need_bits:   # the frame's own scratch: read, used and dropped in this frame
+                pages.append(target.read_bits(out=self._scratch(len(pages) + 1)))
+            if facing_pass and page_lights:
+                # the facing pass reads every light's unshadowed bit: mark the last one's too
+                # (the stencil still holds its count)
+                passes.mark_unshadowed(self.ctx, self.gl, target, progs, len(page_lights) - 1)
+                truth_pages.append(self._truth_pass().run(target, self.geometry, page_lights))
+        return pages
 
     def _ground_truth(self, outputs, camera, lights, truth_pages, zfail, vols, method, clip,
                       want_stencil) -> dict[str, np.ndarray]:

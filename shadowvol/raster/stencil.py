@@ -1,8 +1,9 @@
 """The one module that makes raw OpenGL calls: the depth-stencil attachment and stencil state.
 
 moderngl has no stencil API (moderngl#676), so the depth-stencil renderbuffer (DEPTH32F_STENCIL8),
-every piece of stencil state, depth clamp, the clip-control depth range and the stencil read-back
-are raw GL calls here, made through function pointers loaded from whatever context is current:
+every piece of stencil state, depth clamp, the clip-control depth range, the stencil read-back
+and the colour logic op (moderngl has none either: the lit bits' OR and AND-NOT) are raw GL
+calls here, made through function pointers loaded from whatever context is current:
 EGL's `eglGetProcAddress` for the renderer's headless context (EGL 1.5 and Mesa return core entry
 points too), GLX's `glXGetProcAddressARB` for a window's context under X11 (`shadowvol view`).
 Everything else — programs, buffers, textures, blending, depth test, colour and depth write
@@ -57,6 +58,11 @@ GL_FRAMEBUFFER_COMPLETE = 0x8CD5
 GL_RED_INTEGER = 0x8D94
 GL_RG_INTEGER = 0x8228
 GL_UNSIGNED_INT = 0x1405
+GL_COLOR_LOGIC_OP = 0x0BF2
+GL_LOGIC_OP_MODE = 0x0BF0
+GL_COPY = 0x1503
+GL_OR = 0x1507
+GL_AND_INVERTED = 0x1504   # (NOT source) AND destination: clears the source's bits
 # state queries used to save and restore
 _FRONT_STATE = (0x0B92, 0x0B97, 0x0B93, 0x0B94, 0x0B95, 0x0B96, 0x0B98)  # func ref vmask fail zfail zpass wmask
 _BACK_STATE = (0x8800, 0x8CA3, 0x8CA4, 0x8801, 0x8802, 0x8803, 0x8CA5)
@@ -72,6 +78,7 @@ _SIGNATURES = {
     "glStencilOpSeparate": (_V, _u, _u, _u, _u),
     "glStencilMaskSeparate": (_V, _u, _u),
     "glClearBufferiv": (_V, _u, _i, _p), "glClearBufferfv": (_V, _u, _i, _p),
+    "glClearBufferuiv": (_V, _u, _i, _p), "glLogicOp": (_V, _u),
     "glClearBufferfi": (_V, _u, _i, ctypes.c_float, _i),
     "glPixelStorei": (_V, _u, _i),
     "glReadPixels": (_V, _i, _i, _i, _i, _u, _u, _p),
@@ -258,6 +265,30 @@ def clear_int_attachment(gl: RawGL, framebuffer_glo: int, draw_buffer: int, valu
         gl.glClearBufferiv(GL_COLOR, draw_buffer, values)
 
 
+def clear_uint_attachment(gl: RawGL, framebuffer_glo: int, draw_buffer: int,
+                          value: int = 0) -> None:
+    """Unsigned-integer colour attachment `draw_buffer` to `value`, under the current colour
+    write mask (glClearBufferuiv: a float or signed clear leaves an unsigned one undefined)."""
+    values = (ctypes.c_uint * 4)(value, value, value, value)
+    with bound_framebuffer(gl, framebuffer_glo):
+        gl.glClearBufferuiv(GL_COLOR, draw_buffer, values)
+
+
+@contextlib.contextmanager
+def logic_op(gl: RawGL, op: int) -> Iterator[None]:
+    """Colour logic op `op` (GL_OR, GL_AND_INVERTED) between each fragment's output and the
+    stored value, for integer colour attachments (GL applies it to integer and normalised
+    ones, never to float ones); off again on exit, the op back to its previous mode."""
+    previous = gl.get_int(GL_LOGIC_OP_MODE)
+    gl.glLogicOp(op)
+    gl.glEnable(GL_COLOR_LOGIC_OP)
+    try:
+        yield
+    finally:
+        gl.glDisable(GL_COLOR_LOGIC_OP)
+        gl.glLogicOp(previous)
+
+
 def clear_uint_texture(gl: RawGL, texture_glo: int, box: tuple[int, int, int, int],
                        value: int = 0, layer: int = 0, components: int = 1) -> None:
     """Texels of an unsigned-integer texture (r32ui / rg32ui; a 2D texture, or one `layer`
@@ -404,12 +435,17 @@ def where_unshadowed(gl: RawGL, zero: bool = False) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def where_shadowed(gl: RawGL) -> Iterator[None]:
+def where_shadowed(gl: RawGL, zero: bool = False) -> Iterator[None]:
     """Draw only where the stencil count is not 0 (the complement of `where_unshadowed`); the
-    stencil itself is left unchanged."""
+    stencil itself is left unchanged.  `zero`: every count the draw covers is set to 0
+    instead, whatever the depth test (its pass and fail operations ZERO; a count that fails
+    the stencil test is 0 already), so that after a full-screen draw the stencil is 0
+    everywhere, as a clear would leave it, without the clear."""
+    op = GL_ZERO if zero else GL_KEEP
     with _saved_stencil_state(gl):
-        _set(gl, func=GL_NOTEQUAL, ref=0, front_ops=(GL_KEEP, GL_KEEP, GL_KEEP),
-             back_ops=(GL_KEEP, GL_KEEP, GL_KEEP), write_mask=0x00, depth_clamp=False)
+        _set(gl, func=GL_NOTEQUAL, ref=0, front_ops=(GL_KEEP, op, op),
+             back_ops=(GL_KEEP, op, op), write_mask=0xFF if zero else 0x00,
+             depth_clamp=False)
         yield
 
 

@@ -4,8 +4,10 @@
   in w +-(triangle index + 1), negative where its back face is seen, 0 where nothing is drawn:
   the key of the per-triangle data (normal, first corner, object; a float, exact below 2^24).
   Further per-pixel outputs (depth, object id) fit beside it as attachments of the same pass.
-- unshadowed (R32F): bit i set where light i's stencil count was 0, summed by additive
-  blending (distinct powers of two add exactly in float32 up to 2^24).
+- unshadowed (R32UI): bit i set where light i's stencil count was 0 (the mark pass ORs it in:
+  a colour logic op).  A mask-only frame uses it for its lit bits instead (bits as in `bits`,
+  set by its geometry pass and cleared per light by the logic op AND-NOT: `passes.mask_pass`),
+  read back once by `read_unshadowed`.
 - colour (RGBA32F): linear RGB (float so nothing clamps or is quantised before the final sRGB
   encoding); alpha is 1 where geometry covers the pixel.
 - bits (R32F): bit 0 covered, bit i + 1 lit by the frame's i-th light (of a page of
@@ -40,7 +42,7 @@ LIGHTS_PER_PAGE = 23  # lit bits 1..23 and the coverage bit of a float32: exact
 
 
 # GPU memory of one pixel of the frame: colour RGBA32F, lit bits R32F, G-buffer RGBA32F,
-# unshadowed marks R32F, sRGB RGBA8, depth32F + stencil8 (8 with padding)
+# unshadowed marks R32UI, sRGB RGBA8, depth32F + stencil8 (8 with padding)
 BYTES_PER_PIXEL = 16 + 4 + 16 + 4 + 4 + 8
 
 
@@ -77,7 +79,7 @@ class Target:
         self.colour = ctx.texture((width, height), 4, dtype="f4")
         self.bits = ctx.texture((width, height), 1, dtype="f4")
         self.position = ctx.texture((width, height), 4, dtype="f4")
-        self.unshadowed = ctx.texture((width, height), 1, dtype="f4")
+        self.unshadowed = ctx.texture((width, height), 1, dtype="u4")
         self.srgb = ctx.texture((width, height), 4, dtype="f1")
         self._textures = (self.colour, self.bits, self.position, self.unshadowed, self.srgb)
         for t in self._textures:
@@ -94,6 +96,7 @@ class Target:
         self._rgba = np.empty((height, width, 4), np.float32)
         self._rgb = np.empty((height, width, 3), np.float32)
         self._bits = np.empty((height, width), np.float32)
+        self._unshadowed = np.empty((height, width), np.uint32)
         self._srgb8 = np.empty((height, width, 3), np.uint8)
         try:
             self.depth_stencil = stencil.DepthStencilBuffer(gl, self.fbo.glo, width, height)
@@ -137,7 +140,7 @@ class Target:
 
     def clear_unshadowed(self) -> None:
         self.mark_fbo.color_mask = (True,) * 4
-        stencil.clear_colour_attachment(self.gl, self.mark_fbo.glo, 0, 0.0)
+        stencil.clear_uint_attachment(self.gl, self.mark_fbo.glo, 0, 0)
 
     def clear_lit(self) -> None:
         self.lit_fbo.color_mask = (True,) * 4
@@ -169,6 +172,15 @@ class Target:
         if out is None:
             return self._bits[::-1].astype(np.uint32)
         np.copyto(out, self._bits[::-1], casting="unsafe")   # integers below 2^24: exact
+        return out
+
+    def read_unshadowed(self, out: np.ndarray | None = None) -> np.ndarray:
+        """(H, W) uint32 of the unshadowed attachment (a mask-only frame's lit bits), row 0 at
+        the top, into `out` if given."""
+        self.mark_fbo.read_into(self._unshadowed, components=1, attachment=0, dtype="u4")
+        if out is None:
+            return self._unshadowed[::-1].copy()
+        np.copyto(out, self._unshadowed[::-1])
         return out
 
     def read_lit(self) -> np.ndarray:

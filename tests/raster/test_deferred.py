@@ -19,46 +19,19 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from builders import mixed_scene
 
 from shadowvol.io import encode_srgb
-from shadowvol.primitives import box, plane, sphere
 from shadowvol.raster import methods
 from shadowvol.raster.renderer import OUTPUTS, Renderer
 from shadowvol.raster.target import LIGHTS_PER_PAGE
 from shadowvol.raster.volumes import CpuVolumes
-from shadowvol.scene import (
-    AreaLight,
-    Camera,
-    DirectionalLight,
-    Material,
-    PointLight,
-    Scene,
-    SpotLight,
-)
-
-
-def scene_of(seed: int, lights: int = 3) -> Scene:
-    """A floor, closed spheres and boxes (cullable), lights of every kind above them."""
-    rng = np.random.default_rng(seed)
-    objects = [plane("floor", size=[12, 12])]
-    for i in range(4):
-        c = [rng.uniform(-3, 3), rng.uniform(0.5, 2.0), rng.uniform(-3, 2)]
-        m = Material(diffuse=rng.uniform(0.2, 0.9, 3), specular=[0.3] * 3, shininess=20)
-        objects.append(sphere(f"s{i}", c, rng.uniform(0.3, 0.8), m, subdivisions=2) if i % 2
-                       else box(f"b{i}", c, rng.uniform(0.3, 1.2, 3), m))
-    kinds = [lambda: PointLight([rng.uniform(-4, 4), rng.uniform(5, 8), rng.uniform(-2, 4)],
-                                intensity=0.3),
-             lambda: DirectionalLight([rng.uniform(-0.5, 0.5), -1, rng.uniform(-0.5, 0.5)],
-                                      intensity=0.3),
-             lambda: SpotLight([rng.uniform(-2, 2), 6, 2], [0, -1, -0.3], cone_angle=50,
-                               intensity=0.3)]
-    return Scene(camera=Camera(eye=[0, 4, 9], target=[0, 0.8, 0]), objects=objects,
-                 lights=[kinds[i % 3]() for i in range(lights)], width=96, height=72)
+from shadowvol.scene import AreaLight, Camera
 
 
 @pytest.mark.parametrize("seed", range(3))
 def test_outputs_asked_for_are_the_full_frames(ctx, seed):
-    with Renderer(scene_of(seed), ctx) as r:
+    with Renderer(mixed_scene(seed), ctx) as r:
         full = r.render(stencil=True, outputs=OUTPUTS)
         default = r.render()
         masks = r.render(outputs=("lit", "coverage"))
@@ -79,7 +52,7 @@ def test_outputs_asked_for_are_the_full_frames(ctx, seed):
 
 
 def test_unknown_outputs_are_refused(ctx):
-    with Renderer(scene_of(0), ctx) as r:
+    with Renderer(mixed_scene(0), ctx) as r:
         with pytest.raises(ValueError, match="unknown output 'depht'"):
             r.render(outputs=("image", "depht"))
         with pytest.raises(TypeError):
@@ -87,7 +60,7 @@ def test_unknown_outputs_are_refused(ctx):
 
 
 def test_gpu_srgb_is_within_one_code_of_the_writer(ctx):
-    with Renderer(scene_of(1), ctx) as r:
+    with Renderer(mixed_scene(1), ctx) as r:
         res = r.render(outputs=("image", "image_srgb"))
     ref = encode_srgb(res.image)
     diff = np.abs(res.image_srgb.astype(int) - ref)
@@ -98,7 +71,7 @@ def test_gpu_srgb_is_within_one_code_of_the_writer(ctx):
 def test_more_lights_than_a_page(ctx):
     """LIGHTS_PER_PAGE + 2 lights: two shading passes; each light's mask is its own frame's."""
     n = LIGHTS_PER_PAGE + 2
-    scene = scene_of(2, lights=n)
+    scene = mixed_scene(2, lights=n)
     with Renderer(scene, ctx) as r:
         res = r.render()
         alone = [r.render(lights=(light,)) for light in scene.lights]
@@ -114,7 +87,7 @@ def test_more_lights_than_a_page(ctx):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_back_face_culling_changes_no_pixel_here(ctx, seed, monkeypatch):
-    scene = scene_of(seed)
+    scene = mixed_scene(seed)
     with Renderer(scene, ctx) as r:
         cull = methods.cullable(r.geometry.bounds, r.outward_convex, scene.camera,
                                 r.geometry.extent)
@@ -129,7 +102,7 @@ def test_back_face_culling_changes_no_pixel_here(ctx, seed, monkeypatch):
 
 
 def test_culling_needs_the_box_beyond_the_near_plane(ctx):
-    scene = scene_of(0)
+    scene = mixed_scene(0)
     with Renderer(scene, ctx) as r:
         b = r.geometry.bounds[1]
         inside = Camera(eye=(b[0] + b[1]) / 2, target=[0, 0, 0])
@@ -143,7 +116,7 @@ def test_culling_needs_the_box_beyond_the_near_plane(ctx):
 
 
 def test_inward_wound_and_open_meshes_are_not_culled(ctx):
-    scene = scene_of(0)
+    scene = mixed_scene(0)
     inverted = replace(scene.objects[1], faces=scene.objects[1].faces[:, ::-1].copy())
     scene = scene.replace(objects=[scene.objects[0], inverted, *scene.objects[2:]])
     with Renderer(scene, ctx) as r:
@@ -158,7 +131,7 @@ def test_inward_wound_and_open_meshes_are_not_culled(ctx):
 
 
 def test_kept_side_quads_give_the_same_frames(ctx, monkeypatch):
-    scene = scene_of(3)
+    scene = mixed_scene(3)
     with Renderer(scene, ctx) as r:
         first = r.render()
         vols = r.volumes("cpu")
@@ -188,7 +161,7 @@ def _counting_builds(monkeypatch) -> list:
 
 
 def test_kept_volumes_fit_in_their_budget(ctx):
-    scene = scene_of(0, lights=1)
+    scene = mixed_scene(0, lights=1)
     lights = [np.array([0.5 * k, 7.0, 1.0, 1.0]) for k in range(11)]
     with Renderer(scene, ctx) as r:
         vols = r.volumes("cpu")
@@ -206,7 +179,7 @@ def test_kept_volumes_fit_in_their_budget(ctx):
 def test_a_moving_light_leaves_little_behind(ctx):
     """A light that moves every frame: the last two frames' volumes are kept, and of the older
     ones only the most recent within KEPT_OLDER_BYTES."""
-    scene = scene_of(0, lights=1)
+    scene = mixed_scene(0, lights=1)
     lights = [np.array([0.5 * k, 7.0, 1.0, 1.0]) for k in range(11)]
     with Renderer(scene, ctx) as r:
         vols = r.volumes("cpu")
@@ -224,7 +197,7 @@ def test_a_moving_light_leaves_little_behind(ctx):
 
 
 def test_a_frame_over_the_budget_keeps_its_first_lights(ctx, monkeypatch):
-    scene = scene_of(0, lights=1)
+    scene = mixed_scene(0, lights=1)
     lights = [np.array([0.5 * k, 7.0, 1.0, 1.0]) for k in range(5)]
     with Renderer(scene, ctx) as r:
         vols = r.volumes("cpu")
@@ -242,7 +215,7 @@ def test_a_frame_over_the_budget_keeps_its_first_lights(ctx, monkeypatch):
 
 
 def test_an_area_lights_samples_are_kept_between_frames(ctx, monkeypatch):
-    scene = scene_of(1, lights=1)
+    scene = mixed_scene(1, lights=1)
     light = AreaLight("rect", [0.5, 6.0, 1.0], normal=[0, -1, 0], size=[1.5, 1.0],
                       samples=16)
     scene = replace(scene, lights=(light,))
@@ -277,7 +250,7 @@ def test_one_area_light_gives_the_same_frame_every_time(ctx, samples):
     """One area light of several samples (one page, and more than one): each sample is marked,
     so the unshadowed bits must be cleared every frame, though the scene has one light."""
     from shadowvol.scene import AreaLight
-    scene = scene_of(1, lights=1)
+    scene = mixed_scene(1, lights=1)
     scene = scene.replace(lights=[AreaLight("rect", center=[0.5, 6.0, 1.0], normal=[0, -1, 0],
                                             size=[1.5, 1.0], samples=samples, seed=2)])
     with Renderer(scene, ctx) as r:
@@ -310,7 +283,7 @@ def test_the_srgb_image_from_the_shading_pass_is_the_srgb_passs(ctx, lights, mon
     the sRGB pass encodes from the float colour, background pixels included; a frame of more
     than one page still goes through the float colour."""
     from shadowvol.raster import passes
-    scene = scene_of(4, 3 if lights == "area" else lights)
+    scene = mixed_scene(4, 3 if lights == "area" else lights)
     if lights == "area":
         scene = scene.replace(lights=[AreaLight("rect", [0.5, 6.0, 1.0], normal=[0, -1, 0],
                                                 size=[1.0, 0.8], samples=9)])

@@ -50,8 +50,15 @@ OUT = TEST_OUTPUT / "raster-large-worlds"
 
 
 def raster_masks(ctx, scene, runs=RUNS) -> dict:
+    """Each run's frame; its mask-only frame (the mask pass) must have the same masks."""
+    out = {}
     with Renderer(scene, ctx) as r:
-        return {run: r.render(*run) for run in runs}
+        for run in runs:
+            out[run] = r.render(*run)
+            masks = r.render(*run, outputs=("lit", "coverage"))
+            np.testing.assert_array_equal(masks.lit, out[run].lit, err_msg=str(run))
+            np.testing.assert_array_equal(masks.coverage, out[run].coverage, err_msg=str(run))
+    return out
 
 
 def check_both(request, ctx, assert_masks_match, scene, budget=None) -> None:

@@ -33,6 +33,10 @@ def check_scene(ctx, scene, method: str) -> None:
     lit, cov = raytrace.shadow_masks(scene)
     with Renderer(scene, ctx) as r:
         res = r.render(method)
+        masks = r.render(method, outputs=("lit", "coverage"))   # the mask pass
+    # a mask-only frame has its own passes (passes.mask_pass): the same masks, bit for bit
+    np.testing.assert_array_equal(masks.lit, res.lit)
+    np.testing.assert_array_equal(masks.coverage, res.coverage)
     report = mask_report(res.lit, res.coverage, lit, cov)
     note(f"{method}: {report}")
     if any(row["interior"] for row in report):

@@ -1,0 +1,149 @@
+"""The mask pass: a frame that asks for the masks alone (`outputs` within lit and coverage, one
+page of hard lights) writes its lit bits in the geometry pass and clears each light's bit where
+its stencil count is not 0 (`passes.mask_pass`, `passes.clear_shadowed`), with no G-buffer and
+no shading pass.  Its masks must be the deferred frame's bit for bit, for every light kind,
+method, silhouette path and culling, and with many lights in one framebuffer; a frame of more
+lights than a page, or asking for anything else, takes the deferred passes.
+
+The random-scene and large-world properties check the same equality on their scenes
+(test_random_scenes.check_scene, test_large_worlds.raster_masks), and the ray tracer's masks
+are compared with the deferred frame there: this file makes the mask pass answer to both.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from builders import mixed_scene
+
+import raytrace
+from shadowvol.primitives import plane, sphere
+from shadowvol.raster import passes
+from shadowvol.raster.renderer import Renderer
+from shadowvol.raster.target import LIGHTS_PER_PAGE
+from shadowvol.scene import AreaLight, Camera, Material, PointLight, Scene
+
+MASKS = ("lit", "coverage")
+
+
+def assert_same_masks(masks, full, label: str = "") -> None:
+    np.testing.assert_array_equal(masks.lit, full.lit, err_msg=label)
+    np.testing.assert_array_equal(masks.lit_count, full.lit_count, err_msg=label)
+    np.testing.assert_array_equal(masks.coverage, full.coverage, err_msg=label)
+    np.testing.assert_array_equal(masks.zfail, full.zfail, err_msg=label)
+
+
+@pytest.fixture
+def passes_taken(monkeypatch):
+    """The names of the frame passes each render runs ("mask" or "shade"), for asserting which
+    path a frame took."""
+    taken: list[str] = []
+    for name, label in (("mask_pass", "mask"), ("shade", "shade")):
+        original = getattr(passes, name)
+
+        def spy(*args, _original=original, _label=label, **kwargs):
+            taken.append(_label)
+            return _original(*args, **kwargs)
+        monkeypatch.setattr(passes, name, spy)
+    return taken
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("run", [("auto", "cpu"), ("zpass", "cpu"), ("zfail", "cpu"),
+                                 ("auto", "gpu")])
+def test_the_mask_pass_gives_the_deferred_frames_masks(ctx, passes_taken, seed, run):
+    """Point, directional and spot lights together (scene_of: lights of every kind)."""
+    with Renderer(mixed_scene(seed, lights=3 + seed), ctx) as r:
+        full = r.render(*run)
+        assert passes_taken == ["shade"]
+        masks = r.render(*run, outputs=MASKS)
+        assert passes_taken == ["shade", "mask"]
+        lit_only = r.render(*run, outputs=("lit",))
+        coverage_only = r.render(*run, outputs=("coverage",))
+    assert_same_masks(masks, full, str(run))
+    assert masks.image is None and masks.image_srgb is None and masks.stencil is None
+    np.testing.assert_array_equal(lit_only.lit, full.lit)
+    assert lit_only.coverage is None and coverage_only.lit is None
+    np.testing.assert_array_equal(coverage_only.coverage, full.coverage)
+    # some of every light's pixels are lit and some shadowed: the clears did something
+    assert full.lit.any(axis=(1, 2)).all()
+    assert (full.coverage & ~full.lit).any(axis=(1, 2)).all()
+
+
+def test_a_full_page_of_lights_in_one_framebuffer(ctx, passes_taken):
+    """LIGHTS_PER_PAGE lights: each light's count starts from the stencil the previous clear
+    zeroed, so each light's mask is its own frame's."""
+    scene = mixed_scene(5, lights=LIGHTS_PER_PAGE)
+    with Renderer(scene, ctx) as r:
+        masks = r.render(outputs=MASKS)
+        full = r.render()
+        alone = [r.render(lights=(light,), outputs=MASKS) for light in scene.lights[:4]]
+    assert passes_taken[0] == "mask"
+    assert_same_masks(masks, full)
+    for i, one in enumerate(alone):
+        np.testing.assert_array_equal(masks.lit[i], one.lit[0], err_msg=f"light {i}")
+
+
+def test_more_lights_than_a_page_take_the_deferred_passes(ctx, passes_taken):
+    scene = mixed_scene(2, lights=LIGHTS_PER_PAGE + 1)
+    with Renderer(scene, ctx) as r:
+        masks = r.render(outputs=MASKS)
+        assert "mask" not in passes_taken
+        full = r.render()
+    assert_same_masks(masks, full)
+
+
+def test_anything_but_masks_takes_the_deferred_passes(ctx, passes_taken):
+    with Renderer(mixed_scene(0), ctx) as r:
+        for outputs in (("lit", "image"), ("coverage", "image_srgb"), ("lit", "depth")):
+            passes_taken.clear()
+            r.render(outputs=outputs)
+            assert passes_taken == ["shade"], outputs
+        passes_taken.clear()
+        r.render(outputs=MASKS, stencil=True)
+        assert passes_taken == ["shade"]
+
+
+def test_an_area_lights_samples_in_the_mask_pass(ctx, passes_taken):
+    """An area light's samples are hard lights of the page: its counts (soft shadows) are the
+    deferred frame's."""
+    m = Material(diffuse=[0.7, 0.7, 0.7])
+    scene = Scene(camera=Camera(eye=[0, 4, 7], target=[0, 0, 0]),
+                  objects=[plane("floor", size=(10.0, 10.0), material=m),
+                           sphere("ball", [0.2, 1.0, 0.0], 0.6, m, subdivisions=2)],
+                  lights=[AreaLight("rect", center=[0, 4, 0], normal=[0, -1, 0],
+                                    size=[1.5, 1.5], samples=16),
+                          PointLight([2, 5, 1], intensity=0.5)],
+                  width=96, height=72)
+    with Renderer(scene, ctx) as r:
+        masks = r.render(outputs=MASKS)
+        full = r.render()
+    assert passes_taken == ["mask", "shade"]
+    assert_same_masks(masks, full)
+    penumbra = (masks.lit_count[0] > 0) & (masks.lit_count[0] < 16)
+    assert penumbra.any() and (masks.lit_count[0] == 0).any()
+
+
+def test_back_face_culling_and_no_shadows(ctx, passes_taken):
+    with Renderer(mixed_scene(1), ctx) as r:
+        r.cull_back_faces = True
+        culled = r.render(outputs=MASKS)
+        culled_full = r.render()
+        r.cull_back_faces = False
+        facing = r.render(shadows=False, outputs=("lit",))
+        facing_full = r.render(shadows=False)
+    assert passes_taken == ["mask", "shade", "mask", "shade"]
+    assert_same_masks(culled, culled_full)
+    np.testing.assert_array_equal(facing.lit, facing_full.lit)
+
+
+def test_a_moving_camera_and_the_ray_tracer(ctx, assert_masks_match):
+    """Frames of one renderer from other eyes (the geometry re-expressed in each eye's frame):
+    each mask-only frame within the mask budget of the ray tracer's."""
+    scene = mixed_scene(3)
+    with Renderer(scene, ctx) as r:
+        for eye in ([0, 4, 9], [5, 3, 6], [-4, 6, -5]):
+            camera = Camera(eye=eye, target=[0, 0.8, 0])
+            masks = r.render(camera=camera, outputs=MASKS)
+            assert_masks_match(masks, *raytrace.shadow_masks(scene.replace(camera=camera)),
+                               str(eye))
