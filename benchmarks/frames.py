@@ -94,13 +94,15 @@ def _phase_clock(renderer: Renderer, sink: dict):
         undo.append((owner, name, original, instance))
 
     wrap(passes, "geometry_pass", "geometry pass")
+    wrap(passes, "mask_pass", "geometry pass")          # a mask-only frame's geometry pass
     wrap(passes, "count_volumes", "volume pass")
     wrap(passes, "mark_unshadowed", "mark unshadowed")
+    wrap(passes, "clear_shadowed", "mark unshadowed")   # a mask-only frame's per-light bits
     wrap(passes, "shade", "shading pass")
     for sil in SILHOUETTES:
         wrap(renderer.volumes(sil), "prepare",
              "silhouettes (CPU, incl. upload)" if sil == "cpu" else "_gpu prepare", True)
-    for name in ("read_bits", "read_image"):
+    for name in ("read_bits", "read_image", "read_unshadowed"):
         wrap(renderer.target, name, "read-back", True)
     try:
         yield
