@@ -209,43 +209,42 @@ def mask_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: S
 def clear_shadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
                    progs: ScenePrograms, bit: int, zero: bool = False) -> None:
     """After light `bit`'s count in a mask-only frame (`mask_pass`): its lit bit (2^(bit + 1)
-    of `target.unshadowed`) cleared at every covered pixel whose count is not 0, by a
-    full-screen pass with the logic op AND-NOT.  `zero`: every count is left 0, as a clear
-    would (`stencil.where_shadowed`), for the next light's count.  `target.mark_fbo` stays
-    bound."""
-    fbo = target.mark_fbo
-    fbo.depth_mask = False
-    fbo.color_mask = (True,) * 4
-    fbo.use()
-    ctx.enable_only(moderngl.NOTHING)
-    set_uniform(progs.mark, "u_bit", 2 << bit)
-    _only_where_covered(ctx)
-    with stencil.where_shadowed(gl, zero=zero), stencil.logic_op(gl, stencil.GL_AND_INVERTED):
-        progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
-    ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = NEARER
+    of `target.unshadowed`) cleared at every covered pixel whose count is not 0 (the logic op
+    AND-NOT).  `zero`: every count is left 0, as a clear would (`stencil.where_shadowed`),
+    for the next light's count.  `target.mark_fbo` stays bound."""
+    _bits_pass(ctx, gl, target, progs, 2 << bit, stencil.where_shadowed(gl, zero=zero),
+               stencil.GL_AND_INVERTED)
 
 
 def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
                     progs: ScenePrograms, bit: int, restore: bool = True,
                     zero: bool = False) -> None:
-    """Set bit `bit` of the unshadowed bits where the stencil count is 0 (a full-screen pass,
-    logic op OR); `restore`: bind the
-    target's main framebuffer after (else `target.mark_fbo` stays bound).  `zero`: also set
-    every other count to 0 (`stencil.where_unshadowed`), so that the next light's
-    count needs no clear (`count_volumes(clear=False)`)."""
-    target.mark_fbo.depth_mask = False
-    target.mark_fbo.color_mask = (True,) * 4
-    target.mark_fbo.use()
+    """Set bit `bit` of the unshadowed bits where the stencil count is 0 (the logic op OR);
+    `restore`: bind the target's main framebuffer after (else `target.mark_fbo` stays bound).
+    `zero`: also set every other count to 0 (`stencil.where_unshadowed`), so that the next
+    light's count needs no clear (`count_volumes(clear=False)`)."""
+    _bits_pass(ctx, gl, target, progs, 1 << bit, stencil.where_unshadowed(gl, zero=zero),
+               stencil.GL_OR)
+    if restore:
+        target.use()
+
+
+def _bits_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
+               value: int, where, op: int) -> None:
+    """One full-screen pass of mark.frag over the covered pixels into `target.unshadowed`
+    (`mark_fbo`, left bound): `value` combined with the stored bits by the logic op `op`
+    wherever the stencil test `where` (a context manager of `stencil`) passes."""
+    fbo = target.mark_fbo
+    fbo.depth_mask = False
+    fbo.color_mask = (True,) * 4
+    fbo.use()
     ctx.enable_only(moderngl.NOTHING)
-    set_uniform(progs.mark, "u_bit", 1 << bit)
+    set_uniform(progs.mark, "u_bit", value)
     _only_where_covered(ctx)
-    with stencil.where_unshadowed(gl, zero=zero), stencil.logic_op(gl, stencil.GL_OR):
+    with where, stencil.logic_op(gl, op):
         progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
-    if restore:
-        target.use()
 
 
 def _only_where_covered(ctx: moderngl.Context) -> None:
