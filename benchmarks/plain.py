@@ -163,3 +163,59 @@ class DepthFloor:
     def release(self) -> None:
         for obj in (self.vao, self.fbo, self.program):
             obj.release()
+
+
+IMAGE_FRAGMENT = """
+#version 330
+layout(location = 0) out vec4 f_colour;
+layout(location = 1) out float f_bits;
+void main() {
+    f_colour = vec4(0.5, 0.5, 0.5, 1.0);
+    f_bits = 3.0 / 255.0;
+}
+"""
+
+
+class ImageFloor:
+    """`ImageFloor(ctx, plain_frame)()`: the least GL work and read-back of any exact frame that
+    returns the image, the lit masks and the coverage (the renderer's default outputs), its
+    volume passes aside: `DepthFloor`'s draw (every triangle, no culling) writing besides depth
+    a float colour and one byte of bits a pixel, both cleared first (every returned pixel is
+    written, covered or not), then both read back as the caller gets them: the colour as RGB
+    float32, the bits as bytes; no flip, no conversion.  The colour target is RGBA32F: the
+    image is exact float32 RGB, and GL 4.5 requires no 3-channel 32-bit float format to be
+    renderable; the bits are R8 (coverage and up to 7 lights' lit bits in one byte).  The
+    colour is a constant: no shading arithmetic is counted, only what storing and returning
+    the image and the masks cost."""
+
+    def __init__(self, ctx: moderngl.Context, plain: PlainFrame):
+        self.ctx = ctx
+        self.program = ctx.program(vertex_shader=DEPTH_VERTEX, fragment_shader=IMAGE_FRAGMENT)
+        self.program["u_mvp"].write(plain.program["u_mvp"].read())
+        self.vao = ctx.vertex_array(self.program, [(plain.vbo, "3f", "in_position")],
+                                    index_buffer=plain.ibo, index_element_size=4)
+        w, h = plain.colour.size
+        self.colour = ctx.texture((w, h), 4, dtype="f4")
+        self.bits = ctx.texture((w, h), 1, dtype="f1")
+        self.fbo = ctx.framebuffer([self.colour, self.bits], plain.depth)
+        self.image = np.empty((h, w, 3), np.float32)
+        self.lit = np.empty((h, w), np.uint8)
+
+    def __call__(self) -> None:
+        self.fbo.use()
+        self.ctx.enable_only(moderngl.DEPTH_TEST)
+        self.ctx.depth_func = "<"
+        self.fbo.clear(0.1, 0.1, 0.1, 0.0, depth=1.0)
+        self.vao.render(moderngl.TRIANGLES)
+        self.fbo.read_into(self.image, components=3, attachment=0, dtype="f4")
+        self.fbo.read_into(self.lit, components=1, attachment=1, dtype="f1")
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def release(self) -> None:
+        for obj in (self.vao, self.fbo, self.colour, self.bits, self.program):
+            obj.release()
