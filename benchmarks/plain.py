@@ -219,3 +219,101 @@ class ImageFloor:
     def release(self) -> None:
         for obj in (self.vao, self.fbo, self.colour, self.bits, self.program):
             obj.release()
+
+
+FULLSCREEN_VERTEX = """
+#version 330
+void main() {
+    vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
+    gl_Position = vec4(p, 1.0, 1.0);
+}
+"""
+# FRAGMENT's Blinn-Phong, with the position and the normal made per pixel from gl_FragCoord
+# (no load, nothing the compiler can fold), and the same fragment with a constant colour
+LIGHTING_FRAGMENT = """
+#version 330
+uniform vec3 u_light;
+uniform vec3 u_eye;
+out vec4 f_colour;
+void main() {
+    vec2 q = gl_FragCoord.xy * 0.001;
+    vec3 v_position = vec3(q.x, 0.0, q.y);
+    vec3 v_normal = vec3(q.y, 1.0, q.x);
+    vec3 n = normalize(v_normal);
+    vec3 l = normalize(u_light - v_position);
+    vec3 h = normalize(l + normalize(u_eye - v_position));
+    float d = max(dot(n, l), 0.0);
+    float s = pow(max(dot(n, h), 0.0), 32.0);
+    f_colour = vec4(vec3(0.05) + vec3(0.7) * d + vec3(0.3) * s, 1.0);
+}
+"""
+FLAT_FRAGMENT = """
+#version 330
+out vec4 f_colour;
+void main() {
+    vec2 q = gl_FragCoord.xy * 0.001;
+    f_colour = vec4(q, 0.5, 1.0);
+}
+"""
+
+
+class LightingFloor:
+    """The per-pixel lighting arithmetic of one light, once per covered pixel: `lit()` and
+    `flat()` each clear the plain frame's buffers, draw every triangle to depth (as
+    `DepthFloor`), then one full-screen pass over the covered pixels (depth test against the
+    drawn depth) into the colour, and glFinish.  `lit`'s pass evaluates the plain frame's own
+    Blinn-Phong (FRAGMENT's expressions on per-pixel values, no loads), `flat`'s writes a
+    per-pixel colour without it; everything else is the same, so median(lit) − median(flat)
+    is what the lighting arithmetic alone costs.  Any exact frame that returns the image
+    evaluates at least one light's lighting at every covered pixel (forward or deferred), so
+    this adds to its image floor."""
+
+    def __init__(self, ctx: moderngl.Context, plain: PlainFrame):
+        self.ctx, self.plain = ctx, plain
+        self.depth = ctx.program(vertex_shader=DEPTH_VERTEX,
+                                 fragment_shader="#version 330\nvoid main() {}\n")
+        self.depth["u_mvp"].write(plain.program["u_mvp"].read())
+        self.depth_vao = ctx.vertex_array(self.depth, [(plain.vbo, "3f", "in_position")],
+                                          index_buffer=plain.ibo, index_element_size=4)
+        self.lighting = ctx.program(vertex_shader=FULLSCREEN_VERTEX,
+                                    fragment_shader=LIGHTING_FRAGMENT)
+        for name in ("u_light", "u_eye"):
+            self.lighting[name].value = plain.program[name].value
+        self.flat_program = ctx.program(vertex_shader=FULLSCREEN_VERTEX,
+                                        fragment_shader=FLAT_FRAGMENT)
+        self.lit_vao = ctx.vertex_array(self.lighting, [])
+        self.flat_vao = ctx.vertex_array(self.flat_program, [])
+
+    def _frame(self, vao: moderngl.VertexArray) -> None:
+        fbo = self.plain.fbo
+        fbo.use()
+        self.ctx.enable_only(moderngl.DEPTH_TEST)
+        self.ctx.depth_func = "<"
+        fbo.clear(0.1, 0.1, 0.1, 1.0, depth=1.0)
+        fbo.color_mask = (False,) * 4
+        fbo.use()
+        self.depth_vao.render(moderngl.TRIANGLES)
+        fbo.color_mask = (True,) * 4
+        fbo.depth_mask = False
+        fbo.use()
+        self.ctx.depth_func = ">"   # the full-screen triangle at the far plane: covered pixels
+        vao.render(moderngl.TRIANGLES, vertices=3)
+        fbo.depth_mask = True
+        self.ctx.finish()
+
+    def lit(self) -> None:
+        self._frame(self.lit_vao)
+
+    def flat(self) -> None:
+        self._frame(self.flat_vao)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def release(self) -> None:
+        for obj in (self.lit_vao, self.flat_vao, self.depth_vao, self.lighting,
+                    self.flat_program, self.depth):
+            obj.release()

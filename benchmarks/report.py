@@ -66,10 +66,13 @@ def lower_bounds(results: dict) -> list[dict]:
         pl, floor = _med(row, "plain"), _med(row, "depth floor")
         vol = phase["phases"]["volume pass"]["median"]
         image = _med(row, "image floor") if "image floor" in row["times"] else None
+        lighting = (_med(row, "lighting: lit") - _med(row, "lighting: flat")
+                    if "lighting: lit" in row["times"] else None)
         out.append({"size": row["size"], "triangles": row["triangles"], "plain": pl,
                     "depth_floor": floor, "volume": vol, "bound": (floor + vol) / pl,
-                    "image_floor": image,
-                    "image_bound": None if image is None else (image + vol) / pl,
+                    "image_floor": image, "lighting": lighting,
+                    "image_bound": (None if image is None or lighting is None
+                                    else (image + vol + lighting) / pl),
                     "limit": 2.0 if row["size"] == "1k" else 1.5, "further": vol / pl,
                     "ours": _med(row, "auto/cpu x1") / pl})
     return out
@@ -211,7 +214,9 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
         "**depth floor** = the least GL work of any exact frame of the same triangles "
         "(`plain.DepthFloor`: one indexed draw, no culling, depth only, glFinish); **image "
         "floor** = the same draw also storing a float colour and the bits, and both read back "
-        "(`plain.ImageFloor`).")
+        "(`plain.ImageFloor`); **lighting: lit / flat** = a depth draw and one full-screen "
+        "pass over the covered pixels with and without the plain frame's Blinn-Phong "
+        "(`plain.LightingFloor`: their difference is the lighting arithmetic).")
     add("")
     keys = list(results["frames"][0]["times"])
     add("| triangles | " + " | ".join(keys) + " | setup (s) |")
@@ -250,26 +255,32 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
             "(the volume pass of the phases below: CPU silhouettes, halved and clipped), "
             "before any shading or read-back, and each further light at least one volume "
             "pass.  A frame that returns the image and the masks (the shadowed targets' "
-            "frame) also stores a float colour and the bits of every pixel and reads them "
-            "back: at least **image floor + volume pass** (`plain.ImageFloor`: the depth "
-            "floor's draw also writing a constant RGBA32F colour and one byte of bits, both "
-            "cleared, then the RGB float32 image and the bytes read back; no shading "
-            "arithmetic).  Where a bound already exceeds a target, no implementation of "
-            "shadow volumes meets it on this machine; where it does not, the gap between the "
-            "bound and our frame is what is left to win (shading, synchronisations).")
+            "frame) also stores a float colour and the bits of every pixel, reads them back "
+            "and lights every covered pixel: at least **image floor + volume pass + "
+            "lighting** (`plain.ImageFloor`: the depth floor's draw also writing a constant "
+            "RGBA32F colour and one byte of bits, both cleared, then the RGB float32 image "
+            "and the bytes read back; `plain.LightingFloor`: the plain frame's own "
+            "Blinn-Phong for one light once per covered pixel, as the difference of two "
+            "full-screen passes that differ only by it).  Where a bound already exceeds a "
+            "target, no implementation of shadow volumes meets it on this machine; where it "
+            "does not, the gap between the bound and our frame is what is left to win "
+            "(the rest of the shading, synchronisations, Python).")
         add("")
-        add("| triangles | plain | depth floor | image floor | volume pass | bound: (depth "
-            "floor + volume pass) / plain | bound for image + masks: (image floor + volume "
-            "pass) / plain | shadowed target | bound proves it out of reach | volume pass / "
-            "plain (each further light) | further-light target out of reach | ours / plain |")
-        add("|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|---:|")
+        add("| triangles | plain | depth floor | image floor | lighting | volume pass | "
+            "bound: (depth floor + volume pass) / plain | bound for image + masks: (image "
+            "floor + volume pass + lighting) / plain | shadowed target | bound proves it out "
+            "of reach | volume pass / plain (each further light) | further-light target out "
+            "of reach | ours / plain |")
+        add("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|---:|")
         for b in bounds:
             image_bound = b["bound"] if b["image_bound"] is None else b["image_bound"]
             image_text = "–" if b["image_floor"] is None else f"{b['image_floor']:.1f}"
+            lighting_text = "–" if b["lighting"] is None else f"{b['lighting']:.1f}"
             bound_text = "–" if b["image_bound"] is None else f"{b['image_bound']:.2f}"
             add(f"| {b['triangles']:,} | {b['plain']:.1f} | {b['depth_floor']:.1f} | "
-                f"{image_text} | {b['volume']:.1f} | {b['bound']:.2f} | {bound_text} | "
-                f"≤ {b['limit']:g} | {'yes' if image_bound > b['limit'] else 'no'} | "
+                f"{image_text} | {lighting_text} | {b['volume']:.1f} | {b['bound']:.2f} | "
+                f"{bound_text} | ≤ {b['limit']:g} | "
+                f"{'yes' if image_bound > b['limit'] else 'no'} | "
                 f"{b['further']:.2f} | {'yes' if b['further'] > 0.3 else 'no'} | "
                 f"{b['ours']:.2f} |")
         add("")

@@ -11,7 +11,8 @@ variants interleaved round by round in the same run:
   Blinn-Phong, RGBA8 read-back), the floor (our frame without shadow volumes), the shadowed
   frame (auto, CPU silhouettes) with 1, 2 and 4 point lights, GPU silhouettes, mask-only frames
   (`outputs=("lit", "coverage")`), and the opt-in back-face culling; and the least GL work of
-  any exact frame (`plain.DepthFloor`, and `plain.ImageFloor` for one that returns the image);
+  any exact frame (`plain.DepthFloor`; `plain.ImageFloor` and `plain.LightingFloor` for one
+  that returns the image);
 * each phase of a frame (`frames`: glFinish-bracketed wall time), and silhouette extraction
   alone on the CPU and the GPU;
 * the stencil-overflow check's cost on the shared meshes (bunny, teapot, Spot);
@@ -156,11 +157,13 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
         t0 = time.perf_counter()
         with Renderer(scene, ctx) as r, plain.PlainFrame(ctx, scene) as pf, \
                 plain.DepthFloor(ctx, pf) as depth_floor, \
-                plain.ImageFloor(ctx, pf) as image_floor:
+                plain.ImageFloor(ctx, pf) as image_floor, \
+                plain.LightingFloor(ctx, pf) as lighting:
             setup = time.perf_counter() - t0
             frames.check_same_scene(r)
             r.render()          # lazily built programs, kept side quads
             fns = {"plain": pf, "depth floor": depth_floor, "image floor": image_floor,
+                   "lighting: lit": lighting.lit, "lighting: flat": lighting.flat,
                    "floor": lambda: r.render(shadows=False, lights=one)}
             for n in cfg["lights"]:
                 lights = scene.lights[:n]

@@ -37,8 +37,8 @@ def test_quick_benchmark_run_writes_the_report(tmp_path):
                 "pyrender", "rss", "raytrace", "memory", "groundtruth"):
         assert key in results, key
     frame = results["frames"][0]["times"]
-    assert {"plain", "depth floor", "image floor", "floor", "auto/cpu x1", "masks/cpu x1",
-            "auto/gpu x1"} <= set(frame)
+    assert {"plain", "depth floor", "image floor", "lighting: lit", "lighting: flat", "floor",
+            "auto/cpu x1", "masks/cpu x1", "auto/gpu x1"} <= set(frame)
     assert all({"median", "min", "max"} <= set(s) for s in frame.values())
     # every headline row has a number and a verdict
     rows = md.split("## Headline ratios and targets")[1].split("##")[0]
