@@ -259,22 +259,33 @@ void main() {
 
 class LightingFloor:
     """The per-pixel lighting arithmetic of one light, once per covered pixel: `lit()` and
-    `flat()` each clear the plain frame's buffers, draw every triangle to depth (as
-    `DepthFloor`), then one full-screen pass over the covered pixels (depth test against the
-    drawn depth) into the colour, and glFinish.  `lit`'s pass evaluates the plain frame's own
-    Blinn-Phong (FRAGMENT's expressions on per-pixel values, no loads), `flat`'s writes a
-    per-pixel colour without it; everything else is the same, so median(lit) − median(flat)
-    is what the lighting arithmetic alone costs.  Any exact frame that returns the image
-    evaluates at least one light's lighting at every covered pixel (forward or deferred), so
-    this adds to its image floor."""
+    `flat()` are one full-screen pass each over the covered pixels of the scene (depth-tested
+    against a depth buffer of its own, drawn once here as `DepthFloor` draws it), into a colour
+    buffer, then glFinish.  `lit`'s pass evaluates the plain frame's own Blinn-Phong
+    (FRAGMENT's expressions on per-pixel values, no loads), `flat`'s writes a per-pixel colour
+    without it; everything else is the same, so median(lit) − median(flat) is what the
+    lighting arithmetic alone costs.  Any exact frame that returns the image evaluates at
+    least one light's lighting at every covered pixel (forward or deferred), so this adds to
+    its image floor."""
 
     def __init__(self, ctx: moderngl.Context, plain: PlainFrame):
-        self.ctx, self.plain = ctx, plain
-        self.depth = ctx.program(vertex_shader=DEPTH_VERTEX,
-                                 fragment_shader="#version 330\nvoid main() {}\n")
-        self.depth["u_mvp"].write(plain.program["u_mvp"].read())
-        self.depth_vao = ctx.vertex_array(self.depth, [(plain.vbo, "3f", "in_position")],
-                                          index_buffer=plain.ibo, index_element_size=4)
+        self.ctx = ctx
+        size = plain.colour.size
+        self.colour = ctx.renderbuffer(size, 4)
+        self.depth_buffer = ctx.depth_renderbuffer(size)
+        self.fbo = ctx.framebuffer(self.colour, self.depth_buffer)
+        depth = ctx.program(vertex_shader=DEPTH_VERTEX,
+                            fragment_shader="#version 330\nvoid main() {}\n")
+        depth["u_mvp"].write(plain.program["u_mvp"].read())
+        vao = ctx.vertex_array(depth, [(plain.vbo, "3f", "in_position")],
+                               index_buffer=plain.ibo, index_element_size=4)
+        self.fbo.use()
+        ctx.enable_only(moderngl.DEPTH_TEST)
+        ctx.depth_func = "<"
+        self.fbo.clear(0.1, 0.1, 0.1, 1.0, depth=1.0)
+        vao.render(moderngl.TRIANGLES)
+        vao.release()
+        depth.release()
         self.lighting = ctx.program(vertex_shader=FULLSCREEN_VERTEX,
                                     fragment_shader=LIGHTING_FRAGMENT)
         for name in ("u_light", "u_eye"):
@@ -284,28 +295,19 @@ class LightingFloor:
         self.lit_vao = ctx.vertex_array(self.lighting, [])
         self.flat_vao = ctx.vertex_array(self.flat_program, [])
 
-    def _frame(self, vao: moderngl.VertexArray) -> None:
-        fbo = self.plain.fbo
-        fbo.use()
+    def _pass(self, vao: moderngl.VertexArray) -> None:
+        self.fbo.depth_mask = False
+        self.fbo.use()
         self.ctx.enable_only(moderngl.DEPTH_TEST)
-        self.ctx.depth_func = "<"
-        fbo.clear(0.1, 0.1, 0.1, 1.0, depth=1.0)
-        fbo.color_mask = (False,) * 4
-        fbo.use()
-        self.depth_vao.render(moderngl.TRIANGLES)
-        fbo.color_mask = (True,) * 4
-        fbo.depth_mask = False
-        fbo.use()
         self.ctx.depth_func = ">"   # the full-screen triangle at the far plane: covered pixels
         vao.render(moderngl.TRIANGLES, vertices=3)
-        fbo.depth_mask = True
         self.ctx.finish()
 
     def lit(self) -> None:
-        self._frame(self.lit_vao)
+        self._pass(self.lit_vao)
 
     def flat(self) -> None:
-        self._frame(self.flat_vao)
+        self._pass(self.flat_vao)
 
     def __enter__(self):
         return self
@@ -314,6 +316,6 @@ class LightingFloor:
         self.release()
 
     def release(self) -> None:
-        for obj in (self.lit_vao, self.flat_vao, self.depth_vao, self.lighting,
-                    self.flat_program, self.depth):
+        for obj in (self.lit_vao, self.flat_vao, self.lighting, self.flat_program, self.fbo,
+                    self.colour, self.depth_buffer):
             obj.release()
