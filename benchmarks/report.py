@@ -66,8 +66,11 @@ def lower_bounds(results: dict) -> list[dict]:
         pl, floor = _med(row, "plain"), _med(row, "depth floor")
         vol = phase["phases"]["volume pass"]["median"]
         image = _med(row, "image floor") if "image floor" in row["times"] else None
-        lighting = (_med(row, "lighting: lit") - _med(row, "lighting: flat")
-                    if "lighting: lit" in row["times"] else None)
+        # the lighting arithmetic of the covered pixels, counted only for the share the light
+        # lights (an exact frame may skip the others), and never below 0
+        lighting = (max(_med(row, "lighting: lit") - _med(row, "lighting: flat"), 0.0)
+                    * row.get("lit_fraction", 1.0) if "lighting: lit" in row["times"]
+                    else None)
         out.append({"size": row["size"], "triangles": row["triangles"], "plain": pl,
                     "depth_floor": floor, "volume": vol, "bound": (floor + vol) / pl,
                     "image_floor": image, "lighting": lighting,
@@ -259,9 +262,10 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
             "and lights every covered pixel: at least **image floor + volume pass + "
             "lighting** (`plain.ImageFloor`: the depth floor's draw also writing a constant "
             "RGBA32F colour and one byte of bits, both cleared, then the RGB float32 image "
-            "and the bytes read back; `plain.LightingFloor`: the plain frame's own "
-            "Blinn-Phong for one light once per covered pixel, as the difference of two "
-            "full-screen passes that differ only by it).  Where a bound already exceeds a "
+            "and the bytes read back; **lighting**: the plain frame's own Blinn-Phong for one "
+            "light once per covered pixel, the difference of two full-screen passes that "
+            "differ only by it (`plain.LightingFloor`), times the share of the covered pixels "
+            "the light lights in our frame).  Where a bound already exceeds a "
             "target, no implementation of shadow volumes meets it on this machine; where it "
             "does not, the gap between the bound and our frame is what is left to win "
             "(the rest of the shading, synchronisations, Python).")

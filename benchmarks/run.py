@@ -182,10 +182,13 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
                     r.cull_back_faces = False
             fns["auto/cpu x1 culled"] = culled
             times = frames.interleaved(fns, rep, warm)
+            frame = r.render(lights=one)
             rows.append({"size": size, "triangles": scenes.triangle_count(scene),
                          "setup_s": setup, "times": times,
-                         "auto_zfail_casters": int(r.render(lights=one).zfail.sum()),
-                         "casters": len(scene.objects)})
+                         "auto_zfail_casters": int(frame.zfail.sum()),
+                         "casters": len(scene.objects),
+                         # the covered pixels the light lights (the lighting floor's share)
+                         "lit_fraction": float(frame.lit[0].sum() / frame.coverage.sum())})
             log(f"frames {size}: plain {times['plain']['median']:.1f} ms, auto/cpu x1 "
                 f"{times['auto/cpu x1']['median']:.1f} ms, x4 "
                 f"{times.get('auto/cpu x4', times['auto/cpu x1'])['median']:.1f} ms")
