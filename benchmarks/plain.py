@@ -27,6 +27,16 @@ void main() {
     v_normal = in_normal;
 }
 """
+# one point light's Blinn-Phong from v_position and v_normal (the plain frame's, and the
+# lighting floor's on per-pixel values)
+BLINN_PHONG = """
+    vec3 n = normalize(v_normal);
+    vec3 l = normalize(u_light - v_position);
+    vec3 h = normalize(l + normalize(u_eye - v_position));
+    float d = max(dot(n, l), 0.0);
+    float s = pow(max(dot(n, h), 0.0), 32.0);
+    f_colour = vec4(vec3(0.05) + vec3(0.7) * d + vec3(0.3) * s, 1.0);
+"""
 FRAGMENT = """
 #version 330
 uniform vec3 u_light;
@@ -34,14 +44,7 @@ uniform vec3 u_eye;
 in vec3 v_position;
 in vec3 v_normal;
 out vec4 f_colour;
-void main() {
-    vec3 n = normalize(v_normal);
-    vec3 l = normalize(u_light - v_position);
-    vec3 h = normalize(l + normalize(u_eye - v_position));
-    float d = max(dot(n, l), 0.0);
-    float s = pow(max(dot(n, h), 0.0), 32.0);
-    f_colour = vec4(vec3(0.05) + vec3(0.7) * d + vec3(0.3) * s, 1.0);
-}
+void main() {""" + BLINN_PHONG + """}
 """
 
 
@@ -228,7 +231,7 @@ void main() {
     gl_Position = vec4(p, 1.0, 1.0);
 }
 """
-# FRAGMENT's Blinn-Phong, with the position and the normal made per pixel from gl_FragCoord
+# BLINN_PHONG, with the position and the normal made per pixel from gl_FragCoord
 # (no load, nothing the compiler can fold), and the same fragment with a constant colour
 LIGHTING_FRAGMENT = """
 #version 330
@@ -238,14 +241,7 @@ out vec4 f_colour;
 void main() {
     vec2 q = gl_FragCoord.xy * 0.001;
     vec3 v_position = vec3(q.x, 0.0, q.y);
-    vec3 v_normal = vec3(q.y, 1.0, q.x);
-    vec3 n = normalize(v_normal);
-    vec3 l = normalize(u_light - v_position);
-    vec3 h = normalize(l + normalize(u_eye - v_position));
-    float d = max(dot(n, l), 0.0);
-    float s = pow(max(dot(n, h), 0.0), 32.0);
-    f_colour = vec4(vec3(0.05) + vec3(0.7) * d + vec3(0.3) * s, 1.0);
-}
+    vec3 v_normal = vec3(q.y, 1.0, q.x);""" + BLINN_PHONG + """}
 """
 FLAT_FRAGMENT = """
 #version 330
