@@ -51,6 +51,15 @@ _TEXTURES = ("colour", "bits", "position", "unshadowed", "srgb")
 _FRAMEBUFFERS = ("gbuffer_fbo", "mark_fbo", "fbo", "lit_fbo", "srgb_fbo", "srgb_shade_fbo")
 
 
+def _flipped(staging: np.ndarray, out: np.ndarray | None, dtype=None) -> np.ndarray:
+    """A read-back's staging (GL's row order, bottom row first) with row 0 at the top: into
+    `out` if given, else into a new array of `dtype` (default the staging's)."""
+    if out is None:
+        out = np.empty(staging.shape, staging.dtype if dtype is None else dtype)
+    np.copyto(out, staging[::-1], casting="unsafe")
+    return out
+
+
 class FrameAllocationError(RenderError):
     """The GL could not allocate the frame's buffers (out of GPU memory, or a size the driver
     refuses)."""
@@ -161,27 +170,18 @@ class Target:
         one contiguous copy flips the rows: a strided numpy copy of RGB out of RGBA costs 5x
         more)."""
         self.fbo.read_into(self._rgb, components=3, attachment=0, dtype="f4")
-        if out is None:
-            return self._rgb[::-1].copy()
-        np.copyto(out, self._rgb[::-1])
-        return out
+        return _flipped(self._rgb, out)
 
     def read_bits(self, out: np.ndarray | None = None) -> np.ndarray:
         """(H, W) uint32 of the bits attachment, row 0 at the top, into `out` if given."""
         self.fbo.read_into(self._bits, components=1, attachment=1, dtype="f4")
-        if out is None:
-            return self._bits[::-1].astype(np.uint32)
-        np.copyto(out, self._bits[::-1], casting="unsafe")   # integers below 2^24: exact
-        return out
+        return _flipped(self._bits, out, np.uint32)   # integers below 2^24: exact
 
     def read_unshadowed(self, out: np.ndarray | None = None) -> np.ndarray:
         """(H, W) uint32 of the unshadowed attachment (a mask-only frame's lit bits), row 0 at
         the top, into `out` if given."""
         self.mark_fbo.read_into(self._unshadowed, components=1, attachment=0, dtype="u4")
-        if out is None:
-            return self._unshadowed[::-1].copy()
-        np.copyto(out, self._unshadowed[::-1])
-        return out
+        return _flipped(self._unshadowed, out)
 
     def read_lit(self) -> np.ndarray:
         """(H, W) bool, row 0 at the top: the one light of a forward lighting pass."""
@@ -191,13 +191,12 @@ class Target:
         """(H, W, 3) uint8 sRGB, row 0 at the top, into `out` if given: `flipped`, as the sRGB
         pass writes it (the rows already flipped), else in GL's order (the shading pass's),
         flipped here."""
+        if not flipped:
+            self.srgb_fbo.read_into(self._srgb8, components=3, attachment=0, dtype="f1")
+            return _flipped(self._srgb8, out)
         if out is None:
             out = np.empty((self.height, self.width, 3), np.uint8)
-        if flipped:
-            self.srgb_fbo.read_into(out, components=3, attachment=0, dtype="f1")
-        else:
-            self.srgb_fbo.read_into(self._srgb8, components=3, attachment=0, dtype="f1")
-            np.copyto(out, self._srgb8[::-1])
+        self.srgb_fbo.read_into(out, components=3, attachment=0, dtype="f1")
         return out
 
     def clear_srgb(self, code) -> None:
