@@ -38,7 +38,7 @@ void main() {
     for (int i = 0; i < LIGHTS; ++i) {
         // the visible side faces the light (n . l > 0) and lies inside a spot's cone; every
         // pixel evaluates it all and selects (shade.frag says why)
-        float facing = dot(normal, u_light[i].xyz - u_light[i].w * corner);
+        precise float facing = dot(normal, u_light[i].xyz - u_light[i].w * corner);
         float side = front ? facing : -facing;
         vec3 to_light = u_light[i].xyz - u_light[i].w * world;
         vec3 l = normalize(to_light);

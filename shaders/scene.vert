@@ -6,9 +6,11 @@
 // surface it lies on (see shadowvol/volumes.py for why the tie must count as "behind").
 
 uniform mat4 u_view_proj;   // world -> clip, infinite far plane
-#ifndef MASK_PASS           // (the mask pass's shade.frag has the page's lights as u_light[])
+#ifndef MASK_PASS
 uniform vec4 u_light;       // (position, 1) for a point or spot light, (-direction, 0) for a
                             // directional light: the homogeneous point the light sits at
+#elif LIGHTS > 0            // the mask pass: the page's lights, as shade.frag has them
+uniform vec4 u_light[LIGHTS];
 #endif
 
 in vec3 in_position;        // world space (float32: what the GPU draws)
@@ -22,6 +24,10 @@ flat out float v_facing;    // normal . (L - v0): > 0 when the light is on the n
 flat out int v_object;
 flat out int v_triangle;    // the triangle's index in the soup: three vertices each, drawn
                             // from vertex 0 (`first` counts in gl_VertexID)
+#ifdef MASK_PASS
+flat out uint v_front_lights; // bit i + 1: light i is on the front side of the triangle
+flat out uint v_back_lights;  // (n . l > 0), on the back side (n . l < 0): shade.frag's test
+#endif
 
 invariant gl_Position;
 
@@ -30,9 +36,26 @@ void main() {
     v_world = in_position;
     v_normal = in_normal;
     // Per triangle, not per pixel: the sign of n . l is constant over a flat triangle, and the
-    // three vertices compute the same value from the same flat inputs.
+    // three vertices compute the same value from the same flat inputs.  `precise`, here and in
+    // shade.frag and facing.frag: no compiler may fuse or reorder it differently in one stage
+    // than in another, so every pass gets the same float32 value (llvmpipe fuses nothing, a
+    // GPU compiler may)
 #ifndef MASK_PASS
-    v_facing = dot(in_normal, u_light.xyz - u_light.w * in_corner);
+    precise float facing = dot(in_normal, u_light.xyz - u_light.w * in_corner);
+    v_facing = facing;
+#else
+    // shade.frag's `facing` for each light of the page, the same expression on the same
+    // float32 values (its triangle record holds this normal and corner): the visible side
+    // faces light i where it is the front and facing > 0, or the back and -facing > 0
+    v_front_lights = 0u;
+    v_back_lights = 0u;
+#if LIGHTS > 0
+    for (int i = 0; i < LIGHTS; ++i) {
+        precise float facing = dot(in_normal, u_light[i].xyz - u_light[i].w * in_corner);
+        v_front_lights |= facing > 0.0 ? 2u << uint(i) : 0u;
+        v_back_lights |= -facing > 0.0 ? 2u << uint(i) : 0u;
+    }
+#endif
 #endif
     v_object = in_object;
     v_triangle = gl_VertexID / 3;

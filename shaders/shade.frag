@@ -12,12 +12,14 @@
 // frame of one page whose float image is not asked for).
 //
 // MASK_PASS (with MASKS_ONLY): the geometry pass of a mask-only frame (scene.vert over the
-// soup), before any volume count.  The same tests on the same inputs, taken from the
-// rasterizer instead of the G-buffer (the interpolated world position the geometry pass would
-// have stored, its triangle, gl_FrontFacing), with every light taken as unshadowed: it writes
-// coverage and "faces the light" bits, and after each light's count the mark pass clears that
-// light's bit where the count is not 0 (passes.clear_shadowed).  Only the pixels that survive
-// the depth test keep their bits, so they are the deferred frame's lit bits exactly.
+// soup), before any volume count.  The same tests on the same inputs, with every light taken
+// as unshadowed: n . l > 0 per triangle in scene.vert (the same expression on the same
+// float32 normal and corner as the triangle's record here, both signs), the side from
+// gl_FrontFacing instead of the G-buffer's sign, a spot's cone on the interpolated world
+// position the geometry pass would have stored.  It writes coverage and "faces the light"
+// bits, and after each light's count the mark pass clears that light's bit where the count is
+// not 0 (passes.clear_shadowed).  Only the pixels that survive the depth test keep their
+// bits, so they are the deferred frame's lit bits exactly.
 
 #ifndef LIGHTS
 #define LIGHTS 1        // lights in this page, at most 23 (lit bits 1..23 and coverage: exact
@@ -33,7 +35,8 @@
 uniform sampler2D u_materials;  // row = object: texel 0 ka, 1 kd, 2 (ks, shininess)
 #ifdef MASK_PASS
 in vec3 v_world;                // scene.vert's: what gbuffer.frag stores
-flat in int v_triangle;
+flat in uint v_front_lights;    // scene.vert's: bit i + 1 where n . l > 0 for light i, and
+flat in uint v_back_lights;     // where -(n . l) > 0
 #else
 uniform sampler2D u_position;   // world position (xyz) of the visible surface; w: the surface,
                                 // +-(triangle + 1), negative for a back face; 0: uncovered
@@ -63,15 +66,30 @@ layout(location = 0) out vec4 f_colour;
 layout(location = 1) out float f_bits;     // bit 0 covered, bit i + 1 lit by light i
 #endif
 
+#if LIGHTS > 0
+// Inside light i's cone, `l` the unit vector to the light (always, but for a spot light).
+bool in_cone(int i, vec3 l) {
+    return !(HAS(SPOT_LIGHTS, i) && u_spot_cos[i] > -2.0 &&
+             dot(-l, u_spot_direction[i]) < u_spot_cos[i]);
+}
+#endif
+
 void main() {
 #ifdef MASK_PASS
-    // gbuffer.frag's surface, +-(triangle + 1), as it would have stored it
-    float key = float(v_triangle + 1);
-    vec4 position = vec4(v_world, gl_FrontFacing ? key : -key);
+    // covered, and the lights the visible side faces (the loop's `side > 0.0` below, taken
+    // per triangle in scene.vert), less the spots whose cone the pixel is outside
+    uint lit = 1u | (gl_FrontFacing ? v_front_lights : v_back_lights);
+#if LIGHTS > 0 && SPOT_LIGHTS != 0
+    for (int i = 0; i < LIGHTS; ++i) {
+        vec3 to_light = u_light[i].xyz - u_light[i].w * v_world;
+        vec3 l = normalize(to_light);
+        lit &= in_cone(i, l) ? 0xFFFFFFFFu : ~(2u << uint(i));
+    }
+#endif
+    f_lit_bits = lit;
 #else
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 position = texelFetch(u_position, p, 0);
-#endif
     // never 0 (uncovered) here: the pass is depth-tested to the covered pixels
     // (passes._only_where_covered), which is also why it has no branch for them (a per-pixel
     // branch costs llvmpipe 15% of the pass, taken or not)
@@ -83,14 +101,12 @@ void main() {
     int object = int(normal_object.w);
     vec3 corner = triangle_data[2 * t + 1].xyz;
     vec3 world = position.xyz;
-#if defined(MASK_PASS)
-    uint unshadowed = 0xFFFFFFFFu;   // the counts come after this pass
-#elif LIGHTS > 1
+#if LIGHTS > 1
     uint unshadowed = texelFetch(u_unshadowed, p, 0).r;
 #else
     uint unshadowed = 0u;
 #endif
-#if LIGHTS > 0 && !defined(MASK_PASS)
+#if LIGHTS > 0
     if (u_last_unshadowed) {
         unshadowed |= 1u << uint(LIGHTS - 1);
     }
@@ -111,13 +127,11 @@ void main() {
         // Every pixel evaluates the whole body and selects, rather than leaving the loop
         // early: on a CPU rasterizer (llvmpipe) `continue` under a per-pixel condition costs
         // a quarter of the pass; the selected values are the same bit for bit.
-        float facing = dot(normal, u_light[i].xyz - u_light[i].w * corner);
+        precise float facing = dot(normal, u_light[i].xyz - u_light[i].w * corner);
         float side = front ? facing : -facing;
         vec3 to_light = u_light[i].xyz - u_light[i].w * world;
         vec3 l = normalize(to_light);
-        bool on = (unshadowed & (1u << uint(i))) != 0u && side > 0.0 &&
-                  !(HAS(SPOT_LIGHTS, i) && u_spot_cos[i] > -2.0 &&
-                    dot(-l, u_spot_direction[i]) < u_spot_cos[i]);
+        bool on = (unshadowed & (1u << uint(i))) != 0u && side > 0.0 && in_cone(i, l);
         lit |= on ? 2u << uint(i) : 0u;
 #ifndef MASKS_ONLY
         float n_dot_l = max(dot(n, l), 0.0);
@@ -141,12 +155,9 @@ void main() {
     f_colour = vec4(floor(s * 255.0 + 0.5) / 255.0, 1.0);
 #elif !defined(MASKS_ONLY)
     f_colour = vec4(colour, u_first_page ? 1.0 : 0.0);
-#elif !defined(MASK_PASS)
+#else
     f_colour = vec4(0.0);
 #endif
-#ifdef MASK_PASS
-    f_lit_bits = lit;
-#else
     f_bits = float(lit);
 #endif
 }

@@ -187,8 +187,9 @@ def mask_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: S
     the soup as `geometry_pass` draws it (the same vertex shader and vertices: the same
     depths), writing into `target.unshadowed` bit 0 (covered) and bit i + 1 where the visible
     side faces light i (n . l > 0, inside a spot's cone) by shade.frag's own tests
-    (MASK_PASS); pixels no triangle covers keep 0.  `target.mark_fbo` is left bound, for the
-    counts and `clear_shadowed`."""
+    (MASK_PASS: n . l per triangle in scene.vert, from the soup's normal and corner, the
+    cone per pixel); pixels no triangle covers keep 0.  `target.mark_fbo` is left bound, for
+    the counts and `clear_shadowed`."""
     prog, vao = progs.mask_pass(
         len(lights), spots=sum(1 << i for i, l in enumerate(lights)
                                if isinstance(l, SpotLight)))
@@ -202,7 +203,6 @@ def mask_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: S
     set_camera((prog,), view_proj, camera, origin)
     set_uniform(prog, "u_first_page", True)
     _light_arrays(prog, lights, origin)
-    progs.geometry.triangle_data.bind_to_storage_buffer(0)
     _draw_soup(ctx, progs.geometry, vao, cull)
 
 

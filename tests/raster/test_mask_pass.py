@@ -21,7 +21,7 @@ from shadowvol.primitives import plane, sphere
 from shadowvol.raster import passes
 from shadowvol.raster.renderer import Renderer
 from shadowvol.raster.target import LIGHTS_PER_PAGE
-from shadowvol.scene import AreaLight, Camera, Material, PointLight, Scene
+from shadowvol.scene import AreaLight, Camera, Material, Object, PointLight, Scene
 
 MASKS = ("lit", "coverage")
 
@@ -122,6 +122,60 @@ def test_an_area_lights_samples_in_the_mask_pass(ctx, passes_taken):
     assert_same_masks(masks, full)
     penumbra = (masks.lit_count[0] > 0) & (masks.lit_count[0] < 16)
     assert penumbra.any() and (masks.lit_count[0] == 0).any()
+
+
+def _facing32(normal, to_light, fused: bool) -> np.ndarray:
+    """dot(normal, to_light) in float32 (k,) the way a shader evaluates it: each product and
+    sum rounded (fused=False), or each product added exactly to the running sum before one
+    rounding, as a compiler that fuses multiply-adds would."""
+    n, d = normal.astype(np.float32), to_light.astype(np.float32)
+    total = n[:, 0] * d[:, 0]
+    for j in (1, 2):
+        if fused:
+            total = (n[:, j].astype(np.float64) * d[:, j] + total).astype(np.float32)
+        else:
+            total = total + n[:, j] * d[:, j]
+    return total
+
+
+def test_the_light_in_the_triangles_planes(ctx, passes_taken):
+    """Triangles whose planes pass through the point light: n . (L - v0) is rounding noise, so
+    its sign depends on how the float32 expression is evaluated.  The mask pass takes it per
+    triangle in scene.vert, the shading pass per pixel in shade.frag; both evaluate it the
+    same way (`precise`), so the masks are still the deferred frame's bit for bit."""
+    rng = np.random.default_rng(7)
+    light = np.array([0.31, 2.17, 0.23])
+    tris = []
+    for x in np.linspace(-1.6, 1.6, 14):
+        for z in np.linspace(-1.6, 1.6, 14):
+            n = rng.normal(size=3)
+            n /= np.linalg.norm(n)
+            centre = np.array([x, rng.uniform(-0.3, 0.3), z])
+            centre -= n * np.dot(centre - light, n)          # into the plane through the light
+            u = np.cross(n, [0.0, 1.0, 0.0] if abs(n[1]) < 0.9 else [1.0, 0.0, 0.0])
+            u /= np.linalg.norm(u)
+            w = np.cross(n, u)
+            tris.append([centre + 0.11 * (np.cos(a) * u + np.sin(a) * w)
+                         for a in (0.0, 2.1, 4.2)])
+    corners = np.array(tris)
+    # the renderer's own float32 normal and corner (geometry.py rounds the float64 values)
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    to_light = light.astype(np.float32) - corners[:, 0].astype(np.float32)
+    plain, fused = (_facing32(normal, to_light, f) for f in (False, True))
+    # the scene tells the evaluation orders apart: a shader that fused in one pass and not in
+    # the other would light some of these triangles in one frame and not in the other
+    assert (np.sign(plain) != np.sign(fused)).sum() >= 5
+    faces = np.arange(3 * len(tris)).reshape(-1, 3)
+    scene = Scene(camera=Camera(eye=[0.2, 6.0, 0.4], target=[0, 0, 0], up=[0, 0, -1]),
+                  objects=[Object("fan", corners.reshape(-1, 3), faces)],
+                  lights=[PointLight(light.tolist())], width=160, height=160)
+    with Renderer(scene, ctx) as r:
+        masks = r.render(outputs=MASKS)
+        full = r.render()
+    assert passes_taken == ["mask", "shade"]
+    assert_same_masks(masks, full)
+    assert full.lit.any() and (full.coverage & ~full.lit).any()
 
 
 def test_back_face_culling_and_no_shadows(ctx, passes_taken):
