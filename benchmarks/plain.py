@@ -224,6 +224,57 @@ class ImageFloor:
             obj.release()
 
 
+MASK_FRAGMENT = """
+#version 330
+layout(location = 0) out float f_bits;
+void main() {
+    f_bits = 3.0 / 255.0;
+}
+"""
+
+
+class MaskFloor:
+    """`MaskFloor(ctx, plain_frame)()`: the least GL work and read-back of any exact frame that
+    returns the masks alone (lit and coverage, `outputs=("lit", "coverage")`), its volume
+    passes aside: `DepthFloor`'s draw (every triangle, no culling) also writing one byte of
+    bits a pixel, cleared first, then the bytes read back, no flip, no conversion.  Why the
+    byte must be written in the draw: whether a pixel can be lit depends on the side of its
+    visible triangle the light is on, known only to the fragment that wins the depth test; a
+    second draw of the triangles that face the light, or one draw split by facing, would
+    change the depth ties the exact frame must keep (`ImageFloor`'s bits without its colour).
+    One byte holds coverage and up to 7 lights' lit bits; the bits are a constant: no test is
+    counted, only what storing and returning them costs."""
+
+    def __init__(self, ctx: moderngl.Context, plain: PlainFrame):
+        self.ctx = ctx
+        self.program = ctx.program(vertex_shader=DEPTH_VERTEX, fragment_shader=MASK_FRAGMENT)
+        self.program["u_mvp"].write(plain.program["u_mvp"].read())
+        self.vao = ctx.vertex_array(self.program, [(plain.vbo, "3f", "in_position")],
+                                    index_buffer=plain.ibo, index_element_size=4)
+        w, h = plain.colour.size
+        self.bits = ctx.texture((w, h), 1, dtype="f1")
+        self.fbo = ctx.framebuffer([self.bits], plain.depth)
+        self.lit = np.empty((h, w), np.uint8)
+
+    def __call__(self) -> None:
+        self.fbo.use()
+        self.ctx.enable_only(moderngl.DEPTH_TEST)
+        self.ctx.depth_func = "<"
+        self.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        self.vao.render(moderngl.TRIANGLES)
+        self.fbo.read_into(self.lit, components=1, attachment=0, dtype="f1")
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def release(self) -> None:
+        for obj in (self.vao, self.fbo, self.bits, self.program):
+            obj.release()
+
+
 FULLSCREEN_VERTEX = """
 #version 330
 void main() {

@@ -157,12 +157,14 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
         t0 = time.perf_counter()
         with Renderer(scene, ctx) as r, plain.PlainFrame(ctx, scene) as pf, \
                 plain.DepthFloor(ctx, pf) as depth_floor, \
+                plain.MaskFloor(ctx, pf) as mask_floor, \
                 plain.ImageFloor(ctx, pf) as image_floor, \
                 plain.LightingFloor(ctx, pf) as lighting:
             setup = time.perf_counter() - t0
             frames.check_same_scene(r)
             r.render()          # lazily built programs, kept side quads
-            fns = {"plain": pf, "depth floor": depth_floor, "image floor": image_floor,
+            fns = {"plain": pf, "depth floor": depth_floor, "mask floor": mask_floor,
+                   "image floor": image_floor,
                    "lighting: lit": lighting.lit, "lighting: flat": lighting.flat,
                    "floor": lambda: r.render(shadows=False, lights=one)}
             for n in cfg["lights"]:

@@ -37,8 +37,8 @@ def test_quick_benchmark_run_writes_the_report(tmp_path):
                 "pyrender", "rss", "raytrace", "memory", "groundtruth"):
         assert key in results, key
     frame = results["frames"][0]["times"]
-    assert {"plain", "depth floor", "image floor", "lighting: lit", "lighting: flat", "floor",
-            "auto/cpu x1", "masks/cpu x1", "auto/gpu x1"} <= set(frame)
+    assert {"plain", "depth floor", "mask floor", "image floor", "lighting: lit",
+            "lighting: flat", "floor", "auto/cpu x1", "masks/cpu x1", "auto/gpu x1"} <= set(frame)
     assert all({"median", "min", "max"} <= set(s) for s in frame.values())
     # every headline row has a number and a verdict
     rows = md.split("## Headline ratios and targets")[1].split("##")[0]
@@ -47,8 +47,8 @@ def test_quick_benchmark_run_writes_the_report(tmp_path):
 
 def test_the_mitsuba_peer_runs_or_says_why_not(tmp_path):
     """bench_mitsuba.py on a tiny scene: with Mitsuba 3 installed (the bench extra) a row of
-    times (ours, the ray tracer's, Mitsuba's, and the bound: depth floor and volume pass) and
-    pixel counts; without it, the reason, and exit status 0 either way."""
+    times (ours, the ray tracer's, Mitsuba's, and the bound: the depth and mask floors and the
+    volume pass) and pixel counts; without it, the reason, and exit status 0 either way."""
     done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_mitsuba.py"),
                            "--sizes", "1k", "--width", "64", "--height", "48", "--runs", "1",
                            "--json", str(tmp_path / "m.json")],
@@ -64,8 +64,8 @@ def test_the_mitsuba_peer_runs_or_says_why_not(tmp_path):
     (row,) = results["scenes"]
     assert row["triangles"] == 962
     assert set(row["ms"]) == {"ours, masks only", "raytrace.shadow_masks", "Mitsuba 3",
-                              "depth floor", "volume pass"}
-    assert all(row["ms"][k]["median"] > 0 for k in ("depth floor", "volume pass"))
+                              "depth floor", "mask floor", "volume pass"}
+    assert all(row["ms"][k]["median"] > 0 for k in ("depth floor", "mask floor", "volume pass"))
     # the same scene, the same pixel-centre rays: the masks agree but for a few edge pixels
     assert row["differing_mitsuba"] < 0.05 * 64 * 48 and row["differing_ours"] < 0.05 * 64 * 48
     assert "| occluders-1k |" in done.stdout
