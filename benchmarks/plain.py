@@ -179,6 +179,15 @@ void main() {
 """
 
 
+MASK_FRAGMENT = """
+#version 330
+layout(location = 0) out float f_bits;
+void main() {
+    f_bits = 3.0 / 255.0;
+}
+"""
+
+
 class ImageFloor:
     """`ImageFloor(ctx, plain_frame)()`: the least GL work and read-back of any exact frame that
     returns the image, the lit masks and the coverage (the renderer's default outputs), its
@@ -189,29 +198,34 @@ class ImageFloor:
     image is exact float32 RGB, and GL 4.5 requires no 3-channel 32-bit float format to be
     renderable; the bits are R8 (coverage and up to 7 lights' lit bits in one byte).  The
     colour is a constant: no shading arithmetic is counted, only what storing and returning
-    the image and the masks cost."""
+    the image and the masks cost.  `colour=False`: the bits alone (`MaskFloor`)."""
 
-    def __init__(self, ctx: moderngl.Context, plain: PlainFrame):
+    def __init__(self, ctx: moderngl.Context, plain: PlainFrame, colour: bool = True):
         self.ctx = ctx
-        self.program = ctx.program(vertex_shader=DEPTH_VERTEX, fragment_shader=IMAGE_FRAGMENT)
+        self.program = ctx.program(vertex_shader=DEPTH_VERTEX,
+                                   fragment_shader=IMAGE_FRAGMENT if colour else MASK_FRAGMENT)
         self.program["u_mvp"].write(plain.program["u_mvp"].read())
         self.vao = ctx.vertex_array(self.program, [(plain.vbo, "3f", "in_position")],
                                     index_buffer=plain.ibo, index_element_size=4)
         w, h = plain.colour.size
-        self.colour = ctx.texture((w, h), 4, dtype="f4")
+        self.colour = ctx.texture((w, h), 4, dtype="f4") if colour else None
         self.bits = ctx.texture((w, h), 1, dtype="f1")
-        self.fbo = ctx.framebuffer([self.colour, self.bits], plain.depth)
-        self.image = np.empty((h, w, 3), np.float32)
+        self.fbo = ctx.framebuffer([t for t in (self.colour, self.bits) if t is not None],
+                                   plain.depth)
+        self.image = np.empty((h, w, 3), np.float32) if colour else None
         self.lit = np.empty((h, w), np.uint8)
+        self._clear = (0.1, 0.1, 0.1, 0.0) if colour else (0.0, 0.0, 0.0, 0.0)
 
     def __call__(self) -> None:
         self.fbo.use()
         self.ctx.enable_only(moderngl.DEPTH_TEST)
         self.ctx.depth_func = "<"
-        self.fbo.clear(0.1, 0.1, 0.1, 0.0, depth=1.0)
+        self.fbo.clear(*self._clear, depth=1.0)
         self.vao.render(moderngl.TRIANGLES)
-        self.fbo.read_into(self.image, components=3, attachment=0, dtype="f4")
-        self.fbo.read_into(self.lit, components=1, attachment=1, dtype="f1")
+        if self.image is not None:
+            self.fbo.read_into(self.image, components=3, attachment=0, dtype="f4")
+        self.fbo.read_into(self.lit, components=1, attachment=0 if self.colour is None else 1,
+                           dtype="f1")
 
     def __enter__(self):
         return self
@@ -221,58 +235,21 @@ class ImageFloor:
 
     def release(self) -> None:
         for obj in (self.vao, self.fbo, self.colour, self.bits, self.program):
-            obj.release()
+            if obj is not None:
+                obj.release()
 
 
-MASK_FRAGMENT = """
-#version 330
-layout(location = 0) out float f_bits;
-void main() {
-    f_bits = 3.0 / 255.0;
-}
-"""
-
-
-class MaskFloor:
+class MaskFloor(ImageFloor):
     """`MaskFloor(ctx, plain_frame)()`: the least GL work and read-back of any exact frame that
     returns the masks alone (lit and coverage, `outputs=("lit", "coverage")`), its volume
-    passes aside: `DepthFloor`'s draw (every triangle, no culling) also writing one byte of
-    bits a pixel, cleared first, then the bytes read back, no flip, no conversion.  Why the
-    byte must be written in the draw: whether a pixel can be lit depends on the side of its
+    passes aside: `ImageFloor`'s draw and bits without its colour, the bits cleared to 0.  Why
+    the byte must be written in the draw: whether a pixel can be lit depends on the side of its
     visible triangle the light is on, known only to the fragment that wins the depth test; a
     second draw of the triangles that face the light, or one draw split by facing, would
-    change the depth ties the exact frame must keep (`ImageFloor`'s bits without its colour).
-    One byte holds coverage and up to 7 lights' lit bits; the bits are a constant: no test is
-    counted, only what storing and returning them costs."""
+    change the depth ties the exact frame must keep."""
 
     def __init__(self, ctx: moderngl.Context, plain: PlainFrame):
-        self.ctx = ctx
-        self.program = ctx.program(vertex_shader=DEPTH_VERTEX, fragment_shader=MASK_FRAGMENT)
-        self.program["u_mvp"].write(plain.program["u_mvp"].read())
-        self.vao = ctx.vertex_array(self.program, [(plain.vbo, "3f", "in_position")],
-                                    index_buffer=plain.ibo, index_element_size=4)
-        w, h = plain.colour.size
-        self.bits = ctx.texture((w, h), 1, dtype="f1")
-        self.fbo = ctx.framebuffer([self.bits], plain.depth)
-        self.lit = np.empty((h, w), np.uint8)
-
-    def __call__(self) -> None:
-        self.fbo.use()
-        self.ctx.enable_only(moderngl.DEPTH_TEST)
-        self.ctx.depth_func = "<"
-        self.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-        self.vao.render(moderngl.TRIANGLES)
-        self.fbo.read_into(self.lit, components=1, attachment=0, dtype="f1")
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.release()
-
-    def release(self) -> None:
-        for obj in (self.vao, self.fbo, self.bits, self.program):
-            obj.release()
+        super().__init__(ctx, plain, colour=False)
 
 
 FULLSCREEN_VERTEX = """
