@@ -45,6 +45,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import frames  # noqa: E402
 import plain  # noqa: E402
+import report  # noqa: E402
 import scenes  # noqa: E402
 
 VARIANT = "llvm_ad_rgb"
@@ -167,15 +168,6 @@ def measure(names, width: int, height: int, runs: int) -> dict:
     return out
 
 
-def mask_bound_ms(scene_result: dict) -> float:
-    """Mask floor + volume pass (medians, ms) of one scene's result: the least any exact
-    mask-only shadow-volume frame of it costs here (depth floor + volume pass in a result
-    from before the mask floor was measured)."""
-    ms = scene_result["ms"]
-    floor = ms["mask floor"] if "mask floor" in ms else ms["depth floor"]
-    return floor["median"] + ms["volume pass"]["median"]
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=9)
@@ -207,7 +199,7 @@ def main(argv=None) -> int:
         ratio = ms["ours, masks only"]["median"] / ms["Mitsuba 3"]["median"]
         cells = " | ".join(f"{ms[k]['median']:.1f} ({ms[k]['min']:.1f}-{ms[k]['max']:.1f})"
                            for k in ("ours, masks only", "raytrace.shadow_masks", "Mitsuba 3"))
-        bound = mask_bound_ms(s)
+        bound = report.mask_bound_ms(ms)
         print(f"| {s['scene']} | {s['triangles']:,} | {cells} | {ratio:.2f} | < 1: "
               f"{'met' if ratio < 1 else 'not met'} | {bound:.1f} | "
               f"{bound / ms['Mitsuba 3']['median']:.2f} | {s['differing_ours']}, "
