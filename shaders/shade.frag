@@ -1,4 +1,7 @@
 #version 450 core
+#if defined(MASK_PASS) && defined(STENCIL_BITS)
+#extension GL_ARB_shader_stencil_export : require
+#endif
 // The deferred frame's one shading pass, over the whole screen after every light's volume
 // count (drawn twice, split by the last light's stencil test): per pixel the ambient term ka * ambient plus, for each light whose unshadowed bit is
 // set, the light's direct Phong term where n . l > 0 and inside a spot's cone, which also sets
@@ -20,6 +23,11 @@
 // bits, and after each light's count the mark pass clears that light's bit where the count is
 // not 0 (passes.clear_shadowed).  Only the pixels that survive the depth test keep their
 // bits, so they are the deferred frame's lit bits exactly.
+//
+// STENCIL_BITS (with MASK_PASS, at most 6 lights): the same bits written into the stencil
+// instead of a colour target (gl_FragStencilRefARB, stencil.exported_bits), reversed: bit 7
+// covered, bit 6 - i light i, and the low bits 0, where the lights' counts then go
+// (stencil.mask_layout).
 
 #ifndef LIGHTS
 #define LIGHTS 1        // lights in this page, at most 23 (lit bits 1..23 and coverage: exact
@@ -59,9 +67,9 @@ layout(std430, binding = 0) readonly buffer Triangles {
     vec4 triangle_data[];       // per triangle: (unit normal, object), (first corner, 0)
 };
 
-#ifdef MASK_PASS
+#if defined(MASK_PASS) && !defined(STENCIL_BITS)
 layout(location = 0) out uint f_lit_bits;  // bit 0 covered, bit i + 1 faces light i
-#else
+#elif !defined(MASK_PASS)
 layout(location = 0) out vec4 f_colour;
 layout(location = 1) out float f_bits;     // bit 0 covered, bit i + 1 lit by light i
 #endif
@@ -86,7 +94,11 @@ void main() {
         lit &= in_cone(i, l) ? 0xFFFFFFFFu : ~(2u << uint(i));
     }
 #endif
+#ifdef STENCIL_BITS
+    gl_FragStencilRefARB = int(bitfieldReverse(lit) >> 24u);
+#else
     f_lit_bits = lit;
+#endif
 #else
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 position = texelFetch(u_position, p, 0);

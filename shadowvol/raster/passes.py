@@ -27,6 +27,8 @@ caps tie with their own triangle; see `volumes`).
 
 from __future__ import annotations
 
+import contextlib
+
 import moderngl
 import numpy as np
 
@@ -62,8 +64,8 @@ class ScenePrograms:
         self.mark_vao = ctx.vertex_array(self.mark, [])
         # (lights, colour, sRGB out, spot lights, emitter lights) -> program, vao
         self._shade: dict[tuple[int, bool, bool, int, int], tuple] = {}
-        # (lights, spot lights) -> program, vao of the mask pass
-        self._masks: dict[tuple[int, int], tuple] = {}
+        # (lights, spot lights, bits in the stencil) -> program, vao of the mask pass
+        self._masks: dict[tuple[int, int, bool], tuple] = {}
         self.srgb = glsl.program(ctx, "fullscreen.vert", "srgb.frag")
         self.srgb_vao = ctx.vertex_array(self.srgb, [])
         self._forward = None
@@ -84,14 +86,15 @@ class ScenePrograms:
             self._shade[key] = (program, self.ctx.vertex_array(program, []))
         return self._shade[key]
 
-    def mask_pass(self, lights: int, spots: int) -> tuple:
+    def mask_pass(self, lights: int, spots: int, in_stencil: bool = False) -> tuple:
         """(program, vao) of a mask-only frame's geometry pass for a page of `lights` lights,
-        bit i of `spots` set where light i is a spot (shade.frag's MASK_PASS); made on first
-        use."""
-        key = (lights, spots)
+        bit i of `spots` set where light i is a spot (shade.frag's MASK_PASS), writing its
+        bits into the stencil if `in_stencil` (STENCIL_BITS); made on first use."""
+        key = (lights, spots, in_stencil)
         if key not in self._masks:
             program = glsl.program(self.ctx, "scene.vert", "shade.frag", defines={
-                "LIGHTS": lights, "SPOT_LIGHTS": spots, "MASKS_ONLY": 1, "MASK_PASS": 1})
+                "LIGHTS": lights, "SPOT_LIGHTS": spots, "MASKS_ONLY": 1, "MASK_PASS": 1} |
+                ({"STENCIL_BITS": 1} if in_stencil else {}))
             self._masks[key] = (program, self.ctx.vertex_array(
                 program, self.geometry.soup_bindings(program)))
         return self._masks[key]
@@ -181,29 +184,32 @@ def _draw_soup(ctx: moderngl.Context, geometry: SceneGeometry, vao: moderngl.Ver
 
 def mask_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
               view_proj: np.ndarray, camera: Camera, lights,
-              cull: np.ndarray | None = None) -> None:
+              cull: np.ndarray | None = None, in_stencil: bool = False) -> None:
     """The geometry pass of a mask-only frame for `lights` (one page) seen by `camera`
     (`view_proj` as `set_camera` takes it): depth and stencil cleared, then every triangle of
     the soup as `geometry_pass` draws it (the same vertex shader and vertices: the same
     depths), writing into `target.unshadowed` bit 0 (covered) and bit i + 1 where the visible
     side faces light i (n . l > 0, inside a spot's cone) by shade.frag's own tests
     (MASK_PASS: n . l per triangle in scene.vert, from the soup's normal and corner, the
-    cone per pixel); pixels no triangle covers keep 0.  `target.mark_fbo` is left bound, for
-    the counts and `clear_shadowed`."""
+    cone per pixel); pixels no triangle covers keep 0.  `in_stencil` (at most 6 lights): the
+    same bits into the stencil instead, laid out as `stencil.mask_layout` says, and no colour
+    written.  `target.mark_fbo` is left bound, for the counts and `clear_shadowed`."""
     prog, vao = progs.mask_pass(
         len(lights), spots=sum(1 << i for i, l in enumerate(lights)
-                               if isinstance(l, SpotLight)))
+                               if isinstance(l, SpotLight)), in_stencil=in_stencil)
     fbo = target.mark_fbo
     fbo.depth_mask = True
-    fbo.color_mask = (True,) * 4
+    fbo.color_mask = (not in_stencil,) * 4
     stencil.clear_depth_stencil(gl, fbo.glo, FAR_DEPTH)
-    stencil.clear_uint_attachment(gl, fbo.glo, 0, 0)
+    if not in_stencil:
+        stencil.clear_uint_attachment(gl, fbo.glo, 0, 0)
     fbo.use()
     origin = progs.geometry.origin
     set_camera((prog,), view_proj, camera, origin)
     set_uniform(prog, "u_first_page", True)
     _light_arrays(prog, lights, origin)
-    _draw_soup(ctx, progs.geometry, vao, cull)
+    with stencil.exported_bits(gl) if in_stencil else contextlib.nullcontext():
+        _draw_soup(ctx, progs.geometry, vao, cull)
 
 
 def clear_shadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
@@ -214,6 +220,25 @@ def clear_shadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
     for the next light's count.  `target.mark_fbo` stays bound."""
     _bits_pass(ctx, gl, target, progs, 2 << bit, stencil.where_shadowed(gl, zero=zero),
                stencil.GL_AND_INVERTED)
+
+
+def clear_shadowed_in_stencil(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
+                              progs: ScenePrograms, count_mask: int, light_bit: int) -> None:
+    """`clear_shadowed` for a mask-only frame whose bits are in the stencil (`mask_pass`
+    `in_stencil`): after a light's count (in the bits of `count_mask`), its `light_bit`
+    cleared wherever the count is not 0, and every count left 0 for the next light
+    (`stencil.unlit_where_counted`); a full-screen pass with no colour written.
+    `target.mark_fbo` stays bound."""
+    fbo = target.mark_fbo
+    fbo.depth_mask = False
+    fbo.color_mask = (False,) * 4
+    fbo.use()
+    ctx.enable_only(moderngl.NOTHING)
+    _only_where_covered(ctx)
+    with stencil.unlit_where_counted(gl, count_mask, light_bit):
+        progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
+    ctx.enable_only(moderngl.DEPTH_TEST)
+    ctx.depth_func = NEARER
 
 
 def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
@@ -376,7 +401,8 @@ def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
 def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
                   zfail: np.ndarray, halve: bool = False,
                   clip_planes: np.ndarray | None = None, counting=None,
-                  objects=None, each=None, fbo=None, clear: bool = True) -> None:
+                  objects=None, each=None, fbo=None, clear: bool = True,
+                  count_mask: int = 0xFF) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
     `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
 
@@ -406,11 +432,14 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     mark passes of all its lights together.
 
     `clear=False`: the stencil is known to be 0 already (the geometry pass's clear, or a
-    zeroing mark), and is not cleared again."""
+    zeroing mark), and is not cleared again.
+
+    `count_mask`: the default counting keeps the count in these low bits of the stencil only
+    (`stencil.mask_layout`: the mask-only frame's bits are above them)."""
     if counting is None:
         def counting(zfail_group: bool, depth_clamp: bool):
-            return (stencil.zfail_counting(gl, depth_clamp=depth_clamp) if zfail_group
-                    else stencil.zpass_counting(gl))
+            return (stencil.zfail_counting(gl, depth_clamp=depth_clamp, count_mask=count_mask)
+                    if zfail_group else stencil.zpass_counting(gl, count_mask=count_mask))
     if fbo is not None:
         fbo.depth_mask = False
         fbo.color_mask = (False,) * 4

@@ -146,6 +146,11 @@ class Renderer:
         # the stencil-overflow check (see `overflow`): on by default; it costs one more volume
         # pass per light, and only in scenes whose bound allows a count of 256
         self.check_overflow = True
+        # a mask-only frame of up to 6 hard lights keeps its bits in the stencil where the
+        # counts leave room (`_masks_fit_stencil`); off: always in a colour target (the same
+        # masks bit for bit: tests compare the two)
+        self.masks_in_stencil = True
+        self._stencil_export: bool | None = None   # ARB_shader_stencil_export, looked up once
         try:
             # every public method first makes the context current: raw GL calls
             # (stencil.RawGL) go to whichever context is current, e.g. after another renderer
@@ -311,6 +316,11 @@ class Renderer:
             self._scratches.append(np.empty((self.scene.height, self.scene.width), np.uint32))
         return self._scratches[k]
 
+    def _scratch_bytes(self, k: int) -> np.ndarray:
+        """(H, W) uint8 in the first quarter of `_scratch(k)`'s memory."""
+        h, w = self.scene.height, self.scene.width
+        return self._scratch(k).reshape(-1).view(np.uint8)[:h * w].reshape(h, w)
+
     def _truth_pass(self) -> truth.TruthPass:
         if self._truth is None:
             self._truth = self._own(truth.TruthPass(self.ctx, self.target))
@@ -362,10 +372,15 @@ class Renderer:
         zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
         truth_pages: list = []
         counts: list[np.ndarray] = []
+        in_stencil = None   # the mask-only frame's stencil bytes, when it keeps its bits there
         if outputs <= {"lit", "coverage"} and len(hard) <= LIGHTS_PER_PAGE:
             # the masks alone, one page: no G-buffer and no shading pass
-            pages = [self._mask_frame(method, camera, view_proj, hard, shadows, vols, clip,
-                                      cull, zfail)]
+            if self._masks_fit_stencil(hard, lights, shadows):
+                in_stencil = self._mask_frame(method, camera, view_proj, hard, shadows, vols,
+                                              clip, cull, zfail, in_stencil=True)
+            else:
+                pages = [self._mask_frame(method, camera, view_proj, hard, shadows, vols, clip,
+                                          cull, zfail)]
         else:
             pages = self._deferred_frame(method, camera, hard, shadows, vols, clip, cull,
                                          zfail, outputs, srgb_direct, truth_pages, counts)
@@ -377,11 +392,27 @@ class Renderer:
         coverage = None
         if "coverage" in outputs:
             coverage = pool.empty((h, w), bool)
-            np.not_equal(np.bitwise_and(pages[0], np.uint32(1), out=masked), 0, out=coverage)
+            if in_stencil is not None:   # bit 7 (`stencil.mask_layout`), 0 or 1 as a bool
+                np.right_shift(in_stencil, 7, out=coverage.view(np.uint8))
+            else:
+                np.not_equal(np.bitwise_and(pages[0], np.uint32(1), out=masked), 0,
+                             out=coverage)
         samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
         soft = samples > 1
         lit = lit_count = None
-        if "lit" in outputs:
+        if "lit" in outputs and in_stencil is not None:
+            lit_count = pool.empty((len(lights), h, w), np.uint16)
+            lit = pool.empty((len(lights), h, w), bool)
+            count_mask, light_bits = stencil_gl.mask_layout(len(hard))
+            byte = self._scratch_bytes(0)
+            for k, bit in enumerate(light_bits):
+                # the lights before the last were cleared where counted; the last one's count
+                # is still in the low bits (0 without shadows: nothing counted)
+                last = k == len(light_bits) - 1
+                np.bitwise_and(in_stencil, bit | (count_mask if last else 0), out=byte)
+                np.equal(byte, bit, out=lit[k])
+                lit_count[k] = lit[k]
+        elif "lit" in outputs:
             lit_count = pool.empty((len(lights), h, w), np.uint16)
             lit = pool.empty((len(lights), h, w), bool)
             lit_count[soft] = 0   # an area light's counts add up over its pages
@@ -422,17 +453,39 @@ class Renderer:
             calibration=calibration(self.scene.replace(camera=camera, lights=lights)),
             **extra)
 
+    def _masks_fit_stencil(self, hard, lights, shadows: bool) -> bool:
+        """Whether a mask-only frame of `hard` (its hard lights, one page) keeps its bits in
+        the stencil beside the counts (`stencil.mask_layout`): at most 6 lights, none an area
+        light (whose samples' counts add up in lit_count), no count of the scene able to
+        reach 2^(7 - lights) in magnitude (`count_bound`), and a GL that lets a fragment
+        shader write the stencil (ARB_shader_stencil_export; without it, and when
+        `masks_in_stencil` is off, the bits go to a colour target)."""
+        if not self.masks_in_stencil or not 1 <= len(hard) <= 6 or len(hard) != len(lights):
+            return False
+        if self._stencil_export is None:
+            self._stencil_export = "GL_ARB_shader_stencil_export" in self.ctx.extensions
+        return self._stencil_export and (not shadows or
+                                         self.count_bound < 1 << (7 - len(hard)))
+
     def _mask_frame(self, method, camera, view_proj, hard, shadows, vols, clip, cull,
-                    zfail) -> np.ndarray:
+                    zfail, in_stencil: bool = False) -> np.ndarray:
         """The lit bits of a mask-only frame of the hard lights `hard` ((light index, hard
         light) pairs, one page): (H, W) uint32 in this renderer's scratch, bit 0 covered, bit
         k + 1 lit by hard[k], as the deferred frame's.  No G-buffer and no shading pass
         (`passes.mask_pass`); every light counted and its bit cleared where its count is not
         0 in one framebuffer, so that llvmpipe bins all of them in one scene.  Fills
-        `zfail`."""
+        `zfail`.
+
+        `in_stencil` (`_masks_fit_stencil`): the bits are kept in the stencil's high bits and
+        each count in its low bits (`stencil.mask_layout`); the lights but the last are
+        cleared where counted, the last light's count is left in place, and the stencil is
+        returned as stored, (H, W) uint8 in this renderer's scratch: no colour target, no
+        pass after the last count, one byte a pixel read."""
         progs, target = self.programs, self.target
         passes.mask_pass(self.ctx, self.gl, target, progs, view_proj, camera,
-                         [sample for _, sample in hard], cull)
+                         [sample for _, sample in hard], cull, in_stencil=in_stencil)
+        count_mask, light_bits = (stencil_gl.mask_layout(len(hard)) if in_stencil
+                                  else (0xFF, ()))
         for k, (i, light) in enumerate(hard):
             light4 = light.homogeneous
             choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
@@ -443,11 +496,18 @@ class Renderer:
                 # last zeroes it again (`stencil.where_shadowed`)
                 passes.count_volumes(self.ctx, self.gl, target, vols, choice,
                                      halve=method == "auto", clip_planes=clip,
-                                     fbo=target.mark_fbo, clear=False)
-                passes.clear_shadowed(self.ctx, self.gl, target, progs, k,
-                                      zero=k < len(hard) - 1)
+                                     fbo=target.mark_fbo, clear=False, count_mask=count_mask)
+                if not in_stencil:
+                    passes.clear_shadowed(self.ctx, self.gl, target, progs, k,
+                                          zero=k < len(hard) - 1)
+                elif k < len(hard) - 1:
+                    passes.clear_shadowed_in_stencil(self.ctx, self.gl, target, progs,
+                                                     count_mask, light_bits[k])
             zfail[i] |= choice
-        bits = target.read_unshadowed(out=self._scratch(1))
+        if in_stencil:
+            bits = target.read_stencil_bits(out=self._scratch_bytes(1))
+        else:
+            bits = target.read_unshadowed(out=self._scratch(1))
         target.use()
         return bits
 

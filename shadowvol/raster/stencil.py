@@ -41,6 +41,9 @@ GL_INCR_WRAP = 0x8507
 GL_DECR_WRAP = 0x8508
 GL_ALWAYS = 0x0207
 GL_EQUAL = 0x0202
+GL_NOTEQUAL = 0x0205
+GL_REPLACE = 0x1E01
+GL_INCR = 0x1E02
 GL_STENCIL_TEST = 0x0B90
 GL_DEPTH_CLAMP = 0x864F
 GL_CLIP_DISTANCE0 = 0x3000
@@ -302,10 +305,14 @@ def clear_uint_texture(gl: RawGL, texture_glo: int, box: tuple[int, int, int, in
 
 
 def read_stencil(gl: RawGL, framebuffer_glo: int, width: int, height: int, x: int = 0,
-                 y: int = 0) -> np.ndarray:
+                 y: int = 0, out: np.ndarray | None = None) -> np.ndarray:
     """(height, width) uint8 stencil values of the rectangle whose lower-left pixel is (x, y)
-    (default the whole frame), row 0 at the BOTTOM (GL order; the caller flips)."""
-    out = np.empty((height, width), np.uint8)
+    (default the whole frame), row 0 at the BOTTOM (GL order; the caller flips); into `out`
+    (C-contiguous (height, width) uint8) if given."""
+    if out is None:
+        out = np.empty((height, width), np.uint8)
+    elif out.shape != (height, width) or out.dtype != np.uint8 or not out.flags.c_contiguous:
+        raise ValueError(f"out must be C-contiguous ({height}, {width}) uint8")
     previous = gl.get_int(GL_PACK_ALIGNMENT)
     with bound_framebuffer(gl, framebuffer_glo):
         gl.glPixelStorei(GL_PACK_ALIGNMENT, 1)
@@ -366,40 +373,43 @@ def _saved_stencil_state(gl: RawGL) -> Iterator[None]:
 
 
 def _set(gl: RawGL, *, func: int, ref: int, front_ops: tuple[int, int, int],
-         back_ops: tuple[int, int, int], write_mask: int, depth_clamp: bool) -> None:
+         back_ops: tuple[int, int, int], write_mask: int, depth_clamp: bool,
+         value_mask: int = 0xFF) -> None:
     gl.glEnable(GL_STENCIL_TEST)
     for face, ops in ((GL_FRONT, front_ops), (GL_BACK, back_ops)):
-        gl.glStencilFuncSeparate(face, func, ref, 0xFF)
+        gl.glStencilFuncSeparate(face, func, ref, value_mask)
         gl.glStencilOpSeparate(face, *ops)
         gl.glStencilMaskSeparate(face, write_mask)
     (gl.glEnable if depth_clamp else gl.glDisable)(GL_DEPTH_CLAMP)
 
 
 @contextlib.contextmanager
-def zpass_counting(gl: RawGL) -> Iterator[None]:
+def zpass_counting(gl: RawGL, count_mask: int = 0xFF) -> Iterator[None]:
     """Z-pass: every volume face IN FRONT of the scene (depth test passes) counts, front faces
     +1, back faces -1, wrapping.  No depth clamp: geometry in front of the near plane stays
-    clipped, so the count is taken from the near plane (the auto method's test relies on that)."""
+    clipped, so the count is taken from the near plane (the auto method's test relies on that).
+    `count_mask`: the count is kept in these low bits only (2^k - 1: counted modulo 2^k, the
+    bits above left as they are; see `mask_layout`)."""
     with _saved_stencil_state(gl):
         _set(gl, func=GL_ALWAYS, ref=0,
              front_ops=(GL_KEEP, GL_KEEP, GL_INCR_WRAP), back_ops=(GL_KEEP, GL_KEEP, GL_DECR_WRAP),
-             write_mask=0xFF, depth_clamp=False)
+             write_mask=count_mask, depth_clamp=False)
         yield
 
 
 @contextlib.contextmanager
-def zfail_counting(gl: RawGL, depth_clamp: bool) -> Iterator[None]:
+def zfail_counting(gl: RawGL, depth_clamp: bool, count_mask: int = 0xFF) -> Iterator[None]:
     """Z-fail (Carmack's reverse): every volume face BEHIND the scene (depth test fails) counts,
     back faces +1, front faces -1, wrapping.  `depth_clamp` is on for side quads and far caps:
     far caps lie exactly at depth 0 (w = 0, reversed depth) and must never be clipped away; a
     side fragment in front of the near plane gets depth 1, passes, and so counts for nothing, as
     if clipped.  It
     is off for near caps, which must be clipped exactly as the depth pass clipped the same
-    triangles so that their depths tie bit for bit."""
+    triangles so that their depths tie bit for bit.  `count_mask` as in `zpass_counting`."""
     with _saved_stencil_state(gl):
         _set(gl, func=GL_ALWAYS, ref=0,
              front_ops=(GL_KEEP, GL_DECR_WRAP, GL_KEEP), back_ops=(GL_KEEP, GL_INCR_WRAP, GL_KEEP),
-             write_mask=0xFF, depth_clamp=depth_clamp)
+             write_mask=count_mask, depth_clamp=depth_clamp)
         yield
 
 
@@ -449,6 +459,45 @@ def where_shadowed(gl: RawGL, zero: bool = False) -> Iterator[None]:
         yield
 
 
+# A mask-only frame of a few hard lights keeps its bits in the stencil itself, beside the
+# counts, where the scene's counts fit (`Renderer._masks_in_stencil`): no colour target, no
+# clear pass after the last light, one byte a pixel read back.
+
+def mask_layout(lights: int) -> tuple[int, tuple[int, ...]]:
+    """The stencil byte of a mask-only frame of `lights` (1..6) hard lights kept in the stencil:
+    bit 7 covered, bit 6 - i "the visible side faces light i" (shade.frag's lit bits reversed:
+    STENCIL_BITS), and the low 7 - `lights` bits the light's count, modulo 2^(7 - lights):
+    exact where no count's magnitude reaches that.  (count mask, light i's bit for each i)."""
+    if not 1 <= lights <= 6:
+        raise ValueError(f"1..6 lights fit in the stencil beside a count, got {lights}")
+    return (1 << (7 - lights)) - 1, tuple(0x40 >> i for i in range(lights))
+
+
+@contextlib.contextmanager
+def exported_bits(gl: RawGL) -> Iterator[None]:
+    """The mask pass with the bits in the stencil: every fragment that passes the depth test
+    writes the whole stencil byte its shader exports (gl_FragStencilRefARB: `mask_layout`, the
+    counts' bits 0), as a colour write would have written the bits."""
+    put = (GL_KEEP, GL_KEEP, GL_REPLACE)
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_ALWAYS, ref=0, front_ops=put, back_ops=put, write_mask=0xFF,
+             depth_clamp=False)
+        yield
+
+
+@contextlib.contextmanager
+def unlit_where_counted(gl: RawGL, count_mask: int, light_bit: int) -> Iterator[None]:
+    """After a light's count with the bits in the stencil (`mask_layout`), a full-screen draw
+    clears `light_bit` wherever the count (the bits of `count_mask`) is not 0, and zeroes that
+    count whatever the depth test, leaving the stencil as the next light's count needs it; the
+    other bits are left as they are."""
+    zero = (GL_KEEP, GL_REPLACE, GL_REPLACE)   # ref 0 into the written bits
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_NOTEQUAL, ref=0, value_mask=count_mask, front_ops=zero,
+             back_ops=zero, write_mask=count_mask | light_bit, depth_clamp=False)
+        yield
+
+
 @contextlib.contextmanager
 def caster_touching(gl: RawGL, depth_clamp: bool) -> Iterator[None]:
     """The ground truth's per-caster counts (`truth.CasterCounts`), which go to an image:
@@ -478,9 +527,6 @@ def depth_clamped(gl: RawGL) -> Iterator[None]:
 # light where not shadowed
 # ---------------------------------------------------------------------------------------------
 
-GL_REPLACE = 0x1E01
-GL_INCR = 0x1E02
-GL_NOTEQUAL = 0x0205
 PLANAR_RECEIVER = 1   # stencil value of a pixel where the receiving plane is the visible surface
 PLANAR_SHADOW = 2     # ... and where a projected shadow covers it
 

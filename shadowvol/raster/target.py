@@ -107,6 +107,7 @@ class Target:
         self._bits = np.empty((height, width), np.float32)
         self._unshadowed = np.empty((height, width), np.uint32)
         self._srgb8 = np.empty((height, width, 3), np.uint8)
+        self._stencil8 = np.empty((height, width), np.uint8)
         try:
             self.depth_stencil = stencil.DepthStencilBuffer(gl, self.fbo.glo, width, height)
             self.depth_stencil.attach(self.gbuffer_fbo.glo)
@@ -182,6 +183,14 @@ class Target:
         the top, into `out` if given."""
         self.mark_fbo.read_into(self._unshadowed, components=1, attachment=0, dtype="u4")
         return _flipped(self._unshadowed, out)
+
+    def read_stencil_bits(self, out: np.ndarray | None = None) -> np.ndarray:
+        """(H, W) uint8 of the stencil as stored, row 0 at the top, into `out` if given: a
+        mask-only frame's bits and last count when it keeps them there
+        (`stencil.mask_layout`)."""
+        stencil.read_stencil(self.gl, self.mark_fbo.glo, self.width, self.height,
+                             out=self._stencil8)
+        return _flipped(self._stencil8, out)
 
     def read_lit(self) -> np.ndarray:
         """(H, W) bool, row 0 at the top: the one light of a forward lighting pass."""
