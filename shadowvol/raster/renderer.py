@@ -405,13 +405,13 @@ class Renderer:
             lit = pool.empty((len(lights), h, w), bool)
             count_mask, light_bits = stencil_gl.mask_layout(len(hard))
             byte = self._scratch_bytes(0)
-            for k, bit in enumerate(light_bits):
+            for k, ((i, _), bit) in enumerate(zip(hard, light_bits)):   # i == k: hard lights
                 # the lights before the last were cleared where counted; the last one's count
                 # is still in the low bits (0 without shadows: nothing counted)
                 last = k == len(light_bits) - 1
                 np.bitwise_and(in_stencil, bit | (count_mask if last else 0), out=byte)
-                np.equal(byte, bit, out=lit[k])
-                lit_count[k] = lit[k]
+                np.equal(byte, bit, out=lit[i])
+                lit_count[i] = lit[i]
         elif "lit" in outputs:
             lit_count = pool.empty((len(lights), h, w), np.uint16)
             lit = pool.empty((len(lights), h, w), bool)
@@ -492,8 +492,8 @@ class Renderer:
                                     light4, self.geometry.extent)
             if shadows:
                 vols.prepare(light4)
-                # the stencil is 0: the mask pass cleared it, and each light's clear but the
-                # last zeroes it again (`stencil.where_shadowed`)
+                # the counts are 0: the mask pass cleared them, and each light's clear but the
+                # last zeroes them again (`stencil.where_shadowed`, `unlit_where_counted`)
                 passes.count_volumes(self.ctx, self.gl, target, vols, choice,
                                      halve=method == "auto", clip_planes=clip,
                                      fbo=target.mark_fbo, clear=False, count_mask=count_mask)
