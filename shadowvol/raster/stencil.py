@@ -474,15 +474,21 @@ def mask_layout(lights: int) -> tuple[int, tuple[int, ...]]:
 
 
 @contextlib.contextmanager
-def exported_bits(gl: RawGL) -> Iterator[None]:
-    """The mask pass with the bits in the stencil: every fragment that passes the depth test
-    writes the whole stencil byte its shader exports (gl_FragStencilRefARB: `mask_layout`, the
-    counts' bits 0), as a colour write would have written the bits."""
+def _written_where_drawn(gl: RawGL, ref: int, depth_clamp: bool = False) -> Iterator[None]:
+    """Every fragment that passes the depth test (either face) writes `ref`, or the value its
+    shader exports (gl_FragStencilRefARB), into the whole stencil byte."""
     put = (GL_KEEP, GL_KEEP, GL_REPLACE)
     with _saved_stencil_state(gl):
-        _set(gl, func=GL_ALWAYS, ref=0, front_ops=put, back_ops=put, write_mask=0xFF,
-             depth_clamp=False)
+        _set(gl, func=GL_ALWAYS, ref=ref, front_ops=put, back_ops=put, write_mask=0xFF,
+             depth_clamp=depth_clamp)
         yield
+
+
+def exported_bits(gl: RawGL) -> contextlib.AbstractContextManager[None]:
+    """The mask pass with the bits in the stencil: every fragment that passes the depth test
+    writes the whole stencil byte its shader exports (`mask_layout`, the counts' bits 0), as a
+    colour write would have written the bits."""
+    return _written_where_drawn(gl, 0)
 
 
 @contextlib.contextmanager
@@ -498,18 +504,13 @@ def unlit_where_counted(gl: RawGL, count_mask: int, light_bit: int) -> Iterator[
         yield
 
 
-@contextlib.contextmanager
-def caster_touching(gl: RawGL, depth_clamp: bool) -> Iterator[None]:
+def caster_touching(gl: RawGL, depth_clamp: bool) -> contextlib.AbstractContextManager[None]:
     """The ground truth's per-caster counts (`truth.CasterCounts`), which go to an image:
     the stencil := 1 wherever a counted fragment lands (either face; the image counts the
     fragments that pass the depth test, z-fail's under the complementary test), so a pixel
     whose counters are not all 0 has stencil 1.  `depth_clamp` as `zpass_counting` (off)
     and `zfail_counting` take it for the same faces."""
-    touch = (GL_KEEP, GL_KEEP, GL_REPLACE)
-    with _saved_stencil_state(gl):
-        _set(gl, func=GL_ALWAYS, ref=1, front_ops=touch, back_ops=touch, write_mask=0xFF,
-             depth_clamp=depth_clamp)
-        yield
+    return _written_where_drawn(gl, 1, depth_clamp)
 
 
 @contextlib.contextmanager
@@ -531,16 +532,11 @@ PLANAR_RECEIVER = 1   # stencil value of a pixel where the receiving plane is th
 PLANAR_SHADOW = 2     # ... and where a projected shadow covers it
 
 
-@contextlib.contextmanager
-def planar_receiver_mark(gl: RawGL) -> Iterator[None]:
+def planar_receiver_mark(gl: RawGL) -> contextlib.AbstractContextManager[None]:
     """Every fragment that passes the depth test writes PLANAR_RECEIVER (drawn with the
     receiver's own triangles and depth test EQUAL: its visible pixels).  Projected shadows are
     later drawn only there, so none hangs off the receiver's edge or lands on another object."""
-    with _saved_stencil_state(gl):
-        _set(gl, func=GL_ALWAYS, ref=PLANAR_RECEIVER,
-             front_ops=(GL_KEEP, GL_KEEP, GL_REPLACE), back_ops=(GL_KEEP, GL_KEEP, GL_REPLACE),
-             write_mask=0xFF, depth_clamp=False)
-        yield
+    return _written_where_drawn(gl, PLANAR_RECEIVER)
 
 
 @contextlib.contextmanager
