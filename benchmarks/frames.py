@@ -98,11 +98,12 @@ def _phase_clock(renderer: Renderer, sink: dict):
     wrap(passes, "count_volumes", "volume pass")
     wrap(passes, "mark_unshadowed", "mark unshadowed")
     wrap(passes, "clear_shadowed", "mark unshadowed")   # a mask-only frame's per-light bits
+    wrap(passes, "clear_shadowed_in_stencil", "mark unshadowed")   # ... kept in the stencil
     wrap(passes, "shade", "shading pass")
     for sil in SILHOUETTES:
         wrap(renderer.volumes(sil), "prepare",
              "silhouettes (CPU, incl. upload)" if sil == "cpu" else "_gpu prepare", True)
-    for name in ("read_bits", "read_image", "read_unshadowed"):
+    for name in ("read_bits", "read_image", "read_unshadowed", "read_stencil_bits"):
         wrap(renderer.target, name, "read-back", True)
     try:
         yield
