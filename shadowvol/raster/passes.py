@@ -227,18 +227,10 @@ def clear_shadowed_in_stencil(ctx: moderngl.Context, gl: stencil.RawGL, target: 
     """`clear_shadowed` for a mask-only frame whose bits are in the stencil (`mask_pass`
     `in_stencil`): after a light's count (in the bits of `count_mask`), its `light_bit`
     cleared wherever the count is not 0, and every count left 0 for the next light
-    (`stencil.unlit_where_counted`); a full-screen pass with no colour written.
-    `target.mark_fbo` stays bound."""
-    fbo = target.mark_fbo
-    fbo.depth_mask = False
-    fbo.color_mask = (False,) * 4
-    fbo.use()
-    ctx.enable_only(moderngl.NOTHING)
-    _only_where_covered(ctx)
-    with stencil.unlit_where_counted(gl, count_mask, light_bit):
-        progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
-    ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = NEARER
+    (`stencil.where_shadowed` zeroing both); no colour written.  `target.mark_fbo` stays
+    bound."""
+    _bits_pass(ctx, gl, target, progs, 0, stencil.where_shadowed(
+        gl, zero=True, count_mask=count_mask, also_zero=light_bit), None)
 
 
 def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
@@ -255,18 +247,19 @@ def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
 
 
 def _bits_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
-               value: int, where, op: int) -> None:
+               value: int, where, op: int | None) -> None:
     """One full-screen pass of mark.frag over the covered pixels into `target.unshadowed`
     (`mark_fbo`, left bound): `value` combined with the stored bits by the logic op `op`
-    wherever the stencil test `where` (a context manager of `stencil`) passes."""
+    wherever the stencil test `where` (a context manager of `stencil`) passes; `op` None: no
+    colour written, the stencil operations of `where` alone."""
     fbo = target.mark_fbo
     fbo.depth_mask = False
-    fbo.color_mask = (True,) * 4
+    fbo.color_mask = (op is not None,) * 4
     fbo.use()
     ctx.enable_only(moderngl.NOTHING)
     set_uniform(progs.mark, "u_bit", value)
     _only_where_covered(ctx)
-    with where, stencil.logic_op(gl, op):
+    with where, (contextlib.nullcontext() if op is None else stencil.logic_op(gl, op)):
         progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER

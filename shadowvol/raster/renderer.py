@@ -493,7 +493,7 @@ class Renderer:
             if shadows:
                 vols.prepare(light4)
                 # the counts are 0: the mask pass cleared them, and each light's clear but the
-                # last zeroes them again (`stencil.where_shadowed`, `unlit_where_counted`)
+                # last zeroes them again (`stencil.where_shadowed`)
                 passes.count_volumes(self.ctx, self.gl, target, vols, choice,
                                      halve=method == "auto", clip_planes=clip,
                                      fbo=target.mark_fbo, clear=False, count_mask=count_mask)

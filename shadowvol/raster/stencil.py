@@ -445,17 +445,22 @@ def where_unshadowed(gl: RawGL, zero: bool = False) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def where_shadowed(gl: RawGL, zero: bool = False) -> Iterator[None]:
+def where_shadowed(gl: RawGL, zero: bool = False, count_mask: int = 0xFF,
+                   also_zero: int = 0) -> Iterator[None]:
     """Draw only where the stencil count is not 0 (the complement of `where_unshadowed`); the
     stencil itself is left unchanged.  `zero`: every count the draw covers is set to 0
     instead, whatever the depth test (its pass and fail operations ZERO; a count that fails
     the stencil test is 0 already), so that after a full-screen draw the stencil is 0
-    everywhere, as a clear would leave it, without the clear."""
+    everywhere, as a clear would leave it, without the clear.
+
+    `count_mask`: the count is these low bits only (`mask_layout`), the bits above untested
+    and, unless named in `also_zero`, left as they are; with `zero`, the bits of `also_zero`
+    are zeroed with the count (a mask-only frame's light bit where the light is counted)."""
     op = GL_ZERO if zero else GL_KEEP
     with _saved_stencil_state(gl):
-        _set(gl, func=GL_NOTEQUAL, ref=0, front_ops=(GL_KEEP, op, op),
-             back_ops=(GL_KEEP, op, op), write_mask=0xFF if zero else 0x00,
-             depth_clamp=False)
+        _set(gl, func=GL_NOTEQUAL, ref=0, value_mask=count_mask,
+             front_ops=(GL_KEEP, op, op), back_ops=(GL_KEEP, op, op),
+             write_mask=count_mask | also_zero if zero else 0x00, depth_clamp=False)
         yield
 
 
@@ -489,19 +494,6 @@ def exported_bits(gl: RawGL) -> contextlib.AbstractContextManager[None]:
     writes the whole stencil byte its shader exports (`mask_layout`, the counts' bits 0), as a
     colour write would have written the bits."""
     return _written_where_drawn(gl, 0)
-
-
-@contextlib.contextmanager
-def unlit_where_counted(gl: RawGL, count_mask: int, light_bit: int) -> Iterator[None]:
-    """After a light's count with the bits in the stencil (`mask_layout`), a full-screen draw
-    clears `light_bit` wherever the count (the bits of `count_mask`) is not 0, and zeroes that
-    count whatever the depth test, leaving the stencil as the next light's count needs it; the
-    other bits are left as they are."""
-    zero = (GL_KEEP, GL_REPLACE, GL_REPLACE)   # ref 0 into the written bits
-    with _saved_stencil_state(gl):
-        _set(gl, func=GL_NOTEQUAL, ref=0, value_mask=count_mask, front_ops=zero,
-             back_ops=zero, write_mask=count_mask | light_bit, depth_clamp=False)
-        yield
 
 
 def caster_touching(gl: RawGL, depth_clamp: bool) -> contextlib.AbstractContextManager[None]:
