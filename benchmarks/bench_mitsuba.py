@@ -23,6 +23,12 @@ and from instrumented frames after them our volume pass: where mask floor + volu
 already slower than Mitsuba, no mask-only frame by shadow volumes beats it on this machine (the
 headline's bound, per scene).
 
+After the rounds, the CPU time each of ours and Mitsuba spends on a frame (`cpu_per_frame`:
+process CPU time, every thread, during the call and in the 100 ms after it returns, each call
+from a settled machine): Dr.Jit's worker threads keep running after a call has returned its
+masks (their spin before they sleep), work a frame's wall time does not show but the next
+thing the cores run pays for.
+
 Without Mitsuba installed it prints why and exits 0.
 """
 
@@ -107,6 +113,28 @@ class MitsubaMasks:
                 np.array(hit, bool).reshape(self.shape))
 
 
+def cpu_per_frame(fn, runs: int, after: float = 0.1) -> dict:
+    """{"during": stats, "after": stats} of `runs` calls of `fn`: the process's CPU time (all
+    threads) while the call runs and in the `after` seconds that follow it (sleeping), in ms.
+    Each call starts `after` seconds after the previous one's window, so no call pays for
+    another's tail."""
+    during, tail = [], []
+    for _ in range(runs):
+        time.sleep(after)
+        t0 = time.process_time()
+        fn()
+        t1 = time.process_time()
+        time.sleep(after)
+        t2 = time.process_time()
+        during.append((t1 - t0) * 1e3)
+        tail.append((t2 - t1) * 1e3)
+    return {"during": _stats_ms(during), "after": _stats_ms(tail)}
+
+
+def _stats_ms(values) -> dict:
+    return {"median": statistics.median(values), "min": min(values), "max": max(values)}
+
+
 def measure(names, width: int, height: int, runs: int) -> dict:
     try:
         import mitsuba  # noqa: F401
@@ -154,6 +182,9 @@ def measure(names, width: int, height: int, runs: int) -> dict:
             # the volume pass of the same frames, glFinish-bracketed (instrumented frames)
             volume = frames.phase_times(r, "auto", "cpu", runs,
                                         outputs=("lit", "coverage"))["volume pass"]
+            cpu = {"ours, masks only": cpu_per_frame(fns["ours, masks only"], runs),
+                   "Mitsuba 3": cpu_per_frame(peer, runs)}
+            make_current(r.ctx)
             ours = r.render(outputs=("lit", "coverage")).lit[0]
         ref_lit, _ = shadow_masks(scene, backend)
         mi_lit, mi_cov = peer()
@@ -162,6 +193,7 @@ def measure(names, width: int, height: int, runs: int) -> dict:
             "mitsuba_build_s": build, "mitsuba_first_s": first,
             "ms": {k: {"median": statistics.median(v) * 1e3, "min": min(v) * 1e3,
                        "max": max(v) * 1e3} for k, v in times.items()} | {"volume pass": volume},
+            "cpu_ms": cpu,
             "differing_ours": int((ours != ref_lit[0]).sum()),
             "differing_mitsuba": int((mi_lit != ref_lit[0]).sum())})
     out["load_after"] = os.getloadavg()
@@ -205,6 +237,16 @@ def main(argv=None) -> int:
               f"{bound / ms['Mitsuba 3']['median']:.2f} | {s['differing_ours']}, "
               f"{s['differing_mitsuba']} | {s['mitsuba_build_s']:.2f}, "
               f"{s['mitsuba_first_s']:.2f} |")
+    print()
+    print("CPU time a frame (ms, medians; during the call + in the 100 ms after it returns):")
+    print()
+    print("| scene | ours: during + after | Mitsuba 3: during + after |")
+    print("|---|---|---|")
+    for s in r["scenes"]:
+        if "cpu_ms" in s:
+            print(f"| {s['scene']} | " + " | ".join(
+                f"{c['during']['median']:.1f} + {c['after']['median']:.1f}"
+                for c in (s["cpu_ms"]["ours, masks only"], s["cpu_ms"]["Mitsuba 3"])) + " |")
     return 0
 
 

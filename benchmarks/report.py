@@ -215,6 +215,26 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
                          f"{'yes' if b >= peer['median'] else 'no'} |")
             add(f"| {sc['scene']} ({sc['triangles']:,} triangles) | {_ms(ours)} | "
                 f"{_ms(peer)} | {r:.2f} | < 1 | {_met(r < 1)} |{bound}")
+        cpu_rows = [sc for sc in mitsuba["scenes"] if "cpu_ms" in sc]
+        if cpu_rows:
+            add("")
+            add("CPU time a frame costs, the same scenes (`bench_mitsuba.cpu_per_frame`: the "
+                "process's CPU time over all its threads, during the call and in the 100 ms "
+                "after it returns, each call from a settled machine; ms, median (min–max)). "
+                "Not a target: what a frame leaves the rest of the machine, e.g. the other "
+                "jobs of a batch.  Dr.Jit's workers go on running after Mitsuba's call has "
+                "returned the masks (they spin before they sleep): the frame's wall time above "
+                "does not show that work.")
+            add("")
+            add("| scene | ours: during | ours: after | ours: total | Mitsuba 3: during | "
+                "Mitsuba 3: after | Mitsuba 3: total | ours / Mitsuba (total) |")
+            add("|---|---:|---:|---:|---:|---:|---:|---:|")
+            for sc in cpu_rows:
+                o, m = sc["cpu_ms"]["ours, masks only"], sc["cpu_ms"]["Mitsuba 3"]
+                ot = o["during"]["median"] + o["after"]["median"]
+                mt = m["during"]["median"] + m["after"]["median"]
+                add(f"| {sc['scene']} | {_ms(o['during'])} | {_ms(o['after'])} | {ot:.1f} | "
+                    f"{_ms(m['during'])} | {_ms(m['after'])} | {mt:.1f} | {ot / mt:.2f} |")
     add("")
 
     size_wh = "{}x{}".format(*results["config"]["size"])

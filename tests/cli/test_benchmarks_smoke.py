@@ -66,6 +66,10 @@ def test_the_mitsuba_peer_runs_or_says_why_not(tmp_path):
     assert set(row["ms"]) == {"ours, masks only", "raytrace.shadow_masks", "Mitsuba 3",
                               "depth floor", "mask floor", "volume pass"}
     assert all(row["ms"][k]["median"] > 0 for k in ("depth floor", "mask floor", "volume pass"))
+    # the CPU time of a frame, during the call and after it returns, for ours and Mitsuba
+    assert set(row["cpu_ms"]) == {"ours, masks only", "Mitsuba 3"}
+    for c in row["cpu_ms"].values():
+        assert c["during"]["median"] > 0 and c["after"]["median"] >= 0
     # the same scene, the same pixel-centre rays: the masks agree but for a few edge pixels
     assert row["differing_mitsuba"] < 0.05 * 64 * 48 and row["differing_ours"] < 0.05 * 64 * 48
     assert "| occluders-1k |" in done.stdout
