@@ -100,6 +100,9 @@ class SceneGeometry:
         firsts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
         self.ranges = tuple(ObjectRange(i, int(f), int(c))
                             for i, (f, c) in enumerate(zip(firsts, counts)))
+        # the same ranges as arrays, for the per-frame draws (`spans`: no Python per object)
+        self.range_first = firsts
+        self.range_count = np.asarray(counts, np.int64)
         self.triangle_count = int(sum(counts))
         if self.triangle_count >= MAX_TRIANGLES:
             raise RenderError(f"{self.triangle_count:,} triangles: the rasterizer keys each "
@@ -265,30 +268,31 @@ class SceneGeometry:
 
     def spans(self, objects, pieces: bool = True) -> list[tuple[int, int]]:
         """(first, count) triangle spans of the draws of `objects` (ascending indices): their
-        soup triangles but the holes, then (`pieces`) their pieces (keys M..), runs merged."""
-        out: list[list[int]] = []
-
-        def add(first: int, count: int) -> None:
-            if count <= 0:
-                return
-            if out and out[-1][0] + out[-1][1] == first:
-                out[-1][1] += count
-            else:
-                out.append([first, count])
-
-        objects = list(objects)
-        for i in objects:
-            rng = self.ranges[i]
-            start, end = rng.first, rng.first + rng.count
-            for h in self.holes[(self.holes >= start) & (self.holes < end)]:
-                add(start, int(h) - start)
-                start = int(h) + 1
-            add(start, end - start)
+        soup triangles but the holes, then (`pieces`) their pieces (keys M..): the maximal
+        runs of consecutive keys, one draw each.  In numpy, whatever the number of objects."""
+        if isinstance(objects, range):
+            objects = np.arange(objects.start, objects.stop, objects.step, dtype=np.int64)
+        objects = np.asarray(objects, np.int64).reshape(-1)
+        first = self.range_first[objects]
+        end = first + self.range_count[objects]
+        starts, ends = merged_runs(first, end)
+        if len(self.holes) and len(starts):
+            # the holes inside the runs (those of `objects`) split them: [a, h), [h + 1, b)
+            run = np.searchsorted(starts, self.holes, side="right") - 1
+            holes = self.holes[(run >= 0) & (self.holes < ends[np.maximum(run, 0)])]
+            starts = np.sort(np.concatenate([starts, holes + 1]))
+            ends = np.sort(np.concatenate([holes, ends]))
+            starts, ends = starts[ends > starts], ends[ends > starts]
         if pieces and len(self.piece_of):
-            mine = np.isin(self.triangle_objects[self.piece_of], objects)
-            for k in np.flatnonzero(mine):
-                add(self.triangle_count + int(k), 1)
-        return [(f, c) for f, c in out]
+            keys = self.triangle_count + np.flatnonzero(
+                np.isin(self.triangle_objects[self.piece_of], objects))
+            more, more_ends = merged_runs(keys, keys + 1)
+            if len(more) and len(ends) and ends[-1] == more[0]:   # the soup's run goes on
+                ends = np.concatenate([ends[:-1], more_ends[:1]])
+                more, more_ends = more[1:], more_ends[1:]
+            starts = np.concatenate([starts, more])
+            ends = np.concatenate([ends, more_ends])
+        return list(zip(starts.tolist(), (ends - starts).tolist()))
 
     def pieces_of(self, triangles: np.ndarray) -> np.ndarray:
         """(k,) int64 keys: `triangles` (soup indices) with each hole replaced by the keys of its
@@ -356,6 +360,18 @@ class SceneGeometry:
             buf.release()
         self._buffers.clear()
         self.materials.release()
+
+
+def merged_runs(first: np.ndarray, end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ranges [first, end) in their order, empty ones dropped and each merged with the
+    one it continues (first == the previous end): (starts, ends) of the runs, int64."""
+    keep = end > first
+    first, end = first[keep].astype(np.int64), end[keep].astype(np.int64)
+    if not len(first):
+        return first, end
+    cut = np.flatnonzero(first[1:] != end[:-1]) + 1
+    return (first[np.concatenate([[0], cut])],
+            end[np.concatenate([cut - 1, [len(end) - 1]])])
 
 
 def _unit_normals(corners: np.ndarray) -> np.ndarray:

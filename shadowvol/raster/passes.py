@@ -447,18 +447,19 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
     ctx.depth_func = NEARER
     chosen = np.ones(len(zfail), bool) if objects is None else np.isin(
         np.arange(len(zfail)), list(objects))
-    by_zpass = [int(i) for i in np.flatnonzero(~zfail & chosen)]
-    by_zfail = [int(i) for i in np.flatnonzero(zfail & chosen)]
-    if by_zpass and clip_planes is not None:
+    # index arrays, not lists: the volumes draw them in numpy (no Python per object)
+    by_zpass = np.flatnonzero(~zfail & chosen)
+    by_zfail = np.flatnonzero(zfail & chosen)
+    if len(by_zpass) and clip_planes is not None:
         frame_planes = planes_in_frame(clip_planes, volumes.geometry.origin)
         for p in volumes.programs:
             set_uniform(p, "u_clip_planes", frame_planes.astype(np.float32).tobytes())
         with counting(False, False), stencil.clip_distances(gl, len(clip_planes)):
             volumes.draw_sides(by_zpass, halve=halve, clipped=True, each=each)
-    elif by_zpass:
+    elif len(by_zpass):
         with counting(False, False):
             volumes.draw_sides(by_zpass, halve=halve, each=each)
-    if by_zfail:
+    if len(by_zfail):
         with counting(True, True):
             volumes.draw_sides(by_zfail, each=each)
             volumes.draw_caps(by_zfail, near=False, each=each)

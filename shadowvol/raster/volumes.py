@@ -33,7 +33,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.raster import glsl, guard
-from shadowvol.raster.geometry import SceneGeometry
+from shadowvol.raster.geometry import SceneGeometry, merged_runs
 from shadowvol.raster.projection import in_frame, in_frame32, to_frame
 from shadowvol.raster.silhouettes import (
     edge_multiplicity,
@@ -55,6 +55,8 @@ class _LightVolumes:
     def __init__(self):
         self.signs: list[np.ndarray] = []                         # per object
         self.sides: dict[int, tuple[int, int, int]] = {}          # object -> (first, n, repeat)
+        self.side_table = np.zeros((0, 3), np.int64)  # the same, (n_objects, 3), for the draws
+        self.signs_nbytes = 0
         self.corners: np.ndarray | None = None   # (n, 4) float64 world side triangles' corners
         self.moves = -1                          # the geometry's `moves` the buffer is in
         # huge side triangles cut to the view's guard band (`CpuVolumes._guard_sides`): the
@@ -76,7 +78,7 @@ class _LightVolumes:
         self.nbytes = 0   # what keeping it holds: signs (CPU), side and cap buffers (GPU)
 
     def count_bytes(self) -> None:
-        self.nbytes = (sum(s.nbytes for s in self.signs)
+        self.nbytes = (self.signs_nbytes
                        + (0 if self.corners is None else self.corners.nbytes)
                        + sum(b.size for b in (self.buffer, self.index_buffer) if b is not None))
 
@@ -234,6 +236,9 @@ class CpuVolumes:
         # the welded positions, which minus the origin round to the drawn vertices exactly, so
         # edges meet the caps exactly
         out.corners = np.concatenate(sides)
+        out.side_table = np.array([out.sides[rng.index] for rng in self.geometry.ranges],
+                                  np.int64).reshape(-1, 3)
+        out.signs_nbytes = sum(s.nbytes for s in out.signs)
         data = self._framed(out.corners)
         out.buffer = self.ctx.buffer(data.tobytes() if len(data) else b"\0" * 16)
         out.vaos = {clipped: self.ctx.vertex_array(program, [(out.buffer, "4f", "in_position")])
@@ -363,9 +368,10 @@ class CpuVolumes:
         per triangle."""
         sides = self._current.sides
         extra = self._current.extra   # pieces of huge side triangles (`_guard_sides`)
+        objects = np.asarray(objects, np.int64).reshape(-1)
         if each is not None:
             vao = self._counting_vao("sides", clipped)
-            for i in objects:
+            for i in objects.tolist():
                 spans = [s for s in (sides[i][:2], extra.get(i, (0, 0))) if s[1]]
                 if spans:
                     each(vao.program, i)
@@ -374,15 +380,21 @@ class CpuVolumes:
                             vao.render(moderngl.TRIANGLES, vertices=count, first=first)
             return
         vao = self._current.vaos[clipped]
+        table = self._current.side_table   # (first, n, repeat) per object, as `sides`
         # every object once, then the objects drawn twice once more: INCR_WRAP / DECR_WRAP
         # commute, so the order of the draws does not change a count
-        rounds = [list(objects)]
+        rounds = [objects]
         if not halve:
-            rounds.append([i for i in objects if sides[i][2] == 2])
+            rounds.append(objects[table[objects, 2] == 2])
         for round_ in rounds:
-            spans = [sides[i][:2] for i in round_] + [extra[i] for i in round_ if i in extra]
-            for first, count in _runs(spans):
-                vao.render(moderngl.TRIANGLES, vertices=count, first=first)
+            first, count = table[round_, 0], table[round_, 1]
+            if extra:   # only objects far enough to have huge side triangles have pieces
+                more = np.array([extra[i] for i in round_.tolist() if i in extra],
+                                np.int64).reshape(-1, 2)
+                first = np.concatenate([first, more[:, 0]])
+                count = np.concatenate([count, more[:, 1]])
+            for first_, count_ in _runs_of(first, count):
+                vao.render(moderngl.TRIANGLES, vertices=count_, first=first_)
 
     def draw_caps(self, objects, near: bool, each=None) -> None:
         """Draw the near or far caps of `objects`; `each` as in `draw_sides`."""
@@ -479,15 +491,15 @@ def far_cap_pieces(geometry: SceneGeometry, light4: np.ndarray, signs: list[np.n
 def _runs(ranges) -> list[tuple[int, int]]:
     """(first, count) ranges, empty ones dropped and ranges that continue each other merged:
     one draw call per run instead of one per object."""
-    out: list[list[int]] = []
-    for first, count in ranges:
-        if not count:
-            continue
-        if out and out[-1][0] + out[-1][1] == first:
-            out[-1][1] += count
-        else:
-            out.append([first, count])
-    return [(f, c) for f, c in out]
+    table = np.array(list(ranges), np.int64).reshape(-1, 2)
+    return _runs_of(table[:, 0], table[:, 1])
+
+
+def _runs_of(first: np.ndarray, count: np.ndarray) -> list[tuple[int, int]]:
+    """`_runs` of the ranges (first[k], count[k]), in numpy."""
+    starts, ends = merged_runs(np.asarray(first, np.int64), np.asarray(first, np.int64)
+                           + np.asarray(count, np.int64))
+    return list(zip(starts.tolist(), (ends - starts).tolist()))
 
 
 class GpuVolumes:
@@ -516,6 +528,9 @@ class GpuVolumes:
             count = len(edge_records(topo, geometry.origin, counts_only=True))
             self._records[rng.index] = (n, count)
             n += count
+        # the same, (n_objects, 2), for the draws of all casters at once (`draw_sides`)
+        self._record_table = np.array([self._records[rng.index] for rng in geometry.ranges],
+                                      np.int64).reshape(-1, 2)
         self.edge_buffer = ctx.buffer(self._edge_data().tobytes())
         self._moves, self._cuts = geometry.moves, geometry.cuts
         self.edge_vao, self.clip_vao, self.near_vao, self.far_vao = self._vaos(
@@ -619,11 +634,16 @@ class GpuVolumes:
         else:
             self.counting_programs()
             vao = self._counting_vaos[1 if clipped else 0]
+        if each is None:   # the records of objects next to each other in one draw
+            objects = np.asarray(objects, np.int64).reshape(-1)
+            table = self._record_table
+            for first, count in _runs_of(table[objects, 0], table[objects, 1]):
+                vao.render(moderngl.POINTS, vertices=count, first=first)
+            return
         for i in objects:
             first, count = self._records[i]
             if count:
-                if each is not None:
-                    each(vao.program, i)
+                each(vao.program, i)
                 vao.render(moderngl.POINTS, vertices=count, first=first)
 
     def draw_caps(self, objects, near: bool, each=None) -> None:
