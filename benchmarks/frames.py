@@ -115,6 +115,60 @@ def _phase_clock(renderer: Renderer, sink: dict):
                 setattr(owner, name, original)
 
 
+@contextlib.contextmanager
+def _gl_clock(sink: list):
+    """Add to sink[0] the wall time spent inside GL calls that can wait for the GL (draws,
+    which bin on the calling thread in llvmpipe; clears, reads and glFinish), moderngl's and
+    the raw stencil and depth reads (`stencil`), while the block runs."""
+    from shadowvol.raster import stencil
+    undo = []
+
+    def wrap(owner, name):
+        original = getattr(owner, name)
+
+        def timed(*args, **kwargs):
+            t0 = time.perf_counter()
+            try:
+                return original(*args, **kwargs)
+            finally:
+                sink[0] += time.perf_counter() - t0
+
+        setattr(owner, name, timed)
+        undo.append((owner, name, original))
+
+    for owner, names in ((moderngl.VertexArray, ("render",)),
+                         (moderngl.Framebuffer, ("read_into", "read", "clear")),
+                         (moderngl.Texture, ("read_into", "read")),
+                         (moderngl.Context, ("finish", "clear")),
+                         (stencil, ("read_stencil", "read_depth"))):
+        for name in names:
+            wrap(owner, name)
+    try:
+        yield
+    finally:
+        for owner, name, original in reversed(undo):
+            setattr(owner, name, original)
+
+
+def python_times(renderer: Renderer, repeat: int, **render_kw) -> dict:
+    """{"frame": stats, "python": stats} over `repeat` frames (after two warm-up frames: a
+    light's overflow bound is computed on its second frame, `Renderer._lights_to_check`): the
+    whole frame, and its wall time outside the GL calls `_gl_clock` wraps: the Python (and
+    numpy) work of a frame."""
+    for _ in range(2):
+        renderer.render(**render_kw)
+    whole, python = [], []
+    for _ in range(repeat):
+        inside = [0.0]
+        with _gl_clock(inside):
+            t0 = time.perf_counter()
+            renderer.render(**render_kw)
+            t = time.perf_counter() - t0
+        whole.append(t)
+        python.append(t - inside[0])
+    return {"frame": stats(whole), "python": stats(python)}
+
+
 def phase_times(renderer: Renderer, method: str, silhouettes: str, repeat: int,
                 **render_kw) -> dict:
     """{phase: stats} over `repeat` instrumented frames (after one warm-up frame), plus

@@ -397,6 +397,35 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
                  else "") + " |")
         add("")
 
+    objects = results.get("objects") or []
+    if objects:
+        add("## Python a frame against the number of objects")
+        add("")
+        add("Frames of a floor and N small closed casters (`scenes.many_casters_scene`: "
+            "icosahedra, 20 triangles each, at 64x48 so the draws are small), one point "
+            "light, CPU silhouettes: the whole frame and its wall time outside the GL calls "
+            "that can wait for the GL (draws, clears, reads, glFinish: "
+            "`frames.python_times`), ms, median (min–max).  The draws are runs of "
+            "triangles, not objects; what is left per object is numpy over every object's "
+            "box (the z-fail choice, the overflow check's slack).")
+        add("")
+        add("| objects | triangles | masks: frame | masks: Python | image + masks: frame | "
+            "image + masks: Python |")
+        add("|---:|---:|---:|---:|---:|---:|")
+        for row in objects:
+            add(f"| {row['objects']:,} | {row['triangles']:,} | "
+                f"{_ms(row['masks']['frame'])} | {_ms(row['masks']['python'])} | "
+                f"{_ms(row['image + masks']['frame'])} | "
+                f"{_ms(row['image + masks']['python'])} |")
+        if len(objects) > 1:
+            a, b = objects[0], objects[-1]
+            per = ((b["masks"]["python"]["median"] - a["masks"]["python"]["median"])
+                   / (b["objects"] - a["objects"]) * 1e3)
+            add("")
+            add(f"Python a mask-only frame per further object ({a['objects']:,} → "
+                f"{b['objects']:,}): {per:.2f} µs.")
+        add("")
+
     t = results.get("turntable") or {}
     if t:
         add("## Turntable")

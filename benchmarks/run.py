@@ -71,6 +71,8 @@ FULL = dict(
     mask_sizes=("100k", "1M"), mask_runs=5, bunny=True,
     whitted_size=(1280, 720), whitted_runs=3,
     truth_size="100k", truth_runs=7,
+    # the Python of a frame against the number of objects (64 x 48: small draws)
+    object_counts=(20, 1000, 5000), object_repeat=15,
 )
 QUICK = dict(
     sizes=("1k",), lights=(1, 2), size=(320, 180),
@@ -82,6 +84,7 @@ QUICK = dict(
     mask_sizes=("1k",), mask_runs=1, bunny=False,
     whitted_size=(160, 90), whitted_runs=1,
     truth_size="1k", truth_runs=1,
+    object_counts=(20, 200), object_repeat=2,
 )
 SILHOUETTES = frames.SILHOUETTES
 MASKS = ("lit", "coverage")
@@ -205,6 +208,25 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
                     lambda: r.render("auto", "cpu", lights=one)) / 2**20,
                 "maxrss_mb": maxrss_mb()}
     return rows, phases, sil, memory
+
+
+def objects_section(ctx, cfg) -> list:
+    """Per number of casters (`scenes.many_casters_scene`): the mask-only and the full frame's
+    wall time and the part of it spent outside GL calls (`frames.python_times`), CPU
+    silhouettes, one light."""
+    from shadowvol.raster.renderer import Renderer
+
+    out = []
+    for count in cfg["object_counts"]:
+        scene = scenes.many_casters_scene(count)
+        with Renderer(scene, ctx) as r:
+            row = {"objects": len(scene.objects), "triangles": scenes.triangle_count(scene)}
+            for name, outputs in (("masks", MASKS), ("image + masks", ("image",) + MASKS)):
+                row[name] = frames.python_times(r, cfg["object_repeat"], outputs=outputs)
+        out.append(row)
+        log(f"objects {row['objects']}: Python {row['masks']['python']['median']:.1f} ms "
+            "a mask-only frame")
+    return out
 
 
 def overflow_section(ctx, cfg) -> list:
@@ -507,6 +529,7 @@ def main(argv=None) -> int:
         frame_rows, phases, sil, memory = frame_section(ctx, cfg)
         results.update(frames=frame_rows, phases=phases, silhouettes=sil, memory=memory)
         results["overflow"] = overflow_section(ctx, cfg)
+        results["objects"] = objects_section(ctx, cfg)
         results["turntable"] = turntable_section(ctx, cfg)
         results["maxrss_after_frames_mb"] = maxrss_mb()
         results["pyrender"] = [] if args.no_pyrender else pyrender_section(ctx, cfg)

@@ -65,6 +65,18 @@ def occluder_scene(size: str, lights: int | str = 1, width: int = 1280,
                  name=f"occluders-{size}" + ("" if spheres is None else f"-{spheres}"))
 
 
+def many_casters_scene(count: int, width: int = 64, height: int = 48) -> Scene:
+    """A floor and `count` small seeded icosahedra (20 triangles each, closed: every one a
+    caster) under the benchmark camera, one point light: a frame's cost per object."""
+    rng = np.random.default_rng(count)
+    balls = [sphere(f"ball{i}", [rng.uniform(-4, 4), rng.uniform(0.6, 2.5),
+                                 rng.uniform(-4, 3)], 0.1, Material(), subdivisions=0)
+             for i in range(count)]
+    return Scene(camera=CAMERA, objects=[plane("floor", size=[14, 14])] + balls,
+                 lights=[PointLight(POINT_LIGHTS[0])], width=width, height=height,
+                 name=f"casters-{count}")
+
+
 def triangle_count(scene: Scene) -> int:
     return sum(len(o.faces) for o in scene.objects)
 

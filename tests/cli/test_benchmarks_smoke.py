@@ -16,7 +16,7 @@ pytestmark = pytest.mark.gl  # the child processes render
 SECTIONS = ["## Headline ratios and targets", "## Frames at",
             "### What no exact shadow-volume frame can go below here", "## Phases (one light)",
             "## pyrender 0.1.45, the same scenes", "## Ray tracer", "## Ground truth",
-            "## Memory"]
+            "## Memory", "## Python a frame against the number of objects"]
 # with the shared meshes beside the checkout (or its parent) the real-mesh sections run too
 MESH_SECTIONS = ["## The stencil-overflow check on real meshes", "## Turntable"]
 
@@ -34,8 +34,14 @@ def test_quick_benchmark_run_writes_the_report(tmp_path):
     png = (tmp_path / "benchmarks.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
     for key in ("machine", "frames", "phases", "silhouettes", "overflow", "turntable",
-                "pyrender", "rss", "raytrace", "memory", "groundtruth"):
+                "pyrender", "rss", "raytrace", "memory", "groundtruth", "objects"):
         assert key in results, key
+    # the Python of a frame, for each number of objects, inside its whole frame
+    assert [row["objects"] for row in results["objects"]] == [21, 201]
+    for row in results["objects"]:
+        for part in ("masks", "image + masks"):
+            t = row[part]
+            assert 0 < t["python"]["median"] <= t["frame"]["median"]
     frame = results["frames"][0]["times"]
     assert {"plain", "depth floor", "mask floor", "image floor", "lighting: lit",
             "lighting: flat", "floor", "auto/cpu x1", "masks/cpu x1", "auto/gpu x1"} <= set(frame)
