@@ -497,8 +497,8 @@ def _runs(ranges) -> list[tuple[int, int]]:
 
 def _runs_of(first: np.ndarray, count: np.ndarray) -> list[tuple[int, int]]:
     """`_runs` of the ranges (first[k], count[k]), in numpy."""
-    starts, ends = merged_runs(np.asarray(first, np.int64), np.asarray(first, np.int64)
-                           + np.asarray(count, np.int64))
+    first = np.asarray(first, np.int64)
+    starts, ends = merged_runs(first, first + np.asarray(count, np.int64))
     return list(zip(starts.tolist(), (ends - starts).tolist()))
 
 
