@@ -188,12 +188,15 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
             fns["auto/cpu x1 culled"] = culled
             times = frames.interleaved(fns, rep, warm)
             frame = r.render(lights=one)
+            every = r.render()   # each light's share of the covered pixels it lights
+            lit_fractions = [float(lit.sum() / every.coverage.sum()) for lit in every.lit]
             rows.append({"size": size, "triangles": scenes.triangle_count(scene),
                          "setup_s": setup, "times": times,
                          "auto_zfail_casters": int(frame.zfail.sum()),
                          "casters": len(scene.objects),
                          # the covered pixels the light lights (the lighting floor's share)
-                         "lit_fraction": float(frame.lit[0].sum() / frame.coverage.sum())})
+                         "lit_fraction": float(frame.lit[0].sum() / frame.coverage.sum()),
+                         "lit_fractions": lit_fractions})
             log(f"frames {size}: plain {times['plain']['median']:.1f} ms, auto/cpu x1 "
                 f"{times['auto/cpu x1']['median']:.1f} ms, x4 "
                 f"{times.get('auto/cpu x4', times['auto/cpu x1'])['median']:.1f} ms")
