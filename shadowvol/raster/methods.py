@@ -84,8 +84,10 @@ def needs_zfail(bounds: np.ndarray, camera: Camera, aspect: float, light4: np.nd
     apex = (light4[:3] if light4[3]
             else rect.mean(axis=0) + light4[:3] * (FAR_APEX_EXTENTS * extent))
     hull = np.concatenate([rect, apex[None]])                             # (5, 3)
-    below = (hull[None, :, :] < bounds[:, None, 0, :] - margin).all(axis=1).any(axis=1)
-    above = (hull[None, :, :] > bounds[:, None, 1, :] + margin).all(axis=1).any(axis=1)
+    # every hull corner below a box's low face (above its high face) on one axis: the hull's
+    # largest (smallest) coordinate is, an (n, 3) test instead of (n, 5, 3)
+    below = (hull.max(axis=0) < bounds[:, 0, :] - margin).any(axis=1)
+    above = (hull.min(axis=0) > bounds[:, 1, :] + margin).any(axis=1)
     return ~(outside_a_hull_plane | below | above)
 
 
