@@ -37,7 +37,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import statistics
 import sys
 import time
 from dataclasses import replace
@@ -126,13 +125,9 @@ def cpu_per_frame(fn, runs: int, after: float = 0.1) -> dict:
         t1 = time.process_time()
         time.sleep(after)
         t2 = time.process_time()
-        during.append((t1 - t0) * 1e3)
-        tail.append((t2 - t1) * 1e3)
-    return {"during": _stats_ms(during), "after": _stats_ms(tail)}
-
-
-def _stats_ms(values) -> dict:
-    return {"median": statistics.median(values), "min": min(values), "max": max(values)}
+        during.append(t1 - t0)
+        tail.append(t2 - t1)
+    return {"during": frames.stats(during), "after": frames.stats(tail)}
 
 
 def measure(names, width: int, height: int, runs: int) -> dict:
@@ -191,8 +186,7 @@ def measure(names, width: int, height: int, runs: int) -> dict:
         out["scenes"].append({
             "scene": scene.name, "triangles": int(sum(len(o.faces) for o in scene.objects)),
             "mitsuba_build_s": build, "mitsuba_first_s": first,
-            "ms": {k: {"median": statistics.median(v) * 1e3, "min": min(v) * 1e3,
-                       "max": max(v) * 1e3} for k, v in times.items()} | {"volume pass": volume},
+            "ms": {k: frames.stats(v) for k, v in times.items()} | {"volume pass": volume},
             "cpu_ms": cpu,
             "differing_ours": int((ours != ref_lit[0]).sum()),
             "differing_mitsuba": int((mi_lit != ref_lit[0]).sum())})

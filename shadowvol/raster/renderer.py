@@ -460,7 +460,8 @@ class Renderer:
         reach 2^(7 - lights) in magnitude (`count_bound`), and a GL that lets a fragment
         shader write the stencil (ARB_shader_stencil_export; without it, and when
         `masks_in_stencil` is off, the bits go to a colour target)."""
-        if not self.masks_in_stencil or not 1 <= len(hard) <= 6 or len(hard) != len(lights):
+        if (not self.masks_in_stencil or len(hard) != len(lights)
+                or not 1 <= len(hard) <= stencil_gl.MASK_LAYOUT_LIGHTS):
             return False
         if self._stencil_export is None:
             self._stencil_export = "GL_ARB_shader_stencil_export" in self.ctx.extensions

@@ -465,16 +465,21 @@ def where_shadowed(gl: RawGL, zero: bool = False, count_mask: int = 0xFF,
 
 
 # A mask-only frame of a few hard lights keeps its bits in the stencil itself, beside the
-# counts, where the scene's counts fit (`Renderer._masks_in_stencil`): no colour target, no
+# counts, where the scene's counts fit (`Renderer._masks_fit_stencil`): no colour target, no
 # clear pass after the last light, one byte a pixel read back.
 
+MASK_LAYOUT_LIGHTS = 6   # the most lights whose bits fit beside a count (of 1 bit at least)
+
+
 def mask_layout(lights: int) -> tuple[int, tuple[int, ...]]:
-    """The stencil byte of a mask-only frame of `lights` (1..6) hard lights kept in the stencil:
-    bit 7 covered, bit 6 - i "the visible side faces light i" (shade.frag's lit bits reversed:
-    STENCIL_BITS), and the low 7 - `lights` bits the light's count, modulo 2^(7 - lights):
-    exact where no count's magnitude reaches that.  (count mask, light i's bit for each i)."""
-    if not 1 <= lights <= 6:
-        raise ValueError(f"1..6 lights fit in the stencil beside a count, got {lights}")
+    """The stencil byte of a mask-only frame of `lights` (1..MASK_LAYOUT_LIGHTS) hard lights
+    kept in the stencil: bit 7 covered, bit 6 - i "the visible side faces light i"
+    (shade.frag's lit bits reversed: STENCIL_BITS), and the low 7 - `lights` bits the light's
+    count, modulo 2^(7 - lights): exact where no count's magnitude reaches that.  (count mask,
+    light i's bit for each i)."""
+    if not 1 <= lights <= MASK_LAYOUT_LIGHTS:
+        raise ValueError(f"1..{MASK_LAYOUT_LIGHTS} lights fit in the stencil beside a count, "
+                         f"got {lights}")
     return (1 << (7 - lights)) - 1, tuple(0x40 >> i for i in range(lights))
 
 
