@@ -73,6 +73,16 @@ class SceneError(ValueError):
         return SceneError(key, self.problem, self.file)
 
 
+def reject_unknown_keys(table, allowed, key: str = "") -> None:
+    """Raise SceneError naming the first key of `table` that is not in `allowed`; `key` is the
+    table's own key path ("" at the top level), so the error names `key.unknown`."""
+    unknown = sorted(str(name) for name in set(table) - set(allowed))
+    if unknown:
+        prefix = f"{key}." if key else ""
+        raise SceneError(f"{prefix}{unknown[0]}",
+                         f"unknown key (allowed here: {', '.join(sorted(allowed))})")
+
+
 def is_number(x) -> bool:
     """A real number, strictly: int or float (numpy's too), never a bool or a string."""
     return (isinstance(x, (int, float, np.integer, np.floating))

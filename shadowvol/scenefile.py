@@ -31,6 +31,7 @@ from shadowvol.scene import (
     Scene,
     SceneError,
     SpotLight,
+    reject_unknown_keys,
     shorten,
 )
 
@@ -239,11 +240,7 @@ def _table(value, key: str, allowed: set[str] | None) -> dict:
     if not isinstance(value, dict):
         raise SceneError(key or "(top level)", f"expected a table, got {type(value).__name__}")
     if allowed is not None:
-        unknown = sorted(set(value) - allowed)
-        if unknown:
-            prefix = f"{key}." if key else ""
-            raise SceneError(f"{prefix}{unknown[0]}",
-                             f"unknown key (allowed here: {', '.join(sorted(allowed))})")
+        reject_unknown_keys(value, allowed, key)
     return value
 
 

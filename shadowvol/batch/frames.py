@@ -14,9 +14,10 @@ import math
 
 import numpy as np
 
-from shadowvol.scene import Camera, DirectionalLight, SceneError, is_number, shorten
+from shadowvol.scene import (Camera, DirectionalLight, SceneError, is_number, reject_unknown_keys,
+                             shorten)
+from shadowvol.scenefile import CAMERA_KEYS
 
-CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near"}
 ORBIT_KEYS = {"center", "radius", "elevation", "frames", "start", "sweep", "up", "fov_y",
               "near"}
 MAX_FRAMES = 10_000_000
@@ -64,10 +65,7 @@ def camera_dict(value, key: str) -> dict:
     the Camera (the scene's fov_y, near and up fill what is left out, in the worker)."""
     if not isinstance(value, dict):
         raise SceneError(key, f"expected a camera table, got {shorten(value)}")
-    unknown = sorted(set(value) - CAMERA_KEYS)
-    if unknown:
-        raise SceneError(f"{key}.{unknown[0]}", f"unknown camera key (the keys are: "
-                                                f"{', '.join(sorted(CAMERA_KEYS))})")
+    reject_unknown_keys(value, CAMERA_KEYS, key)
     for need in ("eye", "target"):
         if need not in value:
             raise SceneError(f"{key}.{need}", "missing")
@@ -87,10 +85,7 @@ def orbit(value) -> tuple[dict, ...]:
     key = "cameras.orbit"
     if not isinstance(value, dict):
         raise SceneError(key, f"expected a table, got {shorten(value)}")
-    unknown = sorted(set(value) - ORBIT_KEYS)
-    if unknown:
-        raise SceneError(f"{key}.{unknown[0]}", f"unknown key (the keys are: "
-                                                f"{', '.join(sorted(ORBIT_KEYS))})")
+    reject_unknown_keys(value, ORBIT_KEYS, key)
     for need in ("center", "radius", "frames"):
         if need not in value:
             raise SceneError(f"{key}.{need}", "missing")

@@ -33,7 +33,7 @@ from pathlib import Path
 
 from shadowvol.batch import frames as camera_paths
 from shadowvol.batch.outputs import DEFAULT, OUTPUTS
-from shadowvol.scene import Scene, SceneError, is_number, shorten
+from shadowvol.scene import Scene, SceneError, is_number, reject_unknown_keys, shorten
 from shadowvol.scenefile import light_from_dict
 
 KEYS = {"name", "scene", "cameras", "lights", "size", "outputs", "renderer", "method",
@@ -129,9 +129,7 @@ def check_jobs(entries, base_dir: str | Path = ".") -> list[Job | JobError]:
 def _job(data: dict, source: str, base_dir: Path, position: int) -> Job | JobError:
     fallback = data.get("name") if isinstance(data.get("name"), str) else f"job-{position}"
     try:
-        unknown = sorted(set(data) - KEYS)
-        if unknown:
-            raise SceneError(unknown[0], f"unknown key (the keys are: {', '.join(sorted(KEYS))})")
+        reject_unknown_keys(data, KEYS)
         scene = data.get("scene")
         if isinstance(scene, Scene):
             default_name = scene.name

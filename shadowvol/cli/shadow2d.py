@@ -21,6 +21,9 @@ from shadowvol.course.shadow2d import (
     shadow_polygons,
 )
 from shadowvol.io import save_png
+from shadowvol.scene import SceneError, reject_unknown_keys
+
+INPUT_KEYS = {"light", "segments", "polygons", "back_faces"}
 
 INPUT_HELP = """\
 Input: an optional TOML or JSON file, plus command-line numbers that extend or override it.
@@ -70,9 +73,10 @@ def _read_input(path: Path) -> dict:
         data = tomllib.loads(text.decode("utf-8"))
     else:
         raise ValueError(f"{path}: the input must end in .toml or .json")
-    unknown = set(data) - {"light", "segments", "polygons", "back_faces"}
-    if unknown:
-        raise ValueError(f"{path}: unknown keys {sorted(unknown)}")
+    try:
+        reject_unknown_keys(data, INPUT_KEYS)
+    except SceneError as exc:
+        raise exc.in_file(str(path)) from None
     return data
 
 
