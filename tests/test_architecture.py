@@ -1,0 +1,429 @@
+"""The house rules of docs/ARCHITECTURE.md as tests.
+
+Each rule is a function from a source tree to its violations, one line each naming the file and
+the rule; the tests run every rule on this checkout (no violation) and on a small tree with one
+violation planted (caught, and named).  The rules read the files as text (ast), import nothing.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# The floors of the house, top to bottom (docs/ARCHITECTURE.md): an import may run to a lower
+# floor, or stay inside its own wing; never up, never across to another wing of the same floor.
+# Longest prefix wins.  A module that no row names fails `test_every_module_has_a_floor`.
+FLOORS = {
+    "shadowvol.cli": (9, "cli"),
+    "shadowvol.batch": (8, "batch"),
+    "shadowvol.view": (7, "view"),
+    "shadowvol.course": (6, "course"),
+    "shadowvol.compare": (5, "compare"),
+    "shadowvol.raster": (4, "raster"),
+    "raytrace": (4, "raytrace"),
+    "shadowvol.scenefile": (3, "model"),
+    "shadowvol.meshfiles": (3, "model"),
+    "shadowvol.scenewrite": (3, "model"),
+    "shadowvol.resources": (3, "model"),
+    "shadowvol.memory": (3, "model"),
+    "shadowvol.scene": (2, "model"),
+    "shadowvol.lights": (2, "model"),
+    "shadowvol.cameras": (2, "model"),
+    "shadowvol.primitives": (2, "model"),
+    "shadowvol.arealights": (2, "model"),
+    "shadowvol.fields": (2, "model"),
+    "shadowvol.planes": (2, "model"),
+    "shadowvol.io": (1, "base"),
+    "shadowvol.pictures": (1, "base"),
+    "shadowvol.display": (1, "base"),
+    "shadowvol.errors": (0, "base"),
+    "shadowvol.signals": (0, "base"),
+    "shadowvol": (0, "base"),
+}
+# Entry files: `python -m shadowvol` and `python -m raytrace` start the command line.
+ENTRY_FILES = {"shadowvol.__main__", "raytrace.__main__"}
+# What the witness may import of this project: the model it shares with the rasterizer.
+RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.lights", "shadowvol.cameras",
+                       "shadowvol.primitives", "shadowvol.arealights", "shadowvol.fields",
+                       "shadowvol.planes", "shadowvol.errors", "shadowvol.io",
+                       "shadowvol.signals"}
+# Third-party and standard modules that only one folder may import.
+CONFINED = {"moderngl": "shadowvol/raster/", "glcontext": "shadowvol/raster/",
+            "OpenGL": "shadowvol/raster/", "ctypes": "shadowvol/raster/",
+            "argparse": "shadowvol/cli/"}
+PRODUCT = ("shadowvol", "raytrace")
+SIZED = ("shadowvol", "raytrace", "benchmarks")
+MAX_MODULE_LINES = 500
+MAX_FUNCTION_LINES = 80
+MAX_README_LINES = 200
+MAX_BENCHMARKS_LINES = 450
+# The docs whose paths must exist; docstrings and comments of every module are read too.
+DOCS = ("README.md", "BENCHMARKS.md", "docs/*.md", "scenes/README.md", "benchmarks/*.md")
+TOP_DIRS = {"shadowvol", "raytrace", "shaders", "scenes", "tests", "docs", "benchmarks", ".ci"}
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading the tree
+# ---------------------------------------------------------------------------------------------
+
+def modules(root: Path, tops=PRODUCT) -> dict[str, Path]:
+    """Dotted name -> file of every module under the `tops` folders of `root`."""
+    out = {}
+    for top in tops:
+        for path in sorted((root / top).rglob("*.py")):
+            parts = path.relative_to(root).with_suffix("").parts
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out[".".join(parts)] = path
+    return out
+
+
+def imports_of(name: str, path: Path, known) -> list[tuple[str, int]]:
+    """(imported module, line) for every import in the file, function-level ones too.
+    `from P import x` names P.x where that is a module, else P; relative imports resolved."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            out += [(alias.name, node.lineno) for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module
+            for alias in node.names:
+                sub = f"{target}.{alias.name}"
+                out.append((sub if sub in known else target, node.lineno))
+    return list(dict.fromkeys(out))
+
+
+def floor_of(module: str):
+    """(floor, wing) of one of this project's modules, or None when no row names it."""
+    best = max((prefix for prefix in FLOORS if module == prefix
+                or (prefix != "shadowvol" and module.startswith(prefix + "."))),
+               key=len, default=None)
+    return FLOORS[best] if best is not None else None
+
+
+def _ours(module: str) -> bool:
+    return module.split(".")[0] in PRODUCT
+
+
+def _rel(root: Path, path: Path) -> str:
+    return path.relative_to(root).as_posix()
+
+
+# ---------------------------------------------------------------------------------------------
+# The rules: each returns its violations, one line each
+# ---------------------------------------------------------------------------------------------
+
+def unplaced_modules(root: Path) -> list[str]:
+    return [f"{_rel(root, path)}: module {name} has no floor in FLOORS (tests/"
+            f"test_architecture.py): give it one" for name, path in modules(root).items()
+            if floor_of(name) is None and name not in ENTRY_FILES]
+
+
+def upward_imports(root: Path) -> list[str]:
+    found = modules(root)
+    out = []
+    for name, path in found.items():
+        here = floor_of(name)
+        if name in ENTRY_FILES or here is None:
+            continue
+        for target, line in imports_of(name, path, found):
+            there = floor_of(target) if _ours(target) else None
+            if there is None or there[1] == here[1] or there[0] < here[0]:
+                continue
+            way = "up" if there[0] > here[0] else "across"
+            out.append(f"{_rel(root, path)}:{line}: imports {target} ({there[1]}, floor "
+                       f"{there[0]}) from {here[1]} (floor {here[0]}): an import runs {way}")
+    return out
+
+
+def import_cycles(root: Path) -> list[str]:
+    """Strongly connected components of the module graph (Tarjan), each named once."""
+    found = modules(root)
+    graph = {name: sorted({t for t, _ in imports_of(name, path, found) if t in found} - {name})
+             for name, path in found.items()}
+    index, low, stack, on_stack, cycles = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return [f"{_rel(root, found[c[0]])}: import cycle {' <-> '.join(c)}" for c in cycles]
+
+
+def confined_imports(root: Path) -> list[str]:
+    found = modules(root)
+    out = []
+    for name, path in found.items():
+        rel = _rel(root, path)
+        for target, line in imports_of(name, path, found):
+            home = CONFINED.get(target.split(".")[0])
+            if home is not None and not rel.startswith(home):
+                out.append(f"{rel}:{line}: imports {target}, which only {home} may import")
+    return out
+
+
+def witness_imports(root: Path) -> list[str]:
+    found = modules(root)
+    out = []
+    for name, path in found.items():
+        if not name.startswith("raytrace") or name in ENTRY_FILES:
+            continue
+        for target, line in imports_of(name, path, found):
+            if target.startswith("shadowvol") and target not in RAYTRACE_MAY_IMPORT:
+                out.append(f"{_rel(root, path)}:{line}: the witness imports {target}; raytrace/"
+                           f" may import only the model ({', '.join(sorted(RAYTRACE_MAY_IMPORT))})")
+    return out
+
+
+def oversized(root: Path) -> list[str]:
+    out = []
+    for path in modules(root, SIZED).values():
+        text = path.read_text()
+        rel = _rel(root, path)
+        lines = len(text.splitlines())
+        if lines > MAX_MODULE_LINES:
+            out.append(f"{rel}: {lines} lines, over the cap of {MAX_MODULE_LINES} a module")
+        for node in ast.walk(ast.parse(text, str(path))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                length = node.end_lineno - node.lineno + 1
+                if length > MAX_FUNCTION_LINES:
+                    out.append(f"{rel}:{node.lineno}: function {node.name} is {length} lines, "
+                               f"over the cap of {MAX_FUNCTION_LINES} a function")
+    return out
+
+
+def long_docs(root: Path) -> list[str]:
+    out = []
+    for name, cap in (("README.md", MAX_README_LINES), ("BENCHMARKS.md", MAX_BENCHMARKS_LINES)):
+        path = root / name
+        if path.exists() and len(path.read_text().splitlines()) > cap:
+            out.append(f"{name}: {len(path.read_text().splitlines())} lines, over its cap of "
+                       f"{cap}")
+    return out
+
+
+# A repository path: a top folder (or a shadowvol/ wing) then /-separated names, ending in a
+# file with an extension or a slash.  Globs, placeholders and URLs are not paths.
+_PATH = re.compile(r"(?<![\w./:-])((?:\.ci|[a-z_]+)/(?:[\w.-]+/)*[\w-]+(?:\.[a-z0-9]+)+|"
+                   r"(?:\.ci|[a-z_]+)/(?:[\w.-]+/)+)(?![\w*{<])")
+_DOTTED = re.compile(r"(?<![\w./-])((?:shadowvol|raytrace)(?:\.[A-Za-z_]\w*)+)")
+
+
+def _texts(root: Path):
+    """(file, line, text) of every doc line, and of every docstring and comment of the
+    product's and the benchmarks' modules."""
+    for pattern in DOCS:
+        for path in sorted(root.glob(pattern)):
+            for i, line in enumerate(path.read_text().splitlines(), 1):
+                yield path, i, line
+    for path in modules(root, SIZED).values():
+        source = path.read_text()
+        for node in ast.walk(ast.parse(source, str(path))):
+            body = getattr(node, "body", None)
+            if (isinstance(body, list) and body and isinstance(body[0], ast.Expr)
+                    and isinstance(body[0].value, ast.Constant)
+                    and isinstance(body[0].value.value, str)):
+                for i, line in enumerate(body[0].value.value.splitlines()):
+                    yield path, body[0].lineno + i, line
+        for i, line in enumerate(source.splitlines(), 1):
+            if "#" in line:
+                yield path, i, line[line.index("#"):]
+
+
+def _names_of(path: Path) -> set[str]:
+    """The top-level names a module defines or imports (what `module.name` can mean)."""
+    names = set()
+    for node in ast.parse(path.read_text(), str(path)).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for target in targets:
+                names |= {n.id for n in ast.walk(target) if isinstance(n, ast.Name)}
+                if isinstance(target, ast.Name) and target.id == "_LAZY":
+                    names |= {k.value for k in ast.walk(node.value)
+                              if isinstance(k, ast.Constant) and isinstance(k.value, str)}
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            names |= {(a.asname or a.name).split(".")[0] for a in node.names}
+    return names
+
+
+# Packages the wheel maps from other folders (pyproject.toml's package-dir).
+PACKAGE_DIRS = {"shadowvol.shaders": "shaders", "shadowvol.scenes": "scenes"}
+
+
+def _dotted_exists(root: Path, dotted: str) -> bool:
+    """Whether the module part of `a.b.c.name...` exists and its next name is defined there."""
+    if any(dotted == p or dotted.startswith(p + ".") for p in PACKAGE_DIRS):
+        package = next(p for p in PACKAGE_DIRS if dotted == p or dotted.startswith(p + "."))
+        return (root / PACKAGE_DIRS[package]).is_dir()
+    parts = dotted.split(".")
+    here = root / parts[0]
+    for i, part in enumerate(parts[1:], 1):
+        if (here / part).is_dir() and (here / part / "__init__.py").exists():
+            here = here / part
+        elif (here / f"{part}.py").exists():
+            return i + 1 == len(parts) or parts[i + 1] in _names_of(here / f"{part}.py") \
+                or parts[i + 1] in {"py"}
+        else:
+            init = here / "__init__.py"
+            return init.exists() and part in _names_of(init)
+    return True
+
+
+def _path_exists(root: Path, source: Path, path: str) -> bool:
+    path = path.rstrip("/")
+    candidates = [root / path, source.parent / path, root / "shadowvol" / path]
+    return any(c.exists() for c in candidates)
+
+
+def broken_references(root: Path) -> list[str]:
+    out = []
+    for source, line, text in _texts(root):
+        rel = _rel(root, source)
+        for match in _PATH.finditer(text):
+            path = match.group(1)
+            top = path.split("/")[0]
+            wings = {p.name for p in (root / "shadowvol").iterdir() if p.is_dir()}
+            if top not in TOP_DIRS | wings or _path_exists(root, source, path):
+                continue
+            out.append(f"{rel}:{line}: names {path}, which does not exist")
+        for match in _DOTTED.finditer(text):
+            dotted = match.group(1).rstrip(".")
+            if not _dotted_exists(root, dotted):
+                out.append(f"{rel}:{line}: names {dotted}, which does not exist")
+    return out
+
+
+RULES = [unplaced_modules, upward_imports, import_cycles, confined_imports, witness_imports,
+         oversized, long_docs, broken_references]
+
+
+# ---------------------------------------------------------------------------------------------
+# This checkout keeps every rule
+# ---------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("rule", RULES, ids=lambda r: r.__name__)
+def test_the_house_keeps_the_rule(rule):
+    found = rule(ROOT)
+    assert not found, f"{rule.__name__}:\n" + "\n".join(found)
+
+
+def test_the_floors_name_real_modules():
+    """A row of FLOORS that names nothing is a rule that guards nothing."""
+    found = modules(ROOT)
+    stale = [prefix for prefix in FLOORS
+             if not any(m == prefix or m.startswith(prefix + ".") for m in found)]
+    assert not stale, f"FLOORS rows with no module: {stale}"
+
+
+# ---------------------------------------------------------------------------------------------
+# Each rule catches a planted violation, and names the file and the rule
+# ---------------------------------------------------------------------------------------------
+
+def _tree(tmp_path: Path, files: dict[str, str]) -> Path:
+    base = {"shadowvol/__init__.py": "", "shadowvol/errors.py": "", "shadowvol/scene.py": "",
+            "shadowvol/raster/__init__.py": "", "shadowvol/cli/__init__.py": "",
+            "raytrace/__init__.py": ""}
+    for rel, text in {**base, **files}.items():
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text(text)
+    return tmp_path
+
+
+def test_a_clean_planted_tree_keeps_every_rule(tmp_path):
+    root = _tree(tmp_path, {"shadowvol/raster/passes.py": "import moderngl\n"
+                                                          "from shadowvol.scene import x\n"})
+    assert [v for rule in RULES for v in rule(root)] == []
+
+
+PLANTED = {
+    "upward": (upward_imports, {"shadowvol/scene.py": "from shadowvol.raster import passes\n",
+                                "shadowvol/raster/passes.py": ""},
+               "shadowvol/scene.py:1: imports shadowvol.raster.passes", "runs up"),
+    "across": (upward_imports, {"raytrace/masks.py": "import shadowvol.raster.passes\n",
+                                "shadowvol/raster/passes.py": ""},
+               "raytrace/masks.py:1: imports shadowvol.raster.passes", "runs across"),
+    "lazy upward": (upward_imports, {"shadowvol/errors.py": "def f():\n"
+                                                            "    from shadowvol import cli\n"},
+                    "shadowvol/errors.py:2: imports shadowvol.cli", "runs up"),
+    "cycle": (import_cycles, {"shadowvol/raster/a.py": "from shadowvol.raster import b\n",
+                              "shadowvol/raster/b.py": "from . import a\n"},
+              "import cycle shadowvol.raster.a <-> shadowvol.raster.b", "shadowvol/raster/a.py"),
+    "GL outside raster": (confined_imports, {"shadowvol/scene.py": "import moderngl\n"},
+                          "shadowvol/scene.py:1: imports moderngl", "shadowvol/raster/"),
+    "ctypes outside raster": (confined_imports, {"raytrace/fast.py": "import ctypes.util\n"},
+                              "raytrace/fast.py:1: imports ctypes.util", "shadowvol/raster/"),
+    "EGL outside raster": (confined_imports, {"shadowvol/cli/x.py": "from OpenGL import EGL\n"},
+                           "shadowvol/cli/x.py:1: imports OpenGL", "shadowvol/raster/"),
+    "argparse outside cli": (confined_imports, {"raytrace/cli.py": "import argparse\n"},
+                             "raytrace/cli.py:1: imports argparse", "shadowvol/cli/"),
+    "witness": (witness_imports, {"raytrace/x.py": "from shadowvol import scenefile\n",
+                                  "shadowvol/scenefile.py": ""},
+                "raytrace/x.py:1: the witness imports shadowvol.scenefile", "only the model"),
+    "unplaced": (unplaced_modules, {"shadowvol/util.py": ""},
+                 "shadowvol/util.py: module shadowvol.util has no floor", "FLOORS"),
+    "long module": (oversized, {"shadowvol/scene.py": "x = 1\n" * 501},
+                    "shadowvol/scene.py: 501 lines", "500 a module"),
+    "long function": (oversized, {"raytrace/x.py": "def f():\n" + "    x = 1\n" * 80},
+                      "raytrace/x.py:1: function f is 81 lines", "80 a function"),
+    "long README": (long_docs, {"README.md": "line\n" * 201}, "README.md: 201 lines", "200"),
+    "path in a doc": (broken_references, {"README.md": "See shadowvol/raster/gone.py.\n"},
+                      "README.md:1: names shadowvol/raster/gone.py", "does not exist"),
+    "path in a docstring": (broken_references,
+                            {"raytrace/x.py": '"""Mirrors raster/truth.py."""\n'},
+                            "raytrace/x.py:1: names raster/truth.py", "does not exist"),
+    "module in a comment": (broken_references,
+                            {"raytrace/x.py": "x = 1  # as shadowvol.course.planar does\n",
+                             "shadowvol/course/__init__.py": ""},
+                            "raytrace/x.py:1: names shadowvol.course.planar", "does not exist"),
+    "name in a module": (broken_references,
+                         {"README.md": "`shadowvol.scene.Gone` is\n"},
+                         "README.md:1: names shadowvol.scene.Gone", "does not exist"),
+}
+
+
+@pytest.mark.parametrize("case", PLANTED)
+def test_each_rule_catches_a_planted_violation(tmp_path, case):
+    rule, files, where, what = PLANTED[case]
+    found = rule(_tree(tmp_path, files))
+    assert len(found) == 1 and where in found[0] and what in found[0], found
+
+
+def test_references_that_exist_are_not_flagged(tmp_path):
+    root = _tree(tmp_path, {
+        "shadowvol/raster/truth.py": '"""See shadowvol/scene.py, shadowvol.scene.Camera."""\n',
+        "shadowvol/scene.py": "class Camera:\n    pass\n",
+        "README.md": "[a](docs/x.md#part), out/cage.png, `shadowvol.raster.truth`, scenes/*.toml\n",
+        "docs/x.md": ""})
+    assert broken_references(root) == []
