@@ -1,6 +1,6 @@
 """Benchmark (not a test): `shadowvol batch` throughput and the cost of its machinery.
 
-    python benchmarks/bench_batch.py [--models DIR] [--frames 36] [--width 640 --height 480]
+    python -m benchmarks.bench_batch [--models DIR] [--frames 36] [--width 640 --height 480]
                                      [--rounds 3] [--no-ray] [--json out.json]
 
 The scene: the five shared meshes (../shared/models beside the checkout, or $SHADOWVOL_MODELS,
@@ -36,7 +36,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
 MODELS = Path(os.environ.get("SHADOWVOL_MODELS", ROOT.parent / "shared" / "models"))
 NAMES = ("bunny", "teapot", "suzanne", "spot", "lampshade")
 
@@ -184,9 +183,7 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
                            f"--models)"}
     import shadowvol.batch as batch
     from shadowvol.batch import manifest
-    from shadowvol.raster.renderer import Renderer
-    from shadowvol.scene import Camera
-    from shadowvol.scenefile import load_scene
+    from shadowvol import Camera, Renderer, load_scene
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_batch-"))
     scene_path = write_scene(tmp, models, width, height)

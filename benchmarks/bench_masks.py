@@ -1,6 +1,6 @@
 """Benchmark (not a test): reference masks of the Stanford bunny on a plane against raw Embree.
 
-    python benchmarks/bench_masks.py [--runs N] [--width W] [--height H] [--model OBJ]
+    python -m benchmarks.bench_masks [--runs N] [--width W] [--height H] [--model OBJ]
 
 The scene: the shared bunny (../shared/models/bunny.obj, 69k triangles, open base), scaled to
 about 1.5 units tall, standing on a 6 x 6 plane, one point light, 1280x720.  It times
@@ -26,7 +26,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
 BUNNY = next((b / "shared" / "models" / "bunny.obj" for b in (ROOT.parent, ROOT.parent.parent)
               if (b / "shared" / "models" / "bunny.obj").is_file()),
              ROOT.parent / "shared" / "models" / "bunny.obj")  # ../shared/models beside the checkout (or its parent)
@@ -35,8 +34,8 @@ BUNNY = next((b / "shared" / "models" / "bunny.obj" for b in (ROOT.parent, ROOT.
 def bunny_scene(width: int, height: int, model: Path = BUNNY):
     import trimesh
 
+    from shadowvol import Camera, Material, PointLight, Scene
     from shadowvol.primitives import Transform, mesh, plane
-    from shadowvol.scene import Camera, Material, PointLight, Scene
 
     loaded = trimesh.load(str(model), process=False)
     v = np.asarray(loaded.vertices)
@@ -79,15 +78,16 @@ def measure(scene, runs: int, full: bool = True) -> dict:
     mismatched (pixels where the raw rays' verdict differs from the masks), build_s, and
     masks / raw / full (incl. the BVH build; only if `full`) as {"median", "min", "max"} in
     seconds."""
+    from raytrace import shadow_masks
     from raytrace.camera import primary_rays
-    from raytrace.masks import scene_backend, shadow_masks
+    from raytrace.masks import scene_backend
     from raytrace.tolerances import (
         error_weight,
         light_margin,
         shadow_height,
         through_light,
     )
-    from shadowvol.scene import DirectionalLight
+    from shadowvol import DirectionalLight
 
     vertices, faces, _ = scene.triangles()
     t0 = time.perf_counter()

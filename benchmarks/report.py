@@ -6,6 +6,8 @@ import os
 import statistics
 from pathlib import Path
 
+from . import bench_groundtruth
+
 HEADLINE_SIZE = "100k"
 
 
@@ -530,8 +532,6 @@ def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
     add("")
 
     if "groundtruth" in results:
-        import bench_groundtruth  # beside this module (run.py puts benchmarks/ on the path)
-
         g = results["groundtruth"]
         add(f"## Ground truth ({g['triangles']:,} triangles, one point light)")
         add("")

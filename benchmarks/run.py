@@ -1,7 +1,7 @@
 """Every benchmark of shadowvol in one reproducible run; writes BENCHMARKS.md and its plot.
 
-    python benchmarks/run.py            # the full run (~12-15 min on 2 cores / llvmpipe)
-    python benchmarks/run.py --quick    # a smoke run on small scenes (seconds), into --out
+    python -m benchmarks.run            # the full run (~12-15 min on 2 cores / llvmpipe)
+    python -m benchmarks.run --quick    # a smoke run on small scenes (seconds), into --out
 
 What it measures (medians of several runs after warm-up, with min and max), every ratio from
 variants interleaved round by round in the same run:
@@ -44,17 +44,9 @@ from collections import defaultdict
 from importlib import metadata
 from pathlib import Path
 
+from . import bench_groundtruth, bench_masks, frames, plain, report, scenes
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))          # run from a checkout, installed or not
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-import bench_groundtruth  # noqa: E402
-import bench_masks  # noqa: E402
-import frames  # noqa: E402
-import plain  # noqa: E402
-import report  # noqa: E402
-
-import scenes  # noqa: E402
 
 FULL = dict(
     sizes=("1k", "100k", "1M"), lights=(1, 2, 4), size=(1280, 720),
@@ -149,7 +141,7 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
     Per size, ONE renderer of the scene with the most lights renders the first 1, 2 or 4 of
     them (`render(lights=...)`), and the plain frame, the floor and every variant take turns
     in the same rounds: every ratio is of times measured in the same minutes."""
-    from shadowvol.raster.renderer import Renderer
+    from shadowvol import Renderer
 
     width, height = cfg["size"]
     rows, phases, sil, memory = [], [], {}, {}
@@ -217,7 +209,7 @@ def objects_section(ctx, cfg) -> list:
     """Per number of casters (`scenes.many_casters_scene`): the mask-only and the full frame's
     wall time and the part of it spent outside GL calls (`frames.python_times`), CPU
     silhouettes, one light."""
-    from shadowvol.raster.renderer import Renderer
+    from shadowvol import Renderer
 
     out = []
     for count in cfg["object_counts"]:
@@ -235,7 +227,7 @@ def objects_section(ctx, cfg) -> list:
 def overflow_section(ctx, cfg) -> list:
     """The stencil-overflow check on the shared meshes: the same renderer with the check on and
     off, interleaved (and the plain frame)."""
-    from shadowvol.raster.renderer import Renderer
+    from shadowvol import Renderer
 
     if scenes.models_dir() is None:
         log("overflow: the shared meshes are missing; skipped")
@@ -270,9 +262,9 @@ def overflow_section(ctx, cfg) -> list:
 def turntable_section(ctx, cfg) -> dict:
     """36 views of the shared meshes: our masks + image per view (one renderer, the camera
     changes) against `raytrace.shadow_masks` of the same view, view by view in turn."""
-    from raytrace.masks import shadow_masks
+    from raytrace import shadow_masks
+    from shadowvol import Renderer
     from shadowvol.raster.context import make_current
-    from shadowvol.raster.renderer import Renderer
 
     if scenes.models_dir() is None:
         log("turntable: the shared meshes are missing; skipped")
@@ -319,8 +311,8 @@ def turntable_section(ctx, cfg) -> dict:
 
 
 def pyrender_section(ctx, cfg) -> list:
+    from shadowvol import Renderer
     from shadowvol.raster.context import make_current
-    from shadowvol.raster.renderer import Renderer
 
     width, height = cfg["size"]
     out = []
@@ -354,22 +346,21 @@ def pyrender_section(ctx, cfg) -> list:
 # VmHWM, the peak RSS of this process's memory since exec (ru_maxrss would carry the parent's
 # peak over from fork)
 RSS_CHILD = """
-import sys, time
-sys.path[:0] = [{root!r}, {bench!r}]
+import time
 def hwm_mb():
     for line in open("/proc/self/status"):
         if line.startswith("VmHWM:"):
             return int(line.split()[1]) / 1024
-import scenes
+from benchmarks import scenes
 scene = scenes.occluder_scene({size!r}, 1, 1280, 720)
 base = hwm_mb()
 t0 = time.perf_counter()
 if {what!r} == "frame":
-    from shadowvol.raster.renderer import Renderer
+    from shadowvol import Renderer
     with Renderer(scene) as r:
         r.render()
 else:
-    from raytrace.masks import shadow_masks
+    from raytrace import shadow_masks
     shadow_masks(scene)
 print(base, hwm_mb(), time.perf_counter() - t0)
 """
@@ -380,10 +371,9 @@ def rss_section(cfg) -> dict:
     computes the ray tracer's masks of it (each in a fresh process: the peak is monotone)."""
     out = {"size": cfg["rss_size"]}
     for what in ("frame", "masks"):
-        code = RSS_CHILD.format(root=str(ROOT), bench=str(ROOT / "benchmarks"),
-                                size=cfg["rss_size"], what=what)
-        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                              check=True)
+        code = RSS_CHILD.format(size=cfg["rss_size"], what=what)
+        done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                              text=True, check=True)
         scene_mb, peak_mb, seconds = (float(x) for x in done.stdout.split()[-3:])
         out[what] = {"after_scene_mb": scene_mb, "peak_mb": peak_mb, "seconds": seconds}
     log(f"rss {cfg['rss_size']}: frame {out['frame']['peak_mb']:.0f} MB, masks "
@@ -392,9 +382,8 @@ def rss_section(cfg) -> dict:
 
 
 def raytrace_section(cfg) -> dict:
-    from raytrace import whitted
-    from raytrace.masks import shadow_masks
-    from shadowvol.scenefile import load_scene
+    import raytrace
+    from shadowvol import load_scene
 
     width, height = cfg["size"]
     masks = []
@@ -402,7 +391,7 @@ def raytrace_section(cfg) -> dict:
         scene = scenes.occluder_scene(size, 1, width, height)
         res = bench_masks.measure(scene, cfg["mask_runs"], full=True)
         res.update(scene=f"occluders {size}", memory_python_peak_mb=frames.python_peak_bytes(
-            lambda: shadow_masks(scene, "embree")) / 2**20)
+            lambda: raytrace.shadow_masks(scene, "embree")) / 2**20)
         masks.append(res)
         log(f"masks {size}: {res['masks']['median'] * 1e3:.0f} ms vs raw "
             f"{res['raw']['median'] * 1e3:.0f} ms")
@@ -416,10 +405,10 @@ def raytrace_section(cfg) -> dict:
     w, h = cfg["whitted_size"]
     scene = load_scene(ROOT / "scenes" / "whitted.toml").replace(width=w, height=h)
     times = []
-    whitted.render(scene, progress=False)   # warm-up (thread pool, Embree build paths)
+    raytrace.render(scene, progress=False)   # warm-up (thread pool, Embree build paths)
     for _ in range(cfg["whitted_runs"]):
         t0 = time.perf_counter()
-        whitted.render(scene, progress=False)
+        raytrace.render(scene, progress=False)
         times.append(time.perf_counter() - t0)
     log(f"whitted: {frames.stats(times)['median']:.0f} ms")
     return {"masks": masks, "whitted": {"scene": "scenes/whitted.toml", "width": w,
@@ -429,7 +418,7 @@ def raytrace_section(cfg) -> dict:
 
 # ---------------------------------------------------------------------------------------------
 
-# The other issues' benchmarks, each a script of its own (benchmarks/bench_*.py), run by this
+# The other issues' benchmarks, each a module of its own (benchmarks/bench_*.py), run by this
 # command in the same run and reported verbatim: (name, arguments, what it measures).  The
 # ground truth's (bench_groundtruth.py) is measured in the run itself: its own section.
 EXTRAS = (
@@ -451,6 +440,11 @@ EXTRAS = (
 EXTRA_TIMEOUT_S = 900
 
 
+def _module(script: str) -> str:
+    """The module an EXTRAS script runs as: "bench_soft.py" -> "benchmarks.bench_soft"."""
+    return "benchmarks." + script.removesuffix(".py")
+
+
 def extras_section() -> list[dict]:
     """Run every EXTRAS script once, in this run, one after another; keep what it prints."""
     rows = []
@@ -458,7 +452,7 @@ def extras_section() -> list[dict]:
         # "{json}": a file the script writes its results to, kept in results.json
         json_path = Path(tempfile.mkstemp(suffix=".json")[1]) if "{json}" in listed else None
         args = [str(json_path) if a == "{json}" else a for a in listed]
-        command = [sys.executable, str(ROOT / "benchmarks" / script), *args]
+        command = [sys.executable, "-m", _module(script), *args]
         log(f"extra: {script} {' '.join(args)}")
         start = time.perf_counter()
         try:
@@ -476,9 +470,9 @@ def extras_section() -> list[dict]:
                 data = None
             json_path.unlink(missing_ok=True)
         shown = [a for a in listed if a not in ("--json", "{json}")]
-        rows.append({"script": script, "command": "python benchmarks/" + " ".join(
-            [script, *shown]), "what": what, "seconds": time.perf_counter() - start,
-            "returncode": rc, "output": output.strip(), "results": data})
+        rows.append({"script": script, "command": " ".join(["python -m", _module(script), *shown]),
+                     "what": what, "seconds": time.perf_counter() - start,
+                     "returncode": rc, "output": output.strip(), "results": data})
     return rows
 
 
@@ -522,7 +516,7 @@ def main(argv=None) -> int:
 
     from shadowvol.raster.context import create_context
 
-    command = "python benchmarks/run.py" + (" --quick" if args.quick else "") + \
+    command = "python -m benchmarks.run" + (" --quick" if args.quick else "") + \
               (" --no-pyrender" if args.no_pyrender else "")
     started = time.perf_counter()
     ctx = create_context()

@@ -12,15 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from shadowvol import Camera, DirectionalLight, Material, PointLight, Scene, SpotLight
 from shadowvol.primitives import Transform, mesh, plane, sphere
-from shadowvol.scene import (
-    Camera,
-    DirectionalLight,
-    Material,
-    PointLight,
-    Scene,
-    SpotLight,
-)
 
 # label -> (spheres, icosphere subdivisions): 20 * 4^s triangles per sphere, plus the floor's 2
 SIZES = {
