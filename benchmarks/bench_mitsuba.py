@@ -44,7 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import frames, plain, report, scenes
+from . import frames, plain, scenes
+from .report.ratios import mask_bound_ms
 
 VARIANT = "llvm_ad_rgb"
 
@@ -219,7 +220,7 @@ def main(argv=None) -> int:
         ratio = ms["ours, masks only"]["median"] / ms["Mitsuba 3"]["median"]
         cells = " | ".join(f"{ms[k]['median']:.1f} ({ms[k]['min']:.1f}-{ms[k]['max']:.1f})"
                            for k in ("ours, masks only", "raytrace.shadow_masks", "Mitsuba 3"))
-        bound = report.mask_bound_ms(ms)
+        bound = mask_bound_ms(ms)
         print(f"| {s['scene']} | {s['triangles']:,} | {cells} | {ratio:.2f} | < 1: "
               f"{'met' if ratio < 1 else 'not met'} | {bound:.1f} | "
               f"{bound / ms['Mitsuba 3']['median']:.2f} | {s['differing_ours']}, "
