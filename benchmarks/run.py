@@ -25,9 +25,9 @@ variants interleaved round by round in the same run:
 
 Where: the sections measured on this process's GL context are `sections`, those in processes
 of their own (peak RSS, the other benchmark modules) `processes`, the machine `machine`; the
-markdown is written by `report` from the measured numbers, plus the hand-written history of
-the optimisations (`benchmarks/OPTIMISATIONS.md`) included verbatim.  Mitsuba 3 is an optional
-peer that this run does not install or time.
+markdown is written by `report` from the measured numbers and links the hand-written history
+of the optimisations (`benchmarks/OPTIMISATIONS.md`).  Mitsuba 3 is an optional peer that this
+run does not install or time.
 """
 
 from __future__ import annotations
@@ -100,7 +100,7 @@ def _arguments() -> argparse.ArgumentParser:
                          "skips them too)")
     ap.add_argument("--report-only", type=Path, metavar="RESULTS_JSON",
                     help="measure nothing: rewrite the markdown and the plot from a run's "
-                         "results.json (e.g. after editing benchmarks/OPTIMISATIONS.md)")
+                         "results.json (e.g. after a change to the report's code)")
     return ap
 
 
@@ -160,17 +160,15 @@ def main(argv=None) -> int:
     args = _arguments().parse_args(argv)
     cfg = QUICK if args.quick else FULL
     paths = _paths(args)
-    optimisations = ROOT / "benchmarks" / "OPTIMISATIONS.md"
-    history = optimisations.read_text() if optimisations.is_file() else ""
     if args.report_only:
         results = json.loads(args.report_only.read_text())
-        report.write(results, paths["md"], paths["png"], history)
+        report.write(results, paths["md"], paths["png"])
         log(f"rewrote {paths['md']} and {paths['png']} from {args.report_only}")
         return 0
 
     results = _measure(args, cfg)
     paths["json"].write_text(json.dumps(results, indent=1, default=str))
-    report.write(results, paths["md"], paths["png"], history)
+    report.write(results, paths["md"], paths["png"])
     log(f"wrote {paths['md']}, {paths['png']} and {paths['json']} "
         f"in {results['wall_s']:.0f} s")
     return 0

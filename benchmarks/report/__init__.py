@@ -17,11 +17,11 @@ SECTIONS = (peers.mitsuba, frames.frames, frames.bounds, frames.phases, meshes.o
             peers.ground_truth, frames.memory, summary.extras)
 
 
-def write(results: dict, md_path: Path, png_path: Path, history: str) -> None:
+def write(results: dict, md_path: Path, png_path: Path) -> None:
     """BENCHMARKS.md at `md_path` and the plot at `png_path`, from a run's `results`."""
     plot(results, png_path)
     lines = summary.header(results, md_path, png_path) + summary.headline_table(results)
     for section in SECTIONS:
         lines += section(results)
-    lines += summary.history_lines(history)
-    md_path.write_text("\n".join(lines))
+    text = "\n".join(lines)
+    md_path.write_text(text if text.endswith("\n") else text + "\n")

@@ -1,5 +1,5 @@
-"""The report's head (the run, the machine, the headline ratios) and its tail (the other
-benchmark modules' output, the optimisation history)."""
+"""The report's head (the run, the machine, the reading guide, the headline ratios) and its
+tail (the other benchmark modules' output)."""
 
 from __future__ import annotations
 
@@ -9,16 +9,22 @@ from pathlib import Path
 from .ratios import headline, verdict
 
 
+# the hand-written history beside the generated tables, linked from them
+OPTIMISATIONS = Path(__file__).resolve().parents[1] / "OPTIMISATIONS.md"
+
+
 def header(results: dict, md_path: Path, png_path: Path) -> list[str]:
-    """The run's command, machine, clocks and scenes, and the plot (linked relative to the
-    markdown)."""
+    """The run's command and machine, the plot and the history (linked relative to the
+    markdown), and the reading guide."""
     L: list[str] = []
     add = L.append
     m = results["machine"]
+    history = os.path.relpath(OPTIMISATIONS, md_path.parent)
     add("# Benchmarks")
     add("")
-    add("Written by `benchmarks/run.py` from one run; do not edit by hand (the optimisation "
-        "history at the end is `benchmarks/OPTIMISATIONS.md`, included verbatim).")
+    add("Written by `python -m benchmarks.run` from one run's results; do not edit by hand.  "
+        f"What each optimisation bought, what was tried and dropped, and where the floor is: "
+        f"[{history}]({history}).")
     add("")
     add("```bash")
     add(results["command"])
@@ -33,25 +39,47 @@ def header(results: dict, md_path: Path, png_path: Path) -> list[str]:
     ls, le = m["load_start"], m["load_end"]
     add(f"- **Load** (1/5/15-min load average; other sessions share the 2 cores): at the start "
         f"{ls[0]:.2f} / {ls[1]:.2f} / {ls[2]:.2f}, at the end {le[0]:.2f} / {le[1]:.2f} / "
-        f"{le[2]:.2f}.  Timings interleave the variants they compare round by round, so load "
-        f"slows all of them alike; absolute times are noisier than ratios.")
-    add("- **Clocks**: a frame is the wall time of `Renderer.render(...)`, which returns after "
-        "reading back what was asked for (default: the linear RGB32F image, every light's lit "
-        "bit and the coverage in one R32F read), so all GL work is inside it; the plain frame "
-        "(`benchmarks/plain.py`) returns after its RGBA8 read-back.  Phases are "
-        "glFinish-bracketed wall time (llvmpipe renders on flush), from separate instrumented "
-        "frames.  Times are milliseconds: median (min–max).")
-    add("- **Scenes** (`benchmarks/scenes.py`): a 14 x 14 floor and seeded icospheres "
-        "(closed meshes) under the same camera; 1, 2 or 4 point lights; the pyrender "
-        "comparison uses one spot (45°) or one directional light, since pyrender has no "
-        "point-light shadows.")
+        f"{le[2]:.2f}.")
     if results["quick"]:
         add("- **QUICK RUN**: tiny sizes and one or two repeats — a smoke test, not numbers to "
             "quote.")
     add("")
     add("![benchmarks](" + os.path.relpath(png_path, md_path.parent) + ")")
     add("")
-    return L
+    return L + guide()
+
+
+def guide() -> list[str]:
+    """How to read the tables below and how to make them again."""
+    return [
+        "## Reading these tables",
+        "",
+        "- **Rerun**: `python -m benchmarks.run` from the checkout's root (the full run, ~15 "
+        "min on 2 cores; `--quick` a smoke run on tiny scenes, `--report-only "
+        "benchmarks/results.json` this file and the plot again without measuring).  Each "
+        "`benchmarks.bench_*` module also runs alone (`python -m benchmarks.bench_soft`).",
+        "- **Clocks**: a frame is the wall time of `Renderer.render(...)`, which returns after "
+        "reading back what was asked for, so all GL work is inside it; the plain frame "
+        "(`benchmarks/plain.py`) returns after its RGBA8 read-back.  Phases are "
+        "glFinish-bracketed wall time (llvmpipe renders on flush), from separate instrumented "
+        "frames.  Times are milliseconds: median (min–max).",
+        "- **Ratios**: the variants a ratio compares are interleaved round by round in the same "
+        "minutes, so load slows all of them alike; absolute times are noisier than ratios.  "
+        "\"x / plain\" is in plain frames (1.5: half again a plain frame), a speed-up is theirs "
+        "/ ours, a per-round ratio the median of each round's own.",
+        "- **Floors and bounds**: a floor is the least GL work any exact frame of its kind does "
+        "on the same triangles (`plain.DepthFloor`, `MaskFloor`, `ImageFloor`); floor + volume "
+        "pass bounds every shadow-volume frame, so where a bound exceeds a target no such frame "
+        "meets it on this machine, and where it does not, the gap is what is left to win.",
+        "- **Sections**: the headline's targets; whole frames by size, their floors and phases; "
+        "the overflow check and the turntable on the shared meshes; the Python per object; "
+        "the peers (Mitsuba 3, pyrender); the ray tracer against raw Embree; the ground "
+        "truth's cost; memory; the other benchmark modules' own output, verbatim.",
+        "- **Scenes** (`benchmarks/scenes.py`): a 14 x 14 floor and seeded icospheres (closed "
+        "meshes) under the same camera; 1, 2 or 4 point lights; the pyrender comparison uses "
+        "one spot (45°) or one directional light, since pyrender has no point-light shadows.",
+        "",
+    ]
 
 
 def headline_table(results: dict) -> list[str]:
@@ -83,15 +111,4 @@ def extras(results: dict) -> list[str]:
                   else "timed out")
         add(f"### `{row['command']}`\n\n{row['what']}; {row['seconds']:.0f} s, {status}."
             f"\n\n```\n{row['output']}\n```")
-    return L
-
-
-def history_lines(history: str) -> list[str]:
-    """The optimisation history, verbatim."""
-    L: list[str] = []
-    add = L.append
-    if not history.strip():
-        return []
-    add(history.strip())
-    add("")
     return L
