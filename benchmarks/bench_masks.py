@@ -26,9 +26,10 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+# ../shared/models beside the checkout (or beside its parent)
 BUNNY = next((b / "shared" / "models" / "bunny.obj" for b in (ROOT.parent, ROOT.parent.parent)
               if (b / "shared" / "models" / "bunny.obj").is_file()),
-             ROOT.parent / "shared" / "models" / "bunny.obj")  # ../shared/models beside the checkout (or its parent)
+             ROOT.parent / "shared" / "models" / "bunny.obj")
 
 
 def bunny_scene(width: int, height: int, model: Path = BUNNY):

@@ -19,10 +19,10 @@
    (numba when installed; `by_shading` has both, and whether their images are identical), and
    `numba_compile_seconds` the first numba render's time with a cold and a warm cache.
    All are interleaved round by round (path trace numpy, numba, raw, replay), medians
-   reported, in wall time and in this process's CPU time (`time.process_time`, all threads): other sessions
-   on the same cores stretch wall times unevenly (a thread pool waits for its slowest thread),
-   CPU times much less, so `cpu_ratio_to_raw` is the steadier figure under load; on an idle
-   machine the two ratios agree when both sides keep the cores equally busy.
+   reported, in wall time and in this process's CPU time (`time.process_time`, all threads):
+   other sessions on the same cores stretch wall times unevenly (a thread pool waits for its
+   slowest thread), CPU times much less, so `cpu_ratio_to_raw` is the steadier figure under
+   load; on an idle machine the two ratios agree when both sides keep the cores equally busy.
 2. Radiosity time (meshing, form factors, solve, as `raytrace radiosity` runs it) at about 1k,
    4k and 16k triangles (each triangle is two patches, one per face).
 

@@ -6,9 +6,10 @@ One thread (tiles in turn, Embree on the calling thread), so that the stages add
 frame, in that thread's CPU time (`time.thread_time`: other processes' load on the cores does
 not count, as it does in wall time): each stage is a function of `raytrace.pathtrace` /
 `raytrace.brdf` (the numpy shading) or a kernel of `raytrace.pathkernels` (the numba shading)
-timed exclusively (a stage's time leaves out the stages it calls).  "paths: ..." is what the path loop (`trace_rows`) does
-itself: with numba, drawing the random numbers (in numpy, as the numpy path draws them) and
-the azimuths' cos and sin.  Prints a table and the time of the Embree casts beside the rest.
+timed exclusively (a stage's time leaves out the stages it calls).  "paths: ..." is what the
+path loop (`trace_rows`) does itself: with numba, drawing the random numbers (in numpy, as the
+numpy path draws them) and the azimuths' cos and sin.  Prints a table and the time of the
+Embree casts beside the rest.
 """
 
 from __future__ import annotations

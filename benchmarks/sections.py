@@ -185,7 +185,8 @@ def turntable_section(ctx, cfg) -> dict:
            "triangles": scenes.triangle_count(scene), "lights": len(scene.lights),
            "ours": frames.stats(ours), "ours_masks": frames.stats(masks_only),
            "raytrace": frames.stats(ray), "ours_total_s": sum(ours), "raytrace_total_s": sum(ray),
-           "pixels_differing_max": max(differ), "pixels_differing_median": sorted(differ)[len(differ) // 2],
+           "pixels_differing_max": max(differ),
+           "pixels_differing_median": sorted(differ)[len(differ) // 2],
            "phases": {k: frames.stats(v) for k, v in phase_runs.items()}}
     log(f"turntable: ours {out['ours']['median']:.1f} ms/view, raytrace "
         f"{out['raytrace']['median']:.1f} ms/view")
