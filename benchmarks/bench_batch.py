@@ -1,6 +1,6 @@
 """Benchmark (not a test): `shadowvol batch` throughput and the cost of its machinery.
 
-    python benchmarks/bench_batch.py [--models DIR] [--frames 36] [--width 640 --height 480]
+    python -m benchmarks.bench_batch [--models DIR] [--frames 36] [--width 640 --height 480]
                                      [--rounds 3] [--no-ray] [--json out.json]
 
 The scene: the five shared meshes (../shared/models beside the checkout, or $SHADOWVOL_MODELS,
@@ -26,6 +26,7 @@ import argparse
 import json
 import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -36,7 +37,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
 MODELS = Path(os.environ.get("SHADOWVOL_MODELS", ROOT.parent / "shared" / "models"))
 NAMES = ("bunny", "teapot", "suzanne", "spot", "lampshade")
 
@@ -173,39 +173,24 @@ def _summary(runs: list[dict], frames: int) -> dict:
                                        for r in runs) if cpu else None}
 
 
-def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: int = 480,
-            ray: bool = True, rounds: int = 3) -> dict:
-    """Every run variant once per round, interleaved (each round starts with the next variant,
-    so that a drift of the machine's load falls on all of them); medians over the rounds, and
-    the 2-worker / 1-worker ratio of each round."""
-    if not all((models / f"{n}.obj").is_file() for n in NAMES):
-        return {"skipped": f"the shared models are missing: {models} does not hold "
-                           f"{', '.join(n + '.obj' for n in NAMES)} (set $SHADOWVOL_MODELS or "
-                           f"--models)"}
-    import shadowvol.batch as batch
-    from shadowvol.batch import manifest
-    from shadowvol.raster.renderer import Renderer
-    from shadowvol.scene import Camera
-    from shadowvol.scenefile import load_scene
-
-    tmp = Path(tempfile.mkdtemp(prefix="bench_batch-"))
-    scene_path = write_scene(tmp, models, width, height)
-    jobs = write_jobs(tmp, scene_path, frames)
-    scene = load_scene(scene_path)
-    result = {"frames": frames, "size": [width, height], "lights": len(scene.lights),
-              "triangles": int(sum(len(o.faces) for o in scene.objects)),
-              "cores": len(os.sched_getaffinity(0)), "load_before": os.getloadavg()[0],
-              "autogroup": _autogroup(), "rounds": rounds}
-
+def _variants(ray: bool, result: dict) -> tuple[list[str], object]:
+    """The run variants, and the ray module when Ray is asked for and installed (else a
+    "skipped" entry in `result`)."""
     labels = ["workers_1", "workers_2", "shards_2"]
-    ray_module = None
-    if ray:
-        try:
-            import ray as ray_module
-        except ImportError:
-            result["ray_2"] = {"skipped": "ray is not installed (pip install 'shadowvol[ray]')"}
-        else:
-            labels.append("ray_2")
+    if not ray:
+        return labels, None
+    try:
+        import ray as ray_module
+    except ImportError:
+        result["ray_2"] = {"skipped": "ray is not installed (pip install 'shadowvol[ray]')"}
+        return labels, None
+    return labels + ["ray_2"], ray_module
+
+
+def _rounds(labels: list[str], ray_module, jobs: Path, tmp: Path, frames: int,
+            rounds: int) -> tuple[dict[str, list[dict]], list[float], list[dict]]:
+    """Every variant once per round, each round starting with the next one: the runs per
+    variant, Ray's start-up times and the machine's scaling probe of each round."""
     runs: dict[str, list[dict]] = {label: [] for label in labels}
     ray_init, probes = [], []
     for r in range(rounds):
@@ -222,20 +207,14 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
                     ray_module.shutdown()
             else:
                 runs[label].append(_one_run(label, jobs, out, frames))
-    for label in labels:
-        result[label] = _summary(runs[label], frames)
-    if ray_init:
-        result["ray_init_s"] = statistics.median(ray_init)
-    scaling = [p["scaling"] for p in probes]
-    result["probe"] = {"scaling": statistics.median(scaling), "min": min(scaling),
-                       "max": max(scaling), "runs": probes}
-    # 2 workers can at best use what the machine gives two processes, at the 1-worker frame's
-    # CPU cost: (probe scaling) / (cores 1 worker already uses) times its frames
-    result["ceiling_workers_2"] = result["probe"]["scaling"] / result["workers_1"]["cores"]
+    return runs, ray_init, probes
 
-    # the same outputs whichever way they were made
-    one = tmp / "workers_1-0"
-    ref = [(r["id"], r["files"]) for r in _records(one)]
+
+def _check_same_outputs(jobs: Path, tmp: Path, frames: int, rounds: int) -> None:
+    """The same outputs whichever way they were made (the shards' once merged)."""
+    import shadowvol.batch as batch
+
+    ref = [(r["id"], r["files"]) for r in _records(tmp / "workers_1-0")]
     for label in ("workers_2", "ray_2"):
         for r in range(rounds):
             if (tmp / f"{label}-{r}" / "manifest.jsonl").exists():
@@ -245,8 +224,14 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
     assert merged.skipped == frames and [(r["id"], r["files"]) for r in
                                          _records(tmp / "shards_2-0")] == ref
 
-    # the bare loop: one Renderer, the same cameras, nothing encoded or written
-    cameras = [r["camera"] for r in _records(one)]
+
+def _per_frame(scene, tmp: Path, rounds: int) -> dict:
+    """The bare loop (one Renderer, the 1-worker run's cameras, nothing encoded or written)
+    against the batch's own per-frame seconds and a micro-benchmark of the journal."""
+    from shadowvol import Camera, Renderer
+    from shadowvol.batch import manifest
+
+    cameras = [r["camera"] for r in _records(tmp / "workers_1-0")]
     with Renderer(scene) as renderer:
         renderer.render()  # warm-up
         bare = []
@@ -265,11 +250,45 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
         journal.add(r)
     line = (time.perf_counter() - t) / (len(records) * 10)
     journal.close()
-    result["per_frame"] = {
-        "bare_render_s": frame, "batch_render_s": render, "encode_s": encode,
-        "write_and_hash_s": write, "manifest_line_s": line,
-        "machinery_fraction": (write + line) / frame,
-        "machinery_and_encoding_fraction": (write + line + encode) / frame}
+    return {"bare_render_s": frame, "batch_render_s": render, "encode_s": encode,
+            "write_and_hash_s": write, "manifest_line_s": line,
+            "machinery_fraction": (write + line) / frame,
+            "machinery_and_encoding_fraction": (write + line + encode) / frame}
+
+
+def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: int = 480,
+            ray: bool = True, rounds: int = 3) -> dict:
+    """Every run variant once per round, interleaved (each round starts with the next variant,
+    so that a drift of the machine's load falls on all of them); medians over the rounds, and
+    the 2-worker / 1-worker ratio of each round."""
+    if not all((models / f"{n}.obj").is_file() for n in NAMES):
+        return {"skipped": f"the shared models are missing: {models} does not hold "
+                           f"{', '.join(n + '.obj' for n in NAMES)} (set $SHADOWVOL_MODELS or "
+                           f"--models)"}
+    from shadowvol import load_scene
+
+    tmp = Path(tempfile.mkdtemp(prefix="bench_batch-"))
+    scene_path = write_scene(tmp, models, width, height)
+    jobs = write_jobs(tmp, scene_path, frames)
+    scene = load_scene(scene_path)
+    result = {"frames": frames, "size": [width, height], "lights": len(scene.lights),
+              "triangles": int(sum(len(o.faces) for o in scene.objects)),
+              "cores": len(os.sched_getaffinity(0)), "load_before": os.getloadavg()[0],
+              "autogroup": _autogroup(), "rounds": rounds}
+    labels, ray_module = _variants(ray, result)
+    runs, ray_init, probes = _rounds(labels, ray_module, jobs, tmp, frames, rounds)
+    for label in labels:
+        result[label] = _summary(runs[label], frames)
+    if ray_init:
+        result["ray_init_s"] = statistics.median(ray_init)
+    scaling = [p["scaling"] for p in probes]
+    result["probe"] = {"scaling": statistics.median(scaling), "min": min(scaling),
+                       "max": max(scaling), "runs": probes}
+    # 2 workers can at best use what the machine gives two processes, at the 1-worker frame's
+    # CPU cost: (probe scaling) / (cores 1 worker already uses) times its frames
+    result["ceiling_workers_2"] = result["probe"]["scaling"] / result["workers_1"]["cores"]
+    _check_same_outputs(jobs, tmp, frames, rounds)
+    result["per_frame"] = _per_frame(scene, tmp, rounds)
     w1 = result["workers_1"]["frames_per_s"]
     result["speedup_workers_2"] = result["workers_2"]["frames_per_s"] / w1
     result["speedup_shards_2"] = result["shards_2"]["frames_per_s"] / w1
@@ -281,8 +300,6 @@ def measure(models: Path = MODELS, frames: int = 36, width: int = 640, height: i
         result["ray_vs_pool"] = result["ray_2"]["frames_per_s"] / \
             result["workers_2"]["frames_per_s"]
     result["load_after"] = os.getloadavg()[0]
-    import shutil
-
     shutil.rmtree(tmp, ignore_errors=True)
     return result
 

@@ -8,7 +8,7 @@ once per variant.  Reported: the median (min-max) per-view time of each variant 
 and the load average.  The fixed frame is `projection.frame_origin` returning the world origin
 and `SceneGeometry.set_view` doing nothing (the masks are then world-space float32, as before).
 
-    python benchmarks/bench_frame_origin.py [--views 36] [--rounds 5] [--size 640x480]
+    python -m benchmarks.bench_frame_origin [--views 36] [--rounds 5] [--size 640x480]
 """
 
 from __future__ import annotations
@@ -18,16 +18,15 @@ import os
 import statistics
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import scenes  # noqa: E402
-from shadowvol.raster import projection  # noqa: E402
-from shadowvol.raster.context import create_context  # noqa: E402
-from shadowvol.raster.geometry import SceneGeometry  # noqa: E402
-from shadowvol.raster.renderer import Renderer  # noqa: E402
+from shadowvol import Renderer
+from shadowvol.raster import projection
+from shadowvol.raster.context import create_context
+from shadowvol.raster.geometry import SceneGeometry
+
+from . import scenes
 
 EYE_FRAME = projection.frame_origin
 SET_VIEW = SceneGeometry.set_view

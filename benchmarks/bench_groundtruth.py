@@ -1,7 +1,7 @@
 """Benchmark (not a test): what each ground-truth output costs on a 100k-triangle frame, in
 both renderers.
 
-    python benchmarks/bench_groundtruth.py [--runs N] [--width W] [--height H]
+    python -m benchmarks.bench_groundtruth [--runs N] [--width W] [--height H]
 
 The scene: `occluder_scene("100k")` (a floor and 20 icospheres, 102,402 triangles, 21 objects),
 1280x720, one point light.  The rasterizer: `Renderer.render(outputs=...)` with the frame's own
@@ -11,7 +11,7 @@ on one prebuilt Embree backend.  The variants are interleaved round by round (lo
 alike) and each is the median of the rounds after a warm-up.  The target of the issue, casters
 with at most 16 casting objects in at most 1 extra frame, is measured on the same generator with
 16 spheres (`occluder_scene("100k", spheres=16)`: 81,922 triangles), its frame and + casters
-interleaved in the same rounds.  `run.py` calls `measure` for BENCHMARKS.md.
+interleaved in the same rounds.  `benchmarks.run` calls `measure` for BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -23,8 +23,6 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
-sys.path.insert(0, str(ROOT / "benchmarks"))
 
 OUTPUTS = ("depth", "distance", "normal", "object_id", "facing", "casters")
 FRAME = ("image", "lit", "coverage")
@@ -68,8 +66,9 @@ def measure(ctx, runs: int = 5, width: int = 1280, height: int = 720,
     ctx: a GL context for the rasterizer."""
     import raytrace
     from raytrace.masks import scene_backend
-    from scenes import SIZES, occluder_scene
-    from shadowvol.raster.renderer import Renderer
+    from shadowvol import Renderer
+
+    from .scenes import SIZES, occluder_scene
 
     scene = occluder_scene(size, 1, width, height)
     # the same generator with at most TARGET_CASTING spheres (a small size may have fewer)
@@ -157,8 +156,9 @@ def main(argv=None) -> int:
     ap.add_argument("--width", type=int, default=1280)
     ap.add_argument("--height", type=int, default=720)
     ap.add_argument("--into", type=Path, default=None, metavar="RESULTS_JSON",
-                    help="also store the result as the `groundtruth` entry of a run.py "
-                         "results.json (then `run.py --report-only` rewrites the report)")
+                    help="also store the result as the `groundtruth` entry of a "
+                         "benchmarks.run results.json (then `python -m benchmarks.run "
+                         "--report-only` rewrites the report)")
     args = ap.parse_args(argv)
     from shadowvol.raster.context import create_context
 

@@ -1,6 +1,6 @@
 """Benchmark (not a test): reference masks of the Stanford bunny on a plane against raw Embree.
 
-    python benchmarks/bench_masks.py [--runs N] [--width W] [--height H] [--model OBJ]
+    python -m benchmarks.bench_masks [--runs N] [--width W] [--height H] [--model OBJ]
 
 The scene: the shared bunny (../shared/models/bunny.obj, 69k triangles, open base), scaled to
 about 1.5 units tall, standing on a 6 x 6 plane, one point light, 1280x720.  It times
@@ -26,17 +26,17 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
+# ../shared/models beside the checkout (or beside its parent)
 BUNNY = next((b / "shared" / "models" / "bunny.obj" for b in (ROOT.parent, ROOT.parent.parent)
               if (b / "shared" / "models" / "bunny.obj").is_file()),
-             ROOT.parent / "shared" / "models" / "bunny.obj")  # ../shared/models beside the checkout (or its parent)
+             ROOT.parent / "shared" / "models" / "bunny.obj")
 
 
 def bunny_scene(width: int, height: int, model: Path = BUNNY):
     import trimesh
 
+    from shadowvol import Camera, Material, PointLight, Scene
     from shadowvol.primitives import Transform, mesh, plane
-    from shadowvol.scene import Camera, Material, PointLight, Scene
 
     loaded = trimesh.load(str(model), process=False)
     v = np.asarray(loaded.vertices)
@@ -71,42 +71,19 @@ def median_times(fns: list, runs: int) -> list[float]:
     return [statistics.median(ts) for ts in run_times(fns, runs)]
 
 
-def measure(scene, runs: int, full: bool = True) -> dict:
-    """Time `raytrace.shadow_masks(scene)` on a prebuilt Embree backend against raw embreex
-    casts of the very same rays (light 0: a point or directional light), interleaved.
-
-    Returns a dict: triangles, threads, primary_rays, shadow_rays, coverage, lit (fractions),
-    mismatched (pixels where the raw rays' verdict differs from the masks), build_s, and
-    masks / raw / full (incl. the BVH build; only if `full`) as {"median", "min", "max"} in
-    seconds."""
-    from raytrace.camera import primary_rays
-    from raytrace.masks import scene_backend, shadow_masks
+def _shadow_rays(scene, backend, o, d):
+    """The masks' shadow rays of light 0, rebuilt as `measure` says, from the primary rays
+    o, d (n, 3) float32: idx (the covered rays' indices), cand (those facing the light, a mask
+    over idx), start (m, 3) and shadow_dir (m, 3), dist (m,) float32 or None (unbounded)."""
     from raytrace.tolerances import (
         error_weight,
         light_margin,
         shadow_height,
         through_light,
     )
-    from shadowvol.scene import DirectionalLight
+    from shadowvol import DirectionalLight
 
-    vertices, faces, _ = scene.triangles()
-    t0 = time.perf_counter()
-    backend = scene_backend(scene, "embree")
-    build = time.perf_counter() - t0
-    lit, coverage = shadow_masks(scene, backend)
-    tracer = backend.tracer
-
-    # The same rays, rebuilt outside the clock as float32 arrays ready for embreex, the way
-    # raytrace.masks builds them, in the backend's frame (origin at the eye): primary rays
-    # through the pixel centres from the near plane; wherever n·l > 0, the segment from the hit
-    # point to the light shortened at the surface by shadow_height / (n·l) and before a point
-    # light by light_margin (computed here in float64).  The masks' second casts (a blocked ray
-    # whose blocker may be its own triangle) are not among the raw rays: their cost shows.
-    origin = backend.origin
-    camera = scene.camera.__class__(eye=scene.camera.eye - origin,
-                                    target=scene.camera.target - origin, up=scene.camera.up,
-                                    fov_y=scene.camera.fov_y, near=scene.camera.near)
-    o, d = primary_rays(camera, scene.width, scene.height, dtype=np.float32, unit=False)
+    tracer, origin = backend.tracer, backend.origin
     hits = tracer.closest_hit(o.astype(np.float64), d.astype(np.float64))
     idx = np.flatnonzero(hits.tri >= 0)
     point = o[idx] + hits.t[idx, None] * d[idx]
@@ -135,6 +112,40 @@ def measure(scene, runs: int, full: bool = True) -> dict:
         through = through_light(tracer.normals, tracer.plane_d, weight, position)
         dist = (1.0 - light_margin(position, length, through) / length
                 - near).astype(np.float32)
+    return idx, cand, start, shadow_dir, dist
+
+
+def measure(scene, runs: int, full: bool = True) -> dict:
+    """Time `raytrace.shadow_masks(scene)` on a prebuilt Embree backend against raw embreex
+    casts of the very same rays (light 0: a point or directional light), interleaved.
+
+    Returns a dict: triangles, threads, primary_rays, shadow_rays, coverage, lit (fractions),
+    mismatched (pixels where the raw rays' verdict differs from the masks), build_s, and
+    masks / raw / full (incl. the BVH build; only if `full`) as {"median", "min", "max"} in
+    seconds."""
+    from raytrace import shadow_masks
+    from raytrace.camera import primary_rays
+    from raytrace.masks import scene_backend
+
+    vertices, faces, _ = scene.triangles()
+    t0 = time.perf_counter()
+    backend = scene_backend(scene, "embree")
+    build = time.perf_counter() - t0
+    lit, coverage = shadow_masks(scene, backend)
+    tracer = backend.tracer
+
+    # The same rays, rebuilt outside the clock as float32 arrays ready for embreex, the way
+    # raytrace.masks builds them, in the backend's frame (origin at the eye): primary rays
+    # through the pixel centres from the near plane; wherever n·l > 0, the segment from the hit
+    # point to the light shortened at the surface by shadow_height / (n·l) and before a point
+    # light by light_margin (computed here in float64).  The masks' second casts (a blocked ray
+    # whose blocker may be its own triangle) are not among the raw rays: their cost shows.
+    origin = backend.origin
+    camera = scene.camera.__class__(eye=scene.camera.eye - origin,
+                                    target=scene.camera.target - origin, up=scene.camera.up,
+                                    fov_y=scene.camera.fov_y, near=scene.camera.near)
+    o, d = primary_rays(camera, scene.width, scene.height, dtype=np.float32, unit=False)
+    idx, cand, start, shadow_dir, dist = _shadow_rays(scene, backend, o, d)
     raw = {
         "INTERSECT": (o, d, None),
         "OCCLUDED": (start.astype(np.float32),

@@ -1,7 +1,7 @@
 """Benchmark (not a test): our mask-only frames against Mitsuba 3's JIT ray tracer (an optional
 peer: `pip install '.[bench]'`), and against our own ray tracer, on the same scenes.
 
-    python benchmarks/bench_mitsuba.py [--runs N] [--sizes bunny,100k,1M]
+    python -m benchmarks.bench_mitsuba [--runs N] [--sizes bunny,100k,1M]
 
 Mitsuba 3 (`llvm_ad_rgb`: Dr.Jit compiles the rays' work to LLVM and runs it on every core)
 gets the same masks the way a Mitsuba user would: the scene's triangles as `mi.Mesh`es in the
@@ -44,14 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-import frames  # noqa: E402
-import plain  # noqa: E402
-import report  # noqa: E402
-import scenes  # noqa: E402
+from . import frames, plain, scenes
+from .report.ratios import mask_bound_ms
 
 VARIANT = "llvm_ad_rgb"
 
@@ -135,9 +129,10 @@ def measure(names, width: int, height: int, runs: int) -> dict:
         import mitsuba  # noqa: F401
     except ImportError:
         return {"skipped": "Mitsuba 3 is not installed (pip install '.[bench]')"}
-    from raytrace.masks import scene_backend, shadow_masks
+    from raytrace import shadow_masks
+    from raytrace.masks import scene_backend
+    from shadowvol import Renderer
     from shadowvol.raster.context import make_current
-    from shadowvol.raster.renderer import Renderer
 
     out = {"variant": VARIANT, "size": [width, height], "runs": runs, "scenes": [],
            "load_before": os.getloadavg()}
@@ -225,7 +220,7 @@ def main(argv=None) -> int:
         ratio = ms["ours, masks only"]["median"] / ms["Mitsuba 3"]["median"]
         cells = " | ".join(f"{ms[k]['median']:.1f} ({ms[k]['min']:.1f}-{ms[k]['max']:.1f})"
                            for k in ("ours, masks only", "raytrace.shadow_masks", "Mitsuba 3"))
-        bound = report.mask_bound_ms(ms)
+        bound = mask_bound_ms(ms)
         print(f"| {s['scene']} | {s['triangles']:,} | {cells} | {ratio:.2f} | < 1: "
               f"{'met' if ratio < 1 else 'not met'} | {bound:.1f} | "
               f"{bound / ms['Mitsuba 3']['median']:.2f} | {s['differing_ours']}, "

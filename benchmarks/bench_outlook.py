@@ -1,6 +1,6 @@
 """Benchmark (not a test): path tracing and radiosity on the Cornell box (issue 15's targets).
 
-    python benchmarks/bench_outlook.py [--size 512] [--spp 4] [--runs 3]
+    python -m benchmarks.bench_outlook [--size 512] [--spp 4] [--runs 3]
 
 1. Path tracing throughput: `raytrace.pathtrace.render` of scenes/cornell.toml at size x size,
    Mrays/s counting every ray it traced (camera, bounce and shadow rays), against two raw
@@ -19,10 +19,10 @@
    (numba when installed; `by_shading` has both, and whether their images are identical), and
    `numba_compile_seconds` the first numba render's time with a cold and a warm cache.
    All are interleaved round by round (path trace numpy, numba, raw, replay), medians
-   reported, in wall time and in this process's CPU time (`time.process_time`, all threads): other sessions
-   on the same cores stretch wall times unevenly (a thread pool waits for its slowest thread),
-   CPU times much less, so `cpu_ratio_to_raw` is the steadier figure under load; on an idle
-   machine the two ratios agree when both sides keep the cores equally busy.
+   reported, in wall time and in this process's CPU time (`time.process_time`, all threads):
+   other sessions on the same cores stretch wall times unevenly (a thread pool waits for its
+   slowest thread), CPU times much less, so `cpu_ratio_to_raw` is the steadier figure under
+   load; on an idle machine the two ratios agree when both sides keep the cores equally busy.
 2. Radiosity time (meshing, form factors, solve, as `raytrace radiosity` runs it) at about 1k,
    4k and 16k triangles (each triangle is two patches, one per face).
 
@@ -44,7 +44,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
 CORNELL = ROOT / "scenes" / "cornell.toml"
 PATCH_TARGETS = (1000, 4000, 16000)  # triangles
 
@@ -130,9 +129,9 @@ def compile_seconds() -> dict:
     import subprocess
     import tempfile
 
-    code = ("import sys, time; sys.path.insert(0, sys.argv[1]); "
-            "from raytrace.pathtrace import render; from shadowvol.scenefile import load_scene; "
-            "s = load_scene(sys.argv[2]).replace(width=16, height=16); out = []\n"
+    code = ("import sys, time; "
+            "from raytrace.pathtrace import render; from shadowvol import load_scene; "
+            "s = load_scene(sys.argv[1]).replace(width=16, height=16); out = []\n"
             "for name in ('numba', 'numpy'):\n"
             "    t = time.perf_counter(); render(s, spp=1, shading_name=name, progress=False)\n"
             "    out.append(time.perf_counter() - t)\n"
@@ -141,8 +140,8 @@ def compile_seconds() -> dict:
     with tempfile.TemporaryDirectory() as cache:
         env = {**os.environ, "NUMBA_CACHE_DIR": cache}
         for _ in range(2):
-            done = subprocess.run([sys.executable, "-c", code, str(ROOT), str(CORNELL)],
-                                  env=env, capture_output=True, text=True, check=True)
+            done = subprocess.run([sys.executable, "-c", code, str(CORNELL)],
+                                  cwd=ROOT, env=env, capture_output=True, text=True, check=True)
             times.append([float(x) for x in done.stdout.split()])
     return {"cold": times[0][0], "cached": times[1][0], "numpy": times[1][1]}
 
@@ -155,7 +154,7 @@ def path_tracing(size: int, spp: int, runs: int) -> dict:
 
     from raytrace.backends import cpu_threads
     from raytrace.pathtrace import render, shading
-    from shadowvol.scenefile import load_scene
+    from shadowvol import load_scene
 
     default = shading()
     shadings = ["numpy"] + (["numba"] if shading("auto") == "numba" else [])
@@ -220,7 +219,7 @@ def path_tracing(size: int, spp: int, runs: int) -> dict:
 
 def radiosity_times(targets=PATCH_TARGETS, rays_per_patch: int = 256) -> list[dict]:
     from raytrace import radiosity
-    from shadowvol.scenefile import load_scene
+    from shadowvol import load_scene
 
     scene = load_scene(CORNELL)
     rows = []

@@ -1,8 +1,8 @@
 """Benchmark (not a test): the cost of soft shadows, raster against the ray tracer.
 
-    python benchmarks/bench_soft.py [--size 100k] [--width 1280] [--height 720] [--rounds 9]
+    python -m benchmarks.bench_soft [--size 100k] [--width 1280] [--height 720] [--rounds 9]
 
-The benchmark's occluder scene (`benchmarks/scenes.py`) with its light made a square rect light
+The benchmark's occluder scene (`benchmarks.scenes`) with its light made a square rect light
 (1 x 1, facing down) of N samples.  It times, interleaved round by round after one warm-up round
 (so that load from other processes slows every variant alike):
 
@@ -26,11 +26,6 @@ import os
 import statistics
 import sys
 import time
-from pathlib import Path
-
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
-sys.path.insert(0, str(ROOT / "benchmarks"))
 
 SAMPLES = (1, 4, 16, 64)
 RAY = "ray tracer `lit_count`, rect N=16 (prebuilt backend)"
@@ -59,9 +54,10 @@ def spread(values_ms: list[float], digits: int = 0) -> str:
 def main(argv=None) -> int:
     from raytrace.masks import scene_backend
     from raytrace.soft import lit_counts
-    from scenes import POINT_LIGHTS, occluder_scene, triangle_count
-    from shadowvol.raster.renderer import Renderer
-    from shadowvol.scene import AreaLight, PointLight
+    from shadowvol import PointLight, Renderer
+    from shadowvol.scene import AreaLight
+
+    from .scenes import POINT_LIGHTS, occluder_scene, triangle_count
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--size", default="100k", help="the scene size (benchmarks/scenes.py)")

@@ -1,6 +1,6 @@
 """The interactive viewer's frame rate (`shadowvol view`), on every shipped scene.
 
-    python benchmarks/bench_viewer.py [--frames N] [--modes shaded,roles,stencil]
+    python -m benchmarks.bench_viewer [--frames N] [--modes shaded,roles,stencil]
 
 Each frame orbits the camera one step (so the frame is rendered again, as while dragging) and
 is timed from the state change to the window's buffer swap: the render in the window's GL
@@ -21,7 +21,6 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
 
 
 def _xvfb():
@@ -42,7 +41,7 @@ def _xvfb():
 def bench(scene_path: Path, modes, frames: int) -> list[tuple[str, str, float]]:
     from dataclasses import replace
 
-    from shadowvol.scenefile import load_scene
+    from shadowvol import load_scene
     from shadowvol.view.app import Viewer
     from shadowvol.view.state import orbit
 

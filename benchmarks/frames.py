@@ -24,8 +24,8 @@ from collections import defaultdict
 import moderngl
 import numpy as np
 
+from shadowvol import Renderer
 from shadowvol.raster import passes
-from shadowvol.raster.renderer import Renderer
 from shadowvol.raster.silhouettes import (
     edge_multiplicity,
     quads_to_triangles,

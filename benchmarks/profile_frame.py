@@ -1,7 +1,7 @@
 """Profile shadowvol frames of a benchmark scene with cProfile (the Python side; GL work shows up
 in the calls that wait for it: reads and glFinish).
 
-    python benchmarks/profile_frame.py --size 100k --lights 1 --method auto --silhouettes cpu
+    python -m benchmarks.profile_frame --size 100k --lights 1 --method auto --silhouettes cpu
 
 Prints the top functions by cumulative and by own time over --frames frames (after one
 warm-up frame).
@@ -13,13 +13,8 @@ import argparse
 import cProfile
 import pstats
 import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-import scenes  # noqa: E402
+from . import scenes
 
 
 def main(argv=None) -> int:
@@ -33,7 +28,7 @@ def main(argv=None) -> int:
     ap.add_argument("--top", type=int, default=25)
     args = ap.parse_args(argv)
 
-    from shadowvol.raster.renderer import Renderer
+    from shadowvol import Renderer
 
     scene = scenes.occluder_scene(args.size, args.lights)
     with Renderer(scene) as r:

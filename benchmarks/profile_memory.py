@@ -1,12 +1,12 @@
 """Where the peak RSS of one frame comes from: VmRSS and VmHWM after each step of building the
 scene and rendering one frame of it, and the peak within each step.
 
-    python benchmarks/profile_memory.py --size 1M
+    python -m benchmarks.profile_memory --size 1M
 
 The renderer's steps (the scene's geometry and its topologies, the uploads, the silhouettes and
 side quads, each pass, the read-backs) are wrapped for the one frame, in this process: each
 wrapper resets VmHWM to VmRSS (/proc/self/clear_refs) when it starts, so the peak it prints is
-that step's own.  The process's true peak (VmHWM as `benchmarks/run.py`'s memory section reads
+that step's own.  The process's true peak (VmHWM as `benchmarks.run`'s memory section reads
 it) is the largest of them.  tracemalloc (--python) adds the Python heap's peak per step (numpy
 arrays included; GL buffers are the driver's, not Python's: on llvmpipe a buffer is host
 memory, so every array kept after its upload is a second copy).
@@ -19,13 +19,8 @@ import contextlib
 import sys
 import time
 import tracemalloc
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-import scenes  # noqa: E402
+from . import scenes
 
 MB = 2 ** 20
 
@@ -136,7 +131,7 @@ def main(argv=None) -> int:
     with steps.step("scene build (benchmarks/scenes.py)"):
         scene = scenes.occluder_scene(args.size, 1, 1280, 720)
     if args.masks:
-        from raytrace.masks import shadow_masks
+        from raytrace import shadow_masks
         with steps.step("raytrace.shadow_masks"):
             shadow_masks(scene)
         steps.print()

@@ -1,14 +1,15 @@
 """Profile (not a test): where a path-traced frame of the Cornell box spends its time, by stage.
 
-    python benchmarks/profile_outlook.py [--size 512] [--spp 1] [--shading numpy|numba]
+    python -m benchmarks.profile_outlook [--size 512] [--spp 1] [--shading numpy|numba]
 
 One thread (tiles in turn, Embree on the calling thread), so that the stages add up to the
 frame, in that thread's CPU time (`time.thread_time`: other processes' load on the cores does
 not count, as it does in wall time): each stage is a function of `raytrace.pathtrace` /
 `raytrace.brdf` (the numpy shading) or a kernel of `raytrace.pathkernels` (the numba shading)
-timed exclusively (a stage's time leaves out the stages it calls).  "paths: ..." is what the path loop (`trace_rows`) does
-itself: with numba, drawing the random numbers (in numpy, as the numpy path draws them) and
-the azimuths' cos and sin.  Prints a table and the time of the Embree casts beside the rest.
+timed exclusively (a stage's time leaves out the stages it calls).  "paths: ..." is what the
+path loop (`trace_rows`) does itself: with numba, drawing the random numbers (in numpy, as the
+numpy path draws them) and the azimuths' cos and sin.  Prints a table and the time of the
+Embree casts beside the rest.
 """
 
 from __future__ import annotations
@@ -19,7 +20,6 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # run from a checkout, installed or not
 CORNELL = ROOT / "scenes" / "cornell.toml"
 
 # (module attribute or PathWorld method, stage name)
@@ -56,7 +56,7 @@ NUMBA_STAGES = (
 
 def profile(size: int, spp: int, shading: str = "numpy") -> list[tuple[str, float]]:
     from raytrace import pathtrace
-    from shadowvol.scenefile import load_scene
+    from shadowvol import load_scene
 
     scene = load_scene(CORNELL).replace(width=size, height=size)
     pathtrace.render(scene.replace(width=16, height=16), spp=1, shading_name=shading)  # warm-up

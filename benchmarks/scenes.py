@@ -3,7 +3,8 @@
 Every size has the same layout (a 14 x 14 floor, spheres scattered over it by a seeded generator,
 the same camera), only the number and subdivision of the spheres change, so that frame times
 across sizes differ by triangle count, not by what is on screen.  Closed spheres are the common
-case for shadow volumes (each silhouette edge has multiplicity 2, see `shadowvol.raster.silhouettes`).
+case for shadow volumes (each silhouette edge has multiplicity 2, see
+`shadowvol.raster.silhouettes`).
 """
 
 from __future__ import annotations
@@ -12,15 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from shadowvol import Camera, DirectionalLight, Material, PointLight, Scene, SpotLight
 from shadowvol.primitives import Transform, mesh, plane, sphere
-from shadowvol.scene import (
-    Camera,
-    DirectionalLight,
-    Material,
-    PointLight,
-    Scene,
-    SpotLight,
-)
 
 # label -> (spheres, icosphere subdivisions): 20 * 4^s triangles per sphere, plus the floor's 2
 SIZES = {

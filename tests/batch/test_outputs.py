@@ -55,15 +55,9 @@ def test_the_progress_bar_only_on_a_terminal(monkeypatch):
 
 
 def test_the_benchmark_says_when_the_models_are_missing(tmp_path):
-    import importlib.util
+    from benchmarks import bench_batch
 
-    from builders import ROOT
-
-    spec = importlib.util.spec_from_file_location("bench_batch", ROOT / "benchmarks" /
-                                                  "bench_batch.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    assert "the shared models are missing" in module.measure(models=tmp_path)["skipped"]
+    assert "the shared models are missing" in bench_batch.measure(models=tmp_path)["skipped"]
 
 
 @pytest.mark.gl

@@ -1,5 +1,6 @@
-"""The benchmark command runs end to end (`benchmarks/run.py --quick`, tiny scenes) and writes a
-report of the expected shape.  Structure only: nothing here is timed or compared with a target.
+"""The benchmark command runs end to end (`python -m benchmarks.run --quick`, tiny scenes) and
+writes a report of the expected shape.  Structure only: nothing here is timed or compared with a
+target.
 """
 
 from __future__ import annotations
@@ -22,14 +23,15 @@ MESH_SECTIONS = ["## The stencil-overflow check on real meshes", "## Turntable"]
 
 
 def test_quick_benchmark_run_writes_the_report(tmp_path):
-    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "run.py"), "--quick",
-                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=300)
+    done = subprocess.run([sys.executable, "-m", "benchmarks.run", "--quick", "--out",
+                           str(tmp_path)], cwd=ROOT, capture_output=True, text=True,
+                          timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
     md = (tmp_path / "BENCHMARKS.md").read_text()
     results = json.loads((tmp_path / "results.json").read_text())
     for heading in SECTIONS + (MESH_SECTIONS if results["overflow"] else []):
         assert heading in md, heading
-    assert "python benchmarks/run.py --quick" in md
+    assert "python -m benchmarks.run --quick" in md
     assert "llvmpipe" in md or "GL**:" in md
     png = (tmp_path / "benchmarks.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
@@ -52,13 +54,13 @@ def test_quick_benchmark_run_writes_the_report(tmp_path):
 
 
 def test_the_mitsuba_peer_runs_or_says_why_not(tmp_path):
-    """bench_mitsuba.py on a tiny scene: with Mitsuba 3 installed (the bench extra) a row of
-    times (ours, the ray tracer's, Mitsuba's, and the bound: the depth and mask floors and the
+    """benchmarks.bench_mitsuba on a tiny scene: with Mitsuba 3 installed (the bench extra) a row
+    of times (ours, the ray tracer's, Mitsuba's, and the bound: the depth and mask floors and the
     volume pass) and pixel counts; without it, the reason, and exit status 0 either way."""
-    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_mitsuba.py"),
+    done = subprocess.run([sys.executable, "-m", "benchmarks.bench_mitsuba",
                            "--sizes", "1k", "--width", "64", "--height", "48", "--runs", "1",
                            "--json", str(tmp_path / "m.json")],
-                          capture_output=True, text=True, timeout=300)
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
     results = json.loads((tmp_path / "m.json").read_text())
     try:

@@ -1,0 +1,110 @@
+"""The sections of a run measured in processes of their own: the peak RSS of a frame against the
+ray tracer's masks, and the other benchmark modules (EXTRAS)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from .machine import log
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# VmHWM, the peak RSS of this process's memory since exec (ru_maxrss would carry the parent's
+# peak over from fork)
+RSS_CHILD = """
+import time
+def hwm_mb():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+from benchmarks import scenes
+scene = scenes.occluder_scene({size!r}, 1, 1280, 720)
+base = hwm_mb()
+t0 = time.perf_counter()
+if {what!r} == "frame":
+    from shadowvol import Renderer
+    with Renderer(scene) as r:
+        r.render()
+else:
+    from raytrace import shadow_masks
+    shadow_masks(scene)
+print(base, hwm_mb(), time.perf_counter() - t0)
+"""
+
+
+def rss_section(cfg) -> dict:
+    """Peak RSS of one process that builds the scene and renders one frame, against one that
+    computes the ray tracer's masks of it (each in a fresh process: the peak is monotone)."""
+    out = {"size": cfg["rss_size"]}
+    for what in ("frame", "masks"):
+        code = RSS_CHILD.format(size=cfg["rss_size"], what=what)
+        done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                              text=True, check=True)
+        scene_mb, peak_mb, seconds = (float(x) for x in done.stdout.split()[-3:])
+        out[what] = {"after_scene_mb": scene_mb, "peak_mb": peak_mb, "seconds": seconds}
+    log(f"rss {cfg['rss_size']}: frame {out['frame']['peak_mb']:.0f} MB, masks "
+        f"{out['masks']['peak_mb']:.0f} MB")
+    return out
+
+
+# The other issues' benchmarks, each a module of its own (benchmarks/bench_*.py), run by this
+# command in the same run and reported verbatim: (name, arguments, what it measures).  The
+# ground truth's (bench_groundtruth.py) is measured in the run itself: its own section.
+EXTRAS = (
+    ("bench_mitsuba.py", ["--json", "{json}"],
+     "mask-only frames against Mitsuba 3's llvm_ad_rgb masks (an optional peer: the bench "
+     "extra) and raytrace.shadow_masks, bunny, 100k and 1M (issue: frame cost)"),
+    ("bench_soft.py", ["--size", "100k"],
+     "soft shadows: a rect light of N = 1, 4, 16, 64 samples against point lights, and the "
+     "raster against the ray tracer's lit_count (issue: soft shadows)"),
+    ("bench_batch.py", [],
+     "shadowvol batch on the 36-view turntable of the shared meshes: 1 worker, 2 workers, 2 "
+     "shards, Ray with 2 actors, and the machinery's overhead (issue: datasets at scale)"),
+    ("bench_outlook.py", [],
+     "path tracing Mrays/s against raw Embree casts, radiosity at ~1k/4k/16k patches (issue: "
+     "the lecture's outlook)"),
+    ("bench_viewer.py", ["--frames", "15"],
+     "the viewer's frame rate on the shipped scenes, under its own Xvfb (issue: the course)"),
+)
+EXTRA_TIMEOUT_S = 900
+
+
+def _module(script: str) -> str:
+    """The module an EXTRAS script runs as: "bench_soft.py" -> "benchmarks.bench_soft"."""
+    return "benchmarks." + script.removesuffix(".py")
+
+
+def extras_section() -> list[dict]:
+    """Run every EXTRAS script once, in this run, one after another; keep what it prints."""
+    rows = []
+    for script, listed, what in EXTRAS:
+        # "{json}": a file the script writes its results to, kept in results.json
+        json_path = Path(tempfile.mkstemp(suffix=".json")[1]) if "{json}" in listed else None
+        args = [str(json_path) if a == "{json}" else a for a in listed]
+        command = [sys.executable, "-m", _module(script), *args]
+        log(f"extra: {script} {' '.join(args)}")
+        start = time.perf_counter()
+        try:
+            done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True,
+                                  timeout=EXTRA_TIMEOUT_S)
+            output, rc = done.stdout + (done.stderr[-2000:] if done.returncode else ""), \
+                done.returncode
+        except subprocess.TimeoutExpired as exc:
+            output, rc = f"timed out after {exc.timeout} s", None
+        data = None
+        if json_path is not None:
+            try:
+                data = json.loads(json_path.read_text() or "null")
+            except (OSError, ValueError):
+                data = None
+            json_path.unlink(missing_ok=True)
+        shown = [a for a in listed if a not in ("--json", "{json}")]
+        rows.append({"script": script, "command": " ".join(["python -m", _module(script), *shown]),
+                     "what": what, "seconds": time.perf_counter() - start,
+                     "returncode": rc, "output": output.strip(), "results": data})
+    return rows

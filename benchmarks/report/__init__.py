@@ -1,0 +1,27 @@
+"""BENCHMARKS.md and its plot, written from one run's results (`benchmarks.run`).
+
+Each section of the markdown is one function returning its lines (`summary`, `frames`,
+`meshes`, `peers`); the numbers they share are `ratios`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from . import frames, meshes, peers, summary
+from .plot import plot
+
+# the sections after the headline, in the order the markdown gives them
+SECTIONS = (peers.mitsuba, frames.frames, frames.bounds, frames.phases, meshes.overflow,
+            frames.objects, meshes.turntable, peers.pyrender, peers.ray_tracer,
+            peers.ground_truth, frames.memory, summary.extras)
+
+
+def write(results: dict, md_path: Path, png_path: Path) -> None:
+    """BENCHMARKS.md at `md_path` and the plot at `png_path`, from a run's `results`."""
+    plot(results, png_path)
+    lines = summary.header(results, md_path, png_path) + summary.headline_table(results)
+    for section in SECTIONS:
+        lines += section(results)
+    text = "\n".join(lines)
+    md_path.write_text(text if text.endswith("\n") else text + "\n")
