@@ -1,6 +1,6 @@
 """The documentation: pdoc builds the API reference of every module of `shadowvol` and `raytrace`
-from their docstrings with no warning, every `shadowvol.…` / `raytrace.…` a docstring names
-exists, and every path the README and docs/*.md name exists.
+from their docstrings with no warning, and every `shadowvol.…` / `raytrace.…` name and every path
+that a docstring, the README, docs/*.md or scenes/README.md names exists.
 
 Build the reference yourself with `python tests/test_docs.py docs/api` (not committed: it is
 generated).  pdoc imports every module; none needs an optional extra to be imported.
@@ -22,9 +22,15 @@ PACKAGES = ("shadowvol", "raytrace")
 # for its generated constructor (mitmproxy/pdoc#765): the annotation is fine, pdoc's lookup is not
 NAMEDTUPLE_REF = re.compile(r"Error parsing type annotation .* for ([\w.]+)\.__init__\. Import of")
 DOTTED_REF = re.compile(r"`((?:shadowvol|raytrace)(?:\.[A-Za-z_]\w*)+)`")
+# in a document, a name starts a code span (`shadowvol.batch.run(jobs, ...)`) or follows python -m
+DOC_NAME = re.compile(r"`((?:shadowvol|raytrace)(?:\.[A-Za-z_]\w*)+)|python -m ([\w.]+)")
 # a path a document names: a link target, or a backticked or bare token under one of our folders
 DOC_PATH = re.compile(r"\]\(([^)#\s]+)|(?<![\w./-])((?:shadowvol|raytrace|scenes|docs|tests|"
                       r"benchmarks|shaders|\.ci)/[\w./-]*\w)")
+
+
+def documents() -> list[Path]:
+    return [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")), ROOT / "scenes" / "README.md"]
 
 
 def module_names() -> list[str]:
@@ -52,11 +58,13 @@ def _resolves(dotted: str, data: set[str]) -> bool:
             obj = importlib.import_module(".".join(parts[:i]))
         except ImportError:
             continue
-        try:
-            for part in parts[i:]:
-                obj = getattr(obj, part)
-        except AttributeError:
-            return False
+        for part in parts[i:]:
+            if isinstance(obj, type) and not hasattr(obj, part):
+                # an instance attribute the class declares (a dataclass field with init=False)
+                return any(part in vars(c).get("__annotations__", {}) for c in obj.__mro__)
+            if not hasattr(obj, part):
+                return False
+            obj = getattr(obj, part)
         return True
     return False
 
@@ -109,11 +117,15 @@ def build(out: Path) -> list[str]:
         for where, text in _docstrings(module):
             problems += [f"{where}'s docstring names `{ref}`, which does not exist"
                          for ref in DOTTED_REF.findall(text or "") if not _resolves(ref, data)]
+    for doc in documents():
+        for name, module in DOC_NAME.findall(doc.read_text()):
+            if not _resolves(name or module, data):
+                problems.append(f"{doc.relative_to(ROOT)} names {name or module}, which does not exist")
     return problems
 
 
-def test_api_reference_builds_without_a_warning(tmp_path):
-    """In a fresh process: pdoc imports every module (GL modules import moderngl, nothing more)."""
+def test_api_reference_builds_without_a_warning_and_every_name_exists(tmp_path):
+    """In a fresh process, as pdoc imports every module (GL modules import moderngl, no more)."""
     env = {**os.environ,
            "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     done = subprocess.run([sys.executable, str(Path(__file__)), str(tmp_path)], cwd=ROOT, env=env,
@@ -129,9 +141,8 @@ def test_api_reference_builds_without_a_warning(tmp_path):
 
 
 def test_docs_name_only_paths_that_exist():
-    documents = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
     missing = []
-    for doc in documents:
+    for doc in documents():
         for link, token in DOC_PATH.findall(doc.read_text()):
             path = link or token
             if "://" in path or path.startswith("mailto:"):
