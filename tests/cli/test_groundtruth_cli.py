@@ -89,8 +89,8 @@ def test_shadowvol_render_masks_hold_the_camera_and_the_image_goes_to_exr(ctx, s
     assert (tmp_path / "s-16bit.png").read_bytes()[24] == 16
 
 
-def test_readme_synthetic_data_example_runs_from_any_folder(tmp_path):
-    """The README's synthetic-data example, as written, in a fresh process in an empty folder
+def test_the_datasets_ground_truth_example_runs_from_any_folder(tmp_path):
+    """docs/datasets.md's ground-truth example, as written, in a fresh process in an empty folder
     (at a small image size): three views, each its EXR, 16-bit PNG, NPZ and picture."""
     import re
     import subprocess
@@ -98,7 +98,8 @@ def test_readme_synthetic_data_example_runs_from_any_folder(tmp_path):
 
     from builders import ROOT
 
-    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "datasets.md").read_text(),
+                        flags=re.S)
     block = next(b for b in blocks if "ground_truth" in b)
     line = 'shadowvol.load_scene(shadowvol.example_scene("stack"))'
     assert line in block
