@@ -237,6 +237,7 @@ def long_docs(root: Path) -> list[str]:
 _PATH = re.compile(r"(?<![\w./:-])((?:\.ci|[a-z_]+)/(?:[\w.-]+/)*[\w-]+(?:\.[a-z0-9]+)+|"
                    r"(?:\.ci|[a-z_]+)/(?:[\w.-]+/)+)(?![\w*{<])")
 _DOTTED = re.compile(r"(?<![\w./-])((?:shadowvol|raytrace)(?:\.[A-Za-z_]\w*)+)")
+_RUN_MODULE = re.compile(r"python3? -m ([\w.]+)")
 
 
 def _texts(root: Path):
@@ -301,6 +302,11 @@ def _dotted_exists(root: Path, dotted: str) -> bool:
     return True
 
 
+def _module_exists(root: Path, module: str) -> bool:
+    path = root.joinpath(*module.split("."))
+    return path.with_suffix(".py").exists() or (path / "__main__.py").exists()
+
+
 def _path_exists(root: Path, source: Path, path: str) -> bool:
     path = path.rstrip("/")
     candidates = [root / path, source.parent / path, root / "shadowvol" / path]
@@ -322,6 +328,10 @@ def broken_references(root: Path) -> list[str]:
             dotted = match.group(1).rstrip(".")
             if not _dotted_exists(root, dotted):
                 out.append(f"{rel}:{line}: names {dotted}, which does not exist")
+        for match in _RUN_MODULE.finditer(text):
+            module = match.group(1).rstrip(".")
+            if module.split(".")[0] in TOP_DIRS and not _module_exists(root, module):
+                out.append(f"{rel}:{line}: runs python -m {module}, which does not exist")
     return out
 
 
@@ -407,6 +417,9 @@ PLANTED = {
                             {"raytrace/x.py": "x = 1  # as shadowvol.course.planar does\n",
                              "shadowvol/course/__init__.py": ""},
                             "raytrace/x.py:1: names shadowvol.course.planar", "does not exist"),
+    "module run": (broken_references, {"docs/x.md": "Run `python -m benchmarks.gone`.\n",
+                                       "benchmarks/__init__.py": ""},
+                   "docs/x.md:1: runs python -m benchmarks.gone", "does not exist"),
     "name in a module": (broken_references,
                          {"README.md": "`shadowvol.scene.Gone` is\n"},
                          "README.md:1: names shadowvol.scene.Gone", "does not exist"),
@@ -424,6 +437,8 @@ def test_references_that_exist_are_not_flagged(tmp_path):
     root = _tree(tmp_path, {
         "shadowvol/raster/truth.py": '"""See shadowvol/scene.py, shadowvol.scene.Camera."""\n',
         "shadowvol/scene.py": "class Camera:\n    pass\n",
-        "README.md": "[a](docs/x.md#part), out/cage.png, `shadowvol.raster.truth`, scenes/*.toml\n",
-        "docs/x.md": ""})
+        "README.md": "[a](docs/x.md#part), out/cage.png, `shadowvol.raster.truth`, scenes/*.toml\n"
+                     "python -m shadowvol render, python -m benchmarks.run\n",
+        "docs/x.md": "[back](../README.md)\n", "shadowvol/__main__.py": "",
+        "benchmarks/run.py": ""})
     assert broken_references(root) == []
