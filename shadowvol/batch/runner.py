@@ -24,8 +24,7 @@ from shadowvol import memory
 from shadowvol.batch import egl, frames, local, manifest
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.store import FORMATS, FileStore, TarStore
-from shadowvol.cli import status
-from shadowvol.errors import require
+from shadowvol.errors import BAD_INPUT, OK, require
 from shadowvol.scene import Scene, SceneError
 
 DEFAULT_SAMPLES_PER_TAR = 1000
@@ -43,7 +42,7 @@ class Summary:
     failed: int = 0
     bad_jobs: int = 0
     seconds: float = 0.0
-    status: int = status.OK
+    status: int = OK
     manifest: Path | None = None
     errors: list[str] = field(default_factory=list)
 
@@ -183,11 +182,11 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         for job in entries:
             if isinstance(job, JobError):
                 record = {"id": f"job/{job.name}", "job": job.name, "source": job.source,
-                          "error": job.error, "status": status.BAD_INPUT}
+                          "error": job.error, "status": BAD_INPUT}
                 journal.add(record)
                 done[record["id"]] = record
                 summary.bad_jobs += 1
-                summary.status = max(summary.status, status.BAD_INPUT)
+                summary.status = max(summary.status, BAD_INPUT)
                 summary.errors.append(f"{job.source}: {job.error}")
         todo_specs = [s for u in todo for s in units[u]]
         by_id = {s["id"]: s for s in todo_specs}
