@@ -66,7 +66,7 @@ def test_raytrace_imports_only_the_model_io_pictures_and_status():
 def test_raytrace_renders_with_gl_and_pyrender_blocked(tmp_path):
     code = BLOCK.replace("NAMES", repr(("moderngl", "glcontext", "pyrender", "OpenGL"))) + textwrap.dedent(f"""
         import raytrace
-        from raytrace.cli import main
+        from shadowvol.cli.raytrace import main
         from shadowvol.scenefile import load_scene
         scene = load_scene({str(SCENES / "cage.toml")!r}).replace(width=32, height=24)
         image = raytrace.render(scene, progress=False)
