@@ -7,8 +7,9 @@
     truth = raytrace.ground_truth(scene)          # + depth, normal, object_id, facing, casters
 
 It shares with the rasterizer only the scene model, the writers (`shadowvol.io`,
-`shadowvol.pictures`), the exit-status table (`shadowvol.cli.status`) and docs/CONVENTIONS.md,
-never its code, so that it stays an independent witness.  It never imports GL.
+`shadowvol.pictures`), the errors and their exit statuses (`shadowvol.errors`) and
+docs/CONVENTIONS.md, never its code, so that it stays an independent witness.  It never imports
+GL, and holds no command: its command line is `shadowvol.cli.raytrace`.
 """
 
 from __future__ import annotations

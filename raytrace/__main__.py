@@ -1,7 +1,8 @@
-"""`python -m raytrace`: the same as the `raytrace` command."""
+"""`python -m raytrace`: the same as the `raytrace` command, whose code is the command line's
+(`shadowvol.cli.raytrace`): the one import of the command line from the ray tracer."""
 
 import sys
 
-from raytrace.cli import main
+from shadowvol.cli.raytrace import main
 
 sys.exit(main())

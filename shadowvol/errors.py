@@ -1,13 +1,24 @@
-"""The project's error classes that say which exit status they mean (shadowvol.cli.status).
+"""The project's error classes and the exit status each means, with the one-line message.
 
 `SceneError` (bad input) lives with the scene model; these are the rest, GL-free so that the
-ray tracer and the CLI can name them without importing GL.
+ray tracer, batch and the CLI can name them without importing GL.  The statuses' table and the
+printing are the command line's (`shadowvol.cli.status`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import importlib
+import sys
+
+from shadowvol import signals
+
+OK = 0
+OVER_BUDGET = 1
+BAD_INPUT = 2
+RENDER_FAILED = 3
+INTERRUPTED = 130  # 128 + SIGINT, the shell's convention
+TERMINATED = 143   # 128 + SIGTERM
 
 
 class RenderError(RuntimeError):
@@ -57,3 +68,39 @@ def require(module: str, what: str, extra: str | None = None, package: str | Non
         if exc.name is not None and exc.name.split(".")[0] != module.split(".")[0]:
             raise  # the package is there but broken inside: let that error speak
         raise MissingExtra(what, package or module.split(".")[0], extra) from None
+
+
+def status_of(exc: BaseException) -> int | None:
+    """The exit status an exception means, or None for one no command should meet (a bug).
+
+    SceneError and moderngl.Error are looked up only where their modules were imported (the
+    model and GL sit above this module): an exception of a module never loaded cannot exist."""
+    scene = sys.modules.get("shadowvol.scene")
+    if isinstance(exc, MissingExtra) or (scene is not None and isinstance(exc, scene.SceneError)):
+        return BAD_INPUT
+    if isinstance(exc, (RenderError, MemoryError)):
+        return RENDER_FAILED
+    moderngl = sys.modules.get("moderngl")
+    if moderngl is not None and isinstance(exc, moderngl.Error):
+        return RENDER_FAILED
+    if isinstance(exc, OSError):
+        return BAD_INPUT  # a file that cannot be read or written
+    if isinstance(exc, KeyboardInterrupt):
+        return INTERRUPTED
+    if isinstance(exc, signals.Terminated):
+        return TERMINATED
+    return None
+
+
+def message(exc: BaseException) -> str:
+    """The one line an exception is reported as (after `error: `)."""
+    if isinstance(exc, MemoryError):
+        # numpy's says how much it could not allocate: "Unable to allocate 3.00 GiB for ..."
+        what = str(exc) if isinstance(exc, OutOfMemory) else \
+            "while rendering" + (f" ({exc})" if str(exc) else "")
+        return f"out of memory {what}; try a smaller image or fewer triangles"
+    if isinstance(exc, KeyboardInterrupt):
+        return "interrupted"
+    if isinstance(exc, signals.Terminated):
+        return "terminated"
+    return str(exc) or type(exc).__name__

@@ -295,11 +295,3 @@ def gl_in_host(renderer_name: str) -> bool:
     """Whether a GL of this GL_RENDERER string keeps its frames in the process's memory (a
     software renderer, `SOFTWARE_GL`)."""
     return any(name in renderer_name.lower() for name in SOFTWARE_GL)
-
-
-def add_option(parser) -> None:
-    """The `--memory-budget SIZE` option of the commands that check one."""
-    parser.add_argument(
-        "--memory-budget", metavar="SIZE", default=None,
-        help=f"refuse an image whose estimated memory (shadowvol.memory) exceeds SIZE, e.g. "
-             f"12GiB (default: ${ENV}, else {DEFAULT_FRACTION * 100:.0f}%% of this machine's memory)")

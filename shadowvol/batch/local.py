@@ -29,7 +29,7 @@ from multiprocessing.connection import wait
 
 from shadowvol import memory
 from shadowvol.batch.worker import MAX_RENDERERS, Worker, thread_settings
-from shadowvol.cli import status
+from shadowvol.errors import RENDER_FAILED
 from shadowvol.scene import Scene
 from shadowvol.scenefile import load_scene
 
@@ -146,7 +146,7 @@ def next_task(runs: list[deque], index: int) -> list[dict] | None:
 
 def _died(child: _Child) -> list[dict]:
     code = child.process.exitcode
-    return [{"id": spec["id"], "status": status.RENDER_FAILED,
+    return [{"id": spec["id"], "status": RENDER_FAILED,
              "error": f"a worker process died (exit code {code}) while it held this frame"}
             for task in child.flying for spec in task]
 
@@ -205,7 +205,7 @@ def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
                     for other in alive:  # they share what is left of its lane
                         feed(other)
         # every worker died: what was never sent fails too
-        yield from ({"id": spec["id"], "status": status.RENDER_FAILED,
+        yield from ({"id": spec["id"], "status": RENDER_FAILED,
                      "error": "every worker process died"}
                     for run in runs for task in run for spec in task)
         finished = True

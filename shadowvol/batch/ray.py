@@ -28,8 +28,7 @@ from collections.abc import Iterator
 from shadowvol import memory
 from shadowvol.batch.local import lanes, next_task
 from shadowvol.batch.worker import MAX_RENDERERS, Worker, thread_settings
-from shadowvol.cli import status
-from shadowvol.errors import require
+from shadowvol.errors import RENDER_FAILED, require
 from shadowvol.scene import Scene
 from shadowvol.scenefile import load_scene
 
@@ -159,7 +158,7 @@ class _Pool:
                     for lane in self.lanes:
                         while lane:
                             for spec in lane.popleft():
-                                yield {"id": spec["id"], "status": status.RENDER_FAILED,
+                                yield {"id": spec["id"], "status": RENDER_FAILED,
                                        "error": f"every Ray actor died ({type(exc).__name__})"}
                 done = []
             yield from done

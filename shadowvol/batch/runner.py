@@ -24,8 +24,7 @@ from shadowvol import memory
 from shadowvol.batch import egl, frames, local, manifest
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.store import FORMATS, FileStore, TarStore
-from shadowvol.cli import status
-from shadowvol.errors import require
+from shadowvol.errors import BAD_INPUT, OK, require
 from shadowvol.scene import Scene, SceneError
 
 DEFAULT_SAMPLES_PER_TAR = 1000
@@ -43,7 +42,7 @@ class Summary:
     failed: int = 0
     bad_jobs: int = 0
     seconds: float = 0.0
-    status: int = status.OK
+    status: int = OK
     manifest: Path | None = None
     errors: list[str] = field(default_factory=list)
 
@@ -143,19 +142,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     Returns a Summary; a bad job or frame is recorded in the manifest and the others go on.
     """
     began = time.perf_counter()
-    if isinstance(shard, str):
-        shard = parse_shard(shard)
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise SceneError("--workers", f"must be a whole number >= 1, got {workers!r}")
-    if format not in FORMATS:
-        raise SceneError("--format", f"must be one of {', '.join(FORMATS)}, got {format!r}")
-    if isinstance(samples_per_tar, bool) or not isinstance(samples_per_tar, int) or \
-            samples_per_tar < 1:
-        raise SceneError("--samples-per-tar", f"must be a whole number >= 1, got "
-                                              f"{samples_per_tar!r}")
-    memory.budget(memory_budget)  # a bad budget is an error now, not one per frame
-    if egl.parse(egl_device) is not None and not ray:
-        egl.choose(egl_device)  # a bad index is an error naming this machine's devices, now
+    shard = _checked(workers, shard, format, samples_per_tar, memory_budget, egl_device, ray)
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise SceneError("-o", f"{str(out)!r} is not a folder")
@@ -171,50 +158,19 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     else:
         store.clean(list(plan.mine))
     manifest.remove_stale_parts(out, {own})
-    units, hashes, scenes = plan.units, plan.hashes, plan.scenes
-    mine = plan.mine
-
+    units, mine = plan.units, plan.mine
     summary = Summary(frames=sum(len(units[u]) for u in mine),
                       skipped=sum(len(units[u]) for u in mine) - sum(len(units[u]) for u in todo),
                       manifest=out / own)
     journal = manifest.Journal(out / own)
     done: dict[str, dict] = dict(kept)
     try:
-        for job in entries:
-            if isinstance(job, JobError):
-                record = {"id": f"job/{job.name}", "job": job.name, "source": job.source,
-                          "error": job.error, "status": status.BAD_INPUT}
-                journal.add(record)
-                done[record["id"]] = record
-                summary.bad_jobs += 1
-                summary.status = max(summary.status, status.BAD_INPUT)
-                summary.errors.append(f"{job.source}: {job.error}")
-        todo_specs = [s for u in todo for s in units[u]]
-        by_id = {s["id"]: s for s in todo_specs}
-        unit_of = {s["id"]: u for u in todo for s in units[u]}
-        waiting = {u: {} for u in todo}  # webdataset: unit -> id -> result, until complete
-        bar = _bar(len(todo_specs), progress)
-        for result in _results(todo_specs, scenes, workers, ray, egl_device, start_method,
-                               gpus_per_worker, memory_budget):
-            spec = by_id[result["id"]]
-            if format == "files":
-                _record(journal, done, summary, spec, result, hashes, store)
-            else:
-                u = unit_of[spec["id"]]
-                waiting[u][spec["id"]] = result
-                if len(waiting[u]) == len(units[u]):
-                    got = waiting.pop(u)
-                    pairs = [(s, got[s["id"]]) for s in units[u]]
-                    tar_record, files = store.write(u, pairs)
-                    for s, r in pairs:
-                        _record(journal, done, summary, s, r, hashes, None,
-                                files=files.get(s["id"]))
-                    journal.add(tar_record)
-                    done[tar_record["id"]] = tar_record
-            if bar is not None:
-                bar.update()
-        if bar is not None:
-            bar.close()
+        _record_bad_jobs(entries, journal, done, summary)
+        specs = [s for u in todo for s in units[u]]
+        bar = _bar(len(specs), progress)
+        results = _results(specs, plan.scenes, workers, ray, egl_device, start_method,
+                           gpus_per_worker, memory_budget)
+        _make(plan, todo, results, journal, done, summary, store, format, bar)
         # the final manifest: one line per frame of this share, in job-file order, then the tars
         ordered = [done[f"job/{job.name}"] for job in entries if isinstance(job, JobError)]
         ordered += [done[s["id"]] for u in mine for s in units[u] if s["id"] in done]
@@ -224,6 +180,67 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         journal.close()
     summary.seconds = time.perf_counter() - began
     return summary
+
+
+def _checked(workers, shard, format, samples_per_tar, memory_budget, egl_device, ray
+             ) -> tuple[int, int]:
+    """The shard as (I, N); SceneError for an argument that cannot run, before any work."""
+    if isinstance(shard, str):
+        shard = parse_shard(shard)
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise SceneError("--workers", f"must be a whole number >= 1, got {workers!r}")
+    if format not in FORMATS:
+        raise SceneError("--format", f"must be one of {', '.join(FORMATS)}, got {format!r}")
+    if isinstance(samples_per_tar, bool) or not isinstance(samples_per_tar, int) or \
+            samples_per_tar < 1:
+        raise SceneError("--samples-per-tar", f"must be a whole number >= 1, got "
+                                              f"{samples_per_tar!r}")
+    memory.budget(memory_budget)  # a bad budget is an error now, not one per frame
+    if egl.parse(egl_device) is not None and not ray:
+        egl.choose(egl_device)  # a bad index is an error naming this machine's devices, now
+    return shard
+
+
+def _record_bad_jobs(entries, journal, done, summary) -> None:
+    """A job that cannot run gets one manifest line (status 2); the others go on."""
+    for job in entries:
+        if isinstance(job, JobError):
+            record = {"id": f"job/{job.name}", "job": job.name, "source": job.source,
+                      "error": job.error, "status": BAD_INPUT}
+            journal.add(record)
+            done[record["id"]] = record
+            summary.bad_jobs += 1
+            summary.status = max(summary.status, BAD_INPUT)
+            summary.errors.append(f"{job.source}: {job.error}")
+
+
+def _make(plan, todo, results, journal, done, summary, store, format, bar) -> None:
+    """Record the frames as their results come (in any order); a webdataset tar is written
+    once all of its frames are in."""
+    units, hashes = plan.units, plan.hashes
+    by_id = {s["id"]: s for u in todo for s in units[u]}
+    unit_of = {s["id"]: u for u in todo for s in units[u]}
+    waiting = {u: {} for u in todo}  # webdataset: unit -> id -> result, until complete
+    for result in results:
+        spec = by_id[result["id"]]
+        if format == "files":
+            _record(journal, done, summary, spec, result, hashes, store)
+        else:
+            u = unit_of[spec["id"]]
+            waiting[u][spec["id"]] = result
+            if len(waiting[u]) == len(units[u]):
+                got = waiting.pop(u)
+                pairs = [(s, got[s["id"]]) for s in units[u]]
+                tar_record, files = store.write(u, pairs)
+                for s, r in pairs:
+                    _record(journal, done, summary, s, r, hashes, None,
+                            files=files.get(s["id"]))
+                journal.add(tar_record)
+                done[tar_record["id"]] = tar_record
+        if bar is not None:
+            bar.update()
+    if bar is not None:
+        bar.close()
 
 
 class _Plan:

@@ -26,7 +26,7 @@ from shadowvol import __version__, memory, signals
 from shadowvol.batch import egl, frames
 from shadowvol.batch.outputs import OUTPUTS, fields_of
 from shadowvol.cameras import calibration
-from shadowvol.cli import status
+from shadowvol.errors import RENDER_FAILED, message, status_of
 from shadowvol.io import GROUND_TRUTH
 from shadowvol.scene import Camera, Scene, light_samples
 from shadowvol.scenefile import light_from_dict, load_scene
@@ -160,10 +160,10 @@ class Worker:
         except (KeyboardInterrupt, signals.Terminated):
             raise
         except Exception as exc:  # noqa: BLE001 - a bad frame is recorded, the others go on
-            code = status.status_of(exc)
-            text = status.message(exc) if code is not None else f"{type(exc).__name__}: {exc}"
+            code = status_of(exc)
+            text = message(exc) if code is not None else f"{type(exc).__name__}: {exc}"
             return {"id": spec["id"], "error": text,
-                    "status": code if code is not None else status.RENDER_FAILED}
+                    "status": code if code is not None else RENDER_FAILED}
         return {"id": spec["id"], "outputs": encoded, "camera": camera_dict(camera),
                 "lights": [light_dict(x) for x in lights], "size": [scene.width, scene.height],
                 "seconds": {"scene": round(loaded - start, 6),

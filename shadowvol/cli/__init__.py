@@ -1,5 +1,5 @@
 """The command line of both tools: `shadowvol` (`shadowvol.cli.main`), `raytrace`
-(`raytrace.cli`) and the one exit-status table (`shadowvol.cli.status`) they share.
+(`shadowvol.cli.raytrace`) and the one exit-status table (`shadowvol.cli.status`) they share.
 
 The console scripts enter through `shadowvol_entry` and `raytrace_entry` here: they catch Ctrl-C and
 SIGTERM while the commands' modules are still being imported (GL, numpy, Pillow), which would
@@ -20,8 +20,8 @@ def shadowvol_entry(argv=None) -> int:
 
 
 def raytrace_entry(argv=None) -> int:
-    """`raytrace ...` (see `raytrace.cli`)."""
-    return _enter("raytrace.cli", argv)
+    """`raytrace ...` (see `shadowvol.cli.raytrace`)."""
+    return _enter("shadowvol.cli.raytrace", argv)
 
 
 def _enter(module: str, argv) -> int:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from shadowvol import memory
 from shadowvol.batch.runner import DEFAULT_SAMPLES_PER_TAR, parse_shard, run
 from shadowvol.batch.store import FORMATS
+from shadowvol.cli import args as blocks
 from shadowvol.cli import status
 
 EPILOG = """\
@@ -24,13 +24,13 @@ the others go on; the exit status is 0 only when every frame was made.
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "batch", help="render a job file into a dataset (local pool, shards or Ray)",
+    p = blocks.command(
+        subparsers, "batch", help="render a job file into a dataset (local pool, shards or Ray)",
         description="Render every frame of JOBS into OUT, resumably and deterministically: the "
                     "same files whatever the workers, shards or Ray actors that made them.",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=EPILOG)
     p.add_argument("jobs", metavar="JOBS", help="the job file (.jsonl)")
-    p.add_argument("-o", "--output", required=True, metavar="OUT", help="the dataset folder")
+    blocks.output(p, "OUT", "the dataset folder")
     p.add_argument("--workers", type=int, default=1, metavar="N",
                    help="worker processes on this machine (spawned, each with one GL context "
                         "and a renderer per scene, cores/N threads each), or Ray actors with "
@@ -58,7 +58,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help=f"frames per webdataset tar (default {DEFAULT_SAMPLES_PER_TAR})")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="a progress bar with frames/s and ETA (default: only on a terminal)")
-    memory.add_option(p)
+    blocks.memory_budget(p)
     p.set_defaults(func=command)
     return p
 

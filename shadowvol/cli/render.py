@@ -8,9 +8,10 @@ import sys
 from pathlib import Path
 
 from shadowvol import memory
+from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
 from shadowvol.errors import OutOfMemory, RenderError
-from shadowvol.io import encode_srgb, save_exr, save_masks, save_png, save_png16
+from shadowvol.io import GROUND_TRUTH, encode_srgb, save_exr, save_masks, save_png, save_png16
 from shadowvol.pictures import heat_maps
 from shadowvol.raster.context import create_context
 from shadowvol.raster.renderer import Renderer
@@ -38,16 +39,14 @@ SCENE_SUFFIXES = (".toml", ".json")
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "render", help="render scenes with stencil shadow volumes",
+    p = blocks.command(
+        subparsers, "render", help="render scenes with stencil shadow volumes",
         description="Render SCENE with exact hard shadows counted in the stencil buffer "
                     "(direct Phong lighting: ambient + each light where unshadowed).",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scene", metavar="SCENE", nargs="*",
-                   help="scene file (.toml or .json); several: -o is a directory")
-    p.add_argument("-o", "--output", required=True, metavar="PNG|DIR",
-                   help="where to write the image (one scene: a .png) or the images (several "
-                        "scenes: a directory)")
+        epilog=EPILOG)
+    blocks.scene(p, blocks.SCENE_HELP + "; several: -o is a directory", nargs="*")
+    blocks.output(p, "PNG|DIR", "where to write the image (one scene: a .png) or the images "
+                                "(several scenes: a directory)")
     p.add_argument("--method", choices=("auto", "zpass", "zfail"), default="auto",
                    help="how volumes are counted: zpass (from the near plane to the surface; "
                         "wrong when the near plane cuts a volume, e.g. the camera stands in a "
@@ -71,17 +70,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "with a legend (0: lit, the image darkened; 1, 2, ... yellow to red to "
                         "violet; negative: blue).  Every triangle casts, so a closed object "
                         "counts 2 behind it (its front and its back)")
-    p.add_argument("--outputs", metavar="LIST", default=None,
-                   help="ground truth to add to the mask file, comma-separated: depth, "
-                        "distance, normal, object_id, facing, casters (or all); see "
-                        "docs/CONVENTIONS.md.  Implies --masks (beside the image unless named)")
-    p.add_argument("--exr", metavar="EXR", nargs="?", const=True,
-                   help="also write the image as linear OpenEXR (32-bit float RGB); without a "
-                        "name, beside the image")
+    blocks.ground_truth(p, "ground truth to add to the mask file, comma-separated: "
+                           f"{', '.join(GROUND_TRUTH)} (or all); see docs/CONVENTIONS.md.  "
+                           "Implies --masks (beside the image unless named)")
+    blocks.exr(p, "also write the image as linear OpenEXR (32-bit float RGB); without a name, "
+                  "beside the image", nargs="?", const=True)
     p.add_argument("--png16", metavar="PNG", nargs="?", const=True,
                    help="also write the image as a 16-bit sRGB PNG; without a name, beside the "
                         "image (NAME-16bit.png)")
-    memory.add_option(p)
+    blocks.memory_budget(p)
     p.set_defaults(func=command)
     return p
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
 from shadowvol.course.shadow2d import (
     as_light,
@@ -42,10 +43,11 @@ shadow polygons.  Without any input, --example draws the course's example.
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "shadow2d", help="the 2D shadow-polygon exercise: list and draw shadow polygons",
+    p = blocks.command(
+        subparsers, "shadow2d",
+        help="the 2D shadow-polygon exercise: list and draw shadow polygons",
         description="Shadow polygons of segments lit by a point light in the unit square.",
-        epilog=INPUT_HELP + "\n" + status.EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        epilog=INPUT_HELP + "\n" + status.EPILOG)
     add_shadow2d_arguments(p)
     p.set_defaults(func=command)
     return p

@@ -1,8 +1,8 @@
 """The one exit-status table of both command-line tools, `shadowvol` and `raytrace`.
 
-Every command returns one of these, and its --help prints `EPILOG`.  `report` turns an
-exception into one line on stderr and its status, so no command prints a traceback for an error
-it can name.  GL-free: `raytrace` imports it too.
+Every command returns one of these statuses (`shadowvol.errors` decides them), and its --help
+prints `EPILOG`.  `report` turns an exception into one line on stderr and its status, so no
+command prints a traceback for an error it can name.  GL-free.
 """
 
 from __future__ import annotations
@@ -10,15 +10,16 @@ from __future__ import annotations
 import sys
 
 from shadowvol import signals
-from shadowvol.errors import MissingExtra, OutOfMemory, RenderError
-from shadowvol.scene import SceneError
-
-OK = 0
-OVER_BUDGET = 1
-BAD_INPUT = 2
-RENDER_FAILED = 3
-INTERRUPTED = 130  # 128 + SIGINT, the shell's convention
-TERMINATED = 143   # 128 + SIGTERM
+from shadowvol.errors import (  # noqa: F401 - the statuses, named here for the commands
+    BAD_INPUT,
+    INTERRUPTED,
+    OK,
+    OVER_BUDGET,
+    RENDER_FAILED,
+    TERMINATED,
+    message,
+    status_of,
+)
 
 TABLE = (
     (OK, "success"),
@@ -34,37 +35,6 @@ TABLE = (
 
 EPILOG = "exit status: " + "; ".join(f"{code} {text}" for code, text in TABLE) + \
     ".  Outputs are written atomically: a failed or interrupted command leaves no half file."
-
-
-def status_of(exc: BaseException) -> int | None:
-    """The exit status an exception means, or None for one no command should meet (a bug)."""
-    if isinstance(exc, (SceneError, MissingExtra)):
-        return BAD_INPUT
-    if isinstance(exc, (RenderError, MemoryError)):
-        return RENDER_FAILED
-    moderngl = sys.modules.get("moderngl")  # never imported here: only if GL was used
-    if moderngl is not None and isinstance(exc, moderngl.Error):
-        return RENDER_FAILED
-    if isinstance(exc, OSError):
-        return BAD_INPUT  # a file that cannot be read or written
-    if isinstance(exc, KeyboardInterrupt):
-        return INTERRUPTED
-    if isinstance(exc, signals.Terminated):
-        return TERMINATED
-    return None
-
-
-def message(exc: BaseException) -> str:
-    if isinstance(exc, MemoryError):
-        # numpy's says how much it could not allocate: "Unable to allocate 3.00 GiB for ..."
-        what = str(exc) if isinstance(exc, OutOfMemory) else \
-            "while rendering" + (f" ({exc})" if str(exc) else "")
-        return f"out of memory {what}; try a smaller image or fewer triangles"
-    if isinstance(exc, KeyboardInterrupt):
-        return "interrupted"
-    if isinstance(exc, signals.Terminated):
-        return "terminated"
-    return str(exc) or type(exc).__name__
 
 
 def report(exc: BaseException, prefix: str = "") -> int:

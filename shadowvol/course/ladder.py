@@ -16,13 +16,11 @@ takes the emitters' colour too.  One display for all
 rungs, so that brightness and colour compare across the picture: white-balanced to the
 emitters' colour (as a camera would be), exposed on the path-traced rung.
 
-    python -m shadowvol.course.ladder scenes/cornell.toml -o docs/ladder.png
+    python -m shadowvol.cli.ladder scenes/cornell.toml -o docs/ladder.png
 """
 
 from __future__ import annotations
 
-import argparse
-import sys
 import time
 
 import numpy as np
@@ -33,10 +31,9 @@ from raytrace.camera import primary_rays
 from raytrace.direct import emitter_points
 from raytrace.intersect import dot
 from shadowvol.course.layout import labelled, titled
-from shadowvol.io import encode_srgb, save_png
+from shadowvol.io import encode_srgb
 from shadowvol.pictures import column, row
-from shadowvol.scene import PointLight, Scene, SceneError
-from shadowvol.scenefile import load_scene
+from shadowvol.scene import PointLight, Scene
 
 # The exposure maps this percentile of the path-traced rung's radiance to EXPOSURE_WHITE.
 EXPOSURE_PERCENTILE = 97.0
@@ -153,36 +150,3 @@ def picture(images: list[np.ndarray], balance: np.ndarray, scene_name: str = "")
         panels.append(labelled(labelled(panel, term, small=True), name, small=False))
     title = "The rendering equation, rung by rung" + (f": {scene_name}" if scene_name else "")
     return titled(column([row(panels)]), title, small=False)
-
-
-def main(argv: list[str] | None = None) -> int:
-
-    ap = argparse.ArgumentParser(prog="python -m shadowvol.course.ladder",
-                                 description="Render the ladder picture (local -> Whitted -> "
-                                             "direct -> path traced -> radiosity).")
-    ap.add_argument("scene", help="a scene with emissive surfaces, e.g. scenes/cornell.toml")
-    ap.add_argument("-o", "--output", required=True, help="PNG to write")
-    ap.add_argument("--spp", type=int, default=256)
-    ap.add_argument("--level", type=int, default=4)
-    ap.add_argument("--rays", type=int, default=1024)
-    ap.add_argument("--size", type=int, default=None, help="square image size (default: the "
-                                                           "scene's)")
-    args = ap.parse_args(argv)
-    try:
-        scene = load_scene(args.scene)
-    except SceneError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    if args.size:
-        scene = scene.replace(width=args.size, height=args.size)
-    images, info = rungs(scene, spp=args.spp, level=args.level, rays=args.rays)
-    save_png(args.output, picture(images, np.array(info["white_balance"]), scene.name))
-    for key, value in info.items():
-        print(f"{key}: {value:.2f}" if isinstance(value, float) else f"{key}: {value}",
-              file=sys.stderr)
-    print(f"wrote {args.output}", file=sys.stderr)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

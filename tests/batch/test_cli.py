@@ -17,9 +17,9 @@ import pytest
 from builders import ROOT, job_lines, write_jobs
 
 from shadowvol import batch
-from shadowvol.batch import egl
 from shadowvol.cli import status
 from shadowvol.cli.main import main
+from shadowvol.raster.egl import devices
 
 
 def test_help_prints_the_exit_status_table(capsys):
@@ -33,7 +33,7 @@ def test_help_prints_the_exit_status_table(capsys):
 def test_an_egl_device_by_index_and_a_bad_one(tmp_path, capsys):
     jobs = write_jobs(tmp_path / "jobs.jsonl", job_lines(frames=1, size=(16, 12),
                                                          raytrace=False))
-    found = egl.devices()
+    found = devices()
     assert found, "EGL lists no device here"
     assert main(["batch", str(jobs), "-o", str(tmp_path / "out"), "--egl-device", "0"]) == 0
     record = json.loads((tmp_path / "out" / "manifest.jsonl").read_text())

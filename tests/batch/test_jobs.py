@@ -14,6 +14,7 @@ from shadowvol.batch import egl, frames
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.runner import parse_shard, share
 from shadowvol.io import npz_bytes, tar_bytes
+from shadowvol.raster.egl import Device, devices
 from shadowvol.scene import Camera, PointLight, SceneError
 
 
@@ -95,9 +96,9 @@ def test_jitter_depends_only_on_seed_and_index():
 
 
 def test_egl_device_choice():
-    mesa = egl.Device(2, ("EGL_MESA_device_software",), None, None, None)
-    gpus = [egl.Device(0, ("EGL_NV_device_cuda",), "/dev/dri/card1", "H200", 1),
-            egl.Device(1, ("EGL_NV_device_cuda",), "/dev/dri/card0", "H200", 0), mesa]
+    mesa = Device(2, ("EGL_MESA_device_software",), None, None, None)
+    gpus = [Device(0, ("EGL_NV_device_cuda",), "/dev/dri/card1", "H200", 1),
+            Device(1, ("EGL_NV_device_cuda",), "/dev/dri/card0", "H200", 0), mesa]
     assert egl.choose("auto", gpus)[0] == 1  # CUDA device 0, wherever EGL lists it
     assert egl.choose("auto", [mesa])[0] == 0
     assert egl.choose("2", gpus)[0] == 2
@@ -107,7 +108,7 @@ def test_egl_device_choice():
     for bad in ("-1", "gpu0", True, 1.5):
         with pytest.raises(SceneError, match="--egl-device"):
             egl.choose(bad, gpus)
-    found = egl.devices()  # this machine's, by the real queries
+    found = devices()  # this machine's, by the real queries
     assert all(d.index == i for i, d in enumerate(found))
 
 

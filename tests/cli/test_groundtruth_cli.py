@@ -9,8 +9,8 @@ import pytest
 from builders import SCENES
 
 import raytrace
-from raytrace.cli import main
 from raytrace.groundtruth import ground_truth
+from shadowvol.cli.raytrace import main
 from shadowvol.io import load_mask_arrays
 from shadowvol.scenefile import load_scene
 

@@ -1,5 +1,5 @@
-"""The layer rules of docs/ARCHITECTURE.md: who may import GL, what `raytrace` may import from
-shadowvol, and what importing either package costs."""
+"""The layer rules of docs/ARCHITECTURE.md: who may import GL, ctypes and argparse, what
+`raytrace` and `batch` may import from shadowvol, and what importing either package costs."""
 
 from __future__ import annotations
 
@@ -12,12 +12,14 @@ import pytest
 from builders import ROOT, SCENES
 
 GL_MODULES = ("moderngl", "glcontext")
-# what raytrace may use of shadowvol: the model, the writers, the exit-status table
-RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.primitives", "shadowvol.cameras",
-                       "shadowvol.scenefile", "shadowvol.resources", "shadowvol.errors",
-                       "shadowvol.memory",
-                       "shadowvol.io", "shadowvol.pictures", "shadowvol.cli",
-                       "shadowvol.cli.status", "shadowvol.cli.outputs"}
+# what raytrace may use of shadowvol: the model's core, the writer, the ground floor; no
+# command line, no scene files, no pictures
+RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.lights", "shadowvol.cameras",
+                       "shadowvol.primitives", "shadowvol.arealights", "shadowvol.fields",
+                       "shadowvol.planes", "shadowvol.errors", "shadowvol.io",
+                       "shadowvol.signals"}
+# `python -m raytrace` is the one file of the ray tracer that enters its command line
+RAYTRACE_ENTRY = "raytrace/__main__.py"
 
 # a meta path finder that makes importing the named top-level packages fail
 BLOCK = textwrap.dedent("""
@@ -43,9 +45,13 @@ def _python(code: str) -> subprocess.CompletedProcess:
                           text=True, timeout=300)
 
 
+def _sources():
+    return sorted((ROOT / "shadowvol").rglob("*.py")) + sorted((ROOT / "raytrace").rglob("*.py"))
+
+
 def test_only_the_raster_wing_and_the_pyrender_peer_import_gl():
     offenders = []
-    for path in sorted((ROOT / "shadowvol").rglob("*.py")) + sorted((ROOT / "raytrace").rglob("*.py")):
+    for path in _sources():
         rel = path.relative_to(ROOT).as_posix()
         allowed = rel.startswith("shadowvol/raster/") or rel == "shadowvol/compare/pyrender_peer.py"
         gl = {m for m in _imports(path) if m.split(".")[0] in GL_MODULES}
@@ -54,9 +60,31 @@ def test_only_the_raster_wing_and_the_pyrender_peer_import_gl():
     assert not offenders, f"GL imported outside shadowvol/raster/: {offenders}"
 
 
-def test_raytrace_imports_only_the_model_io_pictures_and_status():
+def test_argparse_only_in_the_command_line_and_ctypes_only_in_the_raster_wing():
+    offenders = []
+    for path in _sources():
+        rel = path.relative_to(ROOT).as_posix()
+        used = {m.split(".")[0] for m in _imports(path)}
+        if "argparse" in used and not rel.startswith("shadowvol/cli/"):
+            offenders.append((rel, "argparse"))
+        # the pyrender peer reads PyOpenGL's EGL handle, as it imports GL (see above)
+        if "ctypes" in used and not (rel.startswith("shadowvol/raster/")
+                                     or rel == "shadowvol/compare/pyrender_peer.py"):
+            offenders.append((rel, "ctypes"))
+    assert not offenders, offenders
+
+
+def test_batch_imports_no_command_line():
+    offenders = [(path.name, sorted(m for m in _imports(path) if m.startswith("shadowvol.cli")))
+                 for path in sorted((ROOT / "shadowvol" / "batch").rglob("*.py"))]
+    assert not [o for o in offenders if o[1]], offenders
+
+
+def test_raytrace_imports_only_the_model_io_pictures_and_errors():
     offenders = []
     for path in sorted((ROOT / "raytrace").rglob("*.py")):
+        if path.relative_to(ROOT).as_posix() == RAYTRACE_ENTRY:
+            continue
         used = {m for m in _imports(path) if m.split(".")[0] == "shadowvol"}
         if used - RAYTRACE_MAY_IMPORT:
             offenders.append((path.name, sorted(used - RAYTRACE_MAY_IMPORT)))
@@ -66,7 +94,7 @@ def test_raytrace_imports_only_the_model_io_pictures_and_status():
 def test_raytrace_renders_with_gl_and_pyrender_blocked(tmp_path):
     code = BLOCK.replace("NAMES", repr(("moderngl", "glcontext", "pyrender", "OpenGL"))) + textwrap.dedent(f"""
         import raytrace
-        from raytrace.cli import main
+        from shadowvol.cli.raytrace import main
         from shadowvol.scenefile import load_scene
         scene = load_scene({str(SCENES / "cage.toml")!r}).replace(width=32, height=24)
         image = raytrace.render(scene, progress=False)

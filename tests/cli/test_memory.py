@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 from builders import ROOT, SCENES
 
-import raytrace.cli
 import raytrace.masks
 import raytrace.pathtrace
 import raytrace.radiosity
@@ -24,14 +23,15 @@ import raytrace.whitted
 import shadowvol.cli.compare
 import shadowvol.cli.demo
 import shadowvol.cli.planar
+import shadowvol.cli.raytrace
 import shadowvol.cli.render
 import shadowvol.io
 import shadowvol.raster.renderer
 import shadowvol.scenefile
-from raytrace.cli import main as raytrace_main
 from shadowvol import memory
 from shadowvol.cli import status
 from shadowvol.cli.main import main as shadowvol_main
+from shadowvol.cli.raytrace import main as raytrace_main
 from shadowvol.raster import target
 from shadowvol.scene import MAX_IMAGE_PIXELS, SceneError
 from shadowvol.scenefile import load_scene, save_scene
@@ -127,15 +127,15 @@ OVER_BUDGET = {  # command -> (argv, what must not run)
     "shadowvol planar": (["planar", "P", "-o", "O/x.png"],
                          (shadowvol.cli.planar, "render_planar")),
     "raytrace render": (["render", "S", "-o", "O/x.png", "--no-progress"],
-                        (raytrace.cli, "render")),
-    "raytrace masks": (["masks", "S", "-o", "O/x.npz"], (raytrace.cli, "shadow_masks")),
+                        (shadowvol.cli.raytrace, "render")),
+    "raytrace masks": (["masks", "S", "-o", "O/x.npz"], (shadowvol.cli.raytrace, "shadow_masks")),
     "raytrace masks --outputs": (["masks", "S", "-o", "O/x.npz", "--outputs", "all"],
-                                 (raytrace.cli, "ground_truth")),
+                                 (shadowvol.cli.raytrace, "ground_truth")),
     "raytrace path": (["render", "S", "-o", "O/x.png", "--integrator", "path", "--spp", "4"],
                       (raytrace.pathtrace, "render")),
     "raytrace radiosity": (["radiosity", "S", "-o", "O/x.png"], (raytrace.radiosity, "solve")),
     "raytrace tree": (["tree", "S", "--pixel", "3", "3", "-o", "O/x.png"],
-                      (raytrace.cli, "ray_tree")),
+                      (shadowvol.cli.raytrace, "ray_tree")),
 }
 
 
@@ -224,11 +224,11 @@ OUT_OF_MEMORY = {  # command -> (tool, argv, [(module, name)] to fail, "while ..
     "raytrace masks": ("raytrace", ["masks", "S", "-o", "O/x.npz"],
                        [(raytrace.masks, "_tile_masks")], "while rendering ("),
     "raytrace masks --outputs": ("raytrace", ["masks", "S", "-o", "O/x.npz", "--outputs", "all"],
-                                 [(raytrace.cli, "ground_truth")], "while rendering ("),
+                                 [(shadowvol.cli.raytrace, "ground_truth")], "while rendering ("),
     "raytrace tree": ("raytrace", ["tree", "S", "--pixel", "3", "3", "-o", "O/x.png"],
-                      [(raytrace.cli, "ray_tree")], "while rendering ("),
+                      [(shadowvol.cli.raytrace, "ray_tree")], "while rendering ("),
     "raytrace exercise": ("raytrace", ["exercise", "plane", "-o", "O/x.png"],
-                          [(raytrace.cli.exercise, "solve_plane")], "while rendering ("),
+                          [(shadowvol.cli.raytrace.exercise, "solve_plane")], "while rendering ("),
     "raytrace path": ("raytrace", ["render", "R", "-o", "O/x.png", "--integrator", "path",
                                    "--spp", "1", "--no-progress"],
                       [(raytrace.pathtrace, "trace_rows")], "while rendering ("),

@@ -35,7 +35,7 @@ CHILD = textwrap.dedent("""
     if tool == "shadowvol":
         from shadowvol.cli.main import main
     else:
-        from raytrace.cli import main
+        from shadowvol.cli.raytrace import main
     folder = Path(tempfile.mkdtemp())
 
     def run(w, h):

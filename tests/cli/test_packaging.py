@@ -25,7 +25,7 @@ def test_runtime_needs_no_test_only_package():
             if name.split(".")[0] in {TEST_ONLY!r}:
                 del sys.modules[name]
         sys.meta_path.insert(0, Block())
-        import shadowvol.cli.main, raytrace.cli
+        import shadowvol.cli.main, shadowvol.cli.raytrace
         shadowvol.cli.main.build_parser()
         for argv in (["render", "--help"], ["compare", "--help"]):
             try:
@@ -34,7 +34,7 @@ def test_runtime_needs_no_test_only_package():
                 assert e.code == 0, (argv, e.code)
         for argv in (["render", "--help"], ["masks", "--help"], ["tree", "--help"]):
             try:
-                raytrace.cli.main(argv)
+                shadowvol.cli.raytrace.main(argv)
             except SystemExit as e:
                 assert e.code == 0, (argv, e.code)
         import raytrace, shadowvol, shadowvol.compare.comparison, shadowvol.raster.overflow

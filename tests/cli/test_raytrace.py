@@ -11,7 +11,7 @@ from builders import ROOT
 from PIL import Image
 
 import raytrace
-from raytrace.cli import main
+from shadowvol.cli.raytrace import main
 from shadowvol.io import encode_srgb, load_masks
 from shadowvol.scenefile import load_scene
 
@@ -121,8 +121,9 @@ def test_bad_scene_in_a_real_process(tmp_path):
     path = tmp_path / "bad.toml"
     path.write_text(BAD[0][0])
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    proc = subprocess.run([sys.executable, "-c", "import sys; from raytrace.cli import main; "
-                           "sys.exit(main())", "masks", str(path), "-o", str(tmp_path / "x.npz")],
+    proc = subprocess.run([sys.executable, "-c", "import sys; from shadowvol.cli.raytrace "
+                           "import main; sys.exit(main())", "masks", str(path), "-o",
+                           str(tmp_path / "x.npz")],
                           capture_output=True, text=True, env=env)
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr == f"error: {path}: {BAD[0][1]}\n"

@@ -10,15 +10,15 @@ import textwrap
 import pytest
 from builders import ROOT, SCENES
 
-import raytrace.cli
-import raytrace.cli_outlook
 import shadowvol.cli.compare
+import shadowvol.cli.raytrace
+import shadowvol.cli.raytrace_outlook
 import shadowvol.cli.render
 import shadowvol.course.gallery
 import shadowvol.raster.renderer
-from raytrace.cli import main as raytrace_main
 from shadowvol.cli import status
 from shadowvol.cli.main import main as shadowvol_main
+from shadowvol.cli.raytrace import main as raytrace_main
 from shadowvol.raster.context import ContextError
 from shadowvol.scenefile import load_scene, save_scene
 
@@ -74,7 +74,7 @@ def test_raytrace_ok_bad_input_and_failure(command, small, tmp_path, capsys, mon
     bad = [a.replace(str(small), str(tmp_path / "missing.toml")) for a in
            RAYTRACE_OK[command](small, tmp_path)]
     assert raytrace_main(bad) == status.BAD_INPUT
-    monkeypatch.setattr(raytrace.cli, "load_scene", _no_memory)
+    monkeypatch.setattr(shadowvol.cli.raytrace, "load_scene", _no_memory)
     assert raytrace_main(RAYTRACE_OK[command](small, tmp_path)) == status.RENDER_FAILED
     err = capsys.readouterr().err
     assert "Traceback" not in err and "error: out of memory" in err
@@ -119,7 +119,8 @@ BLOCK = textwrap.dedent("""
 @pytest.mark.parametrize("missing, tool, args, pip", [
     ("pyrender", "shadowvol.cli.main", ["compare", "SCENE", "--pyrender", "-o", "OUT.png"],
      "pip install 'shadowvol[peer]'"),
-    ("embreex", "raytrace.cli", ["masks", "SCENE", "-o", "OUT.npz"], "pip install embreex"),
+    ("embreex", "shadowvol.cli.raytrace", ["masks", "SCENE", "-o", "OUT.npz"],
+     "pip install embreex"),
 ])
 def test_a_missing_extra_is_bad_input_naming_the_pip_command(missing, tool, args, pip, small,
                                                               tmp_path):
@@ -210,7 +211,7 @@ def test_raytrace_radiosity_and_path_tracing(tmp_path, monkeypatch, capsys):
                           "--no-progress", "-o", str(tmp_path / "p.png")]) == status.OK
     assert raytrace_main(["render", str(box), "--integrator", "path", "--spp", "0",
                           "-o", str(tmp_path / "p.png")]) == status.BAD_INPUT
-    monkeypatch.setattr(raytrace.cli_outlook, "load_scene", _no_memory)
+    monkeypatch.setattr(shadowvol.cli.raytrace_outlook, "load_scene", _no_memory)
     assert raytrace_main(["radiosity", str(box), "-o", str(tmp_path / "r.png")]) == \
         status.RENDER_FAILED
     assert "Traceback" not in capsys.readouterr().err

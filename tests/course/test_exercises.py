@@ -10,8 +10,8 @@ from builders import SCENES
 from PIL import Image
 
 from raytrace import exercise
-from raytrace.cli import main as raytrace_main
 from shadowvol.cli.main import main as shadowvol_main
+from shadowvol.cli.raytrace import main as raytrace_main
 from shadowvol.io import load_masks
 from shadowvol.raster.planar_pass import render_planar
 from shadowvol.scenefile import load_scene

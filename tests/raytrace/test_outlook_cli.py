@@ -11,7 +11,7 @@ import pytest
 from builders import CORNELL, cornell
 from PIL import Image
 
-from raytrace.cli import main
+from shadowvol.cli.raytrace import main
 from shadowvol.course import ladder
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene, save_scene
@@ -142,7 +142,7 @@ def test_the_outlook_modules_import_no_gl():
     import sys
 
     code = ("import sys, raytrace.pathtrace, raytrace.radiosity, raytrace.direct, "
-            "raytrace.cli_outlook, shadowvol.course.ladder, shadowvol.course.layout; "
+            "shadowvol.cli.raytrace_outlook, shadowvol.course.ladder, shadowvol.course.layout; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('moderngl', 'OpenGL', 'glcontext')]; "
             "print(bad); sys.exit(1 if bad else 0)")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

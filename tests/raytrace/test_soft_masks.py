@@ -17,8 +17,8 @@ from builders import (
 
 import raytrace
 from raytrace.camera import primary_rays
-from raytrace.cli import main as raytrace_main
 from raytrace.tolerances import surface_offset
+from shadowvol.cli.raytrace import main as raytrace_main
 from shadowvol.primitives import plane
 from shadowvol.scene import AreaLight, Camera, Material, PointLight, Scene
 from shadowvol.scenefile import load_scene, save_scene

@@ -11,7 +11,7 @@
 
 Outputs are written atomically (shadowvol.io): an error never leaves half a file behind.
 A bad scene prints `error: <file>: <key>: <problem>`; the exit statuses are shadowvol's
-(`shadowvol.cli.status`).
+(`shadowvol.cli.status`).  The ray tracer (`raytrace`) is a library; this is its command line.
 """
 
 from __future__ import annotations
@@ -21,11 +21,16 @@ import io
 import sys
 from pathlib import Path
 
+from raytrace import exercise, shadow_masks  # (area lights: lit where every sample reaches)
+from raytrace.backends import BACKENDS
+from raytrace.groundtruth import check_outputs, ground_truth
+from raytrace.raytree import draw_tree, format_tree, ray_tree
+from raytrace.whitted import render
 from shadowvol import __version__, memory
 from shadowvol.cameras import calibration
-from shadowvol.cli import outputs, status
+from shadowvol.cli import args as blocks
+from shadowvol.cli import outputs, raytrace_outlook, status
 from shadowvol.io import (
-    GROUND_TRUTH,
     atomic_write,
     save_exr,
     save_masks,
@@ -35,16 +40,6 @@ from shadowvol.io import (
 from shadowvol.pictures import ground_truth_picture, masks_image
 from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene
-
-from . import (  # (area lights: lit where every sample reaches)
-    cli_outlook,
-    exercise,
-    shadow_masks,
-)
-from .backends import BACKENDS
-from .groundtruth import check_outputs, ground_truth
-from .raytree import draw_tree, format_tree, ray_tree
-from .whitted import render
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -58,63 +53,74 @@ def _parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--version", action="version", version=f"raytrace (shadowvol) {__version__}")
     sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    _render_parser(sub)
+    raytrace_outlook.add_parsers(sub)
+    _masks_parser(sub)
+    _tree_parser(sub)
+    _exercise_parser(sub)
+    return ap
 
-    r = sub.add_parser("render", help="ray-trace an image (Whitted: shadows, reflection, "
-                                      "refraction, Phong)",
+
+def _render_parser(sub) -> None:
+    r = blocks.command(sub, "render", help="ray-trace an image (Whitted: shadows, reflection, "
+                                           "refraction, Phong)",
                        description="Ray-trace SCENE into an 8-bit sRGB PNG.")
-    r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
-    r.add_argument("-o", "--output", required=True, metavar="PNG",
-                   help="where to write the image (PNG, sRGB, row 0 at the top)")
+    blocks.scene(r)
+    blocks.output(r, "PNG", "where to write the image (PNG, sRGB, row 0 at the top)")
     r.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="reflection/refraction generations; 0 = direct lighting only, as the "
                         "rasterizer draws it (default: the scene's render.max_depth)")
     r.add_argument("--png16", metavar="PNG", default=None,
                    help="also write the image as a 16-bit sRGB PNG")
-    _backend(r)
-    memory.add_option(r)
+    blocks.backend(r, BACKENDS)
+    blocks.memory_budget(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
-    cli_outlook.add_options(r)
-    cli_outlook.add_parsers(sub)
+    raytrace_outlook.add_options(r)
 
-    m = sub.add_parser("masks", help="reference shadow masks (lit per light, coverage)",
+
+def _masks_parser(sub) -> None:
+    m = blocks.command(sub, "masks", help="reference shadow masks (lit per light, coverage)",
                        description="Trace the reference shadow masks of SCENE on its triangles "
                                    "and write them as a .npz (lit, coverage, the camera "
                                    "matrices K, world_to_camera, camera_to_world and the light "
                                    "arrays; with --outputs, the ground truth too) and a "
                                    "picture.")
-    m.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
-    m.add_argument("-o", "--output", required=True, metavar="NPZ",
-                   help="where to write the masks (.npz with lit (L, H, W) and coverage (H, W))")
+    blocks.scene(m)
+    blocks.output(m, "NPZ",
+                  "where to write the masks (.npz with lit (L, H, W) and coverage (H, W))")
     m.add_argument("--png", metavar="PNG", default=None,
                    help="where to write a picture of the masks, one panel per light (white lit, "
                         "grey shadowed, black empty), with --outputs also of the outputs side by "
                         "side (default: beside the .npz, same name, .png)")
     m.add_argument("--no-png", action="store_true", help="write the .npz only")
-    m.add_argument("--outputs", metavar="LIST", default=None,
-                   help="ground truth to add to the .npz, comma-separated: "
-                        f"{','.join(GROUND_TRUTH)} (or all); see docs/CONVENTIONS.md")
-    _backend(m)
-    memory.add_option(m)
+    blocks.ground_truth(m, "ground truth to add to the .npz, comma-separated: "
+                           f"{blocks.GROUND_TRUTH_LIST} (or all); see docs/CONVENTIONS.md")
+    blocks.backend(m, BACKENDS)
+    blocks.memory_budget(m)
 
-    t = sub.add_parser("tree", help="the ray tree of one pixel (the course's exercise)",
+
+def _tree_parser(sub) -> None:
+    t = blocks.command(sub, "tree", help="the ray tree of one pixel (the course's exercise)",
                        description="Print every ray the Whitted tracer follows for pixel "
                                    "(X, Y) — primary, shadow rays with their verdicts, "
                                    "reflected, refracted, total internal reflection — as an "
                                    "indented tree, and optionally draw them over the render "
                                    "and in a side view.")
-    t.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
+    blocks.scene(t)
     t.add_argument("--pixel", nargs=2, type=int, required=True, metavar=("X", "Y"),
                    help="column X from the left, row Y from the top")
     t.add_argument("--depth", type=int, default=None, metavar="N",
                    help="reflection/refraction generations (default: the scene's "
                         "render.max_depth)")
-    t.add_argument("-o", "--output", metavar="PNG", default=None,
-                   help="also draw the tree: the rays over the ray-traced image and a side view")
-    _backend(t)
-    memory.add_option(t)
+    blocks.output(t, "PNG", "also draw the tree: the rays over the ray-traced image and a side "
+                            "view", required=False)
+    blocks.backend(t, BACKENDS)
+    blocks.memory_budget(t)
 
-    e = sub.add_parser("exercise", help="a worked exercise of the course, printed and drawn",
+
+def _exercise_parser(sub) -> None:
+    e = blocks.command(sub, "exercise", help="a worked exercise of the course, printed and drawn",
                        description="Print the worked solution of one of the course's "
                                    "exercises, computed with the ray tracer's own formulas, "
                                    "and optionally draw it.  plane: the ray (5,1) + λ(−1,3) "
@@ -122,18 +128,7 @@ def _parser() -> argparse.ArgumentParser:
                                    "Snell's law from glass into air, past the critical angle.")
     e.add_argument("name", choices=tuple(EXERCISES), metavar="NAME",
                    help="the exercise: " + ", ".join(EXERCISES))
-    e.add_argument("-o", "--output", metavar="PNG", default=None,
-                   help="also draw the exercise's 2D picture")
-    for command in sub.choices.values():  # every command's --help ends with the one table
-        command.epilog = status.EPILOG
-        command.formatter_class = argparse.RawDescriptionHelpFormatter
-    return ap
-
-
-def _backend(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--backend", choices=BACKENDS, default="embree",
-                   help="triangle intersection: 'embree' (fast, float32) or 'numpy' (the float64 "
-                        "reference, for small scenes) (default: embree)")
+    blocks.output(e, "PNG", "also draw the exercise's 2D picture", required=False)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -146,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _render(args) -> int:
     if args.integrator == "path":
-        return cli_outlook.path_traced(args)
+        return raytrace_outlook.path_traced(args)
     paths = {"image": Path(args.output)}
     for kind in ("exr", "png16"):
         if getattr(args, kind):
@@ -247,7 +242,7 @@ def _exercise(args) -> int:
 
 
 COMMANDS = {"render": _render, "masks": _masks, "tree": _tree, "exercise": _exercise,
-            "radiosity": cli_outlook.radiosity_command}
+            "radiosity": raytrace_outlook.radiosity_command}
 
 
 if __name__ == "__main__":

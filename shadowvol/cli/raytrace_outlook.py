@@ -3,7 +3,7 @@
     raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png [--exr c.exr]
     raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png [--flat F.png]
 
-`raytrace.cli` registers them (`add_options`, `add_parsers`) and hands over
+`shadowvol.cli.raytrace` registers them (`add_options`, `add_parsers`) and hands over
 (`path_traced`, `radiosity_command`); exit statuses are `shadowvol.cli.status`'s.
 """
 
@@ -13,13 +13,14 @@ import argparse
 import sys
 from pathlib import Path
 
+from raytrace import pathtrace, radiosity
+from raytrace.backends import BACKENDS
 from shadowvol import memory
+from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
 from shadowvol.io import save_exr, save_png
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
-
-from . import pathtrace, radiosity
 
 
 def add_options(render: argparse.ArgumentParser) -> None:
@@ -29,28 +30,24 @@ def add_options(render: argparse.ArgumentParser) -> None:
                              "next-event estimation of emissive surfaces (material.emission)")
     render.add_argument("--spp", type=int, default=16, metavar="N",
                         help="path tracing: paths per pixel (default 16)")
-    render.add_argument("--seed", type=int, default=0, metavar="S",
-                        help="path tracing: random seed; the same seed gives the same image "
-                             "(default 0)")
-    render.add_argument("--exr", metavar="EXR", default=None,
-                        help="also write the linear image as OpenEXR")
+    blocks.seed(render, "path tracing: random seed; the same seed gives the same image "
+                        "(default 0)")
+    blocks.exr(render, "also write the linear image as OpenEXR")
 
 
 def add_parsers(sub) -> None:
     """The `radiosity` subcommand."""
-    r = sub.add_parser("radiosity", help="radiosity of the diffuse scene (patches, ray-cast "
-                                         "form factors, progressive refinement)",
+    r = blocks.command(sub, "radiosity", help="radiosity of the diffuse scene (patches, "
+                                              "ray-cast form factors, progressive refinement)",
                        description="Mesh SCENE into patches, compute form factors by casting "
                                    "rays through Embree, solve by progressive refinement and "
                                    "show the solution from the camera.  Prints the number of "
                                    "patches, iterations and time.")
-    r.add_argument("scene", metavar="SCENE", help="scene file (.toml or .json)")
-    r.add_argument("-o", "--output", required=True, metavar="PNG",
-                   help="the interpolated (Gouraud) display, sRGB PNG")
+    blocks.scene(r)
+    blocks.output(r, "PNG", "the interpolated (Gouraud) display, sRGB PNG")
     r.add_argument("--flat", metavar="PNG", default=None,
                    help="also write the flat display (one colour per patch)")
-    r.add_argument("--exr", metavar="EXR", default=None,
-                   help="also write the interpolated display as linear OpenEXR")
+    blocks.exr(r, "also write the interpolated display as linear OpenEXR")
     r.add_argument("--level", type=int, default=3, metavar="L",
                    help="subdivision level: patches no longer than the longest triangle edge "
                         "/ 2^L (default 3)")
@@ -61,10 +58,9 @@ def add_parsers(sub) -> None:
                         "1e-4)")
     r.add_argument("--shots", type=int, default=1, metavar="N",
                    help="patches shot per iteration (default 1: Cohen et al.'s one at a time)")
-    r.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
-    r.add_argument("--backend", choices=("numpy", "embree"), default="embree",
-                   help="triangle intersection (default: embree)")
-    memory.add_option(r)
+    blocks.seed(r, "random seed (default 0)")
+    blocks.backend(r, BACKENDS, "triangle intersection (default: embree)")
+    blocks.memory_budget(r)
 
 
 def path_traced(args) -> int:

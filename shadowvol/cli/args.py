@@ -1,0 +1,69 @@
+"""The argument blocks that the subcommands of both tools share, each written once.
+
+A block takes the parser and, where commands word it differently, the help or metavar; the
+flags, destinations and defaults stay the block's.  Every subcommand's --help ends with the one
+exit-status table (`command`).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from shadowvol import memory
+from shadowvol.cli import status
+from shadowvol.io import GROUND_TRUTH
+
+SCENE_HELP = "scene file (.toml or .json)"
+BACKEND_HELP = ("triangle intersection: 'embree' (fast, float32) or 'numpy' (the float64 "
+                "reference, for small scenes) (default: embree)")
+
+
+def command(subparsers, name: str, *, help: str, description: str,
+            epilog: str = status.EPILOG) -> argparse.ArgumentParser:
+    """A subcommand whose --help keeps its epilog's line breaks (it ends with the statuses)."""
+    return subparsers.add_parser(name, help=help, description=description, epilog=epilog,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
+def scene(p: argparse.ArgumentParser, help: str = SCENE_HELP, **kwargs) -> None:
+    """The SCENE positional (`render` takes several: nargs="*")."""
+    p.add_argument("scene", metavar="SCENE", help=help, **kwargs)
+
+
+def output(p: argparse.ArgumentParser, metavar: str, help: str, required: bool = True,
+           **kwargs) -> None:
+    """`-o/--output`: what the command writes (a file, or a folder)."""
+    p.add_argument("-o", "--output", required=required, metavar=metavar, help=help, **kwargs)
+
+
+def backend(p: argparse.ArgumentParser, choices: tuple[str, ...], help: str = BACKEND_HELP) -> None:
+    """The ray tracer's `--backend` (choices: `raytrace.backends.BACKENDS`, passed in so that
+    the `shadowvol` commands never import the ray tracer)."""
+    p.add_argument("--backend", choices=choices, default="embree", help=help)
+
+
+def memory_budget(p: argparse.ArgumentParser) -> None:
+    """`--memory-budget SIZE`, of the commands that check one (`shadowvol.memory.check`)."""
+    p.add_argument(
+        "--memory-budget", metavar="SIZE", default=None,
+        help=f"refuse an image whose estimated memory (shadowvol.memory) exceeds SIZE, e.g. "
+             f"12GiB (default: ${memory.ENV}, else {memory.DEFAULT_FRACTION * 100:.0f}%% of "
+             f"this machine's memory)")
+
+
+def ground_truth(p: argparse.ArgumentParser, help: str) -> None:
+    """`--outputs LIST`: the ground truth added to a mask file (`outputs.ground_truth`)."""
+    p.add_argument("--outputs", metavar="LIST", default=None, help=help)
+
+
+GROUND_TRUTH_LIST = ",".join(GROUND_TRUTH)
+
+
+def exr(p: argparse.ArgumentParser, help: str, **kwargs) -> None:
+    """`--exr EXR`: the linear image as OpenEXR too."""
+    p.add_argument("--exr", metavar="EXR", default=None, help=help, **kwargs)
+
+
+def seed(p: argparse.ArgumentParser, help: str) -> None:
+    """`--seed S` of the seeded ray tracers."""
+    p.add_argument("--seed", type=int, default=0, metavar="S", help=help)
