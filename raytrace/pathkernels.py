@@ -35,7 +35,7 @@ import threading
 import numba
 import numpy as np
 
-from .pathtrace import RR_MAX_SURVIVAL, STATE, STATE_TINY
+from .pathstate import RR_MAX_SURVIVAL, STATE, STATE_TINY
 
 # rows of the per-triangle table (`tables`)
 NORMAL, PLANE_D, KD, KS, SHININESS, P_DIFFUSE, GLOSSY, PHONG, REFL, TRANSP, IOR, EMITS, \
@@ -63,14 +63,14 @@ def _jit(fn):
 
 def _f32(rows) -> np.ndarray:
     """Rows (n,) or (m, n) stacked into one contiguous (n, P) float32 table, one line per item,
-    each converted as `pathtrace._pack` converts them (float64 first), so the values are the
+    each converted as `pathstate.pack` converts them (float64 first), so the values are the
     numpy path's."""
     return np.ascontiguousarray(np.concatenate(
         [np.atleast_2d(np.asarray(v, np.float64)).astype(STATE) for v in rows]).T)
 
 
 def tables(world) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The kernels' tables of a `pathtrace.PathWorld`: per triangle (M, 19) float32, every
+    """The kernels' tables of a `pathstate.PathWorld`: per triangle (M, 19) float32, every
     column (NORMAL ... LIGHT_PDF) whatever the scene needs, its emission (M, 3) float32, and per
     emitter (E, 16) float32: what a hit needs on one or two cache lines."""
     cached = getattr(world, "_kernel_tables", None)
