@@ -87,7 +87,8 @@ def tir(g) -> Picture:
     L = g.layout
     w, h = L.cell(1, 1, labels=False, side=L.px(760))
     rays = exercise.solve_tir()
-    img = figure_pixels(exercise_picture.tir_figure(rays, width_px=w, height_px=h, text_px=L.px(32)))
+    img = figure_pixels(exercise_picture.tir_figure(rays, width_px=w, height_px=h,
+                                                    text_px=L.px(32)))
     text = exercise.tir_text(rays)
     note = L.note(_wrap(text, 40), L.px(760), h)
     title = "Total internal reflection: from glass into air"
@@ -153,7 +154,7 @@ def ray_plane(g) -> Picture:
     w, h = L.cell(1, 1, labels=False, side=side_w)
     s = exercise.solve_plane()
     img = figure_pixels(exercise_picture.plane_figure(s, width_px=min(w, h), height_px=h,
-                                              text_px=L.px(32)))
+                                                      text_px=L.px(32)))
     text = exercise.plane_text(s)
     note = L.note(_wrap(text, 56), side_w, h)
     title = "Exercise: a ray against a plane"
