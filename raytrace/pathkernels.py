@@ -1,10 +1,10 @@
 """The path tracer's per-bounce shading compiled with numba (the optional `fast` extra).
 
 `trace_rows` here is `raytrace.pathtrace.trace_rows` with the numpy stages between the Embree
-calls replaced by a few `@njit` loops over the rays of a bounce (`raytrace.pathstages`): the hit (compaction to the hits,
-surface gather, hit point, emission seen and its MIS share), the emitter sample of next-event
-estimation (its shadow rays, then its shading), each delta light's shadow rays and shading, and
-the bounce (BSDF sample, delta bounces, Russian roulette, compaction to the survivors).  Embree
+calls replaced by a few `@njit` loops over the rays of a bounce (`raytrace.pathstages`): the
+hit (compaction to the hits, surface gather, hit point, emission seen and its MIS share), the
+emitter sample of next-event estimation (its shadow rays, then its shading), each delta
+light's shadow rays and shading, and the bounce (BSDF sample, delta bounces, Russian roulette, compaction to the survivors).  Embree
 still traces each bounce's closest hits and each group of shadow rays as one batch, through
 `PathWorld.closest_rows` / `occluded_rows`.
 
