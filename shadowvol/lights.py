@@ -2,7 +2,8 @@
 
 An area light is its N samples, computed once here (`shadowvol.arealights` places them), each
 judged as a hard light (`hard_lights`); a point, spot or directional light is the case N = 1.
-Colours are linear RGB; `shadowvol.scene` re-exports every name (`shadowvol.scene.AreaLight`).
+Colours are linear RGB.  `shadowvol.scene` names the lights too (`shadowvol.scene.AreaLight`,
+the public name).
 """
 
 from __future__ import annotations
