@@ -216,7 +216,8 @@ def _describe(node: RayNode, number: int, scene: Scene) -> str:
 
 def format_tree(tree: RayNode, scene: Scene) -> str:
     """The tree as indented text, one ray per line, numbered depth first (the numbers label
-    the rays in `draw_tree`'s picture), and the pixel colour as the sum of the contributions."""
+    the rays in the course's picture, `raytree_picture.draw_tree`), and the pixel colour as the
+    sum of the contributions."""
     lines = []
     numbers = {id(n): k for k, n in enumerate(tree.walk())}
 

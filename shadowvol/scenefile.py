@@ -264,7 +264,7 @@ def light_from_dict(value, key: str = "light"):
 def _object(value, key: str, named: dict[str, Material], base_dir: Path,
             max_mesh_bytes: int = MAX_MESH_FILE_BYTES) -> list[Object]:
     """The objects of one `[[objects]]` entry: one, or for a mesh file of several parts (glTF
-    nodes, the meshes of a multi-mesh file) one per part (`mesh_parts`)."""
+    nodes, the meshes of a multi-mesh file) one per part (`scenefile_mesh.read_mesh`)."""
     table, kind = _typed(value, key, OBJECT_KEYS, "object")
     name = table.get("name", f"{kind}{key[len('objects'):]}")
     if not isinstance(name, str):
