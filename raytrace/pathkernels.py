@@ -1,12 +1,12 @@
 """The path tracer's per-bounce shading compiled with numba (the optional `fast` extra).
 
 `trace_rows` here is `raytrace.pathtrace.trace_rows` with the numpy stages between the Embree
-calls replaced by a few `@njit` loops over the rays of a bounce (`raytrace.pathstages`): the
-hit (compaction to the hits, surface gather, hit point, emission seen and its MIS share), the
-emitter sample of next-event estimation (its shadow rays, then its shading), each delta
-light's shadow rays and shading, and the bounce (BSDF sample, delta bounces, Russian roulette, compaction to the survivors).  Embree
-still traces each bounce's closest hits and each group of shadow rays as one batch, through
-`PathWorld.closest_rows` / `occluded_rows`.
+calls replaced by a few `@njit` loops over the rays of a bounce (`raytrace.pathstages`): the hit
+(compaction to the hits, surface gather, hit point, emission seen and its MIS share), the
+emitter sample of next-event estimation (its shadow rays, then its shading), each delta light's
+shadow rays and shading, and the bounce (BSDF sample, delta bounces, Russian roulette,
+compaction to the survivors).  Embree still traces each bounce's closest hits and each group of
+shadow rays as one batch, through `PathWorld.closest_rows` / `occluded_rows`.
 
 Same estimator, same random numbers, same arithmetic.  The random numbers are drawn in numpy,
 from the same generator, in the same order and dtypes as the numpy path, and handed to the
@@ -22,9 +22,9 @@ rounding flips a Russian-roulette choice a path differs (tests/raytrace/test_pat
 states the budget).  `camera_rays` is `pathtrace.camera_rays` compiled, bit-identical too.
 
 Kernels release the GIL (`nogil`), so `pathtrace.render`'s tiles run on its thread pool;
-`cache=True` keeps the compiled code under $NUMBA_CACHE_DIR where that is set, else next to
-the kernels' files, else in numba's user-wide cache directory, whichever is writable first; where none
-is (numba then refuses `cache=True`), they compile in every process.
+`cache=True` keeps the compiled code under $NUMBA_CACHE_DIR where that is set, else next to the
+kernels' files, else in numba's user-wide cache directory, whichever is writable first; where
+none is (numba then refuses `cache=True`), they compile in every process.
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
 """The compiled stages of one bounce of the path tracer (`raytrace.pathkernels` runs them):
 the BRDF per ray, the hit, next-event estimation's emitter sample and delta lights, the bounce.
 
-Each is the numpy path's (`raytrace.pathtrace`) operation for operation, in float32 (`pathstate.STATE`)
-where it is float32 and float64 where it is float64, with float32 constants and no `fastmath`
-(see `raytrace.pathkernels` for why the images are then bit-identical).  Vectors are (n, 3)
-float32, one ray's on one cache line; tables are `pathkernels.tables`'.
+Each is the numpy path's (`raytrace.pathtrace`) operation for operation, in float32
+(`pathstate.STATE`) where it is float32 and float64 where it is float64, with float32 constants
+and no `fastmath` (see `raytrace.pathkernels` for why the images are then bit-identical).
+Vectors are (n, 3) float32, one ray's on one cache line; tables are `pathkernels.tables`'.
 """
 
 from __future__ import annotations

@@ -39,8 +39,8 @@ forces it).
 
 Layout and precision.  The path state is rows, (3, k) arrays (`brdf`'s `_rows` kernels), in
 float32 (`pathstate.STATE`): Embree traces float32 anyway, and numpy's float32 loops are about
-twice as fast.  What float32 costs here is bounded: a hit point lies within a few float32 spacings of
-`length_scale` (<= ~4e-7 of it) of its float64 value, and every ray leaves a surface
+twice as fast.  What float32 costs here is bounded: a hit point lies within a few float32
+spacings of `length_scale` (<= ~4e-7 of it) of its float64 value, and every ray leaves a surface
 `surface_offset` = 1e-4 of `length_scale` out, so a ray cannot start behind the surface it left
 (Whitted's own margin; these images are not masks, CONVENTIONS.md's exact segments are the
 masks'); directions, cosines, densities and throughputs carry ~1e-7 relative errors, far below
