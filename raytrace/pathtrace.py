@@ -38,9 +38,9 @@ repeats the same float32 arithmetic: the same samples (`shading` picks one; $SHA
 forces it).
 
 Layout and precision.  The path state is rows, (3, k) arrays (`brdf`'s `_rows` kernels), in
-float32 (`STATE`): Embree traces float32 anyway, and numpy's float32 loops are about twice as
-fast.  What float32 costs here is bounded: a hit point lies within a few float32 spacings of
-`length_scale` (<= ~4e-7 of it) of its float64 value, and every ray leaves a surface
+float32 (`pathstate.STATE`): Embree traces float32 anyway, and numpy's float32 loops are about
+twice as fast.  What float32 costs here is bounded: a hit point lies within a few float32
+spacings of `length_scale` (<= ~4e-7 of it) of its float64 value, and every ray leaves a surface
 `surface_offset` = 1e-4 of `length_scale` out, so a ray cannot start behind the surface it left
 (Whitted's own margin; these images are not masks, CONVENTIONS.md's exact segments are the
 masks'); directions, cosines, densities and throughputs carry ~1e-7 relative errors, far below
@@ -66,190 +66,27 @@ from shadowvol.scene import (
     Scene,
     SceneError,
     SpotLight,
-    hard_lights,
 )
 
-from .backends import cpu_threads, make_backend
+from .backends import cpu_threads
 from .brdf import (
-    diffuse_probability,
     dot_rows,
-    normalised_phong,
     phong_eval_rows,
     phong_pdf_rows,
     phong_sample_rows,
 )
 from .camera import camera_basis
 from .intersect import reflect, refract
+from .pathstate import RR_MAX_SURVIVAL, STATE, STATE_TINY, PathWorld, take
 from .progress import Progress
-from .tolerances import surface_offset
 
 RR_START_BOUNCE = 3  # Russian roulette from the third bounce on
-RR_MAX_SURVIVAL = 0.95  # never certain survival: bounds the expected path length
 DEFAULT_MAX_DEPTH = 64  # bounces; the truncation bias is below rho^64 of the image
 TILE_PATHS = 1 << 15  # paths traced together: ~10 MB of arrays; sets the progress step
 LEAVING_STANDOFF = 10.0  # `radiance_leaving` starts its rays this many surface offsets out
-# The path state's precision (rays, hit points, throughputs, the tables; see the module
-# docstring) and the smallest value a float32 division below is kept from dividing by.
-STATE = np.float32
-STATE_TINY = 1e-30
 # the environment variable that picks the per-bounce shading (`shading`): auto, numpy, numba
 SHADING_ENV = "SHADOWVOL_PATHTRACE"
 SHADINGS = ("numpy", "numba")
-
-
-def _take(a: np.ndarray, index: np.ndarray) -> np.ndarray:
-    """Columns `index` of a (3, k) array, or entries of a (k,) one (np.take: a fancy index on
-    the last axis of a (3, k) array is several times slower)."""
-    return np.take(a, index, axis=-1)
-
-
-class PathWorld:
-    """The scene as the path tracer and radiosity see it: all objects' triangles in one backend,
-    per-object material arrays, the same per triangle, and the emitters to sample.
-
-    tri_object : (M,) int, the object of each triangle;  area : (M,) float64
-    kd, ks : (K, 3) normalised Phong (`brdf.normalised_phong`);  shininess, refl, transp, ior,
-    p_diffuse : (K,);  emission : (K, 3)
-    emitters : (E,) int, emissive triangles;  emitter_cdf : (E,) float64, cumulative choice
-    probability (area x mean emission)
-    The tracer's own tables, vectors as rows: per triangle (`surface`) and per emitter
-    (`sample_emitters`), each packed into one small (P, M) array, so that what a hit needs is
-    one gather by triangle, no per-object indirection; tri_emission (3, M).
-    """
-
-    def __init__(self, scene: Scene, backend: str = "embree", parallel: bool = True):
-        self.scene = scene
-        self.parallel = parallel
-        vertices, faces, self.tri_object = scene.triangles()
-        self.tracer = make_backend(backend, vertices, faces)
-        self.corners = vertices[faces]  # (M, 3, 3)
-        cross = np.cross(self.corners[:, 1] - self.corners[:, 0],
-                         self.corners[:, 2] - self.corners[:, 0])
-        self.area = 0.5 * np.linalg.norm(cross, axis=1)
-        self.offset = surface_offset(scene)
-        m = [o.material for o in scene.objects]
-        self.kd, self.ks = normalised_phong(np.array([x.diffuse for x in m]),
-                                            np.array([x.specular for x in m]))
-        self.shininess = np.array([x.shininess for x in m])
-        self.refl = np.array([x.reflectivity for x in m])
-        self.transp = np.array([x.transparency for x in m])
-        self.ior = np.array([x.ior for x in m])
-        self.emission = np.array([x.emission for x in m])
-        self.p_diffuse = diffuse_probability(self.kd, self.ks)
-        power = self.area * self.emission[self.tri_object].mean(axis=1)
-        self.emitters = np.flatnonzero(power > 0.0)
-        self.emitter_cdf = np.cumsum(power[self.emitters]) / max(power.sum(), 1e-300)
-        self.emitter_prob = power[self.emitters] / max(power.sum(), 1e-300)
-        # p_A(y) of `sample_emitters` for a point on each triangle (0 off the emitters)
-        self.light_pdf_area = np.zeros(len(self.area))
-        self.light_pdf_area[self.emitters] = self.emitter_prob / self.area[self.emitters]
-        # an area light of `scene.lights` is its samples (as in `raytrace.whitted`)
-        self.lights = tuple(hard for lt in scene.lights for hard in hard_lights(lt))
-        # per triangle, one packed table (rows: `surface`), only the rows this scene needs
-        ob = self.tri_object
-        tri_emission = self.emission[ob]
-        self.tri_emits = self.light_pdf_area > 0.0
-        self.any_glossy = bool((self.ks[ob] > 0.0).any())
-        self.any_delta = bool((self.refl[ob] > 0.0).any() or (self.transp[ob] > 0.0).any())
-        self.any_emits = bool(self.tri_emits.any())
-        table = [("normal", self.tracer.normals.T), ("plane_d", self.tracer.plane_d),
-                 ("kd", self.kd[ob].T)]
-        if self.any_glossy:
-            table += [("ks", self.ks[ob].T), ("shininess", self.shininess[ob]),
-                      ("p_diffuse", self.p_diffuse[ob]),
-                      ("glossy", self.ks[ob].max(axis=1) > 0.0)]
-        if self.any_delta:
-            table += [("phong", 1.0 - self.refl[ob] - self.transp[ob]),
-                      ("refl", self.refl[ob]), ("transp", self.transp[ob]),
-                      ("ior", self.ior[ob])]
-        if self.any_emits:
-            table += [("emits", self.tri_emits), ("light_pdf", self.light_pdf_area)]
-        self._tri_table, self._tri_rows = _pack(table)
-        self.tri_emission = np.ascontiguousarray(tri_emission.T, STATE)
-        # per emitter: a corner, two edges, the normal, the radiance, p_A of a point on it
-        e = self.emitters
-        c = self.corners[e]
-        self._emitter_table, self._emitter_rows = _pack([
-            ("a", c[:, 0].T), ("ab", (c[:, 1] - c[:, 0]).T), ("ac", (c[:, 2] - c[:, 0]).T),
-            ("normal", self.tracer.normals[e].T), ("radiance", tri_emission[e].T),
-            ("pdf_area", self.emitter_prob / self.area[e] if len(e) else np.zeros(0))],
-            constants=True)  # one rect light: the normal, radiance and density are constants
-
-    def surface(self, tri: np.ndarray) -> dict:
-        """What the path tracer needs of triangles tri (k,) int (>= 0), from one gather:
-        normal (3, k) by winding, plane_d (k,), kd (3, k); ks (3, k), shininess, p_diffuse (k,)
-        if the scene has a glossy material (else None, None, 1.0), and glossy (m,), the indices
-        of those with a glossy lobe (`brdf.phong_eval_rows`); phong (the Phong lobes'
-        weight), refl, transp, ior (k,) if it has a mirror or glass (else 1.0, None, None,
-        None); emits (k,) bool and light_pdf (k,), `light_pdf_area`, if it has emitters (else
-        None).  Vectors and numbers are `STATE`."""
-        rows = _unpack(np.take(self._tri_table, tri, axis=1), self._tri_rows)
-        rows.setdefault("ks", None)
-        rows.setdefault("shininess", None)
-        rows.setdefault("p_diffuse", 1.0)
-        rows.setdefault("phong", 1.0)
-        for name in ("refl", "transp", "ior"):
-            rows.setdefault(name, None)
-        rows["emits"] = rows["emits"] > 0.0 if "emits" in rows else None
-        rows["glossy"] = np.flatnonzero(rows["glossy"]) if "glossy" in rows else \
-            np.zeros(0, np.int64)
-        return rows
-
-    def intersect(self, o: np.ndarray, d: np.ndarray):
-        """Closest hits of rays o, d (n, 3) float64: t (n,) (inf: miss), tri (n,) int (-1: miss),
-        and the geometric normals (n, 3) by winding (zero for a miss)."""
-        hits = self.tracer.closest_hit(o, d, parallel=self.parallel)
-        normal = np.zeros((len(o), 3))
-        h = hits.tri >= 0
-        normal[h] = self.tracer.normals[hits.tri[h]]
-        return hits.t, hits.tri, normal
-
-    def closest_rows(self, o: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """The triangle (k,) int64 (-1: miss) that rays o, d (3, k) float64 hit first (float32
-        in Embree, as every backend traces)."""
-        return self.tracer.closest_triangle(o.T, d.T, parallel=self.parallel)
-
-    def occluded(self, o: np.ndarray, d: np.ndarray, tmax) -> np.ndarray:
-        return self.tracer.occluded(o, d, tmax, parallel=self.parallel)
-
-    def occluded_rows(self, o: np.ndarray, d: np.ndarray, tmax) -> np.ndarray:
-        """`occluded` for rays o, d (3, k)."""
-        return self.tracer.occluded(o.T, d.T, tmax, parallel=self.parallel)
-
-    def sample_emitters(self, rng: np.random.Generator, k: int):
-        """k points on the emitters: y (3, k), the emitters' unit normals (3, k) by winding
-        and radiance (3, k), and p_A(y) (k,), the area density of the choice (each of the last
-        three (3, 1) or (1,) where it is the same on all emitters)."""
-        j = np.minimum(np.searchsorted(self.emitter_cdf, rng.random(k), side="right"),
-                       len(self.emitters) - 1)
-        u1, u2 = rng.random(k, dtype=STATE), rng.random(k, dtype=STATE)
-        r = np.sqrt(u1)
-        e = _unpack(np.take(self._emitter_table, j, axis=1) if len(self._emitter_table)
-                    else self._emitter_table, self._emitter_rows)
-        y = e["a"] + (r * (1.0 - u2)) * e["ab"] + (r * u2) * e["ac"]
-        return y, e["normal"], e["radiance"], e["pdf_area"]
-
-
-def _pack(columns, constants: bool = False) -> tuple[np.ndarray, dict]:
-    """Rows (n,) or (m, n) stacked into one (P, n) `STATE` table, and each name's row slice.
-    constants: an entry equal for all n items is left out of the table and kept as a (m, 1) or
-    (1,) array, to broadcast instead of being gathered (only for callers that never index a
-    gathered entry themselves)."""
-    rows, slices, at = [], {}, 0
-    for name, value in columns:
-        value = np.atleast_2d(np.asarray(value, np.float64)).astype(STATE)
-        if constants and value.shape[1] and (value == value[:, :1]).all():
-            slices[name] = value[:, :1] if len(value) > 1 else value[0, :1]
-            continue
-        rows.append(value)
-        slices[name] = slice(at, at + len(value)) if len(value) > 1 else at
-        at += len(value)
-    table = np.concatenate(rows) if rows else np.zeros((0, 0), STATE)
-    return np.ascontiguousarray(table), slices
-
-
-def _unpack(table: np.ndarray, slices: dict) -> dict:
-    return {name: s if isinstance(s, np.ndarray) else table[s] for name, s in slices.items()}
 
 
 @dataclass(frozen=True, eq=False)
@@ -300,7 +137,7 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, start, mis: bo
             cos_y = np.abs(cos_y)
             c = np.flatnonzero((cos_x > 0.0) & (cos_y > 0.0) & (w_phong > 0.0) & (dist2 > 0.0))
             seg = y + side * n_y - start
-            blocked = world.occluded_rows(_take(start, c), _take(seg, c), 1.0)
+            blocked = world.occluded_rows(take(start, c), take(seg, c), 1.0)
             rays += len(c)
             lit = np.zeros(k, bool)
             lit[c] = ~blocked
@@ -334,7 +171,7 @@ def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, start, mis: bo
                 cos_light = -dot_rows(wi, np.asarray(light.direction, STATE)[:, None])
                 ok &= cos_light >= light.cos_cutoff
             c = np.flatnonzero(ok)
-            blocked = world.occluded_rows(_take(start, c), _take(direction, c), tmax)
+            blocked = world.occluded_rows(take(start, c), take(direction, c), tmax)
             rays += len(c)
             lit = np.zeros(k, bool)
             lit[c] = ~blocked
@@ -362,15 +199,15 @@ def _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, ne
     new_o, new_d (3, k).  Rare: done on (m, 3) copies with the Whitted formulas."""
     m = np.flatnonzero(is_mirror)
     if len(m):
-        new_d[:, m] = reflect(_take(d, m).T, _take(n, m).T).T
+        new_d[:, m] = reflect(take(d, m).T, take(n, m).T).T
     g = np.flatnonzero(is_glass)
     if len(g):
-        ior = _take(surf["ior"], g)
-        eta = np.where(_take(entering, g), 1.0 / ior, ior)
-        ng = _take(n, g)
-        t, tir = refract(_take(d, g).T, ng.T, eta)
+        ior = take(surf["ior"], g)
+        eta = np.where(take(entering, g), 1.0 / ior, ior)
+        ng = take(n, g)
+        t, tir = refract(take(d, g).T, ng.T, eta)
         new_d[:, g] = t.T
-        new_o[:, g] = _take(p, g) + np.where(tir, 1.0, -1.0) * world.offset * ng
+        new_o[:, g] = take(p, g) + np.where(tir, 1.0, -1.0) * world.offset * ng
 
 
 def _kernels():
@@ -438,11 +275,11 @@ def _trace_rows_numpy(world: PathWorld, o: np.ndarray, d: np.ndarray,
         if len(h) < len(tri):  # compact to the hits (a camera ray through the open front)
             if shows_background:
                 seen = np.flatnonzero(~hit & count_emission)
-                _scatter_add(L, _take(path, seen), _take(beta, seen) * background)
+                _scatter_add(L, take(path, seen), take(beta, seen) * background)
             if len(h) == 0:
                 break
             o, d, tri, path, beta, count_emission, bsdf_pdf = (
-                _take(x, h) for x in (o, d, tri, path, beta, count_emission, bsdf_pdf))
+                take(x, h) for x in (o, d, tri, path, beta, count_emission, bsdf_pdf))
         surf = world.surface(tri)
         geo_n = surf["normal"]
         d_n = dot_rows(geo_n, d)
@@ -454,21 +291,7 @@ def _trace_rows_numpy(world: PathWorld, o: np.ndarray, d: np.ndarray,
         n = geo_n * np.where(entering, STATE(1.0), STATE(-1.0))  # faces the ray's origin
         wo = -d if world.any_glossy else None  # only the glossy lobe looks at wo
         if world.any_emits:
-            emits = surf["emits"]
-            e = np.flatnonzero(count_emission & emits)
-            if len(e):
-                _scatter_add(L, _take(path, e),
-                             _take(beta, e) * _take(world.tri_emission, _take(tri, e)))
-            e = np.flatnonzero(~count_emission & emits)
-            if len(e):  # an emitter found by BSDF sampling: its MIS share
-                te = _take(tri, e)
-                cos_y = np.abs(_take(d_n, e))
-                p_light = (_take(surf["light_pdf"], e) * _take(t, e) ** 2
-                           / np.maximum(cos_y, STATE_TINY))
-                pe = _take(bsdf_pdf, e)
-                w = pe / (pe + p_light)
-                _scatter_add(L, _take(path, e),
-                             _take(beta, e) * _take(world.tri_emission, te) * w)
+            _emission_seen(world, L, surf, tri, path, beta, count_emission, bsdf_pdf, d_n, t)
         new_o = p + world.offset * n  # where shadow rays and the next ray start
         direct, shadow = next_event(world, rng, p, n, wo, surf, beta, new_o,
                                     mis=bounce < max_depth)
@@ -477,29 +300,8 @@ def _trace_rows_numpy(world: PathWorld, o: np.ndarray, d: np.ndarray,
         if bounce == max_depth:
             break
         k = len(tri)
-        if world.any_delta:
-            u = rng.random(k, dtype=STATE)
-            is_mirror = u < surf["refl"]
-            is_glass = ~is_mirror & (u < surf["refl"] + surf["transp"])
-            is_phong = ~is_mirror & ~is_glass
-        else:
-            is_phong = np.ones(k, bool)
-        # the Phong lobes for all (cheaper than gathering); the delta bounces overwrite theirs
-        s, p_d, glossy = surf["shininess"], surf["p_diffuse"], surf["glossy"]
-        new_d = phong_sample_rows(rng, p_d, s, n, wo, glossy)
-        cos = dot_rows(n, new_d)
-        pdf = phong_pdf_rows(p_d, s, n, wo, new_d, glossy, cos_t=cos)
-        if world.any_glossy:
-            f = phong_eval_rows(surf["kd"], surf["ks"], s, n, wo, new_d, glossy, cos_t=cos)
-            ok = (cos > 0.0) & (pdf > 0.0)
-            factor = f * np.where(ok, cos / np.where(ok, pdf, 1.0), 0.0)
-        else:  # Lambert: f cos / pdf = (kd / pi) cos / (cos / pi) = kd where pdf > 0
-            factor = surf["kd"] * (pdf > 0.0)
-        pdf_next = surf["phong"] * pdf
-        if world.any_delta:
-            factor[:, ~is_phong] = 1.0
-            pdf_next[~is_phong] = 0.0
-            _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, new_d)
+        new_d, factor, pdf_next, is_phong = _scatter(world, rng, surf, d, n, wo, entering, p,
+                                                     new_o)
         beta = beta * factor
         strongest = np.maximum(np.maximum(beta[0], beta[1]), beta[2])
         alive = strongest > 0.0
@@ -514,8 +316,61 @@ def _trace_rows_numpy(world: PathWorld, o: np.ndarray, d: np.ndarray,
             o, d, count_emission, bsdf_pdf = new_o, new_d, ~is_phong, pdf_next
         else:
             o, d, path, beta, count_emission, bsdf_pdf = (
-                _take(x, keep) for x in (new_o, new_d, path, beta, ~is_phong, pdf_next))
+                take(x, keep) for x in (new_o, new_d, path, beta, ~is_phong, pdf_next))
     return L, rays
+
+
+def _emission_seen(world: PathWorld, L, surf: dict, tri, path, beta, count_emission,
+                   bsdf_pdf, d_n, t) -> None:
+    """Add into L (3, n_paths) the emission the hits tri (k,) see: whole where the ray was a
+    camera or delta ray (count_emission), else, found by BSDF sampling, its MIS share."""
+    emits = surf["emits"]
+    e = np.flatnonzero(count_emission & emits)
+    if len(e):
+        _scatter_add(L, take(path, e),
+                     take(beta, e) * take(world.tri_emission, take(tri, e)))
+    e = np.flatnonzero(~count_emission & emits)
+    if len(e):  # an emitter found by BSDF sampling: its MIS share
+        te = take(tri, e)
+        cos_y = np.abs(take(d_n, e))
+        p_light = (take(surf["light_pdf"], e) * take(t, e) ** 2
+                   / np.maximum(cos_y, STATE_TINY))
+        pe = take(bsdf_pdf, e)
+        w = pe / (pe + p_light)
+        _scatter_add(L, take(path, e),
+                     take(beta, e) * take(world.tri_emission, te) * w)
+
+
+def _scatter(world: PathWorld, rng, surf: dict, d, n, wo, entering, p, new_o):
+    """The next direction of k paths at hits p (3, k): the lobe chosen (a mirror or glass
+    bounce with its weights, else the Phong lobes), new_d (3, k), the throughput factor
+    (3, k), the density pdf_next (k,) of a Phong sample (0 after a delta bounce) and
+    is_phong (k,) bool; glass moves its rays' starts in new_o (3, k) in place."""
+    k = p.shape[1]
+    if world.any_delta:
+        u = rng.random(k, dtype=STATE)
+        is_mirror = u < surf["refl"]
+        is_glass = ~is_mirror & (u < surf["refl"] + surf["transp"])
+        is_phong = ~is_mirror & ~is_glass
+    else:
+        is_phong = np.ones(k, bool)
+    # the Phong lobes for all (cheaper than gathering); the delta bounces overwrite theirs
+    s, p_d, glossy = surf["shininess"], surf["p_diffuse"], surf["glossy"]
+    new_d = phong_sample_rows(rng, p_d, s, n, wo, glossy)
+    cos = dot_rows(n, new_d)
+    pdf = phong_pdf_rows(p_d, s, n, wo, new_d, glossy, cos_t=cos)
+    if world.any_glossy:
+        f = phong_eval_rows(surf["kd"], surf["ks"], s, n, wo, new_d, glossy, cos_t=cos)
+        ok = (cos > 0.0) & (pdf > 0.0)
+        factor = f * np.where(ok, cos / np.where(ok, pdf, 1.0), 0.0)
+    else:  # Lambert: f cos / pdf = (kd / pi) cos / (cos / pi) = kd where pdf > 0
+        factor = surf["kd"] * (pdf > 0.0)
+    pdf_next = surf["phong"] * pdf
+    if world.any_delta:
+        factor[:, ~is_phong] = 1.0
+        pdf_next[~is_phong] = 0.0
+        _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, new_d)
+    return new_d, factor, pdf_next, is_phong
 
 
 def radiance_leaving(world: PathWorld, points: np.ndarray, normals: np.ndarray,

@@ -1,6 +1,6 @@
 """Sample points of area lights: the unit-square patterns and their maps onto the shapes.
 
-Pure numpy, no scene types (the scene model, `shadowvol.scene.AreaLight`, calls these once when
+Pure numpy, no scene types (the scene model, `shadowvol.lights.AreaLight`, calls these once when
 it is built).  Every map below is area-preserving, so a stratified pattern stays stratified:
 each cell of the unit square becomes a piece of the light of equal area.
 

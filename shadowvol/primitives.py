@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from shadowvol.planes import default_plane_axes
 from shadowvol.scene import (
     Material,
     Object,
@@ -97,15 +98,6 @@ def sphere(name: str, center, radius: float, material: Material | None = None,
     exact = Sphere(world_center, radius * float(transform.scale[0]))
     return Object(name, transform.points(local), np.asarray(ico.faces), material or Material(),
                   analytic=exact)
-
-
-def default_plane_axes(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """In-plane unit axes (u, v) with u x v = normal: u is world x projected onto the plane
-    (world z where the plane is perpendicular to x)."""
-    ref = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
-    u = ref - normal * float(ref @ normal)
-    u = u / np.linalg.norm(u)
-    return u, np.cross(normal, u)
 
 
 def plane(name: str, point=(0.0, 0.0, 0.0), normal=(0.0, 1.0, 0.0), size=(10.0, 10.0),

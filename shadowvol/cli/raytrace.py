@@ -24,12 +24,14 @@ from pathlib import Path
 from raytrace import exercise, shadow_masks  # (area lights: lit where every sample reaches)
 from raytrace.backends import BACKENDS
 from raytrace.groundtruth import check_outputs, ground_truth
-from raytrace.raytree import draw_tree, format_tree, ray_tree
+from raytrace.raytree import format_tree, ray_tree
 from raytrace.whitted import render
 from shadowvol import __version__, memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, raytrace_outlook, status
+from shadowvol.course.exercise_picture import plane_figure, tir_figure
+from shadowvol.course.raytree_picture import draw_tree
 from shadowvol.io import (
     atomic_write,
     save_exr,
@@ -215,12 +217,12 @@ def _tree(args) -> int:
 
 def _plane():
     s = exercise.solve_plane()
-    return exercise.plane_text(s), exercise.plane_figure(s)
+    return exercise.plane_text(s), plane_figure(s)
 
 
 def _tir():
     rays = exercise.solve_tir()
-    return exercise.tir_text(rays), exercise.tir_figure(rays)
+    return exercise.tir_text(rays), tir_figure(rays)
 
 
 EXERCISES = {"plane": _plane, "tir": _tir}

@@ -172,76 +172,18 @@ def diagram(width: int, height: int, text_px: int):
     shaded, the eye ray with every crossing numbered with its textbook / our step, and the
     sums.  Returns the figure and, per case, (textbook Counts, our Counts)."""
     from matplotlib.figure import Figure
-    from matplotlib.patches import Polygon
 
     dpi = 100
     pt = text_px * 72 / dpi
     fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi)
     fig.subplots_adjust(left=0.01, right=0.99, top=0.86, bottom=0.17, wspace=0.04)
     results = []
-    x0, x1, y0, y1 = VIEW
     for k, (name, eye, surface) in enumerate(CASES):
         ax = fig.add_subplot(1, len(CASES), k + 1)
-        ax.set_xlim(x0, x1), ax.set_ylim(y0, y1), ax.set_aspect("equal"), ax.axis("off")
         tb, ours = textbook_volume(LIGHT, BOX), ours_volume(LIGHT, BOX)
-        # the textbook volume, cut to the view: the box and the wedge behind it
-        sides = [f for f in tb if f.kind == "side"]
-        far = 40.0
-        wedge = [sides[0].a, sides[0].a + far * sides[0].d, sides[1].a + far * sides[1].d,
-                 sides[1].a]
-        ax.add_patch(Polygon(np.array(wedge), closed=True, color="#bbbbbb", alpha=0.45, lw=0))
-        ax.add_patch(Polygon(BOX, closed=True, fc="#4a5aa0", ec="black", lw=1.5, zorder=3))
-        ax.fill_between([x0, x1], y0, 0, color="#e8dcc8", zorder=1)
-        ax.plot([x0, x1], [0, 0], color="#6b5a3a", lw=3, zorder=2)
-        ax.text(x1 - 0.15, -0.35, "floor", ha="right", va="top", fontsize=pt * 0.9,
-                color="#6b5a3a")
-        ax.text(x0 + 0.15, -0.35, "behind P: z-fail counts here", ha="left",
-                va="top", fontsize=pt * 0.9, color="#6b5a3a")
-        for f in sides:
-            ax.plot(*np.array([f.a, f.a + far * f.d]).T, color="#f5a000", lw=3, zorder=2)
-        for f in tb:
-            if f.kind == "near cap":
-                ax.plot(*np.array([f.a, f.a + f.d]).T, color="#2ab34a", lw=5, zorder=4)
-        ax.plot(*LIGHT, "o", ms=text_px * 0.9, mfc="#ffd600", mec="black", mew=2, zorder=6)
-        ax.annotate("L", LIGHT, xytext=(text_px * 0.8, 0), textcoords="offset pixels",
-                    fontsize=pt, va="center", weight="bold")
-        # the eye ray, to the surface (solid) and on behind it (dashed)
-        d = surface - eye
-        beyond = eye + 3.0 * d
-        ax.plot(*np.array([eye, surface]).T, color="#1e6ee6", lw=3, zorder=5)
-        ax.plot(*np.array([surface, beyond]).T, color="#1e6ee6", lw=2, ls="--", zorder=5)
-        ax.plot(*eye, "s", ms=text_px * 0.7, mfc="#1e6ee6", mec="black", zorder=6)
-        ax.annotate("eye", eye, xytext=(-text_px * 0.6, text_px * 0.8),
-                    textcoords="offset pixels", fontsize=pt, ha="right")
-        ax.plot(*surface, "o", ms=text_px * 0.5, mfc="white", mec="#1e6ee6", mew=2, zorder=6)
-        ax.annotate("P", surface, xytext=(text_px * 0.4, text_px * 0.3),
-                    textcoords="offset pixels", fontsize=pt, weight="bold")
+        _draw_case(ax, tb, eye, surface, text_px, pt)
         ctb, cours = crossings(eye, surface, tb), crossings(eye, surface, ours)
-        # label the textbook's crossings with both steps (the same faces, ours weigh 2)
-        steps = {}
-        for c in cours:
-            key = (round(c.t, 9) if np.isfinite(c.t) else np.inf)
-            steps[key] = steps.get(key, 0) + c.step
-        for c in ctb:
-            key = round(c.t, 9) if np.isfinite(c.t) else np.inf
-            behind = c.t > 1   # z-fail counts these, with the opposite sign
-            ours_step = steps.get(key, 0)
-            value, ours_value = (-c.step, -ours_step) if behind else (c.step, ours_step)
-            label = f"{value:+d} / {ours_value:+d}"
-            p = c.point if np.isfinite(c.t) else None
-            if p is None or not (x0 < p[0] < x1 and y0 < p[1] < y1):
-                # off the view (or the far cap at infinity): at the view's edge
-                p = eye + _edge_t(eye, d, VIEW) * d
-                label = ("far cap at ∞  " if not np.isfinite(c.t) else "off view  ") + label
-            colour = "#00873c" if value > 0 else "#c81e28"
-            right = p[0] > (x0 + x1) / 2
-            low = behind and p[1] > y0 + 1.0      # room below the point for its label
-            ax.plot(*p, "X", ms=text_px * 0.6, color=colour, mec="black", zorder=7)
-            ax.annotate(label, p, xytext=(-text_px * 0.6 if right else text_px * 0.6,
-                                          -text_px * 1.2 if low else text_px * 0.9),
-                        textcoords="offset pixels", fontsize=pt * 0.9, color=colour,
-                        weight="bold", zorder=8, ha="right" if right else "left",
-                        bbox=dict(fc="white", ec=colour, alpha=0.9, boxstyle="round"))
+        _label_crossings(ax, eye, surface, ctb, cours, text_px, pt)
         a, b = counts(ctb), counts(cours)
         results.append((a, b))
         ax.set_title(name, fontsize=pt)
@@ -256,6 +198,77 @@ def diagram(width: int, height: int, text_px: int):
              "eye; z-fail counts the faces behind P the other way round)",
              ha="center", va="top", fontsize=pt * 0.9)
     return fig, results
+
+
+def _draw_case(ax, tb, eye: np.ndarray, surface: np.ndarray, text_px: int, pt: float) -> None:
+    """One panel's scene: the textbook volume `tb` cut to the view (the box and the wedge
+    behind it), the floor, the light, and the eye ray to P (solid) and on behind it (dashed)."""
+    from matplotlib.patches import Polygon
+
+    x0, x1, y0, y1 = VIEW
+    ax.set_xlim(x0, x1), ax.set_ylim(y0, y1), ax.set_aspect("equal"), ax.axis("off")
+    sides = [f for f in tb if f.kind == "side"]
+    far = 40.0
+    wedge = [sides[0].a, sides[0].a + far * sides[0].d, sides[1].a + far * sides[1].d,
+             sides[1].a]
+    ax.add_patch(Polygon(np.array(wedge), closed=True, color="#bbbbbb", alpha=0.45, lw=0))
+    ax.add_patch(Polygon(BOX, closed=True, fc="#4a5aa0", ec="black", lw=1.5, zorder=3))
+    ax.fill_between([x0, x1], y0, 0, color="#e8dcc8", zorder=1)
+    ax.plot([x0, x1], [0, 0], color="#6b5a3a", lw=3, zorder=2)
+    ax.text(x1 - 0.15, -0.35, "floor", ha="right", va="top", fontsize=pt * 0.9,
+            color="#6b5a3a")
+    ax.text(x0 + 0.15, -0.35, "behind P: z-fail counts here", ha="left",
+            va="top", fontsize=pt * 0.9, color="#6b5a3a")
+    for f in sides:
+        ax.plot(*np.array([f.a, f.a + far * f.d]).T, color="#f5a000", lw=3, zorder=2)
+    for f in tb:
+        if f.kind == "near cap":
+            ax.plot(*np.array([f.a, f.a + f.d]).T, color="#2ab34a", lw=5, zorder=4)
+    ax.plot(*LIGHT, "o", ms=text_px * 0.9, mfc="#ffd600", mec="black", mew=2, zorder=6)
+    ax.annotate("L", LIGHT, xytext=(text_px * 0.8, 0), textcoords="offset pixels",
+                fontsize=pt, va="center", weight="bold")
+    d = surface - eye
+    beyond = eye + 3.0 * d
+    ax.plot(*np.array([eye, surface]).T, color="#1e6ee6", lw=3, zorder=5)
+    ax.plot(*np.array([surface, beyond]).T, color="#1e6ee6", lw=2, ls="--", zorder=5)
+    ax.plot(*eye, "s", ms=text_px * 0.7, mfc="#1e6ee6", mec="black", zorder=6)
+    ax.annotate("eye", eye, xytext=(-text_px * 0.6, text_px * 0.8),
+                textcoords="offset pixels", fontsize=pt, ha="right")
+    ax.plot(*surface, "o", ms=text_px * 0.5, mfc="white", mec="#1e6ee6", mew=2, zorder=6)
+    ax.annotate("P", surface, xytext=(text_px * 0.4, text_px * 0.3),
+                textcoords="offset pixels", fontsize=pt, weight="bold")
+
+
+def _label_crossings(ax, eye: np.ndarray, surface: np.ndarray, ctb, cours, text_px: int,
+                     pt: float) -> None:
+    """Mark the textbook's crossings `ctb` of the eye ray, each labelled with both steps,
+    textbook / ours (`cours`: the same faces, ours weigh 2); one off the view (or the far cap
+    at infinity) at the view's edge."""
+    x0, x1, y0, y1 = VIEW
+    d = surface - eye
+    steps = {}
+    for c in cours:
+        key = (round(c.t, 9) if np.isfinite(c.t) else np.inf)
+        steps[key] = steps.get(key, 0) + c.step
+    for c in ctb:
+        key = round(c.t, 9) if np.isfinite(c.t) else np.inf
+        behind = c.t > 1   # z-fail counts these, with the opposite sign
+        ours_step = steps.get(key, 0)
+        value, ours_value = (-c.step, -ours_step) if behind else (c.step, ours_step)
+        label = f"{value:+d} / {ours_value:+d}"
+        p = c.point if np.isfinite(c.t) else None
+        if p is None or not (x0 < p[0] < x1 and y0 < p[1] < y1):
+            p = eye + _edge_t(eye, d, VIEW) * d
+            label = ("far cap at ∞  " if not np.isfinite(c.t) else "off view  ") + label
+        colour = "#00873c" if value > 0 else "#c81e28"
+        right = p[0] > (x0 + x1) / 2
+        low = behind and p[1] > y0 + 1.0      # room below the point for its label
+        ax.plot(*p, "X", ms=text_px * 0.6, color=colour, mec="black", zorder=7)
+        ax.annotate(label, p, xytext=(-text_px * 0.6 if right else text_px * 0.6,
+                                      -text_px * 1.2 if low else text_px * 0.9),
+                    textcoords="offset pixels", fontsize=pt * 0.9, color=colour,
+                    weight="bold", zorder=8, ha="right" if right else "left",
+                    bbox=dict(fc="white", ec=colour, alpha=0.9, boxstyle="round"))
 
 
 def _edge_t(eye: np.ndarray, d: np.ndarray, view) -> float:

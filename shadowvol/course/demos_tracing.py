@@ -8,11 +8,12 @@ import numpy as np
 
 import raytrace
 from raytrace import exercise
-from raytrace.raytree import draw_tree, format_tree, ray_tree
+from raytrace.raytree import format_tree, ray_tree
 from shadowvol.compare import maskdiff
 from shadowvol.compare.comparison import compare
-from shadowvol.course import slides
+from shadowvol.course import exercise_picture, slides
 from shadowvol.course.picture import Picture
+from shadowvol.course.raytree_picture import draw_tree
 from shadowvol.course.shadow2d import draw_shadow2d, example
 from shadowvol.pictures import figure_pixels, tint
 from shadowvol.raster.projection import view_matrix, view_projection
@@ -86,7 +87,8 @@ def tir(g) -> Picture:
     L = g.layout
     w, h = L.cell(1, 1, labels=False, side=L.px(760))
     rays = exercise.solve_tir()
-    img = figure_pixels(exercise.tir_figure(rays, width_px=w, height_px=h, text_px=L.px(32)))
+    img = figure_pixels(exercise_picture.tir_figure(rays, width_px=w, height_px=h,
+                                                    text_px=L.px(32)))
     text = exercise.tir_text(rays)
     note = L.note(_wrap(text, 40), L.px(760), h)
     title = "Total internal reflection: from glass into air"
@@ -151,8 +153,8 @@ def ray_plane(g) -> Picture:
     side_w = L.px(900)
     w, h = L.cell(1, 1, labels=False, side=side_w)
     s = exercise.solve_plane()
-    img = figure_pixels(exercise.plane_figure(s, width_px=min(w, h), height_px=h,
-                                              text_px=L.px(32)))
+    img = figure_pixels(exercise_picture.plane_figure(s, width_px=min(w, h), height_px=h,
+                                                      text_px=L.px(32)))
     text = exercise.plane_text(s)
     note = L.note(_wrap(text, 56), side_w, h)
     title = "Exercise: a ray against a plane"

@@ -122,7 +122,8 @@ def test_drawing_a_ray_tree_leaves_matplotlibs_backend_alone():
     done = _python(textwrap.dedent(f"""
         import matplotlib
         matplotlib.use("svg")
-        from raytrace.raytree import draw_tree, ray_tree
+        from raytrace.raytree import ray_tree
+        from shadowvol.course.raytree_picture import draw_tree
         from shadowvol.scenefile import load_scene
         scene = load_scene({str(SCENES / "whitted.toml")!r}).replace(width=64, height=48)
         fig = draw_tree(scene, ray_tree(scene, 30, 20, max_depth=1))

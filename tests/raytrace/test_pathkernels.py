@@ -19,7 +19,8 @@ pytest.importorskip("numba", reason="the numba shading needs numba: "
                     "pip install 'shadowvol[fast]'")
 
 from raytrace import pathtrace  # noqa: E402
-from raytrace.pathtrace import PathWorld, render, shading, trace_paths  # noqa: E402
+from raytrace.pathstate import PathWorld  # noqa: E402
+from raytrace.pathtrace import render, shading, trace_paths  # noqa: E402
 from shadowvol.errors import MissingExtra  # noqa: E402
 from shadowvol.io import save_png  # noqa: E402
 from shadowvol.primitives import box, plane, sphere  # noqa: E402

@@ -23,12 +23,12 @@ from raytrace.raytree import (
     REFRACTED,
     SHADOW,
     TIR,
-    draw_tree,
     format_tree,
     ray_tree,
     tree_colour,
 )
 from raytrace.tolerances import surface_offset
+from shadowvol.course.raytree_picture import draw_tree
 from shadowvol.primitives import mesh, plane
 from shadowvol.scene import (
     Camera,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from builders import SCENES
 
-from shadowvol import arealights, primitives
+from shadowvol import arealights, planes, primitives
 from shadowvol.scene import (
     AreaLight,
     AreaSample,
@@ -104,7 +104,7 @@ def _rect(**kw):
 @pytest.mark.parametrize("pattern", ["stratified", "halton"])
 def test_samples_lie_on_the_shapes(pattern):
     rect = _rect(pattern=pattern)
-    u, v = primitives.default_plane_axes(rect.normal)
+    u, v = planes.default_plane_axes(rect.normal)
     local = rect.positions - rect.center
     assert np.allclose(local @ rect.normal, 0.0)
     assert np.all(np.abs(local @ u) <= 1.0) and np.all(np.abs(local @ v) <= 0.5)
@@ -123,7 +123,7 @@ def test_samples_lie_on_the_shapes(pattern):
 
 def test_stratified_puts_one_sample_per_cell():
     rect = _rect(samples=32)  # 8 x 4: more cells along u, the longer side
-    u, v = primitives.default_plane_axes(rect.normal)
+    u, v = planes.default_plane_axes(rect.normal)
     local = rect.positions - rect.center
     i = np.floor((local @ u + 1.0) / 2.0 * 8).astype(int)
     j = np.floor((local @ v + 0.5) / 1.0 * 4).astype(int)

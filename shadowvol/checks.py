@@ -1,0 +1,139 @@
+"""The checks every value of the scene model passes, and the one error they raise.
+
+`SceneError` names the key path and the problem on one line (a file's keys and values may hold
+line breaks; a wrong value is quoted to `MAX_QUOTE` characters).  `vec` and `num` keep every
+number inside the float32 range the renderers use.  Below `shadowvol.scene` and
+`shadowvol.lights`, which both build on it; `shadowvol.scene` re-exports the public names.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+# The float32 range the renderers use: every number of a scene has |x| <= MAX_MAGNITUDE, and
+# every length that must be positive (near, radius, sizes, scale) is >= MIN_POSITIVE, so that
+# x, 1/x, x*x and sums of a few squares are all normal float32 numbers (float32 ends at 3.4e38
+# and its normal numbers at 1.2e-38).  A world 1e6 or 1e9 wide is far inside this.
+MAX_MAGNITUDE = 1e18
+MIN_POSITIVE = 1e-18
+# Messages quote a bad value only up to this many characters (a wrong 1e6-element list is not
+# echoed whole), and a SceneError's key and problem are cut to one line of at most this length.
+MAX_QUOTE = 80
+MAX_MESSAGE = 400
+
+
+def shorten(value, limit: int = MAX_QUOTE) -> str:
+    """repr(value), cut to about `limit` characters ("… (N items)" for a long list)."""
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    more = f" ({len(value)} items)" if isinstance(value, (list, tuple, np.ndarray)) else ""
+    return text[:limit] + "…" + more
+
+
+def _one_line(text: str, limit: int) -> str:
+    """`text` with line breaks and other control characters escaped, cut to `limit`."""
+    if not text.isprintable():
+        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    return text if len(text) <= limit else text[:limit] + "…"
+
+
+class SceneError(ValueError):
+    """Bad scene input: names the file (when known), the key and the problem."""
+
+    def __init__(self, key: str, problem: str, file: str | None = None):
+        # one line, whatever the input: keys and values from a file may hold line breaks
+        key, problem = _one_line(key, MAX_QUOTE), _one_line(problem, MAX_MESSAGE)
+        file = None if file is None else _one_line(file, MAX_MESSAGE)
+        self.key, self.problem, self.file = key, problem, file
+        parts = [part for part in (file, key) if part]
+        super().__init__(": ".join(parts + [problem]))
+
+    def in_file(self, file: str) -> "SceneError":
+        return SceneError(self.key, self.problem, file)
+
+    def under(self, prefix: str) -> "SceneError":
+        key = f"{prefix}.{self.key}" if self.key else prefix
+        return SceneError(key, self.problem, self.file)
+
+
+def reject_unknown_keys(table, allowed, key: str = "") -> None:
+    """Raise SceneError naming the first key of `table` that is not in `allowed`; `key` is the
+    table's own key path ("" at the top level), so the error names `key.unknown`."""
+    unknown = sorted(str(name) for name in set(table) - set(allowed))
+    if unknown:
+        prefix = f"{key}." if key else ""
+        raise SceneError(f"{prefix}{unknown[0]}",
+                         f"unknown key (allowed here: {', '.join(sorted(allowed))})")
+
+
+def is_number(x) -> bool:
+    """A real number, strictly: int or float (numpy's too), never a bool or a string."""
+    return (isinstance(x, (int, float, np.integer, np.floating))
+            and not isinstance(x, (bool, np.bool_)))
+
+
+def _numbers(value) -> bool:
+    """`value` is a numeric array or a flat list/tuple of real numbers (`is_number`)."""
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in "iuf"
+    return isinstance(value, (list, tuple)) and all(is_number(x) for x in value)
+
+
+def vec(value, key: str, n: int = 3, *, positive: bool = False) -> np.ndarray:
+    """A read-only float64 vector of length `n` from `value` (a list, tuple or array of real
+    numbers: no strings, no booleans), or a SceneError naming `key`."""
+    if not _numbers(value):
+        raise SceneError(key, f"expected {n} numbers, got {shorten(value)}")
+    arr = np.array(value, dtype=np.float64)
+    if arr.shape != (n,):
+        raise SceneError(key, f"expected {n} numbers, got {shorten(value)}")
+    if not np.all(np.isfinite(arr)):
+        raise SceneError(key, f"non-finite number in {shorten(value)}")
+    if np.any(np.abs(arr) > MAX_MAGNITUDE):
+        raise SceneError(key, f"{shorten(value)} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})")
+    if positive and np.any(arr <= 0):
+        raise SceneError(key, f"must be positive, got {shorten(value)}")
+    if positive and np.any(arr < MIN_POSITIVE):
+        raise SceneError(key, f"{shorten(value)} is too small for float32 (at least "
+                              f"{MIN_POSITIVE:g})")
+    arr.setflags(write=False)
+    return arr
+
+
+def num(value, key: str, *, low: float | None = None, high: float | None = None,
+        low_open: bool = False) -> float:
+    """A finite float from `value` within [low, high] (low excluded if `low_open`)."""
+    if not is_number(value):
+        raise SceneError(key, f"expected a number, got {shorten(value)}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise SceneError(key, f"non-finite number {value!r}")
+    if abs(x) > MAX_MAGNITUDE:
+        raise SceneError(key, f"{value!r} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})")
+    if low is not None and (x <= low if low_open else x < low):
+        raise SceneError(key, f"must be {'>' if low_open else '>='} {low}, got {value!r}")
+    if low == 0.0 and low_open and x < MIN_POSITIVE:
+        raise SceneError(key, f"{value!r} is too small for float32 (at least {MIN_POSITIVE:g})")
+    if high is not None and x > high:
+        raise SceneError(key, f"must be <= {high}, got {value!r}")
+    return x
+
+
+def unit(v: np.ndarray, key: str) -> np.ndarray:
+    length = float(np.linalg.norm(v))
+    if length == 0.0 or not math.isfinite(length):
+        raise SceneError(key, "must be a non-zero direction")
+    out = v / length
+    out.setflags(write=False)
+    return out
+
+
+def frozen(arr: np.ndarray) -> np.ndarray:
+    """`arr`, made read-only in place (the model's arrays are never written after checking)."""
+    arr.setflags(write=False)
+    return arr
