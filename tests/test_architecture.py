@@ -27,8 +27,8 @@ FLOORS = {
     "shadowvol.raster": (4, "raster"),
     "raytrace": (4, "raytrace"),
     "shadowvol.scenefile": (3, "model"),
-    "shadowvol.meshfiles": (3, "model"),
-    "shadowvol.scenewrite": (3, "model"),
+    "shadowvol.scenefile_mesh": (3, "model"),
+    "shadowvol.scenefile_write": (3, "model"),
     "shadowvol.resources": (3, "model"),
     "shadowvol.memory": (3, "model"),
     "shadowvol.scene": (2, "model"),
@@ -38,6 +38,7 @@ FLOORS = {
     "shadowvol.arealights": (2, "model"),
     "shadowvol.fields": (2, "model"),
     "shadowvol.planes": (2, "model"),
+    "shadowvol.checks": (2, "model"),
     "shadowvol.io": (1, "base"),
     "shadowvol.pictures": (1, "base"),
     "shadowvol.display": (1, "base"),
@@ -50,7 +51,7 @@ ENTRY_FILES = {"shadowvol.__main__", "raytrace.__main__"}
 # What the witness may import of this project: the model it shares with the rasterizer.
 RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.lights", "shadowvol.cameras",
                        "shadowvol.primitives", "shadowvol.arealights", "shadowvol.fields",
-                       "shadowvol.planes", "shadowvol.errors", "shadowvol.io",
+                       "shadowvol.planes", "shadowvol.checks", "shadowvol.errors", "shadowvol.io",
                        "shadowvol.signals"}
 # Third-party and standard modules that only one folder may import.
 CONFINED = {"moderngl": "shadowvol/raster/", "glcontext": "shadowvol/raster/",
