@@ -258,7 +258,13 @@ def test_the_real_x_window_shows_and_does_what_the_headless_one_does(ctx, x11_se
     and panels as the headless driver, and every frame equals the offscreen render."""
     for name in RECORDED:
         _check_frame(ctx, x11_session, name, "x11")
-    assert x11_session[1] == session[1]
+    timeless = lambda rec: {name: {**r, "panel": [row for row in r["panel"]
+                                                  if not row.startswith("frame ")]}
+                            for name, r in rec.items()}
+    real, headless = timeless(x11_session[1]), timeless(session[1])
+    for name in real:
+        for key in real[name]:
+            assert real[name][key] == headless[name][key], (name, key)
 
 
 def test_events_changed_the_state(session):
