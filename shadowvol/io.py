@@ -64,13 +64,15 @@ STDOUT = "-"
 
 
 @contextlib.contextmanager
-def atomic_write(path: str | Path):
+def atomic_write(path: str | Path, follow_links: bool = True):
     """Yield a binary file object that becomes `path` only once complete.
 
     A regular file (or a new name) is written to a temporary file beside it, fsynced and
     renamed over it: on any error, Ctrl-C or SIGTERM the temporary is removed and `path` is left
     as it was.  A symbolic link is followed: the file it points to is replaced the same way in
-    its own folder, and the link stays.  A device, a FIFO or "-" (standard output) cannot be
+    its own folder, and the link stays; with `follow_links=False` the link itself is replaced
+    by the file, and what it pointed to is left alone (a dataset's frames, where a link may
+    point to another frame's file).  A device, a FIFO or "-" (standard output) cannot be
     replaced: the data is written straight to it.  Errors are WriteError naming `path`.
     """
     shown = str(path)
@@ -78,9 +80,10 @@ def atomic_write(path: str | Path):
         yield _Stream(sys.stdout.buffer, shown)
         return
     path = Path(path)
-    if path.is_symlink():
+    if path.is_symlink() and follow_links:
         path = Path(os.path.realpath(path))
-    if path.exists() and not path.is_file() and not path.is_dir():  # a device or a FIFO
+    if not path.is_symlink() and path.exists() and not path.is_file() and not path.is_dir():
+        # a device or a FIFO
         try:
             with open(path, "wb", buffering=0) as raw:
                 yield _Stream(raw, shown)
@@ -273,9 +276,9 @@ MASK_ARRAYS = {
 }
 
 
-def write_bytes(path: str | Path, data: bytes) -> None:
+def write_bytes(path: str | Path, data: bytes, follow_links: bool = True) -> None:
     """Write `data` to `path` atomically (see `atomic_write`)."""
-    with out_of_memory_while(f"writing {path}"), atomic_write(path) as f:
+    with out_of_memory_while(f"writing {path}"), atomic_write(path, follow_links) as f:
         f.write(data)
 
 

@@ -17,10 +17,12 @@ from __future__ import annotations
 import json
 import math
 import os
+import shutil
 from pathlib import Path
 from statistics import NormalDist
 
 import numpy as np
+import pytest
 
 from shadowvol.compare.maskdiff import count_edges, edge_pixels
 from shadowvol.primitives import box, plane, sphere
@@ -40,6 +42,26 @@ SCENES = ROOT / "scenes"
 TEST_OUTPUT = ROOT / "test-output"
 # the shared test meshes: ../shared/models beside the checkout, or where SHADOWVOL_MODELS says
 # (a worktree elsewhere)
+# Set by .ci/run, which installs the system packages: then a missing one fails instead of
+# skipping, so CI runs every test that needs one.
+REQUIRE_SYSTEM = "SHADOWVOL_REQUIRE_SYSTEM"
+
+
+def system_program(names: tuple[str, ...], package: str) -> str:
+    """The path of the first of `names` on PATH, a program that pip cannot install (a real
+    browser, an X server).  Missing: the test skips, naming the Debian package to install;
+    under $SHADOWVOL_REQUIRE_SYSTEM=1 (CI) it fails."""
+    for name in names:
+        path = shutil.which(name)
+        if path:
+            return path
+    why = (f"needs {names[0]}, a system program pip cannot install: apt-get install {package} "
+           f"(.ci/run does)")
+    if os.environ.get(REQUIRE_SYSTEM) == "1":
+        pytest.fail(f"{why}; ${REQUIRE_SYSTEM}=1 says it must be there")
+    pytest.skip(why)
+
+
 MODELS = Path(os.environ.get("SHADOWVOL_MODELS", ROOT.parent / "shared" / "models"))
 
 

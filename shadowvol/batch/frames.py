@@ -14,8 +14,8 @@ import math
 
 import numpy as np
 
-from shadowvol.scene import (Camera, DirectionalLight, SceneError, is_number, reject_unknown_keys,
-                             shorten)
+from shadowvol.scene import (AreaLight, Camera, DirectionalLight, SceneError, is_number,
+                             reject_unknown_keys, shorten)
 from shadowvol.scenefile import CAMERA_KEYS
 
 ORBIT_KEYS = {"center", "radius", "elevation", "frames", "start", "sweep", "up", "fov_y",
@@ -153,7 +153,8 @@ def _in_ball(rng: np.random.Generator, radius: float) -> np.ndarray:
 
 def jittered(camera: Camera, lights: tuple, jitter: dict, seed: int, index: int):
     """(camera, lights) of a frame with `jitter` applied: the eye, then each point/spot light's
-    position, moved by offsets drawn in that order from `frame_rng(seed, index)`."""
+    position and each area light's centre (the whole emitter: its samples move with it), moved
+    by offsets drawn in that order from `frame_rng(seed, index)`."""
     if not jitter:
         return camera, lights
     import dataclasses
@@ -165,6 +166,9 @@ def jittered(camera: Camera, lights: tuple, jitter: dict, seed: int, index: int)
     for light in lights:
         if isinstance(light, DirectionalLight):
             moved.append(light)
+        elif isinstance(light, AreaLight):
+            moved.append(dataclasses.replace(
+                light, center=light.center + _in_ball(rng, jitter.get("lights", 0.0))))
         else:
             moved.append(dataclasses.replace(
                 light, position=light.position + _in_ball(rng, jitter.get("lights", 0.0))))

@@ -1,7 +1,8 @@
 """Where a frame's bytes go: per-frame files `OUT/<job>/<frame>.<suffix>`, or webdataset tar
 shards `OUT/shard-NNNNNN.tar` of a fixed number of samples.  Only the parent process writes,
 every file through `shadowvol.io` (atomic), so the files do not depend on which worker made
-them.
+them.  An output that is a symbolic link (DVC and git-annex datasets are made of them) is
+replaced by the new file, never written through: the link may point to another output.
 
 A webdataset sample is the members `<job>/<frame>.<suffix>` of one frame (the key is the part
 before the first dot: `<job>/<frame>`), members in frame order, then output order; tar headers
@@ -37,7 +38,7 @@ class FileStore:
         files = {}
         for name, rel in self.paths(spec).items():
             data = encoded[name]
-            write_bytes(self.out / rel, data)
+            write_bytes(self.out / rel, data, follow_links=False)
             files[name] = {"path": rel, "sha256": manifest.sha256(data), "bytes": len(data)}
         return files
 
@@ -94,7 +95,7 @@ class TarStore:
                 files[spec["id"]][name] = {"tar": self.tar_name(unit), "member": member,
                                            "sha256": manifest.sha256(data), "bytes": len(data)}
         data = tar_bytes(members)
-        write_bytes(self.out / self.tar_name(unit), data)
+        write_bytes(self.out / self.tar_name(unit), data, follow_links=False)
         record = {"id": self.tar_id(unit), "tar": self.tar_name(unit),
                   "sha256": manifest.sha256(data), "bytes": len(data),
                   "frames": [spec["id"] for spec, _ in done]}

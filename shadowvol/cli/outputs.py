@@ -47,11 +47,21 @@ def check(outputs: dict[str, Path], flags: dict[str, str] | None = None) -> None
         if not stream and path.suffix.lower() != want:
             raise SceneError(flag, f"{str(path)!r} must end in {want} (shadowvol writes "
                                    f"{want[1:].upper()} there and nothing else)")
-        key = Path("-") if str(path) == "-" else Path(path).resolve()
+        key = Path("-") if str(path) == "-" else _resolved(path, flag)
         if key in seen:
             raise SceneError(flag, f"{str(path)!r} is also the {flags.get(seen[key], seen[key])} "
                                    "output; give each output its own file")
         seen[key] = kind
+
+
+def _resolved(path: Path, flag: str) -> Path:
+    """The file `path` names, links followed; SceneError for a loop of links."""
+    try:
+        return Path(path).resolve()
+    except (RuntimeError, OSError) as exc:   # a loop: RuntimeError before Python 3.13
+        raise SceneError(flag, f"{shorten(str(path))} cannot be written: "
+                               f"{getattr(exc, 'strerror', None) or 'a loop of symbolic links'}"
+                         ) from None
 
 
 def _is_stream(path: Path) -> bool:

@@ -15,7 +15,7 @@ from shadowvol.io import GROUND_TRUTH, encode_srgb, save_exr, save_masks, save_p
 from shadowvol.pictures import heat_maps
 from shadowvol.raster.context import create_context
 from shadowvol.raster.renderer import Renderer
-from shadowvol.scene import SceneError, light_samples
+from shadowvol.scene import AreaLight, SceneError, light_samples
 from shadowvol.scenefile import load_scene
 
 EPILOG = """\
@@ -172,6 +172,15 @@ def _check_gl(ctx) -> None:
         raise RenderError(f"the GL reported {error} while rendering")
 
 
+def _stencil_lights(scene, scene_path: str) -> None:
+    """The heat map shows one light's stencil counts: hard lights only."""
+    for i, light in enumerate(scene.lights):
+        if isinstance(light, AreaLight):
+            raise SceneError(f"lights[{i}]", "--stencil draws a hard light's stencil counts; "
+                             "this is an area light (its per-sample counts are lit_count, in "
+                             "--masks)", scene_path)
+
+
 def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
     """Load, render and write one scene; returns (exit status, the GL context to reuse).
     Errors are reported here, one line each, naming the scene when there are several."""
@@ -183,6 +192,8 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
         if max(scene.width, scene.height) > limit:
             raise SceneError("image", f"{scene.width}x{scene.height} is larger than this GL "
                                       f"allows ({limit} pixels per side)", scene_path)
+        if "stencil" in out:
+            _stencil_lights(scene, scene_path)
         written = tuple(k for k in ("png", "masks", "exr", "png16", "stencil", "volumes")
                         if k in out or k == "png")
         memory.check(memory.raster(scene, ("image", "lit", "coverage") + args.truth,

@@ -1,7 +1,8 @@
 """The viewer's GL side (`shadowvol view`): moderngl on the window's own context, and the blit
 that shows a composed picture in the window.
 
-The window (pyglet, `shadowvol.view`) makes its context (GLX under X11) and makes it current;
+The window (pyglet, `shadowvol.view`) makes its context (GLX under X11, EGL for pyglet's
+headless window) and makes it current;
 `attach` wraps it for moderngl, and the renderer then renders into its own offscreen target in
 that context exactly as on EGL (the raw-GL module loads its functions from the current
 context).  The frame is read back, composed with the side panel on the CPU, and blitted one
@@ -10,6 +11,9 @@ texel per pixel, so the window shows exactly the offscreen render's pixels.
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
+
 import moderngl
 import numpy as np
 
@@ -17,11 +21,35 @@ from shadowvol.raster import glsl
 from shadowvol.raster.context import REQUIRED_GL_VERSION, ContextError
 
 
-def attach() -> moderngl.Context:
+class _EglLoader:
+    """GL functions of the current EGL context, for moderngl (`create_context(context=...)`):
+    glcontext's own EGL backend only makes contexts of its own, it cannot detect one."""
+
+    def __init__(self):
+        self._egl = ctypes.CDLL(ctypes.util.find_library("EGL") or "libEGL.so.1")
+        self._egl.eglGetProcAddress.restype = ctypes.c_void_p
+        self._egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
+
+    def load_opengl_function(self, name: str) -> int:
+        return self._egl.eglGetProcAddress(name.encode()) or 0
+
+    def release(self) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+
+def attach(egl: bool = False) -> moderngl.Context:
     """A moderngl context for the GL context current on this thread (the window's); the
-    window owns the context itself."""
+    window owns the context itself.  `egl`: the window's context is EGL (pyglet's headless
+    window), else the platform's default (GLX under X11)."""
     try:
-        ctx = moderngl.create_context(require=REQUIRED_GL_VERSION)
+        ctx = moderngl.create_context(require=REQUIRED_GL_VERSION,
+                                      **({"context": _EglLoader()} if egl else {}))
     except Exception as exc:  # glcontext raises bare Exceptions
         raise ContextError(f"the window's OpenGL context is unusable ({exc}); shadowvol view "
                            "needs OpenGL 4.5") from None

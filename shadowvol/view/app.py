@@ -85,20 +85,24 @@ def _mono(px: int):
 
 
 class Viewer:
-    """A window on `scene` (call `close()`).  `visible=False` for tests and benchmarks (an X
-    display is still needed: Xvfb is enough)."""
+    """A window on `scene` (call `close()`).  `visible=False` for tests and benchmarks, or
+    pyglet's headless EGL window (`pyglet.options["headless"] = True` before the first viewer):
+    no X server needed."""
 
     def __init__(self, scene, visible: bool = True):
         pyglet = require("pyglet", "the interactive viewer (shadowvol view)", extra="view")
         self.pyglet = pyglet
         self.scene = scene
+        # 8 bits a channel asked for: a config left to choose may be 16-bit (565), and the
+        # window would then not show the frame's own pixels
         config = pyglet.gl.Config(major_version=4, minor_version=5, forward_compatible=True,
-                                  double_buffer=True, depth_size=24)
+                                  double_buffer=True, depth_size=24, red_size=8, green_size=8,
+                                  blue_size=8)
         self.window = pyglet.window.Window(scene.width + PANEL_WIDTH, scene.height,
                                            caption=f"shadowvol view: {scene.name}",
                                            config=config, visible=visible, resizable=False)
         self.window.switch_to()
-        self.ctx = gl_window.attach()
+        self.ctx = gl_window.attach(egl=bool(pyglet.options["headless"]))
         self.renderer = Renderer(scene, self.ctx)
         try:
             receiver_index(scene)
@@ -135,7 +139,9 @@ class Viewer:
         """(H, W + PANEL_WIDTH, 3) uint8: the frame and the side panel."""
         return np.concatenate([self.frame(), self.panel()], axis=1)
 
-    def panel(self) -> np.ndarray:
+    def panel_lines(self) -> list[str]:
+        """The side panel's text as drawn, the lines that fit: the state, then the probe's
+        report (so a click is readable at once, help on or off), then the help."""
         s = self.state
         lights = ", ".join(f"{i}: {type(l).__name__.replace('Light', '').lower()}"
                            for i, l in enumerate(s.lights)) or "none"
@@ -145,20 +151,24 @@ class Viewer:
         if self.message:
             head.append(self.message)
         body = HELP.splitlines() if s.help else []
-        f = _mono(PANEL_TEXT_PX)
-        columns = max(20, int((PANEL_WIDTH - 16) / f.getlength("m")))
+        columns = max(20, int((PANEL_WIDTH - 16) / _mono(PANEL_TEXT_PX).getlength("m")))
         lines = []
-        for line in head + [""] + body + [""] + self.probe_text.splitlines():
+        for line in head + [""] + self.probe_text.splitlines() + [""] + body:
             lines += textwrap.wrap(line, columns, subsequent_indent="    ",
                                    drop_whitespace=False) or [""]
+        fit = max(0, (self.scene.height - 6) // self._line_step())
+        return lines[:fit]
+
+    @staticmethod
+    def _line_step() -> int:
+        return round(PANEL_TEXT_PX * 1.3)
+
+    def panel(self) -> np.ndarray:
         img = Image.new("RGB", (PANEL_WIDTH, self.scene.height), (250, 250, 250))
         draw = ImageDraw.Draw(img)
-        step = round(PANEL_TEXT_PX * 1.3)
-        for i, line in enumerate(lines):
-            y = 6 + i * step
-            if y > self.scene.height - step:
-                break
-            draw.text((8, y), line, fill=(20, 20, 24), font=f)
+        f = _mono(PANEL_TEXT_PX)
+        for i, line in enumerate(self.panel_lines()):
+            draw.text((8, 6 + i * self._line_step()), line, fill=(20, 20, 24), font=f)
         return np.asarray(img, np.uint8)
 
     def draw(self) -> None:

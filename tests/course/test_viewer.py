@@ -1,6 +1,8 @@
-"""`shadowvol view` for real: a window under Xvfb (`.ci/run` installs it), driven by X events
-sent through the XTEST extension (keys, drags, the wheel, a click), screenshot, and the frame's
-pixels checked against the offscreen (EGL) render of the same view state.
+"""`shadowvol view` for real: the viewer's window driven by events (keys, drags, the wheel, a
+click), screenshot, and the frame's pixels checked against the offscreen (EGL) render of the
+same view state.  The window is pyglet's headless EGL one (no X server); one test opens a real X
+window under Xvfb (`.ci/run` installs it; without it that test skips, and fails in CI) driven by
+X events through the XTEST extension, and checks it does exactly what the headless one does.
 
 The window runs in a child process (its own GLX context; this process keeps the EGL one); the
 child writes its screenshots and states, this process renders the same states offscreen."""
@@ -9,7 +11,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 import textwrap
@@ -17,7 +18,7 @@ import time
 
 import numpy as np
 import pytest
-from builders import ROOT, SCENES
+from builders import ROOT, SCENES, system_program
 from PIL import Image
 
 from shadowvol.io import encode_srgb
@@ -33,24 +34,26 @@ pytestmark = pytest.mark.gl
 
 SIZE = (240, 180)
 
-# The child: open the viewer on the window at (0, 0), send X events with XTEST, pump pyglet's
-# event loop, record (state, screenshot) after each step.
+# The child: open the viewer, drive it with events, pump pyglet's event loop, record (state,
+# screenshot) after each step.  Two drivers send the same steps: "x11" sends real X events
+# through XTEST to a window on Xvfb (the window system's own path from device to handler);
+# "headless" opens pyglet's headless EGL window (no X server) and dispatches the events that
+# pyglet's X11 window would make of them (y from the bottom: height - 1 - row).
 CHILD = textwrap.dedent("""
     import ctypes, json, sys, time
     import numpy as np
     from PIL import Image
+
+    scene_path, w, h, out, driver = (sys.argv[1], int(sys.argv[2]), int(sys.argv[3]),
+                                     sys.argv[4], sys.argv[5])
+    if driver == "headless":
+        import pyglet
+        pyglet.options["headless"] = True
     from shadowvol.scenefile import load_scene
     from shadowvol.view.app import Viewer
 
-    scene_path, w, h, out = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
     scene = load_scene(scene_path).replace(width=w, height=h)
     v = Viewer(scene)
-    v.window.set_location(0, 0)
-    x11, xtst = ctypes.CDLL("libX11.so.6"), ctypes.CDLL("libXtst.so.6")
-    x11.XOpenDisplay.restype = ctypes.c_void_p
-    dpy = ctypes.c_void_p(x11.XOpenDisplay(None))
-    x11.XStringToKeysym.restype = ctypes.c_ulong
-    x11.XKeysymToKeycode.argtypes = [ctypes.c_void_p, ctypes.c_ulong]
 
     def pump(n=15):
         for _ in range(n):
@@ -59,39 +62,73 @@ CHILD = textwrap.dedent("""
         v.draw()
         v.window.flip()
 
-    def origin():
-        x, y = v.window.get_location()
-        return x, y
+    if driver == "x11":
+        v.window.set_location(0, 0)
+        x11, xtst = ctypes.CDLL("libX11.so.6"), ctypes.CDLL("libXtst.so.6")
+        x11.XOpenDisplay.restype = ctypes.c_void_p
+        dpy = ctypes.c_void_p(x11.XOpenDisplay(None))
+        x11.XStringToKeysym.restype = ctypes.c_ulong
+        x11.XKeysymToKeycode.argtypes = [ctypes.c_void_p, ctypes.c_ulong]
 
-    def move(x, y):
-        ox, oy = origin()
-        xtst.XTestFakeMotionEvent(dpy, -1, ox + x, oy + y, 0)
-        x11.XFlush(dpy)
-        pump(2)
+        def move(x, y):
+            ox, oy = v.window.get_location()
+            xtst.XTestFakeMotionEvent(dpy, -1, ox + x, oy + y, 0)
+            x11.XFlush(dpy)
+            pump(2)
 
-    def key(name):
-        code = x11.XKeysymToKeycode(dpy, x11.XStringToKeysym(name.encode()))
-        xtst.XTestFakeKeyEvent(dpy, code, 1, 0)
-        xtst.XTestFakeKeyEvent(dpy, code, 0, 0)
-        x11.XFlush(dpy)
-        pump()
+        def key(name):
+            code = x11.XKeysymToKeycode(dpy, x11.XStringToKeysym(name.encode()))
+            xtst.XTestFakeKeyEvent(dpy, code, 1, 0)
+            xtst.XTestFakeKeyEvent(dpy, code, 0, 0)
+            x11.XFlush(dpy)
+            pump()
 
-    def drag(button, x0, y0, x1, y1, steps=6):
+        def button(b, down):
+            xtst.XTestFakeButtonEvent(dpy, b, int(down), 0)
+            x11.XFlush(dpy)
+    else:
+        from pyglet.window import key as keys, mouse
+        BUTTONS = {1: mouse.LEFT, 2: mouse.MIDDLE, 3: mouse.RIGHT}
+        at, held = [0, 0], []
+
+        def move(x, y):
+            dx, dy = x - at[0], -(y - at[1])
+            at[:] = x, y
+            if held:
+                v.window.dispatch_event("on_mouse_drag", x, h - 1 - y, dx, dy,
+                                        BUTTONS[held[0]], 0)
+            pump(2)
+
+        def key(name):
+            v.window.dispatch_event("on_key_press", getattr(keys, name.upper()), 0)
+            pump()
+
+        def button(b, down):
+            x, y = at[0], h - 1 - at[1]
+            if b in (4, 5):
+                if down:
+                    v.window.dispatch_event("on_mouse_scroll", x, y, 0, 1 if b == 4 else -1)
+                return
+            if down:
+                held.append(b)
+                v.window.dispatch_event("on_mouse_press", x, y, BUTTONS[b], 0)
+            else:
+                held.remove(b)
+                v.window.dispatch_event("on_mouse_release", x, y, BUTTONS[b], 0)
+
+    def drag(b, x0, y0, x1, y1, steps=6):
         move(x0, y0)
-        xtst.XTestFakeButtonEvent(dpy, button, 1, 0)
-        x11.XFlush(dpy)
+        button(b, True)
         pump(2)
         for k in range(1, steps + 1):
             move(x0 + (x1 - x0) * k // steps, y0 + (y1 - y0) * k // steps)
-        xtst.XTestFakeButtonEvent(dpy, button, 0, 0)
-        x11.XFlush(dpy)
+        button(b, False)
         pump()
 
-    def click(button, x, y):
+    def click(b, x, y):
         move(x, y)
-        xtst.XTestFakeButtonEvent(dpy, button, 1, 0)
-        xtst.XTestFakeButtonEvent(dpy, button, 0, 0)
-        x11.XFlush(dpy)
+        button(b, True)
+        button(b, False)
         pump()
 
     records = []
@@ -105,7 +142,7 @@ CHILD = textwrap.dedent("""
                                    s.camera.up.tolist(), s.camera.fov_y, s.camera.near],
                         "lights": [l.position.tolist() if hasattr(l, "position")
                                    else l.direction.tolist() for l in s.lights],
-                        "probe": v.probe_text})
+                        "probe": v.probe_text, "panel": v.panel_lines()})
 
     pump(30)
     move(w // 2, h // 2)                 # the pointer over the window: it gets the keys
@@ -117,10 +154,12 @@ CHILD = textwrap.dedent("""
     drag(3, w // 2, h // 2, w // 2 - 30, h // 2 + 20); record("light")
     click(4, w // 2, h // 2); record("zoom")
     key("t"); record("raytraced"); key("n")
-    key("h"); click(1, w // 2, h * 3 // 4); record("probe")
+    click(1, w // 2, h * 3 // 4); record("probe")    # the help still on: the probe readable
+    key("h"); record("nohelp")
     json.dump(records, open(f"{out}/records.json", "w"))
     v.close()
     """)
+RECORDED = ["start", "roles", "zpass_stencil", "orbit", "light", "zoom", "raytraced"]
 
 
 def _free_display() -> int:
@@ -132,9 +171,7 @@ def _free_display() -> int:
 
 @pytest.fixture(scope="module")
 def xvfb():
-    exe = shutil.which("Xvfb")
-    if exe is None:
-        pytest.fail("Xvfb not found (apt-get install xvfb; .ci/run does)")
+    exe = system_program(("Xvfb",), "xvfb")
     n = _free_display()
     proc = subprocess.Popen([exe, f":{n}", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -151,17 +188,29 @@ def xvfb():
         proc.wait(timeout=10)
 
 
-@pytest.fixture(scope="module")
-def session(xvfb, tmp_path_factory):
-    out = tmp_path_factory.mktemp("viewer")
-    env = dict(os.environ, DISPLAY=xvfb,
+def _drive(driver: str, out, display: str | None = None):
+    env = dict(os.environ,
                PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    env.pop("DISPLAY", None)
+    if display is not None:
+        env["DISPLAY"] = display
     done = subprocess.run([sys.executable, "-c", CHILD, str(SCENES / "inside_shadow.toml"),
-                           str(SIZE[0]), str(SIZE[1]), str(out)], env=env, cwd=ROOT,
+                           str(SIZE[0]), str(SIZE[1]), str(out), driver], env=env, cwd=ROOT,
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
-    records = {r["name"]: r for r in json.loads((out / "records.json").read_text())}
-    return out, records
+    return out, {r["name"]: r for r in json.loads((out / "records.json").read_text())}
+
+
+@pytest.fixture(scope="module")
+def session(tmp_path_factory):
+    """The viewer on pyglet's headless EGL window: no X server needed."""
+    return _drive("headless", tmp_path_factory.mktemp("viewer"))
+
+
+@pytest.fixture(scope="module")
+def x11_session(xvfb, tmp_path_factory):
+    """The viewer in a real X window on Xvfb, driven by XTEST events."""
+    return _drive("x11", tmp_path_factory.mktemp("viewer-x11"), xvfb)
 
 
 def state_of(scene, r) -> ViewState:
@@ -178,9 +227,7 @@ def state_of(scene, r) -> ViewState:
                      r["probe_light"])
 
 
-@pytest.mark.parametrize("name", ["start", "roles", "zpass_stencil", "orbit", "light", "zoom",
-                                  "raytraced"])
-def test_window_frame_equals_the_offscreen_render(ctx, session, name):
+def _check_frame(ctx, session, name, tag):
     out, records = session
     scene = load_scene(SCENES / "inside_shadow.toml").replace(width=SIZE[0], height=SIZE[1])
     state = state_of(scene, records[name])
@@ -196,8 +243,28 @@ def test_window_frame_equals_the_offscreen_render(ctx, session, name):
         from builders import TEST_OUTPUT
         TEST_OUTPUT.mkdir(exist_ok=True)
         Image.fromarray(np.concatenate([window, expected], axis=1)).save(
-            TEST_OUTPUT / f"viewer-{name}.png")
-    assert not differ.any(), f"{int(differ.sum())} pixels differ (test-output/viewer-{name}.png)"
+            TEST_OUTPUT / f"viewer-{tag}-{name}.png")
+    assert not differ.any(), \
+        f"{int(differ.sum())} pixels differ (test-output/viewer-{tag}-{name}.png)"
+
+
+@pytest.mark.parametrize("name", RECORDED)
+def test_window_frame_equals_the_offscreen_render(ctx, session, name):
+    _check_frame(ctx, session, name, "headless")
+
+
+def test_the_real_x_window_shows_and_does_what_the_headless_one_does(ctx, x11_session, session):
+    """The one test of a real window: X events through the window system give the same states
+    and panels as the headless driver, and every frame equals the offscreen render."""
+    for name in RECORDED:
+        _check_frame(ctx, x11_session, name, "x11")
+    timeless = lambda rec: {name: {**r, "panel": [row for row in r["panel"]
+                                                  if not row.startswith("frame ")]}
+                            for name, r in rec.items()}
+    real, headless = timeless(x11_session[1]), timeless(session[1])
+    for name in real:
+        for key in real[name]:
+            assert real[name][key] == headless[name][key], (name, key)
 
 
 def test_events_changed_the_state(session):
@@ -212,7 +279,7 @@ def test_events_changed_the_state(session):
     d = lambda r: np.linalg.norm(np.subtract(r["camera"][0], r["camera"][1]))
     assert d(rec["zoom"]) == pytest.approx(0.9 * d(rec["light"]))           # one wheel step
     assert rec["raytraced"]["mode"] == "raytraced" and rec["probe"]["mode"] == "shaded"
-    assert rec["probe"]["help"] is False
+    assert rec["probe"]["help"] is True and rec["nohelp"]["help"] is False
 
 
 def test_click_probes_the_pixel(session):
@@ -222,6 +289,18 @@ def test_click_probes_the_pixel(session):
     assert "z-pass sum" in text and "z-fail sum" in text and "stencil read back" in text
     assert "shadow ray to the light crosses" in text
     assert "all counts agree" in text
+
+
+def test_the_probe_is_readable_the_moment_a_pixel_is_clicked(session):
+    """The help is on by default; it never takes the probe's place in the panel: the report
+    shows from its first line, as much of it as with the help off."""
+    _, rec = session
+    with_help, without = rec["probe"]["panel"], rec["nohelp"]["panel"]
+    report = rec["probe"]["probe"].splitlines()
+    assert report[0].startswith("pixel (") and report[0][:40] in "\n".join(with_help)
+    same = lambda rows: [r for r in rows if not r.startswith("frame ")]
+    assert same(with_help)[:len(same(without))] == same(without)
+    assert len(without) > len(report[:3])
 
 
 def test_view_without_a_display_is_bad_input(monkeypatch, capsys):

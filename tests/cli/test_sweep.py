@@ -1,0 +1,60 @@
+"""The bad-input sweep: each case once gave a traceback, a misleading message or a lost file.
+Every one must now end with one clear line on stderr, the documented exit status, no traceback,
+and no output file written or changed."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+from builders import ROOT, SCENES
+
+pytestmark = pytest.mark.gl
+
+BAD_INPUT = 2
+
+
+def run(args: list[str], cwd) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT),
+                                                       os.environ.get("PYTHONPATH", "")]))
+    return subprocess.run([sys.executable, "-m", *args], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=300)
+
+
+def refused(done: subprocess.CompletedProcess, *words: str) -> str:
+    """One `error:` line naming `words`, exit 2, no traceback."""
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == BAD_INPUT, done.stderr
+    assert len(lines) == 1 and lines[0].startswith("error: "), done.stderr
+    assert "Traceback" not in done.stderr
+    for word in words:
+        assert word in lines[0], lines[0]
+    return lines[0]
+
+
+def files(folder) -> dict[str, bytes | str]:
+    return {p.name: (os.readlink(p) if p.is_symlink() else p.read_bytes())
+            for p in folder.iterdir()}
+
+
+@pytest.mark.parametrize("command, flag, name", [
+    (["shadowvol", "render", str(SCENES / "cage.toml"), "-o", "loop.png"], "-o", "loop.png"),
+    (["shadowvol", "render", str(SCENES / "cage.toml"), "-o", "x.png", "--masks", "loop.npz"],
+     "--masks", "loop.npz"),
+    (["raytrace", "masks", str(SCENES / "cage.toml"), "-o", "loop.npz"], "-o", "loop.npz"),
+])
+def test_an_output_that_is_a_loop_of_links(tmp_path, command, flag, name):
+    stem, suffix = name.split(".")
+    os.symlink(f"{stem}2.{suffix}", tmp_path / name)
+    os.symlink(name, tmp_path / f"{stem}2.{suffix}")
+    before = files(tmp_path)
+    refused(run(command, tmp_path), flag, name, "loop")
+    assert files(tmp_path) == before
+
+
+def test_the_stencil_picture_of_an_area_light(tmp_path):
+    refused(run(["shadowvol", "render", str(SCENES / "soft.toml"), "-o", "s.png", "--stencil",
+                 "st.png"], tmp_path), "lights[0]", "area light", "--stencil")
+    assert list(tmp_path.iterdir()) == []
