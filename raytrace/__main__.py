@@ -3,6 +3,6 @@
 
 import sys
 
-from shadowvol.cli.raytrace import main
+from shadowvol.cli import raytrace_entry
 
-sys.exit(main())
+sys.exit(raytrace_entry())

@@ -2,6 +2,6 @@
 
 import sys
 
-from shadowvol.cli.main import main
+from shadowvol.cli import shadowvol_entry
 
-sys.exit(main())
+sys.exit(shadowvol_entry())

@@ -49,14 +49,16 @@ def build(out: Path) -> list[str]:
     import pdoc.doc
     import pdoc.render
 
+    import raytrace
     import shadowvol
 
     problems = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         # pdoc reads a module's __dict__, not its PEP 562 __getattr__: resolve the lazy names first
-        for name in shadowvol.__all__:
-            getattr(shadowvol, name)
+        for package in (shadowvol, raytrace):
+            for name in package.__all__:
+                getattr(package, name)
         modules = {name: pdoc.doc.Module.from_name(name) for name in module_names()}
         for module in modules.values():
             page = out / f"{module.fullname.replace('.', '/')}.html"

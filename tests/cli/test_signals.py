@@ -3,6 +3,7 @@ file after the signal (docs/robustness.md)."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -62,5 +63,60 @@ def test_a_signal_at_any_moment(tmp_path, signum, code, word, delay):
         assert proc.returncode in (code, -signum) and left == ["x.npz", "x.png"], err
         return
     assert proc.returncode == code, err
-    assert err.strip().splitlines()[-1] == f"error: {word}"
+    assert err.strip().splitlines() == [f"error: {word}"]   # once, and nothing else
     assert set(left) <= {"x.png"}  # the image may be complete; the masks were never renamed
+
+
+# `python -m MODULE ...` with the signal sent while the command's modules are imported: when
+# numpy is first looked for (before it, only the standard library and shadowvol's entry load)
+DURING_IMPORT = """
+import os, runpy, sys
+class Signal:
+    def find_spec(self, name, path=None, target=None):
+        if name == "numpy":
+            sys.meta_path.remove(self)
+            os.kill(os.getpid(), SIGNUM)
+sys.meta_path.insert(0, Signal())
+sys.argv = [MODULE] + sys.argv[1:]
+runpy.run_module(MODULE, run_name="__main__", alter_sys=True)
+"""
+
+
+@pytest.mark.parametrize("signum, code, word", [(signal.SIGINT, 130, "interrupted"),
+                                                 (signal.SIGTERM, 143, "terminated")])
+@pytest.mark.parametrize("module", ["shadowvol", "raytrace"])
+def test_python_m_is_the_command(tmp_path, signum, code, word, module):
+    """`python -m shadowvol|raytrace` enters as the console scripts do: a signal while the
+    command's modules are imported is one line, never a traceback."""
+    command = {"shadowvol": ["render", "-o", str(tmp_path / "x.png")],
+               "raytrace": ["masks", "-o", str(tmp_path / "x.npz")]}[module]
+    code_text = DURING_IMPORT.replace("SIGNUM", str(int(signum))).replace("MODULE",
+                                                                          repr(module))
+    done = subprocess.run([sys.executable, "-c", code_text, *command,
+                           str(SCENES / "cage.toml")], capture_output=True, text=True,
+                          timeout=120)
+    assert (done.returncode, done.stderr.strip().splitlines()) == (code, [f"error: {word}"]), \
+        done.stderr
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("signum, code, word", [(signal.SIGINT, 130, "interrupted"),
+                                                 (signal.SIGTERM, 143, "terminated")])
+def test_a_signal_to_a_running_batch_is_reported_once(tmp_path, signum, code, word):
+    jobs = tmp_path / "jobs.jsonl"
+    jobs.write_text(json.dumps({"name": "t", "scene": str(SCENES / "cage.toml"),
+                                "size": [96, 72], "outputs": ["image", "masks"],
+                                "cameras": {"orbit": {"center": [0, 1, 0], "radius": 7.0,
+                                                      "frames": 2000}}}) + "\n")
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-c", ENTRY, "batch", str(jobs), "-o", str(out),
+                             "--workers", "1"], stderr=subprocess.PIPE, text=True)
+    end = time.monotonic() + 120
+    while time.monotonic() < end and proc.poll() is None and not (
+            (out / "manifest.jsonl").exists() and (out / "manifest.jsonl").stat().st_size):
+        time.sleep(0.02)   # until it has made a frame: the run is under way
+    os.kill(proc.pid, signum)
+    _, err = proc.communicate(timeout=120)
+    errors = [line for line in err.splitlines() if line.startswith("error:")]
+    assert (proc.returncode, errors) == (code, [f"error: {word}"]), err
+    assert "Traceback" not in err
