@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from shadowvol.course.planar import plane_equation, projection_matrix
+from shadowvol.raster.planar import plane_equation, projection_matrix
 from shadowvol.raster import glsl, passes
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import make_current
