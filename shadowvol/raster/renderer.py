@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 import moderngl
 import numpy as np
 
+from shadowvol import fields
 from shadowvol.cameras import Calibration, calibration
 from shadowvol.io import GroundTruthFrame
 from shadowvol.raster import methods, overflow, overlay, passes, truth
@@ -39,14 +40,13 @@ from shadowvol.scene import (
     Light,
     PointLight,
     Scene,
-    SceneError,
     SpotLight,
     hard_lights,
 )
 
 SILHOUETTES = ("cpu", "gpu")
 # what `render(outputs=...)` can return; the default is what the frame always returned
-OUTPUTS = ("image", "image_srgb", "lit", "coverage", "stencil") + truth.TRUTH_OUTPUTS
+OUTPUTS = ("image", "image_srgb", "lit", "coverage", "stencil") + fields.GROUND_TRUTH
 DEFAULT_OUTPUTS = ("image", "lit", "coverage")
 
 
@@ -332,16 +332,11 @@ class Renderer:
         lights = self.scene.lights if lights is None else tuple(lights)
         asked = outputs
         if "casters" in outputs:
-            truth.check_casters(len(self.scene.objects))
+            fields.check_casters(len(self.scene.objects))
             outputs = outputs | {"facing"}
         # facing (and casters) need the facing pass; it gives the lit bits too
         facing_pass = "facing" in outputs
-        area = [i for i, lt in enumerate(lights) if isinstance(lt, AreaLight)]
-        if facing_pass and area:
-            per_light = "facing" if "facing" in asked else "casters"
-            raise SceneError(f"lights[{area[0]}]", f"{per_light} is defined for point, spot and "
-                                                   "directional lights; for an area light use "
-                                                   "lit_count and Renderer.facing")
+        fields.check_hard_lights(lights, asked, "lit_count and Renderer.facing")
         want_stencil = "stencil" in outputs
         vols = self.volumes(silhouettes)
         if "casters" in outputs:
@@ -583,7 +578,7 @@ class Renderer:
         """The ground-truth outputs asked for (and the facing pass's lit, as "lit"), read from
         the frame left in the target (see `truth`)."""
         out: dict[str, np.ndarray] = {}
-        want = set(outputs) & set(truth.TRUTH_OUTPUTS)
+        want = set(outputs) & set(fields.GROUND_TRUTH)
         if not want:
             return out
         h, w = self.scene.height, self.scene.width

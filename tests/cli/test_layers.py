@@ -15,7 +15,7 @@ GL_MODULES = ("moderngl", "glcontext")
 # what raytrace may use of shadowvol: the model, the writers, the exit-status table
 RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.primitives", "shadowvol.cameras",
                        "shadowvol.scenefile", "shadowvol.resources", "shadowvol.errors",
-                       "shadowvol.memory",
+                       "shadowvol.memory", "shadowvol.fields",
                        "shadowvol.io", "shadowvol.pictures", "shadowvol.cli",
                        "shadowvol.cli.status", "shadowvol.cli.outputs"}
 
