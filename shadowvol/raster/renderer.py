@@ -32,7 +32,9 @@ from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.recycle import ArrayPool
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
-from shadowvol.raster.volumes import CpuVolumes, GpuVolumes
+from shadowvol.raster.volumes import VolumeBuilder
+from shadowvol.raster.volumes_cpu import CpuVolumes
+from shadowvol.raster.volumes_gpu import GpuVolumes
 from shadowvol.scene import (
     AreaLight,
     Camera,
@@ -123,7 +125,7 @@ class Renderer:
         self._own_ctx = ctx is None
         self.ctx = create_context() if ctx is None else ctx
         self._owned = []
-        self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
+        self._volumes: dict[str, VolumeBuilder] = {}
         self._count_bound: int | None = None
         self._object_bounds: np.ndarray | None = None
         self._truth: truth.TruthPass | None = None
@@ -168,7 +170,7 @@ class Renderer:
         self._owned.append(obj)
         return obj
 
-    def volumes(self, silhouettes: str) -> CpuVolumes | GpuVolumes:
+    def volumes(self, silhouettes: str) -> VolumeBuilder:
         """The volume builder for "cpu" or "gpu" silhouettes (made on first use)."""
         if silhouettes not in SILHOUETTES:
             raise ValueError(f"silhouettes must be 'cpu' or 'gpu', got {silhouettes!r}")

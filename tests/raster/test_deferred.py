@@ -25,7 +25,7 @@ from shadowvol.io import encode_srgb
 from shadowvol.raster import methods
 from shadowvol.raster.renderer import OUTPUTS, Renderer
 from shadowvol.raster.target import LIGHTS_PER_PAGE
-from shadowvol.raster.volumes import CpuVolumes
+from shadowvol.raster.volumes_cpu import CpuVolumes
 from shadowvol.scene import AreaLight, Camera
 
 
