@@ -29,6 +29,7 @@ from shadowvol.raster import methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import create_context, make_current
 from shadowvol.raster.geometry import SceneGeometry
+from shadowvol.raster.gl import RawGL
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.recycle import ArrayPool
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
@@ -155,10 +156,10 @@ class Renderer:
         self._stencil_export: bool | None = None   # ARB_shader_stencil_export, looked up once
         try:
             # every public method first makes the context current: raw GL calls
-            # (stencil.RawGL) go to whichever context is current, e.g. after another renderer
+            # (gl.RawGL) go to whichever context is current, e.g. after another renderer
             # with its own context has run
             make_current(self.ctx)
-            self.gl = stencil_gl.RawGL()
+            self.gl = RawGL()
             self.geometry = self._own(SceneGeometry(self.ctx, scene))
             self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
             self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
