@@ -15,7 +15,7 @@ shading pass: `mask_pass` is its geometry pass, writing shade.frag's lit bits (M
 no light were shadowed, and after each light's count `clear_shadowed` removes that light's bit
 where the count is not 0 (a colour logic op on the unsigned-integer bits).
 
-The forward passes (`depth_ambient`, then per light `add_light` over the soup with depth test
+The forward passes (`forward`: depth and ambient, then per light over the soup with depth test
 EQUAL) remain for the planar shadows.  Both compute the same numbers: the same depths (the same
 invariant vertex shader on the same vertices in the same order) and the same lighting
 expressions on the same float32 inputs (shade.frag repeats phong.frag's and scene.vert's).
@@ -44,7 +44,7 @@ from shadowvol.raster.projection import (
     planes_in_frame,
 )
 from shadowvol.raster.target import Target
-from shadowvol.scene import AreaSample, Camera, Light, Scene, SpotLight
+from shadowvol.scene import AreaSample, Camera, Scene, SpotLight
 
 NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)
 # reversed depth: FAR_DEPTH (0) is the clear value and drawn surfaces lie above it, so a
@@ -378,20 +378,6 @@ def encode_srgb(ctx: moderngl.Context, target: Target, progs: ScenePrograms) -> 
     target.use()
 
 
-def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
-                  scene: Scene) -> None:
-    """Clear everything, then depth and ambient for all triangles."""
-    target.clear(scene.background)
-    ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = NEARER
-    ctx.front_face = "ccw"
-    set_uniform(progs.ambient, "u_ambient", tuple(float(x) for x in scene.ambient))
-    progs.geometry.materials.use(0)
-    set_uniform(progs.ambient, "u_materials", 0)
-    # the soup's own triangles (the buffers may hold pieces of huge ones after them)
-    progs.ambient_vao.render(moderngl.TRIANGLES, vertices=3 * progs.geometry.triangle_count)
-
-
 def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
                   zfail: np.ndarray, halve: bool = False,
                   clip_planes: np.ndarray | None = None, counting=None,
@@ -468,38 +454,3 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
             volumes.draw_caps(by_zfail, near=True, each=each)
     if fbo is None:
         target.use()
-
-
-def light_uniforms(program: moderngl.Program, light: Light, origin: np.ndarray) -> None:
-    """A light's uniforms of the forward Phong pass, in the frame of `origin` (3,)."""
-    set_uniform(program, "u_light", tuple(float(x) for x in in_frame(light.homogeneous,
-                                                                       origin)))
-    set_uniform(program, "u_radiance", tuple(float(x) for x in light.radiance))
-    set_uniform(program, "u_emitter_cosine", 1.0 if isinstance(light, AreaSample) else 0.0)
-    if isinstance(light, SpotLight):
-        set_uniform(program, "u_spot_direction", tuple(float(x) for x in light.direction))
-        set_uniform(program, "u_spot_cos", light.cos_cutoff)
-    else:
-        set_uniform(program, "u_spot_direction", (0.0, 0.0, 1.0))
-        set_uniform(program, "u_spot_cos", NO_CONE)
-
-
-def add_light(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
-              light: Light, stencil_test=stencil.where_unshadowed) -> None:
-    """Add `light`'s Phong term where `stencil_test` passes (the shadow volumes' count is 0;
-    planar shadows pass their own test); its lit mask goes to `target.lit`."""
-    target.clear_lit()
-    target.use(colour=True, depth=False)
-    ctx.enable_only(moderngl.DEPTH_TEST | moderngl.BLEND)
-    ctx.depth_func = "=="
-    ctx.blend_func = moderngl.ONE, moderngl.ONE
-    ctx.blend_equation = moderngl.FUNC_ADD
-    ctx.front_face = "ccw"
-    light_uniforms(progs.phong, light, progs.geometry.origin)
-    progs.geometry.materials.use(0)
-    set_uniform(progs.phong, "u_materials", 0)
-    with stencil_test(gl):
-        progs.phong_vao.render(moderngl.TRIANGLES, vertices=3 * progs.geometry.triangle_count)
-    ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = NEARER
-    target.use()
