@@ -41,7 +41,7 @@ from shadowvol.raster.projection import in_frame
 MAX_OPPOSITE = 4  # opposite vertices per edge record (silhouette.geom emits at most 4 quads)
 # front face to use so that a cap of triangles of sign s, drawn in their own winding, faces out
 # of its volume: the near cap faces the light, the far cap faces away from it
-_FRONT_FACE = {(True, 1): "ccw", (True, -1): "cw", (False, 1): "cw", (False, -1): "ccw"}
+FRONT_FACE = {(True, 1): "ccw", (True, -1): "cw", (False, 1): "cw", (False, -1): "ccw"}
 
 
 class VolumeBuilder(Protocol):
@@ -75,7 +75,7 @@ def far_cap_pieces(geometry: SceneGeometry, light4: np.ndarray, signs: list[np.n
     """The far caps of the huge triangles the geometry pass cut (`SceneGeometry.holes`), for a
     point light: each triangle projected to infinity, (V - L, 0), cut to the guard pyramid in
     homogeneous coordinates (`guard.cut`), wound to face out of its volume when drawn with the
-    front face ccw (a sign-1 far cap is drawn cw: `_FRONT_FACE`; at infinity there are no
+    front face ccw (a sign-1 far cap is drawn cw: `FRONT_FACE`; at infinity there are no
     depth ties, so the order of its corners is free).  signs : per object, the triangles'
     signs.  Returns (object, (n, 4) float32 homogeneous frame corners) per object; none for a
     directional light (its far cap is a point)."""
@@ -102,22 +102,22 @@ def far_cap_pieces(geometry: SceneGeometry, light4: np.ndarray, signs: list[np.n
     return out
 
 
-def _runs(ranges) -> list[tuple[int, int]]:
+def runs(ranges) -> list[tuple[int, int]]:
     """(first, count) ranges, empty ones dropped and ranges that continue each other merged:
     one draw call per run instead of one per object."""
     table = np.array(list(ranges), np.int64).reshape(-1, 2)
-    return _runs_of(table[:, 0], table[:, 1])
+    return runs_of(table[:, 0], table[:, 1])
 
 
-def _runs_of(first: np.ndarray, count: np.ndarray) -> list[tuple[int, int]]:
-    """`_runs` of the ranges (first[k], count[k]), in numpy."""
+def runs_of(first: np.ndarray, count: np.ndarray) -> list[tuple[int, int]]:
+    """`runs` of the ranges (first[k], count[k]), in numpy."""
     first = np.asarray(first, np.int64)
     starts, ends = merged_runs(first, first + np.asarray(count, np.int64))
     return list(zip(starts.tolist(), (ends - starts).tolist()))
 
 
 
-def _set_light(programs, light4: np.ndarray, origin: np.ndarray) -> None:
+def set_light(programs, light4: np.ndarray, origin: np.ndarray) -> None:
     """The one place `u_light` of the volume programs is set: by the builder that holds it,
     in the frame of `origin`."""
     light = in_frame(light4, origin)

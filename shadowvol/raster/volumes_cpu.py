@@ -17,7 +17,7 @@ from shadowvol.raster.silhouettes import (
     side_quads,
     topology_signs,
 )
-from shadowvol.raster.volumes import _FRONT_FACE, _runs, _runs_of, _set_light, far_cap_pieces
+from shadowvol.raster.volumes import FRONT_FACE, far_cap_pieces, runs, runs_of, set_light
 
 
 class _LightVolumes:
@@ -119,7 +119,7 @@ class CpuVolumes:
         if not self._counting:
             self._counting = self._programs("caster_count.frag")
             if self.light4 is not None:
-                _set_light(self._counting, self.light4, self.geometry.origin)
+                set_light(self._counting, self.light4, self.geometry.origin)
         return self._counting
 
     @property
@@ -141,7 +141,7 @@ class CpuVolumes:
         programs."""
         light4 = np.asarray(light4, np.float64)
         self.light4 = light4
-        _set_light(self.programs, light4, self.geometry.origin)
+        set_light(self.programs, light4, self.geometry.origin)
         if self._transient is not None:   # drawn already (GL keeps a buffer its draws use)
             self._transient.release()
             self._transient = None
@@ -260,7 +260,7 @@ class CpuVolumes:
         # the far caps of the huge triangles the geometry pass cut: their projections from a
         # point light to infinity (V - L, 0), cut to the guard pyramid in homogeneous
         # coordinates, wound so that they face out of the volume with the sides' front face
-        # (ccw: a sign-1 far cap is drawn cw, `_FRONT_FACE`); no ties at infinity, so the
+        # (ccw: a sign-1 far cap is drawn cw, `FRONT_FACE`); no ties at infinity, so the
         # order of their corners is free.  `draw_caps` draws them; the index lists skip them.
         kept.far_extra = {}
         for i, tris in far_cap_pieces(geometry, self.light4, kept.signs):
@@ -366,7 +366,7 @@ class CpuVolumes:
                                 np.int64).reshape(-1, 2)
                 first = np.concatenate([first, more[:, 0]])
                 count = np.concatenate([count, more[:, 1]])
-            for first_, count_ in _runs_of(first, count):
+            for first_, count_ in runs_of(first, count):
                 vao.render(moderngl.TRIANGLES, vertices=count_, first=first_)
 
     def draw_caps(self, objects, near: bool, each=None) -> None:
@@ -380,9 +380,9 @@ class CpuVolumes:
         cur = self._current
         vao = cur.cap_vaos[near] if each is None else self._counting_vao("caps", near)
         for sign in (1, -1):
-            self.ctx.front_face = _FRONT_FACE[near, sign]
+            self.ctx.front_face = FRONT_FACE[near, sign]
             if each is None:
-                for first, count in _runs(cur.caps[i, sign, near] for i in objects):
+                for first, count in runs(cur.caps[i, sign, near] for i in objects):
                     vao.render(moderngl.TRIANGLES, vertices=count, first=first)
                 continue
             for i in objects:
@@ -393,7 +393,7 @@ class CpuVolumes:
         self.ctx.front_face = "ccw"
         if not near and cur.far_extra:   # huge triangles' far caps, cut (`_guard_sides`)
             if each is None:
-                for first, count in _runs(cur.far_extra[i] for i in objects
+                for first, count in runs(cur.far_extra[i] for i in objects
                                           if i in cur.far_extra):
                     cur.vaos[False].render(moderngl.TRIANGLES, vertices=count, first=first)
                 return

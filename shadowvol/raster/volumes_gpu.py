@@ -13,12 +13,12 @@ from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.projection import to_frame
 from shadowvol.raster.silhouettes import topology_signs
 from shadowvol.raster.volumes import (
-    _FRONT_FACE,
+    FRONT_FACE,
     MAX_OPPOSITE,
-    _runs,
-    _runs_of,
-    _set_light,
     far_cap_pieces,
+    runs,
+    runs_of,
+    set_light,
 )
 
 
@@ -88,7 +88,7 @@ class GpuVolumes:
                 glsl.program(self.ctx, "volume_side.vert", "caster_count.frag"),)
             self._counting_vaos = self._vaos(self._counting[:4])
             if self.light4 is not None:
-                _set_light(self._counting, self.light4, self.geometry.origin)
+                set_light(self._counting, self.light4, self.geometry.origin)
         return self._counting
 
     def new_frame(self) -> None:
@@ -106,7 +106,7 @@ class GpuVolumes:
 
     def prepare(self, light4: np.ndarray) -> None:
         self.light4 = light4  # everything else happens in the shaders
-        _set_light(self.programs, light4, self.geometry.origin)
+        set_light(self.programs, light4, self.geometry.origin)
         geometry = self.geometry
         if self._moves != geometry.moves or self._cuts != geometry.cuts:
             # the frame moved or the pieces of huge triangles changed: rewrite, growing
@@ -157,7 +157,7 @@ class GpuVolumes:
         if each is None:   # the records of objects next to each other in one draw
             objects = np.asarray(objects, np.int64).reshape(-1)
             table = self._record_table
-            for first, count in _runs_of(table[objects, 0], table[objects, 1]):
+            for first, count in runs_of(table[objects, 0], table[objects, 1]):
                 vao.render(moderngl.POINTS, vertices=count, first=first)
             return
         for i in objects:
@@ -176,7 +176,7 @@ class GpuVolumes:
             vao = self._counting_vaos[2 if near else 3]
         for sign in (1, -1):
             vao.program["u_cap_sign"].value = sign
-            self.ctx.front_face = _FRONT_FACE[near, sign]
+            self.ctx.front_face = FRONT_FACE[near, sign]
             # near caps as the geometry pass drew them (huge triangles' pieces); far caps whole
             # (see `CpuVolumes._prepare_caps`): huge ones' far caps cut, drawn below
             if each is None:
@@ -191,7 +191,7 @@ class GpuVolumes:
         self.ctx.front_face = "ccw"
         if not near and self._far:
             if each is None:
-                for first, count in _runs(self._far[i] for i in objects if i in self._far):
+                for first, count in runs(self._far[i] for i in objects if i in self._far):
                     self._far_vao.render(moderngl.TRIANGLES, vertices=count, first=first)
                 return
             if self._counting_far_vao is None:   # the buffer is made once, then orphaned
