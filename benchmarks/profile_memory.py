@@ -146,7 +146,7 @@ def main(argv=None) -> int:
         silhouettes,
         target,
         topology,
-        volumes,
+        volumes_cpu,
     )
 
     steps.wrap(context, "create_context")
@@ -157,12 +157,12 @@ def main(argv=None) -> int:
     steps.wrap(geometry.SceneGeometry, "_frame_corners", "frame corners (float32, kept)")
     steps.wrap(target.Target, "__init__", "Target (G-buffer)")
     steps.wrap(passes.ScenePrograms, "__init__", "ScenePrograms")
-    steps.wrap(volumes.CpuVolumes, "__init__", "CpuVolumes")
-    steps.wrap(volumes.CpuVolumes, "_build", "silhouettes + side quads + upload")
+    steps.wrap(volumes_cpu.CpuVolumes, "__init__", "CpuVolumes")
+    steps.wrap(volumes_cpu.CpuVolumes, "_build", "silhouettes + side quads + upload")
     for name in ("topology_signs", "edge_multiplicity", "side_quads", "quads_to_triangles"):
         steps.wrap(silhouettes, name)
-        setattr(volumes, name, getattr(silhouettes, name))
-    steps.wrap(volumes.CpuVolumes, "_framed", "side triangles to the frame")
+        setattr(volumes_cpu, name, getattr(silhouettes, name))
+    steps.wrap(volumes_cpu.CpuVolumes, "_framed", "side triangles to the frame")
     steps.wrap(overflow, "count_bound", "overflow bound (count_bound)")
     steps.wrap(geometry.SceneGeometry, "move_to")
     steps.wrap(geometry.SceneGeometry, "set_view")

@@ -21,8 +21,10 @@ import dataclasses
 
 import numpy as np
 
+from shadowvol import fields
 from shadowvol.cameras import Calibration, calibration
-from shadowvol.io import GROUND_TRUTH, GroundTruthFrame
+from shadowvol.fields import GROUND_TRUTH
+from shadowvol.io import GroundTruthFrame
 from shadowvol.scene import AreaLight, Scene, SceneError
 
 from .backends import NumpyBackend, TriangleBackend, for_each_tile, make_backend
@@ -37,13 +39,11 @@ from .masks import (
     scene_backend,
 )
 
-MAX_CASTERS = 64          # objects `casters` can name: one uint64 word
 # An object's box is widened by this much of its largest coordinate (eye's frame) before a
 # segment is culled against it: float32 rounding of the corners (2**-24) and of the segment's
 # start and direction, 100 times over.  A speed-up only: the culled segments are those that
 # the object's own backend would find unblocked.
 BOX_PAD_RELATIVE = 1e-5
-MAX_OBJECT_IDS = 65535    # objects `object_id` can name: uint16, 0 is the background
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -81,19 +81,12 @@ def check_outputs(scene: Scene, outputs) -> tuple[str, ...]:
     if unknown:
         raise SceneError("outputs", f"unknown output {unknown[0]!r} (one of: "
                                     f"{', '.join(GROUND_TRUTH)})")
-    area = [i for i, lt in enumerate(scene.lights) if isinstance(lt, AreaLight)]
-    per_light = [o for o in ("facing", "casters") if o in outputs]
-    if area and per_light:
-        raise SceneError(f"lights[{area[0]}]", f"{per_light[0]} is defined for point, spot and "
-                                               "directional lights; for an area light use "
-                                               "raytrace.soft_masks (lit_count, facing, umbra)")
-    n = len(scene.objects)
-    if "casters" in outputs and n > MAX_CASTERS:
-        raise SceneError("objects", f"casters is a {MAX_CASTERS}-bit mask, and this scene has "
-                                    f"{n} objects; ask for the other outputs, or split the scene")
-    if "object_id" in outputs and n > MAX_OBJECT_IDS:
-        raise SceneError("objects", f"object_id counts up to {MAX_OBJECT_IDS} objects, and this "
-                                    f"scene has {n}")
+    fields.check_hard_lights(scene.lights, outputs,
+                             "raytrace.soft_masks (lit_count, facing, umbra)")
+    if "casters" in outputs:
+        fields.check_casters(len(scene.objects))
+    if "object_id" in outputs:
+        fields.check_object_ids(len(scene.objects))
     return tuple(o for o in GROUND_TRUTH if o in outputs)
 
 
@@ -137,13 +130,8 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     lit = np.zeros((L, H * W), bool)
     coverage = np.zeros(H * W, bool)
     # the outputs asked for, flat (pixels row-major), with what is stored where nothing is hit
-    blank = {"depth": lambda: np.full(H * W, np.inf, np.float32),
-             "distance": lambda: np.full(H * W, np.inf, np.float32),
-             "normal": lambda: np.zeros((H * W, 3), np.float32),
-             "object_id": lambda: np.zeros(H * W, np.uint16),
-             "facing": lambda: np.zeros((L, H * W), bool),
-             "casters": lambda: np.zeros((L, H * W), np.uint64)}
-    out = {name: blank[name]() for name in outputs}
+    out = {name: fields.blank(name, fields.shape(name, L, H, W, flat=True))
+           for name in outputs}
     vertices, faces, ids = scene.triangles()
     # the output normals: world-space (b − a) × (c − a), normalised in float64 (CONVENTIONS),
     # not the frame's (the same up to rounding, and the same sign: `hit.side` turns either)
@@ -198,10 +186,9 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
 
         count, _ = lit_counts(scene, mt)
         lit = (count == sample_counts(scene)[:, None, None]).reshape(L, H * W)
-    shapes = {"depth": (H, W), "distance": (H, W), "normal": (H, W, 3), "object_id": (H, W),
-              "facing": (L, H, W), "casters": (L, H, W)}
     return GroundTruth(lit.reshape(L, H, W), coverage.reshape(H, W), calibration(scene),
-                       **{name: value.reshape(shapes[name]) for name, value in out.items()})
+                       **{name: value.reshape(fields.shape(name, L, H, W))
+                          for name, value in out.items()})
 
 
 def face_normals(corners: np.ndarray) -> np.ndarray:

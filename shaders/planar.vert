@@ -1,6 +1,6 @@
 #version 450 core
 // Planar projected shadows (Blinn 1988): a caster's triangles squashed from the light onto the
-// receiving plane by the matrix of shadowvol/planar.py, drawn as the shadow.
+// receiving plane by the matrix of shadowvol/raster/planar.py, drawn as the shadow.
 //
 // gl_Position is NOT divided by the projection's w: GL interpolates perspective-correctly in
 // the homogeneous clip coordinates it is given, so a fragment's varyings are the barycentric

@@ -415,8 +415,6 @@ def pyrender_shadow_masks(scene: Scene, lights=None) -> tuple[np.ndarray, np.nda
     which keeps B far from saturating.
     """
     pyrender = import_pyrender()
-    import trimesh
-
     chosen = tuple(range(len(scene.lights))) if lights is None else tuple(lights)
     for i in chosen:
         if isinstance(scene.lights[i], PointLight):
@@ -424,11 +422,7 @@ def pyrender_shadow_masks(scene: Scene, lights=None) -> tuple[np.ndarray, np.nda
                              f"shadows, so it has no shadow mask")
     vertices, faces, _ = scene.triangles()
     tris = vertices[faces]                                           # (m, 3, 3)
-    normals = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
-    toward = np.sign(np.einsum("ij,ij->i", normals, scene.camera.eye - tris[:, 0]))
-    normals *= np.where(toward == 0, 1.0, toward)[:, None]           # face the camera
+    normals = _camera_facing_normals(tris, scene.camera.eye)
 
     white = pyrender.MetallicRoughnessMaterial(baseColorFactor=[1.0, 1.0, 1.0, 1.0],
                                                metallicFactor=0.0, roughnessFactor=1.0,
@@ -452,15 +446,7 @@ def pyrender_shadow_masks(scene: Scene, lights=None) -> tuple[np.ndarray, np.nda
     with _offscreen(scene.width, scene.height) as r:
         for k, i in enumerate(chosen):
             light = scene.lights[i]
-            if isinstance(light, DirectionalLight):
-                intensity = 1.0 / PBR_DIFFUSE
-            else:
-                nearest = trimesh.triangles.closest_point(
-                    tris, np.broadcast_to(light.position, (len(tris), 3)))
-                d = max(float(np.min(np.linalg.norm(nearest - light.position, axis=1))),
-                        MIN_LIGHT_DISTANCE * extent)
-                intensity = d * d / PBR_DIFFUSE
-            pr_light, pose = _pr_light(light, tris, intensity)
+            pr_light, pose = _pr_light(light, tris, _intensity(light, tris, extent))
             light_node = pr.add(pr_light, pose=pose)
             if geometry.mesh is not facing_mesh:
                 pr.remove_node(geometry)
@@ -481,3 +467,28 @@ def pyrender_shadow_masks(scene: Scene, lights=None) -> tuple[np.ndarray, np.nda
         with _offscreen(scene.width, scene.height) as r:
             coverage = r.render(pr, flags=_flags(False))[1] > 0
     return lit, coverage
+
+
+def _camera_facing_normals(tris: np.ndarray, eye: np.ndarray) -> np.ndarray:
+    """(m, 3) float64 unit flat normals of triangles (m, 3, 3), flipped to face `eye` (the
+    conventions' normal; zero for a degenerate triangle)."""
+    normals = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    toward = np.sign(np.einsum("ij,ij->i", normals, eye - tris[:, 0]))
+    normals *= np.where(toward == 0, 1.0, toward)[:, None]           # face the camera
+    return normals
+
+
+def _intensity(light, tris: np.ndarray, extent: float) -> float:
+    """The light's intensity for `pyrender_shadow_masks`: n . l = 1 at the nearest geometry
+    gives brightness 1 (a directional light: everywhere)."""
+    if isinstance(light, DirectionalLight):
+        return 1.0 / PBR_DIFFUSE
+    import trimesh
+
+    nearest = trimesh.triangles.closest_point(
+        tris, np.broadcast_to(light.position, (len(tris), 3)))
+    d = max(float(np.min(np.linalg.norm(nearest - light.position, axis=1))),
+            MIN_LIGHT_DISTANCE * extent)
+    return d * d / PBR_DIFFUSE

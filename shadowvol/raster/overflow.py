@@ -290,81 +290,97 @@ def light_bound(corners: np.ndarray, object_of: np.ndarray, convex: np.ndarray,
     around it (central projection: a triangle with all corners in front of a face projects to
     the triangle of its projected corners, so its box of projected corners holds every
     direction that meets it; a triangle wholly behind the face's plane in none; one across that
-    plane by the box of its part clipped to the face's pyramid).  A directional light's lines are binned on the plane
-    perpendicular to it.  Each box grows by its triangle's `slack` (M,) (world units,
+    plane by the box of its part clipped to the face's pyramid).  A directional light's lines
+    are binned on the plane perpendicular to it.  Each box grows by its triangle's `slack` (M,) (world units,
     `world_slack`) seen from the light, so that the rasterized volumes, a little off the exact
     ones, stay inside.  The bound is the largest cell's sum.
 
     corners : (M, 3, 3) float64;  object_of : (M,) int, each triangle's object;  convex :
     (n_objects,) bool, closed convex objects (`is_closed_convex`)."""
-    if light4[3] == 0.0:
-        d = -np.asarray(light4[:3], np.float64)
-        d = d / np.linalg.norm(d)
-        e1 = np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0])
-        e1 /= np.linalg.norm(e1)
-        e2 = np.cross(d, e1)
-        uv = np.stack([corners @ e1, corners @ e2], axis=-1)              # (M, 3, 2)
-        lo, hi = uv.min(axis=1) - slack[:, None], uv.max(axis=1) + slack[:, None]
-        centre = (lo.min(axis=0) + hi.max(axis=0)) / 2
-        half = float((hi.max(axis=0) - lo.min(axis=0)).max()) / 2 * (1 + 1e-9) + 1e-30
-        faces = [((lo - centre) / half, (hi - centre) / half, np.ones(len(lo), bool))]
-    else:
-        rel = corners - np.asarray(light4[:3], np.float64)                # (M, 3, 3)
-        dist = np.linalg.norm(rel, axis=-1).min(axis=1)                   # nearest corner
-        # the nearest point of a triangle may be nearer than its corners: its box's distance
-        box_lo, box_hi = rel.min(axis=1), rel.max(axis=1)
-        nearest = np.linalg.norm(np.maximum(np.maximum(box_lo, -box_hi), 0.0), axis=1)
-        dist = np.minimum(dist, nearest)
-        with np.errstate(divide="ignore"):
-            margin = np.where(dist > 0, GNOMONIC_STRETCH * slack / dist, np.inf)
-        faces = []
-        for axis in range(3):
-            b, c = [k for k in range(3) if k != axis]
-            for sign in (1.0, -1.0):
-                depth = sign * rel[..., axis]                             # (M, 3)
-                front = (depth > 0).all(axis=1)
-                safe = np.where(depth > 0, depth, 1.0)
-                uv = np.stack([rel[..., b] / safe, rel[..., c] / safe], axis=-1)
-                lo = np.where(front[:, None], uv.min(axis=1) - margin[:, None], -1.0)
-                hi = np.where(front[:, None], uv.max(axis=1) + margin[:, None], 1.0)
-                # a triangle across the face's plane: the box of its part in the pyramid
-                across = ~front & ~(depth <= 0).all(axis=1)
-                if across.any():
-                    c_lo, c_hi = _clip_to_pyramid(rel[across], axis, sign)
-                    lo[across] = c_lo - margin[across, None]
-                    hi[across] = c_hi + margin[across, None]
-                # triangles whose box misses the face, or wholly behind its plane, meet no ray
-                # through it
-                behind = (depth <= 0).all(axis=1)
-                meets = ~((lo > 1.0).any(axis=1) | (hi < -1.0).any(axis=1) | behind)
-                lo, hi = np.nan_to_num(lo, neginf=-1.0), np.nan_to_num(hi, posinf=1.0)
-                faces.append((lo, hi, meets))
+    faces = (_directional_faces(corners, light4, slack) if light4[3] == 0.0
+             else _cube_faces(corners, light4, slack))
     bound = 0
     convex_of = convex[object_of]
     for lo, hi, meets in faces:
-        # boxes that cover the whole face (triangles across its plane) add the same to every
-        # cell; the grid spans the rest, zoomed to their extent
-        whole = meets & (lo <= -1.0).all(axis=1) & (hi >= 1.0).all(axis=1)
-        part = meets & ~whole
-        base = int((whole & ~convex_of).sum()) + sum(
-            min(int((whole & (object_of == o)).sum()), 2) for o in np.flatnonzero(convex))
-        if not part.any():
-            bound = max(bound, base)
-            continue
-        lo_p, hi_p = np.maximum(lo[part], -1.0), np.minimum(hi[part], 1.0)
-        z_lo, z_hi = lo_p.min(axis=0), hi_p.max(axis=0)
-        scale = np.maximum(z_hi - z_lo, 1e-300) / 2
-        lo_z, hi_z = (lo_p - z_lo) / scale - 1.0, (hi_p - z_lo) / scale - 1.0
-        obj = object_of[part]
-        open_part = ~convex_of[part]
-        cells = _binned_max(lo_z[open_part], hi_z[open_part], np.ones(int(open_part.sum())),
-                            grid)
-        for o in np.flatnonzero(convex):
-            mine = obj == o
-            if mine.any():
-                cells = cells + np.minimum(
-                    _binned_max(lo_z[mine], hi_z[mine], np.ones(int(mine.sum())), grid), 2)
-        # a convex object both whole-face and partial is capped twice: still at most 4 of its
-        # crossings counted, a bound
-        bound = max(bound, base + int(cells.max()))
+        bound = max(bound, _face_bound(lo, hi, meets, object_of, convex, convex_of, grid))
     return bound
+
+
+def _directional_faces(corners: np.ndarray, light4: np.ndarray, slack) -> list[tuple]:
+    """`light_bound`'s one face for a directional light: each triangle's box (lo, hi (M, 2),
+    in [-1, 1] on the plane perpendicular to it, grown by its slack) and meets (M,) bool."""
+    d = -np.asarray(light4[:3], np.float64)
+    d = d / np.linalg.norm(d)
+    e1 = np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(d, e1)
+    uv = np.stack([corners @ e1, corners @ e2], axis=-1)              # (M, 3, 2)
+    lo, hi = uv.min(axis=1) - slack[:, None], uv.max(axis=1) + slack[:, None]
+    centre = (lo.min(axis=0) + hi.max(axis=0)) / 2
+    half = float((hi.max(axis=0) - lo.min(axis=0)).max()) / 2 * (1 + 1e-9) + 1e-30
+    return [((lo - centre) / half, (hi - centre) / half, np.ones(len(lo), bool))]
+
+
+def _cube_faces(corners: np.ndarray, light4: np.ndarray, slack) -> list[tuple]:
+    """`light_bound`'s six cube faces around a point light: (lo, hi (M, 2), meets (M,) bool)
+    per face, each triangle's box of directions grown by its slack seen from the light."""
+    rel = corners - np.asarray(light4[:3], np.float64)                # (M, 3, 3)
+    dist = np.linalg.norm(rel, axis=-1).min(axis=1)                   # nearest corner
+    # the nearest point of a triangle may be nearer than its corners: its box's distance
+    box_lo, box_hi = rel.min(axis=1), rel.max(axis=1)
+    nearest = np.linalg.norm(np.maximum(np.maximum(box_lo, -box_hi), 0.0), axis=1)
+    dist = np.minimum(dist, nearest)
+    with np.errstate(divide="ignore"):
+        margin = np.where(dist > 0, GNOMONIC_STRETCH * slack / dist, np.inf)
+    faces = []
+    for axis in range(3):
+        b, c = [k for k in range(3) if k != axis]
+        for sign in (1.0, -1.0):
+            depth = sign * rel[..., axis]                             # (M, 3)
+            front = (depth > 0).all(axis=1)
+            safe = np.where(depth > 0, depth, 1.0)
+            uv = np.stack([rel[..., b] / safe, rel[..., c] / safe], axis=-1)
+            lo = np.where(front[:, None], uv.min(axis=1) - margin[:, None], -1.0)
+            hi = np.where(front[:, None], uv.max(axis=1) + margin[:, None], 1.0)
+            # a triangle across the face's plane: the box of its part in the pyramid
+            across = ~front & ~(depth <= 0).all(axis=1)
+            if across.any():
+                c_lo, c_hi = _clip_to_pyramid(rel[across], axis, sign)
+                lo[across] = c_lo - margin[across, None]
+                hi[across] = c_hi + margin[across, None]
+            # triangles whose box misses the face, or wholly behind its plane, meet no ray
+            # through it
+            behind = (depth <= 0).all(axis=1)
+            meets = ~((lo > 1.0).any(axis=1) | (hi < -1.0).any(axis=1) | behind)
+            lo, hi = np.nan_to_num(lo, neginf=-1.0), np.nan_to_num(hi, posinf=1.0)
+            faces.append((lo, hi, meets))
+    return faces
+
+
+def _face_bound(lo, hi, meets, object_of, convex, convex_of, grid: int) -> int:
+    """The largest cell's sum of one face's boxes (`light_bound`), each closed convex object
+    counted at most twice."""
+    # boxes that cover the whole face (triangles across its plane) add the same to every
+    # cell; the grid spans the rest, zoomed to their extent
+    whole = meets & (lo <= -1.0).all(axis=1) & (hi >= 1.0).all(axis=1)
+    part = meets & ~whole
+    base = int((whole & ~convex_of).sum()) + sum(
+        min(int((whole & (object_of == o)).sum()), 2) for o in np.flatnonzero(convex))
+    if not part.any():
+        return base
+    lo_p, hi_p = np.maximum(lo[part], -1.0), np.minimum(hi[part], 1.0)
+    z_lo, z_hi = lo_p.min(axis=0), hi_p.max(axis=0)
+    scale = np.maximum(z_hi - z_lo, 1e-300) / 2
+    lo_z, hi_z = (lo_p - z_lo) / scale - 1.0, (hi_p - z_lo) / scale - 1.0
+    obj = object_of[part]
+    open_part = ~convex_of[part]
+    cells = _binned_max(lo_z[open_part], hi_z[open_part], np.ones(int(open_part.sum())),
+                        grid)
+    for o in np.flatnonzero(convex):
+        mine = obj == o
+        if mine.any():
+            cells = cells + np.minimum(
+                _binned_max(lo_z[mine], hi_z[mine], np.ones(int(mine.sum())), grid), 2)
+    # a convex object both whole-face and partial is capped twice: still at most 4 of its
+    # crossings counted, a bound
+    return base + int(cells.max())

@@ -11,6 +11,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.raster import stencil
+from shadowvol.raster.gl import RawGL
 from shadowvol.raster.passes import set_uniform
 from shadowvol.raster.projection import NEARER, NEARER_OR_EQUAL
 
@@ -23,7 +24,7 @@ FILL_ALPHA = 0.22
 LINE_ALPHA = 0.85
 
 
-def draw_volume_overlay(ctx: moderngl.Context, gl: stencil.RawGL, target, volumes,
+def draw_volume_overlay(ctx: moderngl.Context, gl: RawGL, target, volumes,
                         zfail: np.ndarray) -> None:
     """Draw the volume polygons of the light `volumes` is prepared for over `target`'s
     colour, leaving its alpha (coverage) and the lit attachment alone."""

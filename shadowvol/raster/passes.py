@@ -15,7 +15,7 @@ shading pass: `mask_pass` is its geometry pass, writing shade.frag's lit bits (M
 no light were shadowed, and after each light's count `clear_shadowed` removes that light's bit
 where the count is not 0 (a colour logic op on the unsigned-integer bits).
 
-The forward passes (`depth_ambient`, then per light `add_light` over the soup with depth test
+The forward passes (`forward`: depth and ambient, then per light over the soup with depth test
 EQUAL) remain for the planar shadows.  Both compute the same numbers: the same depths (the same
 invariant vertex shader on the same vertices in the same order) and the same lighting
 expressions on the same float32 inputs (shade.frag repeats phong.frag's and scene.vert's).
@@ -34,6 +34,7 @@ import numpy as np
 
 from shadowvol.raster import glsl, stencil
 from shadowvol.raster.geometry import SceneGeometry
+from shadowvol.raster.gl import GL_AND_INVERTED, GL_OR, RawGL
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.projection import (
     FAR_DEPTH,
@@ -43,7 +44,7 @@ from shadowvol.raster.projection import (
     planes_in_frame,
 )
 from shadowvol.raster.target import Target
-from shadowvol.scene import AreaSample, Camera, Light, Scene, SpotLight
+from shadowvol.scene import AreaSample, Camera, Scene, SpotLight
 
 NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)
 # reversed depth: FAR_DEPTH (0) is the clear value and drawn surfaces lie above it, so a
@@ -182,7 +183,7 @@ def _draw_soup(ctx: moderngl.Context, geometry: SceneGeometry, vao: moderngl.Ver
     ctx.enable_only(moderngl.DEPTH_TEST)
 
 
-def mask_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
+def mask_pass(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
               view_proj: np.ndarray, camera: Camera, lights,
               cull: np.ndarray | None = None, in_stencil: bool = False) -> None:
     """The geometry pass of a mask-only frame for `lights` (one page) seen by `camera`
@@ -212,17 +213,17 @@ def mask_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: S
         _draw_soup(ctx, progs.geometry, vao, cull)
 
 
-def clear_shadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
+def clear_shadowed(ctx: moderngl.Context, gl: RawGL, target: Target,
                    progs: ScenePrograms, bit: int, zero: bool = False) -> None:
     """After light `bit`'s count in a mask-only frame (`mask_pass`): its lit bit (2^(bit + 1)
     of `target.unshadowed`) cleared at every covered pixel whose count is not 0 (the logic op
     AND-NOT).  `zero`: every count is left 0, as a clear would (`stencil.where_shadowed`),
     for the next light's count.  `target.mark_fbo` stays bound."""
     _bits_pass(ctx, gl, target, progs, 2 << bit, stencil.where_shadowed(gl, zero=zero),
-               stencil.GL_AND_INVERTED)
+               GL_AND_INVERTED)
 
 
-def clear_shadowed_in_stencil(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
+def clear_shadowed_in_stencil(ctx: moderngl.Context, gl: RawGL, target: Target,
                               progs: ScenePrograms, count_mask: int, light_bit: int) -> None:
     """`clear_shadowed` for a mask-only frame whose bits are in the stencil (`mask_pass`
     `in_stencil`): after a light's count (in the bits of `count_mask`), its `light_bit`
@@ -233,7 +234,7 @@ def clear_shadowed_in_stencil(ctx: moderngl.Context, gl: stencil.RawGL, target: 
         gl, zero=True, count_mask=count_mask, also_zero=light_bit), None)
 
 
-def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
+def mark_unshadowed(ctx: moderngl.Context, gl: RawGL, target: Target,
                     progs: ScenePrograms, bit: int, restore: bool = True,
                     zero: bool = False) -> None:
     """Set bit `bit` of the unshadowed bits where the stencil count is 0 (the logic op OR);
@@ -241,12 +242,12 @@ def mark_unshadowed(ctx: moderngl.Context, gl: stencil.RawGL, target: Target,
     `zero`: also set every other count to 0 (`stencil.where_unshadowed`), so that the next
     light's count needs no clear (`count_volumes(clear=False)`)."""
     _bits_pass(ctx, gl, target, progs, 1 << bit, stencil.where_unshadowed(gl, zero=zero),
-               stencil.GL_OR)
+               GL_OR)
     if restore:
         target.use()
 
 
-def _bits_pass(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
+def _bits_pass(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
                value: int, where, op: int | None) -> None:
     """One full-screen pass of mark.frag over the covered pixels into `target.unshadowed`
     (`mark_fbo`, left bound): `value` combined with the stored bits by the logic op `op`
@@ -274,7 +275,7 @@ def _only_where_covered(ctx: moderngl.Context) -> None:
     ctx.depth_func = FARTHER_THAN_NOTHING
 
 
-def shade(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
+def shade(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
           scene: Scene, camera: Camera, lights, first_page: bool, colour: bool = True,
           srgb: bool = False) -> None:
     """The one shading pass for `lights` (at most LIGHTS_PER_PAGE): colour and bits of every
@@ -377,21 +378,7 @@ def encode_srgb(ctx: moderngl.Context, target: Target, progs: ScenePrograms) -> 
     target.use()
 
 
-def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
-                  scene: Scene) -> None:
-    """Clear everything, then depth and ambient for all triangles."""
-    target.clear(scene.background)
-    ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = NEARER
-    ctx.front_face = "ccw"
-    set_uniform(progs.ambient, "u_ambient", tuple(float(x) for x in scene.ambient))
-    progs.geometry.materials.use(0)
-    set_uniform(progs.ambient, "u_materials", 0)
-    # the soup's own triangles (the buffers may hold pieces of huge ones after them)
-    progs.ambient_vao.render(moderngl.TRIANGLES, vertices=3 * progs.geometry.triangle_count)
-
-
-def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volumes,
+def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
                   zfail: np.ndarray, halve: bool = False,
                   clip_planes: np.ndarray | None = None, counting=None,
                   objects=None, each=None, fbo=None, clear: bool = True,
@@ -467,38 +454,3 @@ def count_volumes(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, volu
             volumes.draw_caps(by_zfail, near=True, each=each)
     if fbo is None:
         target.use()
-
-
-def light_uniforms(program: moderngl.Program, light: Light, origin: np.ndarray) -> None:
-    """A light's uniforms of the forward Phong pass, in the frame of `origin` (3,)."""
-    set_uniform(program, "u_light", tuple(float(x) for x in in_frame(light.homogeneous,
-                                                                       origin)))
-    set_uniform(program, "u_radiance", tuple(float(x) for x in light.radiance))
-    set_uniform(program, "u_emitter_cosine", 1.0 if isinstance(light, AreaSample) else 0.0)
-    if isinstance(light, SpotLight):
-        set_uniform(program, "u_spot_direction", tuple(float(x) for x in light.direction))
-        set_uniform(program, "u_spot_cos", light.cos_cutoff)
-    else:
-        set_uniform(program, "u_spot_direction", (0.0, 0.0, 1.0))
-        set_uniform(program, "u_spot_cos", NO_CONE)
-
-
-def add_light(ctx: moderngl.Context, gl: stencil.RawGL, target: Target, progs: ScenePrograms,
-              light: Light, stencil_test=stencil.where_unshadowed) -> None:
-    """Add `light`'s Phong term where `stencil_test` passes (the shadow volumes' count is 0;
-    planar shadows pass their own test); its lit mask goes to `target.lit`."""
-    target.clear_lit()
-    target.use(colour=True, depth=False)
-    ctx.enable_only(moderngl.DEPTH_TEST | moderngl.BLEND)
-    ctx.depth_func = "=="
-    ctx.blend_func = moderngl.ONE, moderngl.ONE
-    ctx.blend_equation = moderngl.FUNC_ADD
-    ctx.front_face = "ccw"
-    light_uniforms(progs.phong, light, progs.geometry.origin)
-    progs.geometry.materials.use(0)
-    set_uniform(progs.phong, "u_materials", 0)
-    with stencil_test(gl):
-        progs.phong_vao.render(moderngl.TRIANGLES, vertices=3 * progs.geometry.triangle_count)
-    ctx.enable_only(moderngl.DEPTH_TEST)
-    ctx.depth_func = NEARER
-    target.use()

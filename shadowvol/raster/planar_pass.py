@@ -6,7 +6,7 @@
 
 A frame, per light (the same passes as a shadow-volume frame, with the volume count replaced):
 
-1. depth + ambient for every triangle (`passes.depth_ambient`), once.
+1. depth + ambient for every triangle (`forward.depth_ambient`), once.
 2. mark: the receiver's own triangles drawn again with depth test EQUAL (same vertex shader,
    same vertices: the depths tie bit for bit) write stencil PLANAR_RECEIVER where the receiver
    is the visible surface.
@@ -35,8 +35,8 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from shadowvol.course.planar import plane_equation, projection_matrix
-from shadowvol.raster import glsl, passes
+from shadowvol.raster.planar import plane_equation, projection_matrix
+from shadowvol.raster import forward, glsl, passes
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import make_current
 from shadowvol.raster.projection import (
@@ -171,7 +171,7 @@ class PlanarShadows:
         view_proj, origin = frame_view_projection(camera, scene.aspect)
         r.geometry.move_to(origin)
         passes.set_camera((r.programs.ambient, r.programs.phong), view_proj, camera, origin)
-        passes.depth_ambient(r.ctx, r.target, r.programs, scene)
+        forward.depth_ambient(r.ctx, r.target, r.programs, scene)
         lit, counts = [], []
         for light in lights:
             r.target.clear_stencil()
@@ -180,7 +180,7 @@ class PlanarShadows:
                 self._project_shadows(index, plane, light, view_proj)
             if stencil:
                 counts.append(r.target.read_stencil().astype(np.uint8))
-            passes.add_light(r.ctx, r.gl, r.target, r.programs, light,
+            forward.add_light(r.ctx, r.gl, r.target, r.programs, light,
                              stencil_gl.where_not_planar_shadow)
             lit.append(r.target.read_lit())
         rgba = r.target.read_colour()

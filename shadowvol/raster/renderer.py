@@ -17,96 +17,29 @@ overflow.StencilOverflowError instead of returning a wrong shadow.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import moderngl
 import numpy as np
 
-from shadowvol.cameras import Calibration, calibration
-from shadowvol.io import GroundTruthFrame
-from shadowvol.raster import methods, overflow, overlay, passes, truth
+from shadowvol import fields
+from shadowvol.cameras import calibration
+from shadowvol.raster import bits, methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import create_context, make_current
 from shadowvol.raster.geometry import SceneGeometry
+from shadowvol.raster.gl import RawGL
+from shadowvol.raster.overflow_policy import LightBounds
+from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.recycle import ArrayPool
+from shadowvol.raster.result import SILHOUETTES, RenderResult, check_lights, check_outputs
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
-from shadowvol.raster.volumes import CpuVolumes, GpuVolumes
-from shadowvol.scene import (
-    AreaLight,
-    Camera,
-    DirectionalLight,
-    Light,
-    PointLight,
-    Scene,
-    SceneError,
-    SpotLight,
-    hard_lights,
-)
-
-SILHOUETTES = ("cpu", "gpu")
-# what `render(outputs=...)` can return; the default is what the frame always returned
-OUTPUTS = ("image", "image_srgb", "lit", "coverage", "stencil") + truth.TRUTH_OUTPUTS
-DEFAULT_OUTPUTS = ("image", "lit", "coverage")
-
-
-@dataclass(frozen=True, eq=False)
-class RenderResult(GroundTruthFrame):
-    """One frame.  Each array is None unless asked for (`Renderer.render(outputs=...)`).
-    The arrays are the caller's: a later frame writes only into memory nothing refers to any
-    more (`recycle.ArrayPool`).
-
-    image      : (H, W, 3) float32 linear RGB (direct Phong lighting; an area light's
-                 samples summed: soft shadows)
-    lit        : (L, H, W) bool, per light: covered, stencil 0, n . l > 0, inside the spot
-                 cone; for an area light: so for every sample (lit_count == N)
-    coverage   : (H, W) bool, geometry visible at the pixel centre
-    stencil    : (L, H, W) int16 signed stencil counts after each light's volume pass (hard
-                 lights only)
-    zfail      : (L, n_objects) bool, which casters were counted with z-fail for each light
-                 (for an area light: for any of its samples; always returned)
-    lit_count  : (L, H, W) uint16, per light how many of its samples (hard lights: 1) light
-                 the pixel as `lit` says (returned with `lit`)
-    samples    : (L,) int64, N per light (hard lights: 1; always returned)
-    image_srgb : (H, W, 3) uint8, `image` encoded to sRGB on the GPU (the IEC 61966-2-1
-                 curve of `shadowvol.io.encode_srgb`, in float32: a code may differ by one)
-    depth, distance, normal, object_id, facing, casters : the ground truth of
-                 docs/CONVENTIONS.md (see `truth`), when asked for
-    calibration : the camera matrices and light arrays of the frame (always)
-    """
-
-    image: np.ndarray | None
-    lit: np.ndarray | None
-    coverage: np.ndarray | None
-    stencil: np.ndarray | None
-    zfail: np.ndarray
-    lit_count: np.ndarray | None = None
-    samples: np.ndarray | None = None
-    image_srgb: np.ndarray | None = None
-    depth: np.ndarray | None = None
-    distance: np.ndarray | None = None
-    normal: np.ndarray | None = None
-    object_id: np.ndarray | None = None
-    facing: np.ndarray | None = None
-    casters: np.ndarray | None = None
-    calibration: Calibration | None = None
-
-
-    @property
-    def visibility(self) -> np.ndarray:
-        """(L, H, W) float32: lit_count / N."""
-        return (self.lit_count / self.samples[:, None, None]).astype(np.float32)
-
-    @property
-    def penumbra(self) -> np.ndarray:
-        """(L, H, W) bool: some samples light the pixel, not all (0 < lit_count < N)."""
-        return (self.lit_count > 0) & ~self.lit
-
-    def _repr_png_(self) -> bytes:
-        """A notebook shows the frame as its image."""
-        from shadowvol.display import frame_png
-        return frame_png(self)
-
+from shadowvol.raster.truth_frame import frame_truth
+from shadowvol.raster.volumes import VolumeBuilder
+from shadowvol.raster.volumes_cpu import CpuVolumes
+from shadowvol.raster.volumes_gpu import GpuVolumes
+from shadowvol.scene import AreaLight, Camera, Light, Scene, hard_lights
 
 class Renderer:
     """Renders `scene` (its geometry and materials; camera and lights may change per frame).
@@ -123,17 +56,13 @@ class Renderer:
         self._own_ctx = ctx is None
         self.ctx = create_context() if ctx is None else ctx
         self._owned = []
-        self._volumes: dict[str, CpuVolumes | GpuVolumes] = {}
+        self._volumes: dict[str, VolumeBuilder] = {}
         self._count_bound: int | None = None
         self._object_bounds: np.ndarray | None = None
         self._truth: truth.TruthPass | None = None
         self._outward_convex: np.ndarray | None = None
         self._convex: np.ndarray | None = None
-        # light -> None (used once) or (the slack (M,) it was computed with, the bound, the
-        # least of that slack in each object (n_objects,))
-        self._light_bounds: dict[bytes, tuple | None] = {}
-        self._slack: tuple | None = None   # (camera key, `overflow.world_slack`)
-        self._largest: float | None = None  # max |world corner|: the float32 part of the slack
+        self._bounds = LightBounds()   # the overflow check's kept light bounds
         self._srgb_code: tuple[int, int, int] | None = None   # `_srgb_background`
         # the arrays frames return (`recycle`), and the frames' own scratch (`_scratch`)
         self._pool = ArrayPool()
@@ -153,10 +82,10 @@ class Renderer:
         self._stencil_export: bool | None = None   # ARB_shader_stencil_export, looked up once
         try:
             # every public method first makes the context current: raw GL calls
-            # (stencil.RawGL) go to whichever context is current, e.g. after another renderer
+            # (gl.RawGL) go to whichever context is current, e.g. after another renderer
             # with its own context has run
             make_current(self.ctx)
-            self.gl = stencil_gl.RawGL()
+            self.gl = RawGL()
             self.geometry = self._own(SceneGeometry(self.ctx, scene))
             self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
             self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
@@ -168,7 +97,7 @@ class Renderer:
         self._owned.append(obj)
         return obj
 
-    def volumes(self, silhouettes: str) -> CpuVolumes | GpuVolumes:
+    def volumes(self, silhouettes: str) -> VolumeBuilder:
         """The volume builder for "cpu" or "gpu" silhouettes (made on first use)."""
         if silhouettes not in SILHOUETTES:
             raise ValueError(f"silhouettes must be 'cpu' or 'gpu', got {silhouettes!r}")
@@ -184,7 +113,7 @@ class Renderer:
                outputs: tuple[str, ...] | None = None) -> RenderResult:
         """One frame.  `method`: "auto" (z-fail only for casters the near plane may cut),
         "zpass" or "zfail".  `camera`/`lights` override the scene's for this frame.
-        `outputs`: the arrays to read back (names in OUTPUTS; default image, lit and
+        `outputs`: the arrays to read back (names in `result.OUTPUTS`; default image, lit and
         coverage); the others are None in the result.  `stencil=True` adds "stencil": the
         per-light stencil counts (one extra read-back each).  `shadows=False` skips the volume
         passes (every count stays 0): the same frame without shadows, the benchmark's
@@ -192,82 +121,37 @@ class Renderer:
         if method not in methods.METHODS:
             raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
                              f"got {method!r}")
-        outputs = _check_outputs(outputs, stencil)
-        lights = _check_lights(lights)
+        outputs = check_outputs(outputs, stencil)
+        lights = check_lights(lights)
         make_current(self.ctx)
         to_check = self._lights_to_check(camera, lights) if shadows else []
+        # the overflow check needs the lit masks, asked for or not
+        plan = FramePlan.of(method, outputs | ({"lit"} if to_check else set()))
         with stencil_gl.zero_to_one_depth(self.gl):
-            # the overflow check needs the lit masks, asked for or not
-            result = self._render(method, silhouettes, camera, lights, shadows,
-                                  outputs | ({"lit"} if to_check else set()))
+            result = self._render(plan, silhouettes, camera, lights, shadows)
             if to_check:
                 overflow.check_frame(self, result, silhouettes, camera, lights,
-                                     halve=method == "auto" and "stencil" not in outputs,
-                                     only=to_check)
+                                     halve=plan.halve, only=to_check)
             if "lit" not in outputs:
                 result = replace(result, lit=None, lit_count=None)
             return result
 
     def _lights_to_check(self, camera, lights) -> list[tuple[int, int]]:
-        """(light, sample) indices of the hard lights (an area light's samples; any other
-        light is its own sample 0) whose stencil count might reach 256 in this frame: none
-        when the scene's bound is below it, else those whose `overflow.light_bound` is not.
-        A light's bound costs more than one re-check (0.1-0.6 s), so it is computed the second
-        time the light is used, with twice the slack this camera needs, and kept while later
-        cameras need no more slack.  An area light's samples are lights of their own here: a
-        sample's position never changes, so its bound is kept like a point light's.  At most
-        `BOUNDS_PER_FRAME` bounds are computed in one frame (the others are re-checked until
-        their turn comes), so no frame pays for 16 or 64 samples' bounds at once: a frame costs
-        at most one bound more than its re-checks."""
+        """(light, sample) indices of the hard lights whose stencil count might reach 256 in
+        this frame: none when the scene's bound is below it, else those whose
+        `overflow.light_bound` is not (`overflow_policy`: at most `BOUNDS_PER_FRAME` bounds
+        computed in one frame, so a frame costs at most one bound more than its re-checks)."""
         if not self.check_overflow or self.count_bound < overflow.STENCIL_LIMIT:
             return []
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else lights
-        corners = self.geometry.soup_corners_f64
-        if self._largest is None:
-            self._largest = float(np.abs(corners).max())
-        # the slack this camera needs: per object from the boxes (8 points each), and per
-        # triangle (a pass over every corner) only where that does not settle it
-        by_object = overflow.object_slack(camera, self.scene.height, self.geometry.bounds,
-                                          self._largest)
+        return self._bounds.to_check(self.geometry, self.scene.height, lambda: self.convex,
+                                     camera, lights, self.BOUNDS_PER_FRAME)
 
-        def needed() -> np.ndarray:
-            key = (camera.eye.tobytes(), float(camera.fov_y))
-            if self._slack is None or self._slack[0] != key:   # once per camera
-                self._slack = (key, overflow.world_slack(camera, self.scene.height, corners,
-                                                         self._largest))
-            return self._slack[1]
-
-        def covers(kept) -> bool:   # the kept slack is at least what this camera needs
-            return bool((by_object <= kept[2]).all() or (needed() <= kept[0]).all())
-
-        doubled = None   # one (M,) array shared by the bounds computed in this frame
-        computed = 0
-        out = []
-        for i, light in enumerate(lights):
-            for k, hard in enumerate(hard_lights(light)):
-                key = hard.homogeneous.tobytes()
-                if key not in self._light_bounds:
-                    self._light_bounds[key] = None      # seen once: re-check this frame
-                    out.append((i, k))
-                    continue
-                kept = self._light_bounds[key]
-                if kept is None or not covers(kept):
-                    if computed == self.BOUNDS_PER_FRAME:   # later: re-check it meanwhile
-                        out.append((i, k))
-                        continue
-                    computed += 1
-                    if doubled is None:
-                        doubled = 2.0 * needed()
-                        least = np.full(len(self.geometry.ranges), np.inf)
-                        np.minimum.at(least, self.geometry.object_of, doubled)
-                    kept = (doubled, overflow.light_bound(corners, self.geometry.object_of,
-                                                          self.convex, hard.homogeneous,
-                                                          doubled), least)
-                    self._light_bounds[key] = kept
-                if kept[1] >= overflow.STENCIL_LIMIT:
-                    out.append((i, k))
-        return out
+    @property
+    def _light_bounds(self) -> dict[bytes, tuple | None]:
+        """`overflow_policy.LightBounds.kept`: the light bounds kept."""
+        return self._bounds.kept
 
     @property
     def convex(self) -> np.ndarray:
@@ -326,132 +210,106 @@ class Renderer:
             self._truth = self._own(truth.TruthPass(self.ctx, self.target))
         return self._truth
 
-    def _render(self, method, silhouettes, camera, lights, shadows,
-                outputs: set[str]) -> RenderResult:
+    def _render(self, plan: FramePlan, silhouettes, camera, lights, shadows) -> RenderResult:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else tuple(lights)
-        asked = outputs
+        outputs = plan.outputs
         if "casters" in outputs:
-            truth.check_casters(len(self.scene.objects))
-            outputs = outputs | {"facing"}
-        # facing (and casters) need the facing pass; it gives the lit bits too
-        facing_pass = "facing" in outputs
-        area = [i for i, lt in enumerate(lights) if isinstance(lt, AreaLight)]
-        if facing_pass and area:
-            per_light = "facing" if "facing" in asked else "casters"
-            raise SceneError(f"lights[{area[0]}]", f"{per_light} is defined for point, spot and "
-                                                   "directional lights; for an area light use "
-                                                   "lit_count and Renderer.facing")
-        want_stencil = "stencil" in outputs
+            fields.check_casters(len(self.scene.objects))
+        fields.check_hard_lights(lights, plan.asked, "lit_count and Renderer.facing")
         vols = self.volumes(silhouettes)
         if "casters" in outputs:
             vols.counting_programs()   # before set_camera: it sets their camera too
         vols.new_frame()
-        progs, target = self.programs, self.target
-        # the GPU draws in the float32 frame of this camera's eye (`projection`), the ray
-        # tracer's frame for the same camera: the geometry is re-expressed when the eye moves
-        view_proj, origin = frame_view_projection(camera, self.scene.aspect)
-        self.geometry.move_to(origin)
-        self.geometry.set_view(view_proj, camera.near)   # huge triangles cut (`guard`)
-        passes.set_camera((progs.gbuffer, *vols.programs), view_proj, camera, origin)
-        cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
-                                self.geometry.extent) if self.cull_back_faces else None
+        view_proj, clip, cull = self._set_frame(camera, vols, plan.want_stencil)
         # an area light is its samples, each counted and shaded as a point light
         hard = [(i, sample) for i, lt in enumerate(lights) for sample in hard_lights(lt)]
         # the 8-bit image straight from the shading pass when the float one is not asked for
         # and one page holds every light (pages add up in float)
         srgb_direct = ("image_srgb" in outputs and "image" not in outputs
                        and len(hard) <= LIGHTS_PER_PAGE)
-        # z-pass faces clipped to the box of the near rectangle and the casters: the same
-        # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
-        clip = None if want_stencil else methods.zpass_clip_planes(
-            self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
         h, w = self.scene.height, self.scene.width
-        if want_stencil and any(isinstance(light, AreaLight) for light in lights):
+        if plan.want_stencil and any(isinstance(light, AreaLight) for light in lights):
             raise ValueError("stencil counts are per hard light: not for area lights")
         zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
         truth_pages: list = []
         counts: list[np.ndarray] = []
         in_stencil = None   # the mask-only frame's stencil bytes, when it keeps its bits there
+        pages: list[np.ndarray] = []
         if outputs <= {"lit", "coverage"} and len(hard) <= LIGHTS_PER_PAGE:
             # the masks alone, one page: no G-buffer and no shading pass
             if self._masks_fit_stencil(hard, lights, shadows):
-                in_stencil = self._mask_frame(method, camera, view_proj, hard, shadows, vols,
+                in_stencil = self._mask_frame(plan, camera, view_proj, hard, shadows, vols,
                                               clip, cull, zfail, in_stencil=True)
             else:
-                pages = [self._mask_frame(method, camera, view_proj, hard, shadows, vols, clip,
+                pages = [self._mask_frame(plan, camera, view_proj, hard, shadows, vols, clip,
                                           cull, zfail)]
         else:
-            pages = self._deferred_frame(method, camera, hard, shadows, vols, clip, cull,
-                                         zfail, outputs, srgb_direct, truth_pages, counts)
+            pages = self._deferred_frame(plan, camera, hard, shadows, vols, clip, cull,
+                                         zfail, srgb_direct, truth_pages, counts)
         # what the caller gets comes from the pool (`recycle`); numpy's temporaries go to
         # the scratch (3 MB of new memory costs a millisecond here)
-        pool, masked = self._pool, self._scratch(0)
-        image = (target.read_image(out=pool.empty((h, w, 3), np.float32))
+        pool = self._pool
+        image = (self.target.read_image(out=pool.empty((h, w, 3), np.float32))
                  if "image" in outputs else None)
-        coverage = None
-        if "coverage" in outputs:
-            coverage = pool.empty((h, w), bool)
-            if in_stencil is not None:   # bit 7 (`stencil.mask_layout`), 0 or 1 as a bool
-                np.right_shift(in_stencil, 7, out=coverage.view(np.uint8))
-            else:
-                np.not_equal(np.bitwise_and(pages[0], np.uint32(1), out=masked), 0,
-                             out=coverage)
         samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
-        soft = samples > 1
-        lit = lit_count = None
-        if "lit" in outputs and in_stencil is not None:
-            lit_count = pool.empty((len(lights), h, w), np.uint16)
-            lit = pool.empty((len(lights), h, w), bool)
-            count_mask, light_bits = stencil_gl.mask_layout(len(hard))
-            byte = self._scratch_bytes(0)
-            for k, ((i, _), bit) in enumerate(zip(hard, light_bits)):   # i == k: hard lights
-                # the lights before the last were cleared where counted; the last one's count
-                # is still in the low bits (0 without shadows: nothing counted)
-                last = k == len(light_bits) - 1
-                np.bitwise_and(in_stencil, bit | (count_mask if last else 0), out=byte)
-                np.equal(byte, bit, out=lit[i])
-                lit_count[i] = lit[i]
-        elif "lit" in outputs:
-            lit_count = pool.empty((len(lights), h, w), np.uint16)
-            lit = pool.empty((len(lights), h, w), bool)
-            lit_count[soft] = 0   # an area light's counts add up over its pages
-            # each light's samples in a page are neighbouring bits: one count of the set bits
-            # per light and page, not one pass per sample
-            masks: dict[tuple[int, int], int] = {}
-            for k, (i, _) in enumerate(hard):
-                page, bit = divmod(k, LIGHTS_PER_PAGE)
-                masks[i, page] = masks.get((i, page), 0) | 1 << (bit + 1)
-            for (i, page), mask in masks.items():
-                np.bitwise_and(pages[page], np.uint32(mask), out=masked)
-                if samples[i] == 1:   # a hard light: its one bit is lit, its count lit too
-                    np.not_equal(masked, 0, out=lit[i])
-                    lit_count[i] = lit[i]
-                else:
-                    lit_count[i] += _bit_count(masked)
-            lit[soft] = lit_count[soft] == samples[soft, None, None]
-        extra = self._ground_truth(outputs, camera, lights, truth_pages, zfail, vols,
-                                   method, clip, want_stencil)
-        if facing_pass:
+        coverage, lit, lit_count = self._read_masks(outputs, hard, samples, in_stencil, pages)
+        extra = frame_truth(self, plan, camera, lights, truth_pages, zfail, vols, clip)
+        if plan.facing_pass:
             # the facing pass's lit: facing & unshadowed, bit for bit (hard lights only)
             lit = extra.pop("lit")
             if lit_count is not None:
                 lit_count = lit.astype(np.uint16)
-            if "facing" not in asked:  # computed for casters only
+            if "facing" not in plan.asked:  # computed for casters only
                 extra.pop("facing")
         srgb = None
         if "image_srgb" in outputs:
             if not srgb_direct:   # encoded from the float image, by its own pass
-                passes.encode_srgb(self.ctx, target, progs)
-            srgb = target.read_srgb(flipped=not srgb_direct,
-                                    out=pool.empty((h, w, 3), np.uint8))
+                passes.encode_srgb(self.ctx, self.target, self.programs)
+            srgb = self.target.read_srgb(flipped=not srgb_direct,
+                                         out=pool.empty((h, w, 3), np.uint8))
         return RenderResult(
             image=image, lit=lit, coverage=coverage,
-            stencil=np.array(counts, np.int16).reshape(len(lights), h, w) if want_stencil
-            else None,
+            stencil=np.array(counts, np.int16).reshape(len(lights), h, w)
+            if plan.want_stencil else None,
             zfail=zfail, lit_count=lit_count, samples=samples, image_srgb=srgb,
             calibration=calibration(self.scene.replace(camera=camera, lights=lights)),
             **extra)
+
+    def _set_frame(self, camera, vols, want_stencil: bool) -> tuple:
+        """The frame's camera set on the geometry and the programs: (view_proj, the z-pass
+        clip planes or None, the back faces to cull or None)."""
+        # the GPU draws in the float32 frame of this camera's eye (`projection`), the ray
+        # tracer's frame for the same camera: the geometry is re-expressed when the eye moves
+        view_proj, origin = frame_view_projection(camera, self.scene.aspect)
+        self.geometry.move_to(origin)
+        self.geometry.set_view(view_proj, camera.near)   # huge triangles cut (`guard`)
+        passes.set_camera((self.programs.gbuffer, *vols.programs), view_proj, camera, origin)
+        cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
+                                self.geometry.extent) if self.cull_back_faces else None
+        # z-pass faces clipped to the box of the near rectangle and the casters: the same
+        # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
+        clip = None if want_stencil else methods.zpass_clip_planes(
+            self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
+        return view_proj, clip, cull
+
+    def _read_masks(self, outputs, hard, samples, in_stencil, pages) -> tuple:
+        """(coverage, lit, lit_count), each None unless asked for, in the pool's memory
+        (`bits` decodes them)."""
+        h, w, pool = self.scene.height, self.scene.width, self._pool
+        masked = self._scratch(0)
+        coverage = lit = lit_count = None
+        if "coverage" in outputs:
+            coverage = pool.empty((h, w), bool)
+            bits.coverage(in_stencil, pages, masked, coverage)
+        if "lit" in outputs:
+            lit_count = pool.empty((len(samples), h, w), np.uint16)
+            lit = pool.empty((len(samples), h, w), bool)
+            if in_stencil is not None:
+                bits.lit_from_stencil(in_stencil, hard, lit, lit_count, self._scratch_bytes(0))
+            else:
+                bits.lit_from_pages(pages, hard, samples, lit, lit_count, masked)
+        return coverage, lit, lit_count
 
     def _masks_fit_stencil(self, hard, lights, shadows: bool) -> bool:
         """Whether a mask-only frame of `hard` (its hard lights, one page) keeps its bits in
@@ -468,7 +326,7 @@ class Renderer:
         return self._stencil_export and (not shadows or
                                          self.count_bound < 1 << (7 - len(hard)))
 
-    def _mask_frame(self, method, camera, view_proj, hard, shadows, vols, clip, cull,
+    def _mask_frame(self, plan: FramePlan, camera, view_proj, hard, shadows, vols, clip, cull,
                     zfail, in_stencil: bool = False) -> np.ndarray:
         """The lit bits of a mask-only frame of the hard lights `hard` ((light index, hard
         light) pairs, one page): (H, W) uint32 in this renderer's scratch, bit 0 covered, bit
@@ -489,14 +347,14 @@ class Renderer:
                                   else (0xFF, ()))
         for k, (i, light) in enumerate(hard):
             light4 = light.homogeneous
-            choice = methods.choose(method, self.geometry.bounds, camera, self.scene.aspect,
-                                    light4, self.geometry.extent)
+            choice = methods.choose(plan.method, self.geometry.bounds, camera,
+                                    self.scene.aspect, light4, self.geometry.extent)
             if shadows:
                 vols.prepare(light4)
                 # the counts are 0: the mask pass cleared them, and each light's clear but the
                 # last zeroes them again (`stencil.where_shadowed`)
                 passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                     halve=method == "auto", clip_planes=clip,
+                                     halve=plan.halve, clip_planes=clip,
                                      fbo=target.mark_fbo, clear=False, count_mask=count_mask)
                 if not in_stencil:
                     passes.clear_shadowed(self.ctx, self.gl, target, progs, k,
@@ -512,15 +370,14 @@ class Renderer:
         target.use()
         return bits
 
-    def _deferred_frame(self, method, camera, hard, shadows, vols, clip, cull, zfail, outputs,
+    def _deferred_frame(self, plan: FramePlan, camera, hard, shadows, vols, clip, cull, zfail,
                         srgb_direct, truth_pages, counts) -> list[np.ndarray]:
         """The deferred frame (`passes`): the lit bits of each page of LIGHTS_PER_PAGE hard
         lights (as `_mask_frame`'s; none when neither masks nor coverage are asked for and
         the colour is).  Fills `zfail`, `truth_pages` (the facing pass's, for the ground
         truth) and `counts` (each hard light's stencil counts, when asked for)."""
         progs, target = self.programs, self.target
-        want_stencil = "stencil" in outputs
-        facing_pass = "facing" in outputs
+        outputs, want_stencil, facing_pass = plan.outputs, plan.want_stencil, plan.facing_pass
         colour = bool({"image", "image_srgb"} & outputs)
         need_bits = "lit" in outputs or "coverage" in outputs or not colour
         # the unshadowed bits are cleared when some light of the first page is marked
@@ -542,14 +399,14 @@ class Renderer:
                 target.clear_lit()
             for bit, light in enumerate(page_lights):
                 light4 = light.homogeneous
-                choice = methods.choose(method, self.geometry.bounds, camera,
+                choice = methods.choose(plan.method, self.geometry.bounds, camera,
                                         self.scene.aspect, light4, self.geometry.extent)
                 if shadows:
                     vols.prepare(light4)
                     # halving is safe only for casters `auto` chose z-pass for, and only when
                     # the counts themselves are not returned (see passes.count_volumes)
                     passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                         halve=method == "auto" and not want_stencil,
+                                         halve=plan.halve,
                                          clip_planes=clip,
                                          # counted where it is marked: no framebuffer
                                          # change between the page's lights (llvmpipe
@@ -578,57 +435,6 @@ class Renderer:
                 truth_pages.append(self._truth_pass().run(target, self.geometry, page_lights))
         return pages
 
-    def _ground_truth(self, outputs, camera, lights, truth_pages, zfail, vols, method, clip,
-                      want_stencil) -> dict[str, np.ndarray]:
-        """The ground-truth outputs asked for (and the facing pass's lit, as "lit"), read from
-        the frame left in the target (see `truth`)."""
-        out: dict[str, np.ndarray] = {}
-        want = set(outputs) & set(truth.TRUTH_OUTPUTS)
-        if not want:
-            return out
-        h, w = self.scene.height, self.scene.width
-        # the depth buffer is cleared every frame: it says where geometry is (the G-buffer and
-        # the facing pass's targets are written only there)
-        stored = truth.read_depth(self.target)
-        covered = stored > 0
-        if want & {"depth", "distance"}:
-            depth = truth.eye_depth(stored, camera)
-            if "depth" in want:
-                out["depth"] = depth
-            if "distance" in want:
-                out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
-        if want & {"normal", "object_id"}:
-            triangle, front, _ = truth.read_surface(self.target, covered)
-            triangle = self.geometry.triangle_of_key(triangle)   # a piece's key: its triangle
-            out |= truth.surface_outputs(self.geometry, triangle, front, want)
-        if "facing" in want:
-            lit = np.zeros((len(lights), h, w), bool)
-            facing = np.zeros((len(lights), h, w), bool)
-            for i in range(len(lights)):
-                page, bit = divmod(i, truth.LIGHTS_PER_PASS)
-                lit_bits, facing_bits = truth_pages[page]
-                np.not_equal(lit_bits & np.uint32(1 << bit), 0, out=lit[i])
-                np.not_equal(facing_bits & np.uint32(1 << bit), 0, out=facing[i])
-            out["lit"], out["facing"] = lit & covered, facing & covered
-        if "casters" in want:
-            casters = np.zeros((len(lights), h, w), np.uint64)
-            for i, light in enumerate(lights):
-                cast = out["facing"][i] & ~out["lit"][i]
-                if not cast.any():
-                    continue
-                light4 = light.homogeneous
-                candidates = truth.caster_candidates(self.geometry.bounds,
-                                                     truth.cast_points(camera, stored, cast),
-                                                     light4)
-                vols.prepare(light4)
-                truth.count_casters(
-                    self.target, self._truth_pass().casters, vols, zfail[i],
-                    candidates, self.object_bounds,
-                    out["facing"][i], halve=method == "auto" and not want_stencil,
-                    clip_planes=clip, out=casters[i])
-            out["casters"] = casters
-        return out
-
     def facing(self, *, camera: Camera | None = None,
                lights: tuple[Light, ...] | None = None) -> np.ndarray:
         """(L, H, W) bool: some sample of each light faces the pixel (n . l > 0 toward it and
@@ -643,7 +449,7 @@ class Renderer:
         """(H, W, 3) float32 linear RGB: the frame lit by `lights` (default: the scene's, as in
         `render`) with their shadow-volume polygons drawn over it, coloured by role (see
         `overlay`).  The polygons are exactly those the stencil pass drew under `method`."""
-        lights = _check_lights(lights)
+        lights = check_lights(lights)
         result = self.render(method, silhouettes, camera=camera, lights=lights)
         vols = self.volumes(silhouettes)  # the frame is left in the target
         with stencil_gl.zero_to_one_depth(self.gl):
@@ -672,46 +478,6 @@ class Renderer:
 
     def __exit__(self, *exc) -> None:
         self.release()
-
-
-# set bits of every byte (numpy < 2 has no bitwise_count)
-_BYTE_BITS = np.unpackbits(np.arange(256, dtype=np.uint8)[:, None], axis=1).sum(axis=1,
-                                                                                dtype=np.uint8)
-
-
-def _bit_count(x: np.ndarray) -> np.ndarray:
-    """(H, W) uint32 -> (H, W) uint8: how many bits of each are set."""
-    if hasattr(np, "bitwise_count"):
-        return np.bitwise_count(x)
-    b = _BYTE_BITS[np.ascontiguousarray(x).view(np.uint8)].reshape(*x.shape, 4)
-    return b.sum(axis=-1, dtype=np.uint8)
-
-
-def _check_outputs(outputs, stencil: bool) -> set[str]:
-    """`outputs=` of render: names from OUTPUTS (default DEFAULT_OUTPUTS); `stencil=True`
-    adds "stencil"."""
-    if outputs is None:
-        outputs = DEFAULT_OUTPUTS
-    if isinstance(outputs, str):
-        raise TypeError(f"outputs must be a sequence of names, e.g. ({outputs!r},)")
-    chosen = set(outputs)
-    unknown = sorted(chosen - set(OUTPUTS))
-    if unknown:
-        raise ValueError(f"unknown output {unknown[0]!r}; outputs are {', '.join(OUTPUTS)}")
-    return chosen | ({"stencil"} if stencil else set())
-
-
-def _check_lights(lights) -> tuple[Light, ...] | None:
-    """`lights=` of render and volume_view: None (the scene's) or Light objects; anything else
-    (light indices, say) is a TypeError rather than a frame without those lights."""
-    if lights is None:
-        return None
-    lights = tuple(lights)
-    bad = [x for x in lights
-           if not isinstance(x, (PointLight, DirectionalLight, SpotLight, AreaLight))]
-    if bad:
-        raise TypeError(f"lights must be Light objects (e.g. scene.lights[0]), got {bad[0]!r}")
-    return lights
 
 
 def render(scene: Scene, method: str = "auto", silhouettes: str = "cpu", *,

@@ -1,13 +1,11 @@
-"""The one module that makes raw OpenGL calls: the depth-stencil attachment and stencil state.
+"""The named stencil states, and the depth-stencil attachment: each pass's whole stencil state.
 
 moderngl has no stencil API (moderngl#676), so the depth-stencil renderbuffer (DEPTH32F_STENCIL8),
 every piece of stencil state, depth clamp, the clip-control depth range, the stencil read-back
 and the colour logic op (moderngl has none either: the lit bits' OR and AND-NOT) are raw GL
-calls here, made through function pointers loaded from whatever context is current:
-EGL's `eglGetProcAddress` for the renderer's headless context (EGL 1.5 and Mesa return core entry
-points too), GLX's `glXGetProcAddressARB` for a window's context under X11 (`shadowvol view`).
-Everything else — programs, buffers, textures, blending, depth test, colour and depth write
-masks — stays with moderngl.
+calls, made here through the entry points of `gl` (the bindings); this module and `gl` are the
+one raw-GL place.  Everything else — programs, buffers, textures, blending, depth test, colour
+and depth write masks — stays with moderngl.
 
 Each pass gets a context manager that sets the WHOLE stencil state it needs (test on/off, func
 for both faces, ops for both faces, write mask) and restores the previous state on exit, so no pass
@@ -18,159 +16,53 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
-import ctypes.util
 from typing import Iterator
 
 import numpy as np
 
-from shadowvol.errors import RenderError
-
-# GL enums (from the GL 4.5 core headers)
-GL_UNSIGNED_BYTE = 0x1401
-GL_STENCIL_INDEX = 0x1901
-GL_DEPTH_COMPONENT = 0x1902
-GL_FLOAT = 0x1406
-GL_STENCIL = 0x1802
-GL_COLOR = 0x1800
-GL_DEPTH_STENCIL = 0x84F9
-GL_FRONT = 0x0404
-GL_BACK = 0x0405
-GL_KEEP = 0x1E00
-GL_ZERO = 0
-GL_INCR_WRAP = 0x8507
-GL_DECR_WRAP = 0x8508
-GL_ALWAYS = 0x0207
-GL_EQUAL = 0x0202
-GL_NOTEQUAL = 0x0205
-GL_REPLACE = 0x1E01
-GL_INCR = 0x1E02
-GL_STENCIL_TEST = 0x0B90
-GL_DEPTH_CLAMP = 0x864F
-GL_CLIP_DISTANCE0 = 0x3000
-GL_PACK_ALIGNMENT = 0x0D05
-GL_RENDERBUFFER = 0x8D41
-GL_DEPTH32F_STENCIL8 = 0x8CAD
-GL_LOWER_LEFT = 0x8CA1
-GL_ZERO_TO_ONE = 0x935F
-GL_CLIP_ORIGIN = 0x935C
-GL_CLIP_DEPTH_MODE = 0x935D
-GL_FRAMEBUFFER = 0x8D40
-GL_FRAMEBUFFER_BINDING = 0x8CA6
-GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
-GL_FRAMEBUFFER_COMPLETE = 0x8CD5
-GL_RED_INTEGER = 0x8D94
-GL_RG_INTEGER = 0x8228
-GL_UNSIGNED_INT = 0x1405
-GL_COLOR_LOGIC_OP = 0x0BF2
-GL_LOGIC_OP_MODE = 0x0BF0
-GL_COPY = 0x1503
-GL_OR = 0x1507
-GL_AND_INVERTED = 0x1504   # (NOT source) AND destination: clears the source's bits
-# state queries used to save and restore
-_FRONT_STATE = (0x0B92, 0x0B97, 0x0B93, 0x0B94, 0x0B95, 0x0B96, 0x0B98)  # func ref vmask fail zfail zpass wmask
-_BACK_STATE = (0x8800, 0x8CA3, 0x8CA4, 0x8801, 0x8802, 0x8803, 0x8CA5)
-
-_V = None  # restype void
-_u = ctypes.c_uint
-_i = ctypes.c_int
-_p = ctypes.c_void_p
-_SIGNATURES = {
-    "glEnable": (_V, _u), "glDisable": (_V, _u), "glIsEnabled": (ctypes.c_ubyte, _u),
-    "glGetIntegerv": (_V, _u, _p), "glGetError": (_u,),
-    "glStencilFuncSeparate": (_V, _u, _u, _i, _u),
-    "glStencilOpSeparate": (_V, _u, _u, _u, _u),
-    "glStencilMaskSeparate": (_V, _u, _u),
-    "glClearBufferiv": (_V, _u, _i, _p), "glClearBufferfv": (_V, _u, _i, _p),
-    "glClearBufferuiv": (_V, _u, _i, _p), "glLogicOp": (_V, _u),
-    "glClearBufferfi": (_V, _u, _i, ctypes.c_float, _i),
-    "glPixelStorei": (_V, _u, _i),
-    "glReadPixels": (_V, _i, _i, _i, _i, _u, _u, _p),
-    "glGenRenderbuffers": (_V, _i, _p), "glDeleteRenderbuffers": (_V, _i, _p),
-    "glBindRenderbuffer": (_V, _u, _u), "glRenderbufferStorage": (_V, _u, _u, _i, _i),
-    "glBindFramebuffer": (_V, _u, _u),
-    "glFramebufferRenderbuffer": (_V, _u, _u, _u, _u),
-    "glCheckFramebufferStatus": (_u, _u),
-    "glClipControl": (_V, _u, _u),
-    "glClearTexSubImage": (_V, _u, _i, _i, _i, _i, _i, _i, _i, _u, _u, _p),
-}
-
-
-class RawGLError(RenderError):
-    pass
-
-
-def _library(soname: str, short: str):
-    """ctypes.CDLL of `soname`, else of what find_library finds for `short`, else None."""
-    try:
-        return ctypes.CDLL(soname)
-    except OSError:
-        found = ctypes.util.find_library(short)
-        return ctypes.CDLL(found) if found else None
-
-
-def _egl_loader():
-    egl = _library("libEGL.so.1", "EGL")
-    if egl is None:
-        return None, None
-    current = egl.eglGetCurrentContext
-    current.restype = ctypes.c_void_p
-    get = egl.eglGetProcAddress
-    get.restype = ctypes.c_void_p
-    get.argtypes = [ctypes.c_char_p]
-    return get, bool(current())
-
-
-def _glx_loader():
-    glx = _library("libGL.so.1", "GL")
-    if glx is None or not hasattr(glx, "glXGetCurrentContext"):
-        return None, None
-    current = glx.glXGetCurrentContext
-    current.restype = ctypes.c_void_p
-    get = glx.glXGetProcAddressARB
-    get.restype = ctypes.c_void_p
-    get.argtypes = [ctypes.c_char_p]
-    return get, bool(current())
-
-
-def proc_address_loader() -> tuple[object, str]:
-    """(get_proc_address, "EGL" | "GLX") of the API whose context is current on this thread;
-    EGL when none is (the renderer makes its EGL context current before any raw call)."""
-    egl_get, egl_current = _egl_loader()
-    if egl_current:
-        return egl_get, "EGL"
-    glx_get, glx_current = _glx_loader()
-    if glx_current:
-        return glx_get, "GLX"
-    if egl_get is None:
-        raise RawGLError("libEGL not found: install libegl1 (Debian/Ubuntu) or your GPU "
-                         "vendor's EGL driver")
-    return egl_get, "EGL"
-
-
-class RawGL:
-    """Raw GL entry points for the context that is current when it is made (the renderer's
-    EGL context, or a window's GLX context: see `proc_address_loader`).  Holds function
-    pointers only, no GL objects; `api` says where they came from."""
-
-    def __init__(self):
-        get, self.api = proc_address_loader()
-        for fname, (restype, *args) in _SIGNATURES.items():
-            address = get(fname.encode())
-            if not address:
-                raise RawGLError(f"{self.api}: no {fname} for the current context")
-            proto = ctypes.CFUNCTYPE(restype, *args)
-            setattr(self, fname, proto(address))
-
-    # -- queries -----------------------------------------------------------------------------
-    def get_int(self, pname: int) -> int:
-        out = (ctypes.c_int * 4)()
-        self.glGetIntegerv(pname, out)
-        return int(out[0])
-
-    def check(self, what: str) -> None:
-        err = self.glGetError()
-        if err:
-            raise RawGLError(f"GL error 0x{err:04X} after {what}")
+from shadowvol.raster.gl import (
+    BACK_STENCIL_STATE,
+    FRONT_STENCIL_STATE,
+    GL_ALWAYS,
+    GL_BACK,
+    GL_CLIP_DEPTH_MODE,
+    GL_CLIP_DISTANCE0,
+    GL_CLIP_ORIGIN,
+    GL_COLOR,
+    GL_COLOR_LOGIC_OP,
+    GL_DECR_WRAP,
+    GL_DEPTH32F_STENCIL8,
+    GL_DEPTH_CLAMP,
+    GL_DEPTH_COMPONENT,
+    GL_DEPTH_STENCIL,
+    GL_DEPTH_STENCIL_ATTACHMENT,
+    GL_EQUAL,
+    GL_FLOAT,
+    GL_FRAMEBUFFER,
+    GL_FRAMEBUFFER_BINDING,
+    GL_FRAMEBUFFER_COMPLETE,
+    GL_FRONT,
+    GL_INCR,
+    GL_INCR_WRAP,
+    GL_KEEP,
+    GL_LOGIC_OP_MODE,
+    GL_LOWER_LEFT,
+    GL_NOTEQUAL,
+    GL_PACK_ALIGNMENT,
+    GL_RED_INTEGER,
+    GL_RENDERBUFFER,
+    GL_REPLACE,
+    GL_RG_INTEGER,
+    GL_STENCIL,
+    GL_STENCIL_INDEX,
+    GL_STENCIL_TEST,
+    GL_UNSIGNED_BYTE,
+    GL_UNSIGNED_INT,
+    GL_ZERO,
+    GL_ZERO_TO_ONE,
+    RawGL,
+    RawGLError,
+)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -358,8 +250,8 @@ def zero_to_one_depth(gl: RawGL) -> Iterator[None]:
 def _saved_stencil_state(gl: RawGL) -> Iterator[None]:
     enabled = bool(gl.glIsEnabled(GL_STENCIL_TEST))
     clamp = bool(gl.glIsEnabled(GL_DEPTH_CLAMP))
-    front = [gl.get_int(p) for p in _FRONT_STATE]
-    back = [gl.get_int(p) for p in _BACK_STATE]
+    front = [gl.get_int(p) for p in FRONT_STENCIL_STATE]
+    back = [gl.get_int(p) for p in BACK_STENCIL_STATE]
     try:
         yield
     finally:

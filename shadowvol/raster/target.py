@@ -36,6 +36,7 @@ import numpy as np
 
 from shadowvol.errors import RenderError
 from shadowvol.raster import stencil
+from shadowvol.raster.gl import RawGL, RawGLError
 from shadowvol.raster.projection import FAR_DEPTH
 
 LIGHTS_PER_PAGE = 23  # lit bits 1..23 and the coverage bit of a float32: exact
@@ -68,12 +69,12 @@ class FrameAllocationError(RenderError):
 class Target:
     """Owns its textures, framebuffers and renderbuffer: call `release()`."""
 
-    def __init__(self, ctx: moderngl.Context, gl: stencil.RawGL, width: int, height: int):
+    def __init__(self, ctx: moderngl.Context, gl: RawGL, width: int, height: int):
         self.ctx, self.gl = ctx, gl
         self._textures, self._fbos, self.depth_stencil = (), (), None
         try:
             self._allocate(ctx, gl, width, height)
-        except (moderngl.Error, stencil.RawGLError) as exc:
+        except (moderngl.Error, RawGLError) as exc:
             self.release()
             mib = width * height * BYTES_PER_PIXEL / 2**20
             raise FrameAllocationError(
@@ -81,7 +82,7 @@ class Target:
                 f"GPU memory at {BYTES_PER_PIXEL} bytes a pixel; {exc}); try a smaller "
                 "image") from None
 
-    def _allocate(self, ctx: moderngl.Context, gl: stencil.RawGL, width: int,
+    def _allocate(self, ctx: moderngl.Context, gl: RawGL, width: int,
                   height: int) -> None:
         self.ctx, self.gl = ctx, gl
         self.width, self.height = width, height

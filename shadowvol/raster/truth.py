@@ -34,7 +34,6 @@ import moderngl
 import numpy as np
 
 from shadowvol.cameras import intrinsics, look_at_basis
-from shadowvol.io import GROUND_TRUTH
 from shadowvol.raster import glsl, passes
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.glsl import set_uniform
@@ -43,8 +42,6 @@ from shadowvol.raster.projection import NEARER, in_frame, top_row_first
 from shadowvol.raster.target import LIGHTS_PER_PAGE
 from shadowvol.scene import Camera, SpotLight
 
-TRUTH_OUTPUTS = GROUND_TRUTH  # the names of docs/CONVENTIONS.md, one list for both renderers
-MAX_CASTERS = 64
 LIGHTS_PER_PASS = LIGHTS_PER_PAGE  # the frame's pages: facing and lit bits exact in a float32
 CASTERS_PER_GROUP = 32  # casters of one counting pass: the slots of caster_bits.frag
 # a counter field of w bits starts at 2^(w - 1) (none for 32 bits: a word of its own), so that
@@ -459,13 +456,4 @@ def cast_box(mask: np.ndarray) -> tuple[slice, slice]:
     if len(rows) == 0:
         return slice(0, mask.shape[0]), slice(0, mask.shape[1])
     return slice(int(rows[0]), int(rows[-1]) + 1), slice(int(cols[0]), int(cols[-1]) + 1)
-
-
-def check_casters(objects: int) -> None:
-    if objects > MAX_CASTERS:
-        from shadowvol.scene import SceneError
-
-        raise SceneError("objects", f"casters is a {MAX_CASTERS}-bit mask, and this scene has "
-                                    f"{objects} objects; ask for the other outputs, or split "
-                                    "the scene")
 

@@ -4,7 +4,7 @@ that shows a composed picture in the window.
 The window (pyglet, `shadowvol.view`) makes its context (GLX under X11, EGL for pyglet's
 headless window) and makes it current;
 `attach` wraps it for moderngl, and the renderer then renders into its own offscreen target in
-that context exactly as on EGL (the raw-GL module loads its functions from the current
+that context exactly as on EGL (`gl` loads its raw GL functions from the current
 context).  The frame is read back, composed with the side panel on the CPU, and blitted one
 texel per pixel, so the window shows exactly the offscreen render's pixels.
 """

@@ -10,7 +10,7 @@ from builders import SCENES
 import raytrace
 from raytrace.backends import make_backend
 from raytrace.camera import primary_rays
-from shadowvol.course.planar import project_points, projection_matrix
+from shadowvol.raster.planar import project_points, projection_matrix
 from shadowvol.primitives import Transform, box, plane, sphere
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.planar_pass import (

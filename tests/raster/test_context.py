@@ -6,7 +6,8 @@ import moderngl
 import pytest
 from builders import tiny_scene
 
-from shadowvol.raster import context, stencil
+from shadowvol.raster import context
+from shadowvol.raster.gl import GL_CLIP_DEPTH_MODE, GL_DEPTH_CLAMP, GL_STENCIL_TEST, RawGL
 from shadowvol.raster.renderer import Renderer
 
 
@@ -37,13 +38,13 @@ def test_too_old_gl_names_the_version(monkeypatch):
 
 
 def test_a_frame_restores_the_raw_gl_state(ctx):
-    gl = stencil.RawGL()
-    before = (gl.glIsEnabled(stencil.GL_STENCIL_TEST), gl.glIsEnabled(stencil.GL_DEPTH_CLAMP),
-              gl.get_int(stencil.GL_CLIP_DEPTH_MODE), gl.get_int(0x0B98))  # STENCIL_WRITEMASK
+    gl = RawGL()
+    before = (gl.glIsEnabled(GL_STENCIL_TEST), gl.glIsEnabled(GL_DEPTH_CLAMP),
+              gl.get_int(GL_CLIP_DEPTH_MODE), gl.get_int(0x0B98))  # STENCIL_WRITEMASK
     with Renderer(tiny_scene(), ctx) as r:
         r.render("zfail", stencil=True)
         r.volume_view("zfail")
-    after = (gl.glIsEnabled(stencil.GL_STENCIL_TEST), gl.glIsEnabled(stencil.GL_DEPTH_CLAMP),
-             gl.get_int(stencil.GL_CLIP_DEPTH_MODE), gl.get_int(0x0B98))
+    after = (gl.glIsEnabled(GL_STENCIL_TEST), gl.glIsEnabled(GL_DEPTH_CLAMP),
+             gl.get_int(GL_CLIP_DEPTH_MODE), gl.get_int(0x0B98))
     assert after == before
     assert before[:3] == (0, 0, 0x935E)  # GL defaults: off, off, NEGATIVE_ONE_TO_ONE

@@ -23,9 +23,10 @@ from builders import mixed_scene
 
 from shadowvol.io import encode_srgb
 from shadowvol.raster import methods
-from shadowvol.raster.renderer import OUTPUTS, Renderer
+from shadowvol.raster.renderer import Renderer
+from shadowvol.raster.result import OUTPUTS
 from shadowvol.raster.target import LIGHTS_PER_PAGE
-from shadowvol.raster.volumes import CpuVolumes
+from shadowvol.raster.volumes_cpu import CpuVolumes
 from shadowvol.scene import AreaLight, Camera
 
 
@@ -264,16 +265,16 @@ def test_one_area_light_gives_the_same_frame_every_time(ctx, samples):
 
 @pytest.mark.parametrize("numpy_has_it", [True, False])
 def test_bit_count_counts_set_bits(monkeypatch, numpy_has_it):
-    """An area light's lit count is the set bits of its samples in a page (`_bit_count`, with
+    """An area light's lit count is the set bits of its samples in a page (`bits.bit_count`, with
     numpy's bitwise_count or the byte table where numpy has none)."""
-    from shadowvol.raster import renderer
+    from shadowvol.raster import bits
     if not numpy_has_it:
         monkeypatch.delattr(np, "bitwise_count", raising=False)
     rng = np.random.default_rng(0)
     x = rng.integers(0, 2 ** 32, (37, 53), dtype=np.uint64).astype(np.uint32)
     x[0, :3] = (0, 2 ** 32 - 1, 2 ** 31)
     expected = np.array([bin(int(v)).count("1") for v in x.ravel()]).reshape(x.shape)
-    np.testing.assert_array_equal(renderer._bit_count(x), expected)
+    np.testing.assert_array_equal(bits.bit_count(x), expected)
 
 
 @pytest.mark.parametrize("lights", [1, 3, LIGHTS_PER_PAGE + 2, "area"])

@@ -1,5 +1,5 @@
 """A frame's draws are runs of triangles, not objects: the soup's spans
-(`SceneGeometry.spans`) and the volumes' runs (`volumes._runs_of`) are computed in numpy, and
+(`SceneGeometry.spans`) and the volumes' runs (`volumes.runs_of`) are computed in numpy, and
 the number of draw calls of a frame does not grow with the number of objects.
 
 Witnesses: the spans against the set of triangle keys a draw must cover, built triangle by
@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from shadowvol.primitives import plane, sphere
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.renderer import Renderer
-from shadowvol.raster.volumes import _runs_of
+from shadowvol.raster.volumes import runs_of
 from shadowvol.scene import Camera, Material, PointLight, Scene
 
 
@@ -97,7 +97,7 @@ def test_runs_merge_the_ranges_that_continue_each_other(ranges):
         else:
             expected.append([first, count])
     table = np.array(ranges, np.int64).reshape(-1, 2)
-    assert _runs_of(table[:, 0], table[:, 1]) == [tuple(r) for r in expected]
+    assert runs_of(table[:, 0], table[:, 1]) == [tuple(r) for r in expected]
 
 
 def _scene(n: int) -> Scene:

@@ -13,7 +13,8 @@ from shadowvol.raster.silhouettes import (
     triangle_signs,
 )
 from shadowvol.raster.topology import Topology
-from shadowvol.raster.volumes import MAX_OPPOSITE, edge_records
+from shadowvol.raster.volumes import MAX_OPPOSITE
+from shadowvol.raster.volumes_gpu import edge_records
 from shadowvol.scene import DirectionalLight, PointLight
 
 

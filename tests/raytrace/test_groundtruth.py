@@ -17,9 +17,10 @@ from exact import _ray_triangles
 
 import raytrace
 from raytrace.camera import primary_rays
-from raytrace.groundtruth import MAX_CASTERS, ground_truth
+from raytrace.groundtruth import ground_truth
 from shadowvol.cameras import calibration
 from shadowvol.compare.maskdiff import edge_pixels
+from shadowvol.fields import MAX_CASTERS
 from shadowvol.primitives import box, sphere
 from shadowvol.scene import (
     AreaLight,
