@@ -49,7 +49,7 @@ Binder, Ray Tracing Gems ch. 6, bound the error of a hit point instead of guessi
 
 Geometry that lies within that height of the surface, or that close to the light, does not
 count: a contact shadow thinner than ~1e-6 of the distance to the eye is lost, nothing else.
-`tests/test_reference_exact.py` measures the masks against a float64 brute-force segment test
+`tests/raytrace/test_reference_exact.py` measures the masks against a float64 brute-force segment test
 on large translations, huge ground quads, cards beside lights and grazing creases, and checks
 the height bound directly (rays leaving random triangles at down to 1e-6 rad of grazing never
 hit a coplanar copy of the triangle).
@@ -114,7 +114,7 @@ T_MIN = 0.0
 # box's face.
 BVH_BOX_PAD_RELATIVE = 1e-9
 
-# Backend agreement (tests/test_backends.py): numpy (float64) and Embree (float32) may pick
+# Backend agreement (tests/raytrace/test_backends.py): numpy (float64) and Embree (float32) may pick
 # different triangles only for rays that pass within this distance (relative to the length
 # scale) of a triangle edge: there float32 rounding decides which of the two triangles is hit.
 # float32 puts a coordinate within ~6e-8 (relative) of its value and Embree's edge tests add a

@@ -23,7 +23,7 @@ behind.  Orientation (which of
 front/back face the cap is) is set with the front-face state, never by reordering vertices,
 because reordering could change the rasterized depths.  A polygon offset was rejected: it
 only moves the problem to surfaces at another slope.  When the eye sees T's unlit side, X is
-unlit by n . l anyway.  tests/test_gl_exact.py checks a lit floor, an open quad seen from its lit
+unlit by n . l anyway.  tests/raster/test_exact.py checks a lit floor, an open quad seen from its lit
 side and a closed mesh under z-fail.
 """
 
