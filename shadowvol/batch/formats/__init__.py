@@ -64,18 +64,24 @@ class DatasetStore:
 
     def clean(self, specs: list[dict]) -> int:
         """Remove temporary files a killed run left for these frames' files and the index."""
-        folders: dict[Path, set[str]] = {}
+        mod = layout(self.format)
+        folders: dict[Path, set[str] | None] = {}
         for spec in specs:
             job = self.out / spec["job"]
-            for sub in layout(self.format).FOLDERS:
+            for sub in mod.FOLDERS:
                 folders.setdefault(job / sub, set()).add(common.frame_stem(spec))
-            folders.setdefault(job, set()).update(layout(self.format).INDEX)
+            for rel in mod.INDEX:
+                names = folders.setdefault((job / rel).parent, set())
+                if names is not None:
+                    names.add(Path(rel).name)
+            if spec["index"] == 0:
+                folders.update({job / sub: None for sub in getattr(mod, "FIRST", ())})
         return sum(_remove_parts(folder, stems) for folder, stems in folders.items())
 
 
-def _remove_parts(folder: Path, stems: set[str]) -> int:
+def _remove_parts(folder: Path, stems: set[str] | None) -> int:
     """Remove `.NAME.XXXXXXXX.part` files (`io.atomic_write`) whose NAME is in `stems` or
-    starts with one of them and a "." or "_"."""
+    starts with one of them and a "." or "_" (every one when `stems` is None)."""
     removed = 0
     try:
         entries = list(os.scandir(folder))
@@ -84,7 +90,8 @@ def _remove_parts(folder: Path, stems: set[str]) -> int:
     for entry in entries:
         if entry.name.startswith(".") and entry.name.endswith(".part"):
             target = entry.name[1:-len(".part")].rsplit(".", 1)[0]
-            if any(target == s or target.startswith((s + ".", s + "_")) for s in stems):
+            if stems is None or any(target == s or target.startswith((s + ".", s + "_"))
+                                    for s in stems):
                 try:
                     os.unlink(entry.path)
                     removed += 1
