@@ -76,3 +76,22 @@ def test_an_area_light_has_no_shadow_categories(tmp_path):
     shadow = {c["id"] // SHADOW_IDS - 1 for c in data["categories"]
               if c["supercategory"] == "shadow"}
     assert shadow == {1}
+
+
+def test_a_scene_over_the_casters_limit_has_objects_and_no_shadows(tmp_path):
+    from shadowvol.primitives import box, plane
+    from shadowvol.scene import Camera, PointLight, Scene
+
+    cubes = [box(f"cube {i}", center=(0.3 * (i % 13) - 1.8, 0.1, 0.3 * (i // 13) - 0.6),
+                 size=(0.2, 0.2, 0.2)) for i in range(65)]
+    scene = Scene(camera=Camera(eye=[0.0, 3.0, 4.0], target=[0.0, 0.0, 0.0]),
+                  objects=(plane("floor"), *cubes),
+                  lights=(PointLight(position=[0.0, 3.0, 0.0]),), width=32, height=24)
+    job = {"name": "cubes", "scene": scene, "cameras": [{"eye": [0.0, 3.0, 4.0],
+                                                         "target": [0.0, 0.0, 0.0]}]}
+    summary = batch.run([job], tmp_path / "coco", format="coco", progress=False)
+    assert summary.status == 0, summary.errors
+    data = json.loads((tmp_path / "coco" / "cubes" / "annotations.json").read_text())
+    assert data["info"]["shadow_lights"] == []
+    assert {c["supercategory"] for c in data["categories"]} == {"object"}
+    assert len({a["category_id"] for a in data["annotations"]}) > 30

@@ -27,23 +27,36 @@ BASE_OUTPUTS = ["image", "masks", "depth", "object_id"]
 def frame_arrays(worker, spec: dict, scene: Scene, camera, lights, *, casters: bool = False,
                  alone: bool = False) -> dict:
     """The worker's arrays of BASE_OUTPUTS, plus `casters` (K, H, W) uint64 of the hard lights
-    `casters_lights` (their indices; none when the renderer refuses them, e.g. too many
+    `casters_lights` (their indices; none when the renderer refuses casters for the scene's
     objects) and `alone` (n, H, W) bool: each object's coverage drawn without the others."""
-    arrays = worker._arrays(dict(spec, outputs=BASE_OUTPUTS), scene, camera, lights)
-    arrays["casters_lights"] = []
     hard = [i for i, light in enumerate(lights) if not isinstance(light, AreaLight)]
-    if casters and hard:
-        try:
-            got = worker._arrays(dict(spec, outputs=["casters"]), scene, camera,
-                                 tuple(lights[i] for i in hard))
-        except SceneError:
-            got = None  # the renderer's limit on casters: the layout notes the lights skipped
-        if got is not None:
-            arrays["casters"], arrays["casters_lights"] = got["casters"], hard
+    arrays = got = None
+    if casters and hard and len(hard) == len(lights):  # one render makes them all
+        got = arrays = _casters(worker, dict(spec, outputs=BASE_OUTPUTS + ["casters"]), scene,
+                                camera, lights)
+    if arrays is None:
+        arrays = worker._arrays(dict(spec, outputs=BASE_OUTPUTS), scene, camera, lights)
+        if casters and hard and len(hard) < len(lights):  # casters of the hard lights alone
+            got = _casters(worker, dict(spec, outputs=["casters"]), scene, camera,
+                           tuple(lights[i] for i in hard))
+    arrays["casters_lights"] = hard if got is not None else []
+    if got is not None:
+        arrays["casters"] = got["casters"]
     if alone:
         arrays["alone"] = np.stack([_alone(worker, spec, scene, camera, obj)
                                     for obj in scene.objects])
     return arrays
+
+
+def _casters(worker, spec: dict, scene: Scene, camera, lights) -> dict | None:
+    """The worker's arrays, or None when the renderer refuses `casters` for the number of
+    objects (its limit; the layout then notes that no light has them)."""
+    try:
+        return worker._arrays(spec, scene, camera, lights)
+    except SceneError as exc:
+        if exc.key != "objects":
+            raise
+        return None
 
 
 def _alone(worker, spec: dict, scene: Scene, camera, obj) -> np.ndarray:
