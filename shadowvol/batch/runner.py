@@ -130,7 +130,8 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     shard        : (I, N) or "I/N": make only this shard's share
     ray          : None (local), True (ray.init() with no address) or a cluster address
     egl_device   : None, "auto" or an EGL device index (`batch.egl`)
-    format       : "files" (OUT/<job>/<frame>.<suffix>) or "webdataset" (OUT/shard-*.tar)
+    format       : "files" (OUT/<job>/<frame>.<suffix>), "webdataset" (OUT/shard-*.tar), or a
+                   dataset layout, "nerfstudio", "bop" or "coco" (`batch.formats`)
     progress     : a tqdm bar on stderr; None: only when stderr is a terminal
     start_method : "spawn" or "forkserver" ("fork" is allowed, and fails clearly in a process
                    that has made a GL context)
