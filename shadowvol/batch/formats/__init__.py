@@ -5,7 +5,9 @@ A layout module has `frame(spec, arrays, scene) -> ({path: bytes}, record)`, the
 (paths relative to OUT) and the JSON its index entries are made from, kept in the frame's
 manifest line (`dataset`); and `index(job, entries) -> {path: bytes}`, the index files
 (transforms.json, scene_*.json, annotations.json) of a job from its (spec, record) pairs in
-frame order.  The index is rebuilt at the end of every run from every manifest in OUT, never
+frame order; and CASTERS, ALONE (what its frames need beside the image, masks, depth and ids:
+`arrays.frame_arrays`), FOLDERS, INDEX (where its files go, for cleaning up after a kill).
+The index is rebuilt at the end of every run from every manifest in OUT, never
 appended to, so a killed and resumed run, or N shards, end with the bytes of one run.
 """
 
@@ -16,7 +18,7 @@ import os
 from pathlib import Path
 
 from shadowvol.batch import manifest
-from shadowvol.batch.formats import common
+from shadowvol.batch.formats import arrays, encoding
 from shadowvol.io import write_bytes
 
 NAMES = ("nerfstudio", "bop", "coco")
@@ -37,9 +39,9 @@ def tag(specs: list[dict], format: str) -> list[dict]:
 def frame(worker, spec: dict, scene, camera, lights) -> tuple[dict[str, bytes], dict]:
     """A frame of `spec["format"]` rendered by `worker` (`batch.worker.Worker`)."""
     mod = layout(spec["format"])
-    arrays = common.frame_arrays(worker, spec, scene, camera, lights, casters=mod.CASTERS,
-                                 alone=mod.ALONE)
-    return mod.frame(spec, arrays, scene.replace(camera=camera, lights=lights))
+    made = arrays.frame_arrays(worker, spec, scene, camera, lights, casters=mod.CASTERS,
+                               alone=mod.ALONE)
+    return mod.frame(spec, made, scene.replace(camera=camera, lights=lights))
 
 
 class DatasetStore:
@@ -69,7 +71,7 @@ class DatasetStore:
         for spec in specs:
             job = self.out / spec["job"]
             for sub in mod.FOLDERS:
-                folders.setdefault(job / sub, set()).add(common.frame_stem(spec))
+                folders.setdefault(job / sub, set()).add(encoding.frame_stem(spec))
             for rel in mod.INDEX:
                 names = folders.setdefault((job / rel).parent, set())
                 if names is not None:

@@ -1,27 +1,17 @@
-"""`--format bop`: each job a BOP dataset (BOP-scenewise, bop_toolkit's docs/bop_datasets_format.md)
-of one scene, OUT/<job>/train/000000/, image id = frame index:
+"""`--format bop`: each job a BOP-scenewise dataset (bop_toolkit's docs/bop_datasets_format.md)
+of one scene, OUT/<job>/train/000000/ (scene_camera.json, scene_gt.json, scene_gt_info.json,
+rgb/, depth/, mask/, mask_visib/ and our shadow/), image id = frame index, with OUT/<job>/models/
+(PLY, mm, and models_info.json) and camera.json written with frame 0 (docs/formats.md).
 
-    scene_camera.json   cam_K (OpenCV: pixel centres on whole numbers), cam_R_w2c, cam_t_w2c (mm),
-                        depth_scale
-    scene_gt.json       per object: obj_id (its object_id), cam_R_m2c, cam_t_m2c (mm)
-    scene_gt_info.json  per object: bbox_obj, bbox_visib, px_count_all, px_count_valid,
-                        px_count_visib, visib_fract
-    rgb/IIIIII.png      the image, 8-bit sRGB
-    depth/IIIIII.png    16-bit, depth in mm = value * depth_scale, 0 = no depth
-    mask/IIIIII_GGGGGG.png        object GG's silhouette drawn alone (unoccluded), 8-bit
-    mask_visib/IIIIII_GGGGGG.png  where object GG is seen (object_id == obj_id), 8-bit
-    shadow/IIIIII_LLLLLL.png      ours: covered and not lit by light LL, 8-bit
-
-and OUT/<job>/models/obj_OOOOOO.ply (ASCII, mm) with models_info.json and camera.json, written
-with frame 0.  An object's model frame is world axes with its origin at the centre of the
-object's box, so cam_R_m2c is cam_R_w2c and cam_t_m2c = R_w2c c + t_w2c.
+An object's model frame is world axes with its origin at the centre of the object's box, so
+cam_R_m2c is cam_R_w2c and cam_t_m2c = R_w2c c + t_w2c; `mask` is the object drawn alone.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from shadowvol.batch.formats import common
+from shadowvol.batch.formats import encoding
 from shadowvol.io import encode_srgb, png_bytes
 
 CASTERS = False
@@ -40,32 +30,32 @@ def _centre(obj) -> np.ndarray:
 
 
 def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
-    stem, root = common.frame_stem(spec), f"{spec['job']}/{SCENE}"
+    stem, root = encoding.frame_stem(spec), f"{spec['job']}/{SCENE}"
     cam = arrays["camera"]
     K = np.array(cam["K"], np.float64)
     K[:2, 2] -= 0.5  # BOP projects with OpenCV's pixel centres
     R, t = cam["world_to_camera"][:3, :3], cam["world_to_camera"][:3, 3]
-    depth = common.depth_mm(arrays["depth"], DEPTH_SCALE)
+    depth = encoding.depth_mm(arrays["depth"], DEPTH_SCALE)
     files = {f"{root}/rgb/{stem}.png": png_bytes(encode_srgb(arrays["image"])),
-             f"{root}/depth/{stem}.png": common.png16(depth)}
+             f"{root}/depth/{stem}.png": encoding.png16(depth)}
     gt, info = [], []
     for k, obj in enumerate(scene.objects):
         full, visib = arrays["alone"][k], arrays["object_id"] == k + 1
-        files[f"{root}/mask/{stem}_{k:06d}.png"] = common.mask_png(full)
-        files[f"{root}/mask_visib/{stem}_{k:06d}.png"] = common.mask_png(visib)
+        files[f"{root}/mask/{stem}_{k:06d}.png"] = encoding.mask_png(full)
+        files[f"{root}/mask_visib/{stem}_{k:06d}.png"] = encoding.mask_png(visib)
         all_, seen = int(full.sum()), int(visib.sum())
         gt.append({"cam_R_m2c": R.reshape(-1).tolist(),
-                   "cam_t_m2c": ((R @ _centre(obj) + t) * common.MM_PER_UNIT).tolist(),
+                   "cam_t_m2c": ((R @ _centre(obj) + t) * encoding.MM_PER_UNIT).tolist(),
                    "obj_id": k + 1})
-        info.append({"bbox_obj": common.bbox(full), "bbox_visib": common.bbox(visib),
+        info.append({"bbox_obj": encoding.bbox(full), "bbox_visib": encoding.bbox(visib),
                      "px_count_all": all_, "px_count_valid": int((full & (depth > 0)).sum()),
                      "px_count_visib": seen, "visib_fract": seen / all_ if all_ else 0.0})
     for i, lit in enumerate(arrays["lit"]):
-        files[f"{root}/shadow/{stem}_{i:06d}.png"] = common.mask_png(arrays["coverage"] & ~lit)
+        files[f"{root}/shadow/{stem}_{i:06d}.png"] = encoding.mask_png(arrays["coverage"] & ~lit)
     if spec["index"] == 0:
         files.update(_models(spec["job"], scene, K))
     camera = {"cam_K": K.reshape(-1).tolist(), "cam_R_w2c": R.reshape(-1).tolist(),
-              "cam_t_w2c": (t * common.MM_PER_UNIT).tolist(), "depth_scale": DEPTH_SCALE}
+              "cam_t_w2c": (t * encoding.MM_PER_UNIT).tolist(), "depth_scale": DEPTH_SCALE}
     return files, {"camera": camera, "gt": gt, "gt_info": info}
 
 
@@ -93,7 +83,7 @@ def _models(job: str, scene, K: np.ndarray) -> dict[str, bytes]:
     """Each object's mesh in its model frame (mm), models_info.json and camera.json."""
     files, info = {}, {}
     for k, obj in enumerate(scene.objects):
-        v = (np.asarray(obj.vertices, np.float64) - _centre(obj)) * common.MM_PER_UNIT
+        v = (np.asarray(obj.vertices, np.float64) - _centre(obj)) * encoding.MM_PER_UNIT
         files[f"{job}/models/obj_{k + 1:06d}.ply"] = _ply(v, np.asarray(obj.faces))
         low, high = v.min(axis=0), v.max(axis=0)
         diameter = _diameter(v)
@@ -101,8 +91,8 @@ def _models(job: str, scene, K: np.ndarray) -> dict[str, bytes]:
                             "min_y": float(low[1]), "min_z": float(low[2]),
                             "size_x": float(high[0] - low[0]), "size_y": float(high[1] - low[1]),
                             "size_z": float(high[2] - low[2])}
-    files[f"{job}/models/models_info.json"] = common.json_bytes(info)
-    files[f"{job}/camera.json"] = common.json_bytes(
+    files[f"{job}/models/models_info.json"] = encoding.json_bytes(info)
+    files[f"{job}/camera.json"] = encoding.json_bytes(
         {"cx": float(K[0, 2]), "cy": float(K[1, 2]), "depth_scale": DEPTH_SCALE,
          "fx": float(K[0, 0]), "fy": float(K[1, 1]), "height": scene.height,
          "width": scene.width})
@@ -115,4 +105,4 @@ def index(job: str, entries: list[tuple[dict, dict]]) -> dict[str, bytes]:
     for spec, record in entries:
         for table, part in zip(tables, ("camera", "gt", "gt_info")):
             table[str(spec["index"])] = record[part]
-    return {f"{job}/{rel}": common.json_bytes(table) for rel, table in zip(INDEX, tables)}
+    return {f"{job}/{rel}": encoding.json_bytes(table) for rel, table in zip(INDEX, tables)}

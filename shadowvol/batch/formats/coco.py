@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shadowvol.batch.formats import common
+from shadowvol.batch.formats import encoding
 from shadowvol.io import encode_srgb, png_bytes
 
 CASTERS = True
@@ -26,12 +26,12 @@ SHADOW_IDS = 1 << 16   # above every object id (object_id is uint16)
 
 
 def _instance(category: int, mask: np.ndarray) -> dict:
-    return {"category_id": category, "segmentation": common.rle(mask),
-            "area": int(mask.sum()), "bbox": common.bbox(mask), "iscrowd": 0}
+    return {"category_id": category, "segmentation": encoding.rle(mask),
+            "area": int(mask.sum()), "bbox": encoding.bbox(mask), "iscrowd": 0}
 
 
 def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
-    stem, ids = common.frame_stem(spec), arrays["object_id"]
+    stem, ids = encoding.frame_stem(spec), arrays["object_id"]
     image = f"images/{stem}.png"
     files = {f"{spec['job']}/{image}": png_bytes(encode_srgb(arrays["image"]))}
     found = []
@@ -73,4 +73,4 @@ def index(job: str, entries: list[tuple[dict, dict]]) -> dict[str, bytes]:
     data = {"info": {"description": f"shadowvol batch job {job}",
                      "shadow_lights": first["shadow_lights"]},
             "images": images, "categories": _categories(first), "annotations": annotations}
-    return {f"{job}/annotations.json": common.json_bytes(data)}
+    return {f"{job}/annotations.json": encoding.json_bytes(data)}

@@ -14,7 +14,7 @@
 
 from __future__ import annotations
 
-from shadowvol.batch.formats import common
+from shadowvol.batch.formats import encoding
 from shadowvol.io import encode_srgb, png_bytes
 
 CASTERS = False
@@ -25,19 +25,19 @@ INTRINSICS = ("fl_x", "fl_y", "cx", "cy", "w", "h")
 
 
 def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
-    stem, job = common.frame_stem(spec), spec["job"]
+    stem, job = encoding.frame_stem(spec), spec["job"]
     cam = arrays["camera"]
     K = cam["K"]
     paths = {"file_path": f"images/{stem}.png", "depth_file_path": f"depth/{stem}.png",
              "mask_path": f"masks/{stem}.png", "object_id_path": f"object_id/{stem}.png"}
     files = {paths["file_path"]: png_bytes(encode_srgb(arrays["image"])),
-             paths["depth_file_path"]: common.png16(common.depth_mm(arrays["depth"])),
-             paths["mask_path"]: common.mask_png(arrays["coverage"]),
-             paths["object_id_path"]: common.png16(arrays["object_id"])}
+             paths["depth_file_path"]: encoding.png16(encoding.depth_mm(arrays["depth"])),
+             paths["mask_path"]: encoding.mask_png(arrays["coverage"]),
+             paths["object_id_path"]: encoding.png16(arrays["object_id"])}
     lit_paths = []
     for i, lit in enumerate(arrays["lit"]):
         lit_paths.append(f"shadow/{stem}_{i:02d}.png")
-        files[lit_paths[-1]] = common.mask_png(lit)
+        files[lit_paths[-1]] = encoding.mask_png(lit)
     record = {**paths, "lit_paths": lit_paths,
               "transform_matrix": cam["camera_to_world"].tolist(),
               "fl_x": float(K[0, 0]), "fl_y": float(K[1, 1]), "cx": float(K[0, 2]),
@@ -59,5 +59,5 @@ def index(job: str, entries: list[tuple[dict, dict]]) -> dict[str, bytes]:
                        "object_id_path": record["object_id_path"],
                        "lit_paths": record["lit_paths"], **own})
     transforms = {"camera_model": "OPENCV", **top, "k1": 0.0, "k2": 0.0, "p1": 0.0, "p2": 0.0,
-                  "depth_unit_scale_factor": 1.0 / common.MM_PER_UNIT, "frames": frames}
-    return {f"{job}/transforms.json": common.json_bytes(transforms)}
+                  "depth_unit_scale_factor": 1.0 / encoding.MM_PER_UNIT, "frames": frames}
+    return {f"{job}/transforms.json": encoding.json_bytes(transforms)}
