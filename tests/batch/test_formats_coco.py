@@ -12,10 +12,10 @@ from builders import SCENES, job_lines, write_jobs
 
 from shadowvol import batch
 from shadowvol.batch.formats.coco import SHADOW_IDS
+from shadowvol.batch.formats.encoding import rle
 
 # pycocotools' own decode warns under numpy 2 (its __array__ has no copy keyword)
-pytestmark = [pytest.mark.gl,
-              pytest.mark.filterwarnings("ignore:__array__ implementation:DeprecationWarning")]
+pytestmark = pytest.mark.filterwarnings("ignore:__array__ implementation:DeprecationWarning")
 
 coco_api = pytest.importorskip("pycocotools.coco", reason="pip install 'shadowvol[coco]'")
 mask_api = pytest.importorskip("pycocotools.mask", reason="pip install 'shadowvol[coco]'")
@@ -35,6 +35,19 @@ def made(tmp_path_factory):
     return _made(tmp_path_factory.mktemp("coco"), job_lines(frames=2, size=(64, 48)))
 
 
+def test_rle_is_pycocotools_encoding():
+    rng = np.random.default_rng(28)
+    masks = [np.zeros((1, 1), bool), np.ones((1, 1), bool), np.ones((5, 7), bool),
+             np.zeros((4, 3), bool)]
+    masks += [rng.random(tuple(rng.integers(1, 60, 2))) < rng.random() for _ in range(300)]
+    for mask in masks:
+        want = mask_api.encode(np.asfortranarray(mask.astype(np.uint8)))
+        got = rle(mask)
+        assert (got["counts"], got["size"]) == (want["counts"].decode(), want["size"])
+        assert np.array_equal(mask_api.decode(got), mask)
+
+
+@pytest.mark.gl
 @pytest.mark.parametrize("job, lights", [("cage-turntable", 1), ("cage-traced", 2)])
 def test_annotations_are_the_object_id_and_casters_outputs(made, job, lights):
     coco_out, files = made
@@ -63,6 +76,7 @@ def test_annotations_are_the_object_id_and_casters_outputs(made, job, lights):
             assert list(mask_api.toBbox(ann["segmentation"])) == ann["bbox"]
 
 
+@pytest.mark.gl
 def test_an_area_light_has_no_shadow_categories(tmp_path):
     area = {"type": "rect", "center": [0.0, 2.5, 0.0],
             "normal": [0.0, -1.0, 0.0], "size": [0.4, 0.4], "samples": 4}
@@ -78,6 +92,7 @@ def test_an_area_light_has_no_shadow_categories(tmp_path):
     assert shadow == {1}
 
 
+@pytest.mark.gl
 def test_a_scene_over_the_casters_limit_has_objects_and_no_shadows(tmp_path):
     from shadowvol.primitives import box, plane
     from shadowvol.scene import Camera, PointLight, Scene
