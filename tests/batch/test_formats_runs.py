@@ -4,6 +4,7 @@ uninterrupted run, index files included."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -112,3 +113,20 @@ def test_a_frame_of_one_layout_is_not_taken_for_another_s(jobs, tmp_path):
     assert batch.run(jobs, out, format="coco", progress=False).rendered == ALL
     again = batch.run(jobs, out, format="nerfstudio", progress=False)  # another spec hash
     assert (again.status, again.rendered) == (0, ALL)
+
+
+@pytest.mark.parametrize("format", NAMES)
+def test_a_failed_frame_is_left_out_of_the_index(tmp_path, format):
+    lines = job_lines(frames=2, size=(32, 24), raytrace=False)
+    lines.append({"name": "lost", "scene": str(tmp_path / "no-such-scene.toml"),
+                  "cameras": [{"eye": [4.2, 3.4, 5.2], "target": [-0.6, 1.0, -0.8]}]})
+    jobs = write_jobs(tmp_path / "jobs.jsonl", lines)
+    summary = batch.run(jobs, tmp_path / "out", format=format, progress=False)
+    assert (summary.status, summary.rendered, summary.failed) == (2, 2, 1)
+    index = {"nerfstudio": "transforms.json", "bop": "train/000000/scene_gt.json",
+             "coco": "annotations.json"}[format]
+    made = json.loads((tmp_path / "out" / "cage-turntable" / index).read_text())
+    lost = json.loads((tmp_path / "out" / "lost" / index).read_text())
+    count = {"nerfstudio": lambda d: len(d["frames"]), "bop": len,
+             "coco": lambda d: len(d["images"])}[format]
+    assert (count(made), count(lost)) == (2, 0)
