@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from shadowvol import memory
-from shadowvol.batch import egl, frames, local, manifest
+from shadowvol.batch import egl, formats, frames, local, manifest
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.store import FORMATS, FileStore, TarStore
 from shadowvol.errors import BAD_INPUT, OK, require
@@ -129,7 +129,8 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     shard        : (I, N) or "I/N": make only this shard's share
     ray          : None (local), True (ray.init() with no address) or a cluster address
     egl_device   : None, "auto" or an EGL device index (`batch.egl`)
-    format       : "files" (OUT/<job>/<frame>.<suffix>) or "webdataset" (OUT/shard-*.tar)
+    format       : "files" (OUT/<job>/<frame>.<suffix>), "webdataset" (OUT/shard-*.tar), or a
+                   dataset layout, "nerfstudio", "bop" or "coco" (`batch.formats`)
     progress     : a tqdm bar on stderr; None: only when stderr is a terminal
     start_method : "spawn" or "forkserver" ("fork" is allowed, and fails clearly in a process
                    that has made a GL context)
@@ -148,12 +149,13 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         raise SceneError("-o", f"{str(out)!r} is not a folder")
     out.mkdir(parents=True, exist_ok=True)
     entries = _jobs(jobs)
-    plan = _Plan(entries, 1 if format == "files" else samples_per_tar, shard)
+    plan = _Plan(entries, 1 if format != "webdataset" else samples_per_tar, shard, format)
     own = manifest.manifest_name(shard)
-    store = FileStore(out) if format == "files" else TarStore(out)
+    store = TarStore(out) if format == "webdataset" else \
+        FileStore(out) if format == "files" else formats.DatasetStore(out, format)
     kept, todo = _already_made(plan, manifest.read(out, own), store, format)
     # temporary files a killed run left, for any file of this share (made or not)
-    if format == "files":
+    if format != "webdataset":
         store.clean([s for u in plan.mine for s in plan.units[u]])
     else:
         store.clean(list(plan.mine))
@@ -176,6 +178,8 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         ordered += [done[s["id"]] for u in mine for s in units[u] if s["id"] in done]
         ordered += [done[TarStore.tar_id(u)] for u in mine if TarStore.tar_id(u) in done]
         journal.finish(ordered)
+        if format in formats.NAMES:  # the index files, from every manifest in OUT
+            formats.write_index(out, format, plan.specs, hashes)
     finally:
         journal.close()
     summary.seconds = time.perf_counter() - began
@@ -223,7 +227,7 @@ def _make(plan, todo, results, journal, done, summary, store, format, bar) -> No
     waiting = {u: {} for u in todo}  # webdataset: unit -> id -> result, until complete
     for result in results:
         spec = by_id[result["id"]]
-        if format == "files":
+        if format != "webdataset":
             _record(journal, done, summary, spec, result, hashes, store)
         else:
             u = unit_of[spec["id"]]
@@ -247,7 +251,7 @@ class _Plan:
     """Every frame of the job file in order (`specs`), their spec hashes, the scenes they need
     (key -> path or Scene), the units (a frame, or a tar's frames) and this shard's share."""
 
-    def __init__(self, entries, per_unit: int, shard: tuple[int, int]):
+    def __init__(self, entries, per_unit: int, shard: tuple[int, int], format: str = "files"):
         self.scenes: dict[str, str | Scene] = {}
         digests: dict[str, str] = {}
         self.specs: list[dict] = []
@@ -256,7 +260,7 @@ class _Plan:
                 key = job.scene if isinstance(job.scene, str) else f"<Scene {id(job.scene)}>"
                 if key not in self.scenes:
                     self.scenes[key], digests[key] = job.scene, scene_digest(job.scene)
-                self.specs.extend(frames.specs(job, key))
+                self.specs.extend(formats.tag(frames.specs(job, key), format))
         self.hashes = {s["id"]: frames.spec_hash(s, digests[s["scene"]]) for s in self.specs}
         self.units = [self.specs[i:i + per_unit] for i in range(0, len(self.specs), per_unit)]
         self.mine = share(len(self.units), shard)
@@ -277,7 +281,7 @@ def _already_made(plan: _Plan, old: dict[str, dict], store, format: str
     todo: list[int] = []
     for u in plan.mine:
         records = [made(spec) for spec in plan.units[u]]
-        if format == "files":
+        if format != "webdataset":
             fine = records[0] is not None and store.verify(plan.units[u][0], records[0])
         else:
             tar = old.get(TarStore.tar_id(u))
@@ -305,14 +309,15 @@ def _record(journal, done, summary, spec, result, hashes, store, files=None) -> 
         if store is not None:
             files = store.write(spec, result["outputs"])
         seconds = dict(result["seconds"], write=round(time.perf_counter() - start, 6))
-        record = {**base, "format": "files" if store is not None else "webdataset",
+        record = {**base, "format": getattr(store, "format", "files") if store else "webdataset",
                   "files": files, "camera": result["camera"], "lights": result["lights"],
                   "size": result["size"], "seed": spec["seed"],
                   **({"method": spec["method"]} if spec["renderer"] == "shadowvol" else
                      {"max_depth": spec["max_depth"]}),
                   "versions": result["versions"], "device": result["device"],
                   "worker": result["worker"],
-                  "seconds": seconds}
+                  "seconds": seconds, **({"dataset": result["dataset"]} if "dataset" in result
+                                         else {})}
         summary.rendered += 1
     journal.add(record)
     done[spec["id"]] = record

@@ -13,11 +13,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from shadowvol.batch import manifest
+from shadowvol.batch import formats, manifest
 from shadowvol.batch.outputs import OUTPUTS
 from shadowvol.io import tar_bytes, write_bytes
 
-FORMATS = ("files", "webdataset")
+FORMATS = ("files", "webdataset", *formats.NAMES)  # the layouts: batch.formats
 
 
 def member_name(frame_id: str, output: str) -> str:

@@ -23,7 +23,7 @@ from importlib import metadata
 import numpy as np
 
 from shadowvol import __version__, memory, signals
-from shadowvol.batch import egl, frames
+from shadowvol.batch import egl, formats, frames
 from shadowvol.batch.outputs import OUTPUTS, fields_of
 from shadowvol.cameras import calibration
 from shadowvol.errors import RENDER_FAILED, message, status_of
@@ -153,9 +153,14 @@ class Worker:
         try:
             scene, camera, lights = self._frame_scene(spec)
             loaded = time.perf_counter()
-            arrays = self._arrays(spec, scene, camera, lights)
+            dataset = None
+            if "format" in spec:  # a dataset layout's files and index record (batch.formats)
+                encoded, dataset = formats.frame(self, spec, scene, camera, lights)
+            else:
+                arrays = self._arrays(spec, scene, camera, lights)
             rendered = time.perf_counter()
-            encoded = {name: OUTPUTS[name].encode(arrays) for name in spec["outputs"]}
+            if dataset is None:
+                encoded = {name: OUTPUTS[name].encode(arrays) for name in spec["outputs"]}
             done = time.perf_counter()
         except (KeyboardInterrupt, signals.Terminated):
             raise
@@ -170,7 +175,8 @@ class Worker:
                             "render": round(rendered - loaded, 6),
                             "encode": round(done - rendered, 6)},
                 "versions": self.versions(spec["renderer"]), "device": self.device,
-                "worker": f"{self.label} (pid {os.getpid()})"}
+                "worker": f"{self.label} (pid {os.getpid()})",
+                **({"dataset": dataset} if dataset is not None else {})}
 
     def _frame_scene(self, spec: dict):
         scene = self.scene(spec["scene"])

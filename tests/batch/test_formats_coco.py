@@ -1,0 +1,112 @@
+"""`--format coco` decoded with pycocotools, pixel for pixel against the `object_id` and
+`casters` outputs of the same frames; lights without casters (an area light) have no shadow
+categories."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from builders import SCENES, job_lines, write_jobs
+
+from shadowvol import batch
+from shadowvol.batch.formats.coco import SHADOW_IDS
+from shadowvol.batch.formats.encoding import rle
+
+# pycocotools' own decode warns under numpy 2 (its __array__ has no copy keyword)
+pytestmark = pytest.mark.filterwarnings("ignore:__array__ implementation:DeprecationWarning")
+
+coco_api = pytest.importorskip("pycocotools.coco", reason="pip install 'shadowvol[coco]'")
+mask_api = pytest.importorskip("pycocotools.mask", reason="pip install 'shadowvol[coco]'")
+
+
+def _made(folder, lines):
+    jobs = write_jobs(folder / "jobs.jsonl", lines)
+    assert batch.run(jobs, folder / "coco", format="coco", progress=False).status == 0
+    truth = write_jobs(folder / "truth.jsonl",
+                       [dict(job, outputs=["object_id", "casters"]) for job in lines])
+    assert batch.run(truth, folder / "files", progress=False).status == 0
+    return folder / "coco", folder / "files"
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    return _made(tmp_path_factory.mktemp("coco"), job_lines(frames=2, size=(64, 48)))
+
+
+def test_rle_is_pycocotools_encoding():
+    rng = np.random.default_rng(28)
+    masks = [np.zeros((1, 1), bool), np.ones((1, 1), bool), np.ones((5, 7), bool),
+             np.zeros((4, 3), bool)]
+    masks += [rng.random(tuple(rng.integers(1, 60, 2))) < rng.random() for _ in range(300)]
+    for mask in masks:
+        want = mask_api.encode(np.asfortranarray(mask.astype(np.uint8)))
+        got = rle(mask)
+        assert (got["counts"], got["size"]) == (want["counts"].decode(), want["size"])
+        assert np.array_equal(mask_api.decode(got), mask)
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("job, lights", [("cage-turntable", 1), ("cage-traced", 2)])
+def test_annotations_are_the_object_id_and_casters_outputs(made, job, lights):
+    coco_out, files = made
+    coco = coco_api.COCO(str(coco_out / job / "annotations.json"))
+    names = [c["name"] for c in coco.loadCats(coco.getCatIds()) if c["supercategory"] == "object"]
+    assert names == ["floor", "back wall", "left wall", "cage"]
+    shadow_cats = {c["id"] for c in coco.cats.values() if c["supercategory"] == "shadow"}
+    assert shadow_cats == {SHADOW_IDS * (i + 1) + k for i in range(lights) for k in range(1, 5)}
+    assert sorted(coco.getImgIds()) == [0, 1]
+    for im in coco.getImgIds():
+        ids = np.load(files / job / f"{im:06d}.object_id.npy")
+        casters = np.load(files / job / f"{im:06d}.casters.npy")
+        want = {k: ids == k for k in range(1, 5) if (ids == k).any()}
+        for i in range(lights):
+            for k in range(1, 5):
+                bit = (casters[i] >> np.uint64(k - 1)) & np.uint64(1) != 0
+                if bit.any():
+                    want[SHADOW_IDS * (i + 1) + k] = bit
+        anns = coco.loadAnns(coco.getAnnIds(imgIds=[im]))
+        assert sorted(a["category_id"] for a in anns) == sorted(want)
+        for ann in anns:
+            decoded = mask_api.decode(ann["segmentation"]).astype(bool)   # column-major RLE
+            assert np.array_equal(decoded, want[ann["category_id"]]), ann["category_id"]
+            assert np.array_equal(coco.annToMask(ann).astype(bool), decoded)
+            assert ann["area"] == decoded.sum()
+            assert list(mask_api.toBbox(ann["segmentation"])) == ann["bbox"]
+
+
+@pytest.mark.gl
+def test_an_area_light_has_no_shadow_categories(tmp_path):
+    area = {"type": "rect", "center": [0.0, 2.5, 0.0],
+            "normal": [0.0, -1.0, 0.0], "size": [0.4, 0.4], "samples": 4}
+    lines = [{"name": "lamp", "scene": str(SCENES / "cage.toml"), "size": [32, 24],
+              "lights": [area, {"type": "point", "position": [0.0, 1.4, 0.0]}],
+              "cameras": [{"eye": [4.2, 3.4, 5.2], "target": [-0.6, 1.0, -0.8]}]}]
+    jobs = write_jobs(tmp_path / "jobs.jsonl", lines)
+    assert batch.run(jobs, tmp_path / "coco", format="coco", progress=False).status == 0
+    data = json.loads((tmp_path / "coco" / "lamp" / "annotations.json").read_text())
+    assert data["info"]["shadow_lights"] == [1]   # the point light only
+    shadow = {c["id"] // SHADOW_IDS - 1 for c in data["categories"]
+              if c["supercategory"] == "shadow"}
+    assert shadow == {1}
+
+
+@pytest.mark.gl
+def test_a_scene_over_the_casters_limit_has_objects_and_no_shadows(tmp_path):
+    from shadowvol.primitives import box, plane
+    from shadowvol.scene import Camera, PointLight, Scene
+
+    cubes = [box(f"cube {i}", center=(0.3 * (i % 13) - 1.8, 0.1, 0.3 * (i // 13) - 0.6),
+                 size=(0.2, 0.2, 0.2)) for i in range(65)]
+    scene = Scene(camera=Camera(eye=[0.0, 3.0, 4.0], target=[0.0, 0.0, 0.0]),
+                  objects=(plane("floor"), *cubes),
+                  lights=(PointLight(position=[0.0, 3.0, 0.0]),), width=32, height=24)
+    job = {"name": "cubes", "scene": scene, "cameras": [{"eye": [0.0, 3.0, 4.0],
+                                                         "target": [0.0, 0.0, 0.0]}]}
+    summary = batch.run([job], tmp_path / "coco", format="coco", progress=False)
+    assert summary.status == 0, summary.errors
+    data = json.loads((tmp_path / "coco" / "cubes" / "annotations.json").read_text())
+    assert data["info"]["shadow_lights"] == []
+    assert {c["supercategory"] for c in data["categories"]} == {"object"}
+    assert len({a["category_id"] for a in data["annotations"]}) > 30
