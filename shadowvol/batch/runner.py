@@ -179,7 +179,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         ordered += [done[TarStore.tar_id(u)] for u in mine if TarStore.tar_id(u) in done]
         journal.finish(ordered)
         if format in formats.NAMES:  # the index files, from every manifest in OUT
-            formats.write_index(out, format, plan.specs, hashes)
+            formats.write_index(out, format, plan.specs, plan.hashes)
     finally:
         journal.close()
     summary.seconds = time.perf_counter() - began

@@ -12,7 +12,7 @@ from builders import SCENES
 from PIL import Image
 
 import raytrace
-from raytrace import cli
+from shadowvol.cli import raytrace as cli
 from raytrace.raytree import (
     BLOCKED,
     FACES_AWAY,

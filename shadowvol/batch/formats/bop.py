@@ -1,4 +1,4 @@
-"""`--format bop`: each job a BOP-scenewise dataset (bop_toolkit's docs/bop_datasets_format.md)
+"""`--format bop`: each job a BOP-scenewise dataset (bop_toolkit: bop_datasets_format.md)
 of one scene, OUT/<job>/train/000000/ (scene_camera.json, scene_gt.json, scene_gt_info.json,
 rgb/, depth/, mask/, mask_visib/ and our shadow/), image id = frame index, with OUT/<job>/models/
 (PLY, mm, and models_info.json) and camera.json written with frame 0 (docs/formats.md).
