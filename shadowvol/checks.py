@@ -87,7 +87,11 @@ def vec(value, key: str, n: int = 3, *, positive: bool = False) -> np.ndarray:
     numbers: no strings, no booleans), or a SceneError naming `key`."""
     if not _numbers(value):
         raise SceneError(key, f"expected {n} numbers, got {shorten(value)}")
-    arr = np.array(value, dtype=np.float64)
+    try:
+        arr = np.array(value, dtype=np.float64)
+    except OverflowError:   # an integer past float64 (1e400)
+        raise SceneError(key, f"{shorten(value)} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})") from None
     if arr.shape != (n,):
         raise SceneError(key, f"expected {n} numbers, got {shorten(value)}")
     if not np.all(np.isfinite(arr)):
@@ -109,11 +113,15 @@ def num(value, key: str, *, low: float | None = None, high: float | None = None,
     """A finite float from `value` within [low, high] (low excluded if `low_open`)."""
     if not is_number(value):
         raise SceneError(key, f"expected a number, got {shorten(value)}")
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:   # an integer past float64 (1e400)
+        raise SceneError(key, f"{shorten(value)} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})") from None
     if not math.isfinite(x):
         raise SceneError(key, f"non-finite number {value!r}")
     if abs(x) > MAX_MAGNITUDE:
-        raise SceneError(key, f"{value!r} is beyond the float32 range the renderers use "
+        raise SceneError(key, f"{shorten(value)} is beyond the float32 range the renderers use "
                               f"(|x| <= {MAX_MAGNITUDE:g})")
     if low is not None and (x <= low if low_open else x < low):
         raise SceneError(key, f"must be {'>' if low_open else '>='} {low}, got {value!r}")

@@ -27,6 +27,7 @@ from shadowvol.scene import (
     Scene,
     SceneError,
     SpotLight,
+    is_number,
     reject_unknown_keys,
     shorten,
 )
@@ -192,9 +193,25 @@ def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene
 
 # ---------------------------------------------------------------------------------------------
 
+def given(value) -> str:
+    """What a scene file gave, in the file's own terms (a table, a list, the string 'x', ...),
+    never a Python class name."""
+    if isinstance(value, dict):
+        return "a table"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, str):
+        return f"the string {shorten(value)}"
+    if is_number(value):
+        return f"the number {shorten(value)}"
+    return shorten(value)
+
+
 def _table(value, key: str, allowed: set[str] | None) -> dict:
     if not isinstance(value, dict):
-        raise SceneError(key or "(top level)", f"expected a table, got {type(value).__name__}")
+        raise SceneError(key or "(top level)", f"expected a table, got {given(value)}")
     if allowed is not None:
         reject_unknown_keys(value, allowed, key)
     return value
@@ -202,7 +219,7 @@ def _table(value, key: str, allowed: set[str] | None) -> dict:
 
 def _list(value, key: str) -> list:
     if not isinstance(value, list):
-        raise SceneError(key, f"expected a list, got {type(value).__name__}")
+        raise SceneError(key, f"expected a list, got {given(value)}")
     return value
 
 
@@ -309,12 +326,32 @@ def _inline_mesh(table: dict, key: str) -> tuple[np.ndarray, np.ndarray]:
     bad = _first_not_triple(vertices, _REALS, "iuf")
     if bad is not None:
         raise SceneError(f"{key}.vertices{bad[0]}", f"expected [x, y, z] numbers, got {bad[1]}")
-    v = np.array(vertices, dtype=np.float64).reshape(-1, 3)
+    v = _array(vertices, np.float64, f"{key}.vertices", "a coordinate of at most 1.8e308")
     bad = _first_not_triple(faces, _WHOLES, "iu")
     if bad is not None:
         raise SceneError(f"{key}.faces{bad[0]}", f"expected [i, j, k] whole numbers, got {bad[1]}")
-    f = np.array(faces, dtype=np.int64).reshape(-1, 3)
+    f = _array(faces, np.int64, f"{key}.faces", f"an index in 0..{len(v) - 1}")
     return v, f
+
+
+def _array(rows, dtype, key: str, wanted: str) -> np.ndarray:
+    """(n, 3) array of checked triples; a number past `dtype` (an index of 2**63, a coordinate
+    of 1e400) is a SceneError naming it instead of numpy's OverflowError."""
+    try:
+        return np.array(rows, dtype=dtype).reshape(-1, 3)
+    except OverflowError:
+        i, j = next((i, j) for i, row in enumerate(rows) for j, x in enumerate(row)
+                    if not _fits(x, dtype))
+        raise SceneError(f"{key}[{i}][{j}]", f"expected {wanted}, got "
+                                             f"{shorten(rows[i][j])}") from None
+
+
+def _fits(x, dtype) -> bool:
+    try:
+        np.array([x], dtype=dtype)
+        return True
+    except OverflowError:
+        return False
 
 
 # The exact types a number may have in parsed data (JSON and TOML give int and float; code

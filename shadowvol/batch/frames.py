@@ -28,15 +28,22 @@ def frame_id(job: str, index: int) -> str:
     return f"{job}/{index:06d}"
 
 
+def _finite(x) -> bool:
+    """A real number that is finite as a float64 (an integer of 1e400 is not)."""
+    try:
+        return is_number(x) and math.isfinite(x)
+    except OverflowError:
+        return False
+
+
 def _vector(value, key: str) -> list[float]:
-    if not (isinstance(value, list) and len(value) == 3 and all(is_number(x) for x in value)
-            and all(math.isfinite(x) for x in value)):
+    if not (isinstance(value, list) and len(value) == 3 and all(_finite(x) for x in value)):
         raise SceneError(key, f"expected 3 finite numbers, got {shorten(value)}")
     return [float(x) for x in value]
 
 
 def _number(value, key: str, low: float | None = None) -> float:
-    if not is_number(value) or not math.isfinite(value) or (low is not None and value < low):
+    if not _finite(value) or (low is not None and value < low):
         raise SceneError(key, f"expected a finite number{'' if low is None else f' >= {low}'}, "
                               f"got {shorten(value)}")
     return float(value)
