@@ -188,7 +188,7 @@ def test_ctrl_c_during_a_render_command_leaves_no_file(tmp_path, monkeypatch, ca
     real = shadowvol.io.atomic_write
     calls = []
 
-    def interrupt_second(path):  # the image is written, Ctrl-C while writing the masks
+    def interrupt_second(path, *args):  # the image is written, Ctrl-C while writing the masks
         calls.append(path)
         if len(calls) == 2:
             def gen():
@@ -198,7 +198,7 @@ def test_ctrl_c_during_a_render_command_leaves_no_file(tmp_path, monkeypatch, ca
                     yield f  # pragma: no cover
             import contextlib
             return contextlib.contextmanager(gen)()
-        return real(path)
+        return real(path, *args)
 
     save_scene(small_scene(), tmp_path / "s.json")
     monkeypatch.setattr(shadowvol.io, "atomic_write", interrupt_second)
