@@ -69,8 +69,8 @@ class CpuVolumes:
     casters never move, so a light that comes back (every sample of an area light in every
     frame, a light in the next camera of a turntable) reuses its side quads and cap lists as
     they were uploaded.  Kept: every light of this frame and the last (`new_frame()` starts a
-    frame) and the most recent others within `KEPT_OLDER_BYTES` (what a moving light leaves
-    behind), all within `KEPT_BYTES` of signs, side corners, side-quad and cap buffers.  Over
+    frame) and the most recent others within `KEPT_OLDER_BYTES` and `KEPT_OLDER_LIGHTS` (what a
+    moving light leaves behind), all within `KEPT_BYTES` of signs, side corners, side-quad and cap buffers.  Over
     the bytes the least recently used go first, but never one this frame has used: a frame
     whose lights need more (many samples of a large scene) keeps those it prepared first and
     rebuilds only the others in every frame, where plain LRU over a cycle longer than the
@@ -86,6 +86,10 @@ class CpuVolumes:
     # sets, as the soft-shadow benchmark's interleaved variants are)
     KEPT_BYTES = 256 << 20
     KEPT_OLDER_BYTES = 80 << 20
+    # and at most this many older lights, whatever their bytes: each also holds GL objects
+    # (a buffer, its vertex arrays) that the bytes above do not count, so on a small scene a
+    # moving light left ~4,000 of them, 120 MB (the rotations above need ~100)
+    KEPT_OLDER_LIGHTS = 256
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
@@ -165,15 +169,15 @@ class CpuVolumes:
         sparing this frame's; if they alone do not fit, the current one is not kept (it is
         released at the next `prepare`).  Before that, of the lights used in neither this
         frame nor the last, the least recently used go until the rest fit in
-        KEPT_OLDER_BYTES."""
+        KEPT_OLDER_BYTES and number at most KEPT_OLDER_LIGHTS."""
         older = [k for k, v in self._kept.items()
                  if v.frame < self._frame - 1 and v is not self._current]
-        total = sum(self._kept[k].nbytes for k in older)
+        total, left = sum(self._kept[k].nbytes for k in older), len(older)
         for key in older:   # oldest first
-            if total <= self.KEPT_OLDER_BYTES:
+            if total <= self.KEPT_OLDER_BYTES and left <= self.KEPT_OLDER_LIGHTS:
                 break
             old = self._kept.pop(key)
-            total -= old.nbytes
+            total, left = total - old.nbytes, left - 1
             old.release()
         total = sum(v.nbytes for v in self._kept.values())
         for key in list(self._kept):   # oldest first; this frame's come last

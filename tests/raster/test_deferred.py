@@ -197,6 +197,23 @@ def test_a_moving_light_leaves_little_behind(ctx):
         assert list(vols._kept) == [lights[-1].tobytes(), lights[0].tobytes()]
 
 
+def test_a_moving_light_keeps_at_most_so_many_older_volumes(ctx):
+    """However few bytes each holds (a small scene), the older lights kept number at most
+    KEPT_OLDER_LIGHTS: a long run of moving lights stays bounded (each also holds GL objects)."""
+    scene = mixed_scene(0, lights=1)
+    with Renderer(scene, ctx) as r:
+        vols = r.volumes("cpu")
+        vols.KEPT_OLDER_LIGHTS = 5
+        for k in range(40):
+            vols.new_frame()
+            for j in range(3):       # three lights a frame, all moving
+                vols.prepare(np.array([0.1 * k, 7.0 + j, 1.0, 1.0]))
+        assert len(vols._kept) == 5 + 2 * 3          # five older, this frame's and the last's
+        newest = [np.array([0.1 * k, 7.0 + j, 1.0, 1.0]).tobytes()
+                  for k in (37, 38, 39) for j in range(3)]
+        assert list(vols._kept)[-8:] == newest[-8:]  # the most recent kept, in order of use
+
+
 def test_a_frame_over_the_budget_keeps_its_first_lights(ctx, monkeypatch):
     scene = mixed_scene(0, lights=1)
     lights = [np.array([0.5 * k, 7.0, 1.0, 1.0]) for k in range(5)]
