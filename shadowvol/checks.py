@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from shadowvol.errors import short_path
+
 # The float32 range the renderers use: every number of a scene has |x| <= MAX_MAGNITUDE, and
 # every length that must be positive (near, radius, sizes, scale) is >= MIN_POSITIVE, so that
 # x, 1/x, x*x and sums of a few squares are all normal float32 numbers (float32 ends at 3.4e38
@@ -46,7 +48,7 @@ class SceneError(ValueError):
     def __init__(self, key: str, problem: str, file: str | None = None):
         # one line, whatever the input: keys and values from a file may hold line breaks
         key, problem = _one_line(key, MAX_QUOTE), _one_line(problem, MAX_MESSAGE)
-        file = None if file is None else _one_line(file, MAX_MESSAGE)
+        file = None if file is None else _one_line(short_path(file), MAX_MESSAGE)
         self.key, self.problem, self.file = key, problem, file
         parts = [part for part in (file, key) if part]
         super().__init__(": ".join(parts + [problem]))

@@ -92,6 +92,26 @@ def status_of(exc: BaseException) -> int | None:
     return None
 
 
+# A path in a message is cut to this many characters, keeping its start and its file name.
+MAX_PATH_SHOWN = 120
+
+
+def short_path(path) -> str:
+    """`path` as a message shows it: whole up to MAX_PATH_SHOWN characters, else its start,
+    "…" and its last name (itself cut in the middle when it is that long), so that a 5,000
+    character path still names its file."""
+    text = str(path)
+    if len(text) <= MAX_PATH_SHOWN:
+        return text
+    head, sep, name = text.rpartition("/")
+    if len(name) > MAX_PATH_SHOWN // 2:
+        name = f"{name[:MAX_PATH_SHOWN // 4]}…{name[-MAX_PATH_SHOWN // 4:]}"
+    if not sep:
+        return name
+    kept = head[:max(8, MAX_PATH_SHOWN - len(name) - 2)]
+    return f"{kept}{'…' if len(kept) < len(head) else ''}/{name}"
+
+
 def message(exc: BaseException) -> str:
     """The one line an exception is reported as (after `error: `)."""
     if isinstance(exc, MemoryError):
@@ -103,4 +123,7 @@ def message(exc: BaseException) -> str:
         return "interrupted"
     if isinstance(exc, signals.Terminated):
         return "terminated"
+    if isinstance(exc, OSError) and exc.filename is not None and exc.strerror and \
+            str(exc).startswith("["):   # the OS's own "[Errno 36] ...: '<the whole path>'"
+        return f"{short_path(exc.filename)}: {exc.strerror}"
     return str(exc) or type(exc).__name__

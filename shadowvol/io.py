@@ -27,7 +27,7 @@ import numpy as np
 from PIL import Image
 
 from shadowvol import signals
-from shadowvol.errors import out_of_memory_while
+from shadowvol.errors import out_of_memory_while, short_path
 
 # Values encoded at a time by `encode_srgb` and `png16_bytes`: the float64 temporaries of the
 # curve stay this small (a few MiB) whatever the image, so encoding adds only its output to
@@ -75,7 +75,7 @@ def atomic_write(path: str | Path, follow_links: bool = True):
     point to another frame's file).  A device, a FIFO or "-" (standard output) cannot be
     replaced: the data is written straight to it.  Errors are WriteError naming `path`.
     """
-    shown = str(path)
+    shown = short_path(path)
     if shown == STDOUT:
         yield _Stream(sys.stdout.buffer, shown)
         return

@@ -35,9 +35,11 @@ def ground_truth(text: str | None, flag: str = "--outputs") -> tuple[str, ...]:
     return tuple(n for n in GROUND_TRUTH if n in names)
 
 
-def check(outputs: dict[str, Path], flags: dict[str, str] | None = None) -> None:
+def check(outputs: dict[str, Path], flags: dict[str, str] | None = None,
+          program: str = "shadowvol") -> None:
     """Raise SceneError (exit 2) for a path whose suffix is not its kind's, or for two kinds
-    naming one file.  `flags` maps a kind to the option that named it (for the message)."""
+    naming one file.  `flags` maps a kind to the option that named it (for the message);
+    `program`, the command that speaks."""
     flags = flags or {}
     seen: dict[Path, str] = {}
     for kind, path in outputs.items():
@@ -45,7 +47,7 @@ def check(outputs: dict[str, Path], flags: dict[str, str] | None = None) -> None
         stream = str(path) == "-" or _is_stream(path)
         want = SUFFIXES[kind]
         if not stream and path.suffix.lower() != want:
-            raise SceneError(flag, f"{str(path)!r} must end in {want} (shadowvol writes "
+            raise SceneError(flag, f"{str(path)!r} must end in {want} ({program} writes "
                                    f"{want[1:].upper()} there and nothing else)")
         key = Path("-") if str(path) == "-" else _resolved(path, flag)
         if key in seen:

@@ -148,7 +148,7 @@ def _render(args) -> int:
     for kind in ("exr", "png16"):
         if getattr(args, kind):
             paths[kind] = Path(getattr(args, kind))
-    outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"})
+    outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
     if args.max_depth is not None and args.max_depth < 0:
         raise SceneError("--max-depth", f"must be >= 0, got {args.max_depth}")
     scene = load_scene(args.scene)
@@ -170,7 +170,7 @@ def _masks(args) -> int:
     paths = {"masks": Path(args.output)}
     if not args.no_png:
         paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
-    outputs.check(paths, {"masks": "-o", "picture": "--png"})
+    outputs.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
     scene = load_scene(args.scene)
     memory.check(memory.ray_masks(scene, wanted, picture="picture" in paths),
                  args.memory_budget, args.scene)
@@ -193,7 +193,7 @@ def _masks(args) -> int:
 def _tree(args) -> int:
     """The `tree` command: print the ray tree of one pixel, draw it with -o."""
     if args.output:
-        outputs.check({"picture": Path(args.output)}, {"picture": "-o"})
+        outputs.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
     if args.depth is not None and args.depth < 0:
         raise SceneError("--depth", f"must be >= 0, got {args.depth}")
     scene = load_scene(args.scene)
@@ -231,7 +231,7 @@ EXERCISES = {"plane": _plane, "tir": _tir}
 def _exercise(args) -> int:
     """The `exercise` command: print the worked solution, draw it with -o."""
     if args.output:
-        outputs.check({"picture": Path(args.output)}, {"picture": "-o"})
+        outputs.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
     text, fig = EXERCISES[args.name]()
     print(text)
     if args.output:

@@ -68,7 +68,7 @@ def path_traced(args) -> int:
     paths = {"image": Path(args.output)}
     if args.exr:
         paths["exr"] = Path(args.exr)
-    outputs.check(paths, {"image": "-o", "exr": "--exr"})
+    outputs.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
     if args.spp < 1:
         raise SceneError("--spp", f"must be >= 1, got {args.spp}")
     depth = args.max_depth
@@ -96,7 +96,7 @@ def radiosity_command(args) -> int:
         paths["flat"] = Path(args.flat)
     if args.exr:
         paths["exr"] = Path(args.exr)
-    outputs.check(paths, {"image": "-o", "flat": "--flat", "exr": "--exr"})
+    outputs.check(paths, {"image": "-o", "flat": "--flat", "exr": "--exr"}, "raytrace")
     for flag, value, ok, rule in (("--level", args.level, args.level >= 0, ">= 0"),
                                   ("--rays", args.rays, args.rays >= 1, ">= 1"),
                                   ("--tol", args.tol, args.tol > 0.0, "> 0"),

@@ -58,3 +58,43 @@ def test_the_stencil_picture_of_an_area_light(tmp_path):
     refused(run(["shadowvol", "render", str(SCENES / "soft.toml"), "-o", "s.png", "--stencil",
                  "st.png"], tmp_path), "lights[0]", "area light", "--stencil")
     assert list(tmp_path.iterdir()) == []
+
+
+LONG_NAME = "n" * 300 + ".png"                             # over the 255 bytes a name may have
+DEEP = "/".join(["d" * 60] * 80)                            # a 4,900-character path
+
+
+@pytest.mark.parametrize("command", [
+    ["shadowvol", "render", str(SCENES / "cage.toml"), "-o", LONG_NAME],
+    ["shadowvol", "render", str(SCENES / "cage.toml"), "-o", f"{DEEP}/x.png"],
+    ["raytrace", "masks", str(SCENES / "cage.toml"), "-o", f"{DEEP}/x.npz"],
+    ["shadowvol", "render", f"{DEEP}/scene.toml", "-o", "x.png"],
+    ["raytrace", "render", f"{DEEP}/scene.toml", "-o", "x.png"],
+], ids=["long name", "deep output", "deep masks", "deep scene", "deep scene raytrace"])
+def test_a_long_path_is_named_short(tmp_path, command):
+    """The message keeps the path's start and its file name, never the whole path."""
+    line = refused(run(command, tmp_path))
+    path = next(a for a in command if a.startswith(("n" * 10, "d" * 10)))
+    name = path.rpartition("/")[2]
+    assert len(line) < 250, line
+    assert path[:8] in line and (name if len(name) < 60 else name[-8:]) in line, line
+    assert "Errno" not in line
+
+
+def test_each_command_speaks_for_itself(tmp_path):
+    line = refused(run(["raytrace", "masks", str(SCENES / "cage.toml"), "-o", "m.png"],
+                       tmp_path), "-o", "m.png")
+    assert "raytrace writes NPZ" in line and "shadowvol" not in line
+
+
+@pytest.mark.parametrize("text, key, given", [
+    ('{"camera": [1, 2]}', "camera", "got a list"),
+    ('{"camera": {"eye": [0, 1, 5], "target": [0, 0, 0]}, "objects": {"a": 1}}', "objects",
+     "got a table"),
+    ('{"camera": {"eye": [0, 1, 5], "target": [0, 0, 0]}, "lights": "sun"}', "lights",
+     "got the string 'sun'"),
+])
+def test_a_wrong_type_is_named_in_the_files_terms(tmp_path, text, key, given):
+    (tmp_path / "s.json").write_text(text)
+    line = refused(run(["shadowvol", "render", "s.json", "-o", "x.png"], tmp_path), key, given)
+    assert "_Json" not in line and "dict" not in line
