@@ -373,7 +373,8 @@ def masks_bytes(lit: np.ndarray, coverage: np.ndarray,
                              f"{', '.join(MASK_ARRAYS)})")
         dtype, shape = MASK_ARRAYS[name]
         value = np.asarray(value)
-        words = {"K": value.shape[-1] if value.ndim == len(shape) and value.shape[-1] else 0}
+        # K, the casters' words: the array's own (at least 1)
+        words = {"K": max(1, value.shape[-1]) if value.ndim == len(shape) else 1}
         want = tuple(sizes.get(n, words.get(n, n)) for n in shape)
         if value.dtype != dtype or value.shape != want:
             raise ValueError(f"{name} must be {np.dtype(dtype)}{want}, got "
