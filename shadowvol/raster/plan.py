@@ -9,8 +9,9 @@ from dataclasses import dataclass
 class FramePlan:
     """method : "auto" | "zpass" | "zfail".  asked : the outputs named by the caller (with "lit"
     when the overflow check needs it); outputs : those and what they need ("facing" for
-    casters and facing_count).  halve : `auto`'s z-pass casters may be drawn m / 2 times, which is safe only
-    when the counts themselves are not returned (`passes.count_volumes`)."""
+    casters and facing_count).  halve : `auto`'s z-pass casters may be drawn m / 2 times,
+    which is safe only when the counts themselves are not returned
+    (`passes.count_volumes`)."""
 
     method: str
     asked: frozenset[str]

@@ -13,15 +13,15 @@ casting object's shadow volumes into a counter of its own.
   the facing bits and the lit bits (facing & unshadowed) together, so that `cast = facing & ~lit`
   holds bit for bit on the raster side; the frame's `lit` is taken from that pass then.
 - `casters`: after the frame, for each hard light (an area light's sample) with cast pixels,
-  the objects whose box can reach
-  them (`caster_candidates`: a box test, no per-pixel work) are counted each into its own
-  counter, CASTERS_PER_GROUP at a time (`CasterCounts`): one volume pass over the group's
+  the objects whose box can reach them (`caster_candidates`: a box test, no per-pixel work)
+  are counted each into its own counter, CASTERS_PER_GROUP at a time (`CasterCounts`): one volume pass over the group's
   volumes, the same faces, groups and depth tests as the light's stencil count, adding each
   fragment's +-1 to its caster's bit field of an integer image (caster_count.frag), then one
   pass where a counted fragment landed turning the counters into a 64-bit word of the mask
   (caster_bits.frag); one read per light and word of 64 objects.  Bit j mod 64 of word
-  j div 64 is set where object j's count is not 0 and the pixel faces the light.  Counts are never negative where the count is exact (each is
-  the number of the caster's triangles between the point and the light), so the stencil's
+  j div 64 is set where object j's count is not 0 and the pixel faces the light.  Counts are
+  never negative where the count is exact (each is the number of the caster's triangles
+  between the point and the light), so the stencil's
   count, their sum, is 0 exactly where every caster's is: `casters.any(-1)` is `cast`.  The
   cost grows with the candidates' volume fragments and the shadow's box, however many
   objects the scene holds.

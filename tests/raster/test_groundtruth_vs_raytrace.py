@@ -7,7 +7,7 @@ pixel from an edge of either renderer's mask of that quantity or of the object i
 (shadowvol.compare.maskdiff.edge_pixels), and under 0.1% of the pixels in all.  depth and
 distance: within RASTER_DEPTH_RTOL where both hit the same object away from its edges.
 normals: equal where both see the same facet (the same object, and a normal constant over the
-3 x 3 neighbourhood in both).  On the raster side cast == (casters != 0) exactly, and asking for
+3 x 3 neighbourhood in both).  On the raster side cast == casters.any(-1) exactly, and asking for
 the ground truth never changes lit.
 """
 
@@ -43,7 +43,6 @@ from shadowvol.scene import (
     DirectionalLight,
     PointLight,
     Scene,
-    SceneError,
     SpotLight,
 )
 from shadowvol.scenefile import load_scene, save_scene
@@ -123,7 +122,8 @@ def compare(request, scene: Scene, raster, ref) -> list[str]:
         masks(f"light {i} lit", raster.lit[i], ref.lit[i])
         masks(f"light {i} facing", raster.facing[i], ref.facing[i])
         masks(f"light {i} cast", raster.cast[i], ref.cast[i])
-        got_bits, want_bits = decode_casters(raster.casters[i], n), decode_casters(ref.casters[i], n)
+        got_bits = decode_casters(raster.casters[i], n)
+        want_bits = decode_casters(ref.casters[i], n)
         for j in range(n):
             masks(f"light {i} casters bit {j}", got_bits[..., j], want_bits[..., j])
     if not np.array_equal(raster.cast, raster.casters.any(-1)):

@@ -5,8 +5,8 @@ Two category sets: object k (the object_id k, scene order) is category k, superc
 "object"; the cast shadow of object k under light i is category SHADOW_IDS * (i + 1) + k,
 supercategory "shadow": the pixels where object k lies on the shadow segment to light i
 (`casters` bit (k - 1) mod 64 of word (k - 1) div 64: for an area light, object k blocks
-some sample facing the pixel).  Every light has them (`info.shadow_lights` lists them).  Segmentations are compressed RLE, column-major, as pycocotools'
-`mask.encode` writes them (decode with `pycocotools.mask.decode`); iscrowd 0.
+some sample facing the pixel).  Every light has them (`info.shadow_lights` lists them).
+Segmentations are compressed RLE, column-major, as pycocotools' `mask.encode` writes them (decode with `pycocotools.mask.decode`); iscrowd 0.
 """
 
 from __future__ import annotations
