@@ -234,8 +234,6 @@ def save_exr(path: str | Path, image: np.ndarray) -> None:
 
 # The ground-truth outputs a frame may carry, by name, in this order (docs/CONVENTIONS.md).
 GROUND_TRUTH = ("depth", "distance", "normal", "object_id", "facing", "facing_count", "casters")
-# the arrays of an area light's counts, in a mask file whenever some light has N > 1 samples
-SOFT_ARRAYS = ("lit_count", "samples")
 
 
 class GroundTruthFrame:
