@@ -37,10 +37,11 @@ def _stats(times: list[float]) -> dict:
 
 
 def casting_objects(casters) -> int:
-    """How many objects cast somewhere: the bits set in any pixel of `casters` (L, H, W)."""
+    """How many objects cast somewhere: the bits set in any pixel of `casters` (L, H, W, K)."""
     import numpy as np
 
-    return bin(int(np.bitwise_or.reduce(casters.reshape(-1)))).count("1")
+    words = np.bitwise_or.reduce(casters.reshape(-1, casters.shape[-1]), axis=0)
+    return sum(bin(int(w)).count("1") for w in words)
 
 
 def _interleaved(variants: dict, runs: int) -> dict:

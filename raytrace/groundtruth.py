@@ -1,18 +1,15 @@
 """Ground truth for vision datasets from the reference ray tracer (docs/CONVENTIONS.md, "Ground
 truth"): per pixel the depth, the distance, the face normal and the object id of the visible
-point, and per light whether the point faces it and which objects block it.
+point, and per light how many samples face it, how many reach it and which objects block it.
 
 Everything rides the masks' own rays (`raytrace.masks`): the same visible triangle, the same
-float64 hit point, the same shadow segments with the same margins.  `lit` is computed exactly
-as `shadow_masks` computes it; `casters` traces every blocked segment again against each
-object alone (one backend per object, in the masks' frame, the visible triangle excluded by id
-in its own object), so bit j of `casters[i, p]` says "object j lies on p's segment to light i".
-
-Limits: `object_id` counts up to 65535 objects (uint16); `casters` is one 64-bit word, so a
-scene of more than 64 objects cannot have it (SceneError naming the count: ask for the other
-outputs, or split the scene).  `facing` and `casters` are per hard light: a scene with an area
-light gets a SceneError for them (`raytrace.soft_masks` has its facing); the other outputs and
-`lit` ("every sample reaches", as `raytrace.shadow_masks`) work.
+float64 hit point, the same shadow segments with the same margins.  An area light is its N
+samples (`shadowvol.scene.hard_lights`), each traced as a hard light; its counts add up and its
+casters OR, so `lit_count` equals `raytrace.soft_masks`' and `lit` `shadow_masks`'.  `casters`
+traces every blocked segment again against each object alone (one backend per object, in the
+masks' frame, the visible triangle excluded by id in its own object): bit j mod 64 of word
+j div 64 of `casters[i, p]` says "object j blocks p's segment to some facing sample of light
+i".  `object_id` counts up to 65535 objects (uint16); `casters` any number.
 """
 
 from __future__ import annotations
@@ -25,7 +22,7 @@ from shadowvol import fields
 from shadowvol.cameras import Calibration, calibration
 from shadowvol.fields import GROUND_TRUTH
 from shadowvol.io import GroundTruthFrame
-from shadowvol.scene import AreaLight, Scene, SceneError
+from shadowvol.scene import Scene, SceneError, hard_lights
 
 from .backends import NumpyBackend, TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
@@ -51,24 +48,32 @@ class GroundTruth(GroundTruthFrame):
     """One frame's masks, the ground-truth outputs asked for (None otherwise) and the camera.
 
     lit : (L, H, W) bool and coverage : (H, W) bool, as `shadow_masks` returns them
+    lit_count : (L, H, W) uint16, how many of light i's samples reach the pixel
+    samples : (L,) int64, N per light (1 for a point, spot or directional light)
     depth : (H, W) float32, eye-space depth (along the view axis); inf where nothing is hit
     distance : (H, W) float32, from the eye along the pixel's ray; inf where nothing is hit
     normal : (H, W, 3) float32, the world-space unit face normal, turned toward the camera;
         0 where nothing is hit
     object_id : (H, W) uint16, 0 = background, k = scene.objects[k - 1]
-    facing : (L, H, W) bool, n·l > 0 (and inside a spot light's cone)
-    casters : (L, H, W) uint64, bit j set when scene.objects[j] blocks the pixel's segment
+    facing : (L, H, W) bool, facing_count > 0
+    facing_count : (L, H, W) uint16, how many samples face the pixel: n·l > 0 and inside the
+        sample's cone (a spot light's; a rect or disk sample's 90 degrees)
+    casters : (L, H, W, K) uint64, K = max(1, ceil(n_objects / 64)): bit j mod 64 of word
+        j div 64 set when scene.objects[j] blocks the segment to some facing sample
     calibration : the camera matrices and light arrays (`shadowvol.cameras.Calibration`)
     """
 
     lit: np.ndarray
     coverage: np.ndarray
     calibration: Calibration
+    lit_count: np.ndarray | None = None
+    samples: np.ndarray | None = None
     depth: np.ndarray | None = None
     distance: np.ndarray | None = None
     normal: np.ndarray | None = None
     object_id: np.ndarray | None = None
     facing: np.ndarray | None = None
+    facing_count: np.ndarray | None = None
     casters: np.ndarray | None = None
 
 
@@ -81,10 +86,6 @@ def check_outputs(scene: Scene, outputs) -> tuple[str, ...]:
     if unknown:
         raise SceneError("outputs", f"unknown output {unknown[0]!r} (one of: "
                                     f"{', '.join(GROUND_TRUTH)})")
-    fields.check_hard_lights(scene.lights, outputs,
-                             "raytrace.soft_masks (lit_count, facing, umbra)")
-    if "casters" in outputs:
-        fields.check_casters(len(scene.objects))
     if "object_id" in outputs:
         fields.check_object_ids(len(scene.objects))
     return tuple(o for o in GROUND_TRUTH if o in outputs)
@@ -117,21 +118,21 @@ class _ObjectTracers:
 def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer = "embree"
                  ) -> GroundTruth:
     """The masks of `scene` with the ground-truth `outputs` (names from
-    `shadowvol.io.GROUND_TRUTH`; default all) and the calibration.
+    `shadowvol.io.GROUND_TRUTH`; default all), the counts and the calibration.
 
     backend : "embree", "numpy", or `raytrace.masks.scene_backend(scene, ...)` built once.
-    `lit` and `coverage` equal `shadow_masks(scene, backend)`; `facing & ~lit` equals
-    `casters != 0`.  Tiled and threaded as `shadow_masks` is."""
+    `lit` and `coverage` equal `shadow_masks(scene, backend)`; `casters.any(-1)` equals
+    `lit_count < facing_count`.  Tiled and threaded as `shadow_masks` is."""
     outputs = check_outputs(scene, outputs)
     mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
     tracer, triangles, origin = mt
-    H, W, L = scene.height, scene.width, len(scene.lights)
+    H, W, L, n = scene.height, scene.width, len(scene.lights), len(scene.objects)
     objects = _ObjectTracers(scene, mt) if "casters" in outputs else None
-    lit = np.zeros((L, H * W), bool)
     coverage = np.zeros(H * W, bool)
     # the outputs asked for, flat (pixels row-major), with what is stored where nothing is hit
-    out = {name: fields.blank(name, fields.shape(name, L, H, W, flat=True))
+    out = {name: fields.blank(name, fields.shape(name, L, H, W, flat=True, objects=n))
            for name in outputs}
+    counts = {name: np.zeros((L, H * W), np.uint16) for name in ("lit_count", "facing_count")}
     vertices, faces, ids = scene.triangles()
     # the output normals: world-space (b − a) × (c − a), normalised in float64 (CONVENTIONS),
     # not the frame's (the same up to rounding, and the same sign: `hit.side` turns either)
@@ -139,10 +140,9 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
                                  target=scene.camera.target - origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
-    reach = scene.extent
-    # with an area light, the tiles trace no shadow rays: lit comes from raytrace.soft below
-    area = any(isinstance(light, AreaLight) for light in scene.lights)
-    lights = [] if area else [_local_light(light, origin, triangles) for light in scene.lights]
+    # every sample of every light, as the light it counts for and a hard light
+    lights = [(i, _local_light(sample, origin, triangles))
+              for i, light in enumerate(scene.lights) for sample in hard_lights(light)]
     rows_per_tile = max(1, MASK_TILE_RAYS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
 
@@ -162,33 +162,43 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
             out["normal"][pixel] = world_normals[hit.tri] * hit.side[:, None]
         if "object_id" in out:
             out["object_id"][pixel] = ids[hit.tri] + 1
-        for i, light in enumerate(lights):
-            seg = _segments(light, hit, reach)
-            own, fragile = hit.tri[seg.rays], hit.fragile[seg.rays]
-            start = seg.start.copy() if objects is not None else seg.start
-            tmax = None if seg.tmax is None else seg.tmax.copy()
-            blocked = _blocked(tracer, seg.start, seg.direction, seg.tmax, own, fragile)
-            lit_here = seg.facing.copy()
-            lit_here[seg.rays] = ~blocked
-            lit[i, pixel] = lit_here
-            if "facing" in out:
-                out["facing"][i, pixel] = seg.facing
-            if objects is not None and blocked.any():
-                b = np.flatnonzero(blocked)
-                out["casters"][i, pixel[seg.rays[b]]] = _caster_bits(
-                    objects, start[:, b], seg.direction if seg.direction.shape[1] == 1
-                    else seg.direction[:, b], None if tmax is None else tmax[b], own[b],
-                    fragile[b])
+        for i, light in lights:
+            _shadow_tile(tracer, objects, light, hit, scene.extent, pixel, counts, i,
+                         out.get("casters"))
 
     for_each_tile(trace_tile, tiles, tracer)
-    if area:  # "every sample reaches the pixel", as raytrace.shadow_masks says
-        from .soft import lit_counts, sample_counts
-
-        count, _ = lit_counts(scene, mt)
-        lit = (count == sample_counts(scene)[:, None, None]).reshape(L, H * W)
+    samples = np.array([len(hard_lights(light)) for light in scene.lights], np.int64)
+    lit = counts["lit_count"] == samples[:, None]
+    if "facing" in out:
+        out["facing"] = counts["facing_count"] > 0
+    if "facing_count" in out:
+        out["facing_count"] = counts["facing_count"]
     return GroundTruth(lit.reshape(L, H, W), coverage.reshape(H, W), calibration(scene),
-                       **{name: value.reshape(fields.shape(name, L, H, W))
+                       lit_count=counts["lit_count"].reshape(L, H, W), samples=samples,
+                       **{name: value.reshape(fields.shape(name, L, H, W, objects=n))
                           for name, value in out.items()})
+
+
+def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: float,
+                 pixel: np.ndarray, counts: dict[str, np.ndarray], i: int,
+                 casters: np.ndarray | None) -> None:
+    """One hard light (a sample of light i) over a tile's hits at `pixel` (h,) int64: its
+    facing and lit pixels added to `counts` (L, H * W) uint16 each, its blockers ORed into
+    `casters` (L, H * W, K) uint64 when given."""
+    seg = _segments(light, hit, reach)
+    own, fragile = hit.tri[seg.rays], hit.fragile[seg.rays]
+    start = seg.start.copy() if casters is not None else seg.start
+    tmax = None if seg.tmax is None else seg.tmax.copy()
+    blocked = _blocked(tracer, seg.start, seg.direction, seg.tmax, own, fragile)
+    lit_here = seg.facing.copy()
+    lit_here[seg.rays] = ~blocked
+    counts["lit_count"][i, pixel] += lit_here
+    counts["facing_count"][i, pixel] += seg.facing
+    if casters is not None and blocked.any():
+        b = np.flatnonzero(blocked)
+        casters[i, pixel[seg.rays[b]]] |= _caster_bits(
+            objects, start[:, b], seg.direction if seg.direction.shape[1] == 1
+            else seg.direction[:, b], None if tmax is None else tmax[b], own[b], fragile[b])
 
 
 def face_normals(corners: np.ndarray) -> np.ndarray:
@@ -201,13 +211,14 @@ def face_normals(corners: np.ndarray) -> np.ndarray:
 
 def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarray,
                  tmax: np.ndarray | None, own: np.ndarray, fragile: np.ndarray) -> np.ndarray:
-    """(b,) uint64: the objects that block each of b blocked shadow segments, as bits.
+    """(b, K) uint64: the objects that block each of b blocked shadow segments, as bits
+    (object j: bit j mod 64 of word j div 64).
 
     start (3, b) float32, direction (3, b) or (3, 1) float32, tmax (b,) float32 or None: the
     segments as `_segments` made them (before `_blocked` moved any start); own (b,) int64 the
     scene triangle each leaves, fragile (b,) bool.  Each object's backend is asked the masks'
     own question (`_blocked`), its own triangle excluded by id in the object it belongs to."""
-    bits = np.zeros(len(own), np.uint64)
+    bits = np.zeros((len(own), fields.caster_words(len(objects.tracers))), np.uint64)
     own_object = objects.object[own]
     start64 = start.astype(np.float64)
     direction64 = np.broadcast_to(direction, start.shape).astype(np.float64)
@@ -224,7 +235,8 @@ def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarr
         hit = _blocked(tracer, start[:, k], direction if direction.shape[1] == 1
                        else direction[:, k], None if tmax is None else tmax[k].copy(),
                        local_own, fragile[k] & mine[k])
-        bits[k[hit]] |= np.uint64(1) << np.uint64(j)
+        bits[k[hit], j // fields.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
+            j % fields.CASTER_WORD_BITS)
     return bits
 
 

@@ -2,8 +2,8 @@
 renderers: their names, dtypes and shapes, what is stored where nothing is hit, and what a
 scene allows (GL-free, numpy only).
 
-`facing` and `casters` are per hard light: an area light's pixel that faces only some samples
-is neither lit nor blocked, so `cast = facing & ~lit` would no longer be `casters != 0`.
+Every field is defined for every light kind: an area light is its N samples, each a hard
+light, and its per-light fields reduce theirs (counts add, `casters` ORs).
 """
 
 from __future__ import annotations
@@ -11,23 +11,28 @@ from __future__ import annotations
 import numpy as np
 
 from shadowvol.io import GROUND_TRUTH, MASK_ARRAYS
-from shadowvol.scene import AreaLight, SceneError
+from shadowvol.scene import SceneError
 
-__all__ = ["GROUND_TRUTH", "MAX_CASTERS", "MAX_OBJECT_IDS", "PER_HARD_LIGHT", "blank",
-           "check_casters", "check_hard_lights", "check_object_ids", "shape"]
+__all__ = ["CASTER_WORD_BITS", "GROUND_TRUTH", "MAX_OBJECT_IDS", "blank", "caster_words",
+           "check_object_ids", "decode_casters", "shape"]
 
-MAX_CASTERS = 64          # objects `casters` can name: one uint64 word
+CASTER_WORD_BITS = 64     # objects per uint64 word of `casters`
 MAX_OBJECT_IDS = 65535    # objects `object_id` can name: uint16, 0 is the background
-PER_HARD_LIGHT = ("facing", "casters")
 # what a field holds where nothing is hit (0 for the others)
 _NOTHING = {"depth": np.inf, "distance": np.inf}
 
 
-def shape(name: str, lights: int, height: int, width: int, flat: bool = False
-          ) -> tuple[int, ...]:
-    """The shape of field `name` in a frame of `lights` lights, (H, W) pixels; `flat`: the
-    pixels as one axis, row-major (H * W)."""
-    sizes = {"L": lights, "H": height, "W": width}
+def caster_words(objects: int) -> int:
+    """K, the uint64 words of `casters` per pixel for a scene of `objects` objects: object j
+    is bit j mod 64 of word j div 64."""
+    return max(1, -(-objects // CASTER_WORD_BITS))
+
+
+def shape(name: str, lights: int, height: int, width: int, flat: bool = False,
+          objects: int = 0) -> tuple[int, ...]:
+    """The shape of field `name` in a frame of `lights` lights, (H, W) pixels and `objects`
+    objects; `flat`: the pixels as one axis, row-major (H * W)."""
+    sizes = {"L": lights, "H": height, "W": width, "K": caster_words(objects)}
     out = [sizes.get(d, d) for d in MASK_ARRAYS[name][1]]
     if flat:
         at = MASK_ARRAYS[name][1].index("H")
@@ -40,12 +45,12 @@ def blank(name: str, shape: tuple[int, ...]) -> np.ndarray:
     return np.full(shape, _NOTHING.get(name, 0), MASK_ARRAYS[name][0])
 
 
-def check_casters(objects: int) -> None:
-    """SceneError when `objects` objects do not fit in the `casters` word."""
-    if objects > MAX_CASTERS:
-        raise SceneError("objects", f"casters is a {MAX_CASTERS}-bit mask, and this scene has "
-                                    f"{objects} objects; ask for the other outputs, or split "
-                                    "the scene")
+def decode_casters(casters: np.ndarray, objects: int) -> np.ndarray:
+    """(..., K) uint64 `casters` -> (..., objects) bool, element j: scene.objects[j] casts
+    (numpy alone: the words' bytes, little-endian, unpacked lowest bit first)."""
+    bits = np.unpackbits(np.ascontiguousarray(casters, "<u8").view(np.uint8), axis=-1,
+                         bitorder="little")
+    return bits[..., :objects].astype(bool)
 
 
 def check_object_ids(objects: int) -> None:
@@ -53,14 +58,3 @@ def check_object_ids(objects: int) -> None:
     if objects > MAX_OBJECT_IDS:
         raise SceneError("objects", f"object_id counts up to {MAX_OBJECT_IDS} objects, and this "
                                     f"scene has {objects}")
-
-
-def check_hard_lights(lights, outputs, instead: str) -> None:
-    """SceneError naming the first area light of `lights` when `outputs` asks for a per hard
-    light field (PER_HARD_LIGHT); `instead` says what an area light has in its place."""
-    per_light = [o for o in PER_HARD_LIGHT if o in outputs]
-    area = [i for i, lt in enumerate(lights) if isinstance(lt, AreaLight)]
-    if area and per_light:
-        raise SceneError(f"lights[{area[0]}]", f"{per_light[0]} is defined for point, spot and "
-                                               f"directional lights; for an area light use "
-                                               f"{instead}")

@@ -233,41 +233,71 @@ def save_exr(path: str | Path, image: np.ndarray) -> None:
 
 
 # The ground-truth outputs a frame may carry, by name, in this order (docs/CONVENTIONS.md).
-GROUND_TRUTH = ("depth", "distance", "normal", "object_id", "facing", "casters")
+GROUND_TRUTH = ("depth", "distance", "normal", "object_id", "facing", "facing_count", "casters")
 
-# The arrays a mask file may hold beside `lit` and `coverage` (docs/CONVENTIONS.md): name ->
-# (dtype, shape), the shape in terms of the lights L, the height H and the width W.
+
 class GroundTruthFrame:
     """What a frame of either renderer derives from its arrays, as docs/CONVENTIONS.md defines
-    it: the cast and the attached shadow, and its arrays by their mask-file names.  Mixed into
-    both renderers' results, which hold `lit`, `coverage`, `facing`, `calibration` and the
-    GROUND_TRUTH outputs (None where not asked for)."""
+    it: the cast and the attached shadow, the umbra and the penumbra, and its arrays by their
+    mask-file names.  Mixed into both renderers' results, which hold `lit`, `coverage`,
+    `lit_count`, `samples`, `calibration` and the GROUND_TRUTH outputs (None where not asked
+    for)."""
 
     @property
     def cast(self) -> np.ndarray:
-        """(L, H, W) bool: cast shadow, facing the light yet not lit (needs facing, lit)."""
+        """(L, H, W) bool: some sample facing the pixel is blocked (lit_count <
+        facing_count; hard lights: facing & ~lit); `casters.any(-1)` exactly."""
+        if self.facing_count is not None and self.lit_count is not None:
+            return self.lit_count < self.facing_count
         return self.facing & ~self.lit
 
     @property
     def attached(self) -> np.ndarray:
-        """(L, H, W) bool: attached shadow, covered but facing away (needs facing, coverage)."""
+        """(L, H, W) bool: covered, but no sample faces the pixel (needs facing, coverage)."""
         return self.coverage[None] & ~self.facing
 
+    @property
+    def umbra(self) -> np.ndarray:
+        """(L, H, W) bool: some sample faces the pixel and none reaches it (needs facing,
+        lit_count)."""
+        return self.facing & (self.lit_count == 0)
+
+    @property
+    def penumbra(self) -> np.ndarray:
+        """(L, H, W) bool: some samples reach the pixel, not all (0 < lit_count < N)."""
+        return (self.lit_count > 0) & (self.lit_count < self.samples[:, None, None])
+
     def arrays(self) -> dict[str, np.ndarray]:
-        """The ground truth computed and the calibration, by their mask-file names
-        (`save_masks`)."""
+        """The ground truth computed, the counts when some light has more than one sample,
+        and the calibration, by their mask-file names (`save_masks`)."""
         out = {name: getattr(self, name) for name in GROUND_TRUTH
                if getattr(self, name) is not None}
-        return out | self.calibration.arrays()
+        return out | soft_arrays(self.lit_count, self.samples) | self.calibration.arrays()
 
 
+def soft_arrays(lit_count: np.ndarray | None, samples: np.ndarray | None
+                ) -> dict[str, np.ndarray]:
+    """`lit_count` and `samples` by name when some light has more than one sample (a mask
+    file of hard lights alone stays as it was), else nothing."""
+    if samples is None or lit_count is None or not (np.asarray(samples) > 1).any():
+        return {}
+    return {"lit_count": np.asarray(lit_count, np.uint16),
+            "samples": np.asarray(samples, np.int64)}
+
+
+# The arrays a mask file may hold beside `lit` and `coverage` (docs/CONVENTIONS.md): name ->
+# (dtype, shape), the shape in terms of the lights L, the height H, the width W and the
+# casters' words K = max(1, ceil(n_objects / 64)) (taken from the array itself).
 MASK_ARRAYS = {
     "depth": (np.float32, ("H", "W")),
     "distance": (np.float32, ("H", "W")),
     "normal": (np.float32, ("H", "W", 3)),
     "object_id": (np.uint16, ("H", "W")),
     "facing": (np.bool_, ("L", "H", "W")),
-    "casters": (np.uint64, ("L", "H", "W")),
+    "facing_count": (np.uint16, ("L", "H", "W")),
+    "casters": (np.uint64, ("L", "H", "W", "K")),
+    "lit_count": (np.uint16, ("L", "H", "W")),
+    "samples": (np.int64, ("L",)),
     "K": (np.float64, (3, 3)),
     "world_to_camera": (np.float64, (4, 4)),
     "camera_to_world": (np.float64, (4, 4)),
@@ -340,8 +370,10 @@ def masks_bytes(lit: np.ndarray, coverage: np.ndarray,
             raise ValueError(f"a mask file holds no array {name!r} (known: "
                              f"{', '.join(MASK_ARRAYS)})")
         dtype, shape = MASK_ARRAYS[name]
-        want = tuple(sizes.get(n, n) for n in shape)
         value = np.asarray(value)
+        # K, the casters' words: the array's own (at least 1)
+        words = {"K": max(1, value.shape[-1]) if value.ndim == len(shape) else 1}
+        want = tuple(sizes.get(n, words.get(n, n)) for n in shape)
         if value.dtype != dtype or value.shape != want:
             raise ValueError(f"{name} must be {np.dtype(dtype)}{want}, got "
                              f"{value.dtype}{value.shape}")

@@ -26,6 +26,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from shadowvol.fields import caster_words
 from shadowvol.scene import Scene, SceneError, hard_lights
 
 ENV = "SHADOWVOL_MEMORY_BUDGET"
@@ -122,7 +123,9 @@ def raster(scene: Scene, outputs=("image", "lit", "coverage"), *, gl_in_host: bo
          # lit_count uint16 and lit bool per light, one bool mask and one uint32 temporary
          "lit_count + lit": (3 * L + 1 + 4) if "lit" in outputs else 0,
          "image_srgb": 6 if "image_srgb" in outputs else 0}
-    truth = outputs & {"depth", "distance", "normal", "object_id", "facing", "casters"}
+    truth = outputs & {"depth", "distance", "normal", "object_id", "facing", "facing_count",
+                       "casters"}
+    K = caster_words(len(scene.objects))
     if truth:
         # depth read (float32), its float64 quotient and the depth, the covered mask
         t["depth"] = 4 + 8 + 4 + 1
@@ -134,25 +137,27 @@ def raster(scene: Scene, outputs=("image", "lit", "coverage"), *, gl_in_host: bo
             t["surface read"] = 16 + 8 + 8 + 8 + 1 + 8
             t["normal"] = (12 + 24) if "normal" in truth else 0
             t["object_id"] = (2 + 8) if "object_id" in truth else 0
-        if truth & {"facing", "casters"}:
-            t["facing + its lit"] = 2 * L + 2 * L + 8   # the results, their unmasked copies
+        if truth & {"facing", "facing_count", "casters"}:
+            # the counts (uint16) and their bools, a sample's unmasked bits
+            t["facing + its lit"] = 2 * L + 2 * L + 2 * L + 8
         if "casters" in truth:
-            t["casters"] = 8 * L + 8
+            t["casters"] = 8 * L * K + 16 * K   # the result, a sample's words and their OR
     if stencil:
         t["stencil counts"] = 4 * L + 4
     if volumes:
         # its frame's image, the RGBA read (a copy of the staging), its RGB copy
         t["volume view"] = 12 + 16 + 12
-    t |= _written(written, L, truth, float64=False, stencil=stencil)
+    t |= _written(written, L, truth, float64=False, stencil=stencil, words=K)
     return Estimate("the rasterizer", scene.width, scene.height,
                     _terms(scene.width * scene.height, t))
 
 
-def _written(written, L: int, truth, float64: bool, stencil: bool = False) -> dict:
+def _written(written, L: int, truth, float64: bool, stencil: bool = False, words: int = 1
+             ) -> dict:
     """The encoders' bytes per pixel for the files written (the largest file at a time: files
     are written one after the other, each freed before the next)."""
     truth_bytes = {"depth": 4, "distance": 4, "normal": 12, "object_id": 2, "facing": L,
-                   "casters": 8 * L}
+                   "facing_count": 2 * L, "casters": 8 * L * words}
     per = {"png": PNG, "png16": PNG16, "exr": EXR64 if float64 else EXR,
            # npz: the compressed stream twice (value and copy), at most the raw bytes
            "masks": 2 * 1.01 * (L + 1 + sum(truth_bytes[k] for k in truth)),
@@ -171,14 +176,15 @@ def ray_masks(scene: Scene, outputs=(), picture: bool = True) -> Estimate:
     per = {"lit + coverage": L + 1,
            "ground truth": (4 * ("depth" in truth) + 4 * ("distance" in truth)
                             + 12 * ("normal" in truth) + 2 * ("object_id" in truth)
-                            + L * ("facing" in truth) + 8 * L * ("casters" in truth)
+                            + L * ("facing" in truth) + 2 * L * ("facing_count" in truth)
+                            + 8 * L * caster_words(len(scene.objects)) * ("casters" in truth)
                             + (L + 1) * bool(truth)),
            # soft lights: lit_count uint16 and facing per light
            "lit_count": 3 * L if any(len(hard_lights(lt)) > 1 for lt in scene.lights) else 0,
            # one RGB uint8 panel per light (and per output), the joined picture, its PNG;
            # the outputs' heat maps colour one panel at a time in float64
            "picture": ((L + len(truth)) * 3 * 2 + 24 * bool(truth) + PNG) if picture else 0}
-    per |= _written(("masks",), L, truth, float64=False)
+    per |= _written(("masks",), L, truth, float64=False, words=caster_words(len(scene.objects)))
     fixed = {"tiles in flight": _tiles(scene.width, MASK_TILE_RAYS, MASK_RAY_BYTES, threads())}
     return Estimate("the ray tracer's masks", scene.width, scene.height,
                     _terms(scene.width * scene.height, per, fixed))

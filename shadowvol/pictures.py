@@ -243,19 +243,22 @@ def shadow_kinds_image(lit: np.ndarray, facing: np.ndarray, coverage: np.ndarray
 
 
 def casters_image(casters: np.ndarray, coverage: np.ndarray) -> np.ndarray:
-    """One light's (H, W) uint64 casters -> (H, W, 3) uint8: each shadowed pixel in the mean
-    colour of the objects that block it (`object_colours`), UNSHADOWED where none does,
-    BACKGROUND where nothing is hit."""
-    bits = np.asarray(casters, np.uint64)
-    total = np.zeros(bits.shape + (3,))
-    count = np.zeros(bits.shape)
-    colours = object_colours(64).astype(np.float64)
-    for j in range(64):
-        on = (bits >> np.uint64(j)) & np.uint64(1) == 1
+    """One light's (H, W, K) uint64 casters (object j: bit j mod 64 of word j div 64; (H, W)
+    for one word) -> (H, W, 3) uint8: each shadowed pixel in the mean colour of the objects
+    that block it (`object_colours`), UNSHADOWED where none does, BACKGROUND where nothing is
+    hit."""
+    words = np.asarray(casters, np.uint64)
+    words = words[..., None] if words.ndim == 2 else words
+    shape = words.shape[:2]
+    total = np.zeros(shape + (3,))
+    count = np.zeros(shape)
+    colours = object_colours(64 * words.shape[2]).astype(np.float64)
+    for j in range(64 * words.shape[2]):
+        on = (words[..., j // 64] >> np.uint64(j % 64)) & np.uint64(1) == 1
         if on.any():
             total[on] += colours[j]
             count[on] += 1
-    out = np.broadcast_to(BACKGROUND, bits.shape + (3,)).copy()
+    out = np.broadcast_to(BACKGROUND, shape + (3,)).copy()
     out[coverage] = UNSHADOWED
     cast = count > 0
     out[cast] = np.round(total[cast] / count[cast, None]).astype(np.uint8)

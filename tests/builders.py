@@ -287,6 +287,30 @@ def check_counts(scene, got, ref) -> list[dict]:
     return rows
 
 
+def check_facing_counts(scene, got, ref) -> list[dict]:
+    """Raster `got` against ray tracer `ref` (frames with facing_count): per light the pixels
+    whose facing counts differ must all lie on an edge (one pixel) of some sample's facing
+    mask (the ray tracer's), of the raster's count or of either coverage, and be few (as
+    `check_counts`).  Fails the test beyond the budget."""
+    from raytrace.soft import sample_masks
+
+    near_cov = edge_pixels(got.coverage) | edge_pixels(ref.coverage)
+    rows = []
+    for i in range(len(scene.lights)):
+        edges = count_edges(got.facing_count[i]) | near_cov
+        for _, facing in sample_masks(scene, i, facing=True):
+            for mask in facing:
+                edges |= edge_pixels(mask)
+        differ = got.facing_count[i] != ref.facing_count[i]
+        rows.append({"light": i, "differ": int(differ.sum()),
+                     "interior": int((differ & ~edges).sum())})
+    pixels = scene.width * scene.height
+    assert all(r["interior"] == 0 for r in rows), rows
+    assert all(r["differ"] <= MAX_DIFFERING_FRACTION * pixels for r in rows), rows
+    np.testing.assert_array_equal(got.facing, got.facing_count > 0)
+    return rows
+
+
 # ---- batch jobs (tests/batch) ----------------------------------------------------------
 
 def job_lines(frames: int = 4, size=(40, 30), raytrace: bool = True) -> list[dict]:

@@ -30,12 +30,13 @@ class Output:
 OUTPUTS: dict[str, Output] = {o.name: o for o in (
     Output("image", "png", ("image",), lambda f: png_bytes(encode_srgb(f["image"])),
            "the image, 8-bit sRGB PNG, row 0 at the top"),
-    Output("masks", "masks.npz", ("lit", "coverage", "camera", "light_samples"),
-           lambda f: masks_bytes(f["lit"], f["coverage"], arrays=f["camera"],
+    Output("masks", "masks.npz", ("lit", "coverage", "camera", "light_samples", "counts"),
+           lambda f: masks_bytes(f["lit"], f["coverage"], arrays=f["camera"] | f["counts"],
                                  light_samples=f["light_samples"]),
            "the shadow masks (docs/CONVENTIONS.md): lit (L, H, W) bool, coverage (H, W) bool, "
-           "the camera matrices and lights (K, world_to_camera, camera_to_world, ...) and each "
-           "area light's samples, as every mask file holds them"),
+           "the camera matrices and lights (K, world_to_camera, camera_to_world, ...), each "
+           "area light's samples and, when a light has more than one, lit_count (L, H, W) "
+           "uint16 and samples (L,) int64, as every mask file holds them"),
     # the ground truth (docs/CONVENTIONS.md): one .npy each, from either renderer
     *(Output(name, f"{name}.npy", (name,), lambda f, name=name: npy_bytes(f[name]),
              f"the ground truth's {name} (docs/CONVENTIONS.md), a .npy of its array")

@@ -27,8 +27,8 @@ from shadowvol.batch import egl, formats, frames
 from shadowvol.batch.outputs import OUTPUTS, fields_of
 from shadowvol.cameras import calibration
 from shadowvol.errors import RENDER_FAILED, message, status_of
-from shadowvol.io import GROUND_TRUTH
-from shadowvol.scene import Camera, Scene, light_samples
+from shadowvol.io import GROUND_TRUTH, soft_arrays
+from shadowvol.scene import Camera, Scene, hard_lights, light_samples
 from shadowvol.scenefile import light_from_dict, load_scene
 
 # what a batch frame asks `Renderer.render(outputs=...)` for (its OUTPUTS; named here, since
@@ -225,18 +225,26 @@ class Worker:
             if "image" in wanted:
                 arrays["image"] = raytrace.render(frame_scene, max_depth=spec["max_depth"],
                                                   progress=False)
-            if truth:  # the masks come with it, on the same rays
+            soft = any(len(hard_lights(lt)) > 1 for lt in lights)
+            if truth or (soft and {"lit", "coverage", "counts"} & set(wanted)):
+                # the masks and an area light's counts come with it, on the same rays
                 gt = raytrace.ground_truth(frame_scene, outputs=truth)
                 arrays.update({name: getattr(gt, name) for name in truth},
-                              lit=gt.lit, coverage=gt.coverage)
-            elif {"lit", "coverage"} & set(wanted):
+                              lit=gt.lit, coverage=gt.coverage,
+                              counts=soft_arrays(gt.lit_count, gt.samples))
+            elif {"lit", "coverage", "counts"} & set(wanted):
                 arrays["lit"], arrays["coverage"] = raytrace.shadow_masks(frame_scene)
+                arrays["counts"] = {}
         else:
             renderer = self.renderer(spec["scene"], scene)
             asked = tuple(name for name in wanted if name in RASTER_OUTPUTS)
+            if "counts" in wanted and "lit" not in asked:
+                asked += ("lit",)
             result = renderer.render(spec["method"], camera=camera, lights=lights,
                                      outputs=asked)
             arrays = {name: getattr(result, name) for name in asked}
+            if "counts" in wanted:   # what a mask file holds of an area light
+                arrays["counts"] = soft_arrays(result.lit_count, result.samples)
         frame_scene = scene.replace(camera=camera, lights=lights)
         if "camera" in wanted:  # what every mask file holds beside the masks
             arrays["camera"] = calibration(frame_scene).arrays()

@@ -40,7 +40,7 @@ from shadowvol.io import (
     save_png16,
 )
 from shadowvol.pictures import ground_truth_picture, masks_image
-from shadowvol.scene import SceneError, light_samples
+from shadowvol.scene import SceneError, hard_lights, light_samples
 from shadowvol.scenefile import load_scene
 
 
@@ -90,7 +90,8 @@ def _masks_parser(sub) -> None:
                                    "picture.")
     blocks.scene(m)
     blocks.output(m, "NPZ",
-                  "where to write the masks (.npz with lit (L, H, W) and coverage (H, W))")
+                  "where to write the masks (.npz with lit (L, H, W) and coverage (H, W); "
+                  "with an area light also lit_count (L, H, W) and samples (L,))")
     m.add_argument("--png", metavar="PNG", default=None,
                    help="where to write a picture of the masks, one panel per light (white lit, "
                         "grey shadowed, black empty), with --outputs also of the outputs side by "
@@ -174,10 +175,12 @@ def _masks(args) -> int:
     scene = load_scene(args.scene)
     memory.check(memory.ray_masks(scene, wanted, picture="picture" in paths),
                  args.memory_budget, args.scene)
-    if wanted:
+    if wanted or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
+        # the counts of an area light (lit_count, samples) come with the ground truth's rays
         truth = ground_truth(scene, check_outputs(scene, wanted), backend=args.backend)
         lit, coverage, arrays = truth.lit, truth.coverage, truth.arrays()
-        picture = ground_truth_picture(truth, [o.name for o in scene.objects])
+        picture = (ground_truth_picture(truth, [o.name for o in scene.objects]) if wanted
+                   else masks_image(lit, coverage))
     else:
         lit, coverage = shadow_masks(scene, backend=args.backend)
         arrays = calibration(scene).arrays()

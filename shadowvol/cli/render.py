@@ -59,7 +59,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--masks", metavar="NPZ", nargs="?", const=True,
                    help="also write the shadow masks (.npz): lit (L, H, W) bool per light, "
                         "coverage (H, W) bool and the camera matrices K, world_to_camera, "
-                        "camera_to_world and the light arrays; without a name, beside the "
+                        "camera_to_world and the light arrays (with an area light also "
+                        "lit_count (L, H, W) and samples (L,)); without a name, beside the "
                         "image")
     p.add_argument("--volumes", metavar="PNG", nargs="?", const=True,
                    help="also write the teaching view: the shadow-volume polygons the stencil "

@@ -9,8 +9,9 @@ from dataclasses import dataclass
 class FramePlan:
     """method : "auto" | "zpass" | "zfail".  asked : the outputs named by the caller (with "lit"
     when the overflow check needs it); outputs : those and what they need ("facing" for
-    casters).  halve : `auto`'s z-pass casters may be drawn m / 2 times, which is safe only
-    when the counts themselves are not returned (`passes.count_volumes`)."""
+    casters and facing_count).  halve : `auto`'s z-pass casters may be drawn m / 2 times,
+    which is safe only when the counts themselves are not returned
+    (`passes.count_volumes`)."""
 
     method: str
     asked: frozenset[str]
@@ -21,7 +22,8 @@ class FramePlan:
 
     @classmethod
     def of(cls, method: str, asked: set[str]) -> "FramePlan":
-        outputs = asked | {"facing"} if "casters" in asked else asked
+        needs_facing = bool({"casters", "facing_count"} & asked)
+        outputs = asked | {"facing"} if needs_facing else asked
         want_stencil = "stencil" in outputs
         return cls(method, frozenset(asked), frozenset(outputs), want_stencil,
                    halve=method == "auto" and not want_stencil,

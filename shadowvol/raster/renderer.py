@@ -22,7 +22,6 @@ from dataclasses import replace
 import moderngl
 import numpy as np
 
-from shadowvol import fields
 from shadowvol.cameras import calibration
 from shadowvol.raster import bits, methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
@@ -214,9 +213,6 @@ class Renderer:
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else tuple(lights)
         outputs = plan.outputs
-        if "casters" in outputs:
-            fields.check_casters(len(self.scene.objects))
-        fields.check_hard_lights(lights, plan.asked, "lit_count and Renderer.facing")
         vols = self.volumes(silhouettes)
         if "casters" in outputs:
             vols.counting_programs()   # before set_camera: it sets their camera too
@@ -254,14 +250,15 @@ class Renderer:
                  if "image" in outputs else None)
         samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
         coverage, lit, lit_count = self._read_masks(outputs, hard, samples, in_stencil, pages)
-        extra = frame_truth(self, plan, camera, lights, truth_pages, zfail, vols, clip)
+        extra = frame_truth(self, plan, camera, lights, hard, truth_pages, vols, clip)
         if plan.facing_pass:
-            # the facing pass's lit: facing & unshadowed, bit for bit (hard lights only)
-            lit = extra.pop("lit")
+            # the facing pass's lit: facing & unshadowed, bit for bit, summed over samples
+            lit, counted = extra.pop("lit"), extra.pop("lit_count")
             if lit_count is not None:
-                lit_count = lit.astype(np.uint16)
-            if "facing" not in plan.asked:  # computed for casters only
-                extra.pop("facing")
+                lit_count = counted
+            for name in ("facing", "facing_count"):
+                if name not in plan.asked:  # computed for casters only
+                    extra.pop(name)
         srgb = None
         if "image_srgb" in outputs:
             if not srgb_direct:   # encoded from the float image, by its own pass

@@ -37,8 +37,8 @@ class RenderResult(GroundTruthFrame):
     samples    : (L,) int64, N per light (hard lights: 1; always returned)
     image_srgb : (H, W, 3) uint8, `image` encoded to sRGB on the GPU (the IEC 61966-2-1
                  curve of `shadowvol.io.encode_srgb`, in float32: a code may differ by one)
-    depth, distance, normal, object_id, facing, casters : the ground truth of
-                 docs/CONVENTIONS.md (see `truth`), when asked for
+    depth, distance, normal, object_id, facing, facing_count, casters : the ground truth
+                 of docs/CONVENTIONS.md (see `truth`), when asked for; casters (L, H, W, K)
     calibration : the camera matrices and light arrays of the frame (always)
     """
 
@@ -55,6 +55,7 @@ class RenderResult(GroundTruthFrame):
     normal: np.ndarray | None = None
     object_id: np.ndarray | None = None
     facing: np.ndarray | None = None
+    facing_count: np.ndarray | None = None
     casters: np.ndarray | None = None
     calibration: Calibration | None = None
 
@@ -63,11 +64,6 @@ class RenderResult(GroundTruthFrame):
     def visibility(self) -> np.ndarray:
         """(L, H, W) float32: lit_count / N."""
         return (self.lit_count / self.samples[:, None, None]).astype(np.float32)
-
-    @property
-    def penumbra(self) -> np.ndarray:
-        """(L, H, W) bool: some samples light the pixel, not all (0 < lit_count < N)."""
-        return (self.lit_count > 0) & ~self.lit
 
     def _repr_png_(self) -> bytes:
         """A notebook shows the frame as its image."""

@@ -12,16 +12,17 @@ casting object's shadow volumes into a counter of its own.
 - `facing`: facing.frag evaluates shade.frag's n · l and cone tests once per light and writes
   the facing bits and the lit bits (facing & unshadowed) together, so that `cast = facing & ~lit`
   holds bit for bit on the raster side; the frame's `lit` is taken from that pass then.
-- `casters`: after the frame, for each light with cast pixels, the objects whose box can reach
-  them (`caster_candidates`: a box test, no per-pixel work) are counted each into its own
-  counter, CASTERS_PER_GROUP at a time (`CasterCounts`): one volume pass over the group's
+- `casters`: after the frame, for each hard light (an area light's sample) with cast pixels,
+  the objects whose box can reach them (`caster_candidates`: a box test, no per-pixel work)
+  are counted each into its own counter, CASTERS_PER_GROUP at a time (`CasterCounts`): one volume pass over the group's
   volumes, the same faces, groups and depth tests as the light's stencil count, adding each
   fragment's +-1 to its caster's bit field of an integer image (caster_count.frag), then one
-  pass where a counted fragment landed turning the counters into the 64-bit mask
-  (caster_bits.frag); one read per light.  Bit j is set where object j's count is not 0 and
-  the pixel faces the light.  Counts are never negative where the count is exact (each is
-  the number of the caster's triangles between the point and the light), so the stencil's
-  count, their sum, is 0 exactly where every caster's is: `casters != 0` is `cast`.  The
+  pass where a counted fragment landed turning the counters into a 64-bit word of the mask
+  (caster_bits.frag); one read per light and word of 64 objects.  Bit j mod 64 of word
+  j div 64 is set where object j's count is not 0 and the pixel faces the light.  Counts are
+  never negative where the count is exact (each is the number of the caster's triangles
+  between the point and the light), so the stencil's
+  count, their sum, is 0 exactly where every caster's is: `casters.any(-1)` is `cast`.  The
   cost grows with the candidates' volume fragments and the shadow's box, however many
   objects the scene holds.
 """
@@ -34,6 +35,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.cameras import intrinsics, look_at_basis
+from shadowvol.fields import CASTER_WORD_BITS, caster_words
 from shadowvol.raster import glsl, passes
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.glsl import set_uniform
@@ -252,7 +254,8 @@ class CasterCounts:
             fields = sorted((s, b, j) for (w_, s, b), j in zip(layout, group) if w_ == w)
             width[w], first_slot[w] = fields[0][1], slot
             for _, _, j in fields:
-                object_bits[slot, j // 32] = 1 << (j % 32)
+                bit = j % CASTER_WORD_BITS   # the group's objects share a word
+                object_bits[slot, bit // 32] = 1 << (bit % 32)
                 slot += 1
         set_uniform(program, "u_width", width.tobytes())
         set_uniform(program, "u_first_slot", first_slot.tobytes())
@@ -267,8 +270,8 @@ class CasterCounts:
         ctx.memory_barrier()   # the casters' words, before they are read or added to
 
     def read_casters(self, box: tuple[int, int, int, int], objects: int) -> np.ndarray:
-        """(h, w) uint64 of the casters' words in `box` (x, y, w, h, GL's rows), row 0 at
-        the top (a view); the first word only when the scene has at most 32 `objects`."""
+        """(h, w) uint64 of the casters' 64-bit word in `box` (x, y, w, h, GL's rows), row 0
+        at the top (a view); its low half only when the word's `objects` are at most 32."""
         words = np.zeros((box[3], box[2], 2), np.uint32)
         components = 1 if objects <= 32 else 2
         staging = words if components == 2 else np.empty((box[3], box[2]), np.uint32)
@@ -413,39 +416,44 @@ def caster_candidates(bounds: np.ndarray, points: np.ndarray, light4: np.ndarray
 
 def count_casters(target, counter: CasterCounts, volumes, choice: np.ndarray,
                   candidates: list[int], bounds: np.ndarray, where: np.ndarray, halve: bool,
-                  clip_planes, out: np.ndarray | None = None) -> np.ndarray:
-    """(H, W) uint64: bit j where candidate object j's own shadow volumes count non-zero and
-    `where` (H, W) bool (the pixels facing the light); into `out` (H, W) uint64, zeros, when
-    given.  bounds (n_objects,) int: each
-    object's `overflow.topology_bound`.  `volumes`, `choice`, `halve` and `clip_planes` as
+                  clip_planes) -> np.ndarray:
+    """(H, W, K) uint64, K = `caster_words(n_objects)`: bit j mod 64 of word j div 64
+    where candidate object j's own shadow volumes count non-zero and `where` (H, W) bool (the
+    pixels facing the light).  bounds (n_objects,) int: each object's
+    `overflow.topology_bound`.  `volumes`, `choice`, `halve` and `clip_planes` as
     `CasterCounts.count` takes them.
 
-    Per group of CASTERS_PER_GROUP candidates one counting pass and one bits pass; one read
-    of the casters' words at the end.  Everything is drawn (scissor), cleared and read only in
-    the box of the cast pixels (`cast_box`).  Leaves the stencil holding the last group's
+    The candidates go word by word (objects 64k .. 64k + 63), each word's in groups of
+    CASTERS_PER_GROUP: one counting pass and one bits pass a group, one read a word (a word
+    without candidates costs nothing).  Everything is drawn (scissor), cleared and read only
+    in the box of the cast pixels (`cast_box`).  Leaves the stencil holding the last group's
     count."""
-    bits = np.zeros(where.shape, np.uint64) if out is None else out
+    bits = np.zeros(where.shape + (caster_words(len(bounds)),), np.uint64)
     if not candidates:
         return bits
     rows, cols = cast_box(where)
     box = (cols.start, target.height - rows.stop, cols.stop - cols.start,
            rows.stop - rows.start)  # GL counts rows from the bottom
+    words: dict[int, list[int]] = {}
+    for j in candidates:
+        words.setdefault(j // CASTER_WORD_BITS, []).append(j)
     # moderngl keeps a scissor per framebuffer and applies it when the framebuffer is bound;
     # both passes draw into target.fbo
     target.fbo.scissor = box
     try:
-        target.use()
-        counter.clear_casters(box)
-        for first in range(0, len(candidates), CASTERS_PER_GROUP):
-            group = candidates[first:first + CASTERS_PER_GROUP]
-            layout = counter_layout(bounds[group])
-            counter.count(target, volumes, choice, group, layout, halve, clip_planes, box)
-            counter.add_bits(target, group, layout)
-        combined = counter.read_casters(box, len(bounds))
+        for word, in_word in words.items():
+            target.use()
+            counter.clear_casters(box)
+            for first in range(0, len(in_word), CASTERS_PER_GROUP):
+                group = in_word[first:first + CASTERS_PER_GROUP]
+                layout = counter_layout(bounds[group])
+                counter.count(target, volumes, choice, group, layout, halve, clip_planes, box)
+                counter.add_bits(target, group, layout)
+            combined = counter.read_casters(box, 1 + max(in_word) % CASTER_WORD_BITS)
+            bits[rows, cols, word] = np.where(where[rows, cols], combined, np.uint64(0))
     finally:
         target.fbo.scissor = None
         target.use()  # re-applies the framebuffer's state: no scissor
-    bits[rows, cols] = np.where(where[rows, cols], combined, np.uint64(0))
     return bits
 
 

@@ -1,20 +1,25 @@
-"""A frame's ground truth assembled from what its passes left in the target (see `truth`)."""
+"""A frame's ground truth assembled from what its passes left in the target (see `truth`).
+
+An area light is its samples, each a hard light of the frame's pages: its facing and lit
+bits add up into `facing_count` and `lit_count`, its samples' casters OR.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
 from shadowvol import fields
-from shadowvol.raster import truth
+from shadowvol.raster import methods, truth
 from shadowvol.raster.plan import FramePlan
 from shadowvol.scene import Camera
 
 
-def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, truth_pages, zfail, vols,
+def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_pages, vols,
                 clip) -> dict[str, np.ndarray]:
-    """The ground-truth outputs of `plan` (and the facing pass's lit, as "lit"), read from the
-    frame `renderer` left in its target.  truth_pages : the facing pass's (lit, facing) bits
-    per page; zfail : (L, n_objects) bool, the casters counted with z-fail."""
+    """The ground-truth outputs of `plan` (and the facing pass's lit and lit_count, as "lit"
+    and "lit_count"), read from the frame `renderer` left in its target.  hard : the frame's
+    (light index, hard light) pairs, in the pages' order; truth_pages : the facing pass's
+    (lit, facing) bits per page."""
     out: dict[str, np.ndarray] = {}
     want = set(plan.outputs) & set(fields.GROUND_TRUTH)
     if not want:
@@ -36,34 +41,52 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, truth_pages, 
         triangle = geometry.triangle_of_key(triangle)   # a piece's key: its triangle
         out |= truth.surface_outputs(geometry, triangle, front, want)
     if "facing" in want:
-        out["lit"], out["facing"] = _facing(truth_pages, len(lights), h, w, covered)
-    if "casters" in want:
-        casters = np.zeros((len(lights), h, w), np.uint64)
-        for i, light in enumerate(lights):
-            cast = out["facing"][i] & ~out["lit"][i]
-            if not cast.any():
-                continue
-            light4 = light.homogeneous
-            candidates = truth.caster_candidates(geometry.bounds,
-                                                 truth.cast_points(camera, stored, cast),
-                                                 light4)
-            vols.prepare(light4)
-            truth.count_casters(
-                target, renderer._truth_pass().casters, vols, zfail[i],
-                candidates, renderer.object_bounds,
-                out["facing"][i], halve=plan.halve, clip_planes=clip, out=casters[i])
-        out["casters"] = casters
+        samples = np.array([sum(1 for i, _ in hard if i == k) for k in range(len(lights))],
+                           np.int64)
+        lit_count = np.zeros((len(lights), h, w), np.uint16)
+        facing_count = np.zeros((len(lights), h, w), np.uint16)
+        casters = (np.zeros(fields.shape("casters", len(lights), h, w,
+                                         objects=len(renderer.scene.objects)), np.uint64)
+                   if "casters" in want else None)
+        for k, (i, light) in enumerate(hard):
+            lit, facing = _sample_bits(truth_pages, k, covered)
+            lit_count[i] += lit
+            facing_count[i] += facing
+            if casters is not None:
+                _sample_casters(renderer, plan, camera, stored, light, lit, facing, vols, clip,
+                                casters[i])
+        out["lit_count"], out["lit"] = lit_count, lit_count == samples[:, None, None]
+        out["facing_count"], out["facing"] = facing_count, facing_count > 0
+        if casters is not None:
+            out["casters"] = casters
     return out
 
 
-def _facing(truth_pages, lights: int, h: int, w: int, covered: np.ndarray
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """lit, facing (L, H, W) bool from the facing pass's bits, covered pixels only."""
-    lit = np.zeros((lights, h, w), bool)
-    facing = np.zeros((lights, h, w), bool)
-    for i in range(lights):
-        page, bit = divmod(i, truth.LIGHTS_PER_PASS)
-        lit_bits, facing_bits = truth_pages[page]
-        np.not_equal(lit_bits & np.uint32(1 << bit), 0, out=lit[i])
-        np.not_equal(facing_bits & np.uint32(1 << bit), 0, out=facing[i])
+def _sample_casters(renderer, plan: FramePlan, camera: Camera, stored: np.ndarray, light,
+                    lit: np.ndarray, facing: np.ndarray, vols, clip, into: np.ndarray) -> None:
+    """ORs hard light `light`'s casters into `into` (H, W, K) uint64 where it faces the
+    pixel and is blocked: its own counts, under the method the frame counted it with."""
+    cast = facing & ~lit
+    if not cast.any():
+        return
+    geometry = renderer.geometry
+    light4 = light.homogeneous
+    choice = methods.choose(plan.method, geometry.bounds, camera, renderer.scene.aspect,
+                            light4, geometry.extent)
+    candidates = truth.caster_candidates(geometry.bounds,
+                                         truth.cast_points(camera, stored, cast), light4)
+    vols.prepare(light4)
+    bits = truth.count_casters(renderer.target, renderer._truth_pass().casters, vols, choice,
+                               candidates, renderer.object_bounds, facing, halve=plan.halve,
+                               clip_planes=clip)
+    np.bitwise_or(into, bits, out=into)
+
+
+def _sample_bits(truth_pages, k: int, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """lit, facing (H, W) bool of the frame's hard light k from the facing pass's bits,
+    covered pixels only."""
+    page, bit = divmod(k, truth.LIGHTS_PER_PASS)
+    lit_bits, facing_bits = truth_pages[page]
+    lit = (lit_bits & np.uint32(1 << bit)) != 0
+    facing = (facing_bits & np.uint32(1 << bit)) != 0
     return lit & covered, facing & covered

@@ -63,7 +63,7 @@ def test_annotations_are_the_object_id_and_casters_outputs(made, job, lights):
         want = {k: ids == k for k in range(1, 5) if (ids == k).any()}
         for i in range(lights):
             for k in range(1, 5):
-                bit = (casters[i] >> np.uint64(k - 1)) & np.uint64(1) != 0
+                bit = (casters[i][..., 0] >> np.uint64(k - 1)) & np.uint64(1) != 0
                 if bit.any():
                     want[SHADOW_IDS * (i + 1) + k] = bit
         anns = coco.loadAnns(coco.getAnnIds(imgIds=[im]))
@@ -77,7 +77,7 @@ def test_annotations_are_the_object_id_and_casters_outputs(made, job, lights):
 
 
 @pytest.mark.gl
-def test_an_area_light_has_no_shadow_categories(tmp_path):
+def test_an_area_light_has_shadow_categories(tmp_path):
     area = {"type": "rect", "center": [0.0, 2.5, 0.0],
             "normal": [0.0, -1.0, 0.0], "size": [0.4, 0.4], "samples": 4}
     lines = [{"name": "lamp", "scene": str(SCENES / "cage.toml"), "size": [32, 24],
@@ -86,14 +86,17 @@ def test_an_area_light_has_no_shadow_categories(tmp_path):
     jobs = write_jobs(tmp_path / "jobs.jsonl", lines)
     assert batch.run(jobs, tmp_path / "coco", format="coco", progress=False).status == 0
     data = json.loads((tmp_path / "coco" / "lamp" / "annotations.json").read_text())
-    assert data["info"]["shadow_lights"] == [1]   # the point light only
+    assert data["info"]["shadow_lights"] == [0, 1]   # the area light too
     shadow = {c["id"] // SHADOW_IDS - 1 for c in data["categories"]
               if c["supercategory"] == "shadow"}
-    assert shadow == {1}
+    assert shadow == {0, 1}
+    found = {a["category_id"] // SHADOW_IDS - 1 for a in data["annotations"]
+             if a["category_id"] >= SHADOW_IDS}
+    assert 0 in found   # the area light's cast shadows are annotated
 
 
 @pytest.mark.gl
-def test_a_scene_over_the_casters_limit_has_objects_and_no_shadows(tmp_path):
+def test_a_scene_of_more_than_64_objects_has_their_shadows(tmp_path):
     from shadowvol.primitives import box, plane
     from shadowvol.scene import Camera, PointLight, Scene
 
@@ -107,6 +110,10 @@ def test_a_scene_over_the_casters_limit_has_objects_and_no_shadows(tmp_path):
     summary = batch.run([job], tmp_path / "coco", format="coco", progress=False)
     assert summary.status == 0, summary.errors
     data = json.loads((tmp_path / "coco" / "cubes" / "annotations.json").read_text())
-    assert data["info"]["shadow_lights"] == []
-    assert {c["supercategory"] for c in data["categories"]} == {"object"}
-    assert len({a["category_id"] for a in data["annotations"]}) > 30
+    assert data["info"]["shadow_lights"] == [0]
+    assert {c["supercategory"] for c in data["categories"]} == {"object", "shadow"}
+    objects = {a["category_id"] for a in data["annotations"] if a["category_id"] < SHADOW_IDS}
+    shadows = {a["category_id"] - SHADOW_IDS for a in data["annotations"]
+               if a["category_id"] >= SHADOW_IDS}
+    assert len(objects) > 30
+    assert max(shadows) > 64   # a cube of the second caster word casts

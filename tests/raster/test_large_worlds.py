@@ -194,9 +194,9 @@ def test_huge_ground_pieces_keep_their_ground_truth(ctx, ground, seed):
     """A piece of a cut triangle is its triangle in the ground truth: the same object id and
     normal as the ray tracer's, and depth to CONVENTIONS' relative 3e-5, away from edges."""
     scene = random_ground_view(ground, seed)
-    want = ("depth", "normal", "object_id", "facing", "casters")
+    want = ("depth", "normal", "object_id", "facing", "facing_count", "casters")
     with Renderer(scene, ctx) as r:
-        got = r.render(outputs=want)
+        got = r.render(outputs=("lit",) + want)
         assert len(r.geometry.holes)
     ref = raytrace.ground_truth(scene, outputs=want)
     edges = np.logical_or.reduce([edge_pixels(got.object_id == k) | edge_pixels(ref.object_id == k)
@@ -206,8 +206,11 @@ def test_huge_ground_pieces_keep_their_ground_truth(ctx, ground, seed):
     assert (np.abs(got.depth[same] / ref.depth[same] - 1) <= 3e-5).all()
     assert (got.normal[same] == ref.normal[same]).all()
     for i in range(len(scene.lights)):
-        near = edges | edge_pixels(got.casters[i] != 0) | edge_pixels(ref.casters[i] != 0)
-        assert not ((got.casters[i] != ref.casters[i]) & ~near).any()
+        near = (edges | edge_pixels(got.casters[i].any(-1))
+                | edge_pixels(ref.casters[i].any(-1)))
+        assert not ((got.casters[i] != ref.casters[i]).any(-1) & ~near).any()
+    for frame in (got, ref):
+        np.testing.assert_array_equal(frame.casters.any(-1), frame.lit_count < frame.facing_count)
 
 
 def test_a_view_where_a_huge_far_cap_leaves_no_piece(ctx):

@@ -20,8 +20,7 @@ from raytrace.camera import primary_rays
 from raytrace.groundtruth import ground_truth
 from shadowvol.cameras import calibration
 from shadowvol.compare.maskdiff import edge_pixels
-from shadowvol.fields import MAX_CASTERS
-from shadowvol.primitives import box, sphere
+from shadowvol.primitives import box, plane, sphere
 from shadowvol.scene import (
     AreaLight,
     Camera,
@@ -88,7 +87,7 @@ def test_two_occluders_every_shadow_pixels_casters(request):
     truth = ground_truth(scene)
     ids, depth, casters = analytic_cards(scene)
     a, b = np.uint64(1 << 1), np.uint64(1 << 2)
-    got = truth.casters[0]
+    got = truth.casters[0, ..., 0]   # one word: at most 64 objects
     # the scene shows every case: A alone, B alone, both (the overlap), on the floor and on B
     for want, where in [(a, 1), (b, 1), (a | b, 1), (a, 3)]:
         assert ((casters == want) & (ids == where)).sum() > 20, (want, where)
@@ -112,7 +111,7 @@ def test_a_point_light_beside_the_cards_gives_the_same_bits_as_brute_force():
     truth = ground_truth(scene)
     want, ids = exact_casters(scene)
     np.testing.assert_array_equal(truth.object_id, ids)
-    check_bits(truth.casters, want, ids, len(scene.objects))
+    check_bits(truth.casters[..., 0], want, ids, len(scene.objects))
 
 
 # ---- depth and distance on a sphere ---------------------------------------------------------
@@ -165,18 +164,20 @@ def test_depth_distance_and_normals_on_a_sphere():
 def test_every_scene_file_cast_is_casters_and_lit_is_the_masks(name):
     scene = load_scene(SCENES / f"{name}.toml").replace(width=160, height=120)
     lit, coverage = raytrace.shadow_masks(scene)
-    if any(isinstance(light, AreaLight) for light in scene.lights):
-        # per-light outputs are per hard light; the rest, and lit, work
-        with pytest.raises(SceneError, match=r"lights\[\d+\]: facing is defined for point"):
-            ground_truth(scene)
-        truth = ground_truth(scene, ["depth", "object_id"])
-        np.testing.assert_array_equal(truth.lit, lit)
-        np.testing.assert_array_equal(truth.object_id > 0, coverage)
-        return
     truth = ground_truth(scene)
     np.testing.assert_array_equal(truth.lit, lit)
     np.testing.assert_array_equal(truth.coverage, coverage)
-    np.testing.assert_array_equal(truth.cast, truth.casters != 0)
+    np.testing.assert_array_equal(truth.cast, truth.casters.any(-1))
+    np.testing.assert_array_equal(truth.casters.any(-1), truth.lit_count < truth.facing_count)
+    if any(isinstance(light, AreaLight) for light in scene.lights):
+        # every output of an area light: its counts are raytrace.soft_masks'
+        soft = raytrace.soft_masks(scene)
+        np.testing.assert_array_equal(truth.lit_count, soft.lit_count)
+        np.testing.assert_array_equal(truth.facing, soft.facing)
+        np.testing.assert_array_equal(truth.umbra, soft.umbra)
+        np.testing.assert_array_equal(truth.penumbra, soft.penumbra)
+        np.testing.assert_array_equal(truth.object_id > 0, coverage)
+        return
     assert truth.cast.any() or not scene.lights  # cornell.toml has only emitters
     np.testing.assert_array_equal(truth.object_id > 0, coverage)
     assert (np.isfinite(truth.depth) == coverage).all()
@@ -206,8 +207,8 @@ def test_stack_casters_match_a_float64_brute_force_per_object():
     truth = ground_truth(scene)
     want, ids = exact_casters(scene)
     np.testing.assert_array_equal(truth.object_id, ids)
-    check_bits(truth.casters, want, ids, len(scene.objects))
-    assert popcount(truth.casters).max() >= 3
+    check_bits(truth.casters[..., 0], want, ids, len(scene.objects))
+    assert popcount(truth.casters[..., 0]).max() >= 3
 
 
 def test_embree_and_numpy_agree():
@@ -233,15 +234,15 @@ def test_only_the_outputs_asked_for_and_the_calibration_always():
         ground_truth(scene, ["depths"])
 
 
-def test_more_than_64_objects_refuse_casters_but_give_the_rest():
+def test_more_than_64_objects_have_casters_in_two_words():
     cubes = [box(f"c{i}", [i % 9 - 4.0, 0.2, i // 9 - 4.0], [0.3, 0.3, 0.3]) for i in range(70)]
-    scene = Scene(camera=Camera(eye=[0, 8, 8], target=[0, 0, 0]), objects=cubes,
+    scene = Scene(camera=Camera(eye=[0, 8, 8], target=[0, 0, 0]),
+                  objects=cubes + [plane("floor", point=(0, 0.05, 0))],
                   lights=[DirectionalLight([0.3, -1, 0.2])], width=32, height=24)
-    with pytest.raises(SceneError, match=f"casters is a {MAX_CASTERS}-bit mask, and this "
-                                         "scene has 70 objects"):
-        ground_truth(scene)
-    truth = ground_truth(scene, ["object_id", "facing"])
+    truth = ground_truth(scene)
     assert truth.object_id.max() > 64
+    assert truth.casters.shape == (1, 24, 32, 2) and truth.casters[..., 1].any()
+    np.testing.assert_array_equal(truth.casters.any(-1), truth.lit_count < truth.facing_count)
 
 
 # ---- the brute force ------------------------------------------------------------------------

@@ -38,7 +38,7 @@ def test_mask_file_holds_the_extra_arrays_and_refuses_wrong_ones(tmp_path):
     lit = np.zeros((3, 6, 8), bool)
     cov = np.ones((6, 8), bool)
     arrays = calibration(scene).arrays() | {
-        "depth": np.full((6, 8), 2.5, np.float32), "casters": np.ones((3, 6, 8), np.uint64)}
+        "depth": np.full((6, 8), 2.5, np.float32), "casters": np.ones((3, 6, 8, 1), np.uint64)}
     save_masks(tmp_path / "m.npz", lit, cov, arrays=arrays)
     back = load_mask_arrays(tmp_path / "m.npz")
     assert set(back) == {"lit", "coverage"} | set(arrays)

@@ -4,11 +4,9 @@ OUT/<job>/images/NNNNNN.png; image id = frame index.
 Two category sets: object k (the object_id k, scene order) is category k, supercategory
 "object"; the cast shadow of object k under light i is category SHADOW_IDS * (i + 1) + k,
 supercategory "shadow": the pixels where object k lies on the shadow segment to light i
-(`casters` bit k - 1).  Shadow categories exist only for the lights `casters` is made for:
-point, spot and directional lights of a scene within the renderers' caster limit; an area
-light, or every light of a scene over the limit, has none (`info.shadow_lights` lists the
-lights that have them).  Segmentations are compressed RLE, column-major, as pycocotools'
-`mask.encode` writes them (decode with `pycocotools.mask.decode`); iscrowd 0.
+(`casters` bit (k - 1) mod 64 of word (k - 1) div 64: for an area light, object k blocks
+some sample facing the pixel).  Every light has them (`info.shadow_lights` lists them).
+Segmentations are compressed RLE, column-major, as pycocotools' `mask.encode` writes them (decode with `pycocotools.mask.decode`); iscrowd 0.
 """
 
 from __future__ import annotations
@@ -40,9 +38,10 @@ def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
         if mask.any():
             found.append(_instance(k, mask))
     for slot, light in enumerate(arrays["casters_lights"]):
-        words = arrays["casters"][slot]
+        words = arrays["casters"][slot]   # (H, W, K)
         for k in range(1, len(scene.objects) + 1):
-            mask = (words >> np.uint64(k - 1)) & np.uint64(1) != 0
+            word, bit = divmod(k - 1, 64)
+            mask = (words[..., word] >> np.uint64(bit)) & np.uint64(1) != 0
             if mask.any():
                 found.append(_instance(SHADOW_IDS * (light + 1) + k, mask))
     record = {"image": {"file_name": image, "width": scene.width, "height": scene.height},
