@@ -12,12 +12,13 @@ The lights as the path tracer sees them (`raytrace.pathtrace`):
   (cosine-weighted about its normal: its cosine at the light), and pi^2 · radiance · R^2 / N for
   a directional light (a disc of radius R covering the scene).
 
-N is the number of photons shot from that light (`share`), stored or not.  Photons are stored
-at every hit with a Phong lobe after the first (the first is direct light, which shadow rays
-compute: `pathtrace.next_event`), in the caustic map while every bounce before was a mirror or
-glass (L S+ D), else in the global map (L .* D .* D); bounces follow `pathtrace._scatter`,
-the path tracer's own lobe choice and BSDF sampling, with Russian roulette on the Phong bounces
-(survival = the throughput's largest channel, at most `RR_MAX_SURVIVAL`).
+N is the number of photons shot from that light (`share`), stored or not.  Photons are
+stored at every hit with a diffuse lobe (kd > 0) after the first (the first is direct light,
+which shadow rays compute: `pathtrace.next_event`), in the caustic map while every bounce
+before was a mirror or glass (L S+ D), else in the global map (L .* D .* D); bounces follow
+`pathtrace._scatter`, the path tracer's own lobe choice and BSDF sampling, with Russian
+roulette on the Phong bounces (survival = the throughput's largest channel, at most
+`RR_MAX_SURVIVAL`).
 
 From the eye (`shade_rows`): emission seen directly or through mirrors and glass; at a hit
 with a Phong lobe of weight w, direct light by shadow rays plus  w · kd / pi · E  with E the
@@ -231,7 +232,9 @@ def trace_photons(world: PathWorld, rng, n: int, max_bounces: int = MAX_BOUNCES)
         if bounce == 0:
             power = power * np.where(scaled, np.asarray(t, np.float64) ** 2, 1.0)
         k = len(tri)
-        store = bounced & (np.broadcast_to(surf["phong"], (k,)) > 0.0)
+        diffuse_lobe = (np.broadcast_to(surf["phong"], (k,)) > 0.0) & \
+            (surf["kd"].max(axis=0) > 0.0)
+        store = bounced & diffuse_lobe  # (a black surface reflects nothing: no photon there)
         for name, sel in (("caustic", store & ~diffuse), ("global", store & diffuse)):
             i = np.flatnonzero(sel)
             stored[name].append((take(p, i).T, take(nrm, i).T, take(power, i).T))
