@@ -33,7 +33,7 @@ from shadowvol.errors import require
 KERNELS = ("cone", "uniform")
 KERNEL_NORM = {"uniform": 1.0, "cone": 1.0 / 3.0}  # c above: sum of weights / (pi r^2)
 NORMAL_AGREEMENT = 0.9  # cos of the largest angle between a photon's normal and the query's
-QUERY_BLOCK = 1 << 14  # query points per k-d tree call (bounds the (m, k) arrays)
+PAIR_BUDGET = 1 << 20  # (query, photon) pairs per k-d tree call: bounds its arrays (~25 MB)
 
 
 def kdtree():
@@ -76,13 +76,26 @@ class PhotonMap:
         out = np.zeros((len(points), 3))
         if self.tree is None or not len(points):
             return out
-        for s in range(0, len(points), QUERY_BLOCK):
-            block = slice(s, s + QUERY_BLOCK)
+        if radius is None:
+            step = max(1, PAIR_BUDGET // min(k, len(self)))
+            blocks = [slice(s, s + step) for s in range(0, len(points), step)]
+        else:
+            blocks = self._blocks(points, radius)
+        for block in blocks:
             if radius is None:
                 out[block] = self._nearest(points[block], normals[block], k, kernel)
             else:
                 out[block] = self._within(points[block], normals[block], radius, kernel)
         return out
+
+    def _blocks(self, points: np.ndarray, radius: float) -> list[slice]:
+        """Runs of query points with about `PAIR_BUDGET` photons within radius in all (a
+        radius as large as the scene pairs every point with every photon)."""
+        found = self.tree.query_ball_point(points, radius, return_length=True)
+        ends = np.cumsum(found)
+        cuts = np.searchsorted(ends, np.arange(PAIR_BUDGET, ends[-1], PAIR_BUDGET), "right")
+        edges = np.unique(np.concatenate([[0], cuts, [len(points)]]))
+        return [slice(a, b) for a, b in zip(edges[:-1], edges[1:])]
 
     def _nearest(self, points, normals, k: int, kernel: str) -> np.ndarray:
         k = min(k, len(self))
