@@ -25,10 +25,10 @@ with a Phong lobe of weight w, direct light by shadow rays plus  w · kd / pi ·
 caustic map's estimate plus the global map's (`raytrace.photonmap`), or, with a final gather,
 the caustic map's plus the irradiance gathered by G cosine-weighted rays, each adding what
 leaves the diffuse point it finds (direct light and both maps there; emission found is direct
-light or caustic at x and is not counted again) times cos / pdf (`gather_weight`).  The
-photon estimates use the diffuse kd / pi: a glossy lobe gets its direct light by shadow rays
-and only the diffuse part of the rest.  The path continues through mirrors and glass as the
-path tracer chooses them.  Random numbers: two streams spawned from `SeedSequence(seed)`
+light or caustic at x and is not counted again) times cos / pdf (`gather_weight`).  A glossy
+Phong lobe adds each photon of both maps weighted by the lobe's BRDF toward the eye (the
+gather serves the diffuse part).  The path continues through mirrors and glass as the path
+tracer chooses them.  Random numbers: two streams spawned from `SeedSequence(seed)`
 (photons, eye), used in a fixed order, so an image depends on the seed only.
 """
 
@@ -42,7 +42,7 @@ import numpy as np
 
 from shadowvol.scene import AreaSample, DirectionalLight, Scene, SpotLight
 
-from .brdf import cosine_hemisphere_rows, dot_rows
+from .brdf import cosine_hemisphere_rows, dot_rows, phong_eval_rows
 from .pathstate import RR_MAX_SURVIVAL, STATE, PathWorld, take
 from .pathtrace import _delta_bounce, _scatter, _scatter_add, camera_rays, next_event
 from .photonmap import KERNELS, PhotonMap, kdtree
@@ -83,9 +83,10 @@ class Estimate:
         if self.kernel not in KERNELS:
             raise ValueError(f"kernel must be one of {', '.join(KERNELS)}, got {self.kernel!r}")
 
-    def irradiance(self, photons: PhotonMap, p: np.ndarray, n: np.ndarray) -> np.ndarray:
-        """E (3, m) float64 at points p, normals n (3, m)."""
-        return photons.irradiance(p.T, n.T, self.k, self.radius, self.kernel).T
+    def irradiance(self, photons: PhotonMap, p: np.ndarray, n: np.ndarray,
+                   brdf=None) -> np.ndarray:
+        """E (3, m) float64 at points p, normals n (3, m) (brdf: `PhotonMap.irradiance`)."""
+        return photons.irradiance(p.T, n.T, self.k, self.radius, self.kernel, brdf).T
 
 
 @dataclass(frozen=True, eq=False)
@@ -215,7 +216,7 @@ def _hit_geometry(world: PathWorld, o, d, tri):
 
 def trace_photons(world: PathWorld, rng, n: int, max_bounces: int = MAX_BOUNCES) -> dict:
     """Shoot about n photons (the module docstring); returns {"caustic", "global": (points,
-    normals, powers) each (m, 3) float64, "shot": photons shot}."""
+    normals, powers, directions) each (m, 3), "shot": photons shot}."""
     o, d, power, scaled = emit(world, rng, n)
     shot = o.shape[1]
     stored = {"caustic": [], "global": []}
@@ -237,7 +238,8 @@ def trace_photons(world: PathWorld, rng, n: int, max_bounces: int = MAX_BOUNCES)
         store = bounced & diffuse_lobe  # (a black surface reflects nothing: no photon there)
         for name, sel in (("caustic", store & ~diffuse), ("global", store & diffuse)):
             i = np.flatnonzero(sel)
-            stored[name].append((take(p, i).T, take(nrm, i).T, take(power, i).T))
+            stored[name].append((take(p, i).T, take(nrm, i).T, take(power, i).T,
+                                 take(d, i).T))
         new_o = p + world.offset * nrm
         wo = -d if world.any_glossy else None
         d, factor, _, is_phong = _scatter(world, rng, surf, d, nrm, wo, entering, p, new_o)
@@ -254,7 +256,7 @@ def trace_photons(world: PathWorld, rng, n: int, max_bounces: int = MAX_BOUNCES)
     out = {"shot": shot}
     for name, chunks in stored.items():
         out[name] = tuple(np.concatenate([c[i] for c in chunks]) if chunks else
-                          np.zeros((0, 3)) for i in range(3))
+                          np.zeros((0, 3)) for i in range(4))
     return out
 
 
@@ -277,6 +279,40 @@ def _final_gather(world, maps, est, p, n, rng, rays: int) -> tuple[np.ndarray, i
     L, traced = shade_rows(world, maps, est, start, wi, rng, as_gather=True)
     e = (L * weight).reshape(3, m, rays).mean(axis=2)
     return e, traced + m * rays
+
+
+def _photon_light(world, maps, est, surf: dict, p, n, wo, i, rng, gather: int
+                  ) -> tuple[np.ndarray, int]:
+    """Radiance (3, m) float64 the maps (or the caustic map and a final gather) reflect at
+    hits i (m,) of a bounce (p, n, wo (3, k)), per unit throughput and Phong weight, and the
+    rays traced.  The diffuse kd / pi times E; a glossy lobe weighs each photon by its BRDF
+    toward wo (the final gather, cosine-weighted, serves the diffuse part only)."""
+    pi, ni = take(p, i).astype(np.float64), take(n, i).astype(np.float64)
+    e, rays = est.irradiance(maps.caustic, pi, ni), 0
+    if gather:
+        g, rays = _final_gather(world, maps, est, take(p, i), take(n, i), rng, gather)
+        e += g
+    else:
+        e += est.irradiance(maps.global_, pi, ni)
+    out = take(surf["kd"], i) * (1.0 / math.pi) * e
+    if world.any_glossy:
+        g = np.flatnonzero(np.isin(i, surf["glossy"]))
+        if len(g):
+            out[:, g] += _glossy_light(maps, est, surf, i[g], pi[:, g], ni[:, g], wo)
+    return out, rays
+
+
+def _glossy_light(maps, est, surf: dict, i, p, n, wo) -> np.ndarray:
+    """The glossy lobe's share (3, m) of the photons' reflected radiance at hits i (m,)."""
+    ks, s = take(surf["ks"], i).astype(np.float64), take(surf["shininess"], i)
+    wo_i, zero = take(wo, i).astype(np.float64), np.zeros((3, len(i)))
+    out = np.zeros((3, len(i)))
+    for photons in (maps.caustic, maps.global_):
+        def lobe(q, j, photons=photons):
+            wi = -photons.direction[j].T
+            return phong_eval_rows(zero[:, q], ks[:, q], s[q], n[:, q], wo_i[:, q], wi).T
+        out += est.irradiance(photons, p, n, lobe)
+    return out
 
 
 def shade_rows(world: PathWorld, maps: PhotonMaps, est: Estimate, o, d, rng,
@@ -313,15 +349,10 @@ def shade_rows(world: PathWorld, maps: PhotonMaps, est: Estimate, o, d, rng,
         phong = np.broadcast_to(surf["phong"], (k,))
         i = np.flatnonzero(phong > 0.0)
         if len(i):
-            pi, ni = take(p, i).astype(np.float64), take(n, i).astype(np.float64)
-            e = est.irradiance(maps.caustic, pi, ni)
-            if gather and not as_gather:
-                g, traced = _final_gather(world, maps, est, take(p, i), take(n, i), rng, gather)
-                e, rays = e + g, rays + traced
-            else:
-                e += est.irradiance(maps.global_, pi, ni)
-            f = take(beta, i) * take(surf["kd"], i) * (take(phong, i) / math.pi)
-            _scatter_add(L, take(path, i), f * e)
+            reflected, traced = _photon_light(world, maps, est, surf, p, n, wo, i, rng,
+                                              0 if as_gather else gather)
+            rays += traced
+            _scatter_add(L, take(path, i), take(beta, i) * take(phong, i) * reflected)
         if not world.any_delta:
             break
         u = rng.random(k, dtype=STATE)

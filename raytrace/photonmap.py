@@ -49,28 +49,34 @@ class PhotonMap:
 
     position : (n, 3) float64;  normal : (n, 3) float64, unit, the side the photon arrived on;
     power : (n, 3) float64, each photon's flux (already divided by the photons shot);
+    direction : (n, 3) float64, unit, the way it travelled (zero where not recorded);
     tree : the cKDTree of `position`, or None for an empty map
     """
 
     position: np.ndarray
     normal: np.ndarray
     power: np.ndarray
+    direction: np.ndarray
     tree: object
 
     @classmethod
-    def build(cls, position, normal, power) -> "PhotonMap":
+    def build(cls, position, normal, power, direction=None) -> "PhotonMap":
         position = np.asarray(position, np.float64).reshape(-1, 3)
         tree = kdtree()(position) if len(position) else None
+        direction = np.zeros_like(position) if direction is None else \
+            np.asarray(direction, np.float64).reshape(-1, 3)
         return cls(position, np.asarray(normal, np.float64).reshape(-1, 3),
-                   np.asarray(power, np.float64).reshape(-1, 3), tree)
+                   np.asarray(power, np.float64).reshape(-1, 3), direction, tree)
 
     def __len__(self) -> int:
         return len(self.position)
 
     def irradiance(self, points: np.ndarray, normals: np.ndarray, k: int | None = None,
-                   radius: float | None = None, kernel: str = "cone") -> np.ndarray:
+                   radius: float | None = None, kernel: str = "cone", brdf=None) -> np.ndarray:
         """The density estimate E (m, 3) float64 at points (m, 3) with unit normals (m, 3)
-        (the module docstring); exactly one of k (>= 2) and radius (> 0)."""
+        (the module docstring); exactly one of k (>= 2) and radius (> 0).  brdf: None, or
+        f(q, j) -> (P, 3), the BRDF for query points q (P,) int and photons j (P,) int, each
+        photon weighted by it: then the result is the reflected radiance."""
         points = np.asarray(points, np.float64).reshape(-1, 3)
         normals = np.asarray(normals, np.float64).reshape(-1, 3)
         out = np.zeros((len(points), 3))
@@ -82,10 +88,12 @@ class PhotonMap:
         else:
             blocks = self._blocks(points, radius)
         for block in blocks:
+            f = None if brdf is None else \
+                (lambda q, j, first=block.start: brdf(q + first, j))
             if radius is None:
-                out[block] = self._nearest(points[block], normals[block], k, kernel)
+                out[block] = self._nearest(points[block], normals[block], k, kernel, f)
             else:
-                out[block] = self._within(points[block], normals[block], radius, kernel)
+                out[block] = self._within(points[block], normals[block], radius, kernel, f)
         return out
 
     def _blocks(self, points: np.ndarray, radius: float) -> list[slice]:
@@ -97,7 +105,7 @@ class PhotonMap:
         edges = np.unique(np.concatenate([[0], cuts, [len(points)]]))
         return [slice(a, b) for a, b in zip(edges[:-1], edges[1:])]
 
-    def _nearest(self, points, normals, k: int, kernel: str) -> np.ndarray:
+    def _nearest(self, points, normals, k: int, kernel: str, brdf) -> np.ndarray:
         k = min(k, len(self))
         dist, idx = self.tree.query(points, k=k)
         dist, idx = dist.reshape(len(points), k), idx.reshape(len(points), k)
@@ -107,18 +115,24 @@ class PhotonMap:
             return np.zeros((len(points), 3))
         w = _weights(d, r[:, None], kernel)
         w *= np.einsum("mkc,mc->mk", self.normal[inner], normals) > NORMAL_AGREEMENT
-        flux = np.einsum("mk,mkc->mc", w, self.power[inner])
+        power = self.power[inner]
+        if brdf is not None:
+            m = len(points)
+            power = power * brdf(np.repeat(np.arange(m), k - 1), inner.ravel()).reshape(
+                m, k - 1, 3)
+        flux = np.einsum("mk,mkc->mc", w, power)
         with np.errstate(divide="ignore", invalid="ignore"):
             e = flux / (KERNEL_NORM[kernel] * np.pi * r[:, None] ** 2)
         return np.where(np.isfinite(e), e, 0.0)
 
-    def _within(self, points, normals, radius: float, kernel: str) -> np.ndarray:
+    def _within(self, points, normals, radius: float, kernel: str, brdf) -> np.ndarray:
         pairs = kdtree()(points).sparse_distance_matrix(self.tree, radius,
                                                          output_type="ndarray")
         i, j, d = pairs["i"], pairs["j"], pairs["v"]
         w = _weights(d, radius, kernel)
         w *= (self.normal[j] * normals[i]).sum(axis=1) > NORMAL_AGREEMENT
-        flux = np.stack([np.bincount(i, w * self.power[j, c], minlength=len(points))
+        power = self.power[j] if brdf is None else self.power[j] * brdf(i, j)
+        flux = np.stack([np.bincount(i, w * power[:, c], minlength=len(points))
                          for c in range(3)], axis=1)
         return flux / (KERNEL_NORM[kernel] * np.pi * radius ** 2)
 
