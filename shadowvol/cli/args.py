@@ -72,7 +72,8 @@ def seed(p: argparse.ArgumentParser, help: str) -> None:
 def photon(p: argparse.ArgumentParser, kernels: tuple[str, ...]) -> None:
     """The photon map's options on `raytrace render` (kernels: `raytrace.photonmap.KERNELS`)."""
     p.add_argument("--photons", type=int, default=200_000, metavar="N",
-                   help="photon mapping: photons shot from the lights (default 200000)")
+                   help="photon mapping: photons shot from the lights (default 200000); its "
+                        "eye rays per pixel are --spp's")
     p.add_argument("--knn", type=int, default=None, metavar="K",
                    help="photon mapping: the density estimate over the K nearest photons "
                         "(default 100, unless --radius)")
