@@ -183,7 +183,8 @@ def _photon(args) -> int:
     if args.knn is not None and args.radius is not None:
         raise SceneError("--knn", "give --knn or --radius, not both")
     try:
-        estimate = photon.Estimate(k=None if args.radius is not None else args.knn or 100,
+        k = photon.DEFAULT_K if args.knn is None else args.knn
+        estimate = photon.Estimate(k=None if args.radius is not None else k,
                                    radius=args.radius, kernel=args.kernel)
     except ValueError as exc:
         raise SceneError("--radius" if args.radius is not None else "--knn", str(exc)) from None

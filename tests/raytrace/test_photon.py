@@ -289,7 +289,13 @@ def test_cli_without_scipy_exits_2_naming_the_pip_command(tmp_path, capsys, monk
     assert not out.exists()
 
 
-def test_cli_refuses_knn_with_radius(tmp_path, capsys):
-    assert cli.main(["render", str(CAUSTIC), "--integrator", "photon", "--knn", "5",
-                     "--radius", "0.1", "-o", str(tmp_path / "x.png")]) == 2
-    assert "--knn" in capsys.readouterr().err
+@pytest.mark.parametrize("bad, flag", [
+    (["--knn", "5", "--radius", "0.1"], "--knn"), (["--knn", "1"], "--knn"),
+    (["--radius", "0"], "--radius"), (["--photons", "0"], "--photons"),
+    (["--final-gather", "-1"], "--final-gather")])
+def test_cli_refuses_bad_photon_options(tmp_path, capsys, bad, flag):
+    out = tmp_path / "x.png"
+    assert cli.main(["render", str(CAUSTIC), "--integrator", "photon", *bad,
+                     "-o", str(out)]) == 2
+    assert f"error: {flag}:" in capsys.readouterr().err
+    assert not out.exists()
