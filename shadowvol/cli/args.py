@@ -67,3 +67,21 @@ def exr(p: argparse.ArgumentParser, help: str, **kwargs) -> None:
 def seed(p: argparse.ArgumentParser, help: str) -> None:
     """`--seed S` of the seeded ray tracers."""
     p.add_argument("--seed", type=int, default=0, metavar="S", help=help)
+
+
+def photon(p: argparse.ArgumentParser, kernels: tuple[str, ...]) -> None:
+    """The photon map's options on `raytrace render` (kernels: `raytrace.photonmap.KERNELS`)."""
+    p.add_argument("--photons", type=int, default=200_000, metavar="N",
+                   help="photon mapping: photons shot from the lights (default 200000); its "
+                        "eye rays per pixel are --spp's")
+    p.add_argument("--knn", type=int, default=None, metavar="K",
+                   help="photon mapping: the density estimate over the K nearest photons "
+                        "(default 100, unless --radius)")
+    p.add_argument("--radius", type=float, default=None, metavar="R",
+                   help="photon mapping: the density estimate over the photons within R "
+                        "(scene units) instead of the nearest K")
+    p.add_argument("--kernel", choices=kernels, default=kernels[0],
+                   help=f"photon mapping: the density estimate's kernel (default {kernels[0]})")
+    p.add_argument("--final-gather", type=int, default=0, metavar="G",
+                   help="photon mapping: G final-gather rays per diffuse hit instead of reading "
+                        "the global map there (default 0: none)")

@@ -6,6 +6,7 @@
     raytrace masks  scenes/whitted.toml -o truth.npz --outputs depth,normal,object_id,casters
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
     raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png
+    raytrace render scenes/caustic.toml --integrator photon --photons 500000 -o caustic.png
     raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png
     raytrace exercise plane -o plane.png                            (the worked solution)
 
@@ -21,9 +22,10 @@ import io
 import sys
 from pathlib import Path
 
-from raytrace import exercise, shadow_masks  # (area lights: lit where every sample reaches)
+from raytrace import exercise, photon, shadow_masks  # (area lights: lit where every sample reaches)
 from raytrace.backends import BACKENDS
 from raytrace.groundtruth import check_outputs, ground_truth
+from raytrace.photonmap import KERNELS
 from raytrace.raytree import format_tree, ray_tree
 from raytrace.whitted import render
 from shadowvol import __version__, memory
@@ -79,6 +81,7 @@ def _render_parser(sub) -> None:
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
     raytrace_outlook.add_options(r)
+    blocks.photon(r, KERNELS)
 
 
 def _masks_parser(sub) -> None:
@@ -145,6 +148,8 @@ def main(argv: list[str] | None = None) -> int:
 def _render(args) -> int:
     if args.integrator == "path":
         return raytrace_outlook.path_traced(args)
+    if args.integrator == "photon":
+        return _photon(args)
     paths = {"image": Path(args.output)}
     for kind in ("exr", "png16"):
         if getattr(args, kind):
@@ -163,6 +168,39 @@ def _render(args) -> int:
     if "png16" in paths:
         save_png16(paths["png16"], image)
     print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)
+    return status.OK
+
+
+def _photon(args) -> int:
+    """`raytrace render --integrator photon`."""
+    paths = {"image": Path(args.output)} | ({"exr": Path(args.exr)} if args.exr else {})
+    outputs.check(paths, {"image": "-o", "exr": "--exr"})
+    for flag, value, ok, rule in (("--photons", args.photons, args.photons >= 1, ">= 1"),
+                                  ("--spp", args.spp, args.spp >= 1, ">= 1"),
+                                  ("--final-gather", args.final_gather, args.final_gather >= 0,
+                                   ">= 0")):
+        if not ok:
+            raise SceneError(flag, f"must be {rule}, got {value}")
+    if args.knn is not None and args.radius is not None:
+        raise SceneError("--knn", "give --knn or --radius, not both")
+    try:
+        k = photon.DEFAULT_K if args.knn is None else args.knn
+        estimate = photon.Estimate(k=None if args.radius is not None else k,
+                                   radius=args.radius, kernel=args.kernel)
+    except ValueError as exc:
+        raise SceneError("--radius" if args.radius is not None else "--knn", str(exc)) from None
+    scene = load_scene(args.scene)
+    memory.check(memory.path_traced(scene, args.spp, tuple(paths.keys() - {"image"}) + ("png",)),
+                 args.memory_budget, args.scene)
+    result = photon.render(scene, photons=args.photons, estimate=estimate, spp=args.spp,
+                           gather=args.final_gather, seed=args.seed, backend=args.backend)
+    save_png(args.output, result.image)
+    if args.exr:
+        save_exr(args.exr, result.image)
+    print(f"{result.maps.shot} photons ({len(result.maps.caustic)} caustic, "
+          f"{len(result.maps.global_)} global), {args.spp} spp, {result.rays / 1e6:.1f} M rays "
+          f"in {result.seconds:.1f} s; wrote {', '.join(str(p) for p in paths.values())}",
+          file=sys.stderr)
     return status.OK
 
 

@@ -25,9 +25,10 @@ from shadowvol.scenefile import load_scene
 
 def add_options(render: argparse.ArgumentParser) -> None:
     """The path tracer's options on `raytrace render`."""
-    render.add_argument("--integrator", choices=("whitted", "path"), default="whitted",
+    render.add_argument("--integrator", choices=("whitted", "path", "photon"), default="whitted",
                         help="'whitted' (default) or 'path': unidirectional path tracing with "
-                             "next-event estimation of emissive surfaces (material.emission)")
+                             "next-event estimation of emissive surfaces (material.emission); "
+                             "'photon': photon mapping (needs scipy: the outlook extra)")
     render.add_argument("--spp", type=int, default=16, metavar="N",
                         help="path tracing: paths per pixel (default 16)")
     blocks.seed(render, "path tracing: random seed; the same seed gives the same image "
