@@ -48,8 +48,9 @@ if TYPE_CHECKING:
 from shadowvol.scene import Scene
 
 from .backends import make_backend
-from .brdf import cosine_hemisphere, normalised_phong
+from .brdf import around, normalised_phong
 from .camera import primary_rays
+from .contacts import split_at_contacts
 from .intersect import dot
 from .tolerances import surface_offset
 
@@ -107,10 +108,12 @@ def split_triangles(corners: np.ndarray) -> np.ndarray:
                      ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))], axis=1).reshape(-1, 3, 3)
 
 
-def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | None = None
-                 ) -> PatchMesh:
+def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | None = None,
+                 contacts: bool = True) -> PatchMesh:
     """Subdivide the scene's triangles (see the module docstring); `level` >= 0, or, given,
-    `max_edge` (scene units, > 0) the longest edge allowed instead of longest / 2^level."""
+    `max_edge` (scene units, > 0) the longest edge allowed instead of longest / 2^level (the
+    scene's own longest edge, before the contact cuts: `raytrace.contacts`, unless
+    contacts=False)."""
     if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0:
         raise ValueError(f"level must be a whole number >= 0, got {level!r}")
     vertices, faces, ids = scene.triangles()
@@ -119,6 +122,9 @@ def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | Non
     target = edges.max() / 2.0 ** level if max_edge is None else float(max_edge)
     if not target > 0.0:
         raise ValueError(f"max_edge must be > 0, got {max_edge!r}")
+    if contacts:
+        corners, ids = split_at_contacts(corners, ids)
+        edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
     splits = np.ceil(np.log2(np.maximum(edges / target, 1.0)) - 1e-9).astype(int)
     if splits.max() > MAX_SUBDIVISION:
         raise ValueError(f"level {level} would split a triangle 4^{splits.max()} ways")
@@ -153,13 +159,15 @@ def form_factors(scene: Scene, mesh: PatchMesh, rays_per_patch: int = DEFAULT_RA
     for first in range(0, P, per_chunk):
         patch = np.repeat(np.arange(first, min(first + per_chunk, P)), rays_per_patch)
         tri = patch % T
-        u1, u2 = rng.random(len(patch)), rng.random(len(patch))
+        m = len(patch) // rays_per_patch
+        u1, u2 = stratified(rng, m, rays_per_patch)
+        v1, v2 = stratified(rng, m, rays_per_patch)
         r = np.sqrt(u1)
         c = mesh.vertices[mesh.faces[tri]]
         x = ((1.0 - r)[:, None] * c[:, 0] + (r * (1.0 - u2))[:, None] * c[:, 1]
              + (r * u2)[:, None] * c[:, 2])
         n = normals[patch]
-        d = cosine_hemisphere(rng, n)
+        d = around(n, np.sqrt(1.0 - v1), 2.0 * np.pi * v2)
         hits = tracer.closest_hit(x + offset * n, d)
         h = hits.tri >= 0
         facing_back = dot(tracer.normals[hits.tri[h]], d[h]) > 0.0  # the ray meets the -n face
@@ -170,6 +178,24 @@ def form_factors(scene: Scene, mesh: PatchMesh, rays_per_patch: int = DEFAULT_RA
     F = sp.csr_matrix((np.full(len(rows), 1.0 / rays_per_patch), (rows, cols)), shape=(P, P))
     F.sum_duplicates()
     return F, P * rays_per_patch
+
+
+def stratified(rng: np.random.Generator, m: int, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two (m * k,) float64 arrays: for each of m patches, k points of the unit square, one in
+    each cell of a g x (k // g) grid (g = floor(sqrt k)), the k - g (k // g) left over uniform,
+    in random order.  Each point is uniform on its own (the estimate stays unbiased, and a ray
+    still hits exactly one patch); together they cover the square evenly, so that a small
+    emitter is hit by nearly the same number of rays from every patch."""
+    g = max(1, int(np.sqrt(k)))
+    h = k // g
+    cell = np.arange(g * h)
+    a = np.concatenate([(cell // h + rng.random((m, g * h))) / g,
+                        rng.random((m, k - g * h))], axis=1)
+    b = np.concatenate([(cell % h + rng.random((m, g * h))) / h,
+                        rng.random((m, k - g * h))], axis=1)
+    order = rng.permuted(np.broadcast_to(np.arange(k), (m, k)), axis=1)
+    return (np.take_along_axis(a, order, axis=1).ravel(),
+            np.take_along_axis(b, order, axis=1).ravel())
 
 
 @dataclass(frozen=True, eq=False)
