@@ -21,6 +21,7 @@ import numpy as np
 CONTACT_RELATIVE = 1e-7  # on a plane: within this fraction of the largest |coordinate|
 PARALLEL_COS = 1.0 - 1e-9  # |n_A · n_B| above this: the two planes are the same direction
 PAIR_CHUNK = 1 << 22  # triangle-edge pairs tested per step (bounds memory)
+SIDE_CODE_BASE = 1 << 20  # `sides`: a corner on up to three segments gets a distinct code
 
 
 def unit_normals(corners: np.ndarray) -> np.ndarray:
@@ -54,13 +55,16 @@ def contact_cuts(corners: np.ndarray) -> list[tuple[int, np.ndarray, np.ndarray]
     return cuts
 
 
-def split_at_contacts(corners: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def split_at_contacts(corners: np.ndarray, ids: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Triangles (T, 3, 3) and their objects (T,) -> the same surfaces with every contact line
-    cut: (T', 3, 3), (T',), the cut triangles' pieces last, same winding, same total area."""
+    cut: (T', 3, 3), (T',), the cut triangles' pieces last, same winding, same total area; and
+    the contacts (C, 3, 3): each edge's two ends and the unit normal of the plane it cut."""
     cuts = contact_cuts(corners)
-    if not cuts:
-        return corners, ids
     n = unit_normals(corners)
+    segments = np.array([(p, p + d, n[t]) for t, p, d in cuts]).reshape(-1, 3, 3)
+    if not cuts:
+        return corners, ids, segments
     eps = _eps(corners)
     lines: dict[int, list] = {}
     for tri, point, direction in cuts:
@@ -78,7 +82,29 @@ def split_at_contacts(corners: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray,
             piece_ids += [ids[tri]] * (len(poly) - 2)
         keep[tri] = False
     return (np.concatenate([corners[keep], np.array(pieces)]),
-            np.concatenate([ids[keep], np.array(piece_ids, dtype=ids.dtype)]))
+            np.concatenate([ids[keep], np.array(piece_ids, dtype=ids.dtype)]), segments)
+
+
+def sides(points: np.ndarray, centres: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """(k,) int64: for patch corners `points` (k, 3) of patches with `centres` (k, 3), a code
+    of the side of each contact segment (C, 3, 3) that the patch lies on, over the segments
+    the corner lies on (0 when none): corners on a contact are shared only by patches on the
+    same side of it."""
+    code = np.zeros(len(points), np.int64)
+    eps = _eps(points) if len(points) else 0.0
+    for c, (p, q, n) in enumerate(segments):
+        along = q - p
+        length = float(np.linalg.norm(along))
+        unit = along / length
+        side = np.cross(unit, n)
+        rel = points - p
+        t = rel @ unit
+        off = rel - t[:, None] * unit
+        on = (np.linalg.norm(off, axis=1) <= eps) & (t >= -eps) & (t <= length + eps)
+        s = (centres - p) @ side
+        sign = np.where(s > eps, 1, np.where(s < -eps, -1, 0))
+        code += np.where(on, sign * (c + 1), 0) * SIDE_CODE_BASE ** (c % 3)
+    return code
 
 
 def _eps(corners: np.ndarray) -> float:

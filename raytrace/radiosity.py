@@ -36,7 +36,7 @@ most `tol` times the emitted power (or after `max_iterations`).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -50,7 +50,8 @@ from shadowvol.scene import Scene
 from .backends import make_backend
 from .brdf import around, normalised_phong
 from .camera import primary_rays
-from .contacts import split_at_contacts
+from .contacts import sides, split_at_contacts
+from .formrays import concentric_disk, emitter_windows, ray_square_points, stratified
 from .intersect import dot
 from .tolerances import surface_offset
 
@@ -72,7 +73,9 @@ class PatchMesh:
 
     vertices : (V, 3) float64;  faces : (T, 3) int64 (one patch per face of each triangle,
     2T patches);  tri_object : (T,) int, the object of each triangle;  area : (T,) float64;
-    normal : (T, 3) float64 unit winding normals.
+    normal : (T, 3) float64 unit winding normals;  contacts : (C, 3, 3) the contact segments
+    the mesh was cut along (`raytrace.contacts`), which the interpolated display never blends
+    across.
     """
 
     vertices: np.ndarray
@@ -80,6 +83,7 @@ class PatchMesh:
     tri_object: np.ndarray
     area: np.ndarray
     normal: np.ndarray
+    contacts: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
 
     @property
     def triangles(self) -> int:
@@ -122,8 +126,9 @@ def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | Non
     target = edges.max() / 2.0 ** level if max_edge is None else float(max_edge)
     if not target > 0.0:
         raise ValueError(f"max_edge must be > 0, got {max_edge!r}")
+    segments = np.zeros((0, 3, 3))
     if contacts:
-        corners, ids = split_at_contacts(corners, ids)
+        corners, ids, segments = split_at_contacts(corners, ids)
         edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
     splits = np.ceil(np.log2(np.maximum(edges / target, 1.0)) - 1e-9).astype(int)
     if splits.max() > MAX_SUBDIVISION:
@@ -142,60 +147,56 @@ def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | Non
     keep = length > 0.0
     c, cross, length = c[keep], cross[keep], length[keep]
     return PatchMesh(c.reshape(-1, 3), np.arange(3 * len(c)).reshape(-1, 3),
-                     np.concatenate(out_ids)[keep], 0.5 * length, cross / length[:, None])
+                     np.concatenate(out_ids)[keep], 0.5 * length, cross / length[:, None],
+                     segments)
 
 
 def form_factors(scene: Scene, mesh: PatchMesh, rays_per_patch: int = DEFAULT_RAYS_PER_PATCH,
                  seed: int = 0, backend: str = "embree") -> tuple[sp.csr_matrix, int]:
-    """F (2T, 2T) CSR float64, F[i, j] = fraction of patch i's rays whose first hit is patch j;
-    and the number of rays traced."""
+    """F (2T, 2T) CSR float64, F[i, j] = the weighted share of patch i's rays whose first hit
+    is patch j (`raytrace.formrays`: stratified, a share aimed at the emitters, weights summing
+    to 1 a patch); and the number of rays traced."""
     rng = np.random.default_rng(seed)
     tracer = make_backend(backend, mesh.vertices, mesh.faces)
     T, P = mesh.triangles, mesh.patches
     offset = surface_offset(scene)
     normals = mesh.patch_normal()
-    rows, cols = [], []
+    emitters = emitter_corners(scene)
+    emits = np.array([o.material.emission.any() for o in scene.objects])[mesh.patch_object()]
+    rows, cols, weights = [], [], []
     per_chunk = max(1, RAY_CHUNK // rays_per_patch)
     for first in range(0, P, per_chunk):
-        patch = np.repeat(np.arange(first, min(first + per_chunk, P)), rays_per_patch)
-        tri = patch % T
-        m = len(patch) // rays_per_patch
-        u1, u2 = stratified(rng, m, rays_per_patch)
-        v1, v2 = stratified(rng, m, rays_per_patch)
-        r = np.sqrt(u1)
-        c = mesh.vertices[mesh.faces[tri]]
-        x = ((1.0 - r)[:, None] * c[:, 0] + (r * (1.0 - u2))[:, None] * c[:, 1]
-             + (r * u2)[:, None] * c[:, 2])
+        ids = np.arange(first, min(first + per_chunk, P))
+        c = mesh.vertices[mesh.faces[ids % T]]
+        window = emitter_windows(c, normals[ids], emitters, emits[ids])
+        u, v, weight = ray_square_points(rng, window, rays_per_patch)
+        o1, o2 = stratified(rng, len(ids), rays_per_patch)
+        r = np.sqrt(o1)[..., None]
+        x = ((1.0 - r) * c[:, None, 0] + r * (1.0 - o2[..., None]) * c[:, None, 1]
+             + r * o2[..., None] * c[:, None, 2]).reshape(-1, 3)
+        patch = np.repeat(ids, rays_per_patch)
         n = normals[patch]
-        d = around(n, np.sqrt(1.0 - v1), 2.0 * np.pi * v2)
+        radius, phi = concentric_disk(u.ravel(), v.ravel())
+        d = around(n, np.sqrt(np.maximum(1.0 - radius * radius, 0.0)), phi)
         hits = tracer.closest_hit(x + offset * n, d)
         h = hits.tri >= 0
         facing_back = dot(tracer.normals[hits.tri[h]], d[h]) > 0.0  # the ray meets the -n face
         rows.append(patch[h])
         cols.append(hits.tri[h] + np.where(facing_back, T, 0))
+        weights.append(weight.ravel()[h])
     rows, cols = np.concatenate(rows), np.concatenate(cols)
     sp = _sparse()
-    F = sp.csr_matrix((np.full(len(rows), 1.0 / rays_per_patch), (rows, cols)), shape=(P, P))
+    F = sp.csr_matrix((np.concatenate(weights), (rows, cols)), shape=(P, P))
     F.sum_duplicates()
     return F, P * rays_per_patch
 
 
-def stratified(rng: np.random.Generator, m: int, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Two (m * k,) float64 arrays: for each of m patches, k points of the unit square, one in
-    each cell of a g x (k // g) grid (g = floor(sqrt k)), the k - g (k // g) left over uniform,
-    in random order.  Each point is uniform on its own (the estimate stays unbiased, and a ray
-    still hits exactly one patch); together they cover the square evenly, so that a small
-    emitter is hit by nearly the same number of rays from every patch."""
-    g = max(1, int(np.sqrt(k)))
-    h = k // g
-    cell = np.arange(g * h)
-    a = np.concatenate([(cell // h + rng.random((m, g * h))) / g,
-                        rng.random((m, k - g * h))], axis=1)
-    b = np.concatenate([(cell % h + rng.random((m, g * h))) / h,
-                        rng.random((m, k - g * h))], axis=1)
-    order = rng.permuted(np.broadcast_to(np.arange(k), (m, k)), axis=1)
-    return (np.take_along_axis(a, order, axis=1).ravel(),
-            np.take_along_axis(b, order, axis=1).ravel())
+def emitter_corners(scene: Scene) -> np.ndarray:
+    """(8 e, 3) the corners of each emissive object's bounding box: what the rays aim at."""
+    boxes = [(o.vertices.min(axis=0), o.vertices.max(axis=0)) for o in scene.objects
+             if o.material.emission.any()]
+    return np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for lo, hi in boxes
+                     for i in (0, 1) for j in (0, 1) for k in (0, 1)]).reshape(-1, 3)
 
 
 @dataclass(frozen=True, eq=False)
@@ -272,18 +273,24 @@ def solve(scene: Scene, level: int = DEFAULT_LEVEL, rays_per_patch: int = DEFAUL
 
 def vertex_radiance(mesh: PatchMesh, radiance: np.ndarray) -> np.ndarray:
     """(2T, 3 corners, 3) radiance at each patch's corners for interpolated display: the
-    area-weighted mean over the patches that share the corner's position, object and face
-    orientation (so that light never leaks round an edge onto another wall)."""
+    area-weighted mean over the patches that share the corner's position, object, face
+    orientation and side of any contact through it (so that light never leaks round an edge
+    onto another wall, nor out from under a block)."""
     T = mesh.triangles
     scale = max(float(np.abs(mesh.vertices).max()), 1e-300)
     pos = np.round(mesh.vertices[mesh.faces] / (scale * WELD_RELATIVE)).astype(np.int64)
     nrm = np.round(mesh.normal / NORMAL_QUANTUM).astype(np.int64)
+    corners = mesh.vertices[mesh.faces]
+    side = sides(corners.reshape(-1, 3), np.repeat(corners.mean(axis=1), 3, axis=0),
+                 mesh.contacts).reshape(T, 3, 1)
     key = np.concatenate([
         np.concatenate([pos, np.broadcast_to(nrm[:, None], (T, 3, 3)),
-                        np.broadcast_to(mesh.tri_object[:, None, None], (T, 3, 1))], axis=2),
+                        np.broadcast_to(mesh.tri_object[:, None, None], (T, 3, 1)), side],
+                       axis=2),
         np.concatenate([pos, np.broadcast_to(-nrm[:, None], (T, 3, 3)),
-                        np.broadcast_to(mesh.tri_object[:, None, None], (T, 3, 1))], axis=2)])
-    _, group = np.unique(key.reshape(-1, 7), axis=0, return_inverse=True)
+                        np.broadcast_to(mesh.tri_object[:, None, None], (T, 3, 1)), side],
+                       axis=2)])
+    _, group = np.unique(key.reshape(-1, 8), axis=0, return_inverse=True)
     group = group.ravel()
     w = np.repeat(mesh.patch_area(), 3)
     vals = np.repeat(radiance, 3, axis=0)
