@@ -11,8 +11,9 @@ stratified sampling with unequal allocation: unbiased for any window, and a patc
 to exactly w1 + w2 = 1, so every ray still lands on exactly one patch and a closed box's rows
 sum to one (the furnace stays exactly uniform).  The window only decides the variance: it is
 the bounding box, in the square, of the emitters' corners seen from the patch's corners and
-centre, padded by `WINDOW_PAD` (the images of an emitter's edges bulge); patches that see an
-emitter across their own horizon, or whose window would be most of the square, get none.
+centre (corners behind the patch's plane taken on the disk's rim, where the emitter's edges
+cross the horizon), padded by `WINDOW_PAD` (the images of its edges bulge); patches whose
+window would be most of the square, or that see no emitter corner, get none.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ EMITTER_SHARE = 0.25  # the fraction of a patch's rays sent into its emitter win
 WINDOW_PAD = 0.25  # the window's padding on each side, as a fraction of its size ...
 WINDOW_MARGIN = 0.02  # ... plus this much of the square
 WINDOW_MAX = 0.5  # a window larger than this share of the square is not worth it
-HORIZON_COS = 1e-3  # an emitter corner this close to the patch's plane: no window
+HORIZON_COS = 1e-3  # an emitter corner this close to the patch's plane counts as on the rim
 MIN_SPLIT_RAYS = 8  # fewer rays a patch than this: no window
 
 
@@ -81,7 +82,10 @@ def emitter_windows(corners: np.ndarray, normals: np.ndarray, emitters: np.ndarr
     w = emitters[None, None] - origins[:, :, None]  # (m, 4, e, 3)
     w /= np.maximum(np.linalg.norm(w, axis=3, keepdims=True), 1e-300)  # 0: no window
     z = np.einsum("mose,me->mos", w, normals)
-    u, v = square_of_disk(np.einsum("mose,me->mos", w, t), np.einsum("mose,me->mos", w, b))
+    x, y = np.einsum("mose,me->mos", w, t), np.einsum("mose,me->mos", w, b)
+    below = z <= HORIZON_COS  # seen across the horizon: its image goes to the disk's rim
+    rim = np.maximum(np.hypot(x, y), 1e-300)
+    u, v = square_of_disk(np.where(below, x / rim, x), np.where(below, y / rim, y))
     u, v = u.reshape(m, -1), v.reshape(m, -1)
     lo_u, hi_u, lo_v, hi_v = u.min(axis=1), u.max(axis=1), v.min(axis=1), v.max(axis=1)
     pad_u = WINDOW_PAD * (hi_u - lo_u) + WINDOW_MARGIN
@@ -89,7 +93,7 @@ def emitter_windows(corners: np.ndarray, normals: np.ndarray, emitters: np.ndarr
     window = np.stack([np.maximum(lo_u - pad_u, 0.0), np.minimum(hi_u + pad_u, 1.0),
                        np.maximum(lo_v - pad_v, 0.0), np.minimum(hi_v + pad_v, 1.0)], axis=1)
     area = (window[:, 1] - window[:, 0]) * (window[:, 3] - window[:, 2])
-    ok = (z.reshape(m, -1).min(axis=1) > HORIZON_COS) & ~own & (area < WINDOW_MAX)
+    ok = ~below.reshape(m, -1).all(axis=1) & ~own & (area < WINDOW_MAX)
     return np.where(ok[:, None], window, 0.0)
 
 
