@@ -8,7 +8,8 @@ Two measures per object, both over what the camera sees of it:
   display, of its flat display, and of the path tracer at `spp` (un-jittered, so both images
   sample the same points; its image is cached in `--cache` by (size, spp, seed));
 * `area`: the area-weighted mean of the solution over the object's camera-side patches, against
-  `points` path-traced points spread uniformly over the object's area (`radiance_leaving`).
+  one path-traced reference for all seeds, `points` points spread uniformly over the object's
+  area (`radiance_leaving`; cached in `--cache` by points).
 Differences are relative, radiosity over path tracer minus 1, summed over channels.  The light
 is listed separately (it is its emission plus what it reflects).  Radiosity runs at its
 defaults unless told otherwise, once per seed, and its time is reported.
