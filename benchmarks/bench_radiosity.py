@@ -3,7 +3,7 @@
     python -m benchmarks.bench_radiosity [--size 64] [--spp 256] [--seeds 0 1 2]
                                          [--level L] [--rays K] [--tol T] [--cache /tmp/x]
 
-Two measures per object, both over what the camera sees of it:
+Two measures per object:
 * `image`: the mean over the object's pixels (pixel centres) of radiosity's interpolated
   display, of its flat display, and of the path tracer at `spp` (un-jittered, so both images
   sample the same points; its image is cached in `--cache` by (size, spp, seed));
