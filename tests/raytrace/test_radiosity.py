@@ -253,6 +253,32 @@ def test_contact_cuts_leave_no_patch_under_a_block_edge():
         (mesh.vertices[mesh.faces][:, :, 1] == 0.0).all(axis=1).sum()
 
 
+def test_aimed_rays_keep_a_closed_box_s_rows_at_one():
+    """A closed white box with a small light card inside: the rays aimed at the card are
+    weighted, and still every inner face's row sums to exactly one; the windows are used."""
+    from raytrace import formrays
+    from shadowvol.primitives import box
+
+    white = Material(diffuse=[0.5] * 3, specular=[0, 0, 0])
+    lamp = Material(diffuse=[0.5] * 3, specular=[0, 0, 0], emission=[4.0] * 3)
+    scene = Scene(camera=Camera(eye=[0, 0, 0], target=[0, 0, -1], fov_y=90.0, near=0.01),
+                  objects=[box("room", size=(2.0, 2.0, 2.0), material=white),
+                           plane("lamp", point=[0.0, 0.9, 0.0], normal=[0, -1, 0],
+                                 size=[0.3, 0.3], material=lamp)],
+                  lights=[], width=8, height=8)
+    mesh = radiosity.mesh_patches(scene, 2)
+    F, _ = radiosity.form_factors(scene, mesh, rays_per_patch=64, seed=3)
+    sums = np.asarray(F.sum(axis=1)).ravel()
+    room = mesh.patch_object() == 0
+    inner = room & _inside_patches(mesh)
+    np.testing.assert_allclose(sums[inner], 1.0, rtol=1e-12)
+    np.testing.assert_allclose(sums[room & ~inner], 0.0)
+    c = np.concatenate([mesh.vertices[mesh.faces]] * 2)
+    windows = formrays.emitter_windows(c, mesh.patch_normal(), radiosity.emitter_corners(scene),
+                                       ~room)
+    assert (windows[inner].any(axis=1)).sum() > inner.sum() / 4
+
+
 def test_form_factor_ray_weights_are_unbiased_and_sum_to_one():
     """A window of the square gets a quarter of the rays; every patch's weights sum to one and
     the weighted points integrate a test function to its exact value."""
