@@ -1,7 +1,7 @@
 """The `raytrace` commands of the rendering equation's outlook: path tracing and radiosity.
 
     raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png [--exr c.exr]
-    raytrace radiosity scenes/cornell.toml --level 4 -o cornell-radiosity.png [--flat F.png]
+    raytrace radiosity scenes/cornell.toml -o cornell-radiosity.png [--flat F.png] [--level 4]
 
 `shadowvol.cli.raytrace` registers them (`add_options`, `add_parsers`) and hands over
 (`path_traced`, `radiosity_command`); exit statuses are `shadowvol.cli.status`'s.
