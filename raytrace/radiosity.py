@@ -9,18 +9,24 @@ the system is the diffuse rendering equation discretised over patches,
 with E_i the material's `emission` and rho_i its diffuse albedo (the normalised Phong kd of
 `raytrace.brdf`; specular, mirror and glass terms are dropped: radiosity is the diffuse part).
 
-Patches.  Every triangle is split by midpoints into 4^k similar triangles, k the smallest making
-its longest edge at most  (the scene's longest triangle edge) / 2^level.  Surfaces are two-sided,
-so each triangle has two patches, one per face: patch `t` is the face its winding normal points
-out of, patch `t + T` the other (T triangles).  A face that sees nothing (the outside of a wall)
-simply stays dark.
+Patches.  First, where an edge of one surface lies on another's plane (a block on the floor),
+the lower triangle is cut along that edge's line (`raytrace.contacts`): a patch running under a
+block would average its lit part with the buried one, and the blocks came out 1-2 % dark at
+every level and seed.  Then every triangle is split by midpoints into 4^k similar triangles, k
+the smallest making its longest edge at most  (the scene's longest triangle edge) / 2^level.
+Surfaces are two-sided, so each triangle has two patches, one per face: patch `t` is the face
+its winding normal points out of, patch `t + T` the other (T triangles).  A face that sees
+nothing (the outside of a wall) simply stays dark.
 
 Form factors by ray casting (Malley's method): from each patch, `rays_per_patch` rays leave
-uniformly random points of it in cosine-distributed directions, and are traced through Embree;
-F_ij is the fraction of them whose first hit is patch j (the face hit is the one facing the ray).
-This estimates the area-to-area form factor with visibility, unbiased; sum_j F_ij <= 1 exactly
-(1 minus the escaping rays: exactly 1 in a closed box), reciprocity A_i F_ij = A_j F_ji holds in
-expectation only.  F is stored sparse (CSR), at most rays_per_patch entries a row.
+stratified points of it in cosine-distributed directions (`raytrace.formrays`: stratified over
+the square, a quarter of them in a window around the emitters, each ray weighted so that a
+patch's weights sum to 1), and are traced through Embree; F_ij is the weight of the rays whose
+first hit is patch j (the face hit is the one facing the ray).  This estimates the area-to-area
+form factor with visibility, unbiased; sum_j F_ij <= 1 exactly (1 minus the escaping rays:
+exactly 1 in a closed box), reciprocity A_i F_ij = A_j F_ji holds in expectation only.  F is
+stored sparse (CSR), at most rays_per_patch entries a row.  The defaults (level 3, 4096 rays)
+put every object of the Cornell box within 1 % of the path tracer (docs/course.md).
 
 Solver: progressive refinement by shooting (Cohen et al. 1988).  Each iteration shoots the
 unshot radiance of the `shots` patches holding the most unshot power (A_i · ΔL_i, summed over
@@ -36,7 +42,7 @@ most `tol` times the emitted power (or after `max_iterations`).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -48,16 +54,18 @@ if TYPE_CHECKING:
 from shadowvol.scene import Scene
 
 from .backends import make_backend
-from .brdf import cosine_hemisphere, normalised_phong
+from .brdf import around, normalised_phong
 from .camera import primary_rays
+from .contacts import sides, split_at_contacts
+from .formrays import concentric_disk, emitter_windows, ray_square_points, stratified
 from .intersect import dot
 from .tolerances import surface_offset
 
 DEFAULT_LEVEL = 3
-DEFAULT_RAYS_PER_PATCH = 256
+DEFAULT_RAYS_PER_PATCH = 4096  # per wall within 2 % of the path tracer (docs/course.md)
 DEFAULT_TOL = 1e-4  # unshot power / emitted power at which shooting stops
 MAX_SUBDIVISION = 12  # 4^12 children per triangle is already absurd: a guard against bad input
-RAY_CHUNK = 1 << 20  # form-factor rays traced per call (bounds memory)
+RAY_CHUNK = 1 << 18  # form-factor rays traced per call (bounds memory: ~100 bytes a ray)
 # Interpolated display: patch corners are the same vertex when their positions agree to this
 # fraction of the largest coordinate (midpoint subdivision computes shared corners identically,
 # up to rounding) and their face normals to this much per component.
@@ -71,7 +79,9 @@ class PatchMesh:
 
     vertices : (V, 3) float64;  faces : (T, 3) int64 (one patch per face of each triangle,
     2T patches);  tri_object : (T,) int, the object of each triangle;  area : (T,) float64;
-    normal : (T, 3) float64 unit winding normals.
+    normal : (T, 3) float64 unit winding normals;  contacts : (C, 3, 3) the contact segments
+    the mesh was cut along (`raytrace.contacts`), which the interpolated display never blends
+    across.
     """
 
     vertices: np.ndarray
@@ -79,6 +89,7 @@ class PatchMesh:
     tri_object: np.ndarray
     area: np.ndarray
     normal: np.ndarray
+    contacts: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
 
     @property
     def triangles(self) -> int:
@@ -107,10 +118,12 @@ def split_triangles(corners: np.ndarray) -> np.ndarray:
                      ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))], axis=1).reshape(-1, 3, 3)
 
 
-def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | None = None
-                 ) -> PatchMesh:
+def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | None = None,
+                 contacts: bool = True) -> PatchMesh:
     """Subdivide the scene's triangles (see the module docstring); `level` >= 0, or, given,
-    `max_edge` (scene units, > 0) the longest edge allowed instead of longest / 2^level."""
+    `max_edge` (scene units, > 0) the longest edge allowed instead of longest / 2^level (the
+    scene's own longest edge, before the contact cuts: `raytrace.contacts`, unless
+    contacts=False)."""
     if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0:
         raise ValueError(f"level must be a whole number >= 0, got {level!r}")
     vertices, faces, ids = scene.triangles()
@@ -119,6 +132,10 @@ def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | Non
     target = edges.max() / 2.0 ** level if max_edge is None else float(max_edge)
     if not target > 0.0:
         raise ValueError(f"max_edge must be > 0, got {max_edge!r}")
+    segments = np.zeros((0, 3, 3))
+    if contacts:
+        corners, ids, segments = split_at_contacts(corners, ids)
+        edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max(axis=1)
     splits = np.ceil(np.log2(np.maximum(edges / target, 1.0)) - 1e-9).astype(int)
     if splits.max() > MAX_SUBDIVISION:
         raise ValueError(f"level {level} would split a triangle 4^{splits.max()} ways")
@@ -136,40 +153,57 @@ def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | Non
     keep = length > 0.0
     c, cross, length = c[keep], cross[keep], length[keep]
     return PatchMesh(c.reshape(-1, 3), np.arange(3 * len(c)).reshape(-1, 3),
-                     np.concatenate(out_ids)[keep], 0.5 * length, cross / length[:, None])
+                     np.concatenate(out_ids)[keep], 0.5 * length, cross / length[:, None],
+                     segments)
 
 
 def form_factors(scene: Scene, mesh: PatchMesh, rays_per_patch: int = DEFAULT_RAYS_PER_PATCH,
                  seed: int = 0, backend: str = "embree") -> tuple[sp.csr_matrix, int]:
-    """F (2T, 2T) CSR float64, F[i, j] = fraction of patch i's rays whose first hit is patch j;
-    and the number of rays traced."""
+    """F (2T, 2T) CSR float64, F[i, j] = the weighted share of patch i's rays whose first hit
+    is patch j (`raytrace.formrays`: stratified, a share aimed at the emitters, weights summing
+    to 1 a patch); and the number of rays traced."""
     rng = np.random.default_rng(seed)
     tracer = make_backend(backend, mesh.vertices, mesh.faces)
     T, P = mesh.triangles, mesh.patches
     offset = surface_offset(scene)
     normals = mesh.patch_normal()
-    rows, cols = [], []
+    emitters = emitter_corners(scene)
+    emits = np.array([o.material.emission.any() for o in scene.objects])[mesh.patch_object()]
+    sp = _sparse()
+    blocks = []  # one CSR block of rows a chunk, duplicates summed: memory ~ nonzeros, not rays
     per_chunk = max(1, RAY_CHUNK // rays_per_patch)
     for first in range(0, P, per_chunk):
-        patch = np.repeat(np.arange(first, min(first + per_chunk, P)), rays_per_patch)
-        tri = patch % T
-        u1, u2 = rng.random(len(patch)), rng.random(len(patch))
-        r = np.sqrt(u1)
-        c = mesh.vertices[mesh.faces[tri]]
-        x = ((1.0 - r)[:, None] * c[:, 0] + (r * (1.0 - u2))[:, None] * c[:, 1]
-             + (r * u2)[:, None] * c[:, 2])
+        ids = np.arange(first, min(first + per_chunk, P))
+        c = mesh.vertices[mesh.faces[ids % T]]
+        window = emitter_windows(c, normals[ids], emitters, emits[ids])
+        u, v, weight = ray_square_points(rng, window, rays_per_patch)
+        o1, o2 = stratified(rng, len(ids), rays_per_patch)
+        r = np.sqrt(o1)[..., None]
+        x = ((1.0 - r) * c[:, None, 0] + r * (1.0 - o2[..., None]) * c[:, None, 1]
+             + r * o2[..., None] * c[:, None, 2]).reshape(-1, 3)
+        patch = np.repeat(ids, rays_per_patch)
         n = normals[patch]
-        d = cosine_hemisphere(rng, n)
+        radius, phi = concentric_disk(u.ravel(), v.ravel())
+        d = around(n, np.sqrt(np.maximum(1.0 - radius * radius, 0.0)), phi)
         hits = tracer.closest_hit(x + offset * n, d)
         h = hits.tri >= 0
         facing_back = dot(tracer.normals[hits.tri[h]], d[h]) > 0.0  # the ray meets the -n face
-        rows.append(patch[h])
-        cols.append(hits.tri[h] + np.where(facing_back, T, 0))
-    rows, cols = np.concatenate(rows), np.concatenate(cols)
-    sp = _sparse()
-    F = sp.csr_matrix((np.full(len(rows), 1.0 / rays_per_patch), (rows, cols)), shape=(P, P))
+        block = sp.csr_matrix((weight.ravel()[h], (patch[h] - first,
+                                                   hits.tri[h] + np.where(facing_back, T, 0))),
+                              shape=(len(ids), P))
+        block.sum_duplicates()
+        blocks.append(block)
+    F = sp.vstack(blocks, format="csr")
     F.sum_duplicates()
     return F, P * rays_per_patch
+
+
+def emitter_corners(scene: Scene) -> np.ndarray:
+    """(8 e, 3) the corners of each emissive object's bounding box: what the rays aim at."""
+    boxes = [(o.vertices.min(axis=0), o.vertices.max(axis=0)) for o in scene.objects
+             if o.material.emission.any()]
+    return np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for lo, hi in boxes
+                     for i in (0, 1) for j in (0, 1) for k in (0, 1)]).reshape(-1, 3)
 
 
 @dataclass(frozen=True, eq=False)
@@ -246,18 +280,24 @@ def solve(scene: Scene, level: int = DEFAULT_LEVEL, rays_per_patch: int = DEFAUL
 
 def vertex_radiance(mesh: PatchMesh, radiance: np.ndarray) -> np.ndarray:
     """(2T, 3 corners, 3) radiance at each patch's corners for interpolated display: the
-    area-weighted mean over the patches that share the corner's position, object and face
-    orientation (so that light never leaks round an edge onto another wall)."""
+    area-weighted mean over the patches that share the corner's position, object, face
+    orientation and side of any contact through it (so that light never leaks round an edge
+    onto another wall, nor out from under a block)."""
     T = mesh.triangles
     scale = max(float(np.abs(mesh.vertices).max()), 1e-300)
     pos = np.round(mesh.vertices[mesh.faces] / (scale * WELD_RELATIVE)).astype(np.int64)
     nrm = np.round(mesh.normal / NORMAL_QUANTUM).astype(np.int64)
+    corners = mesh.vertices[mesh.faces]
+    side = sides(corners.reshape(-1, 3), np.repeat(corners.mean(axis=1), 3, axis=0),
+                 mesh.contacts).reshape(T, 3, 1)
     key = np.concatenate([
         np.concatenate([pos, np.broadcast_to(nrm[:, None], (T, 3, 3)),
-                        np.broadcast_to(mesh.tri_object[:, None, None], (T, 3, 1))], axis=2),
+                        np.broadcast_to(mesh.tri_object[:, None, None], (T, 3, 1)), side],
+                       axis=2),
         np.concatenate([pos, np.broadcast_to(-nrm[:, None], (T, 3, 3)),
-                        np.broadcast_to(mesh.tri_object[:, None, None], (T, 3, 1))], axis=2)])
-    _, group = np.unique(key.reshape(-1, 7), axis=0, return_inverse=True)
+                        np.broadcast_to(mesh.tri_object[:, None, None], (T, 3, 1)), side],
+                       axis=2)])
+    _, group = np.unique(key.reshape(-1, 8), axis=0, return_inverse=True)
     group = group.ravel()
     w = np.repeat(mesh.patch_area(), 3)
     vals = np.repeat(radiance, 3, axis=0)
