@@ -420,8 +420,13 @@ def _distributed_tile(world: World, scene: Scene, rows: slice, depth: int, spp: 
     offsets = pixel_offsets(samples(0, centre=True), pixel_filter)
     lens = concentric_disk(samples(1)) if scene.camera.aperture > 0.0 else None
     o, d = sample_rays(scene.camera, W, scene.height, rows, offsets, lens)
-    glossy_samples = (lambda g: samples(2 + g).reshape(-1, 2)) if rough else None
-    colour = trace(world, scene, o, d, depth, glossy_samples)
+    glossy = [samples(2 + g).reshape(-1, 2) for g in range(depth)] if rough else None
+    colour = np.empty((pixels * spp, 3))
+    step = max(1, TILE_RAYS // spp) * spp  # whole pixels: a row of many samples is split too
+    for i in range(0, len(o), step):
+        part = slice(i, i + step)
+        colour[part] = trace(world, scene, o[part], d[part], depth,
+                             None if glossy is None else lambda g: glossy[g][part])
     return colour.reshape(pixels, spp, 3).mean(axis=1).reshape(-1, W, 3)
 
 

@@ -2,6 +2,7 @@
 
     raytrace render scenes/whitted.toml -o whitted.png
     raytrace render scenes/whitted.toml -o whitted.png --exr whitted.exr --png16 whitted16.png
+    raytrace render scenes/whitted.toml -o whitted-aa.png --spp 16 --filter tent --seed 1
     raytrace masks  scenes/whitted.toml -o whitted-masks.npz      (+ whitted-masks.png)
     raytrace masks  scenes/whitted.toml -o truth.npz --outputs depth,normal,object_id,casters
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
@@ -25,6 +26,7 @@ from raytrace import exercise, shadow_masks  # (area lights: lit where every sam
 from raytrace.backends import BACKENDS
 from raytrace.groundtruth import check_outputs, ground_truth
 from raytrace.raytree import format_tree, ray_tree
+from raytrace.sampling import FILTERS
 from raytrace.whitted import render
 from shadowvol import __version__, memory
 from shadowvol.cameras import calibration
@@ -78,6 +80,9 @@ def _render_parser(sub) -> None:
     blocks.memory_budget(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
+    r.add_argument("--filter", choices=FILTERS, default="box",
+                   help="Whitted with --spp N: the pixel filter the samples are drawn from, "
+                        "'box' (the pixel's square, default) or 'tent' (radius 1 pixel)")
     raytrace_outlook.add_options(r)
 
 
@@ -151,11 +156,16 @@ def _render(args) -> int:
     outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"})
     if args.max_depth is not None and args.max_depth < 0:
         raise SceneError("--max-depth", f"must be >= 0, got {args.max_depth}")
+    spp = 1 if args.spp is None else args.spp
+    for flag, value, low in (("--spp", spp, 1), ("--seed", args.seed, 0)):
+        if value < low:
+            raise SceneError(flag, f"must be >= {low}, got {value}")
     scene = load_scene(args.scene)
     memory.check(memory.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
     image = render(scene, max_depth=args.max_depth, backend=args.backend,
-                   progress=False if args.no_progress else None)
+                   progress=False if args.no_progress else None, spp=spp, seed=args.seed,
+                   pixel_filter=args.filter)
     save_png(args.output, image)
     if "exr" in paths:
         save_exr(paths["exr"], image)
