@@ -33,10 +33,15 @@ def stratified(rng: np.random.Generator, pixels: int, spp: int,
         cell = np.stack([k % m, k // m], axis=-1).astype(np.float64)
         u = (cell[None] + rng.random((pixels, spp, 2))) / m
     else:  # N-rooks: column k, row π(k)
-        rows = rng.permuted(np.broadcast_to(np.arange(spp), (pixels, spp)), axis=1)
+        rows = _permutations(rng, pixels, spp)
         cell = np.stack([np.broadcast_to(np.arange(spp), (pixels, spp)), rows], axis=-1)
         u = (cell + rng.random((pixels, spp, 2))) / spp
-    return rng.permuted(u, axis=1)  # a fresh pairing with every other dimension
+    return u[np.arange(pixels)[:, None], _permutations(rng, pixels, spp)]  # a fresh pairing
+
+
+def _permutations(rng: np.random.Generator, pixels: int, spp: int) -> np.ndarray:
+    """(pixels, spp) int: a random permutation of 0 .. spp - 1 per pixel."""
+    return rng.permuted(np.broadcast_to(np.arange(spp), (pixels, spp)), axis=1)
 
 
 def pixel_offsets(u: np.ndarray, pixel_filter: str) -> np.ndarray:
