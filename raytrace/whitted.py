@@ -407,27 +407,27 @@ def render(scene: Scene, max_depth: int | None = None, backend: str = "embree",
 
 def _distributed_tile(world: World, scene: Scene, rows: slice, depth: int, spp: int,
                       seed: int, pixel_filter: str, rough: bool) -> np.ndarray:
-    """The rows (R, W, 3) of a distributed render: spp samples per pixel, averaged.  Each
-    dimension draws from its own generator, keyed by (seed, first row, dimension), so a tile's
-    samples depend on neither the threads nor which other effects are on."""
+    """The rows (R, W, 3) of a distributed render: spp samples per pixel, averaged, traced in
+    chunks of whole pixels of at most TILE_RAYS rays (or one pixel).  Each dimension draws
+    from its own generator, keyed by (seed, the tile's first row, dimension), so the samples
+    depend on neither the threads nor which other effects are on."""
     W = scene.width
-    pixels = (rows.stop - rows.start) * W
-
-    def samples(dimension: int, centre: bool = False) -> np.ndarray:
-        rng = np.random.default_rng([seed, rows.start, dimension])
-        return stratified(rng, pixels, spp, centre)
-
-    offsets = pixel_offsets(samples(0, centre=True), pixel_filter)
-    lens = concentric_disk(samples(1)) if scene.camera.aperture > 0.0 else None
-    o, d = sample_rays(scene.camera, W, scene.height, rows, offsets, lens)
-    glossy = [samples(2 + g).reshape(-1, 2) for g in range(depth)] if rough else None
-    colour = np.empty((pixels * spp, 3))
-    step = max(1, TILE_RAYS // spp) * spp  # whole pixels: a row of many samples is split too
-    for i in range(0, len(o), step):
-        part = slice(i, i + step)
-        colour[part] = trace(world, scene, o[part], d[part], depth,
-                             None if glossy is None else lambda g: glossy[g][part])
-    return colour.reshape(pixels, spp, 3).mean(axis=1).reshape(-1, W, 3)
+    first, pixels = rows.start * W, (rows.stop - rows.start) * W
+    rngs = [np.random.default_rng([seed, rows.start, dim]) for dim in range(2 + depth)]
+    colour = np.empty((pixels, 3))
+    step = max(1, TILE_RAYS // spp)
+    for start in range(0, pixels, step):
+        n = min(step, pixels - start)
+        offsets = pixel_offsets(stratified(rngs[0], n, spp, centre=True), pixel_filter)
+        lens = concentric_disk(stratified(rngs[1], n, spp)) \
+            if scene.camera.aperture > 0.0 else None
+        o, d = sample_rays(scene.camera, W, scene.height, first + start + np.arange(n),
+                           offsets, lens)
+        glossy = [stratified(rng, n, spp).reshape(-1, 2) for rng in rngs[2:]] if rough \
+            else None
+        c = trace(world, scene, o, d, depth, None if glossy is None else glossy.__getitem__)
+        colour[start:start + n] = c.reshape(n, spp, 3).mean(axis=1)
+    return colour.reshape(-1, W, 3)
 
 
 def aliasing_pair(scene: Scene, spp: int = 16, seed: int = 0, pixel_filter: str = "box",
