@@ -101,8 +101,9 @@ def sample_rays(camera, width: int, height: int, pixels: np.ndarray, offsets: np
     lens    : (P, S, 2) float64 points of the unit disk, scaled by `camera.aperture` (the
               lens radius) along right and up; None or aperture 0: a pinhole.
     Returns origins, unit directions : (P*S, 3) float64, sample-minor (the i-th pixel's
-    samples at i*S .. i*S + S - 1).  The lens ray aims at where the pinhole ray of the same pixel position
-    meets the plane of focus (eye-space depth `camera.focus`) and starts on the near plane.
+    samples at i*S .. i*S + S - 1).  A lens ray aims where the pinhole ray of the same pixel
+    position meets the plane of focus (eye-space depth `camera.focus`): that plane is sharp.
+    Every ray starts on the near plane.
     """
     right, up, back = camera_basis(camera)
     half_h = math.tan(math.radians(camera.fov_y) / 2.0)

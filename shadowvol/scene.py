@@ -69,8 +69,9 @@ class Material:
     radiosity (`raytrace.pathtrace`, `raytrace.radiosity`).  The shadow-volume renderer, the
     masks and Whitted ignore it: they light only with `Scene.lights`.
 
-    `roughness` in [0, 1] blurs the ray tracer's reflection into a glossy lobe around the mirror
-    direction (`raytrace.sampling.glossy`); 0 is the exact mirror.  The rasterizer ignores it.
+    `roughness` in [0, 1] blurs Whitted's reflection into a glossy lobe around the mirror
+    direction (`raytrace.sampling.glossy`); 0 is the exact mirror.  The rasterizer, the path
+    tracer and radiosity ignore it.
     """
 
     ambient: np.ndarray = field(default_factory=lambda: vec([0.1, 0.1, 0.1], "ambient"))
@@ -198,8 +199,9 @@ class Camera:
     """Look-at camera, OpenGL style (looks down its -z axis); see CONVENTIONS.md.
 
     `aperture` (the lens radius, 0: a pinhole) and `focus_distance` (the eye-space depth of the
-    plane in focus; None: the distance to `target`) give the ray tracer's image depth of field
-    (`raytrace.camera.sample_rays`).  The rasterizer and every mask stay a pinhole.
+    plane in focus; None: the distance to `target`) give Whitted's image depth of field
+    (`raytrace.camera.sample_rays`).  The rasterizer, every mask, the path tracer and radiosity
+    stay a pinhole.
     """
 
     eye: np.ndarray
