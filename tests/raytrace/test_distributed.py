@@ -180,6 +180,11 @@ def test_stratified_layouts_fill_every_stratum():
             assert (np.sort(np.floor(u[..., 1] * m), axis=1) == np.arange(m)).all()
         assert (np.sort(cells, axis=1) == np.arange(spp)).all()
     assert (stratified(rng, 2, 1, centre=True) == 0.5).all()
+    # jittered, not a regular grid: uniform inside each stratum (variance 1/12)
+    inside = (stratified(rng, 4000, 16) * 4) % 1.0
+    assert inside.mean() == pytest.approx(0.5, abs=0.01)
+    assert inside.var() == pytest.approx(1 / 12, abs=0.005)
+    assert stratified(rng, 4000, 1).var() == pytest.approx(1 / 12, abs=0.005)  # lens, gloss
 
 
 def test_tent_warp_has_the_tent_density():
@@ -205,6 +210,7 @@ def test_glossy_lobe_has_the_phong_density():
         # the pdf ∝ cos^e about the mirror direction: E[cos] = (e + 1) / (e + 2)
         assert d[:, 2].mean() == pytest.approx((e + 1) / (e + 2), abs=3e-3)
         assert abs(d[:, 0].mean()) < 5e-3 and abs(d[:, 1].mean()) < 5e-3
+    assert (phong_exponent(1.0), phong_exponent(0.5)) == (0.0, 6.0)  # r = 1: uniform
     grazing = np.tile([1.0, 0.0, 0.0], (k, 1))
     up = np.tile([0.0, 0.0, 1.0], (k, 1))
     folded = glossy(grazing, up, np.full(k, 0.5), rng.random((k, 2)))
