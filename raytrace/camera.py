@@ -88,3 +88,36 @@ def primary_rays(camera, width: int, height: int, rows: slice | None = None,
     if unit:
         d = d / np.sqrt((d * d).sum(axis=0))
     return origins, d.T.copy()
+
+
+def sample_rays(camera, width: int, height: int, pixels: np.ndarray, offsets: np.ndarray,
+                lens: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Rays through points inside the pixels, through a thin lens: distributed ray tracing's
+    primary rays (the masks keep `primary_rays`, the pixel centres).
+
+    pixels  : (P,) int, row-major pixel indices y * W + x, row 0 at the top.
+    offsets : (P, S, 2) float64, each ray's position in pixel units from its pixel's top-left
+              corner (x right, y down); 0.5 is the centre, as in `pixel_ndc`.
+    lens    : (P, S, 2) float64 points of the unit disk, scaled by `camera.aperture` (the
+              lens radius) along right and up; None or aperture 0: a pinhole.
+    Returns origins, unit directions : (P*S, 3) float64, sample-minor (the i-th pixel's
+    samples at i*S .. i*S + S - 1).  A lens ray aims where the pinhole ray of the same pixel
+    position meets the plane of focus (eye-space depth `camera.focus`): that plane is sharp.
+    Every ray starts on the near plane.
+    """
+    right, up, back = camera_basis(camera)
+    half_h = math.tan(math.radians(camera.fov_y) / 2.0)
+    half_w = half_h * (width / height)
+    px = (pixels % width)[:, None] + offsets[..., 0]
+    py = (pixels // width)[:, None] + offsets[..., 1]
+    x = (px / width * 2.0 - 1.0).reshape(-1)
+    y = (1.0 - py / height * 2.0).reshape(-1)
+    d = up * (y * half_h)[:, None] + (right * (x * half_w)[:, None] - back)  # depth 1
+    start = np.broadcast_to(camera.eye, d.shape)
+    if lens is not None and camera.aperture > 0.0:
+        disk = camera.aperture * lens.reshape(-1, 2)
+        shift = disk[:, :1] * right + disk[:, 1:] * up  # in the lens plane: depth 0
+        start = start + shift
+        d = d - shift / camera.focus  # through eye + focus·d: still depth 1
+    origins = start + camera.near * d
+    return origins, d / np.sqrt((d * d).sum(axis=1))[:, None]

@@ -28,6 +28,16 @@ are exact for analytic shapes and the face normal for triangles, flipped to face
 ray.  Refraction decides entering / leaving by the geometric normal (outward for spheres, by
 winding for triangles, edge_u × edge_v for parallelograms) against the ray, and assumes the
 other side is air (ior 1): nested media are not tracked.
+
+Distributed ray tracing (Cook, Porter, Carpenter 1984) generalises three of these: `spp`
+stratified samples per pixel through a box or tent filter (antialiasing), a lens of radius
+`camera.aperture` focused at `camera.focus` (depth of field) and a material's `roughness`
+(a glossy lobe instead of the mirror ray, one ray per pixel sample and generation), each
+dimension stratified over the pixel's samples (`raytrace.sampling`).  An area light stays its
+N fixed samples (`AreaLight.positions`, the masks' light), all of them summed at every hit:
+the soft shadow of each pixel sample is today's, so the image converges to today's averaged
+over the pixel.  At spp 1 with no lens and no roughness, the image is the classic one, bit for
+bit: the same pixel-centre rays (`primary_rays`) and the same mirror rays.
 """
 
 from __future__ import annotations
@@ -48,9 +58,10 @@ from shadowvol.scene import (
 )
 
 from .backends import cpu_threads, make_backend
-from .camera import primary_rays
+from .camera import primary_rays, sample_rays
 from .intersect import dot, ray_parallelogram, ray_sphere, reflect, refract
 from .progress import Progress
+from .sampling import FILTERS, concentric_disk, glossy, pixel_offsets, stratified
 from .tolerances import surface_offset
 
 # Primary rays per tile: bounds memory (a generation holds a few dozen float64 values per ray)
@@ -65,7 +76,7 @@ class World:
     kind     : (K,) int: 0 sphere, 1 parallelogram, 2 triangles
     center   : (K, 3), radius : (K,)         spheres
     normal   : (K, 3)                         parallelograms (unit, edge_u × edge_v)
-    ka, kd, ks : (K, 3);  shininess, refl, transp, ior : (K,)
+    ka, kd, ks : (K, 3);  shininess, refl, transp, ior, roughness : (K,)
     """
 
     SPHERE, PARALLELOGRAM, TRIANGLES = 0, 1, 2
@@ -107,6 +118,7 @@ class World:
         self.refl = np.array([x.reflectivity for x in m])
         self.transp = np.array([x.transparency for x in m])
         self.ior = np.array([x.ior for x in m])
+        self.roughness = np.array([x.roughness for x in m])
 
     def nearest(self, o: np.ndarray, d: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -267,22 +279,36 @@ class Secondary:
     tir: np.ndarray
 
 
-def secondary_rays(world: World, p, n, d, entering, obj) -> Secondary:
+def secondary_rays(world: World, p, n, d, entering, obj, u=None) -> Secondary:
     """Reflected and refracted rays at hits p (k, 3) with shading normals n (k, 3) (facing the
-    ray), incoming unit directions d (k, 3), `entering` (k,) bool, objects obj (k,)."""
+    ray), incoming unit directions d (k, 3), `entering` (k,) bool, objects obj (k,).
+
+    u : (k, 2) float64 in [0, 1)², the glossy samples; None: every reflection is the mirror
+        (roughness ignored).  A roughness of 0 is the mirror either way.
+    """
     r = np.flatnonzero(world.refl[obj] > 0.0)
+    mirror = reflect(d[r], n[r])
+    rough = world.roughness[obj[r]]
+    g = np.flatnonzero(rough > 0.0) if u is not None else ()
+    if len(g):
+        mirror[g] = glossy(mirror[g], n[r[g]], rough[g], u[r[g]])
     s = np.flatnonzero(world.transp[obj] > 0.0)
     # Reflection leaves on the ray's side; refraction crosses to the other side (unless
     # it is totally reflected inside, when `refract` hands back the mirror direction).
     eta = np.where(entering[s], 1.0 / world.ior[obj[s]], world.ior[obj[s]])
     refr_dir, tir = refract(d[s], n[s], eta)
     side = np.where(tir, 1.0, -1.0)[:, None]
-    return Secondary(r, p[r] + world.offset * n[r], reflect(d[r], n[r]),
+    return Secondary(r, p[r] + world.offset * n[r], mirror,
                      s, p[s] + side * world.offset * n[s], refr_dir, tir)
 
 
-def trace(world: World, scene: Scene, origins, directions, max_depth: int) -> np.ndarray:
-    """Colours (n, 3) float64 of rays origins, directions (n, 3) (unit directions)."""
+def trace(world: World, scene: Scene, origins, directions, max_depth: int,
+          glossy_samples=None) -> np.ndarray:
+    """Colours (n, 3) float64 of rays origins, directions (n, 3) (unit directions).
+
+    glossy_samples : None (mirrors), or a function of the generation (0, 1, ...) giving the
+                     glossy samples (n, 2) in [0, 1)² of that generation per primary ray.
+    """
     n_rays = len(origins)
     colour = np.zeros((n_rays, 3))
     o, d = origins, directions
@@ -305,7 +331,8 @@ def trace(world: World, scene: Scene, origins, directions, max_depth: int) -> np
             _accumulate(colour, pixel, weight[:, None] * local)
             break
         _accumulate(colour, pixel, (weight * (1.0 - refl - transp))[:, None] * local)
-        sec = secondary_rays(world, p, n, d, entering, obj)
+        u = None if glossy_samples is None else glossy_samples(depth)[pixel]
+        sec = secondary_rays(world, p, n, d, entering, obj, u)
         r, s = sec.reflect_index, sec.refract_index
         o = np.concatenate([sec.reflect_origin, sec.refract_origin])
         d = np.concatenate([sec.reflect_direction, sec.refract_direction])
@@ -323,28 +350,44 @@ def _accumulate(colour: np.ndarray, index: np.ndarray, values: np.ndarray) -> No
 
 
 def render(scene: Scene, max_depth: int | None = None, backend: str = "embree",
-           progress: bool | None = None) -> np.ndarray:
+           progress: bool | None = None, spp: int = 1, seed: int = 0,
+           pixel_filter: str = "box") -> np.ndarray:
     """Ray-trace `scene`: (H, W, 3) float64 linear RGB, row 0 at the top.
 
-    max_depth : reflection / refraction generations (default `scene.max_depth`); 0 gives the
-                direct lighting alone (exactly what the rasterizer draws).
-    backend   : "embree" or "numpy", for objects without an analytic form (meshes, boxes).
-    progress  : a progress bar on stderr: None (default) when stderr is a terminal.
+    max_depth    : reflection / refraction generations (default `scene.max_depth`); 0 gives the
+                   direct lighting alone (exactly what the rasterizer draws).
+    backend      : "embree" or "numpy", for objects without an analytic form (meshes, boxes).
+    progress     : a progress bar on stderr: None (default) when stderr is a terminal.
+    spp          : samples per pixel (`raytrace.sampling`); 1 is the pixel centre.
+    seed         : >= 0; the same seed gives the same image, whatever the number of threads.
+    pixel_filter : "box" or "tent" (`raytrace.sampling.pixel_offsets`).
     """
     depth = scene.max_depth if max_depth is None else max_depth
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or depth < 0:
         raise ValueError(f"max_depth must be a whole number >= 0, got {depth!r}")
+    for name, value in (("spp", spp), ("seed", seed)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                or value < (name == "spp"):
+            raise ValueError(f"{name} must be a whole number >= {int(name == 'spp')}, "
+                             f"got {value!r}")
+    if pixel_filter not in FILTERS:
+        raise ValueError(f"filter must be one of {', '.join(FILTERS)}, got {pixel_filter!r}")
     H, W = scene.height, scene.width
-    rows_per_tile = max(1, TILE_RAYS // W)
+    rows_per_tile = max(1, TILE_RAYS // (W * spp))
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
     # One tile per core at a time: Embree and numpy's larger operations release the GIL.
     threads = min(cpu_threads(), len(tiles))
     world = World(scene, backend, parallel=threads == 1)
+    rough = bool((world.roughness * world.refl).any())
+    distributed = spp > 1 or scene.camera.aperture > 0.0 or rough
     image = np.zeros((H, W, 3))
 
     def trace_tile(rows: slice) -> tuple[slice, np.ndarray]:
-        o, d = primary_rays(scene.camera, W, H, rows)
-        return rows, trace(world, scene, o, d, depth).reshape(-1, W, 3)
+        if not distributed:
+            o, d = primary_rays(scene.camera, W, H, rows)
+            return rows, trace(world, scene, o, d, depth).reshape(-1, W, 3)
+        return rows, _distributed_tile(world, scene, rows, depth, spp, seed, pixel_filter,
+                                       rough)
 
     with Progress(len(tiles), f"raytrace {scene.name}", enabled=progress) as bar:
         if threads == 1:
@@ -360,3 +403,37 @@ def render(scene: Scene, max_depth: int | None = None, backend: str = "embree",
             if threads > 1:
                 pool.shutdown(cancel_futures=True)
     return image
+
+
+def _distributed_tile(world: World, scene: Scene, rows: slice, depth: int, spp: int,
+                      seed: int, pixel_filter: str, rough: bool) -> np.ndarray:
+    """The rows (R, W, 3) of a distributed render: spp samples per pixel, averaged, traced in
+    chunks of whole pixels of at most TILE_RAYS rays (or one pixel).  Each dimension draws
+    from its own generator, keyed by (seed, the tile's first row, dimension), so the samples
+    depend on neither the threads nor which other effects are on."""
+    W = scene.width
+    first, pixels = rows.start * W, (rows.stop - rows.start) * W
+    rngs = [np.random.default_rng([seed, rows.start, dim]) for dim in range(2 + depth)]
+    colour = np.empty((pixels, 3))
+    step = max(1, TILE_RAYS // spp)
+    for start in range(0, pixels, step):
+        n = min(step, pixels - start)
+        offsets = pixel_offsets(stratified(rngs[0], n, spp, centre=True), pixel_filter)
+        lens = concentric_disk(stratified(rngs[1], n, spp)) \
+            if scene.camera.aperture > 0.0 else None
+        o, d = sample_rays(scene.camera, W, scene.height, first + start + np.arange(n),
+                           offsets, lens)
+        glossy = [stratified(rng, n, spp).reshape(-1, 2) for rng in rngs[2:]] if rough \
+            else None
+        c = trace(world, scene, o, d, depth, None if glossy is None else glossy.__getitem__)
+        colour[start:start + n] = c.reshape(n, spp, 3).mean(axis=1)
+    return colour.reshape(-1, W, 3)
+
+
+def aliasing_pair(scene: Scene, spp: int = 16, seed: int = 0, pixel_filter: str = "box",
+                  **kwargs) -> tuple[np.ndarray, np.ndarray]:
+    """The lecture's "aliasing through discrete sampling": `scene` rendered at one sample per
+    pixel (the centre: the staircase) and at `spp` stratified samples (the edge's coverage),
+    each (H, W, 3) float64; `kwargs` go to `render`."""
+    return (render(scene, **kwargs),
+            render(scene, spp=spp, seed=seed, pixel_filter=pixel_filter, **kwargs))

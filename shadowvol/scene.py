@@ -68,6 +68,10 @@ class Material:
     direction (a Lambertian emitter): it makes an object an area light for the path tracer and
     radiosity (`raytrace.pathtrace`, `raytrace.radiosity`).  The shadow-volume renderer, the
     masks and Whitted ignore it: they light only with `Scene.lights`.
+
+    `roughness` in [0, 1] blurs Whitted's reflection into a glossy lobe around the mirror
+    direction (`raytrace.sampling.glossy`); 0 is the exact mirror.  The rasterizer, the path
+    tracer and radiosity ignore it.
     """
 
     ambient: np.ndarray = field(default_factory=lambda: vec([0.1, 0.1, 0.1], "ambient"))
@@ -78,6 +82,7 @@ class Material:
     transparency: float = 0.0
     ior: float = 1.5
     emission: np.ndarray = field(default_factory=lambda: vec([0.0, 0.0, 0.0], "emission"))
+    roughness: float = 0.0
 
     def __post_init__(self):
         for name in ("ambient", "diffuse", "specular", "emission"):
@@ -91,6 +96,8 @@ class Material:
         object.__setattr__(self, "transparency",
                            num(self.transparency, "transparency", low=0.0, high=1.0))
         object.__setattr__(self, "ior", num(self.ior, "ior", low=0.0, low_open=True))
+        object.__setattr__(self, "roughness",
+                           num(self.roughness, "roughness", low=0.0, high=1.0))
         if self.reflectivity + self.transparency > 1.0 + 1e-12:
             raise SceneError("reflectivity", "reflectivity + transparency must be <= 1")
 
@@ -189,17 +196,30 @@ class Object:
 
 @dataclass(frozen=True, eq=False)
 class Camera:
-    """Look-at camera, OpenGL style (looks down its -z axis); see CONVENTIONS.md."""
+    """Look-at camera, OpenGL style (looks down its -z axis); see CONVENTIONS.md.
+
+    `aperture` (the lens radius, 0: a pinhole) and `focus_distance` (the eye-space depth of the
+    plane in focus; None: the distance to `target`) give Whitted's image depth of field
+    (`raytrace.camera.sample_rays`).  The rasterizer, every mask, the path tracer and radiosity
+    stay a pinhole.
+    """
 
     eye: np.ndarray
     target: np.ndarray
     up: np.ndarray = field(default_factory=lambda: vec([0, 1, 0], "up"))
     fov_y: float = 45.0
     near: float = 0.05
+    aperture: float = 0.0
+    focus_distance: float | None = None
 
     def __post_init__(self):
         for name in ("eye", "target", "up"):
             object.__setattr__(self, name, vec(getattr(self, name), name))
+        object.__setattr__(self, "aperture", num(self.aperture, "aperture", low=0.0))
+        if self.focus_distance is not None:
+            object.__setattr__(self, "focus_distance", num(self.focus_distance,
+                                                           "focus_distance", low=0.0,
+                                                           low_open=True))
         object.__setattr__(self, "fov_y", num(self.fov_y, "fov_y", low=0.0, high=179.0,
                                               low_open=True))
         object.__setattr__(self, "near", num(self.near, "near", low=0.0, low_open=True))
@@ -212,6 +232,13 @@ class Camera:
                                                          np.linalg.norm(self.up))
         if sin < PARALLEL_TOLERANCE:
             raise SceneError("up", "up is parallel to the view direction (target - eye)")
+
+    @property
+    def focus(self) -> float:
+        """The eye-space depth of the plane in focus: `focus_distance`, else |target - eye|."""
+        if self.focus_distance is not None:
+            return self.focus_distance
+        return float(np.linalg.norm(self.target - self.eye))
 
 
 @dataclass(frozen=True, eq=False)

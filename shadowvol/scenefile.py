@@ -52,10 +52,10 @@ MAX_LIST_LENGTH = 1 << 24
 # Allowed keys per table; anything else is an error (a typo must not be silently ignored).
 TOP_KEYS = {"name", "image", "camera", "ambient", "render", "materials", "lights", "objects"}
 IMAGE_KEYS = {"width", "height", "background"}
-CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near"}
+CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near", "aperture", "focus_distance"}
 RENDER_KEYS = {"max_depth"}
 MATERIAL_KEYS = {"ambient", "diffuse", "specular", "shininess", "reflectivity", "transparency",
-                 "ior", "emission"}
+                 "ior", "emission", "roughness"}
 LIGHT_KEYS = {
     "point": {"type", "position", "color", "intensity"},
     "directional": {"type", "direction", "color", "intensity"},

@@ -26,10 +26,12 @@ def scene_to_dict(scene: Scene) -> dict:
     lights, so a saved scene reproduces any mask exactly."""
 
     def material(m: Material) -> dict:
+        # roughness (and the lens keys below) only where set: older files stay as they were
         return {"ambient": m.ambient.tolist(), "diffuse": m.diffuse.tolist(),
                 "specular": m.specular.tolist(), "shininess": m.shininess,
                 "reflectivity": m.reflectivity, "transparency": m.transparency, "ior": m.ior,
-                "emission": m.emission.tolist()}
+                "emission": m.emission.tolist(),
+                **({"roughness": m.roughness} if m.roughness else {})}
 
     def light(lt) -> dict:
         out = {"color": lt.color.tolist(), "intensity": lt.intensity}
@@ -53,7 +55,10 @@ def scene_to_dict(scene: Scene) -> dict:
         "image": {"width": int(scene.width), "height": int(scene.height),
                   "background": scene.background.tolist()},
         "camera": {"eye": cam.eye.tolist(), "target": cam.target.tolist(), "up": cam.up.tolist(),
-                   "fov_y": cam.fov_y, "near": cam.near},
+                   "fov_y": cam.fov_y, "near": cam.near,
+                   **({"aperture": cam.aperture} if cam.aperture else {}),
+                   **({} if cam.focus_distance is None
+                      else {"focus_distance": cam.focus_distance})},
         "render": {"max_depth": int(scene.max_depth)},
         "lights": [light(lt) for lt in scene.lights],
         "objects": [{"type": "mesh", "name": o.name, "vertices": o.vertices.tolist(),

@@ -2,6 +2,7 @@
 
     raytrace render scenes/whitted.toml -o whitted.png
     raytrace render scenes/whitted.toml -o whitted.png --exr whitted.exr --png16 whitted16.png
+    raytrace render scenes/whitted.toml -o whitted-aa.png --spp 16 --filter tent --seed 1
     raytrace masks  scenes/whitted.toml -o whitted-masks.npz      (+ whitted-masks.png)
     raytrace masks  scenes/whitted.toml -o truth.npz --outputs depth,normal,object_id,casters
     raytrace tree   scenes/whitted.toml --pixel 420 300 --depth 3 -o tree.png
@@ -27,6 +28,7 @@ from raytrace.backends import BACKENDS
 from raytrace.groundtruth import check_outputs, ground_truth
 from raytrace.photonmap import KERNELS
 from raytrace.raytree import format_tree, ray_tree
+from raytrace.sampling import FILTERS
 from raytrace.whitted import render
 from shadowvol import __version__, memory
 from shadowvol.cameras import calibration
@@ -47,7 +49,7 @@ from shadowvol.scenefile import load_scene
 
 
 def _parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(
+    ap = blocks.Parser(
         prog="raytrace",
         description="Reference CPU ray tracer of shadowvol: Whitted images and the exact "
                     "shadow masks the shadow-volume rasterizer is checked against.",
@@ -80,6 +82,9 @@ def _render_parser(sub) -> None:
     blocks.memory_budget(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
+    r.add_argument("--filter", choices=FILTERS, default="box",
+                   help="Whitted with --spp N: the pixel filter the samples are drawn from, "
+                        "'box' (the pixel's square, default) or 'tent' (radius 1 pixel)")
     raytrace_outlook.add_options(r)
     blocks.photon(r, KERNELS)
 
@@ -157,11 +162,16 @@ def _render(args) -> int:
     outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
     if args.max_depth is not None and args.max_depth < 0:
         raise SceneError("--max-depth", f"must be >= 0, got {args.max_depth}")
+    spp = 1 if args.spp is None else args.spp
+    for flag, value, low in (("--spp", spp, 1), ("--seed", args.seed, 0)):
+        if value < low:
+            raise SceneError(flag, f"must be >= {low}, got {value}")
     scene = load_scene(args.scene)
     memory.check(memory.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
     image = render(scene, max_depth=args.max_depth, backend=args.backend,
-                   progress=False if args.no_progress else None)
+                   progress=False if args.no_progress else None, spp=spp, seed=args.seed,
+                   pixel_filter=args.filter)
     save_png(args.output, image)
     if "exr" in paths:
         save_exr(paths["exr"], image)
@@ -174,9 +184,11 @@ def _render(args) -> int:
 def _photon(args) -> int:
     """`raytrace render --integrator photon`."""
     paths = {"image": Path(args.output)} | ({"exr": Path(args.exr)} if args.exr else {})
-    outputs.check(paths, {"image": "-o", "exr": "--exr"})
+    outputs.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
+    spp = raytrace_outlook.PATH_SPP if args.spp is None else args.spp
     for flag, value, ok, rule in (("--photons", args.photons, args.photons >= 1, ">= 1"),
-                                  ("--spp", args.spp, args.spp >= 1, ">= 1"),
+                                  ("--spp", spp, spp >= 1, ">= 1"),
+                                  ("--seed", args.seed, args.seed >= 0, ">= 0"),
                                   ("--final-gather", args.final_gather, args.final_gather >= 0,
                                    ">= 0")):
         if not ok:
@@ -190,15 +202,15 @@ def _photon(args) -> int:
     except ValueError as exc:
         raise SceneError("--radius" if args.radius is not None else "--knn", str(exc)) from None
     scene = load_scene(args.scene)
-    memory.check(memory.path_traced(scene, args.spp, tuple(paths.keys() - {"image"}) + ("png",)),
+    memory.check(memory.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
-    result = photon.render(scene, photons=args.photons, estimate=estimate, spp=args.spp,
+    result = photon.render(scene, photons=args.photons, estimate=estimate, spp=spp,
                            gather=args.final_gather, seed=args.seed, backend=args.backend)
     save_png(args.output, result.image)
     if args.exr:
         save_exr(args.exr, result.image)
     print(f"{result.maps.shot} photons ({len(result.maps.caustic)} caustic, "
-          f"{len(result.maps.global_)} global), {args.spp} spp, {result.rays / 1e6:.1f} M rays "
+          f"{len(result.maps.global_)} global), {spp} spp, {result.rays / 1e6:.1f} M rays "
           f"in {result.seconds:.1f} s; wrote {', '.join(str(p) for p in paths.values())}",
           file=sys.stderr)
     return status.OK

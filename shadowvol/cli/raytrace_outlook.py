@@ -23,15 +23,22 @@ from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 
+PATH_SPP = 16  # the path tracer's paths per pixel when --spp is not given
+
+
 def add_options(render: argparse.ArgumentParser) -> None:
     """The path tracer's options on `raytrace render`."""
     render.add_argument("--integrator", choices=("whitted", "path", "photon"), default="whitted",
                         help="'whitted' (default) or 'path': unidirectional path tracing with "
                              "next-event estimation of emissive surfaces (material.emission); "
                              "'photon': photon mapping (needs scipy: the outlook extra)")
-    render.add_argument("--spp", type=int, default=16, metavar="N",
-                        help="path tracing: paths per pixel (default 16)")
-    blocks.seed(render, "path tracing: random seed; the same seed gives the same image "
+    render.add_argument("--spp", type=int, default=None, metavar="N",
+                        help="samples per pixel: path tracing's paths and the photon map's eye "
+                             f"rays (default {PATH_SPP}); Whitted's stratified jittered samples, "
+                             "see --filter (default 1: the pixel centre, no jitter)")
+    blocks.seed(render, "random seed of the path tracer, the photon map and Whitted's "
+                        "distributed samples (--spp, roughness, aperture); the same seed gives "
+                        "the same image "
                         "(default 0)")
     blocks.exr(render, "also write the linear image as OpenEXR")
 
@@ -72,21 +79,23 @@ def path_traced(args) -> int:
     if args.exr:
         paths["exr"] = Path(args.exr)
     outputs.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
-    if args.spp < 1:
-        raise SceneError("--spp", f"must be >= 1, got {args.spp}")
+    spp = PATH_SPP if args.spp is None else args.spp
+    for flag, value, low in (("--spp", spp, 1), ("--seed", args.seed, 0)):
+        if value < low:
+            raise SceneError(flag, f"must be >= {low}, got {value}")
     depth = args.max_depth
     if depth is not None and depth < 1:
         raise SceneError("--max-depth", f"must be >= 1 for path tracing, got {depth}")
     scene = load_scene(args.scene)
-    memory.check(memory.path_traced(scene, args.spp, tuple(paths.keys() - {"image"}) + ("png",)),
+    memory.check(memory.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
     kwargs = {} if depth is None else {"max_depth": depth}
-    result = pathtrace.render(scene, spp=args.spp, seed=args.seed, backend=args.backend,
+    result = pathtrace.render(scene, spp=spp, seed=args.seed, backend=args.backend,
                               progress=False if args.no_progress else None, **kwargs)
     save_png(args.output, result.image)
     if args.exr:
         save_exr(args.exr, result.image)
-    print(f"{args.spp} spp, {result.rays / 1e6:.1f} M rays in {result.seconds:.1f} s "
+    print(f"{spp} spp, {result.rays / 1e6:.1f} M rays in {result.seconds:.1f} s "
           f"({result.rays / result.seconds / 1e6:.2f} Mrays/s); wrote "
           f"{', '.join(str(p) for p in paths.values())}", file=sys.stderr)
     return status.OK
