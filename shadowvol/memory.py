@@ -271,23 +271,26 @@ def machine_memory() -> int:
     return total
 
 
-def budget(value: int | str | None = None) -> int:
-    """The memory budget in bytes: `value` (bytes or a size such as "12GiB"), else
-    $SHADOWVOL_MEMORY_BUDGET, else DEFAULT_FRACTION of `machine_memory()`."""
+def budget(value: int | str | None = None, key: str = "memory_budget") -> int:
+    """The memory budget in bytes: `value` (bytes or a size such as "12GiB"; a bad one is a
+    SceneError naming `key`), else $SHADOWVOL_MEMORY_BUDGET, else DEFAULT_FRACTION of
+    `machine_memory()`."""
     if value is None:
-        value = os.environ.get(ENV) or None
+        value, key = os.environ.get(ENV) or None, ENV
     if value is None:
         return int(DEFAULT_FRACTION * machine_memory())
     if isinstance(value, str):
-        return parse_size(value)
+        return parse_size(value, key)
     if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
-        raise SceneError("memory_budget", f"must be a positive number of bytes, got {value!r}")
+        raise SceneError(key, f"must be a positive number of bytes, got {value!r}")
     return value
 
 
-def check(estimate: Estimate, limit: int | str | None = None, file: str | None = None) -> None:
-    """Raise SceneError (key `image`, naming `file`) when `estimate` exceeds the budget."""
-    allowed = budget(limit)
+def check(estimate: Estimate, limit: int | str | None = None, file: str | None = None,
+          key: str = "--memory-budget") -> None:
+    """Raise SceneError (key `image`, naming `file`) when `estimate` exceeds the budget
+    `limit` (a command's `key`, by default its --memory-budget)."""
+    allowed = budget(limit, key)
     need = estimate.total + BASE
     if need > allowed:
         raise SceneError(

@@ -18,6 +18,14 @@ BACKEND_HELP = ("triangle intersection: 'embree' (fast, float32) or 'numpy' (the
                 "reference, for small scenes) (default: embree)")
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse's parser whose usage errors are one line, ending with where the help is (the
+    usage block it would print first is --help's); the exit status is still 2 (bad input)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def command(subparsers, name: str, *, help: str, description: str,
             epilog: str = status.EPILOG) -> argparse.ArgumentParser:
     """A subcommand whose --help keeps its epilog's line breaks (it ends with the statuses)."""

@@ -5,11 +5,11 @@
 
 from __future__ import annotations
 
-import argparse
 import sys
 
 import numpy as np
 
+from shadowvol.cli import args as blocks
 from shadowvol.cli import status
 from shadowvol.course.ladder import picture, rungs
 from shadowvol.io import save_png
@@ -18,7 +18,7 @@ from shadowvol.scenefile import load_scene
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m shadowvol.cli.ladder",
+    ap = blocks.Parser(prog="python -m shadowvol.cli.ladder",
                                  description="Render the ladder picture (local -> Whitted -> "
                                              "direct -> path traced -> radiosity).")
     ap.add_argument("scene", help="a scene with emissive surfaces, e.g. scenes/cornell.toml")

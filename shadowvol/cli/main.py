@@ -17,13 +17,14 @@ import argparse
 import sys
 
 from shadowvol import __version__
+from shadowvol.cli import args as blocks
 from shadowvol.cli import batch, compare, demo, planar, render, shadow2d, status, view
 
 COMMANDS = (render, planar, shadow2d, compare, demo, view, batch)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = blocks.Parser(
         prog="shadowvol",
         description="Exact hard shadows with stencil shadow volumes, headless (OpenGL on EGL).",
         epilog=status.EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -98,3 +98,39 @@ def test_a_wrong_type_is_named_in_the_files_terms(tmp_path, text, key, given):
     (tmp_path / "s.json").write_text(text)
     line = refused(run(["shadowvol", "render", "s.json", "-o", "x.png"], tmp_path), key, given)
     assert "_Json" not in line and "dict" not in line
+
+
+@pytest.mark.parametrize("command, words", [
+    (["raytrace", "render", str(SCENES / "cornell.toml"), "--integrator", "path", "--seed", "-1",
+      "-o", "x.png"], ("--seed", ">= 0", "-1")),
+    (["raytrace", "render", str(SCENES / "cornell.toml"), "--integrator", "photon", "--seed",
+      "-1", "-o", "x.png"], ("--seed", ">= 0")),
+    (["raytrace", "render", str(SCENES / "whitted.toml"), "--seed", "-1", "-o", "x.png"],
+     ("--seed", ">= 0")),
+    (["shadowvol", "render", str(SCENES / "cage.toml"), "--memory-budget=-5GB", "-o", "x.png"],
+     ("--memory-budget", "-5GB")),
+], ids=["path seed", "photon seed", "whitted seed", "negative budget"])
+def test_a_value_out_of_range(tmp_path, command, words):
+    """Once a numpy ValueError traceback (a negative seed) or a message naming the environment
+    variable for a flag's value (the budget)."""
+    refused(run(command, tmp_path), *words)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command, words", [
+    (["shadowvol", "batch", "--format", "tfrecord", "-o", "out", "jobs.jsonl"],
+     ("shadowvol batch: error:", "--format", "tfrecord", "shadowvol batch --help")),
+    (["shadowvol", "render", str(SCENES / "cage.toml"), "--memory-budget", "-5GB", "-o", "x.png"],
+     ("shadowvol render: error:", "--memory-budget")),
+    (["raytrace", "render", "--spp", "many", "x.toml", "-o", "x.png"],
+     ("raytrace render: error:", "--spp", "many")),
+    (["shadowvol"], ("shadowvol: error:", "COMMAND")),
+], ids=["batch format", "budget as a flag", "spp", "no command"])
+def test_a_usage_error_is_one_line(tmp_path, command, words):
+    """argparse's mistakes are one line too (the usage block is --help's), exit 2."""
+    done = run(command, tmp_path)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == BAD_INPUT and len(lines) == 1, done.stderr
+    for word in words:
+        assert word in lines[0], lines[0]
+    assert list(tmp_path.iterdir()) == []
