@@ -101,7 +101,7 @@ class Gallery:
         by both renderers at most at the slide's size, so each scene of the folder is
         estimated as `shadowvol compare` of it at that size.  A scene that does not load is
         left to the demo that needs it."""
-        budget = memory.budget(limit)
+        budget = memory.budget(limit, "--memory-budget")
         for path in sorted(self.scenes.glob("*.toml")):
             try:
                 scene = self.scene(path.stem)
