@@ -177,6 +177,16 @@ def test_within_the_budget_it_renders_and_a_bad_budget_is_bad_input(tmp_path, ca
     capsys.readouterr()
     assert shadowvol_main(["render", str(scene), "-o", str(tmp_path / "y.png"),
                            "--memory-budget", "plenty"]) == status.BAD_INPUT
+    assert "--memory-budget: expected a memory size" in _one_error_line(capsys.readouterr().err)
+    assert not (tmp_path / "y.png").exists()
+
+
+@pytest.mark.gl
+def test_a_bad_budget_in_the_environment_is_named_as_the_variable(tmp_path, capsys, monkeypatch):
+    scene = _scene(tmp_path, width=64, height=48)
+    monkeypatch.setenv("SHADOWVOL_MEMORY_BUDGET", "plenty")
+    assert shadowvol_main(["render", str(scene), "-o", str(tmp_path / "y.png")]) == \
+        status.BAD_INPUT
     assert "SHADOWVOL_MEMORY_BUDGET: expected a memory size" in \
         _one_error_line(capsys.readouterr().err)
     assert not (tmp_path / "y.png").exists()
