@@ -86,16 +86,20 @@ def around(axis: np.ndarray, cos_theta: np.ndarray, phi: np.ndarray) -> np.ndarr
     return _rows(around_rows(_rows(axis), np.asarray(cos_theta), np.asarray(phi)))
 
 
-def cosine_hemisphere_rows(rng: np.random.Generator, n: np.ndarray) -> np.ndarray:
+def cosine_hemisphere_rows(rng: np.random.Generator, n: np.ndarray, u=None) -> np.ndarray:
     """Directions (3, k) about unit normals n (3, k) with density cos(theta) / pi: n plus a
     uniform point of the unit sphere, normalised (the unit sphere through the origin centred on
     n, seen from the origin: uniform area there is density cos(theta) / pi; no tangent frame).
     The measure-zero case n + s = 0 gives n.  The azimuth's cosine and sine are float32
     (numpy's float64 sin and cos are ~20 times slower): the direction moves by ~1e-7 rad, far
-    below any image's noise; the rest is float64."""
+    below any image's noise; the rest is float64.  u: the two uniforms (u1 of n's dtype, u2
+    float32, (k,) each) instead of drawing them from rng."""
     k = n.shape[1]
-    u1 = rng.random(k, dtype=n.dtype if n.dtype == np.float32 else np.float64)
-    u2 = rng.random(k, dtype=np.float32)
+    if u is None:
+        u1 = rng.random(k, dtype=n.dtype if n.dtype == np.float32 else np.float64)
+        u2 = rng.random(k, dtype=np.float32)
+    else:
+        u1, u2 = u
     z = 1.0 - 2.0 * u1
     r = np.sqrt(np.maximum(1.0 - z * z, 0.0))
     phi = np.float32(2.0 * math.pi) * u2
@@ -183,15 +187,16 @@ def phong_pdf(p_diffuse, s, n, wo, wi) -> np.ndarray:
                           _rows(n), _rows(wo), _rows(wi))
 
 
-def phong_sample_rows(rng: np.random.Generator, p_diffuse, s, n, wo, glossy=None
+def phong_sample_rows(rng: np.random.Generator, p_diffuse, s, n, wo, glossy=None, u=None
                       ) -> np.ndarray:
     """Directions wi (3, k): the cosine lobe about n (3, k) with probability p_diffuse (k,),
     else the cos^s lobe about the mirror direction of wo (3, k) (which may point below the
     surface: the caller gives such samples weight 0).  glossy : None, or the indices (m,) of the
     only entries whose p_diffuse may be below 1 (the lobe is chosen by a random number there
-    only)."""
+    only).  u: the cosine lobe's two uniforms (`cosine_hemisphere_rows`); the glossy lobe's
+    are drawn from rng."""
     sub = _subset(glossy)
-    wi = cosine_hemisphere_rows(rng, n)
+    wi = cosine_hemisphere_rows(rng, n, u)
     if glossy is None or len(glossy):
         cand = np.arange(n.shape[1]) if glossy is None else glossy
         g = cand[rng.random(len(cand)) >= sub(p_diffuse)]

@@ -121,3 +121,24 @@ def sample_rays(camera, width: int, height: int, pixels: np.ndarray, offsets: np
         d = d - shift / camera.focus  # through eye + focus·d: still depth 1
     origins = start + camera.near * d
     return origins, d / np.sqrt((d * d).sum(axis=1))[:, None]
+
+
+def camera_rays(camera, width: int, height: int, rows: np.ndarray, cols: np.ndarray,
+                rng: np.random.Generator | None, jitter=None) -> tuple[np.ndarray, np.ndarray]:
+    """Rays through pixels (rows[i], cols[i]) (k,) int: at a uniformly random point of the pixel
+    (rng given; or at jitter, (jx, jy) (k,) float64 in [0, 1)) or its centre (rng None, as the
+    masks sample), starting on the near plane (CONVENTIONS.md).  Returns origins, unit
+    directions as rows (3, k) float64."""
+    right, up, back = camera_basis(camera)
+    if jitter is not None:
+        jx, jy = jitter
+    else:
+        jx = rng.random(len(rows)) if rng is not None else 0.5
+        jy = rng.random(len(rows)) if rng is not None else 0.5
+    half_h = math.tan(math.radians(camera.fov_y) / 2.0)
+    half_w = half_h * width / height
+    sx = ((cols + jx) / width * 2.0 - 1.0) * half_w
+    sy = (1.0 - (rows + jy) / height * 2.0) * half_h
+    d = sx * right[:, None] + sy * up[:, None] - back[:, None]
+    o = np.asarray(camera.eye, np.float64)[:, None] + camera.near * d
+    return o, d / np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])

@@ -34,6 +34,7 @@ import threading
 
 import numpy as np
 
+from .mis import code
 from .pathstate import STATE
 
 # the stages keep their names here too: `benchmarks/profile_outlook.py` times them as k._hits...
@@ -110,16 +111,20 @@ def _camera(eye, right, up, back, near, half_w, half_h, width, height, row0, row
 
 
 def camera_rays(camera, width: int, height: int, rows: slice, spp: int,
-                rng: np.random.Generator | None) -> tuple[np.ndarray, np.ndarray]:
+                rng: np.random.Generator | None, jitter=None) -> tuple[np.ndarray, np.ndarray]:
     """`pathtrace.camera_rays` of the pixels of rows `rows`, every column, `spp` times over
-    (the order `pathtrace.render` traces them): the same random numbers, the same rays,
-    origins and directions (3, n) float64 (views of (n, 3) arrays)."""
+    (the order `pathtrace.render` traces them): the same random numbers (or the jitter
+    (jx, jy) given), the same rays, origins and directions (3, n) float64 (views of (n, 3)
+    arrays)."""
     from .camera import camera_basis
 
     right, up, back = camera_basis(camera)
     n = (rows.stop - rows.start) * width * spp
-    jx = rng.random(n) if rng is not None else np.full(n, 0.5)
-    jy = rng.random(n) if rng is not None else np.full(n, 0.5)
+    if jitter is not None:
+        jx, jy = (np.ascontiguousarray(j, np.float64) for j in jitter)
+    else:
+        jx = rng.random(n) if rng is not None else np.full(n, 0.5)
+        jy = rng.random(n) if rng is not None else np.full(n, 0.5)
     half_h = math.tan(math.radians(camera.fov_y) / 2.0)
     o, d = np.empty((n, 3)), np.empty((n, 3))  # rows of (3, n) would alias in the cache
     _camera(np.asarray(camera.eye, np.float64), right, up, back, float(camera.near),
@@ -186,16 +191,20 @@ def buffers(world, n: int) -> _Buffers:
 
 
 def _next_event(world, rng, b: _Buffers, k: int, tab, etab, cdf, lights, offset,
-                mis: bool) -> int:
+                mis: int, u_light) -> int:
     """Next-event estimation at the k hits of a bounce into b.direct (zero on entry): one
-    emitter sample each (its random numbers those of `PathWorld.sample_emitters`), then every
-    delta light.  Returns the shadow rays traced."""
+    emitter sample each (its random numbers those of `PathWorld.sample_emitters`, or u_light
+    (r, u1, u2) given), then every delta light; mis: the heuristic's code (`raytrace.mis`), -1
+    for none.  Returns the shadow rays traced."""
     glossy, delta = world.any_glossy, world.any_delta
     direct, rays = b.direct, 0
     if len(world.emitters) > 0:
-        rng.random(out=b.r[:k])
-        rng.random(dtype=STATE, out=b.u1[:k])
-        rng.random(dtype=STATE, out=b.u2[:k])
+        if u_light is None:
+            rng.random(out=b.r[:k])
+            rng.random(dtype=STATE, out=b.u1[:k])
+            rng.random(dtype=STATE, out=b.u2[:k])
+        else:
+            b.r[:k], b.u1[:k], b.u2[:k] = u_light
         m = _emitter_rays(k, b.p, b.n, b.start, b.tri, tab, etab, cdf, b.r, b.u1, b.u2,
                           offset, b.wi, b.cos_x, b.cos_y, b.dist2, b.jem, b.cand, b.so, b.sd)
         blocked = world.occluded_rows(b.so[:m].T, b.sd[:m].T, 1.0)
@@ -212,16 +221,21 @@ def _next_event(world, rng, b: _Buffers, k: int, tab, etab, cdf, lights, offset,
     return rays
 
 
-def _bounce_randoms(rng, b: _Buffers, k: int, tab, delta: bool, glossy: bool, roulette: bool):
+def _bounce_randoms(rng, b: _Buffers, k: int, tab, delta: bool, glossy: bool, roulette: bool,
+                    u_bsdf=None):
     """The random numbers of a bounce, in the numpy path's order, into b.u3 (the delta
-    choice), b.u1, b.u4 (roulette); returns the azimuths' cos, sin (k,) float32 and the glossy
-    lobe's (gl_index, cos_theta, cos_phi, sin_phi) of the vertices that sample it."""
+    choice), b.u1, b.u4 (roulette), or those of u_bsdf (`sobol.TileSamples.bounce`); returns
+    the azimuths' cos, sin (k,) float32 and the glossy lobe's (gl_index, cos_theta, cos_phi,
+    sin_phi) of the vertices that sample it."""
     no_f64 = np.zeros(0)
-    if delta:
-        rng.random(dtype=STATE, out=b.u3[:k])
-    rng.random(dtype=STATE, out=b.u1[:k])
     phi = b.u2[:k]
-    rng.random(dtype=STATE, out=phi)
+    if u_bsdf is not None:
+        b.u3[:k], b.u1[:k], phi[:], b.u4[:k] = u_bsdf
+    if delta and u_bsdf is None:
+        rng.random(dtype=STATE, out=b.u3[:k])
+    if u_bsdf is None:
+        rng.random(dtype=STATE, out=b.u1[:k])
+        rng.random(dtype=STATE, out=phi)
     phi *= np.float32(2.0 * math.pi)  # as numpy's float32 product, in place
     cos_phi, sin_phi = np.cos(phi, out=b.cos_x[:k]), np.sin(phi, out=b.cos_y[:k])
     lobe = (np.zeros(0, np.int64), no_f64, no_f64, no_f64)
@@ -237,19 +251,21 @@ def _bounce_randoms(rng, b: _Buffers, k: int, tab, delta: bool, glossy: bool, ro
                 lobe = (gl_index, gu1 ** (1.0 / (s + 1.0)), np.cos(gl_phi), np.sin(gl_phi))
             else:
                 lobe = (gl_index,) + lobe[1:]
-    if roulette:
+    if roulette and u_bsdf is None:
         rng.random(dtype=STATE, out=b.u4[:k])
     return cos_phi, sin_phi, lobe
 
 
 def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
-               max_depth: int, rr_start: int) -> tuple[np.ndarray, int]:
+               max_depth: int, rr_start: int, heuristic: str = "power", samples=None
+               ) -> tuple[np.ndarray, int]:
     """`raytrace.pathtrace.trace_rows` (same arguments, same result) with compiled shading.
     The kernels' vectors are (n, 3) float32, one ray's on one cache line: rows of (3, n)
     arrays, 2^15 apart in a tile, alias in the cache and made them twice as slow.  They write
     compacted rays into the first rows of whole buffers and are told how many are valid (every
     array stays C-contiguous: one compiled version each)."""
     tab, tri_emission, etab = tables(world)
+    mis = code(heuristic)
     lights = _lights(world)
     offset = STATE(world.offset)
     glossy, delta, emits = world.any_glossy, world.any_delta, world.any_emits
@@ -272,19 +288,22 @@ def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
         tri = world.closest_rows(rays_o[:n].T, rays_d[:n].T)
         rays += n
         k = _hits(rays_o, rays_d, tri, path, beta, count_em, bsdf_pdf, L, background,
-                  shows_background, tab, tri_emission, emits, offset, b.tri, b.path, b.beta,
-                  b.d, b.p, b.n, b.entering, b.start)
+                  shows_background, tab, tri_emission, emits, offset, mis, b.tri, b.path,
+                  b.beta, b.d, b.p, b.n, b.entering, b.start)
         if k == 0:
             break
         direct = b.direct
         direct[:k] = 0.0
+        u_light, u_bsdf = (None, None) if samples is None else \
+            samples.bounce(bounce, b.path[:k], bounce < max_depth)
         rays += _next_event(world, rng, b, k, tab, etab, cdf, lights, offset,
-                            bounce < max_depth)
+                            mis if bounce < max_depth else -1, u_light)
         if bounce == max_depth:
             _add_direct(L, b.path, direct, k)
             break
         roulette = bounce >= rr_start
-        cos_phi, sin_phi, lobe = _bounce_randoms(rng, b, k, tab, delta, glossy, roulette)
+        cos_phi, sin_phi, lobe = _bounce_randoms(rng, b, k, tab, delta, glossy, roulette,
+                                                 u_bsdf)
         out = b.spare
         n = _bounce(k, L, direct, b.tri, b.path, b.beta, b.d, b.p, b.n, b.entering, b.start,
                     tab, glossy, delta, b.u3, b.u1, cos_phi, sin_phi, *lobe, roulette, b.u4,
@@ -293,3 +312,77 @@ def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
         if n == 0:
             break
     return np.ascontiguousarray(L.T), rays
+
+
+# ---- the low-discrepancy numbers (`raytrace.sobol`, bit for bit, in uint64 masked to 32) ----
+
+M32 = np.uint64(0xFFFFFFFF)
+U1, U8, U15, U16 = np.uint64(1), np.uint64(8), np.uint64(15), np.uint64(16)
+
+
+@_jit
+def _hash32(x):
+    x ^= x >> U16
+    x = (x * np.uint64(0x7FEB352D)) & M32
+    x ^= x >> U15
+    x = (x * np.uint64(0x846CA68B)) & M32
+    return x ^ (x >> U16)
+
+
+@_jit
+def _reverse32(x):
+    x = ((x >> U1) & np.uint64(0x55555555)) | ((x & np.uint64(0x55555555)) << U1)
+    x = ((x >> np.uint64(2)) & np.uint64(0x33333333)) | \
+        ((x & np.uint64(0x33333333)) << np.uint64(2))
+    x = ((x >> np.uint64(4)) & np.uint64(0x0F0F0F0F)) | \
+        ((x & np.uint64(0x0F0F0F0F)) << np.uint64(4))
+    x = ((x >> U8) & np.uint64(0x00FF00FF)) | ((x & np.uint64(0x00FF00FF)) << U8)
+    return ((x >> U16) | (x << U16)) & M32
+
+
+@_jit
+def _owen_reversed(y, seed):
+    y ^= (y * np.uint64(0x3D20ADEA)) & M32
+    y = (y + seed) & M32
+    y = (y * ((seed >> U16) | U1)) & M32
+    y ^= (y * np.uint64(0x05526C56)) & M32
+    return y ^ ((y * np.uint64(0x53A22864)) & M32)
+
+
+@_jit
+def sobol_chunk(base, first, pixels, path, m, table, reversed_samples, out, out64, dim64):
+    """`sobol.chunk_bits` of paths `path` (k,) int64 of a tile (`sobol.TileSamples`) as
+    float32 (`sobol.to_float32`) into out (dims, k), and dimension dim64 as float64
+    (`sobol.to_float64`) into out64 (k,) (where dim64 >= 0).  base: `sobol.chunk_base` of the
+    chunk; table (4, 2^m) uint32: the bit-reversed Sobol points (`sobol.reversed_points`) in
+    the order of their m-bit-reversed index; reversed_samples: the bit-reversed sample
+    indices."""
+    dims = out.shape[0]
+    low = np.uint64(32 - m)
+    b64 = np.uint64(base)
+    # each pixel's seeds: the index scramble's, then per dimension the scramble's and the shift
+    seeds = np.empty((pixels, 1 + 2 * dims), np.uint64)
+    for q in range(pixels):
+        seed = _hash32(_hash32((np.uint64(first + q) & M32) ^ b64))
+        seeds[q, 0] = seed
+        for d in range(dims):
+            seed_d = _hash32((seed + np.uint64((d + 1) * 0x9E3779B9 & 0xFFFFFFFF)) & M32)
+            seeds[q, 1 + d] = seed_d
+            seeds[q, 1 + dims + d] = _hash32(seed_d ^ np.uint64(0x5BD1E995))
+    inv = 1.0 / pixels
+    for i in range(path.shape[0]):
+        p = path[i]
+        sample = np.int64(p * inv)  # p // pixels without a division (p < 2^52)
+        if sample * pixels > p:
+            sample -= 1
+        elif (sample + 1) * pixels <= p:
+            sample += 1
+        q = p - sample * pixels
+        # the scrambled index, bit-reversed: its top m bits are the index's, reversed
+        j = _owen_reversed(np.uint64(reversed_samples[sample]), seeds[q, 0]) >> low
+        for d in range(dims):
+            x = _reverse32(_owen_reversed(np.uint64(table[d, j]), seeds[q, 1 + d])) \
+                ^ seeds[q, 1 + dims + d]
+            out[d, i] = np.float32(x >> U8) * np.float32(2.0 ** -24)
+            if d == dim64:
+                out64[i] = np.float64(x) * 2.0 ** -32

@@ -23,6 +23,8 @@ NORMAL, PLANE_D, KD, KS, SHININESS, P_DIFFUSE, GLOSSY, PHONG, REFL, TRANSP, IOR,
 E_A, E_AB, E_AC, E_NORMAL, E_RADIANCE, E_PDF = 0, 3, 6, 9, 12, 15
 # delta light kinds
 DIRECTIONAL, POINT, SPOT, AREA = 0, 1, 2, 3
+# the MIS heuristics' codes (`mis.HEURISTICS`)
+POWER, BALANCE, NEE = 0, 1, 2
 
 F0, F1, F2 = np.float32(0.0), np.float32(1.0), np.float32(2.0)
 INV_PI = np.float32(1.0 / math.pi)
@@ -78,15 +80,26 @@ def _phong_pdf(tab, t, glossy_scene, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2, c
     return pdf
 
 
+@_jit
+def _mis_weight(p_this, p_other, heuristic):
+    """`mis.weight` (float32): 1 / (1 + r^beta), r = p_other / p_this; 0 where p_this is 0."""
+    if not p_this > F0:
+        return F0
+    r = p_other / p_this
+    if heuristic == POWER:
+        r = r * r
+    return F1 / (F1 + r)
+
+
 # ---- the stages of one bounce ----------------------------------------------------------------
 
 @_jit
 def _hits(o, d, tri, path, beta, count_em, bsdf_pdf, L, background, shows_background, tab,
-          tri_emission, any_emits, offset, out_tri, out_path, out_beta, out_d, out_p, out_n,
-          out_entering, out_start):
+          tri_emission, any_emits, offset, mis, out_tri, out_path, out_beta, out_d, out_p,
+          out_n, out_entering, out_start):
     """The hits of a bounce's rays, compacted in order into the out_ arrays; the background
-    seen by the misses and the emission seen by the hits added to L (n_paths, 3) float64.
-    Returns how many hit."""
+    seen by the misses and the emission seen by the hits added to L (n_paths, 3) float64 (by
+    BSDF-sampled rays: their MIS share, heuristic code mis).  Returns how many hit."""
     k = 0
     for i in range(tri.shape[0]):
         t_i = tri[i]
@@ -119,11 +132,10 @@ def _hits(o, d, tri, path, beta, count_em, bsdf_pdf, L, background, shows_backgr
             if count_em[i]:
                 for c in range(3):
                     L[q, c] += np.float64(beta[i, c] * tri_emission[t_i, c])
-            else:  # found by BSDF sampling: its MIS share
+            elif mis != NEE:  # found by BSDF sampling: its MIS share
                 cos_y = abs(d_n)
                 p_light = tab[t_i, LIGHT_PDF] * (t * t) / (cos_y if cos_y > TINY else TINY)
-                pe = bsdf_pdf[i]
-                w = pe / (pe + p_light)
+                w = _mis_weight(bsdf_pdf[i], p_light, mis)
                 for c in range(3):
                     L[q, c] += np.float64(beta[i, c] * tri_emission[t_i, c] * w)
         k += 1
@@ -193,11 +205,11 @@ def _emitter_shade(direct, beta, tri, tab, etab, n, d, jem, wi, cos_x, cos_y, di
         wi0, wi1, wi2 = wi[i, 0], wi[i, 1], wi[i, 2]
         w_phong = tab[t_i, PHONG] if delta_scene else F1
         g = cx * cy / (l2 * p_area)
-        if mis:
-            p_light = p_area * l2 / cy
+        if mis >= 0 and mis != NEE:
+            p_light = p_area * l2 / (cy if cy > TINY else TINY)
             p_bsdf = w_phong * _phong_pdf(tab, t_i, glossy_scene, n0, n1, n2, wo0, wo1, wo2,
                                           wi0, wi1, wi2, cx)
-            g *= p_light / (p_light + p_bsdf)
+            g *= _mis_weight(p_light, p_bsdf, mis)
         g = g * w_phong
         if glossy_scene:
             f0, f1, f2 = _phong_f(tab, t_i, glossy_scene, n0, n1, n2, wo0, wo1, wo2,

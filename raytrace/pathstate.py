@@ -142,13 +142,16 @@ class PathWorld:
         """`occluded` for rays o, d (3, k)."""
         return self.tracer.occluded(o.T, d.T, tmax, parallel=self.parallel)
 
-    def sample_emitters(self, rng: np.random.Generator, k: int):
+    def sample_emitters(self, rng: np.random.Generator, k: int, u=None):
         """k points on the emitters: y (3, k), the emitters' unit normals (3, k) by winding
         and radiance (3, k), and p_A(y) (k,), the area density of the choice (each of the last
-        three (3, 1) or (1,) where it is the same on all emitters)."""
-        j = np.minimum(np.searchsorted(self.emitter_cdf, rng.random(k), side="right"),
+        three (3, 1) or (1,) where it is the same on all emitters).  u: the uniforms (r
+        float64 choosing the emitter, u1, u2 `STATE` the point in it, (k,) each) instead of
+        drawing them from rng."""
+        r, u1, u2 = (rng.random(k), rng.random(k, dtype=STATE),
+                     rng.random(k, dtype=STATE)) if u is None else u
+        j = np.minimum(np.searchsorted(self.emitter_cdf, r, side="right"),
                        len(self.emitters) - 1)
-        u1, u2 = rng.random(k, dtype=STATE), rng.random(k, dtype=STATE)
         r = np.sqrt(u1)
         e = unpack(np.take(self._emitter_table, j, axis=1) if len(self._emitter_table)
                     else self._emitter_table, self._emitter_rows)
