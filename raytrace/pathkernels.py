@@ -230,7 +230,11 @@ def _bounce_randoms(rng, b: _Buffers, k: int, tab, delta: bool, glossy: bool, ro
     no_f64 = np.zeros(0)
     phi = b.u2[:k]
     if u_bsdf is not None:
-        b.u3[:k], b.u1[:k], phi[:], b.u4[:k] = u_bsdf
+        b.u1[:k], phi[:] = u_bsdf[1:3]
+        if delta:
+            b.u3[:k] = u_bsdf[0]
+        if roulette:
+            b.u4[:k] = u_bsdf[3]
     if delta and u_bsdf is None:
         rng.random(dtype=STATE, out=b.u3[:k])
     if u_bsdf is None:
@@ -295,7 +299,7 @@ def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
         direct = b.direct
         direct[:k] = 0.0
         u_light, u_bsdf = (None, None) if samples is None else \
-            samples.bounce(bounce, b.path[:k], bounce < max_depth)
+            samples.bounce(bounce, b.path[:k], bounce < max_depth, delta, bounce >= rr_start)
         rays += _next_event(world, rng, b, k, tab, etab, cdf, lights, offset,
                             mis if bounce < max_depth else -1, u_light)
         if bounce == max_depth:

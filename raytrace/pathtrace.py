@@ -310,7 +310,7 @@ def _trace_rows_numpy(world: PathWorld, o: np.ndarray, d: np.ndarray,
                            heuristic)
         new_o = p + world.offset * n  # where shadow rays and the next ray start
         u_light, u_bsdf = (None, None) if samples is None else \
-            samples.bounce(bounce, path, bounce < max_depth)
+            samples.bounce(bounce, path, bounce < max_depth, world.any_delta, bounce >= rr_start)
         direct, shadow = next_event(world, rng, p, n, wo, surf, beta, new_o,
                                     bounce < max_depth, u_light, heuristic)
         rays += shadow

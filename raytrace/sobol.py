@@ -192,15 +192,18 @@ class TileSamples:
         u, jx = self.floats(0, np.arange(self.pixels * self.spp), 2, 0)
         return jx, u[1].astype(np.float64)
 
-    def bounce(self, bounce: int, path: np.ndarray, scatter: bool = True):
+    def bounce(self, bounce: int, path: np.ndarray, scatter: bool = True, lobe: bool = True,
+               roulette: bool = True):
         """The numbers of bounce `bounce` of paths `path` (k,): the emitter sample's (r float64,
         u1, u2 float32; `PathWorld.sample_emitters`) and, if scatter, the BSDF sample's (the
-        lobe choice, the cosine lobe's u1, u2, the roulette's, float32; else None), or
-        (None, None) past the low-discrepancy bounces."""
+        lobe choice if lobe, else None; the cosine lobe's u1, u2; the roulette's if roulette,
+        else None; float32), else None; or (None, None) past the low-discrepancy bounces.
+        A dimension left out changes none of the others."""
         if bounce > self.bounces:
             return None, None
         light, r = self.floats(2 * bounce - 1, path, 3, 2)
         if not scatter:
             return (r, light[0], light[1]), None
-        bsdf, _ = self.floats(2 * bounce, path, CHUNK_DIMS)
-        return (r, light[0], light[1]), (bsdf[2], bsdf[0], bsdf[1], bsdf[3])
+        bsdf, _ = self.floats(2 * bounce, path, 4 if roulette else 3 if lobe else 2)
+        return ((r, light[0], light[1]),
+                (bsdf[2] if lobe else None, bsdf[0], bsdf[1], bsdf[3] if roulette else None))
