@@ -49,9 +49,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenes" / "cornell.toml"
 VARIANT = "llvm_ad_rgb"
-OURS = (("ours: balance, independent (before)", dict(mis="balance", sampler="independent")),
-        ("ours: power, independent", dict(mis="power", sampler="independent")),
-        ("ours: power, sobol (default)", dict(mis="power", sampler="sobol")))
+# before: the path tracer as it was (balance heuristic, independent samples, roulette from the
+# third bounce); then one step at a time to the default
+OURS = (("ours before: balance, independent, RR 3", dict(mis="balance", sampler="independent",
+                                                         rr_start=3)),
+        ("ours: power, independent, RR 5", dict(mis="power", sampler="independent")),
+        ("ours now: power, sobol, RR 5", dict(mis="power", sampler="sobol")))
 PEERS = (("Mitsuba 3: independent", "independent"), ("Mitsuba 3: ldsampler", "ldsampler"))
 SPPS = (4, 16, 64, 256, 1024)  # square powers of two: what `ldsampler` takes
 REF_SPP, REF_CHUNKS = 8192, 8

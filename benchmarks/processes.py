@@ -68,6 +68,10 @@ EXTRAS = (
     ("bench_outlook.py", [],
      "path tracing Mrays/s against raw Embree casts, radiosity at ~1k/4k/16k patches (issue: "
      "the lecture's outlook)"),
+    ("bench_time_to_rmse.py", ["--json", "{json}"],
+     "the path tracer's CPU time to a fixed RMSE on the Cornell box against Mitsuba 3's path "
+     "integrator (an optional peer: the bench extra) in the same run (issue: the path tracer "
+     "as efficient as the best)"),
     ("bench_viewer.py", ["--frames", "15"],
      "the viewer's frame rate on the shipped scenes, under its own Xvfb (issue: the course)"),
 )

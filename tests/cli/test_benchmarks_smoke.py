@@ -81,3 +81,27 @@ def test_the_mitsuba_peer_runs_or_says_why_not(tmp_path):
     # the same scene, the same pixel-centre rays: the masks agree but for a few edge pixels
     assert row["differing_mitsuba"] < 0.05 * 64 * 48 and row["differing_ours"] < 0.05 * 64 * 48
     assert "| occluders-1k |" in done.stdout
+
+
+def test_time_to_rmse_runs_with_or_without_mitsuba(tmp_path):
+    """benchmarks.bench_time_to_rmse --quick (24 x 24, 4 and 16 spp): every variant's error
+    falls with the samples and has times; Mitsuba's rows where it is installed, else the
+    reason in the first line and ours alone; exit status 0 either way."""
+    done = subprocess.run([sys.executable, "-m", "benchmarks.bench_time_to_rmse", "--quick",
+                           "--json", str(tmp_path / "t.json")],
+                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    results = json.loads((tmp_path / "t.json").read_text())
+    ours = {k for k in results["variants"] if k.startswith("ours")}
+    assert len(ours) == 3 and "ours now: power, sobol, RR 5" in ours
+    try:
+        import mitsuba  # noqa: F401
+    except ImportError:
+        assert "Mitsuba 3 is not installed" in results["peer_missing"]
+        assert "ours alone" in done.stdout.splitlines()[0]
+        assert set(results["variants"]) == ours
+    else:
+        assert results["peer_missing"] is None and len(results["variants"]) == 5
+        assert results["reference"].startswith("Mitsuba 3")
+    for v in results["variants"].values():
+        assert v["rmse"][1] < v["rmse"][0] and min(v["cpu_s"]) > 0
