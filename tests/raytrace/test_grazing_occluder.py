@@ -5,17 +5,21 @@ heights along the segment, and a wall of the same mesh crossing it there was ski
 band behind the wall's foot).  Here a floor and a wall through it (one mesh) are lit at n·l̂
 of 1e-4, 1e-3 and 0.03 by a point light whose segment crosses the wall 0.3-5 % of the way,
 by a directional light and by a rect light's samples, and the masks and counts are checked
-against the float64 brute force (tests/exact.py: all triangles, only p's own skipped).
+against the float64 brute force (tests/exact.py: all triangles, only p's own skipped).  The
+ground truth (`raytrace.ground_truth`) rides the same near pieces: its lit, counts and
+casters, with the wall an object of its own, against the same walk (`exact_casters`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from exact import check_counts, check_exact
+from exact import check_counts, check_exact, exact_casters
 
+import raytrace
 from raytrace.soft import lit_counts
 from raytrace.tolerances import shadow_height
+from shadowvol.compare.maskdiff import edge_pixels
 from shadowvol.primitives import mesh
 from shadowvol.scene import AreaLight, Camera, DirectionalLight, PointLight, Scene
 
@@ -68,3 +72,37 @@ def test_area_light_samples_are_blocked_by_the_wall_they_graze(request, sin_elev
     check_counts(request, scene, count)
     # the scene tests something: samples blocked behind the wall, all of them lit before it
     assert count[0].min() == 0 and count[0].max() == 8
+
+
+def wall_apart(scene: Scene, before: int = 69) -> Scene:
+    """`wall_foot`'s scene with the floor object 0 and the wall object before + 1 (69: its
+    casters bit in the second word), the objects between single triangles far below the
+    floor, out of every segment's way."""
+    ground = scene.objects[0]
+    v, f = ground.vertices, ground.faces
+    low = v[:3] - [0.0, 1e3, 0.0]
+    spare = [mesh(f"spare{k}", low + [0.0, -k, 0.0], np.array([[0, 1, 2]]))
+             for k in range(before)]
+    return scene.replace(objects=[mesh("floor", v, f[:2])] + spare + [mesh("wall", v, f[2:])])
+
+
+@pytest.mark.parametrize("backend", ["embree", "numpy"])
+@pytest.mark.parametrize("kind", ["point", "directional", "rect"])
+def test_ground_truth_counts_and_casters_see_the_wall_they_graze(kind, backend):
+    scene = wall_apart(wall_foot(1e-3, kind, (3e4, -1e4, 2e4), size=(32, 24)))
+    truth = raytrace.ground_truth(scene, outputs=("facing_count", "casters"), backend=backend)
+    lit, _ = raytrace.shadow_masks(scene, backend)
+    np.testing.assert_array_equal(truth.lit, lit)
+    want = exact_casters(scene)
+    wall = len(scene.objects) - 1
+    assert truth.casters.shape[-1] == 2
+    for i in range(len(scene.lights)):
+        got_count, want_count = truth.lit_count[i], want["lit_count"][i]
+        edges = edge_pixels(got_count == got_count.max()) | edge_pixels(want_count == 0)
+        assert not ((got_count != want_count) & ~edges).any()
+        bit = np.uint64(1) << np.uint64(wall % 64)
+        got, exact = (truth.casters[i, ..., 1] & bit) > 0, (want["casters"][i, ..., 1] & bit) > 0
+        assert not ((got != exact) & ~(edge_pixels(got) | edge_pixels(exact))).any()
+        assert exact.sum() > 100  # the wall shadows the floor behind it
+        np.testing.assert_array_equal(truth.casters[i, ..., 0], 0)  # nothing else casts
+    np.testing.assert_array_equal(truth.casters.any(-1), truth.lit_count < truth.facing_count)
