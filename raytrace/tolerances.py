@@ -61,7 +61,8 @@ Binder, Ray Tracing Gems ch. 6, bound the error of a hit point instead of guessi
 
 Geometry that lies within LIFT_HEIGHTS heights of p along the segment, or that close to the
 light, does not count: a contact shadow thinner than ~3e-5 of the distance to the eye is lost,
-nothing else.
+nothing else (`tests/raytrace/test_margins_property.py` checks this against a float64 walk of
+the segment at n·l̂ down to 1e-4 and 1e5 from the origin).
 `tests/raytrace/test_reference_exact.py` measures the masks against a float64 brute-force segment test
 on large translations, huge ground quads, cards beside lights and grazing creases, and checks
 the height bound directly (rays leaving random triangles at down to 1e-6 rad of grazing never
