@@ -21,6 +21,7 @@ import re
 import numpy as np
 import pytest
 from builders import TEST_OUTPUT
+from hypothesis import note
 
 import raytrace
 from raytrace.camera import primary_rays
@@ -28,6 +29,7 @@ from raytrace.tolerances import LIFT_HEIGHTS, frame_origin, light_margin, shadow
 from shadowvol.compare.maskdiff import diff_image, edge_pixels, mask_report
 from shadowvol.io import save_png
 from shadowvol.pictures import masks_image
+from shadowvol.scenefile import save_scene
 from shadowvol.fields import caster_words
 from shadowvol.scene import DirectionalLight, Scene, SpotLight, hard_lights
 
@@ -355,27 +357,78 @@ def count_bracket(samples: np.ndarray, coverage: np.ndarray, tie: np.ndarray | N
     return low, high, free
 
 
-def count_report(scene: Scene, lit_count: np.ndarray, rows: slice = slice(None),
-                 cols: slice = slice(None), lost: float | None = None) -> list[dict]:
-    """Per light, a renderer's lit_count (L, H, W) of `scene` against the float64 witness
-    (`exact_sample_masks`): {"what", "interior": differences where no sample's hard edge lies
-    within one pixel, "outside": counts outside `count_bracket`, "total", "count", "exact",
-    "coverage"} (the last three arrays, for pictures).  lost: the renderer's own margin
-    (`exact_ties`); given, the samples' ties (whole image only) may go either way."""
-    got = np.asarray(lit_count, np.int64)[:, rows, cols]
+def count_witness(scene: Scene, rows: slice = slice(None), cols: slice = slice(None),
+                  lost: float | None = None, skip: np.ndarray | None = None) -> list[dict]:
+    """Per light, the float64 witness of `count_report`: {"exact", "low", "high", "free",
+    "samples", "coverage"}, computed once for any number of renderers' counts.  skip (H, W)
+    bool, optional: pixels out of the check (`gl_vertex_ties`: the rasterizer's)."""
     coverage = exact_masks(scene.replace(lights=()), rows, cols)[1]
-    report = []
+    out = []
     for i in range(len(scene.lights)):
         samples = exact_sample_masks(scene, i, rows, cols)
         tie = None if lost is None else exact_ties(
             scene.replace(lights=hard_lights(scene.lights[i])), lost)[2]
         low, high, free = count_bracket(samples, coverage, tie)
-        want = samples.sum(axis=0)
-        report.append({"what": f"light {i}", "interior": int(((got[i] != want) & ~free).sum()),
-                       "outside": int(((got[i] < low) | (got[i] > high)).sum()),
-                       "total": int((got[i] != want).sum()), "count": got[i], "exact": want,
-                       "samples": len(samples), "coverage": coverage})
+        if skip is not None:
+            low, high, free = np.where(skip, 0, low), np.where(skip, len(samples), high), \
+                free | skip
+        out.append({"exact": samples.sum(axis=0), "low": low, "high": high, "free": free,
+                    "samples": len(samples), "coverage": coverage})
+    return out
+
+
+def count_report(scene: Scene, lit_count: np.ndarray, rows: slice = slice(None),
+                 cols: slice = slice(None), lost: float | None = None,
+                 witness: list[dict] | None = None) -> list[dict]:
+    """Per light, a renderer's lit_count (L, H, W) of `scene` against the float64 witness
+    (`exact_sample_masks`): {"what", "interior": differences where no sample's hard edge lies
+    within one pixel, "outside": counts outside `count_bracket`, "total", "count", "exact",
+    "coverage"} (the last three arrays, for pictures).  lost: the renderer's own margin
+    (`exact_ties`); given, the samples' ties (whole image only) may go either way.  witness:
+    `count_witness`'s, when already computed."""
+    got = np.asarray(lit_count, np.int64)[:, rows, cols]
+    witness = witness if witness is not None else count_witness(scene, rows, cols, lost)
+    report = []
+    for i, w in enumerate(witness):
+        report.append({"what": f"light {i}",
+                       "interior": int(((got[i] != w["exact"]) & ~w["free"]).sum()),
+                       "outside": int(((got[i] < w["low"]) | (got[i] > w["high"])).sum()),
+                       "total": int((got[i] != w["exact"]).sum()), "count": got[i],
+                       "exact": w["exact"], "samples": w["samples"], "coverage": w["coverage"]})
     return report
+
+
+def gl_vertex_ties(scene: Scene, precision: float = 1 / 64) -> np.ndarray:
+    """(H, W) bool: the pixels whose visible surface is a tie below GL's vertex precision
+    (docs/CONVENTIONS.md): the pixel-centre ray passes within `precision` of a pixel of the
+    edge of a triangle at or in front of the surface it hits, measured as the angle from
+    the plane through the eye and the edge, against the pixel's angular size on the axis."""
+    vertices, faces, _ = scene.triangles()
+    tri = vertices[faces]
+    H, W = scene.height, scene.width
+    o, d = primary_rays(scene.camera, W, H, unit=True)
+    eye = np.asarray(scene.camera.eye, np.float64)
+    pixel = 2.0 * np.tan(np.radians(scene.camera.fov_y) / 2.0) / H
+    out = np.zeros(H * W, bool)
+    rel = tri - eye
+    normals = [np.cross(rel[:, i], rel[:, (i + 1) % 3]) for i in range(3)]
+    normals = [n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+               for n in normals]
+    for c in _chunks(len(o), 8 * len(tri)):
+        t, edge = _edge_distances(o[c], d[c], tri)
+        t = np.where(np.isfinite(t) & (t > 0), t, np.inf)
+        best = np.where(edge >= 0, t, np.inf).min(axis=1)
+        at_or_front = t <= best[:, None] * (1 + 1e-6)
+        near = np.zeros(t.shape, bool)
+        for i, n in enumerate(normals):
+            a, b = rel[:, i], rel[:, (i + 1) % 3]
+            # the ray's angle from the edge's plane, and whether it passes between its ends
+            angle = np.abs(d[c] @ n.T)
+            between = (np.einsum("pk,mk->pm", d[c], np.cross(n, a)) >= 0) & \
+                (np.einsum("pk,mk->pm", d[c], np.cross(b, n)) >= 0)
+            near |= (angle <= precision * pixel) & between
+        out[c] = (near & at_or_front & np.isfinite(t)).any(axis=1)
+    return out.reshape(H, W)
 
 
 def check_counts(request, scene: Scene, lit_count: np.ndarray, label: str = "",
@@ -398,3 +451,18 @@ def check_counts(request, scene: Scene, lit_count: np.ndarray, label: str = "",
         save_png(out / f"diff_{i}.png", diff_image(got, cov, want, cov))
     pytest.fail(f"lit_count vs the float64 witness{label}: {summary}; budget: 0 interior, "
                 f"0 outside the one-pixel bracket; pictures in {out}")
+
+
+def check_lit_count(scene, lit_count, who: str, lost: float,
+                    witness: list[dict] | None = None) -> None:
+    """Raise AssertionError (hypothesis shrinks it) where `who`'s lit_count (L, H, W) breaks
+    the rule, a sample whose brute-force answer is a tie (within `lost`, the renderer's
+    margin, or the brute force's own bound: `exact_ties`) going either way; the scene is saved
+    first.  witness: `count_witness(scene, lost=lost, ...)`, when already computed."""
+    summary = [{k: r[k] for k in ("what", "interior", "outside", "total")}
+               for r in count_report(scene, lit_count, lost=lost, witness=witness)]
+    note(f"{who}: {summary}")
+    if any(r["interior"] or r["outside"] for r in summary):
+        path = TEST_OUTPUT / "soft-witness" / f"failing-{who}.json"
+        save_scene(scene, path)  # overwritten while shrinking: the last one is the smallest
+        raise AssertionError(f"{who} vs the float64 witness: {summary}; saved as {path}")
