@@ -2,7 +2,7 @@
 // GPU silhouettes: the multiplicity of one edge record and its side quads.
 // m = sum over the record's triangles (a, b, c) of tri_sign(a, b, c); emit |m| quads extruded
 // to infinity along the edge as the light-facing triangles run it, s -> e = a -> b when m > 0,
-// b -> a when m < 0, wound to face out of the volume (see shadowvol/silhouettes.py).
+// b -> a when m < 0, wound to face out of the volume (see shadowvol/raster/silhouettes.py).
 
 layout(points) in;
 layout(triangle_strip, max_vertices = 24) out;  // 4 opposite vertices -> at most 4 quads
