@@ -210,46 +210,112 @@ def _frame(image: np.ndarray, x: int, y: int, cw: int, ch: int, px: int) -> np.n
     return out
 
 
+BAND = (0, 190, 215)       # the ±1 px band along every mask edge: where the two may differ
+BAND_WEIGHT = 0.55
+EDGE_ZOOM = 12             # the compare slide's crop: 1/12 of the panel, one square per pixel
+
+
+def band_panel(diff: np.ndarray, band: np.ndarray) -> np.ndarray:
+    """The mask difference `diff` ((H, W, 3) uint8, maskdiff's colours) with the ±1 px band
+    `band` ((H, W) bool) tinted cyan where both agree (lit: pale, shadowed: dark); a
+    mismatch keeps its own red or blue."""
+    agree = band & ((diff == maskdiff.BOTH_LIT) | (diff == maskdiff.BOTH_SHADOWED)).all(axis=2)
+    return tint(diff, agree, np.array(BAND, np.uint8), BAND_WEIGHT)
+
+
+def pixel_grid(zoomed: np.ndarray, cw: int, ch: int, colour=(150, 150, 150)) -> np.ndarray:
+    """`zoom`'s picture of a cw x ch crop with a thin line between neighbouring pixels."""
+    out = zoomed.copy()
+    h, w = out.shape[:2]
+    ys, xs = np.arange(h) * ch // h, np.arange(w) * cw // w
+    out[np.flatnonzero(np.diff(ys)) + 1] = colour
+    out[:, np.flatnonzero(np.diff(xs)) + 1] = colour
+    return out
+
+
 def compare_picture(g) -> Picture:
     L = g.layout
     scene = g.scene("cage")
-    w, h = L.cell(2, 2, legend=True)
+    side_w = L.px(540)
+    w, h = L.cell(2, 2, legend=True, side=side_w + L.margin)   # a margin at both ends
     s = slides.fit(scene, w, h)
     c = compare(s, ctx=g.ctx)
     light = c.lights[0]
-    diff = maskdiff.diff_panel(c.raster_lit[0], c.raster_coverage, c.ref_lit[0],
-                               c.ref_coverage)
+    got, ref = (c.raster_lit[0], c.raster_coverage), (c.ref_lit[0], c.ref_coverage)
+    diff = maskdiff.diff_panel(*got, *ref)
+    band = maskdiff.near_edges(*got, *ref)
     bad = c.raster_lit[0] != c.ref_lit[0]
-    cw, ch = max(2, w // ZOOM_FRACTION), max(2, h // ZOOM_FRACTION)
+    n = {"size": (w, h), "pixels": w * h, "band": int(band.sum()), "band_differ": int((bad & band).sum()),
+         "interior_px": int((~band).sum()), "interior": light.interior}
+    cw, ch = max(2, w // EDGE_ZOOM), max(2, h // EDGE_ZOOM)
     # the zoom goes where the masks differ most, or, when they agree everywhere, where the
-    # shadow edges are densest: the pixels where they could have differed
-    x, y = crop_window(bad if bad.any() else maskdiff.edge_pixels(c.ref_lit[0]), cw, ch)
+    # band is densest: the pixels where they could have differed
+    x, y = crop_window(bad if bad.any() else band, cw, ch)
     ours = slides.mark_lights(slides.supersampled(
         lambda sc: _raster_image(g, sc), scene, w, h, L.supersample), s, L)
-    ref = slides.mark_lights(slides.supersampled(
+    ref_image = slides.mark_lights(slides.supersampled(
         lambda sc: raytrace.render(sc, max_depth=0, progress=False), scene, w, h,
         L.supersample), s, L)
+    shown = band_panel(diff, band)
     px = max(1, L.px(4))
+    side = _compare_note(L, side_w, 2 * h + 2 * L.label_h + L.margin, light, n)
     title = "Raster against ray traced: the cage, pixel by pixel"
     return Picture(
         "compare", title, "outlook",
         "The same scene twice: shadow volumes on the GPU and the ray tracer's shadow rays, "
-        "compared pixel by pixel.  They may differ only on shadow edges, where a pixel centre "
-        f"lies within rounding of a boundary; here {light.mismatched} pixels differ, "
-        f"{light.interior} away from an edge (shadow IoU {light.iou:.4f}).  The zoom shows "
-        "the part of the frame with the most mismatches, one square per pixel.",
+        "compared pixel by pixel.  They may differ only on the ±1 px band along shadow and "
+        "coverage edges, where a pixel centre may lie within rounding of a boundary; here "
+        f"{light.mismatched} pixels differ, {n['band_differ']} of the band's {n['band']} and "
+        f"{light.interior} of the {n['interior_px']} away from an edge: the interior "
+        f"difference is {light.interior} (shadow IoU {light.iou:.4f}).  The zoom enlarges the "
+        "part of the frame where the band is densest (or the mismatches, when there are any), "
+        "one square per pixel.",
         "top: the rasterizer's image, the ray tracer's (direct light); bottom: the difference "
-        "of their masks, and the boxed part of it enlarged",
+        "of their masks with the ±1 px band along every edge tinted cyan, and the boxed part "
+        "of it enlarged with a line between pixels; at the side the counts",
         f"shadowvol compare {g.path('cage')} -o compare.png",
         L.compose(title, [[("raster (shadow volumes)", _frame(ours, x, y, cw, ch, px)),
-                           ("ray traced (shadow rays)", ref)],
-                          [(f"mask difference: {light.mismatched} px", _frame(
-                              diff, x, y, cw, ch, px)),
-                           (f"zoom x{ZOOM_FRACTION}: {int(bad[y:y + ch, x:x + cw].sum())} px "
-                            "differ here", zoom(diff, x, y, cw, ch, w, h))]],
-                  legend=[(t, c_) for t, c_ in maskdiff.LEGEND[:4]]),
+                           ("ray traced (shadow rays)", ref_image)],
+                          [(f"masks differ: {light.mismatched} px", _frame(
+                              shown, x, y, cw, ch, px)),
+                           (f"an edge, x{EDGE_ZOOM}: {int(bad[y:y + ch, x:x + cw].sum())} px "
+                            "differ", pixel_grid(zoom(shown, x, y, cw, ch, w, h), cw, ch))]],
+                  side=side,
+                  legend=[("both lit", maskdiff.BOTH_LIT),
+                          ("both shadowed", maskdiff.BOTH_SHADOWED),
+                          ("±1 px band", BAND),
+                          ("only the raster shadows", maskdiff.SHADOWED_ONLY_IN_GOT),
+                          ("only the ray tracer shadows", maskdiff.SHADOWED_ONLY_IN_REF)]),
         numbers={"mismatched": sum(l.mismatched for l in c.lights),
-                 "interior": sum(l.interior for l in c.lights)})
+                 "interior": sum(l.interior for l in c.lights), **{
+                     k: v for k, v in n.items() if k != "interior"}})
+
+
+def _compare_note(L, width: int, height: int, light, n: dict) -> np.ndarray:
+    """The compare slide's side: the verdict, large, over what was measured."""
+    head = L.text(f"interior: {light.interior} px differ", width, px=40,
+                  height=L.px(64))
+    body = L.note([
+        "Where could they differ?",
+        "Only on the ±1 px band (cyan):",
+        "pixels within one pixel of a",
+        "shadow or coverage edge, where",
+        "a pixel centre may lie within",
+        "rounding of the boundary.",
+        "",
+        f"Measured at {n['size'][0]} × {n['size'][1]} px:",
+        f"  band: {n['band']:,} px,",
+        f"      {n['band_differ']} differ",
+        f"  interior: {n['interior_px']:,} px,",
+        f"      {light.interior} differ",
+        f"  shadow IoU {light.iou:.4f}",
+        "",
+        "Away from the edges the stencil",
+        "count and the shadow ray agree",
+        "on every pixel: the interior",
+        f"difference is {light.interior}.",
+    ], width, max(1, height - head.shape[0]))
+    return np.concatenate([head, body])
 
 
 def _raster_image(g, scene):
