@@ -8,18 +8,27 @@ import numpy as np
 
 import raytrace
 from raytrace import exercise
-from raytrace.raytree import format_tree, ray_tree
+from raytrace.raytree import (
+    BLOCKED,
+    LIT,
+    REFLECTED,
+    REFRACTED,
+    format_tree,
+    ray_tree,
+    tree_colour,
+)
 from shadowvol.compare import maskdiff
 from shadowvol.compare.comparison import compare
-from shadowvol.course import exercise_picture, slides
+from shadowvol import pictures
+from shadowvol.course import exercise_picture, raytree_diagram, slides
 from shadowvol.course.picture import Picture
-from shadowvol.course.raytree_picture import draw_tree
 from shadowvol.course.shadow2d import draw_shadow2d, example
 from shadowvol.pictures import figure_pixels, tint
 from shadowvol.raster.projection import view_matrix, view_projection
 from shadowvol.raster.renderer import Renderer
 
 RAY_TREE_DEPTH = 2    # "sketch all rays to recursion depth 2"
+COLOUR = {k: raytree_diagram.rgb(k) for k in (REFLECTED, REFRACTED, LIT, BLOCKED)}
 ZOOM_FRACTION = 6     # a zoomed crop shows 1/6 of the panel's width and height
 
 
@@ -63,10 +72,24 @@ def raytree(g) -> Picture:
     scene = g.scene("whitted")
     x, y = ray_tree_pixel(scene, "glass ball")
     tree = ray_tree(scene, x, y, max_depth=RAY_TREE_DEPTH)
-    w, h = L.cell(1, 1, labels=False)
-    image = raytrace.render(scene, max_depth=RAY_TREE_DEPTH, progress=False)  # as the command
-    fig = draw_tree(scene, tree, image, size_px=(w, h),
-                    text_px=L.px(28))
+    text_px = L.px(28)
+    # the image at the left, 4:3, a note under it; the tree at the right
+    img_w = L.px(780)
+    img_h = round(img_w * scene.height / scene.width)
+    s = slides.fit(scene, img_w, img_h)
+    image = slides.supersampled(lambda sc: raytrace.render(
+        sc, max_depth=RAY_TREE_DEPTH, progress=False), scene, img_w, img_h, L.supersample)
+    image = raytree_diagram.draw_rays(image, s, tree, text_px)
+    body_h = L.height - L.title_h - L.legend_h - 2 * L.margin - L.label_h
+    note = L.note([f"{raytree_diagram.light_names(scene)}.",
+                   "The pixel's colour is the sum of what",
+                   "every ray adds, each weighted by the",
+                   "reflectivity and transparency on its",
+                   "path: " + "(" + ", ".join(f"{c:.3f}" for c in tree_colour(tree)) + ")."],
+                  img_w, body_h - img_h - L.margin)
+    left = pictures.column([image, note], gap=L.margin)
+    tree_w = L.width - img_w - 3 * L.margin
+    diagram = raytree_diagram.draw_diagram(scene, tree, tree_w, body_h, text_px)
     kinds = [n.kind for n in tree.walk()]
     title = f"The ray tree of pixel ({x}, {y}), to recursion depth {RAY_TREE_DEPTH}"
     return Picture(
@@ -75,12 +98,19 @@ def raytree(g) -> Picture:
         "hit a shadow ray goes to each light, a reflected ray and, through glass, a refracted "
         "ray, each of which does the same, down to the depth limit.  The pixel's colour is "
         "the sum of what every ray contributes.",
-        "the rays over the ray-traced image, in a side and a top view, coloured by kind and "
-        "numbered as in the tree below (every ray, shadow rays included)",
+        "the rays over the ray-traced image, coloured by kind, the eye, reflected and "
+        "refracted rays' hits numbered; beside it the tree, one box per ray (numbered as in "
+        "the text below), its edges labelled S (shadow), R (reflected), T (refracted)",
         f"raytrace tree {g.path('whitted')} --pixel {x} {y} --depth {RAY_TREE_DEPTH} "
         "-o raytree.png",
-        L.compose(title, [[("", figure_pixels(fig))]]), text=format_tree(tree, scene),
-        numbers={"rays": len(kinds), **{k: kinds.count(k) for k in sorted(set(kinds))}})
+        L.compose(title, [[("the rays over the image", left),
+                           ("the tree: one box per ray", diagram)]],
+                  legend=[("eye ray", (255, 255, 255)), ("reflected", COLOUR[REFLECTED]),
+                          ("refracted", COLOUR[REFRACTED]), ("shadow ray: lit", COLOUR[LIT]),
+                          ("shadow ray: blocked", COLOUR[BLOCKED])]),
+        text=format_tree(tree, scene),
+        numbers={"rays": len(kinds), "boxes": len(raytree_diagram.layout(tree)),
+                 **{k: kinds.count(k) for k in sorted(set(kinds))}})
 
 
 def tir(g) -> Picture:
@@ -245,8 +275,9 @@ def compare_picture(g) -> Picture:
     diff = maskdiff.diff_panel(*got, *ref)
     band = maskdiff.near_edges(*got, *ref)
     bad = c.raster_lit[0] != c.ref_lit[0]
-    n = {"size": (w, h), "pixels": w * h, "band": int(band.sum()), "band_differ": int((bad & band).sum()),
-         "interior_px": int((~band).sum()), "interior": light.interior}
+    n = {"size": (w, h), "pixels": w * h, "band": int(band.sum()),
+         "band_differ": int((bad & band).sum()), "interior_px": int((~band).sum()),
+         "interior": light.interior}
     cw, ch = max(2, w // EDGE_ZOOM), max(2, h // EDGE_ZOOM)
     # the zoom goes where the masks differ most, or, when they agree everywhere, where the
     # band is densest: the pixels where they could have differed
