@@ -221,6 +221,20 @@ def crop_window(where: np.ndarray, cw: int, ch: int) -> tuple[int, int]:
     return int(x), int(y)
 
 
+def centred_window(where: np.ndarray, cw: int, ch: int) -> tuple[int, int]:
+    """(x, y) top-left of a cw x ch window over the cluster of `crop_window`, moved so that
+    the True pixels of `where` inside it are at its centre (kept inside the image): a lone
+    mismatch sits in the middle of the zoom, not at its corner."""
+    x, y = crop_window(where, cw, ch)
+    ys, xs = np.nonzero(where[y:y + ch, x:x + cw])
+    if len(xs) == 0:
+        return x, y
+    h, w = where.shape
+    cx, cy = x + float(xs.mean()), y + float(ys.mean())
+    return (int(np.clip(round(cx - cw / 2), 0, w - cw)),
+            int(np.clip(round(cy - ch / 2), 0, h - ch)))
+
+
 def zoom(image: np.ndarray, x: int, y: int, cw: int, ch: int, w: int, h: int) -> np.ndarray:
     """The crop (x, y, cw, ch) of `image` enlarged to (h, w) by repeating pixels (every pixel
     a visible square)."""
@@ -281,7 +295,7 @@ def compare_picture(g) -> Picture:
     cw, ch = max(2, w // EDGE_ZOOM), max(2, h // EDGE_ZOOM)
     # the zoom goes where the masks differ most, or, when they agree everywhere, where the
     # band is densest: the pixels where they could have differed
-    x, y = crop_window(bad if bad.any() else band, cw, ch)
+    x, y = centred_window(bad, cw, ch) if bad.any() else crop_window(band, cw, ch)
     ours = slides.mark_lights(slides.supersampled(
         lambda sc: _raster_image(g, sc), scene, w, h, L.supersample), s, L)
     ref_image = slides.mark_lights(slides.supersampled(
@@ -312,11 +326,11 @@ def compare_picture(g) -> Picture:
                            (f"an edge, x{EDGE_ZOOM}: {int(bad[y:y + ch, x:x + cw].sum())} px "
                             "differ", pixel_grid(zoom(shown, x, y, cw, ch, w, h), cw, ch))]],
                   side=side,
-                  legend=[("both lit", maskdiff.BOTH_LIT),
-                          ("both shadowed", maskdiff.BOTH_SHADOWED),
+                  legend=[("lit", maskdiff.BOTH_LIT), ("shadowed", maskdiff.BOTH_SHADOWED),
                           ("±1 px band", BAND),
-                          ("only the raster shadows", maskdiff.SHADOWED_ONLY_IN_GOT),
-                          ("only the ray tracer shadows", maskdiff.SHADOWED_ONLY_IN_REF)]),
+                          ("shadow: raster only", maskdiff.SHADOWED_ONLY_IN_GOT),
+                          ("shadow: ray tracer only", maskdiff.SHADOWED_ONLY_IN_REF),
+                          ("coverage differs", maskdiff.COVERAGE_DIFFERS)]),
         numbers={"mismatched": sum(l.mismatched for l in c.lights),
                  "interior": sum(l.interior for l in c.lights), **{
                      k: v for k, v in n.items() if k != "interior"}})

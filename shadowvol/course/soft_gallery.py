@@ -204,9 +204,10 @@ def hard_sum(g) -> Picture:
         "four samples reach each point",
         "shadowvol demo (shadowvol.course.soft_gallery.hard_sum)",
         L.compose(title, [cells[:3], cells[3:]],
-                  legend=[(f"{k} of 4 reach" + (": umbra" if k == 0 else ""), c)
-                          for k, c in enumerate(REACH_COLOURS)] +
-                         [(f"sample {k + 1}", c) for k, c in enumerate(SAMPLE_COLOURS)]),
+                  legend=[(label, c) for label, c in zip(
+                      ("0 of 4 samples reach: umbra", "1 of 4", "2 of 4",
+                       "3 of 4 (1 to 3: penumbra)"), REACH_COLOURS)] +
+                         [("4 of 4: lit", (255, 255, 255))]),
         numbers={"penumbra": int(soft.penumbra.sum()),
                  "levels": int(np.unique(count[soft.coverage]).size),
                  "shadow_px": [int(m.sum()) for m in shadows], "apart_px": apart,

@@ -263,6 +263,17 @@ def test_crop_window_finds_the_cluster():
     assert x <= 50 and x + 10 >= 55 and y <= 30 and y + 8 >= 34
 
 
+def test_centred_window_puts_a_lone_pixel_in_the_middle():
+    where = np.zeros((40, 60), bool)
+    where[30, 50] = True
+    x, y = demos_tracing.centred_window(where, 10, 8)
+    assert (x, y) == (45, 26)
+    where[39, 59] = False
+    where[:] = False
+    where[39, 59] = True                                  # at the corner: kept in the image
+    assert demos_tracing.centred_window(where, 10, 8) == (50, 32)
+
+
 def test_other_slide_sizes(ctx, tmp_path):
     g = demo.Gallery(ctx=ctx, size=(640, 360))
     assert demos_tracing.tir(g).image.shape == (360, 640, 3)
