@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from PIL import Image, ImageDraw
 
 from shadowvol.course import slides
 from shadowvol.course.picture import Picture
@@ -52,9 +53,9 @@ def _ball_scene(g):
     return scene.replace(objects=keep, camera=CAMERA)
 
 
-def _rect(centre, side: float, samples: int) -> AreaLight:
+def _rect(centre, side: float, samples: int, seed: int = 1) -> AreaLight:
     return AreaLight("rect", centre, normal=[0.0, -1.0, 0.0], size=[side, side],
-                     samples=samples, seed=1, intensity=1.3)
+                     samples=samples, seed=seed, intensity=1.3)
 
 
 def _frame(g, scene, w, h, lights) -> np.ndarray:
@@ -126,8 +127,6 @@ def outline(mask: np.ndarray, width: int) -> np.ndarray:
 def _draw_samples(image, s, L, light, current=None) -> np.ndarray:
     """`image` with the light's outline and its samples numbered 1..N in SAMPLE_COLOURS: the
     `current` one (an index) large, the others small; all large when `current` is None."""
-    from PIL import Image, ImageDraw
-
     img = Image.fromarray(image)
     draw = ImageDraw.Draw(img)
     edge = slides.area_outline(light)
@@ -166,8 +165,7 @@ def _reach_map(image, lit_count, facing) -> np.ndarray:
 def hard_sum(g) -> Picture:
     L = g.layout
     scene = _ball_scene(g)
-    light = _rect(scene.lights[0].center, HARD_SIDE, 4)
-    light = dataclasses.replace(light, seed=HARD_SEED)
+    light = _rect(scene.lights[0].center, HARD_SIDE, 4, HARD_SEED)
     w, h = L.cell(3, 2, legend=True)
     s = slides.fit(scene, w, h)
     cells, hard, shadows = [], [], []
