@@ -33,7 +33,7 @@ CAUSTIC = {"full": dict(spp=64, photons=500_000, k=50, eye=4),
 GLOSS = (0.08, 0.3)                     # the mirror balls' roughness, two panels
 APERTURE = 0.12                         # the lens radius (scene units) of the depth of field
 DISTRIBUTED_SPP = {"full": 16, "small": 4}
-GLOSS_ZOOM = 0.75                       # the field of view narrowed: the balls fill the panels
+GLOSS_ZOOM = 0.85                       # the field of view narrowed: the balls fill the panels
 
 
 def _size_flags(g) -> str:
