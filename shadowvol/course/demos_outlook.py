@@ -6,8 +6,8 @@ Each demo takes the `Gallery` and returns a `Picture` (see `gallery`).  The ladd
 caustic need scipy (the `outlook` extra): without it they raise MissingExtra, and the gallery
 leaves them out.
 
-`--small` (CI) renders with few samples and photons; the 1920x1080 slides take about four
-minutes together on two cores (docs/course.md).
+`--small` (CI) renders with few samples and photons; the 1920x1080 slides take about two and a
+half minutes together on two cores (docs/course.md).
 """
 
 from __future__ import annotations
@@ -75,7 +75,7 @@ def ladder(g) -> Picture:
         "and glass; direct lighting keeps the area light's visibility (soft shadows) but one "
         "bounce; Monte Carlo solves it all: path tracing with noise, the photon map with the "
         "blur of its density estimate; radiosity keeps the other special kind, diffuse "
-        "bounces only, exact but with no gloss.  Colour bleeds from the red and green walls "
+        "bounces only, noise-free but with no gloss.  Colour bleeds from the red and green walls "
         f"only on the global rungs 4-6.  Path tracing {info['spp']} paths per pixel "
         f"({times['path_s']} s for rungs 3-4), photon map {info['photons']:,} photons "
         f"({times['photon_s']} s), radiosity {info['radiosity']}.",
