@@ -68,26 +68,11 @@ def exact_masks(scene: Scene, rows: slice = slice(None), cols: slice = slice(Non
                 ) -> tuple[np.ndarray, np.ndarray]:
     """lit (L, h, w) and coverage (h, w) of the pixel window (rows, cols), by brute force in
     float64 (see the module docstring)."""
-    vertices, faces, _ = scene.triangles()
-    tri = vertices[faces]
     H, W = scene.height, scene.width
-    o, d = primary_rays(scene.camera, W, H, unit=False)
     pix = np.arange(H * W).reshape(H, W)[rows, cols]
     shape = pix.shape
-    o, d = o[pix.reshape(-1)], d[pix.reshape(-1)]
-    first = np.full(len(o), -1)
-    t_hit = np.full(len(o), np.inf)
-    for c in _chunks(len(o), len(tri)):
-        t = _ray_triangles(o[c], d[c], tri)
-        t[t <= 0] = np.inf
-        first[c] = np.argmin(t, axis=1)
-        t_hit[c] = t[np.arange(len(t)), first[c]]
-    covered = np.isfinite(t_hit)
-    first[~covered] = -1
-    p = o + np.where(covered, t_hit, 0.0)[:, None] * d
-    n = np.cross(tri[first, 1] - tri[first, 0], tri[first, 2] - tri[first, 0])
-    n *= np.where(np.einsum("ij,ij->i", n, d) > 0, -1.0, 1.0)[:, None]  # toward the camera
-    lit = np.zeros((len(scene.lights), len(o)), bool)
+    tri, first, covered, p, n = _primary(scene, pix.reshape(-1))
+    lit = np.zeros((len(scene.lights), len(first)), bool)
     idx = np.flatnonzero(covered)
     for i, light in enumerate(scene.lights):
         if isinstance(light, DirectionalLight):
@@ -268,12 +253,15 @@ def check_exact(request, scene: Scene, rows: slice = slice(None), cols: slice = 
     return report
 
 
-def _primary(scene: Scene):
-    """Every pixel's nearest triangle in float64: tri (M, 3, 3), first (P,) (−1: nothing),
-    covered (P,), p (P, 3) the hit points, n (P, 3) their normals turned toward the camera."""
+def _primary(scene: Scene, pixels: np.ndarray | None = None):
+    """The nearest triangle in float64 of `pixels` (flat indices, default every pixel): tri
+    (M, 3, 3), first (P,) (−1: nothing), covered (P,), p (P, 3) the hit points, n (P, 3) their
+    normals turned toward the camera."""
     vertices, faces, _ = scene.triangles()
     tri = vertices[faces]
     o, d = primary_rays(scene.camera, scene.width, scene.height, unit=False)
+    if pixels is not None:
+        o, d = o[pixels], d[pixels]
     first = np.full(len(o), -1)
     t_hit = np.full(len(o), np.inf)
     for c in _chunks(len(o), len(tri)):
