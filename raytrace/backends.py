@@ -28,6 +28,7 @@ queries (Embree stops at the first hit before tfar), which trimesh's wrapper doe
 from __future__ import annotations
 
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple, Protocol
 
@@ -36,7 +37,7 @@ import numpy as np
 from shadowvol.errors import require
 
 from .intersect import dot, ray_triangle
-from .tolerances import BVH_BOX_PAD_RELATIVE
+from .tolerances import BVH_BOX_PAD_RELATIVE, error_weight, plane_error64
 
 BACKENDS = ("numpy", "embree")
 
@@ -76,6 +77,9 @@ class TriangleBackend(Protocol):
 
     def first_hit(self, origins: np.ndarray, directions: np.ndarray,
                   tmax: np.ndarray | float | None = None) -> Hits: ...
+
+    def occluded_leaving(self, origins: np.ndarray, directions: np.ndarray,
+                         tmax: np.ndarray, own: np.ndarray) -> np.ndarray: ...
 
 
 class TriangleSet:
@@ -151,6 +155,7 @@ class NumpyBackend(TriangleSet):
         super().__init__(vertices, faces)
         tri = self.vertices[self.faces]
         self._a, self._b, self._c = tri[:, 0], tri[:, 1], tri[:, 2]
+        self._weight = error_weight(self.normals, tri)  # for occluded_leaving
         pad = BVH_BOX_PAD_RELATIVE * float(np.abs(tri).max())
         lo_t, hi_t = tri.min(axis=1) - pad, tri.max(axis=1) + pad
         centroids = tri.mean(axis=1)
@@ -188,9 +193,11 @@ class NumpyBackend(TriangleSet):
         t_out = np.maximum(t1, t2).min(axis=1)
         return np.where(t_in <= t_out, t_in, np.inf)
 
-    def _traverse(self, origins, directions, t_best, tri_best, any_hit: bool) -> None:
+    def _traverse(self, origins, directions, t_best, tri_best, any_hit: bool,
+                  exclude=None) -> None:
         """Fill t_best/tri_best (n,) in place; with any_hit, a ray stops at its first hit
-        (t_best becomes -inf so that every box culls it)."""
+        (t_best becomes -inf so that every box culls it).  exclude(rays, tris) -> (r, m) bool:
+        the (ray, triangle) pairs that do not count."""
         # A zero direction component becomes the smallest normal float, so that 1/d is huge but
         # finite and the slab test never computes 0 * inf = NaN.
         d = np.where(directions == 0.0, np.finfo(np.float64).tiny, directions)
@@ -214,6 +221,8 @@ class NumpyBackend(TriangleSet):
                 rays = idx[s:s + step]
                 lam = ray_triangle(origins[rays, None], directions[rays, None],
                                    self._a[None, tris], self._b[None, tris], self._c[None, tris])
+                if exclude is not None:
+                    lam = np.where(exclude(rays, tris), np.inf, lam)
                 j = np.argmin(lam, axis=1)
                 t = lam[np.arange(len(rays)), j]
                 better = t < t_best[rays]
@@ -258,6 +267,29 @@ class NumpyBackend(TriangleSet):
         t_best = _tmax_array(tmax, len(o))
         tri_best = np.full(len(o), -1, np.int64)
         self._traverse(o, d, t_best, tri_best, any_hit=True)
+        return tri_best >= 0
+
+
+    def occluded_leaving(self, origins, directions, tmax, own) -> np.ndarray:
+        """(n,) bool: does the ray leaving a surface at its origin hit, at 0 < t < tmax, a
+        triangle other than own (n,) int64 (the one it leaves) and other than those whose
+        plane passes through the origin up to its float64 error (`tolerances.plane_error64`:
+        they meet the ray's line there only, so every hit on them is rounding)?  Float64
+        throughout.  origins (n, 3) float64; directions (n, 3) or (1, 3); tmax (n,)."""
+        o = np.asarray(origins, dtype=np.float64)
+        d = np.broadcast_to(np.asarray(directions, dtype=np.float64), o.shape)
+        own = np.asarray(own, dtype=np.int64)
+        weight = self._weight
+
+        def exclude(rays, tris):
+            n = self.normals[tris]
+            height = np.abs(o[rays] @ n.T - self.plane_d[tris])
+            bound = plane_error64(weight[tris] + np.abs(o[rays]) @ np.abs(n).T)
+            return (height <= bound) | (tris[None, :] == own[rays, None])
+
+        t_best = _tmax_array(tmax, len(o))
+        tri_best = np.full(len(o), -1, np.int64)
+        self._traverse(o, d, t_best, tri_best, any_hit=True, exclude=exclude)
         return tri_best >= 0
 
 
@@ -307,6 +339,8 @@ class EmbreeBackend(TriangleSet):
         # embreex commits the scene (builds the BVH) lazily in the first run(); do it now, so
         # that threads never race to do it and the build is not billed to the first trace.
         self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
+        self._float64: NumpyBackend | None = None  # built on first use (occluded_leaving)
+        self._float64_lock = threading.Lock()
 
     def _run(self, origins, directions, dists, query: str, parallel: bool) -> np.ndarray:
         """Trace; returns primID (INTERSECT) or geomID (OCCLUDED), int32 (n,), -1 for a miss /
@@ -367,3 +401,12 @@ class EmbreeBackend(TriangleSet):
         Embree occlusion query: it stops at the first hit and never looks past tmax.
         directions : (n, 3), or (1, 3) for one direction shared by all rays."""
         return self._run(origins, directions, tmax, "OCCLUDED", parallel) != -1
+
+    def occluded_leaving(self, origins, directions, tmax, own) -> np.ndarray:
+        """`NumpyBackend.occluded_leaving` on the same triangles, float64 (the few rays that
+        need it are short: the pieces a grazing shadow ray's lift skips).  The float64 BVH is
+        built on the first call, once, whichever thread makes it."""
+        with self._float64_lock:
+            if self._float64 is None:
+                self._float64 = NumpyBackend(self.vertices, self.faces)
+        return self._float64.occluded_leaving(origins, directions, tmax, own)

@@ -3,8 +3,9 @@ truth"): per pixel the depth, the distance, the face normal and the object id of
 point, and per light how many samples face it, how many reach it and which objects block it.
 
 Everything rides the masks' own rays (`raytrace.masks`): the same visible triangle, the same
-float64 hit point, the same shadow segments with the same margins.  An area light is its N
-samples (`shadowvol.scene.hard_lights`), each traced as a hard light; its counts add up and its
+float64 hit point, the same shadow segments with the same margins and the same float64 pieces
+that a long lift skips (`raytrace.masks._NearPieces`).  An area light is its N samples
+(`shadowvol.scene.hard_lights`), each traced as a hard light; its counts add up and its
 casters OR, so `lit_count` equals `raytrace.soft_masks`' and `lit` `shadow_masks`'.  `casters`
 traces every blocked segment again against each object alone (one backend per object, in the
 masks' frame, the visible triangle excluded by id in its own object): bit j mod 64 of word
@@ -31,6 +32,7 @@ from .masks import (
     MaskTracer,
     _blocked,
     _local_light,
+    _near_blocked,
     _primary_hits,
     _segments,
     scene_backend,
@@ -184,7 +186,9 @@ def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: floa
                  casters: np.ndarray | None) -> None:
     """One hard light (a sample of light i) over a tile's hits at `pixel` (h,) int64: its
     facing and lit pixels added to `counts` (L, H * W) uint16 each, its blockers ORed into
-    `casters` (L, H * W, K) uint64 when given."""
+    `casters` (L, H * W, K) uint64 when given.  Lit as `masks._lit` decides it: the segment
+    past the lift unblocked, and then the float64 near piece a long lift skips
+    (`masks._NearPieces`) unblocked too."""
     seg = _segments(light, hit, reach)
     own, fragile = hit.tri[seg.rays], hit.fragile[seg.rays]
     start = seg.start.copy() if casters is not None else seg.start
@@ -192,6 +196,8 @@ def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: floa
     blocked = _blocked(tracer, seg.start, seg.direction, seg.tmax, own, fragile)
     lit_here = seg.facing.copy()
     lit_here[seg.rays] = ~blocked
+    near = seg.near.where(lit_here[seg.near.rays])  # those the rest of the segment left lit
+    lit_here[near.rays] = ~_near_blocked(tracer, near, hit.tri[near.rays])
     counts["lit_count"][i, pixel] += lit_here
     counts["facing_count"][i, pixel] += seg.facing
     if casters is not None and blocked.any():
@@ -199,6 +205,9 @@ def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: floa
         casters[i, pixel[seg.rays[b]]] |= _caster_bits(
             objects, start[:, b], seg.direction if seg.direction.shape[1] == 1
             else seg.direction[:, b], None if tmax is None else tmax[b], own[b], fragile[b])
+    if casters is not None and len(seg.near.rays):
+        casters[i, pixel[seg.near.rays]] |= _near_caster_bits(objects, seg.near,
+                                                              hit.tri[seg.near.rays])
 
 
 def face_normals(corners: np.ndarray) -> np.ndarray:
@@ -235,6 +244,30 @@ def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarr
         hit = _blocked(tracer, start[:, k], direction if direction.shape[1] == 1
                        else direction[:, k], None if tmax is None else tmax[k].copy(),
                        local_own, fragile[k] & mine[k])
+        bits[k[hit], j // fields.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
+            j % fields.CASTER_WORD_BITS)
+    return bits
+
+
+def _near_caster_bits(objects: _ObjectTracers, near, own: np.ndarray) -> np.ndarray:
+    """(q, K) uint64: the objects that block the float64 near pieces `near`
+    (`masks._NearPieces`) of segments leaving scene triangles own (q,), as bits (object j: bit
+    j mod 64 of word j div 64).  Each object's backend is asked the masks' own question
+    (`masks._near_blocked`), its own triangle excluded by id in the object it belongs to; a
+    piece that misses an object's padded box is not asked of it."""
+    bits = np.zeros((len(own), fields.caster_words(len(objects.tracers))), np.uint64)
+    own_object = objects.object[own]
+    direction = np.broadcast_to(near.direction, near.origin.shape)
+    with np.errstate(divide="ignore"):
+        inverse = 1.0 / direction
+    for j, tracer in enumerate(objects.tracers):
+        mine = own_object == j
+        ask = _meets_box(near.origin, inverse, near.tmax, objects.lo[j], objects.hi[j]) | mine
+        if not ask.any():
+            continue
+        k = np.flatnonzero(ask)
+        local_own = np.where(mine[k], own[k] - objects.first[j], -1)
+        hit = _near_blocked(tracer, near.where(ask), local_own)
         bits[k[hit], j // fields.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
             j % fields.CASTER_WORD_BITS)
     return bits

@@ -19,6 +19,7 @@ from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 from .backends import TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
 from .tolerances import (
+    LIFT_HEIGHTS,
     OWN_HIT_RETRIES,
     error_weight,
     frame_origin,
@@ -152,7 +153,8 @@ class _Hits(NamedTuple):
     side_d : (h,) side · (normal · point);  height : (h,) the margin at the surface
     (`tolerances.shadow_height`);  tri : (h,) int64, the hit triangle (excluded by id);
     fragile : (h,) bool, it is a sliver (`_Triangles.fragile`);  depth : (h,) float64, the
-    eye-space depth of p (p = eye + depth·v, v the pixel's direction of depth 1).
+    eye-space depth of p (p = eye + depth·v, v the pixel's direction of depth 1);
+    point64 : (3, h) float64, p before rounding (where a grazing ray's lift is traced again).
     """
 
     point: np.ndarray
@@ -163,6 +165,7 @@ class _Hits(NamedTuple):
     tri: np.ndarray
     fragile: np.ndarray
     depth: np.ndarray
+    point64: np.ndarray
 
 
 def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
@@ -210,7 +213,7 @@ def _primary_hits(tracer: TriangleBackend, triangles: _Triangles,
     # the bound of p's float error relative to planes through it (tolerances, item 3)
     height = shadow_height(np.take(triangles.weight, k) + _dot(np.abs(normal), np.abs(point64)))
     return covered, index, _Hits(point, normal, side, side * plane_d, height, k,
-                                 np.take(triangles.fragile, k), s)
+                                 np.take(triangles.fragile, k), s, point64)
 
 
 def _round_down32(x: np.ndarray) -> np.ndarray:
@@ -254,9 +257,11 @@ class _Segments(NamedTuple):
     """The shadow rays of a tile's hit points toward one light (see `_segments`).
 
     facing    : (h,) bool, n·l > 0 (and, for a spot light, inside the cone): lit unless blocked
-    rays      : (r,) int64, the facing hits that need a shadow ray (the others are lit)
+    rays      : (r,) int64, the facing hits that need a shadow ray past the lift (the
+                others are lit unless their `near` piece is blocked)
     start     : (3, r) float32;  direction : (3, r) float32, or (3, 1) for all
     tmax      : (r,) float32, or None (unbounded: a directional light)
+    near      : `_NearPieces`, the pieces a long lift skips, traced again in float64
     """
 
     facing: np.ndarray
@@ -264,6 +269,32 @@ class _Segments(NamedTuple):
     start: np.ndarray
     direction: np.ndarray
     tmax: np.ndarray | None
+    near: "_NearPieces"
+
+
+class _NearPieces(NamedTuple):
+    """The start of the segments whose lift is longer than LIFT_HEIGHTS heights
+    (`tolerances`, item 3b): rays (q,) int64, which hits; origin (3, q) float64, p itself;
+    direction (3, q) float64, or (3, 1) for all; tmax (q,) float64, where the lifted start (or
+    the segment's end, if nearer) is."""
+
+    rays: np.ndarray
+    origin: np.ndarray
+    direction: np.ndarray
+    tmax: np.ndarray
+
+    def where(self, keep: np.ndarray) -> "_NearPieces":
+        """The pieces where keep (q,) bool is True."""
+        d = self.direction if self.direction.shape[1] == 1 else self.direction[:, keep]
+        return _NearPieces(self.rays[keep], self.origin[:, keep], d, self.tmax[keep])
+
+
+def _near_blocked(tracer: TriangleBackend, near: _NearPieces, own: np.ndarray) -> np.ndarray:
+    """(q,) bool: is the piece of segment a lift skips blocked, in float64, by a triangle
+    other than `own` (q,) int64 and those through p (`TriangleBackend.occluded_leaving`)?"""
+    if len(near.rays) == 0:
+        return np.zeros(0, bool)
+    return tracer.occluded_leaving(near.origin.T, near.direction.T, near.tmax, own)
 
 
 def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) -> np.ndarray:
@@ -273,6 +304,8 @@ def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) 
     out = seg.facing.copy()
     out[seg.rays] = ~_blocked(tracer, seg.start, seg.direction, seg.tmax, hit.tri[seg.rays],
                               hit.fragile[seg.rays])
+    near = seg.near.where(out[seg.near.rays])  # those the rest of the segment left lit
+    out[near.rays] = ~_near_blocked(tracer, near, hit.tri[near.rays])
     return out
 
 
@@ -282,24 +315,50 @@ def _segments(local: _LocalLight, hit: _Hits, reach: float) -> _Segments:
     The shadow ray is the segment p -> light (p + t·l, 0 < t < 1, l = L − p) or the ray
     p + t·l (t > 0, l = −direction) on its own line; only its ends are cut: t > height/(n·l)
     at the surface (height `hit.height` above p's plane) and, for a point light,
-    t < 1 − light_margin/|l|, and the hit triangle does not count (`_blocked`).  Origins and
-    directions go to Embree as float32, component-major (embreex reads the transposed views
-    without a copy)."""
+    t < 1 − light_margin/|l|, and the hit triangle does not count (`_blocked`).  Where that
+    lift is longer than LIFT_HEIGHTS heights, the piece it skips is `_Segments.near`.
+    Origins and directions go to Embree as float32, component-major (embreex reads the
+    transposed views without a copy)."""
+    if isinstance(local.light, DirectionalLight):
+        return _directional_segments(local.light, hit, reach)
+    return _point_segments(local, hit)
+
+
+def _long_lifts(rays: np.ndarray, near: np.ndarray, lift: np.ndarray, end, hit: _Hits,
+                direction) -> _NearPieces:
+    """The `_NearPieces` of the rays (r,) (hit indices) whose lift (r,) (world units) is
+    longer than LIFT_HEIGHTS heights: from p to min(near, end) (in units of `direction`,
+    (3, r) float64 or (3, 1))."""
+    long = np.flatnonzero(lift > LIFT_HEIGHTS * hit.height[rays])
+    if direction.shape[1] != 1:
+        direction = direction[:, long]
+    tmax = np.minimum(near[long], end if np.ndim(end) == 0 else end[long])
+    k = rays[long]
+    return _NearPieces(k, hit.point64[:, k], direction, tmax)
+
+
+def _directional_segments(light: DirectionalLight, hit: _Hits, reach: float) -> _Segments:
+    """`_segments` toward a directional light: rays, unbounded, ending at the scene's reach."""
     f32 = np.float32
-    light = local.light
-    if isinstance(light, DirectionalLight):
-        toward = -light.direction
-        n_dot_l = hit.side * (toward @ hit.normal)  # n facing the camera
-        facing = n_dot_l > 0
-        with np.errstate(divide="ignore"):
-            near = hit.height / n_dot_l  # distance along the unit l
-        cast = facing & (near < reach)  # a start beyond the scene's reach sees nothing
-        toward32 = toward.astype(f32)
-        start = hit.point.compress(cast, axis=1)
-        start += near[cast].astype(f32) * toward32[:, None]
-        # Unbounded: anything anywhere along the ray toward a directional light blocks it.
-        return _Segments(facing, np.flatnonzero(cast), start, toward32[:, None], None)
-    position = local.position
+    toward = -light.direction
+    n_dot_l = hit.side * (toward @ hit.normal)  # n facing the camera
+    facing = n_dot_l > 0
+    with np.errstate(divide="ignore"):
+        near = hit.height / n_dot_l  # distance along the unit l
+    cast = facing & (near < reach)  # a start beyond the scene's reach sees nothing
+    toward32 = toward.astype(f32)
+    start = hit.point.compress(cast, axis=1)
+    start += near[cast].astype(f32) * toward32[:, None]
+    c = np.flatnonzero(facing)
+    pieces = _long_lifts(c, near[c], near[c], reach, hit, toward[:, None])
+    # Unbounded: anything anywhere along the ray toward a directional light blocks it.
+    return _Segments(facing, np.flatnonzero(cast), start, toward32[:, None], None, pieces)
+
+
+def _point_segments(local: _LocalLight, hit: _Hits) -> _Segments:
+    """`_segments` toward a point or spot light: segments, `light_margin` short of it."""
+    f32 = np.float32
+    light, position = local.light, local.position
     # n·(L − p) = n·L − n·p, and n·p = plane_d on the triangle's plane.
     n_dot_l = hit.side * (position @ hit.normal) - hit.side_d
     facing = n_dot_l > 0
@@ -314,13 +373,16 @@ def _segments(local: _LocalLight, hit: _Hits, reach: float) -> _Segments:
         c, start, l, length = c[inside], start[:, inside], l[:, inside], length[inside]
     near = hit.height[c] / n_dot_l[c]                      # fractions of the segment
     length = length.astype(np.float64)
-    gap = 1.0 - light_margin(position, length, local.through) / length - near
+    end = 1.0 - light_margin(position, length, local.through) / length
+    pieces = _long_lifts(c, near, near * length, end, hit,
+                         position[:, None] - hit.point64[:, c])
+    gap = end - near
     # Where the margins meet (gap <= 0: the light within `height` of the surface's plane)
-    # nothing is strictly between: lit.
+    # nothing is strictly between the lift and the light's margin: only the near piece.
     cast = gap > 0
     if not cast.all():
         c, start, l, near, gap = c[cast], start[:, cast], l[:, cast], near[cast], gap[cast]
     start += near.astype(f32) * l
     gap = _round_down32(gap)  # Embree's tfar is float32: never let rounding lengthen the ray
     # Bounded: the rest of the segment, direction l not normalised, so it ends at tmax = gap.
-    return _Segments(facing, c, start, l, gap)
+    return _Segments(facing, c, start, l, gap, pieces)

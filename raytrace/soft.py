@@ -75,6 +75,9 @@ class _Unoccluded:
     def occluded(self, origins, directions, tmax, parallel=True):
         return np.zeros(len(origins), bool)
 
+    def occluded_leaving(self, origins, directions, tmax, own):
+        return np.zeros(len(origins), bool)
+
 
 def sample_masks(scene: Scene, light_index: int, backend: str | MaskTracer = "embree",
                  facing: bool = False):

@@ -39,6 +39,18 @@ Binder, Ray Tracing Gems ch. 6, bound the error of a hit point instead of guessi
    (t = height / (n·l)).  Weighting by |n_j| is what keeps a horizontal ground quad 1e7 wide
    exact: its corners' x and z are large but its plane depends only on y, and W is the eye's
    height above it.
+3b. **The lift is never longer than `LIFT_HEIGHTS` heights.**  Along a unit l the lift is
+   height / (n·l̂): at n·l̂ = 1e-3 a thousand heights, and a real occluder of the same mesh
+   a little way along (a bunny's fold under a low spot light) would be skipped.  So where
+   n·l̂ < 1 / LIFT_HEIGHTS the skipped piece, p to the lifted start, is traced again in
+   float64 from p itself (`TriangleBackend.occluded_leaving`), counting every triangle except
+   p's own and those whose float64 plane passes through p up to its float64 error
+   (`plane_error64`: the same weights in spacings of 2**-52).  Those are the only triangles
+   that may be met there by rounding alone: a plane through p meets the segment's line at p
+   only (or contains it), so in exact arithmetic they never block.  Anything else the float64
+   walk meets is a blocker, however grazing the light.  What the masks lose at the surface is
+   therefore geometry within LIFT_HEIGHTS heights of p along the ray (a contact shadow
+   thinner than ~3e-5 of the distance to the eye), at every angle.
 4. **At a point light, a bound of the light position's own error.**  The segment ends
    `light_margin` before the light: 8 spacings of the light's coordinates, of the segment's
    length (Embree's t is relative to it) and, if some triangle's plane passes through the light
@@ -47,8 +59,10 @@ Binder, Ray Tracing Gems ch. 6, bound the error of a hit point instead of guessi
    rasterizer either) -- and nothing else near the light is dropped: a card 1e-5 beside a light
    one unit from the eye still shadows (the margin is ~1e-6).
 
-Geometry that lies within that height of the surface, or that close to the light, does not
-count: a contact shadow thinner than ~1e-6 of the distance to the eye is lost, nothing else.
+Geometry that lies within LIFT_HEIGHTS heights of p along the segment, or that close to the
+light, does not count: a contact shadow thinner than ~3e-5 of the distance to the eye is lost,
+nothing else (`tests/raytrace/test_margins_property.py` checks this against a float64 walk of
+the segment at n·l̂ down to 1e-4 and 1e5 from the origin).
 `tests/raytrace/test_reference_exact.py` measures the masks against a float64 brute-force segment test
 on large translations, huge ground quads, cards beside lights and grazing creases, and checks
 the height bound directly (rays leaving random triangles at down to 1e-6 rad of grazing never
@@ -73,7 +87,8 @@ Where float32 is used: everything Embree touches (see `raytrace.backends`) and, 
 the primary rays (only to choose the visible triangle) and the shadow rays, all in the eye's
 frame.  The hit point is computed in float64 and rounded to float32 once; n·l (which decides
 "facing") and the margins are float64; the shadow ray's start, p + margin·l, is added in
-float32 (counted in the bound above); its tfar is rounded down, never up.  The intersection
+float32 (counted in the bound above); its tfar is rounded down, never up; the pieces a long
+lift skips (item 3b) are float64 from end to end.  The intersection
 formulas, the numpy backend and the Whitted renderer are float64.
 """
 
@@ -85,12 +100,17 @@ from shadowvol import cameras
 
 # float32's relative spacing: the distance from 1.0 to the next float32.
 FLOAT32_EPS = float(np.finfo(np.float32).eps)  # 2**-23
+FLOAT64_EPS = float(np.finfo(np.float64).eps)  # 2**-52
 
 # The masks' margins (see above), in float32 spacings (2**-23 relative) of |n|-weighted
 # coordinates in the eye's frame: at the surface (about 4 are accounted for), and before a point
 # light.
 SURFACE_ERROR_ULPS = 8.0
 LIGHT_ERROR_ULPS = 8.0
+
+# The longest lift along the segment, in heights (item 3b): where the lift would be longer
+# (n·l̂ < 1 / LIFT_HEIGHTS) the piece it skips is traced in float64.
+LIFT_HEIGHTS = 16.0
 
 # A triangle whose smallest angle has a sine below 1 / SLIVER_SHAPE (~14.5 degrees) is a
 # sliver: the float32 error of its normal, relative, grows as 1 / sin(smallest angle), which
@@ -162,6 +182,13 @@ def shadow_height(weight):
     triangle's `error_weight` plus p's coordinates weighted by |n|, eye's frame).  Never 0: a
     weight of 0 still gets the spacing at the smallest normal float32 scale, 1e-30."""
     return SURFACE_ERROR_ULPS * FLOAT32_EPS * np.maximum(weight, 1e-30)
+
+
+def plane_error64(weight):
+    """The float64 twin of `shadow_height`: how far (world units) a plane through p may pass
+    from p by float64 rounding alone.  weight : float or array, W + Σ_j |n_j||p_j| (eye's
+    frame)."""
+    return SURFACE_ERROR_ULPS * FLOAT64_EPS * np.maximum(weight, 1e-300)
 
 
 def light_margin(light_position, length, through_weight: float = 0.0):

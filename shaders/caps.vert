@@ -7,7 +7,7 @@
 //
 // Why not a geometry shader: on llvmpipe, a triangle passed through a geometry shader with its
 // gl_Position unchanged does NOT rasterize to bit-identical depths, and the near cap must tie
-// exactly with the depth pass (see shadowvol/volumes.py).  A vertex shader computing
+// exactly with the depth pass (see shadowvol/raster/volumes.py).  A vertex shader computing
 // gl_Position with the same invariant expression as scene.vert does.
 //
 // Defines: FAR_CAP — project the triangle to infinity (V -> (V - L, 0)) instead of drawing it

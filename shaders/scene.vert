@@ -3,7 +3,7 @@
 // The depth pass, the lighting pass and the z-fail near caps all run THIS vertex shader on the
 // SAME vertex data, and gl_Position is invariant, so the three passes produce bit-identical
 // depths: the lighting pass's depth test EQUAL holds, and a near cap ties exactly with the
-// surface it lies on (see shadowvol/volumes.py for why the tie must count as "behind").
+// surface it lies on (see shadowvol/raster/volumes.py for why the tie must count as "behind").
 
 uniform mat4 u_view_proj;   // world -> clip, infinite far plane
 #ifndef MASK_PASS

@@ -2,10 +2,10 @@
 // GPU silhouettes: the multiplicity of one edge record and its side quads.
 // m = sum over the record's triangles (a, b, c) of tri_sign(a, b, c); emit |m| quads extruded
 // to infinity along the edge as the light-facing triangles run it, s -> e = a -> b when m > 0,
-// b -> a when m < 0, wound to face out of the volume (see shadowvol/silhouettes.py).
+// b -> a when m < 0, wound to face out of the volume (see shadowvol/raster/silhouettes.py).
 
 layout(points) in;
-layout(triangle_strip, max_vertices = 16) out;  // 4 opposite vertices -> at most 4 quads
+layout(triangle_strip, max_vertices = 24) out;  // 4 opposite vertices -> at most 4 quads
 
 uniform mat4 u_view_proj;
 uniform vec4 u_light;  // (position, 1) or (-direction, 0)
@@ -66,12 +66,16 @@ void main() {
     vec4 s_inf = vec4(s * u_light.w - u_light.xyz, 0.0);
     vec4 e_inf = vec4(e * u_light.w - u_light.xyz, 0.0);
     for (int k = 0; k < abs(m); ++k) {
-        // strip e, s, e_inf, s_inf = triangles (e, s, e_inf), (e_inf, s, s_inf): the quad
-        // e -> s -> s_inf -> e_inf, wound as the CPU path's.
+        // the quad e -> s -> s_inf -> e_inf as the CPU path draws it (quads_to_triangles):
+        // triangles (e, s, s_inf) and (e, s_inf, e_inf), the same corners in the same order,
+        // so that both paths rasterize the same triangles
         emit(vec4(e, 1.0));
         emit(vec4(s, 1.0));
-        emit(e_inf);
         emit(s_inf);
+        EndPrimitive();
+        emit(vec4(e, 1.0));
+        emit(s_inf);
+        emit(e_inf);
         EndPrimitive();
     }
 }

@@ -4,10 +4,10 @@
 
 //
 // Defines: ZPASS_CLIP — also write the distances to the z-pass clip box
-// (shadowvol/methods.py zpass_clip_planes), for z-pass draws only.  A separate program, not
+// (shadowvol/raster/methods.py zpass_clip_planes), for z-pass draws only.  A separate program, not
 // a switch: on llvmpipe a vertex shader that writes gl_ClipDistance changes how the z-fail
-// draws (depth clamp on) are clipped even with every GL_CLIP_DISTANCEi disabled (checked:
-// 500 interior mismatches on scenes/cage.toml under z-fail).
+// draws (depth clamp on, as they then were) are clipped even with every GL_CLIP_DISTANCEi
+// disabled (checked: 500 interior mismatches on scenes/cage.toml under z-fail).
 
 uniform mat4 u_view_proj;
 #ifdef ZPASS_CLIP

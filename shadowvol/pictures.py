@@ -144,15 +144,65 @@ HEAT_LEGEND = (("0 lit", (128, 128, 128)),
 
 
 def heat_maps(counts: np.ndarray, image: np.ndarray | None = None,
-              with_legend: bool = False) -> np.ndarray:
-    """(L, H, W) counts -> one heat map per light side by side, with the legend below when
-    asked."""
+              with_legend: bool = False, titles: list[str] | None = None) -> np.ndarray:
+    """(L, H, W) counts -> one heat map per light side by side, each under its title when
+    `titles` are given, with the legend below when asked (`captioned`)."""
     if len(counts) == 0:  # no lights: nothing counted
-        out = heat_map(np.zeros(counts.shape[1:], np.int16), image)
+        panels = [heat_map(np.zeros(counts.shape[1:], np.int16), image)]
     else:
-        out = row([heat_map(c, image) for c in counts])
-    return np.concatenate([out, legend(out.shape[1], HEAT_LEGEND, spacing=22, char_width=6)]) \
-        if with_legend else out
+        panels = [heat_map(c, image) for c in counts]
+    if titles is None and not with_legend:
+        return row(panels)
+    titles = titles if titles is not None else [""] * len(panels)
+    return captioned(list(zip(titles, panels)), HEAT_LEGEND if with_legend else ())
+
+
+def caption_px(height: int) -> int:
+    """The font size of a picture's titles and legend: 1/27 of its panels' height (18 px at
+    480), at least MIN_TEXT_SIZE + 3."""
+    return max(MIN_TEXT_SIZE + 3, round(height / 27))
+
+
+def swatch_legend(width: int, entries, px: int) -> np.ndarray:
+    """(h, width, 3) uint8: a swatch and its label per (label, colour) entry in DejaVu Sans at
+    `px`, left to right, on as many lines as `width` needs (h = lines x 1.6 px)."""
+    f, sw, gap, line = font(px), px, px, round(1.6 * px)
+    measure = ImageDraw.Draw(Image.new("RGB", (1, 1)))
+    places, x, y = [], 4, 0
+    for label, colour in entries:
+        w = sw + px // 3 + measure.textlength(label, font=f)
+        if x > 4 and x + w > width - 4:
+            x, y = 4, y + line
+        places.append((x, y, label, colour))
+        x += w + gap
+    strip = Image.new("RGB", (width, y + line), WHITE)
+    draw = ImageDraw.Draw(strip)
+    for x, y, label, colour in places:
+        top = y + (line - sw) // 2
+        draw.rectangle([x, top, x + sw, top + sw], fill=tuple(map(int, colour)),
+                       outline=(0, 0, 0))
+        draw.text((x + sw + px // 3, y + line // 2), label, fill=(0, 0, 0), font=f,
+                  anchor="lm")
+    return np.asarray(strip, np.uint8)
+
+
+def captioned(panels: list[tuple[str, np.ndarray]], entries=(), px: int | None = None,
+              title: str | None = None) -> np.ndarray:
+    """Panels of equal height side by side, each under its title strip (none when every
+    title is ""), the `swatch_legend` of `entries` below (none when empty) and `title` in a
+    dark strip on top; text at `px` (default `caption_px` of the panels' height)."""
+    px = caption_px(panels[0][1].shape[0]) if px is None else px
+    strip_h = round(1.6 * px)
+    if any(label for label, _ in panels):
+        panels = [(label, np.concatenate([text_strip(label, img.shape[1], strip_h, px), img]))
+                  for label, img in panels]
+    out = row([img for _, img in panels])
+    parts = [out]
+    if title:
+        parts.insert(0, text_strip(title, out.shape[1], strip_h, px, dark=True))
+    if entries:
+        parts.append(swatch_legend(out.shape[1], entries, px))
+    return np.concatenate(parts)
 
 
 def masks_image(lit: np.ndarray, coverage: np.ndarray) -> np.ndarray:

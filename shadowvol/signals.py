@@ -11,6 +11,7 @@ before it reports success.
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
 
@@ -26,8 +27,22 @@ class _Pending:
     depth: int = 0
 
 
+# Where an exception raised by the handler is not propagated but printed as "Exception ignored
+# in ..." with a traceback: importlib's module-lock weakref callback (`_get_module_lock.cb`),
+# which runs whenever a module lock is collected, during any import.
+_IGNORING = {("<frozen importlib._bootstrap>", "cb")}
+REDELIVER_S = 0.01  # a signal that lands there comes again this much later
+
+
 def _handler(signum, frame):
     _Pending.signum = signum
+    if frame is not None and (frame.f_code.co_filename, frame.f_code.co_name) in _IGNORING:
+        # raising here would print a traceback and lose the exception: send the signal again
+        # in a moment, when the main thread is back in code that propagates it
+        timer = threading.Timer(REDELIVER_S, os.kill, (os.getpid(), signum))
+        timer.daemon = True
+        timer.start()
+        return
     raise KeyboardInterrupt() if signum == signal.SIGINT else Terminated()
 
 

@@ -15,6 +15,7 @@ of practically impossible, and keeps shrunk examples readable.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 
 import numpy as np
@@ -272,3 +273,132 @@ def huge_ground_views(draw):
               draw(st.floats(-5.0, 5.0))]
     assume(np.hypot(eye[0] - target[0], eye[2] - target[2]) > 1e-3)  # not looking along up
     return scene.replace(camera=Camera(eye=eye, target=target, fov_y=draw(st.floats(30.0, 90.0))))
+
+
+# ---- grazing light, far from the origin (issue 31): every margin of the masks ----------------
+
+def translated(scene: Scene, offset) -> Scene:
+    """`scene` moved by offset (3,): objects, lights and camera (area lights keep their
+    samples' layout: their centres move)."""
+    from shadowvol.scene import AreaLight
+    o = np.asarray(offset, float)
+    objects = [mesh(ob.name, ob.vertices + o, ob.faces, ob.material) for ob in scene.objects]
+    lights = []
+    for lt in scene.lights:
+        if isinstance(lt, AreaLight):
+            lights.append(dataclasses.replace(lt, center=lt.center + o))
+        elif isinstance(lt, DirectionalLight):
+            lights.append(lt)
+        else:
+            lights.append(dataclasses.replace(lt, position=lt.position + o))
+    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye + o,
+                                 target=scene.camera.target + o)
+    return scene.replace(objects=objects, lights=lights, camera=camera)
+
+
+def offsets(high_exp: float = 5.0):
+    """No translation, or one of magnitude 10**2 .. 10**high_exp."""
+    return st.one_of(st.just([0.0, 0.0, 0.0]), _far_offset(2.0, high_exp))
+
+
+@st.composite
+def grazing_light(draw, objects):
+    """A light at n·l̂ 1e-4 .. 0.1 above the floor (directional, or a point light 2..6 away),
+    or a point light 1e-5 .. 1e-3 off a face of one of `objects`, on either side."""
+    kind = draw(st.sampled_from(["directional", "point", "by a face"]))
+    sin_e = 10 ** draw(st.floats(-4.0, -1.0))
+    phi = draw(st.floats(0.0, 2 * np.pi))
+    flat = np.array([np.cos(phi), 0.0, np.sin(phi)]) * np.sqrt(1 - sin_e ** 2)
+    toward = flat + [0.0, sin_e, 0.0]
+    if kind == "directional":
+        return DirectionalLight(-toward)
+    if kind == "point":
+        return PointLight(draw(st.floats(2.0, 6.0)) * toward)
+    obj = objects[draw(st.integers(0, len(objects) - 1))]
+    tri = obj.triangles[draw(st.integers(0, len(obj.triangles) - 1))]
+    n = np.cross(tri[1] - tri[0], tri[2] - tri[0])
+    assume(np.linalg.norm(n) > 1e-6)
+    gap = 10 ** draw(st.floats(-5.0, -3.0)) * draw(st.sampled_from([-1.0, 1.0]))
+    return PointLight(tri.mean(axis=0) + gap * n / np.linalg.norm(n))
+
+
+@st.composite
+def close_up(draw, objects):
+    """A camera 0.01 .. 3 from where a face of an object meets the floor (y = 0), looking at
+    it through a lens of 0.01 .. 20 degrees: where a grazing light's lift would skip the
+    face."""
+    obj = objects[draw(st.integers(1, len(objects) - 1))]
+    tri = obj.triangles
+    a, b = tri, np.roll(tri, 1, axis=1)
+    crossing = np.argwhere((a[..., 1] < 0) & (b[..., 1] > 0))
+    assume(len(crossing) > 0)
+    m, e = crossing[draw(st.integers(0, len(crossing) - 1))]
+    p, q = a[m, e], b[m, e]
+    target = p + (q - p) * (-p[1] / (q[1] - p[1]))
+    back = np.array([draw(st.floats(-1.0, 1.0)), draw(st.floats(0.2, 1.0)),
+                     draw(st.floats(-1.0, 1.0))])
+    assume(np.hypot(back[0], back[2]) > 0.05)  # not looking straight down the up axis
+    eye = target + 10 ** draw(st.floats(-2.0, 0.5)) * back / np.linalg.norm(back)
+    return Camera(eye=eye, target=target, fov_y=10 ** draw(st.floats(-2.0, 1.3)),
+                  near=float(np.linalg.norm(eye - target)) * 0.01)
+
+
+@st.composite
+def grazing_scenes(draw, size=(40, 30)):
+    """A floor, 1..3 closed or open objects, 1..2 grazing lights (`grazing_light`), a random
+    camera, the whole translated by up to 1e5 (`offsets`)."""
+    objs = [plane("floor", point=[0, 0, 0], size=[12, 12], material=GREY)]
+    for i in range(draw(st.integers(1, 3))):
+        obj = draw(closed(f"closed{i}")) if draw(st.booleans()) else draw(soup(f"soup{i}"))
+        objs.append(_variant(obj, draw(st.sampled_from(["as is", "unwelded", "flipped"])),
+                             draw(st.integers(0, 99))))
+    lights = [draw(grazing_light(objs)) for _ in range(draw(st.integers(1, 2)))]
+    scene = Scene(camera=draw(st.one_of(camera(), close_up(objs))), objects=objs,
+                  lights=lights, width=size[0], height=size[1], name="grazing")
+    assume(not rounding_tie(scene))
+    return translated(scene, draw(offsets()))
+
+
+@st.composite
+def area_light(draw, objects):
+    """A rect, disk or sphere light of 1..16 samples, anywhere `light_position` puts lights,
+    grazing the floor (its centre 1e-3 .. 0.1 above y = 0), or 1e-3 off a face of one of
+    `objects`."""
+    from shadowvol.scene import AreaLight
+    shape = draw(st.sampled_from(["rect", "disk", "sphere"]))
+    where = draw(st.sampled_from(["anywhere", "grazing", "by a face"]))
+    if where == "anywhere":
+        centre = np.array(draw(light_position()), float)
+    elif where == "grazing":
+        centre = np.array([draw(coord(-4.0, 4.0)), 10 ** draw(st.floats(-3.0, -1.0)),
+                           draw(coord(-4.0, 4.0))])
+    else:
+        obj = objects[draw(st.integers(0, len(objects) - 1))]
+        tri = obj.triangles[draw(st.integers(0, len(obj.triangles) - 1))]
+        n = np.cross(tri[1] - tri[0], tri[2] - tri[0])
+        assume(np.linalg.norm(n) > 1e-6)
+        centre = tri.mean(axis=0) + 1e-3 * draw(st.sampled_from([-1.0, 1.0])) * n / \
+            np.linalg.norm(n)
+    kw = dict(samples=draw(st.sampled_from([1, 2, 4, 6, 9, 16])),
+              pattern=draw(st.sampled_from(["stratified", "halton"])),
+              seed=draw(st.integers(0, 9)))
+    if shape == "sphere":
+        return AreaLight("sphere", centre, radius=draw(coord(0.0625, 1.0)), **kw)
+    normal = draw(direction())
+    if shape == "rect":
+        return AreaLight("rect", centre, normal=normal, size=[draw(coord(0.0625, 1.5)),
+                                                              draw(coord(0.0625, 1.5))], **kw)
+    return AreaLight("disk", centre, normal=normal, radius=draw(coord(0.0625, 1.0)), **kw)
+
+
+@st.composite
+def area_light_scenes(draw, size=(32, 24)):
+    """`objects` (closed, open and non-manifold casters, a floor or not) under 1..2 area
+    lights (`area_light`), a random `camera` (often inside an object or its volumes), the
+    whole translated by up to 1e5 (`offsets`)."""
+    objs = draw(objects())
+    lights = [draw(area_light(objs)) for _ in range(draw(st.integers(1, 2)))]
+    scene = Scene(camera=draw(camera()), objects=objs, lights=lights, width=size[0],
+                  height=size[1], name="soft")
+    assume(not any(rounding_tie(scene.replace(lights=lt.hard)) for lt in lights))
+    return translated(scene, draw(offsets()))

@@ -21,8 +21,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                     "the shadow polygons of one box, the stencil counter, counting along an "
                     "eye ray, z-pass against z-fail, Whitted ray tracing, the ray tree, total "
                     "internal reflection, the exercises, raster against ray traced, shadow "
-                    "mapping against shadow volumes), and DIR/index.html showing them in the "
-                    "course's order with a table of contents and captions.")
+                    "mapping against shadow volumes, the rendering equation, the ladder of its "
+                    "solutions, a caustic, aliasing, gloss and depth of field), and "
+                    "DIR/index.html showing them in the course's order with a table of "
+                    "contents and captions.")
     blocks.output(p, "DIR", "the folder to write the pictures and index.html into", type=Path)
     p.add_argument("--size", metavar="WxH", default=None,
                    help=f"slide size in pixels (default {SLIDE[0]}x{SLIDE[1]})")

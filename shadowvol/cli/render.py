@@ -7,13 +7,16 @@ import re
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from shadowvol import memory
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
 from shadowvol.errors import OutOfMemory, RenderError
 from shadowvol.io import GROUND_TRUTH, encode_srgb, save_exr, save_masks, save_png, save_png16
-from shadowvol.pictures import heat_maps
+from shadowvol.pictures import captioned, heat_maps
 from shadowvol.raster.context import create_context
+from shadowvol.raster.overlay import ROLE_COLOURS
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight, SceneError, light_samples
 from shadowvol.scenefile import load_scene
@@ -64,11 +67,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "image")
     p.add_argument("--volumes", metavar="PNG", nargs="?", const=True,
                    help="also write the teaching view: the shadow-volume polygons the stencil "
-                        "pass drew, over the image (orange sides, green near caps, violet far "
+                        "pass drew, over the image, under a title naming the lights and the "
+                        "method, with a legend (orange sides, green near caps, violet far "
                         "caps)")
     p.add_argument("--stencil", metavar="PNG", nargs="?", const=True,
-                   help="also write the stencil counts as a heat map, one panel per light, "
-                        "with a legend (0: lit, the image darkened; 1, 2, ... yellow to red to "
+                   help="also write the stencil counts as a heat map, one panel per light "
+                        "under its name, with a legend (0: lit, the image darkened; 1, 2, ... yellow to red to "
                         "violet; negative: blue).  Every triangle casts, so a closed object "
                         "counts 2 behind it (its front and its back)")
     blocks.ground_truth(p, "ground truth to add to the mask file, comma-separated: "
@@ -173,6 +177,30 @@ def _check_gl(ctx) -> None:
         raise RenderError(f"the GL reported {error} while rendering")
 
 
+def light_names(scene) -> list[str]:
+    """"light 0 (point)", "light 1 (directional)", ...: the lights as the pictures name them."""
+    return [f"light {i} ({type(lt).__name__.removesuffix('Light').lower()})"
+            for i, lt in enumerate(scene.lights)]
+
+
+def stencil_picture(stencil, image, scene):
+    """--stencil's picture: a heat map per light ((L, H, W) counts over the (H, W, 3) uint8
+    image), each under its light's name, the counts' legend below."""
+    titles = [f"{name}: stencil count" for name in light_names(scene)] or ["no lights"]
+    return heat_maps(stencil, image, with_legend=True, titles=titles)
+
+
+def volumes_picture(image, scene, method: str):
+    """--volumes' picture: the shadow-volume polygons over the (H, W, 3) uint8 image, under a
+    title naming the lights and the method, the roles' colours below."""
+    names = ", ".join(light_names(scene)) or "no lights"
+    caps = "" if method == "zpass" else " (z-fail)"
+    entries = [(label, encode_srgb(np.array([[ROLE_COLOURS[role]]], np.float64))[0, 0])
+               for label, role in (("side quads", "side"), (f"near caps{caps}", "near cap"),
+                                   (f"far caps{caps}", "far cap"))]
+    return captioned([(f"shadow volumes ({method}) of {names}", image)], entries)
+
+
 def _stencil_lights(scene, scene_path: str) -> None:
     """The heat map shows one light's stencil counts: hard lights only."""
     for i, light in enumerate(scene.lights):
@@ -219,10 +247,10 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
         if "png16" in out:
             save_png16(out["png16"], result.image)
         if volumes is not None:
-            save_png(out["volumes"], volumes)
+            save_png(out["volumes"], volumes_picture(encode_srgb(volumes), scene, args.method))
         if "stencil" in out:
-            save_png(out["stencil"],
-                     heat_maps(result.stencil, encode_srgb(result.image), with_legend=True))
+            save_png(out["stencil"], stencil_picture(result.stencil, encode_srgb(result.image),
+                                                     scene))
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # noqa: BLE001 - report() re-raises what has no status

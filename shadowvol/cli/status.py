@@ -55,7 +55,8 @@ def run(command, args) -> int:
     with signals.handled():
         try:
             code = command(args)
-            signals.raise_pending()
+            if code not in (INTERRUPTED, TERMINATED):  # else the command reported it already
+                signals.raise_pending()
             return code
         except (Exception, KeyboardInterrupt, signals.Terminated) as exc:  # noqa: BLE001
             return report(exc)  # report re-raises what has no status (a bug)

@@ -8,18 +8,27 @@ import numpy as np
 
 import raytrace
 from raytrace import exercise
-from raytrace.raytree import format_tree, ray_tree
+from raytrace.raytree import (
+    BLOCKED,
+    LIT,
+    REFLECTED,
+    REFRACTED,
+    format_tree,
+    ray_tree,
+    tree_colour,
+)
 from shadowvol.compare import maskdiff
 from shadowvol.compare.comparison import compare
-from shadowvol.course import exercise_picture, slides
+from shadowvol import pictures
+from shadowvol.course import exercise_picture, raytree_diagram, slides
 from shadowvol.course.picture import Picture
-from shadowvol.course.raytree_picture import draw_tree
 from shadowvol.course.shadow2d import draw_shadow2d, example
 from shadowvol.pictures import figure_pixels, tint
 from shadowvol.raster.projection import view_matrix, view_projection
 from shadowvol.raster.renderer import Renderer
 
 RAY_TREE_DEPTH = 2    # "sketch all rays to recursion depth 2"
+COLOUR = {k: raytree_diagram.rgb(k) for k in (REFLECTED, REFRACTED, LIT, BLOCKED)}
 ZOOM_FRACTION = 6     # a zoomed crop shows 1/6 of the panel's width and height
 
 
@@ -63,10 +72,24 @@ def raytree(g) -> Picture:
     scene = g.scene("whitted")
     x, y = ray_tree_pixel(scene, "glass ball")
     tree = ray_tree(scene, x, y, max_depth=RAY_TREE_DEPTH)
-    w, h = L.cell(1, 1, labels=False)
-    image = raytrace.render(scene, max_depth=RAY_TREE_DEPTH, progress=False)  # as the command
-    fig = draw_tree(scene, tree, image, size_px=(w, h),
-                    text_px=L.px(28))
+    text_px = L.px(28)
+    # the image at the left, 4:3, a note under it; the tree at the right
+    img_w = L.px(780)
+    img_h = round(img_w * scene.height / scene.width)
+    s = slides.fit(scene, img_w, img_h)
+    image = slides.supersampled(lambda sc: raytrace.render(
+        sc, max_depth=RAY_TREE_DEPTH, progress=False), scene, img_w, img_h, L.supersample)
+    image = raytree_diagram.draw_rays(image, s, tree, text_px)
+    body_h = L.height - L.title_h - L.legend_h - 2 * L.margin - L.label_h
+    note = L.note([f"{raytree_diagram.light_names(scene)}.",
+                   "The pixel's colour is the sum of what",
+                   "every ray adds, each weighted by the",
+                   "reflectivity and transparency on its",
+                   "path: " + "(" + ", ".join(f"{c:.3f}" for c in tree_colour(tree)) + ")."],
+                  img_w, body_h - img_h - L.margin)
+    left = pictures.column([image, note], gap=L.margin)
+    tree_w = L.width - img_w - 3 * L.margin
+    diagram = raytree_diagram.draw_diagram(scene, tree, tree_w, body_h, text_px)
     kinds = [n.kind for n in tree.walk()]
     title = f"The ray tree of pixel ({x}, {y}), to recursion depth {RAY_TREE_DEPTH}"
     return Picture(
@@ -75,12 +98,19 @@ def raytree(g) -> Picture:
         "hit a shadow ray goes to each light, a reflected ray and, through glass, a refracted "
         "ray, each of which does the same, down to the depth limit.  The pixel's colour is "
         "the sum of what every ray contributes.",
-        "the rays over the ray-traced image, in a side and a top view, coloured by kind and "
-        "numbered as in the tree below (every ray, shadow rays included)",
+        "the rays over the ray-traced image, coloured by kind, the eye, reflected and "
+        "refracted rays' hits numbered; beside it the tree, one box per ray (numbered as in "
+        "the text below), its edges labelled S (shadow), R (reflected), T (refracted)",
         f"raytrace tree {g.path('whitted')} --pixel {x} {y} --depth {RAY_TREE_DEPTH} "
         "-o raytree.png",
-        L.compose(title, [[("", figure_pixels(fig))]]), text=format_tree(tree, scene),
-        numbers={"rays": len(kinds), **{k: kinds.count(k) for k in sorted(set(kinds))}})
+        L.compose(title, [[("the rays over the image", left),
+                           ("the tree: one box per ray", diagram)]],
+                  legend=[("eye ray", (255, 255, 255)), ("reflected", COLOUR[REFLECTED]),
+                          ("refracted", COLOUR[REFRACTED]), ("shadow ray: lit", COLOUR[LIT]),
+                          ("shadow ray: blocked", COLOUR[BLOCKED])]),
+        text=format_tree(tree, scene),
+        numbers={"rays": len(kinds), "boxes": len(raytree_diagram.layout(tree)),
+                 **{k: kinds.count(k) for k in sorted(set(kinds))}})
 
 
 def tir(g) -> Picture:
@@ -191,6 +221,20 @@ def crop_window(where: np.ndarray, cw: int, ch: int) -> tuple[int, int]:
     return int(x), int(y)
 
 
+def centred_window(where: np.ndarray, cw: int, ch: int) -> tuple[int, int]:
+    """(x, y) top-left of a cw x ch window over the cluster of `crop_window`, moved so that
+    the True pixels of `where` inside it are at its centre (kept inside the image): a lone
+    mismatch sits in the middle of the zoom, not at its corner."""
+    x, y = crop_window(where, cw, ch)
+    ys, xs = np.nonzero(where[y:y + ch, x:x + cw])
+    if len(xs) == 0:
+        return x, y
+    h, w = where.shape
+    cx, cy = x + float(xs.mean()), y + float(ys.mean())
+    return (int(np.clip(round(cx - cw / 2), 0, w - cw)),
+            int(np.clip(round(cy - ch / 2), 0, h - ch)))
+
+
 def zoom(image: np.ndarray, x: int, y: int, cw: int, ch: int, w: int, h: int) -> np.ndarray:
     """The crop (x, y, cw, ch) of `image` enlarged to (h, w) by repeating pixels (every pixel
     a visible square)."""
@@ -210,46 +254,113 @@ def _frame(image: np.ndarray, x: int, y: int, cw: int, ch: int, px: int) -> np.n
     return out
 
 
+BAND = (0, 190, 215)       # the ±1 px band along every mask edge: where the two may differ
+BAND_WEIGHT = 0.55
+EDGE_ZOOM = 12             # the compare slide's crop: 1/12 of the panel, one square per pixel
+
+
+def band_panel(diff: np.ndarray, band: np.ndarray) -> np.ndarray:
+    """The mask difference `diff` ((H, W, 3) uint8, maskdiff's colours) with the ±1 px band
+    `band` ((H, W) bool) tinted cyan where both agree (lit: pale, shadowed: dark); a
+    mismatch keeps its own red or blue."""
+    agree = band & ((diff == maskdiff.BOTH_LIT) | (diff == maskdiff.BOTH_SHADOWED)).all(axis=2)
+    return tint(diff, agree, np.array(BAND, np.uint8), BAND_WEIGHT)
+
+
+def pixel_grid(zoomed: np.ndarray, cw: int, ch: int, colour=(150, 150, 150)) -> np.ndarray:
+    """`zoom`'s picture of a cw x ch crop with a thin line between neighbouring pixels."""
+    out = zoomed.copy()
+    h, w = out.shape[:2]
+    ys, xs = np.arange(h) * ch // h, np.arange(w) * cw // w
+    out[np.flatnonzero(np.diff(ys)) + 1] = colour
+    out[:, np.flatnonzero(np.diff(xs)) + 1] = colour
+    return out
+
+
 def compare_picture(g) -> Picture:
     L = g.layout
     scene = g.scene("cage")
-    w, h = L.cell(2, 2, legend=True)
+    side_w = L.px(540)
+    w, h = L.cell(2, 2, legend=True, side=side_w + L.margin)   # a margin at both ends
     s = slides.fit(scene, w, h)
     c = compare(s, ctx=g.ctx)
     light = c.lights[0]
-    diff = maskdiff.diff_panel(c.raster_lit[0], c.raster_coverage, c.ref_lit[0],
-                               c.ref_coverage)
+    got, ref = (c.raster_lit[0], c.raster_coverage), (c.ref_lit[0], c.ref_coverage)
+    diff = maskdiff.diff_panel(*got, *ref)
+    band = maskdiff.near_edges(*got, *ref)
     bad = c.raster_lit[0] != c.ref_lit[0]
-    cw, ch = max(2, w // ZOOM_FRACTION), max(2, h // ZOOM_FRACTION)
+    n = {"size": (w, h), "pixels": w * h, "band": int(band.sum()),
+         "band_differ": int((bad & band).sum()), "interior_px": int((~band).sum()),
+         "interior": light.interior}
+    cw, ch = max(2, w // EDGE_ZOOM), max(2, h // EDGE_ZOOM)
     # the zoom goes where the masks differ most, or, when they agree everywhere, where the
-    # shadow edges are densest: the pixels where they could have differed
-    x, y = crop_window(bad if bad.any() else maskdiff.edge_pixels(c.ref_lit[0]), cw, ch)
+    # band is densest: the pixels where they could have differed
+    x, y = centred_window(bad, cw, ch) if bad.any() else crop_window(band, cw, ch)
     ours = slides.mark_lights(slides.supersampled(
         lambda sc: _raster_image(g, sc), scene, w, h, L.supersample), s, L)
-    ref = slides.mark_lights(slides.supersampled(
+    ref_image = slides.mark_lights(slides.supersampled(
         lambda sc: raytrace.render(sc, max_depth=0, progress=False), scene, w, h,
         L.supersample), s, L)
+    shown = band_panel(diff, band)
     px = max(1, L.px(4))
+    side = _compare_note(L, side_w, 2 * h + 2 * L.label_h + L.margin, light, n)
     title = "Raster against ray traced: the cage, pixel by pixel"
     return Picture(
         "compare", title, "outlook",
         "The same scene twice: shadow volumes on the GPU and the ray tracer's shadow rays, "
-        "compared pixel by pixel.  They may differ only on shadow edges, where a pixel centre "
-        f"lies within rounding of a boundary; here {light.mismatched} pixels differ, "
-        f"{light.interior} away from an edge (shadow IoU {light.iou:.4f}).  The zoom shows "
-        "the part of the frame with the most mismatches, one square per pixel.",
+        "compared pixel by pixel.  They may differ only on the ±1 px band along shadow and "
+        "coverage edges, where a pixel centre may lie within rounding of a boundary; here "
+        f"{light.mismatched} pixels differ, {n['band_differ']} of the band's {n['band']} and "
+        f"{light.interior} of the {n['interior_px']} away from an edge: the interior "
+        f"difference is {light.interior} (shadow IoU {light.iou:.4f}).  The zoom enlarges the "
+        "part of the frame where the band is densest (or the mismatches, when there are any), "
+        "one square per pixel.",
         "top: the rasterizer's image, the ray tracer's (direct light); bottom: the difference "
-        "of their masks, and the boxed part of it enlarged",
+        "of their masks with the ±1 px band along every edge tinted cyan, and the boxed part "
+        "of it enlarged with a line between pixels; at the side the counts",
         f"shadowvol compare {g.path('cage')} -o compare.png",
         L.compose(title, [[("raster (shadow volumes)", _frame(ours, x, y, cw, ch, px)),
-                           ("ray traced (shadow rays)", ref)],
-                          [(f"mask difference: {light.mismatched} px", _frame(
-                              diff, x, y, cw, ch, px)),
-                           (f"zoom x{ZOOM_FRACTION}: {int(bad[y:y + ch, x:x + cw].sum())} px "
-                            "differ here", zoom(diff, x, y, cw, ch, w, h))]],
-                  legend=[(t, c_) for t, c_ in maskdiff.LEGEND[:4]]),
+                           ("ray traced (shadow rays)", ref_image)],
+                          [(f"masks differ: {light.mismatched} px", _frame(
+                              shown, x, y, cw, ch, px)),
+                           (f"an edge, x{EDGE_ZOOM}: {int(bad[y:y + ch, x:x + cw].sum())} px "
+                            "differ", pixel_grid(zoom(shown, x, y, cw, ch, w, h), cw, ch))]],
+                  side=side,
+                  legend=[("lit", maskdiff.BOTH_LIT), ("shadowed", maskdiff.BOTH_SHADOWED),
+                          ("±1 px band", BAND),
+                          ("shadow: raster only", maskdiff.SHADOWED_ONLY_IN_GOT),
+                          ("shadow: ray tracer only", maskdiff.SHADOWED_ONLY_IN_REF),
+                          ("coverage differs", maskdiff.COVERAGE_DIFFERS)]),
         numbers={"mismatched": sum(l.mismatched for l in c.lights),
-                 "interior": sum(l.interior for l in c.lights)})
+                 "interior": sum(l.interior for l in c.lights), **{
+                     k: v for k, v in n.items() if k != "interior"}})
+
+
+def _compare_note(L, width: int, height: int, light, n: dict) -> np.ndarray:
+    """The compare slide's side: the verdict, large, over what was measured."""
+    head = L.text(f"interior: {light.interior} px differ", width, px=40,
+                  height=L.px(64))
+    body = L.note([
+        "Where could they differ?",
+        "Only on the ±1 px band (cyan):",
+        "pixels within one pixel of a",
+        "shadow or coverage edge, where",
+        "a pixel centre may lie within",
+        "rounding of the boundary.",
+        "",
+        f"Measured at {n['size'][0]} × {n['size'][1]} px:",
+        f"  band: {n['band']:,} px,",
+        f"      {n['band_differ']} differ",
+        f"  interior: {n['interior_px']:,} px,",
+        f"      {light.interior} differ",
+        f"  shadow IoU {light.iou:.4f}",
+        "",
+        "Away from the edges the stencil",
+        "count and the shadow ray agree",
+        "on every pixel: the interior",
+        f"difference is {light.interior}.",
+    ], width, max(1, height - head.shape[0]))
+    return np.concatenate([head, body])
 
 
 def _raster_image(g, scene):

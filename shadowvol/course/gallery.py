@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from shadowvol import memory
-from shadowvol.course import demos_tracing, demos_volumes, soft_gallery
+from shadowvol.course import demos_outlook, demos_tracing, demos_volumes, soft_gallery
 from shadowvol.course.picture import Picture
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE, SUPERSAMPLE, Layout
 from shadowvol.errors import MissingExtra
@@ -42,6 +42,7 @@ SECTIONS = (
     ("raytracing", "6. Ray tracing"),
     ("exercises", "7. Exercises"),
     ("outlook", "8. Outlook: checking shadows, and what else one could use"),
+    ("gi", "9. Global illumination: the rendering equation and its solutions"),
 )
 
 DEMOS = (demos_volumes.cage, soft_gallery.umbra_penumbra, soft_gallery.hard_sum,
@@ -49,7 +50,7 @@ DEMOS = (demos_volumes.cage, soft_gallery.umbra_penumbra, soft_gallery.hard_sum,
          demos_volumes.stack_stencil, demos_volumes.counting_side_view,
          demos_volumes.zpass_zfail, demos_tracing.whitted_best, demos_tracing.raytree,
          demos_tracing.tir, demos_tracing.shadow2d, demos_tracing.ray_plane,
-         demos_tracing.compare_picture, demos_tracing.shadow_mapping)
+         demos_tracing.compare_picture, demos_tracing.shadow_mapping) + demos_outlook.DEMOS
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -125,7 +126,8 @@ def build_gallery(small: bool = False, scenes: Path = SCENES, ctx=None, progress
                   size: tuple[int, int] | None = None, skipped: list | None = None,
                   memory_budget=None) -> list[Picture]:
     """Every demo's pictures, in the course's order.  `progress(name, seconds)` is called after
-    each demo when given.  A demo needing a missing optional extra (pyrender) is left out and
+    each demo when given.  A demo needing a missing optional extra (pyrender; scipy for the
+    ladder and the caustic) is left out and
     its (name, message) appended to `skipped` when given; otherwise MissingExtra is raised.
     Slides over the memory budget (`memory_budget`, see `Gallery.check_memory`) are refused
     before any demo runs."""

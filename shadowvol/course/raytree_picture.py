@@ -35,7 +35,7 @@ def _colour(node: RayNode) -> str:
     return COLOURS[node.verdict] if node.kind == SHADOW else COLOURS[node.kind]
 
 
-def _project(scene: Scene, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def project(scene: Scene, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pixel coordinates (n, 2) float64 (x right, y down, pixel centres at +0.5) of world
     points (n, 3), and their eye-space depth (n,) (positive in front of the eye)."""
     right, up, back = camera_basis(scene.camera)
@@ -51,9 +51,9 @@ def _project(scene: Scene, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.stack([px, py], axis=1), depth
 
 
-def _clip_near(scene: Scene, a: np.ndarray, b: np.ndarray):
+def clip_near(scene: Scene, a: np.ndarray, b: np.ndarray):
     """The part of segment a-b in front of the near plane, or None."""
-    _, (da, db) = _project(scene, np.array([a, b]))
+    _, (da, db) = project(scene, np.array([a, b]))
     near = scene.camera.near
     if da < near and db < near:
         return None
@@ -231,10 +231,10 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None, *,
     for k, node in enumerate(nodes):
         if node.kind == PRIMARY:
             continue
-        seg = _clip_near(scene, node.origin, node.end)
+        seg = clip_near(scene, node.origin, node.end)
         if seg is None:
             continue
-        xy, _ = _project(scene, np.array(seg))
+        xy, _ = project(scene, np.array(seg))
         style = ":" if node.verdict in (FACES_AWAY, OUTSIDE_CONE) else "-"
         ax_img.plot(xy[:, 0], xy[:, 1], style, color=_colour(node), lw=1.6)
         if node.hit and node.kind != SHADOW:
@@ -260,5 +260,5 @@ def draw_tree(scene: Scene, tree: RayNode, image: np.ndarray | None = None, *,
 
 def _pixel(scene: Scene, tree: RayNode) -> np.ndarray:
     """(2,) float64: where the primary ray pierces the image (the pixel's centre)."""
-    xy, _ = _project(scene, np.array([tree.origin + tree.direction]))
+    xy, _ = project(scene, np.array([tree.origin + tree.direction]))
     return xy[0]

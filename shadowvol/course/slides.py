@@ -19,6 +19,7 @@ from PIL import Image, ImageDraw
 
 from shadowvol import pictures
 from shadowvol.io import encode_srgb
+from shadowvol.planes import default_plane_axes
 from shadowvol.pictures import font, text_strip  # noqa: F401 - the slides' text
 from shadowvol.raster.overlay import ROLE_COLOURS
 from shadowvol.raster.projection import view_projection
@@ -230,10 +231,10 @@ def project(scene, points4: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def mark_lights(image: np.ndarray, scene, layout: Layout, lights=None) -> np.ndarray:
     """`image` ((H, W, 3) uint8 of `scene` at its size) with every light marked: a point or
-    spot light as a yellow disc with a dark ring and "L" where it projects (an arrow at the
-    border toward it when off screen or behind); an area light as a yellow dot per sample and
-    "L" above its centre; a directional light as an arrow, in the top right corner, along its
-    direction projected into the image."""
+    spot light as a yellow disc with a dark ring and "L" where it projects; an area light as
+    its outline, a yellow dot per sample and "L" beside it (`_mark_area`); either as an arrow
+    at the border toward it when off screen or behind; a directional light as an arrow, in the
+    top right corner, along its direction projected into the image."""
     lights = scene.lights if lights is None else lights
     img = Image.fromarray(image)
     draw = ImageDraw.Draw(img)
@@ -241,20 +242,14 @@ def mark_lights(image: np.ndarray, scene, layout: Layout, lights=None) -> np.nda
     ink, yellow = SCHEME["ink"], SCHEME["light"]
     h, w = image.shape[:2]
     for k, light in enumerate(lights):
-        if hasattr(light, "positions"):  # an area light: a dot per sample, "L" at its centre
-            xy, cw = project(scene, np.c_[light.positions, np.ones(len(light.positions))])
-            dot = max(1, layout.px(5))
-            for (x, y), c in zip(xy, cw):
-                if c > 0:
-                    draw.ellipse([x - dot, y - dot, x + dot, y + dot], fill=yellow, outline=ink)
-        if hasattr(light, "position") or hasattr(light, "center"):
-            centre = light.center if hasattr(light, "positions") else light.position
-            xy, cw = project(scene, np.append(centre, 1.0)[None])
+        area = hasattr(light, "positions")
+        if area or hasattr(light, "position"):
+            xy, cw = project(scene, np.append(light.center if area else light.position,
+                                              1.0)[None])
             x, y, cw = float(xy[0, 0]), float(xy[0, 1]), float(cw[0])
             if cw > 0 and 0 <= x < w and 0 <= y < h:
-                if hasattr(light, "positions"):
-                    draw.text((x, y - 3 * dot), "L", fill=ink, font=font(layout.px(32)),
-                              anchor="mb")
+                if area:
+                    _mark_area(draw, scene, light, layout)
                     continue
                 draw.ellipse([x - r, y - r, x + r, y + r], fill=yellow, outline=ink,
                              width=max(1, layout.px(4)))
@@ -277,6 +272,40 @@ def mark_lights(image: np.ndarray, scene, layout: Layout, lights=None) -> np.nda
                          width=max(1, layout.px(4)))
             _arrow(draw, centre + d * r * 1.3, d, layout)
     return np.asarray(img, np.uint8)
+
+
+def area_outline(light, n: int = 48) -> np.ndarray:
+    """(k, 3) world points around an area light's edge: a rect's four corners, a disk's rim
+    (n points); none (k = 0) for a sphere, whose samples lie on its surface."""
+    if light.shape == "sphere":
+        return np.zeros((0, 3))
+    u, v = default_plane_axes(light.normal)
+    if light.shape == "rect":
+        a, b = light.size / 2
+        return np.array([light.center + su * a * u + sv * b * v
+                         for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+    phi = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    return light.center + light.radius * (np.cos(phi)[:, None] * u + np.sin(phi)[:, None] * v)
+
+
+def _mark_area(draw, scene, light, layout: Layout) -> None:
+    """An area light in view: its outline (dark, over a pale fill, so its size reads), a
+    yellow dot with a dark ring per sample, and "L" beside it, left of the outline."""
+    ink, yellow = SCHEME["ink"], SCHEME["light"]
+    edge = area_outline(light)
+    pts = np.concatenate([edge, light.positions])
+    xy, cw = project(scene, np.c_[pts, np.ones(len(pts))])
+    if not (cw > 0).all():
+        return
+    if len(edge):
+        poly = [tuple(p) for p in xy[:len(edge)]]
+        draw.polygon(poly, fill=(255, 246, 200), outline=ink, width=max(1, layout.px(3)))
+    dot = max(2, layout.px(6 if len(light.positions) <= 16 else 4))
+    for x, y in xy[len(edge):]:
+        draw.ellipse([x - dot, y - dot, x + dot, y + dot], fill=yellow, outline=ink,
+                     width=max(1, layout.px(2)))
+    left, mid = float(xy[:, 0].min()), float(xy[:, 1].mean())
+    draw.text((left - layout.px(10), mid), "L", fill=ink, font=font(layout.px(32)), anchor="rm")
 
 
 def _arrow(draw, start: np.ndarray, d: np.ndarray, layout: Layout) -> None:

@@ -3,8 +3,12 @@
 * `umbra_penumbra`: the ball of scenes/soft.toml under a point light, then under square area
   lights of growing side: a hard shadow, then an umbra (no sample reaches the floor) inside a
   penumbra (some do), both tinted and counted.
-* `hard_sum`: the four hard shadows an area light of N = 4 samples is made of, and their sum,
-  the soft shadow.
+* `hard_sum`: the four hard shadows an area light of N = 4 samples is made of (samples one in
+  each quarter of the light, far apart, so the four shadows visibly part), their sum, the soft
+  shadow, and how many of the four samples reach each point (0: the umbra).
+
+Both are seen from higher up than soft.toml's camera (`CAMERA`), so the light, its outline and
+a dot per sample are in the frame above the ball.
 
 Umbra is "facing & no sample reaches", with the raster's facing from `Renderer.facing` (the
 frame without the volume passes).  Images are supersampled; the tints come from the masks at one
@@ -16,39 +20,56 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from PIL import Image, ImageDraw
 
 from shadowvol.course import slides
 from shadowvol.course.picture import Picture
 from shadowvol.pictures import tint
 from shadowvol.raster.renderer import Renderer
-from shadowvol.scene import AreaLight, PointLight
+from shadowvol.scene import AreaLight, Camera, PointLight
 
 UMBRA_TINT = np.array([40, 60, 220], np.uint8)     # blue
 PENUMBRA_TINT = np.array([255, 150, 0], np.uint8)  # orange
 TINT_WEIGHT = 0.45
 LIGHT_SIDES = (0.5, 1.2, 2.4)  # the area lights' side lengths, growing
 LIGHT_SAMPLES = 64
+# hard_sum's light: 4 jittered samples, one per quarter; seed 32 puts each near its quarter's
+# outer corner (the four at least 1.2 apart), so the four hard shadows part by about half the
+# ball's width
+HARD_SIDE, HARD_SEED = 2.0, 32
+# the four samples' colours: each sample's marker and its shadow's outline
+SAMPLE_COLOURS = ((220, 20, 60), (0, 150, 70), (150, 40, 200), (0, 120, 230))
+# how many of the 4 samples reach a point: 0 (the umbra) .. 3; 4 (lit) keeps the image
+REACH_COLOURS = (tuple(UMBRA_TINT), (230, 80, 0), (255, 150, 40), (255, 215, 130))
+# above and in front of the ball, higher than the light: the light and its samples in view
+CAMERA = Camera(eye=[-1.3, 6.6, 4.6], target=[-1.9, 2.0, -0.9], fov_y=47.0)
 
 
 def _ball_scene(g):
-    """scenes/soft.toml with the ball alone over the floor (its rect light's centre kept)."""
+    """scenes/soft.toml with the ball alone over the floor (its rect light's centre kept), seen
+    by `CAMERA`."""
     scene = g.scene("soft")
     keep = tuple(o for o in scene.objects if o.name in ("floor", "ball"))
-    return scene.replace(objects=keep)
+    return scene.replace(objects=keep, camera=CAMERA)
 
 
-def _rect(centre, side: float, samples: int) -> AreaLight:
+def _rect(centre, side: float, samples: int, seed: int = 1) -> AreaLight:
     return AreaLight("rect", centre, normal=[0.0, -1.0, 0.0], size=[side, side],
-                     samples=samples, seed=1, intensity=1.3)
+                     samples=samples, seed=seed, intensity=1.3)
+
+
+def _frame(g, scene, w, h, lights) -> np.ndarray:
+    """(h, w, 3) uint8: the supersampled frame of `scene` lit by `lights`."""
+    def frame(s):
+        with Renderer(s, g.ctx) as r:
+            return r.render(lights=lights).image
+    return slides.supersampled(frame, scene, w, h, g.layout.supersample)
 
 
 def _image(g, scene, w, h, lights) -> np.ndarray:
     """(h, w, 3) uint8: the supersampled frame of `scene` lit by `lights`, lights marked."""
-    def frame(s):
-        with Renderer(s, g.ctx) as r:
-            return r.render(lights=lights).image
-    image = slides.supersampled(frame, scene, w, h, g.layout.supersample)
-    return slides.mark_lights(image, slides.fit(scene, w, h), g.layout, lights=lights)
+    return slides.mark_lights(_frame(g, scene, w, h, lights), slides.fit(scene, w, h),
+                              g.layout, lights=lights)
 
 
 def umbra_penumbra(g) -> Picture:
@@ -81,8 +102,9 @@ def umbra_penumbra(g) -> Picture:
         "where the ball hides part of it; the larger the light, the wider the penumbra and the "
         "smaller the umbra, until the umbra is gone.",
         "the ball of soft.toml under a point light and under square lights of side "
-        f"{', '.join(f'{s:g}' for s in LIGHT_SIDES)} ({LIGHT_SAMPLES} samples each, one dot "
-        "per sample), the umbra tinted blue, the penumbra orange",
+        f"{', '.join(f'{s:g}' for s in LIGHT_SIDES)} ({LIGHT_SAMPLES} samples each; each light "
+        "in view above the ball, its outline and one dot per sample), the umbra tinted blue, "
+        "the penumbra orange",
         "shadowvol demo (shadowvol.course.soft_gallery.umbra_penumbra)",
         L.compose(title, [cells[:2], cells[2:]],
                   legend=[("umbra: no sample reaches", tuple(UMBRA_TINT)),
@@ -91,23 +113,81 @@ def umbra_penumbra(g) -> Picture:
         numbers=numbers)
 
 
+def outline(mask: np.ndarray, width: int) -> np.ndarray:
+    """(H, W) bool: the pixels of `mask` within `width` pixels (chessboard distance) of a
+    pixel outside it: its border, drawn inward."""
+    inside = mask.copy()
+    for _ in range(width):
+        pad = np.pad(inside, 1)
+        inside = (inside & pad[:-2, 1:-1] & pad[2:, 1:-1] & pad[1:-1, :-2] & pad[1:-1, 2:]
+                  & pad[:-2, :-2] & pad[:-2, 2:] & pad[2:, :-2] & pad[2:, 2:])
+    return mask & ~inside
+
+
+def _draw_samples(image, s, L, light, current=None) -> np.ndarray:
+    """`image` with the light's outline and its samples numbered 1..N in SAMPLE_COLOURS: the
+    `current` one (an index) large, the others small; all large when `current` is None."""
+    img = Image.fromarray(image)
+    draw = ImageDraw.Draw(img)
+    edge = slides.area_outline(light)
+    xy, _ = slides.project(s, np.c_[np.concatenate([edge, light.positions]),
+                                    np.ones(len(edge) + light.samples)])
+    ink = slides.SCHEME["ink"]
+    draw.polygon([tuple(p) for p in xy[:len(edge)]], fill=(255, 246, 200), outline=ink,
+                 width=L.px(3))
+    for k, (x, y) in enumerate(xy[len(edge):]):
+        big = current is None or k == current
+        r = L.px(22 if big else 12)
+        draw.ellipse([x - r, y - r, x + r, y + r], fill=SAMPLE_COLOURS[k] if big else
+                     (255, 255, 255), outline=SAMPLE_COLOURS[k], width=L.px(4))
+        draw.text((x, y), str(k + 1), fill=(255, 255, 255) if big else SAMPLE_COLOURS[k],
+                  font=slides.font(L.px(30 if big else 18), bold=True), anchor="mm")
+    return np.asarray(img, np.uint8)
+
+
+def _outlined(image, shadows, which, width) -> np.ndarray:
+    """`image` with the outlines of `shadows[k]` for k in `which`, in SAMPLE_COLOURS."""
+    out = image.copy()
+    for k in which:
+        out[outline(shadows[k], width)] = SAMPLE_COLOURS[k]
+    return out
+
+
+def _reach_map(image, lit_count, facing) -> np.ndarray:
+    """`image` paled, with the points some sample faces but not all four reach coloured by
+    how many do (REACH_COLOURS)."""
+    out = (128 + image // 2).astype(np.uint8)
+    for k, colour in enumerate(REACH_COLOURS):
+        out[facing & (lit_count == k)] = colour
+    return out
+
+
 def hard_sum(g) -> Picture:
     L = g.layout
     scene = _ball_scene(g)
-    light = _rect(scene.lights[0].center, LIGHT_SIDES[1], 4)
-    w, h = L.cell(3, 2, legend=False)
+    light = _rect(scene.lights[0].center, HARD_SIDE, 4, HARD_SEED)
+    w, h = L.cell(3, 2, legend=True)
     s = slides.fit(scene, w, h)
-    cells, hard = [], []
+    cells, hard, shadows = [], [], []
     with Renderer(s, g.ctx) as r:
         for k, sample in enumerate(light.hard):
             # each sample at the whole light's power, so that its hard shadow reads clearly
             alone = dataclasses.replace(sample, intensity=light.intensity)
-            hard.append(r.render(lights=(alone,)).image)
-            cells.append((f"sample {k + 1} of 4: a hard shadow",
-                          _image(g, scene, w, h, (alone,))))
+            frame = r.render(lights=(alone,))
+            hard.append(frame.image)
+            shadows.append(r.facing(lights=(alone,))[0] & ~frame.lit[0])  # cast, not attached
+            image = _outlined(_frame(g, scene, w, h, (alone,)), shadows, [k], L.px(3))
+            cells.append((f"sample {k + 1} alone: its hard shadow",
+                          _draw_samples(image, s, L, light, current=k)))
         soft = r.render(lights=(light,))
+        facing = r.facing(lights=(light,))[0]
         ambient = r.render(lights=()).image
-    cells.append(("their sum (each 1/4): the soft shadow", _image(g, scene, w, h, (light,))))
+    image = _outlined(_frame(g, scene, w, h, (light,)), shadows, range(4), L.px(3))
+    cells.append(("all four, each 1/4: the soft shadow", _draw_samples(image, s, L, light)))
+    count = soft.lit_count[0]
+    cells.append(("how many of the 4 samples reach",
+                  _draw_samples(_reach_map(image, count, facing), s, L, light)))
+    apart = [int((a ^ b).sum()) for i, a in enumerate(shadows) for b in shadows[i + 1:]]
     title = "A soft shadow is the sum of hard ones"
     return Picture(
         "hard_sum", title, "shadows",
@@ -115,13 +195,21 @@ def hard_sum(g) -> Picture:
         "casts a hard shadow, counted exactly in the stencil, and their sum is the soft "
         "shadow.  Where all N shadows overlap is the umbra; where only some do, the penumbra, "
         "in N - 1 steps of brightness.",
-        "the four hard shadows of a 4-sample square light over the ball of soft.toml (each "
-        "drawn at the whole light's power), then the frame with the light itself: the ambient "
-        "term plus the mean of the four lights' terms",
+        f"the four hard shadows of a 4-sample {HARD_SIDE:g} x {HARD_SIDE:g} light over the ball "
+        "of soft.toml (each drawn at the whole light's power, its sample and its shadow's "
+        "outline in its own colour), the frame with the light itself (the ambient term plus "
+        "the mean of the four lights' terms, the four outlines over it), and how many of the "
+        "four samples reach each point",
         "shadowvol demo (shadowvol.course.soft_gallery.hard_sum)",
-        L.compose(title, [cells[:3], cells[3:]]),
+        L.compose(title, [cells[:3], cells[3:]],
+                  legend=[(label, c) for label, c in zip(
+                      ("0 of 4 samples reach: umbra", "1 of 4", "2 of 4",
+                       "3 of 4 (1 to 3: penumbra)"), REACH_COLOURS)] +
+                         [("4 of 4: lit", (255, 255, 255))]),
         numbers={"penumbra": int(soft.penumbra.sum()),
-                 "levels": int(np.unique(soft.lit_count[0][soft.coverage]).size),
+                 "levels": int(np.unique(count[soft.coverage]).size),
+                 "shadow_px": [int(m.sum()) for m in shadows], "apart_px": apart,
+                 "umbra": int((facing & (count == 0)).sum()),
                  # the sum, in linear RGB, less the frame it shows: 0 up to float32 rounding
                  "sum_error": float(np.abs(ambient + sum(x - ambient for x in hard) / 4
                                            - soft.image).max())})

@@ -447,8 +447,9 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
         with counting(False, False):
             volumes.draw_sides(by_zpass, halve=halve, each=each)
     if len(by_zfail):
-        with counting(True, True):
+        with counting(True, False):   # sides clipped, not clamped: see zfail_counting
             volumes.draw_sides(by_zfail, each=each)
+        with counting(True, True):
             volumes.draw_caps(by_zfail, near=False, each=each)
         with counting(True, False):
             volumes.draw_caps(by_zfail, near=True, each=each)

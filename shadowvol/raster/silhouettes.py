@@ -60,13 +60,16 @@ def extrude(points: np.ndarray, light4: np.ndarray) -> np.ndarray:
     return np.concatenate([points * light4[3] - light4[:3], np.zeros((len(points), 1))], axis=1)
 
 
-def side_quads(topology: Topology, multiplicity: np.ndarray, light4: np.ndarray) -> np.ndarray:
+def side_quads(topology: Topology, multiplicity: np.ndarray, light4: np.ndarray,
+               unextruded: bool = False) -> np.ndarray:
     """(q, 4, 4) float64 homogeneous corners of every side quad, |m| copies per edge.
 
     For an edge that the light-facing triangles run s -> e (s, e = a, b if m > 0, else b, a)
     the quad is (e, 1), (s, 1), (s extruded, 0), (e extruded, 0): wound so that its normal
     points out of the volume, as the near cap's (the light-facing triangle) and the far cap's
     (that triangle reversed, at infinity) do.  Outward faces seen from the eye are front faces.
+    `unextruded`: the w = 0 corners hold s and e themselves (`extrude_rows` extrudes them),
+    for a caller that extrudes them in float32 exactly as the far caps' shaders do.
     """
     count = np.abs(multiplicity)
     which = np.repeat(np.arange(len(multiplicity)), count)
@@ -75,8 +78,22 @@ def side_quads(topology: Topology, multiplicity: np.ndarray, light4: np.ndarray)
     start = topology.vertices[np.where(forward, a, b)]
     end = topology.vertices[np.where(forward, b, a)]
     ones = np.ones((len(which), 1))
+    if unextruded:
+        zeros = np.zeros((len(which), 1))
+        far_start, far_end = (np.concatenate([p, zeros], axis=1) for p in (start, end))
+    else:
+        far_start, far_end = extrude(start, light4), extrude(end, light4)
     return np.stack([np.concatenate([end, ones], axis=1), np.concatenate([start, ones], axis=1),
-                     extrude(start, light4), extrude(end, light4)], axis=1)
+                     far_start, far_end], axis=1)
+
+
+def extrude_rows(corners: np.ndarray, light4: np.ndarray) -> np.ndarray:
+    """(n, 4) float64 corners of `side_quads(..., unextruded=True)` -> those of
+    `side_quads(...)`, bit for bit: each w = 0 row's point extruded (`extrude`)."""
+    out = corners.copy()
+    far = corners[:, 3] == 0.0
+    out[far, :3] = corners[far, :3] * light4[3] - light4[:3]
+    return out
 
 
 def quads_to_triangles(quads: np.ndarray) -> np.ndarray:

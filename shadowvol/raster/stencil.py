@@ -292,11 +292,13 @@ def zpass_counting(gl: RawGL, count_mask: int = 0xFF) -> Iterator[None]:
 @contextlib.contextmanager
 def zfail_counting(gl: RawGL, depth_clamp: bool, count_mask: int = 0xFF) -> Iterator[None]:
     """Z-fail (Carmack's reverse): every volume face BEHIND the scene (depth test fails) counts,
-    back faces +1, front faces -1, wrapping.  `depth_clamp` is on for side quads and far caps:
-    far caps lie exactly at depth 0 (w = 0, reversed depth) and must never be clipped away; a
-    side fragment in front of the near plane gets depth 1, passes, and so counts for nothing, as
-    if clipped.  It
-    is off for near caps, which must be clipped exactly as the depth pass clipped the same
+    back faces +1, front faces -1, wrapping.  `depth_clamp` is on for far caps only: they lie
+    exactly at depth 0 (w = 0, reversed depth) and must never be clipped away.  It is off for
+    side quads, whose fragments in front of the near plane count for nothing: clamped, a side
+    triangle whose plane (nearly) holds the eye is drawn through w = 0, where float32 rounding
+    decides which half of the view it covers (the eye on a volume's side plane: a wedge of
+    wrong counts); clipped, what is left of it lies within a sliver of its edge-on line.  Off
+    too for near caps, which must be clipped exactly as the depth pass clipped the same
     triangles so that their depths tie bit for bit.  `count_mask` as in `zpass_counting`."""
     with _saved_stencil_state(gl):
         _set(gl, func=GL_ALWAYS, ref=0,

@@ -1,11 +1,11 @@
 """The rasterizer's ground truth (docs/CONVENTIONS.md, "Ground truth"), from the frame's own
-passes: depth from the depth buffer, normal and object id from the G-buffer's triangle key,
+passes: depth, normal and object id from the G-buffer's triangle key,
 facing (and lit with it) from one full-screen pass over the G-buffer, casters by counting each
 casting object's shadow volumes into a counter of its own.
 
-- `depth`: the reversed infinite projection stores near / d (`projection`), so d = near / stored,
-  exact to float32 rounding of that projection; `distance` = depth × the length of the pixel's
-  direction of depth 1 (from `shadowvol.cameras`' K).
+- `depth`: the pixel-centre ray met with the key's triangle plane in float64 (`plane_depth`;
+  the depth buffer's near / d only where that plane gives none); `distance` = depth × the
+  length of the pixel's direction of depth 1 (from `shadowvol.cameras`' K).
 - `normal`: the triangle's world-space (b − a) × (c − a), normalised in float64 (the geometry's
   own normals), negated where the G-buffer says its back face is seen, rounded to float32;
   `object_id`: the triangle's object + 1.

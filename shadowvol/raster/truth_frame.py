@@ -11,6 +11,7 @@ import numpy as np
 from shadowvol import fields
 from shadowvol.raster import methods, truth
 from shadowvol.raster.plan import FramePlan
+from shadowvol.raster.plane_depth import plane_depths
 from shadowvol.scene import Camera
 
 
@@ -30,15 +31,18 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_p
     # the facing pass's targets are written only there)
     stored = truth.read_depth(target)
     covered = stored > 0
+    if want & {"depth", "distance", "normal", "object_id"}:
+        triangle, front, _ = truth.read_surface(target, covered)
+        triangle = geometry.triangle_of_key(triangle)   # a piece's key: its triangle
     if want & {"depth", "distance"}:
-        depth = truth.eye_depth(stored, camera)
+        # exact: the pixel's ray met with its triangle's plane (`plane_depth`), the depth
+        # buffer's near / d only where that plane gives none
+        depth = plane_depths(geometry, camera, triangle, truth.eye_depth(stored, camera))
         if "depth" in want:
             out["depth"] = depth
         if "distance" in want:
             out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
     if want & {"normal", "object_id"}:
-        triangle, front, _ = truth.read_surface(target, covered)
-        triangle = geometry.triangle_of_key(triangle)   # a piece's key: its triangle
         out |= truth.surface_outputs(geometry, triangle, front, want)
     if "facing" in want:
         samples = np.array([sum(1 for i, _ in hard if i == k) for k in range(len(lights))],

@@ -13,6 +13,7 @@ from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.projection import in_frame, in_frame32
 from shadowvol.raster.silhouettes import (
     edge_multiplicity,
+    extrude_rows,
     quads_to_triangles,
     side_quads,
     topology_signs,
@@ -29,7 +30,7 @@ class _LightVolumes:
         self.sides: dict[int, tuple[int, int, int]] = {}          # object -> (first, n, repeat)
         self.side_table = np.zeros((0, 3), np.int64)  # the same, (n_objects, 3), for the draws
         self.signs_nbytes = 0
-        self.corners: np.ndarray | None = None   # (n, 4) float64 world side triangles' corners
+        self.corners: np.ndarray | None = None   # (n, 4) float64 world side corners (`_framed`)
         self.moves = -1                          # the geometry's `moves` the buffer is in
         # huge side triangles cut to the view's guard band (`CpuVolumes._guard_sides`): the
         # view they were cut for, the pieces' vertex ranges per object after the sides
@@ -205,7 +206,8 @@ class CpuVolumes:
             # drawn twice: the same quads as |m| copies, in another order, and stencil
             # INCR_WRAP / DECR_WRAP commute.  See `draw_sides` for drawing it once.
             repeat = 2 if multiplicity.any() and not (multiplicity & 1).any() else 1
-            tris = quads_to_triangles(side_quads(topo, multiplicity // repeat, light4))
+            tris = quads_to_triangles(side_quads(topo, multiplicity // repeat, light4,
+                                                 unextruded=True))   # see `_framed`
             sides.append(tris)
             out.sides[rng.index] = (n_side, len(tris), repeat)
             n_side += len(tris)
@@ -242,7 +244,8 @@ class CpuVolumes:
         far = np.concatenate([np.zeros(0, np.int64)] + [
             np.arange(kept.sides[i][0] // 3, (kept.sides[i][0] + kept.sides[i][1]) // 3)
             for i in far_objects])
-        frame = in_frame(kept.corners.reshape(-1, 3, 4)[far], geometry.origin)
+        frame = in_frame(extrude_rows(kept.corners, self.light4).reshape(-1, 3, 4)[far],
+                         geometry.origin)
         cut = np.isin(np.arange(len(far)), guard.huge(frame, guard.reach(frame), planes, near))
         holes = far[cut]
         if not len(holes) and not kept.extra and not len(geometry.holes) and not kept.far_extra:
@@ -277,8 +280,19 @@ class CpuVolumes:
         kept.buffer.write(np.ascontiguousarray(data).tobytes())
 
     def _framed(self, corners: np.ndarray) -> np.ndarray:
-        """(n, 4) float64 world homogeneous corners -> float32 in the geometry's frame."""
-        return in_frame32(corners, self.geometry.origin)
+        """(n, 4) float64 world side corners, w = 0 ones unextruded (`side_quads`) -> float32
+        homogeneous in the geometry's frame.  A w = 0 corner V is extruded here as the far
+        caps' shaders do it, V * L.w - L.xyz of the float32 frame V and L (exact whatever
+        the order or fusion: V * 1 and V * 0 are), so that the volume is closed at infinity
+        bit for bit: rounded from float64, the sides' edges there missed the far caps' and
+        left slivers where a z-fail count was off by one."""
+        out = np.empty(corners.shape, np.float32)
+        np.subtract(corners[:, :3], self.geometry.origin, out=out[:, :3], casting="unsafe")
+        out[:, 3] = corners[:, 3]
+        light = in_frame32(self.light4[None], self.geometry.origin)[0]
+        far = corners[:, 3] == 0.0
+        out[far, :3] = out[far, :3] * light[3] - light[:3]
+        return out
 
     def _prepare_caps(self, objects: tuple[int, ...]) -> None:
         """Upload the cap index lists (the soup vertices of the triangles of each sign) of

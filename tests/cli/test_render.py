@@ -9,7 +9,7 @@ from PIL import Image
 
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.io import load_masks
-from shadowvol.pictures import HEAT_PALETTE, LEGEND_HEIGHT, NEGATIVE_COLOUR, heat_map
+from shadowvol.pictures import HEAT_PALETTE, NEGATIVE_COLOUR, caption_px, heat_map
 from shadowvol.raster.context import ContextError
 from shadowvol.raster.overlay import ROLE_COLOURS
 from shadowvol.raster.renderer import Renderer
@@ -55,8 +55,13 @@ def test_render_writes_every_output(ctx, scene_file, tmp_path, capsys):
                      str(out["volumes"]), "--stencil", str(out["stencil"])])
     assert code == 0, capsys.readouterr().err
     assert Image.open(out["image"]).size == (64, 48)
-    assert Image.open(out["volumes"]).size == (64, 48)
-    assert Image.open(out["stencil"]).size == (2 * 64 + 4, 48 + LEGEND_HEIGHT)  # two lights
+    # the teaching views: a title strip over each panel, the legend below
+    strip = round(1.6 * caption_px(48))
+    volumes = np.asarray(Image.open(out["volumes"]))
+    legend_h = volumes.shape[0] - strip - 48
+    assert volumes.shape[1] == 64 and legend_h >= strip
+    stencil = np.asarray(Image.open(out["stencil"]))
+    assert stencil.shape[1] == 2 * 64 + 4 and stencil.shape[0] > strip + 48 + strip  # two lights
     lit, coverage = load_masks(out["masks"])
     assert lit.shape == (2, 48, 64) and lit.dtype == bool and coverage.dtype == bool
     from shadowvol.scenefile import load_scene
@@ -66,6 +71,42 @@ def test_render_writes_every_output(ctx, scene_file, tmp_path, capsys):
     np.testing.assert_array_equal(lit, expect.lit)
     np.testing.assert_array_equal(coverage, expect.coverage)
     assert (lit.sum(axis=(1, 2)) < coverage.sum()).all()  # the box casts a shadow for both
+
+
+def test_teaching_views_have_titles_and_legends(ctx, scene_file, tmp_path):
+    """--volumes and --stencil: the picture under a title strip naming the light(s) (dark
+    text on white), the image itself unchanged beneath it, a legend strip of swatches below."""
+    from shadowvol.cli.render import light_names, stencil_picture, volumes_picture
+    from shadowvol.io import encode_srgb
+    from shadowvol.scenefile import load_scene
+
+    scene = load_scene(scene_file).replace(width=320, height=240)
+    assert light_names(scene) == ["light 0 (point)", "light 1 (directional)"]
+    with Renderer(scene, ctx) as r:
+        frame = r.render(stencil=True)
+        view = encode_srgb(r.volume_view())
+    strip = round(1.6 * caption_px(240))
+    for picture, panels in ((volumes_picture(view, scene, "auto"), [view]),
+                            (stencil_picture(frame.stencil, encode_srgb(frame.image), scene),
+                             None)):
+        title = picture[:strip]
+        assert (title < 100).all(axis=2).sum() > 200           # dark text: the title
+        assert (title[:, :4] == 255).all()                     # on white
+        legend = picture[strip + 240:]
+        assert legend.shape[0] >= strip and (legend < 100).all(axis=2).sum() > 100
+        if panels:
+            np.testing.assert_array_equal(picture[strip:strip + 240], panels[0])
+    stencil = stencil_picture(frame.stencil, encode_srgb(frame.image), scene)
+    assert stencil.shape[1] == 2 * 320 + 4
+
+
+def test_swatch_legend_wraps_to_the_width():
+    from shadowvol.pictures import HEAT_LEGEND, swatch_legend
+
+    one = swatch_legend(2000, HEAT_LEGEND, 18)
+    narrow = swatch_legend(120, HEAT_LEGEND, 18)
+    assert one.shape == (round(1.6 * 18), 2000, 3)
+    assert narrow.shape[1] == 120 and narrow.shape[0] >= 3 * one.shape[0]   # several lines
 
 
 def test_bad_scene_is_one_line_on_stderr_and_status_2(tmp_path, capsys):

@@ -120,3 +120,44 @@ def test_a_signal_to_a_running_batch_is_reported_once(tmp_path, signum, code, wo
     errors = [line for line in err.splitlines() if line.startswith("error:")]
     assert (proc.returncode, errors) == (code, [f"error: {word}"]), err
     assert "Traceback" not in err
+
+
+def test_a_signal_the_command_reported_is_not_reported_again(capsys):
+    """A SIGTERM that breaks a scene's render as another exception: `render` reports it (as
+    "terminated", status 143) and goes on to return; `status.run` must not raise the pending
+    signal again (it printed "error: terminated" twice, once in 250 runs at 0.5 s)."""
+    from shadowvol.cli import status
+
+    def command(args):
+        try:
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(1)
+            except BaseException as exc:
+                raise RuntimeError("EGL call failed") from exc  # what the signal broke
+        except RuntimeError as exc:
+            return status.report(exc, "scene.toml: ")
+        return status.OK
+
+    assert status.run(command, None) == status.TERMINATED
+    assert capsys.readouterr().err.splitlines() == ["error: scene.toml: terminated"]
+
+
+def test_a_signal_inside_an_ignoring_callback_comes_again():
+    """A Ctrl-C landing in importlib's module-lock weakref callback, whose exceptions Python
+    prints as "Exception ignored ... Traceback" and drops (seen once in a fresh venv's suite, at
+    0.05 s): the handler raises nothing there and the signal comes again a moment later, where
+    it propagates."""
+    import types
+
+    from shadowvol import signals
+
+    code = types.SimpleNamespace(co_filename="<frozen importlib._bootstrap>", co_name="cb")
+    with signals.handled():
+        try:
+            signals._handler(signal.SIGINT, types.SimpleNamespace(f_code=code))
+        except KeyboardInterrupt:
+            pytest.fail("raised inside a callback that ignores exceptions")
+        with pytest.raises(KeyboardInterrupt):
+            time.sleep(5)  # the signal again, within REDELIVER_S
+        assert signals.pending() is not None

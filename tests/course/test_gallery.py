@@ -29,7 +29,8 @@ pytestmark = pytest.mark.gl
 
 EXPECTED = ["cage", "umbra_penumbra", "hard_sum", "planar", "one_caster", "stack_stencil", "counting", "zpass_zfail",
             "whitted_best", "raytree", "tir", "shadow2d", "ray_plane", "compare",
-            "shadow_mapping"]   # the course's order
+            "shadow_mapping", "rendering_equation", "ladder", "caustic", "aliasing",
+            "glossy_dof"]   # the course's order
 
 
 class _Index(HTMLParser):
@@ -79,7 +80,8 @@ def test_index_shows_every_picture_once_in_the_course_order(gallery):
     assert index.links == EXPECTED                     # the table of contents, same order
     text = (out / "index.html").read_text(encoding="utf-8")
     headings = re.findall(r'<section id="section-(\w+)">', text)
-    assert headings == [k for k, _ in demo.SECTIONS if k != "outlook"] + ["outlook"]
+    assert headings == [k for k, _ in demo.SECTIONS]
+    assert headings[-2:] == ["outlook", "gi"]          # the course ends with the equation
 
 
 @pytest.mark.parametrize("name", EXPECTED)
@@ -226,6 +228,30 @@ def test_planar_demo_shows_what_projection_misses(small):
     assert picture.numbers["extra"] <= 0.001 * w * w * 3 / 4   # on the floor, both agree
 
 
+def test_compare_slide_counts_the_band_and_the_interior(small):
+    """The compare slide says where raster and ray tracer may differ (the ±1 px band along
+    every edge) and what it measured: the band and the rest partition the panel, every
+    mismatch lies on one of them, and the interior (the rest) differs nowhere."""
+    n = demos_tracing.compare_picture(small).numbers
+    assert n["band"] > 0 and n["band"] + n["interior_px"] == n["pixels"]
+    assert n["band_differ"] + n["interior"] == n["mismatched"]
+    assert n["interior"] == 0
+
+
+def test_band_panel_tints_the_band_and_keeps_mismatches():
+    from shadowvol.compare import maskdiff
+
+    diff = np.array([[maskdiff.BOTH_LIT, maskdiff.BOTH_SHADOWED, maskdiff.SHADOWED_ONLY_IN_GOT,
+                      maskdiff.BOTH_LIT]], np.uint8)
+    band = np.array([[True, True, True, False]])
+    out = demos_tracing.band_panel(diff, band)
+    assert (out[0, :2] != diff[0, :2]).any(axis=1).all()          # the band: tinted
+    np.testing.assert_array_equal(out[0, 2:], diff[0, 2:])        # a mismatch, off the band
+    assert out[0, 0].sum() > out[0, 1].sum()                      # lit stays lighter
+    grid = demos_tracing.pixel_grid(np.zeros((24, 36, 3), np.uint8), 3, 2)
+    assert (grid[12] == 150).all() and (grid[:, 12] == 150).all() and (grid[5, 5] == 0).all()
+
+
 def test_shadow_mapping_is_marked_worse_than_ours(small):
     n = demos_tracing.shadow_mapping(small).numbers
     assert n["pyrender_wrong"] > 10 * max(n["ours_wrong"], 1)
@@ -237,6 +263,17 @@ def test_crop_window_finds_the_cluster():
     where[2, 3] = True
     x, y = demos_tracing.crop_window(where, 10, 8)
     assert x <= 50 and x + 10 >= 55 and y <= 30 and y + 8 >= 34
+
+
+def test_centred_window_puts_a_lone_pixel_in_the_middle():
+    where = np.zeros((40, 60), bool)
+    where[30, 50] = True
+    x, y = demos_tracing.centred_window(where, 10, 8)
+    assert (x, y) == (45, 26)
+    where[39, 59] = False
+    where[:] = False
+    where[39, 59] = True                                  # at the corner: kept in the image
+    assert demos_tracing.centred_window(where, 10, 8) == (50, 32)
 
 
 def test_other_slide_sizes(ctx, tmp_path):

@@ -10,6 +10,7 @@ from builders import SCENES
 import raytrace
 from raytrace.backends import make_backend
 from raytrace.camera import primary_rays
+from shadowvol.compare.maskdiff import edge_pixels
 from shadowvol.raster.planar import project_points, projection_matrix
 from shadowvol.primitives import Transform, box, plane, sphere
 from shadowvol.raster import stencil as stencil_gl
@@ -78,7 +79,7 @@ def test_shadow_on_another_object_is_missing(ctx):
     without_ball = scene.replace(objects=tuple(o for o in scene.objects if o.name != "ball"))
     with Renderer(scene, ctx) as r, PlanarShadows(r) as planar:
         volumes = r.render()
-        projected = planar.render()
+        projected = planar.render(stencil=True)
     with Renderer(without_ball, ctx) as r:
         no_ball = r.render()
     # the ball's shadow on the box: shadowed with the ball, lit without it (shadow volumes)
@@ -86,11 +87,37 @@ def test_shadow_on_another_object_is_missing(ctx):
     assert ball_shadow_on_box.sum() > 2000
     # projected shadows light every one of those pixels
     assert projected.lit[0][ball_shadow_on_box].all()
-    # and off the floor they never shadow anything: off-floor lit = n . l alone
-    off_floor = projected.coverage & (ids != projected.receiver)
+    # and off the floor they never shadow anything: off-floor lit = n . l alone, on every
+    # pixel where the raster's receiver mark is not set, and on every pixel the ray tracer
+    # sees another object on, but for the floor's outline (within one pixel of it, the two
+    # may see a different surface at a pixel centre)
     with Renderer(scene, ctx) as r:
         unshadowed = r.render(shadows=False)
-    assert np.array_equal(projected.lit[0][off_floor], unshadowed.lit[0][off_floor])
+    off_mark = projected.coverage & (projected.stencil[0] == 0)
+    off_floor = (projected.coverage & (ids != projected.receiver)
+                 & ~edge_pixels(ids == projected.receiver))
+    for off in (off_mark, off_floor):
+        assert off.sum() > 0.05 * off.size                  # the box, the ball, the cage
+        assert np.array_equal(projected.lit[0][off], unshadowed.lit[0][off])
+
+
+def test_the_example_shows_its_floor_shadows(ctx):
+    """scenes/planar.toml, as `shadowvol planar` draws it: the light stands low and to the
+    side, so the projected shadows reach out from under their casters and cover a clear part
+    of the floor the camera sees (at least 8 % of it; the old light above the camera's
+    shoulder hid them behind the objects, 0.4 %), every caster's shadow reaching past it."""
+    scene = load_scene(SCENES / "planar.toml")
+    with Renderer(scene, ctx) as r, PlanarShadows(r) as planar:
+        got = planar.render(stencil=True)
+    marked = got.stencil[0] == stencil_gl.PLANAR_SHADOW
+    floor = marked | (got.stencil[0] == stencil_gl.PLANAR_RECEIVER)
+    assert marked.sum() >= 0.08 * floor.sum()
+    ids = object_ids(scene)
+    names = [o.name for o in scene.objects]
+    for caster in ("box", "cage"):   # its shadow shows beside it, in the columns it covers
+        cols = np.flatnonzero((ids == names.index(caster)).any(axis=0))
+        beside = marked[:, cols.max() + 1:cols.max() + 40]
+        assert beside.sum() > 200, caster
 
 
 def test_self_shadowing_is_missing(ctx):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from shadowvol.course.gallery import Gallery
@@ -31,3 +32,32 @@ def test_the_soft_shadow_is_the_sum_of_the_hard_ones(pictures):
     assert numbers["levels"] == 5  # counts 0..4 all occur on screen
     assert numbers["penumbra"] > 0
     assert numbers["sum_error"] < 1e-5
+
+
+def test_the_four_hard_shadows_visibly_part(pictures):
+    """Each pair of the four samples' cast shadows differs in at least half as many pixels as
+    the smaller of the two covers: the samples lie far apart on the light, so the shadows move,
+    and all four still overlap somewhere (the umbra)."""
+    numbers = pictures[1].numbers
+    sizes, apart = numbers["shadow_px"], iter(numbers["apart_px"])
+    assert len(sizes) == 4 and min(sizes) > 0
+    for i in range(4):
+        for j in range(i + 1, 4):
+            assert next(apart) >= 0.5 * min(sizes[i], sizes[j]), (i, j, numbers)
+    assert numbers["umbra"] > 0
+
+
+def test_the_soft_slides_see_the_light_and_every_sample(gl_session):
+    """The slides' camera has the largest light, its outline and every sample in the frame of
+    each panel, so the legend's "a dot per sample" is drawn, not an arrow at the border."""
+    from shadowvol.course import slides, soft_gallery
+
+    g = Gallery(small=True, ctx=gl_session)
+    scene = soft_gallery._ball_scene(g)
+    big = soft_gallery._rect(scene.lights[0].center, max(soft_gallery.LIGHT_SIDES), 64)
+    for cols, rows in ((2, 2), (3, 2)):
+        s = slides.fit(scene, *g.layout.cell(cols, rows, legend=True))
+        pts = np.concatenate([slides.area_outline(big), big.positions])
+        xy, w = slides.project(s, np.c_[pts, np.ones(len(pts))])
+        assert (w > 0).all()
+        assert (xy >= 0).all() and (xy[:, 0] < s.width).all() and (xy[:, 1] < s.height).all()

@@ -49,10 +49,10 @@ from shadowvol.scenefile import load_scene, save_scene
 
 ALL = ("image", "lit", "coverage", "depth", "distance", "normal", "object_id", "facing",
        "facing_count", "casters")
-# The depth buffer holds near / d in float32, interpolated in screen space from float32 world
-# vertices: a few float32 spacings of d, more where a surface is seen nearly edge-on (the
-# interpolated 1/d's rounding grows with the depth's slope across the pixel).  Measured at
-# most 9e-6 over the scene files; 3e-5 allowed.
+# Both meet the pixel's ray with the visible triangle's float32 plane in float64 (within ~6e-7
+# of each other where both see the same triangle); where they see the same object through
+# neighbouring triangles (a tie near their shared edge) the planes differ.  3e-5 allowed, as
+# CONVENTIONS says.
 RASTER_DEPTH_RTOL = 3e-5
 MAX_MISMATCH_FRACTION = 0.001
 SIZE = dict(width=160, height=120)

@@ -2,7 +2,8 @@
 
 Random scenes (tests/strategies.py): closed meshes, open and non-manifold soups, unwelded
 vertices, reversed windings, cameras anywhere (inside objects and volumes, deep near planes),
-1-3 point, directional and spot lights.  `shadowvol.render` with method auto and zfail against
+1-3 point, directional and spot lights.  `shadowvol.render` with method auto and zfail (CPU
+silhouettes, and both with GPU silhouettes) against
 `raytrace.shadow_masks`: zero mismatches farther than one pixel from a mask edge
 (shadowvol.compare.maskdiff).  A failing scene is shrunk by hypothesis and saved as a JSON scene file
 (`save_scene`) under test-output/robustness/, which any command renders:
@@ -29,15 +30,17 @@ OUT = TEST_OUTPUT / "robustness"
 METHODS = ("auto", "zfail")
 
 
-def check_scene(ctx, scene, method: str) -> None:
+def check_scene(ctx, scene, method: str, silhouettes: str = "cpu") -> None:
     lit, cov = raytrace.shadow_masks(scene)
     with Renderer(scene, ctx) as r:
-        res = r.render(method)
-        masks = r.render(method, outputs=("lit", "coverage"))   # the mask pass
+        res = r.render(method, silhouettes)
+        masks = r.render(method, silhouettes, outputs=("lit", "coverage"))   # the mask pass
     # a mask-only frame has its own passes (passes.mask_pass): the same masks, bit for bit
     np.testing.assert_array_equal(masks.lit, res.lit)
     np.testing.assert_array_equal(masks.coverage, res.coverage)
     report = mask_report(res.lit, res.coverage, lit, cov)
+    if silhouettes != "cpu":
+        method = f"{method}-{silhouettes}"
     note(f"{method}: {report}")
     if any(row["interior"] for row in report):
         path = OUT / f"failing-{method}.json"
@@ -57,6 +60,14 @@ def test_random_scenes_auto(ctx, scene):
 @given(scene=scenes())
 def test_random_scenes_zfail(ctx, scene):
     check_scene(ctx, scene, "zfail")
+
+
+@profile()
+@given(scene=scenes())
+def test_random_scenes_gpu_silhouettes(ctx, scene):
+    """The silhouettes found by the geometry shader (auto, and z-fail everywhere)."""
+    check_scene(ctx, scene, "auto", "gpu")
+    check_scene(ctx, scene, "zfail", "gpu")
 
 
 @settings(profile(), max_examples=5)

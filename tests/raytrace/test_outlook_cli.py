@@ -116,10 +116,15 @@ def test_cornell_scene_is_the_published_box():
 
 def test_ladder_bleeds_colour_only_in_the_global_rungs():
     """The white back wall beside the red wall is redder than beside the green wall in the
-    path-traced and radiosity rungs (colour bleeding), and not in the Whitted rung."""
+    path-traced, photon-mapped and radiosity rungs (colour bleeding), and not in the Whitted
+    and direct-light rungs."""
     scene = cornell(32)
-    images, _ = ladder.rungs(scene, spp=64, level=2, rays=256)
-    assert len(images) == 5
+    settings = ladder.Settings(spp=64, level=2, rays=256, photons=40_000, k=50,
+                               supersample=1)
+    images, info = ladder.rungs(scene, settings)
+    assert len(images) == len(ladder.RUNGS) == 6
+    assert [name.split()[1] for name, _ in ladder.RUNGS] == [
+        "local", "Whitted", "direct", "path", "photon", "radiosity"]
     # back wall: the middle rows, columns just inside the side walls (red left, green right)
     left, right = images[0].shape[1] * 9 // 32, images[0].shape[1] * 23 // 32
     rows = slice(6, 12)
@@ -131,10 +136,10 @@ def test_ladder_bleeds_colour_only_in_the_global_rungs():
     for rung in (1, 2):  # Whitted and direct light: no bounce off the red wall
         assert redness(images[rung], left) / redness(images[rung], right) == \
             pytest.approx(1.0, abs=0.02), rung
-    for rung in (3, 4):
+    for rung in (3, 4, 5):
         assert redness(images[rung], left) / redness(images[rung], right) > 1.15, rung
-    picture = ladder.picture(images, ladder.emitter_colour(scene), "cornell")
-    assert picture.dtype == np.uint8 and picture.shape[1] > 5 * 32
+    shown = ladder.display(images, np.array(info["white_balance"]))
+    assert all(p.dtype == np.uint8 and p.shape == (32, 32, 3) for p in shown)
 
 
 def test_the_outlook_modules_import_no_gl():
@@ -142,7 +147,7 @@ def test_the_outlook_modules_import_no_gl():
     import sys
 
     code = ("import sys, raytrace.pathtrace, raytrace.radiosity, raytrace.direct, "
-            "shadowvol.cli.raytrace_outlook, shadowvol.course.ladder, shadowvol.course.layout; "
+            "shadowvol.cli.raytrace_outlook, shadowvol.course.ladder, raytrace.photon; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('moderngl', 'OpenGL', 'glcontext')]; "
             "print(bad); sys.exit(1 if bad else 0)")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
