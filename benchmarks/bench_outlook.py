@@ -1,6 +1,6 @@
 """Benchmark (not a test): path tracing and radiosity on the Cornell box (issue 15's targets).
 
-    python -m benchmarks.bench_outlook [--size 512] [--spp 4] [--runs 3]
+    python -m benchmarks.bench_outlook [--size 512] [--spp 4] [--runs 3] [--json PATH]
 
 1. Path tracing throughput: `raytrace.pathtrace.render` of scenes/cornell.toml at size x size,
    Mrays/s counting every ray it traced (camera, bounce and shadow rays), against two raw
@@ -249,14 +249,44 @@ def measure(size: int = 512, spp: int = 4, runs: int = 3, radiosity: bool = True
             "radiosity": radiosity_times() if radiosity else None}
 
 
+def report(r: dict) -> list[str]:
+    """The lines the run prints (short: BENCHMARKS.md keeps them verbatim; --json has all)."""
+    p = r["path_tracing"]
+    lines = [f"path tracing {p['size']}x{p['size']}, {p['spp']} spp, {p['threads']} threads, "
+             f"{p['rays']:,} rays; load {p['load_average'][0]:.1f}",
+             "| shading | s (median) | Mrays/s | / raw Embree (wall, CPU) "
+             "| / replayed Embree (wall, CPU) |", "|---|---:|---:|---|---|"]
+    for name, v in p["by_shading"].items():
+        lines.append(f"| {name} | {v['seconds']:.3f} | {v['mrays_per_s']:.1f} | "
+                     f"{v['ratio_to_raw']:.2f}, {v['cpu_ratio_to_raw']:.2f} | "
+                     f"{v['ratio_to_replay']:.2f}, {v['cpu_ratio_to_replay']:.2f} |")
+    lines.append(f"raw Embree {p['raw_embree_mrays_per_s']:.1f} Mrays/s, replayed "
+                 f"{p['replay_embree_mrays_per_s']:.1f}; target ratio to raw "
+                 f">= {p['target_ratio']}: {'met' if p['target_met'] else 'NOT met'}; images "
+                 f"identical across shadings: {p['images_identical_across_shadings']}; numba "
+                 "compile s: " + ", ".join(f"{k} {v:.2f}" for k, v in
+                                          p["numba_compile_seconds"].items()))
+    if r.get("radiosity"):
+        lines += ["| radiosity triangles | patches | rays/patch | form factors s | solve s "
+                  "| iterations | total s |", "|---:|---:|---:|---:|---:|---:|---:|"]
+        lines += [f"| {x['triangles']:,} | {x['patches']:,} | {x['rays_per_patch']} | "
+                  f"{x['form_factor_s']:.2f} | {x['solve_s']:.2f} | {x['iterations']:,} | "
+                  f"{x['total_s']:.2f} |" for x in r["radiosity"]]
+    return lines
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=512)
     ap.add_argument("--spp", type=int, default=4)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--no-radiosity", action="store_true", help="path tracing only")
+    ap.add_argument("--json", type=Path, help="also write every number here")
     args = ap.parse_args(argv)
-    print(json.dumps(measure(args.size, args.spp, args.runs, not args.no_radiosity), indent=1))
+    r = measure(args.size, args.spp, args.runs, not args.no_radiosity)
+    print("\n".join(report(r)))
+    if args.json:
+        args.json.write_text(json.dumps(r, indent=1) + "\n")
     return 0
 
 

@@ -65,7 +65,7 @@ EXTRAS = (
     ("bench_batch.py", [],
      "shadowvol batch on the 36-view turntable of the shared meshes: 1 worker, 2 workers, 2 "
      "shards, Ray with 2 actors, and the machinery's overhead (issue: datasets at scale)"),
-    ("bench_outlook.py", [],
+    ("bench_outlook.py", ["--json", "{json}"],
      "path tracing Mrays/s against raw Embree casts, radiosity at ~1k/4k/16k patches (issue: "
      "the lecture's outlook)"),
     ("bench_time_to_rmse.py", ["--json", "{json}"],
