@@ -15,7 +15,7 @@ offsets off the surface, reflection and refraction all come from `raytrace.whitt
 functions (`World.nearest`, `surface_frame`, `shadow_rays`, `local_colour`, `secondary_rays`)
 called on one ray at a time, so the tree is the renderer's, and `tree_colour(tree)` is the
 pixel's colour in `raytrace.render(scene)` (up to floating-point summation order).
-The picture of a tree is the course's (`shadowvol.course.raytree_picture.draw_tree`).
+The picture of a tree is the course's (`shadowvol.course.raytree_slide.slide`).
 """
 
 from __future__ import annotations
@@ -216,7 +216,7 @@ def _describe(node: RayNode, number: int, scene: Scene) -> str:
 
 def format_tree(tree: RayNode, scene: Scene) -> str:
     """The tree as indented text, one ray per line, numbered depth first (the numbers label
-    the rays in the course's picture, `raytree_picture.draw_tree`), and the pixel colour as the
+    the rays and boxes in the course's picture, `raytree_slide`), and the pixel colour as the
     sum of the contributions."""
     lines = []
     numbers = {id(n): k for k, n in enumerate(tree.walk())}

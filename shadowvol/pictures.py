@@ -29,6 +29,10 @@ HEAT_PALETTE = np.array([[255, 230, 120], [255, 170, 40], [240, 90, 20], [200, 3
                          [140, 10, 90], [80, 0, 120]], np.uint8)
 NEGATIVE_COLOUR = np.array([60, 140, 255], np.uint8)
 
+# a shadow volume's faces by role, linear RGB: the `--volumes` overlay, its legend, the slides
+ROLE_COLOURS = {"side": (1.0, 0.62, 0.05), "near cap": (0.1, 0.8, 0.25),
+                "far cap": (0.5, 0.25, 1.0)}
+
 ERROR_TINT = np.array([255, 0, 0], np.uint8)  # pixels a method gets wrong
 ERROR_TINT_WEIGHT = 0.6
 

@@ -34,8 +34,9 @@ from shadowvol import __version__, memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, raytrace_outlook, status
+from shadowvol.course import raytree_slide
 from shadowvol.course.exercise_picture import plane_figure, tir_figure
-from shadowvol.course.raytree_picture import draw_tree
+from shadowvol.course.slides import Layout
 from shadowvol.io import (
     atomic_write,
     save_exr,
@@ -116,16 +117,17 @@ def _tree_parser(sub) -> None:
                        description="Print every ray the Whitted tracer follows for pixel "
                                    "(X, Y) — primary, shadow rays with their verdicts, "
                                    "reflected, refracted, total internal reflection — as an "
-                                   "indented tree, and optionally draw them over the render "
-                                   "and in a side view.")
+                                   "indented tree, and optionally draw the gallery's slide of "
+                                   "it: the rays over the render, the tree as boxes beside "
+                                   "it.")
     blocks.scene(t)
     t.add_argument("--pixel", nargs=2, type=int, required=True, metavar=("X", "Y"),
                    help="column X from the left, row Y from the top")
     t.add_argument("--depth", type=int, default=None, metavar="N",
                    help="reflection/refraction generations (default: the scene's "
                         "render.max_depth)")
-    blocks.output(t, "PNG", "also draw the tree: the rays over the ray-traced image and a side "
-                            "view", required=False)
+    blocks.output(t, "PNG", "also draw the tree (a 1920x1080 slide): the rays over the "
+                            "ray-traced image and one box per ray", required=False)
     blocks.backend(t, BACKENDS)
     blocks.memory_budget(t)
 
@@ -254,16 +256,17 @@ def _tree(args) -> int:
     if not (0 <= x < scene.width and 0 <= y < scene.height):
         raise SceneError("--pixel", f"{x} {y} is outside the {scene.width}x{scene.height} "
                                     "image")
+    layout = Layout(supersample=1)  # the gallery's slide, its image traced once a pixel
     if args.output:
-        memory.check(memory.whitted(scene), args.memory_budget, args.scene)
+        memory.check(memory.whitted(raytree_slide.traced_scene(layout, scene)),
+                     args.memory_budget, args.scene)
     tree = ray_tree(scene, x, y, max_depth=args.depth, backend=args.backend)
     print(format_tree(tree, scene))
     if args.output:
-        image = render(scene, max_depth=args.depth, backend=args.backend, progress=False)
-        buf = io.BytesIO()
-        draw_tree(scene, tree, image).savefig(buf, format="png")
-        with atomic_write(args.output) as f:
-            f.write(buf.getvalue())
+        depth = scene.max_depth if args.depth is None else args.depth
+        picture = raytree_slide.slide(layout, scene, tree, (x, y), depth, lambda s: render(
+            s, max_depth=args.depth, backend=args.backend, progress=False))
+        save_png(args.output, picture)
         print(f"wrote {args.output}", file=sys.stderr)
     return status.OK
 

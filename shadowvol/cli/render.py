@@ -14,9 +14,8 @@ from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
 from shadowvol.errors import OutOfMemory, RenderError
 from shadowvol.io import GROUND_TRUTH, encode_srgb, save_exr, save_masks, save_png, save_png16
-from shadowvol.pictures import captioned, heat_maps
+from shadowvol.pictures import ROLE_COLOURS, captioned, heat_maps
 from shadowvol.raster.context import create_context
-from shadowvol.raster.overlay import ROLE_COLOURS
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight, SceneError, light_samples
 from shadowvol.scenefile import load_scene

@@ -8,19 +8,10 @@ import numpy as np
 
 import raytrace
 from raytrace import exercise
-from raytrace.raytree import (
-    BLOCKED,
-    LIT,
-    REFLECTED,
-    REFRACTED,
-    format_tree,
-    ray_tree,
-    tree_colour,
-)
+from raytrace.raytree import format_tree, ray_tree
 from shadowvol.compare import maskdiff
 from shadowvol.compare.comparison import compare
-from shadowvol import pictures
-from shadowvol.course import exercise_picture, raytree_diagram, slides
+from shadowvol.course import exercise_picture, raytree_diagram, raytree_slide, slides
 from shadowvol.course.picture import Picture
 from shadowvol.course.shadow2d import draw_shadow2d, example
 from shadowvol.pictures import figure_pixels, tint
@@ -28,7 +19,6 @@ from shadowvol.raster.projection import view_matrix, view_projection
 from shadowvol.raster.renderer import Renderer
 
 RAY_TREE_DEPTH = 2    # "sketch all rays to recursion depth 2"
-COLOUR = {k: raytree_diagram.rgb(k) for k in (REFLECTED, REFRACTED, LIT, BLOCKED)}
 ZOOM_FRACTION = 6     # a zoomed crop shows 1/6 of the panel's width and height
 
 
@@ -68,32 +58,16 @@ def ray_tree_pixel(scene, obj_name: str, offset=(-0.35, 0.45)) -> tuple[int, int
 
 
 def raytree(g) -> Picture:
-    L = g.layout
     scene = g.scene("whitted")
     x, y = ray_tree_pixel(scene, "glass ball")
     tree = ray_tree(scene, x, y, max_depth=RAY_TREE_DEPTH)
-    text_px = L.px(28)
-    # the image at the left, 4:3, a note under it; the tree at the right
-    img_w = L.px(780)
-    img_h = round(img_w * scene.height / scene.width)
-    s = slides.fit(scene, img_w, img_h)
-    image = slides.supersampled(lambda sc: raytrace.render(
-        sc, max_depth=RAY_TREE_DEPTH, progress=False), scene, img_w, img_h, L.supersample)
-    image = raytree_diagram.draw_rays(image, s, tree, text_px)
-    body_h = L.height - L.title_h - L.legend_h - 2 * L.margin - L.label_h
-    note = L.note([f"{raytree_diagram.light_names(scene)}.",
-                   "The pixel's colour is the sum of what",
-                   "every ray adds, each weighted by the",
-                   "reflectivity and transparency on its",
-                   "path: " + "(" + ", ".join(f"{c:.3f}" for c in tree_colour(tree)) + ")."],
-                  img_w, body_h - img_h - L.margin)
-    left = pictures.column([image, note], gap=L.margin)
-    tree_w = L.width - img_w - 3 * L.margin
-    diagram = raytree_diagram.draw_diagram(scene, tree, tree_w, body_h, text_px)
+    image = raytree_slide.slide(g.layout, scene, tree, (x, y), RAY_TREE_DEPTH,
+                                lambda sc: raytrace.render(sc, max_depth=RAY_TREE_DEPTH,
+                                                           progress=False))
     kinds = [n.kind for n in tree.walk()]
-    title = f"The ray tree of pixel ({x}, {y}), to recursion depth {RAY_TREE_DEPTH}"
     return Picture(
-        "raytree", title, "raytracing",
+        "raytree", f"The ray tree of pixel ({x}, {y}), to recursion depth {RAY_TREE_DEPTH}",
+        "raytracing",
         "Whitted's recursion for one pixel: the primary ray hits the glass ball; from every "
         "hit a shadow ray goes to each light, a reflected ray and, through glass, a refracted "
         "ray, each of which does the same, down to the depth limit.  The pixel's colour is "
@@ -103,12 +77,7 @@ def raytree(g) -> Picture:
         "the text below), its edges labelled S (shadow), R (reflected), T (refracted)",
         f"raytrace tree {g.path('whitted')} --pixel {x} {y} --depth {RAY_TREE_DEPTH} "
         "-o raytree.png",
-        L.compose(title, [[("the rays over the image", left),
-                           ("the tree: one box per ray", diagram)]],
-                  legend=[("eye ray", (255, 255, 255)), ("reflected", COLOUR[REFLECTED]),
-                          ("refracted", COLOUR[REFRACTED]), ("shadow ray: lit", COLOUR[LIT]),
-                          ("shadow ray: blocked", COLOUR[BLOCKED])]),
-        text=format_tree(tree, scene),
+        image, text=format_tree(tree, scene),
         numbers={"rays": len(kinds), "boxes": len(raytree_diagram.layout(tree)),
                  **{k: kinds.count(k) for k in sorted(set(kinds))}})
 

@@ -8,7 +8,8 @@ The root (the eye ray) is at the left, its children in the next column and so on
 says the ray's number (as `raytrace.raytree.format_tree` prints it), its kind and what it meets,
 and each edge is labelled with Whitted's letters: S a shadow ray, R the reflected ray, T the
 transmitted (refracted) one.  Box colours are the rays' colours over the image
-(`raytree_picture.COLOURS`), so the diagram and the picture read together.  Pillow only.
+(`COLOURS`), so the diagram and the picture read together.  Pillow only.  The slide that
+puts the two side by side is `raytree_slide`.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image, ImageDraw
 
+from raytrace.camera import camera_basis
 from raytrace.raytree import (
     BLOCKED,
     FACES_AWAY,
@@ -30,13 +32,44 @@ from raytrace.raytree import (
     TIR,
     RayNode,
 )
-from shadowvol.course.raytree_picture import COLOURS, clip_near, project
 from shadowvol.pictures import font
 from shadowvol.scene import DirectionalLight, Scene
 
+COLOURS = {PRIMARY: "#ffffff", REFLECTED: "#00d0ff", REFRACTED: "#40e040", TIR: "#ff40ff",
+           LIT: "#ffd000", BLOCKED: "#ff3030", FACES_AWAY: "#a0a0a0", OUTSIDE_CONE: "#a0a0a0"}
 LETTERS = {SHADOW: "S", REFLECTED: "R", REFRACTED: "T", TIR: "R"}
 INK = (20, 20, 24)
 EDGE = (90, 90, 100)
+
+
+def project(scene: Scene, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel coordinates (n, 2) float64 (x right, y down, pixel centres at +0.5) of world
+    points (n, 3), and their eye-space depth (n,) (positive in front of the eye)."""
+    right, up, back = camera_basis(scene.camera)
+    rel = points - scene.camera.eye
+    depth = -(rel @ back)
+    half_h = np.tan(np.radians(scene.camera.fov_y) / 2.0)
+    half_w = half_h * scene.aspect
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ndc_x = (rel @ right) / (depth * half_w)
+        ndc_y = (rel @ up) / (depth * half_h)
+    px = (ndc_x + 1.0) / 2.0 * scene.width
+    py = (1.0 - ndc_y) / 2.0 * scene.height
+    return np.stack([px, py], axis=1), depth
+
+
+def clip_near(scene: Scene, a: np.ndarray, b: np.ndarray):
+    """The part of segment a-b in front of the near plane, or None."""
+    _, (da, db) = project(scene, np.array([a, b]))
+    near = scene.camera.near
+    if da < near and db < near:
+        return None
+    if da < near:
+        a = a + (near - da) / (db - da) * (b - a)
+    elif db < near:
+        b = b + (near - db) / (da - db) * (a - b)
+    return a, b
+
 
 
 @dataclass(frozen=True)
@@ -51,7 +84,7 @@ class Box:
 
 
 def rgb(key: str) -> tuple[int, int, int]:
-    """`raytree_picture.COLOURS[key]` (a ray kind or a shadow ray's verdict) as sRGB uint8."""
+    """`COLOURS[key]` (a ray kind or a shadow ray's verdict) as sRGB uint8."""
     c = COLOURS[key]
     return tuple(int(c[i:i + 2], 16) for i in (1, 3, 5))
 
@@ -107,18 +140,14 @@ def layout(tree: RayNode) -> list[Box]:
     return [Box(number, node, column[id(node)], centre[id(node)]) for number, node, _ in rows]
 
 
-def draw_diagram(scene: Scene, tree: RayNode, width: int, height: int,
-                 text_px: int) -> np.ndarray:
-    """(height, width, 3) uint8: the tree left to right, a box per ray (see `layout`), edges
-    from each box to its children's boxes with their letter (S, R, T) on them."""
+def placed(scene: Scene, tree: RayNode, width: int, height: int, text_px: int):
+    """Where `draw_diagram` puts the boxes: (boxes, {id(node): (left x, centre y, height,
+    width)}, the gap between columns), at text size text_px."""
     boxes = layout(tree)
-    img = Image.new("RGB", (width, height), (255, 255, 255))
-    draw = ImageDraw.Draw(img)
-    letter = font(text_px, bold=True)
+    draw = ImageDraw.Draw(Image.new("RGB", (1, 1)))
     columns = max(b.column for b in boxes) + 1
     line_h = round(text_px * 1.25)
-    bold = lambda b, i: i == 0 and b.node.kind != SHADOW  # noqa: E731 - a box's title line
-    box_w = [text_px + max(draw.textlength(t, font=font(text_px, bold=bold(b, i)))
+    box_w = [text_px + max(draw.textlength(t, font=font(text_px, bold=_bold(b, i)))
                            for b in boxes if b.column == c
                            for i, t in enumerate(lines(b.node, b.number, scene)))
              for c in range(columns)]
@@ -130,6 +159,23 @@ def draw_diagram(scene: Scene, tree: RayNode, width: int, height: int,
         h = len(lines(b.node, b.number, scene)) * line_h + text_px * 0.5
         y = pad + b.y * (height - 2 * pad)
         where[id(b.node)] = (left[b.column], y, h, box_w[b.column])
+    return boxes, where, gap
+
+
+def _bold(b: Box, i: int) -> bool:
+    """Is line i of box b its title line (bold)?"""
+    return i == 0 and b.node.kind != SHADOW
+
+
+def draw_diagram(scene: Scene, tree: RayNode, width: int, height: int,
+                 text_px: int) -> np.ndarray:
+    """(height, width, 3) uint8: the tree left to right, a box per ray (see `layout`), edges
+    from each box to its children's boxes with their letter (S, R, T) on them."""
+    boxes, where, gap = placed(scene, tree, width, height, text_px)
+    img = Image.new("RGB", (width, height), (255, 255, 255))
+    draw = ImageDraw.Draw(img)
+    letter = font(text_px, bold=True)
+    line_h = round(text_px * 1.25)
     stroke = max(2, round(text_px / 9))
     for b in boxes:                                    # edges first, under the boxes
         x, y, h, bw = where[id(b.node)]
@@ -149,7 +195,7 @@ def draw_diagram(scene: Scene, tree: RayNode, width: int, height: int,
         for i, t in enumerate(text):
             ty = y - h / 2 + text_px * 0.25 + (i + 0.5) * line_h
             draw.text((x + text_px / 2, ty), t, fill=INK, anchor="lm",
-                      font=font(text_px, bold=bold(b, i)))
+                      font=font(text_px, bold=_bold(b, i)))
     return np.asarray(img, np.uint8)
 
 
@@ -181,13 +227,20 @@ def draw_rays(image: np.ndarray, scene: Scene, tree: RayNode, text_px: int) -> n
     labels.insert(0, ("#0", (px, py)))
     f = font(text_px, bold=True)
     taken = []
+
+    def inside(b) -> bool:
+        return b[0] >= 0 and b[1] >= 0 and b[2] <= img.width and b[3] <= img.height
+
     for text, (x, y) in labels:               # each label beside its point, clear of the others
+        tries = []                            # and of the image's edges, where a place is
         for dx, dy in ((1, -1), (1, 1), (-1, -1), (-1, 1), (2, 0), (-2, 0)):
             at = (x + dx * r, y + dy * r)
             anchor = ("l" if dx > 0 else "r") + ("s" if dy < 0 else "t")
             box = draw.textbbox(at, text, font=f, anchor=anchor)
-            if not any(_overlap(box, t) for t in taken):
-                break
+            tries.append((at, anchor, box))
+        clear = [t for t in tries if not any(_overlap(t[2], o) for o in taken)]
+        at, anchor, box = next((t for t in clear if inside(t[2])),
+                               clear[0] if clear else tries[-1])
         taken.append(box)
         draw.text(at, text, fill=(255, 255, 255), font=f, anchor=anchor,
                   stroke_width=max(2, text_px // 10), stroke_fill=INK)

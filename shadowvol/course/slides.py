@@ -20,8 +20,7 @@ from PIL import Image, ImageDraw
 from shadowvol import pictures
 from shadowvol.io import encode_srgb
 from shadowvol.planes import default_plane_axes
-from shadowvol.pictures import font, text_strip  # noqa: F401 - the slides' text
-from shadowvol.raster.overlay import ROLE_COLOURS
+from shadowvol.pictures import ROLE_COLOURS, font, text_strip  # noqa: F401 - the slides' text
 from shadowvol.raster.projection import view_projection
 
 SLIDE = (1920, 1080)

@@ -10,16 +10,12 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
+from shadowvol.pictures import ROLE_COLOURS
 from shadowvol.raster import stencil
 from shadowvol.raster.gl import RawGL
 from shadowvol.raster.passes import set_uniform
 from shadowvol.raster.projection import NEARER, NEARER_OR_EQUAL
 
-ROLE_COLOURS = {  # linear RGB
-    "side": (1.0, 0.62, 0.05),
-    "near cap": (0.1, 0.8, 0.25),
-    "far cap": (0.5, 0.25, 1.0),
-}
 FILL_ALPHA = 0.22
 LINE_ALPHA = 0.85
 

@@ -55,15 +55,13 @@ def test_importing_a_package_loads_no_gl_trimesh_or_matplotlib(package):
     assert done.stdout.strip() == "[]"
 
 
-def test_drawing_a_ray_tree_leaves_matplotlibs_backend_alone():
-    done = _python(textwrap.dedent(f"""
+def test_drawing_an_exercise_leaves_matplotlibs_backend_alone():
+    done = _python(textwrap.dedent("""
         import matplotlib
         matplotlib.use("svg")
-        from raytrace.raytree import ray_tree
-        from shadowvol.course.raytree_picture import draw_tree
-        from shadowvol.scenefile import load_scene
-        scene = load_scene({str(SCENES / "whitted.toml")!r}).replace(width=64, height=48)
-        fig = draw_tree(scene, ray_tree(scene, 30, 20, max_depth=1))
+        from raytrace import exercise
+        from shadowvol.course.exercise_picture import plane_figure
+        fig = plane_figure(exercise.solve_plane())
         import io; fig.savefig(io.BytesIO(), format="png")
         print(matplotlib.get_backend())
         """))

@@ -61,3 +61,37 @@ def test_diagram_and_rays_are_drawn_at_slide_size(tree_and_scene):
     drawn = raytree_diagram.draw_rays(image, scene, tree, 28)
     assert (drawn != 128).any(axis=2).mean() > 0.01
     assert raytree_diagram.light_names(scene) == "L0 the point light, L1 the directional light"
+
+
+def test_a_deep_tree_shrinks_its_boxes_to_fit():
+    """The glass ball's pixel at the scene's depth 5 (29 rays): at the slide's 28 px the boxes
+    overflow the diagram, so `raytree_slide` takes the largest size at which they fit; the
+    depth-2 tree keeps 28 px.  `fits` is the check: one pixel larger does not fit."""
+    from shadowvol.course import raytree_slide
+    from shadowvol.course.slides import Layout
+
+    scene = load_scene(SCENES / "whitted.toml")
+    x, y = ray_tree_pixel(scene, "glass ball")
+    w, h = raytree_slide.diagram_size(Layout())
+    deep = ray_tree(scene, x, y, max_depth=scene.max_depth)
+    assert len(list(deep.walk())) > 20
+    assert not raytree_slide.fits(scene, deep, w, h, raytree_slide.TEXT_PX)
+    px = raytree_slide.text_size(scene, deep, w, h, raytree_slide.TEXT_PX)
+    assert raytree_slide.MIN_TEXT_PX < px < raytree_slide.TEXT_PX
+    assert raytree_slide.fits(scene, deep, w, h, px)
+    assert not raytree_slide.fits(scene, deep, w, h, px + 1)
+    shallow = ray_tree(scene, x, y, max_depth=RAY_TREE_DEPTH)
+    assert raytree_slide.text_size(scene, shallow, w, h, 28) == 28
+
+
+def test_the_slide_legend_names_what_the_tree_has():
+    """Total internal reflection and untraced shadow rays are in the legend only where the
+    tree has them."""
+    from shadowvol.course import raytree_slide
+
+    scene = load_scene(SCENES / "whitted.toml")
+    x, y = ray_tree_pixel(scene, "glass ball")
+    deep = [label for label, _ in raytree_slide.legend(ray_tree(scene, x, y, max_depth=5))]
+    assert "not traced" in deep and deep[0] == "eye ray"
+    one = [label for label, _ in raytree_slide.legend(ray_tree(scene, x, y, max_depth=0))]
+    assert "not traced" not in one and "total internal refl." not in one

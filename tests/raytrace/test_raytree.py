@@ -28,7 +28,8 @@ from raytrace.raytree import (
     tree_colour,
 )
 from raytrace.tolerances import surface_offset
-from shadowvol.course.raytree_picture import draw_tree
+from shadowvol.course import raytree_slide
+from shadowvol.course.slides import Layout
 from shadowvol.primitives import mesh, plane
 from shadowvol.scene import (
     Camera,
@@ -211,9 +212,9 @@ def test_bad_pixel_and_depth():
 
 
 def test_picture_and_cli(tmp_path, capsys):
+    """`raytrace tree -o` draws the gallery's slide: the same pixels as
+    `raytree_slide.slide` at 1920x1080, one sample a pixel."""
     scene = load_scene(SCENES / "whitted.toml").replace(width=64, height=48)
-    fig = draw_tree(scene, ray_tree(scene, 40, 30, max_depth=2))
-    assert len(fig.axes) == 3  # the image, the side view, the top view
     small = tmp_path / "whitted.json"
     save_scene(scene, small)
     out = tmp_path / "tree.png"
@@ -222,6 +223,12 @@ def test_picture_and_cli(tmp_path, capsys):
     text = capsys.readouterr().out
     assert text.startswith("#0 primary") and "hits 'glass ball'" in text
     assert text.splitlines()[-1].startswith("pixel colour")
-    assert Image.open(out).size[0] > 600
+    drawn = np.asarray(Image.open(out).convert("RGB"))
+    scene = load_scene(small)  # as the command reads it
+    tree = ray_tree(scene, 42, 30, max_depth=2)
+    slide = raytree_slide.slide(Layout(supersample=1), scene, tree, (42, 30), 2,
+                                lambda s: raytrace.render(s, max_depth=2, progress=False))
+    assert drawn.shape == (1080, 1920, 3)
+    np.testing.assert_array_equal(drawn, slide)
     assert cli.main(["tree", str(small), "--pixel", "64", "0"]) == 2
     assert cli.main(["tree", str(small), "--pixel", "0", "0", "--depth", "-1"]) == 2
