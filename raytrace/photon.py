@@ -316,10 +316,13 @@ def _glossy_light(maps, est, surf: dict, i, p, n, wo) -> np.ndarray:
 
 
 def shade_rows(world: PathWorld, maps: PhotonMaps, est: Estimate, o, d, rng,
-               gather: int = 0, as_gather: bool = False) -> tuple[np.ndarray, int]:
+               gather: int = 0, as_gather: bool = False, light_samples: int = 1
+               ) -> tuple[np.ndarray, int]:
     """Radiance (3, k) float64 along rays o, d (3, k) and the rays traced (the module
     docstring).  gather: final-gather rays per diffuse hit (0: read the global map there);
-    as_gather: these are gather rays (no emission, no background, no further gather)."""
+    as_gather: these are gather rays (no emission, no background, no further gather, one
+    light sample); light_samples: the direct light's shadow rays to the emitters per hit,
+    averaged (delta lights: each is one exact ray anyway)."""
     o, d = np.asarray(o, STATE), np.asarray(d, STATE)
     L = np.zeros((3, o.shape[1]))
     background = np.asarray(world.scene.background, np.float64)[:, None]
@@ -343,9 +346,11 @@ def shade_rows(world: PathWorld, maps: PhotonMaps, est: Estimate, o, d, rng,
             _scatter_add(L, take(path, e), take(beta, e) * take(world.tri_emission, take(tri, e)))
         start = p + world.offset * n
         wo = -d if world.any_glossy else None
-        direct, shadow = next_event(world, rng, p, n, wo, surf, beta, start, mis=False)
-        rays += shadow
-        _scatter_add(L, path, direct)
+        shots = light_samples if len(world.emitters) and not as_gather else 1
+        for _ in range(shots):
+            direct, shadow = next_event(world, rng, p, n, wo, surf, beta, start, mis=False)
+            rays += shadow
+            _scatter_add(L, path, direct / shots)
         phong = np.broadcast_to(surf["phong"], (k,))
         i = np.flatnonzero(phong > 0.0)
         if len(i):
@@ -376,11 +381,13 @@ def radiance_leaving(world: PathWorld, maps: PhotonMaps, est: Estimate, points, 
 
 def render(scene: Scene, photons: int = DEFAULT_PHOTONS, estimate: Estimate = Estimate(),
            spp: int = 4, gather: int = 0, seed: int = 0, backend: str = "embree",
-           jitter: bool = True) -> PhotonImage:
+           jitter: bool = True, light_samples: int = 1) -> PhotonImage:
     """Photon-map `scene`: about `photons` photons, then `spp` eye rays per pixel (jittered
     in the pixel, or at its centre: jitter False), `gather` final-gather rays per diffuse hit
-    (0: none).  The image depends on the arguments only (`seed`: the module docstring)."""
-    for name, value, low in (("photons", photons, 1), ("spp", spp, 1), ("gather", gather, 0)):
+    (0: none), `light_samples` shadow rays to the emitters per diffuse hit for the direct
+    light.  The image depends on the arguments only (`seed`: the module docstring)."""
+    for name, value, low in (("photons", photons, 1), ("spp", spp, 1), ("gather", gather, 0),
+                             ("light_samples", light_samples, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
             raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
     kdtree()  # a missing scipy fails here, before any photon is traced
@@ -396,7 +403,8 @@ def render(scene: Scene, photons: int = DEFAULT_PHOTONS, estimate: Estimate = Es
     for s in range(0, len(row), TILE_RAYS):
         part = slice(s, s + TILE_RAYS)
         o, d = camera_rays(scene.camera, W, H, row[part], col[part], rng if jitter else None)
-        L, traced = shade_rows(world, maps, estimate, o, d, rng, gather)
+        L, traced = shade_rows(world, maps, estimate, o, d, rng, gather,
+                               light_samples=light_samples)
         pixel = row[part] * W + col[part]
         for c in range(3):
             total[c] += np.bincount(pixel, L[c], minlength=H * W)

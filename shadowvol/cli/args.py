@@ -93,3 +93,6 @@ def photon(p: argparse.ArgumentParser, kernels: tuple[str, ...]) -> None:
     p.add_argument("--final-gather", type=int, default=0, metavar="G",
                    help="photon mapping: G final-gather rays per diffuse hit instead of reading "
                         "the global map there (default 0: none)")
+    p.add_argument("--light-samples", type=int, default=1, metavar="N",
+                   help="photon mapping: N shadow rays to the area lights per diffuse hit for "
+                        "the direct light, averaged (default 1)")

@@ -192,7 +192,9 @@ def _photon(args) -> int:
                                   ("--spp", spp, spp >= 1, ">= 1"),
                                   ("--seed", args.seed, args.seed >= 0, ">= 0"),
                                   ("--final-gather", args.final_gather, args.final_gather >= 0,
-                                   ">= 0")):
+                                   ">= 0"),
+                                  ("--light-samples", args.light_samples,
+                                   args.light_samples >= 1, ">= 1")):
         if not ok:
             raise SceneError(flag, f"must be {rule}, got {value}")
     if args.knn is not None and args.radius is not None:
@@ -207,7 +209,8 @@ def _photon(args) -> int:
     memory.check(memory.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
     result = photon.render(scene, photons=args.photons, estimate=estimate, spp=spp,
-                           gather=args.final_gather, seed=args.seed, backend=args.backend)
+                           gather=args.final_gather, seed=args.seed, backend=args.backend,
+                           light_samples=args.light_samples)
     save_png(args.output, result.image)
     if args.exr:
         save_exr(args.exr, result.image)

@@ -64,7 +64,8 @@ COLUMNS = 3  # the rungs in two rows of three, read left to right
 @dataclass(frozen=True)
 class Settings:
     """What the rungs cost: paths per pixel (rungs 3-4), radiosity's subdivision level and
-    form-factor rays per patch, photons and the photons per density estimate (rung 5), and
+    form-factor rays per patch, photons, the photons per density estimate and the shadow rays
+    per eye hit (rung 5), and
     the supersampling of the pixel-centre rungs (1, 2, 6) along each axis."""
 
     spp: int = 256
@@ -73,10 +74,12 @@ class Settings:
     photons: int = 1_000_000
     k: int = 200
     supersample: int = 2
+    light_samples: int = 16  # rung 5's shadow rays per eye hit: its direct light unspeckled
 
 
 FULL = Settings()  # the 1920x1080 slide: about two minutes on two cores
-SMALL = Settings(spp=16, level=1, rays=256, photons=20_000, k=32, supersample=1)  # --small
+SMALL = Settings(spp=16, level=1, rays=256, photons=20_000, k=32, supersample=1,
+                 light_samples=4)  # --small
 
 
 def point_light_stand_in(scene: Scene) -> PointLight:
@@ -170,7 +173,8 @@ def rungs(scene: Scene, settings: Settings = FULL, seed: int = 0
               _box(lambda sc: whitted.render(sc, progress=False), stand_in, s.supersample)]
     t2 = time.perf_counter()
     mapped = photon.render(scene, photons=s.photons, estimate=photon.Estimate(k=s.k),
-                           spp=max(1, s.supersample ** 2), seed=seed)
+                           spp=max(1, s.supersample ** 2), seed=seed,
+                           light_samples=s.light_samples)
     t3 = time.perf_counter()
     sol = radiosity.solve(scene, level=s.level, rays_per_patch=s.rays, seed=seed, shots=16)
     images += [direct.image, full.image, mapped.image,

@@ -292,10 +292,32 @@ def test_cli_without_scipy_exits_2_naming_the_pip_command(tmp_path, capsys, monk
 @pytest.mark.parametrize("bad, flag", [
     (["--knn", "5", "--radius", "0.1"], "--knn"), (["--knn", "1"], "--knn"),
     (["--radius", "0"], "--radius"), (["--photons", "0"], "--photons"),
-    (["--final-gather", "-1"], "--final-gather")])
+    (["--final-gather", "-1"], "--final-gather"), (["--light-samples", "0"], "--light-samples")])
 def test_cli_refuses_bad_photon_options(tmp_path, capsys, bad, flag):
     out = tmp_path / "x.png"
     assert cli.main(["render", str(CAUSTIC), "--integrator", "photon", *bad,
                      "-o", str(out)]) == 2
     assert f"error: {flag}:" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_light_samples_average_the_direct_light():
+    """With the eye rays at the pixel centres and no final gather, the direct light's shadow
+    rays are the only randomness: two runs over the same maps differ by NEE noise alone.
+    light_samples = 8 keeps the mean (a missing division by the count would multiply the
+    direct light) and divides that noise's variance by about 8 (between 5 and 12)."""
+    from raytrace.camera import camera_rays
+
+    scene = cornell(32)
+    world = PathWorld(scene)
+    maps = photon.build_maps(world, 20_000, np.random.default_rng(3))
+    est = photon.Estimate(k=32)
+    row = np.repeat(np.arange(32), 32)
+    col = np.tile(np.arange(32), 32)
+    o, d = camera_rays(scene.camera, 32, 32, row, col, None)
+    runs = {n: [photon.shade_rows(world, maps, est, o, d, np.random.default_rng(seed),
+                                  light_samples=n)[0] for seed in (10, 11)] for n in (1, 8)}
+    mean1, mean8 = (np.mean(runs[n]) for n in (1, 8))
+    assert abs(mean8 / mean1 - 1) < 0.03, (mean1, mean8)
+    noise = {n: np.var(runs[n][0] - runs[n][1]) for n in (1, 8)}
+    assert 5 < noise[1] / noise[8] < 12, noise
