@@ -19,6 +19,7 @@ A bad scene prints `error: <file>: <key>: <problem>`; the exit statuses are shad
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import io
 import sys
 from pathlib import Path
@@ -261,7 +262,9 @@ def _tree(args) -> int:
                                     "image")
     layout = Layout(supersample=1)  # the gallery's slide, its image traced once a pixel
     if args.output:
-        memory.check(memory.whitted(raytree_slide.traced_scene(layout, scene)),
+        estimate = memory.whitted(raytree_slide.traced_scene(layout, scene))
+        memory.check(dataclasses.replace(estimate, what=f"{estimate.what} on the ray tree "
+                                                        "slide's image"),
                      args.memory_budget, args.scene)
     tree = ray_tree(scene, x, y, max_depth=args.depth, backend=args.backend)
     print(format_tree(tree, scene))

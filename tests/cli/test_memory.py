@@ -32,6 +32,8 @@ from shadowvol import memory
 from shadowvol.cli import status
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.cli.raytrace import main as raytrace_main
+from shadowvol.course import raytree_slide
+from shadowvol.course.slides import Layout
 from shadowvol.raster import target
 from shadowvol.scene import MAX_IMAGE_PIXELS, SceneError
 from shadowvol.scenefile import load_scene, save_scene
@@ -139,6 +141,12 @@ OVER_BUDGET = {  # command -> (argv, what must not run)
 }
 
 
+def _slide_image(path) -> tuple[int, int]:
+    """(width, height) the ray tree slide traces for the scene at `path`."""
+    traced = raytree_slide.traced_scene(Layout(supersample=1), load_scene(path))
+    return traced.width, traced.height
+
+
 @pytest.mark.gl
 @pytest.mark.parametrize("command", sorted(OVER_BUDGET))
 @pytest.mark.parametrize("how", ["option", "variable"])
@@ -160,11 +168,26 @@ def test_an_image_over_the_budget_is_refused_before_rendering(command, how, tmp_
     assert main(argv) == status.BAD_INPUT
     line = _one_error_line(capsys.readouterr().err)
     shown = planar if "planar" in command else scene
+    # the tree draws the slide: its image is the slide's panel, whatever the scene's size
+    size = ("x".join(map(str, _slide_image(scene))) if command == "raytrace tree"
+            else "4000x3000")
     assert re.fullmatch(
-        rf"error: {re.escape(str(shown))}: image: 4000x3000 needs about [\d.]+ [MG]iB for .+ "
+        rf"error: {re.escape(str(shown))}: image: {size} needs about [\d.]+ [MG]iB for .+ "
         r"\(model: .+ B/px.*\), more than the memory budget of 64 MiB \(set "
         r"SHADOWVOL_MEMORY_BUDGET, e\.g\. 32GiB, or --memory-budget to change it\)", line), line
     _nothing_written(out)
+
+
+@pytest.mark.gl
+def test_the_tree_slide_is_judged_by_the_image_it_traces(tmp_path, monkeypatch):
+    """A 4000x3000 scene's Whitted image is over 512 MiB, the slide's panel is not: the tree
+    command goes on to trace (and is stopped there), it is not refused for the scene's size."""
+    scene = _scene(tmp_path, width=4000, height=3000)
+    assert memory.whitted(load_scene(scene)).total + memory.BASE > 512 * 2**20
+    monkeypatch.setattr(shadowvol.cli.raytrace, "ray_tree", _boom)
+    with pytest.raises(AssertionError, match="the render was started"):
+        raytrace_main(["tree", str(scene), "--pixel", "3", "3", "-o", str(tmp_path / "x.png"),
+                       "--memory-budget", "512MiB"])
 
 
 @pytest.mark.gl
