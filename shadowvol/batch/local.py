@@ -27,7 +27,7 @@ from collections import OrderedDict, deque
 from collections.abc import Iterable, Iterator
 from multiprocessing.connection import wait
 
-from shadowvol import memory
+from shadowvol import memory, signals
 from shadowvol.batch.worker import MAX_RENDERERS, Worker, thread_settings
 from shadowvol.errors import RENDER_FAILED
 from shadowvol.scene import Scene
@@ -165,7 +165,7 @@ def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
     environment = thread_settings(workers)
     # the workers render at once: each gets its share of the memory budget
     environment[memory.ENV] = str(memory.budget(budget) // count)
-    children = [_Child(context, i, egl_device, environment) for i in range(count)]
+    children: list[_Child] = []
     source = _Scenes(scenes)
     finished = False
 
@@ -181,6 +181,11 @@ def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
             child.flying.append(task)
 
     try:
+        for i in range(count):
+            # a child cut while it is started would be left behind; once in `children` the
+            # `finally` below ends it
+            with signals.deferred():
+                children.append(_Child(context, i, egl_device, environment))
         for child in children:  # they import and start up meanwhile
             feed(child)
         alive = list(children)
