@@ -77,8 +77,8 @@ def _sample_casters(renderer, plan: FramePlan, camera: Camera, stored: np.ndarra
     light4 = light.homogeneous
     choice = methods.choose(plan.method, geometry.bounds, camera, renderer.scene.aspect,
                             light4, geometry.extent)
-    candidates = truth.caster_candidates(geometry.bounds,
-                                         truth.cast_points(camera, stored, cast), light4)
+    candidates = [j for j in truth.caster_candidates(
+        geometry.bounds, truth.cast_points(camera, stored, cast), light4) if geometry.casts[j]]
     vols.prepare(light4)
     bits = truth.count_casters(renderer.target, renderer._truth_pass().casters, vols, choice,
                                candidates, renderer.object_bounds, facing, halve=plan.halve,
