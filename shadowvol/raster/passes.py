@@ -195,10 +195,19 @@ def _draw_soup(ctx: moderngl.Context, geometry: SceneGeometry, vao: moderngl.Ver
     ctx.enable_only(moderngl.DEPTH_TEST)
 
 
-def _draw_soup_of(geometry: SceneGeometry, vao: moderngl.VertexArray, objects) -> None:
-    """The triangles of `objects` (their pieces too) through `vao`, in the soup's order."""
-    for first, count in geometry.spans(objects):
-        vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
+def zero_unreceiving(ctx: moderngl.Context, gl: RawGL, progs: ScenePrograms | None,
+                     count_mask: int = 0xFF) -> None:
+    """After a light's count (`count_volumes`, its framebuffer bound, colour and depth writes
+    off): the objects that receive no shadow (`Object.receive_shadows`) drawn again over the
+    geometry pass's depths (the same shader and vertices: depth test EQUAL holds), their
+    visible pixels' counts set to 0 (`stencil.zeroed_counts`).  Nothing when all receive."""
+    if progs is None or progs.receivers is None:
+        return
+    ctx.depth_func = "=="
+    with stencil.zeroed_counts(gl, count_mask):
+        for first, count in progs.geometry.spans(progs.unreceiving):
+            progs.receivers_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
+    ctx.depth_func = NEARER
 
 
 def mask_pass(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
@@ -433,11 +442,8 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
     zeroing mark), and is not cleared again.
 
     `count_mask`: the default counting keeps the count in these low bits of the stencil only
-    (`stencil.mask_layout`: the mask-only frame's bits are above them).
-
-    Only the objects that cast shadows are counted (`Object.cast_shadows`); `receivers` (the
-    frame's programs): then the objects that receive none are drawn again, their visible
-    pixels' counts set to 0 (`stencil.zeroed_counts`)."""
+    (`stencil.mask_layout`: the mask-only frame's bits are above them).  Only casting objects
+    count; `receivers`: then `zero_unreceiving` (the shadow switches)."""
     if counting is None:
         def counting(zfail_group: bool, depth_clamp: bool):
             return (stencil.zfail_counting(gl, depth_clamp=depth_clamp, count_mask=count_mask)
@@ -476,10 +482,6 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
             volumes.draw_caps(by_zfail, near=False, each=each)
         with counting(True, False):
             volumes.draw_caps(by_zfail, near=True, each=each)
-    if receivers is not None and receivers.receivers is not None:
-        ctx.depth_func = "=="   # the geometry pass's own depths: the same shader and vertices
-        with stencil.zeroed_counts(gl, count_mask):
-            _draw_soup_of(receivers.geometry, receivers.receivers_vao, receivers.unreceiving)
-        ctx.depth_func = NEARER
+    zero_unreceiving(ctx, gl, receivers, count_mask)
     if fbo is None:
         target.use()
