@@ -181,9 +181,10 @@ class Renderer:
 
     @property
     def count_bound(self) -> int:
-        """`overflow.count_bound` of the scene: below 256 no stencil count can wrap."""
+        """`overflow.count_bound` of the casting objects: below 256 no count can wrap."""
         if self._count_bound is None:
-            self._count_bound = overflow.count_bound(self.geometry.topologies)
+            self._count_bound = overflow.count_bound(
+                t for t, casts in zip(self.geometry.topologies, self.geometry.casts) if casts)
         return self._count_bound
 
     def _srgb_background(self) -> tuple[int, int, int]:

@@ -29,7 +29,9 @@ from builders import (
 from raytrace.groundtruth import ground_truth
 from shadowvol.compare.maskdiff import edge_pixels
 from shadowvol.fields import decode_casters
+from shadowvol.primitives import mesh, plane
 from shadowvol.raster.renderer import Renderer
+from shadowvol.scene import Camera, PointLight, Scene
 
 pytestmark = pytest.mark.gl
 
@@ -107,3 +109,30 @@ def test_mask_only_frames_switch_the_same(ctx, name):
                 np.testing.assert_array_equal(masks.coverage, full.coverage)
             r.masks_in_stencil = True
         assert (full.lit != r.render(shadows=False, outputs=("lit",)).lit).any()
+
+
+def test_objects_that_cast_nothing_count_nothing(ctx, monkeypatch, assert_masks_match):
+    """256 stacked sheets (one mesh) over a floor would wrap the stencil; switched off they
+    add nothing to the counts' bound (`Renderer.count_bound`), so the overflow check never
+    runs, and the floor under them is lit as the ray tracer says, by both methods."""
+    from shadowvol.raster import overflow
+
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("the overflow check ran")
+
+    corners = np.array([[-0.5, 0, -0.5], [0.5, 0, -0.5], [0.5, 0, 0.5], [-0.5, 0, 0.5]])
+    z = np.linspace(1.0, 2.0, 256)
+    v = corners[None] + np.stack([np.zeros_like(z), z, np.zeros_like(z)], 1)[:, None]
+    f = np.array([[0, 1, 2], [0, 2, 3]])[None] + 4 * np.arange(256)[:, None, None]
+    scene = Scene(camera=Camera(eye=[0, 0.8, 3.0], target=[0, 0, 0], fov_y=60),
+                  objects=[plane("floor", size=[6, 6]),
+                           mesh("sheets", v.reshape(-1, 3), f.reshape(-1, 3))],
+                  lights=[PointLight([0.1, 4.0, 0.05])], width=64, height=48)
+    scene = switched(scene, cast=[1])
+    ref = ground_truth(scene, ("object_id",))
+    assert (ref.lit[0] & (ref.object_id == 1)).sum() > 100   # the floor under them is lit
+    monkeypatch.setattr(overflow, "find_wrapped", must_not_run)
+    with Renderer(scene, ctx) as r:
+        assert r.count_bound == 2
+        for method in ("auto", "zfail"):
+            assert_masks_match(r.render(method), ref.lit, ref.coverage, method)
