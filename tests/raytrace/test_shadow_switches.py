@@ -9,7 +9,7 @@ lights):
 - a light's `shadows` off makes its lit its own facing output, the other lights unchanged;
 - the switched scenes against the float64 brute force (`exact`, which honours the switches
   as the definition says) within the masks' budget, the casters bit by bit off the edges;
-- Whitted's image: an unreceiving object's pixels are the image with every light's shadows
+- Whitted's image (and the ray tree's shadow verdicts): an unreceiving object's pixels are the image with every light's shadows
   off, to float64 rounding, and nothing else changes; switching every object's casting off gives the
   same image as switching every light's shadows off; a caster switched off changes the image
   only within a pixel of where the masks changed.
@@ -31,6 +31,7 @@ from exact import exact_casters
 from raytrace import whitted
 from raytrace.camera import primary_rays
 from raytrace.groundtruth import ground_truth
+from raytrace.raytree import BLOCKED, LIT, ray_tree
 from shadowvol.compare.maskdiff import count_edges, edge_pixels
 from shadowvol.fields import decode_casters
 
@@ -141,3 +142,28 @@ def test_whitted_cast_switch_changes_the_image_where_the_masks_change(before):
     near = edge_pixels(masks_changed) | masks_changed
     assert not (changed & ~near).any()
     assert (changed & masks_changed).sum() >= 0.9 * masks_changed.sum() > 0
+
+
+def test_the_ray_tree_gives_whitted_s_verdict_under_the_switches(before):
+    """A pixel deep in one hard light's shadow of one object alone: the ray tree's shadow ray
+    to that light is blocked, and lit once that object casts nothing, the object seen there
+    receives nothing, or the light casts nothing."""
+    n = len(SCENE.objects)
+    for i, j in ((i, j) for i in range(3) for j in range(n)):
+        bits = decode_casters(before.casters[i], n)
+        alone = bits[..., j] & ~np.delete(bits, j, axis=-1).any(-1)
+        deep = alone & ~edge_pixels(alone) & ~np.logical_or.reduce(
+            [edge_pixels(before.object_id == k) for k in range(n + 1)])
+        if deep.any():
+            break
+    y, x = np.argwhere(deep)[len(np.argwhere(deep)) // 2]
+    seen = int(before.object_id[y, x]) - 1
+
+    hard = SCENE.replace(lights=SCENE.lights[:3])   # the ray tree draws hard lights only
+
+    def verdict(scene):
+        return ray_tree(scene, int(x), int(y), max_depth=0).children[i].verdict
+
+    assert verdict(hard) == BLOCKED
+    for switches in (dict(cast=[j]), dict(receive=[seen]), dict(lights=[i])):
+        assert verdict(switched(hard, **switches)) == LIT, switches
