@@ -9,10 +9,11 @@ lights):
 - a light's `shadows` off makes its lit its own facing output, the other lights unchanged;
 - the switched scenes against the float64 brute force (`exact`, which honours the switches
   as the definition says) within the masks' budget, the casters bit by bit off the edges;
-- Whitted's image (and the ray tree's shadow verdicts): an unreceiving object's pixels are the image with every light's shadows
-  off, to float64 rounding, and nothing else changes; switching every object's casting off gives the
-  same image as switching every light's shadows off; a caster switched off changes the image
-  only within a pixel of where the masks changed.
+- Whitted's image: an unreceiving object's pixels are the image with every light's shadows
+  off, to float64 rounding, and nothing else changes; switching every object's casting off
+  gives the same image as switching every light's shadows off; a caster switched off changes
+  the image only within a pixel of where the masks changed; the ray tree's shadow verdicts
+  follow the switches.
 """
 
 from __future__ import annotations
