@@ -25,7 +25,7 @@ from shadowvol.fields import GROUND_TRUTH
 from shadowvol.io import GroundTruthFrame
 from shadowvol.scene import Scene, SceneError, hard_lights
 
-from .backends import NumpyBackend, TriangleBackend, for_each_tile, make_backend
+from .backends import TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
 from .masks import (
     MASK_TILE_RAYS,
@@ -37,6 +37,7 @@ from .masks import (
     _segments,
     scene_backend,
 )
+from .switches import backend_kind, receiving
 
 # An object's box is widened by this much of its largest coordinate (eye's frame) before a
 # segment is culled against it: float32 rounding of the corners (2**-24) and of the segment's
@@ -102,14 +103,16 @@ class _ObjectTracers:
     that misses the padded box cannot meet the object in float32 either)."""
 
     def __init__(self, scene: Scene, mask_tracer: MaskTracer):
-        kind = "numpy" if isinstance(mask_tracer.tracer, NumpyBackend) else "embree"
+        kind = backend_kind(mask_tracer.tracer)
         _, _, ids = scene.triangles()
         self.object = ids.astype(np.int64)
         self.first = np.searchsorted(self.object, np.arange(len(scene.objects) + 1))
-        # each object's own vertices and faces (its face k is scene triangle first[j] + k)
+        # each object's own vertices and faces (its face k is scene triangle first[j] + k);
+        # None for an object that casts no shadow (`Object.cast_shadows`): it blocks nothing
         local = [o.vertices - mask_tracer.origin for o in scene.objects]
-        self.tracers: list[TriangleBackend] = [make_backend(kind, v, o.faces)
-                                               for v, o in zip(local, scene.objects)]
+        self.tracers: list[TriangleBackend | None] = [
+            make_backend(kind, v, o.faces) if o.cast_shadows else None
+            for v, o in zip(local, scene.objects)]
         lo = np.array([v[o.faces.reshape(-1)].min(axis=0) for v, o in zip(local, scene.objects)])
         hi = np.array([v[o.faces.reshape(-1)].max(axis=0) for v, o in zip(local, scene.objects)])
         pad = BOX_PAD_RELATIVE * np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, keepdims=True)
@@ -189,7 +192,7 @@ def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: floa
     `casters` (L, H * W, K) uint64 when given.  Lit as `masks._lit` decides it: the segment
     past the lift unblocked, and then the float64 near piece a long lift skips
     (`masks._NearPieces`) unblocked too."""
-    seg = _segments(light, hit, reach)
+    seg = receiving(tracer, light.light, _segments(light, hit, reach), hit)
     own, fragile = hit.tri[seg.rays], hit.fragile[seg.rays]
     start = seg.start.copy() if casters is not None else seg.start
     tmax = None if seg.tmax is None else seg.tmax.copy()
@@ -235,6 +238,8 @@ def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarr
         inverse = 1.0 / direction64
     end = np.inf if tmax is None else tmax.astype(np.float64)
     for j, tracer in enumerate(objects.tracers):
+        if tracer is None:
+            continue
         mine = own_object == j
         near = _meets_box(start64, inverse, end, objects.lo[j], objects.hi[j]) | mine
         k = np.flatnonzero(near)
@@ -261,6 +266,8 @@ def _near_caster_bits(objects: _ObjectTracers, near, own: np.ndarray) -> np.ndar
     with np.errstate(divide="ignore"):
         inverse = 1.0 / direction
     for j, tracer in enumerate(objects.tracers):
+        if tracer is None:
+            continue
         mine = own_object == j
         ask = _meets_box(near.origin, inverse, near.tmax, objects.lo[j], objects.hi[j]) | mine
         if not ask.any():

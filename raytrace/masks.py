@@ -18,6 +18,7 @@ from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 
 from .backends import TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
+from .switches import receiving, switched_backend
 from .tolerances import (
     LIFT_HEIGHTS,
     OWN_HIT_RETRIES,
@@ -51,10 +52,11 @@ class MaskTracer(NamedTuple):
 def scene_backend(scene: Scene, backend: str = "embree") -> MaskTracer:
     """The scene's triangles in a backend, ready for `shadow_masks` (build once, trace often),
     in the float32 frame of `tolerances.frame_origin` (the eye): float64 coordinates minus the
-    origin, subtracted before anything is rounded."""
+    origin, subtracted before anything is rounded.  Objects switched off (`cast_shadows`,
+    `receive_shadows`) are traced as `raytrace.switches` says."""
     vertices, faces, _ = scene.triangles()
     origin = frame_origin(scene)
-    tracer = make_backend(backend, vertices - origin, faces)
+    tracer = switched_backend(scene, make_backend(backend, vertices - origin, faces), origin)
     return MaskTracer(tracer, _Triangles.of(tracer), origin)
 
 
@@ -300,7 +302,7 @@ def _near_blocked(tracer: TriangleBackend, near: _NearPieces, own: np.ndarray) -
 def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) -> np.ndarray:
     """(h,) bool: which of the tile's hit points the light reaches: facing it, and their
     shadow ray (`_segments`) not blocked by a triangle other than their own (`_blocked`)."""
-    seg = _segments(local, hit, reach)
+    seg = receiving(tracer, local.light, _segments(local, hit, reach), hit)
     out = seg.facing.copy()
     out[seg.rays] = ~_blocked(tracer, seg.start, seg.direction, seg.tmax, hit.tri[seg.rays],
                               hit.fragile[seg.rays])

@@ -134,7 +134,7 @@ def _trace(world: World, scene: Scene, o: np.ndarray, d: np.ndarray, kind: str, 
     last = depth == max_depth
     node.contribution = (weight if last else weight * (1.0 - refl - transp)) * node.local
     for i, light in enumerate(scene.lights):
-        node.children.append(_shadow_node(world, scene, i, light, p, n, depth, weight))
+        node.children.append(_shadow_node(world, scene, i, light, p, n, depth, weight, obj))
     if last:
         return node
     sec = secondary_rays(world, p, n, d, entering, obj)
@@ -149,9 +149,10 @@ def _trace(world: World, scene: Scene, o: np.ndarray, d: np.ndarray, kind: str, 
 
 
 def _shadow_node(world: World, scene: Scene, i: int, light, p, n, depth: int,
-                 weight: float) -> RayNode:
-    """The shadow ray from the hit p, n (1, 3) to light i, with whitted's verdict."""
-    rays = shadow_rays(world, light, p, n)
+                 weight: float, obj: np.ndarray | None = None) -> RayNode:
+    """The shadow ray from the hit p, n (1, 3) on object obj (1,) to light i, with whitted's
+    verdict (the shadow switches included: `whitted.shadow_rays`)."""
+    rays = shadow_rays(world, light, p, n, obj)
     o, d = rays.origin[0].copy(), np.array(rays.direction[0])
     node = RayNode(SHADOW, o, d, depth, weight, light=i)
     if not rays.facing[0]:

@@ -110,6 +110,15 @@ class World:
             faces = np.concatenate([objs[i].faces + off for i, off in zip(meshes, offsets)])
             self.tri_object = np.concatenate([np.full(len(objs[i].faces), i) for i in meshes])
             self.tracer = make_backend(backend, vertices, faces)
+        # the shadow switches: shadow rays meet the casting objects only, and are not cast
+        # from an object that receives none (`Object.cast_shadows`, `receive_shadows`)
+        self.receives = np.array([o.receive_shadows for o in objs], bool)
+        self.occluders, self.shadow_tracer = self.analytic, self.tracer
+        if not all(o.cast_shadows for o in objs):
+            self.occluders = [(i, a) for i, a in self.analytic if objs[i].cast_shadows]
+            casting = [i for i in meshes if objs[i].cast_shadows]
+            self.shadow_tracer = None if not casting else make_backend(
+                backend, vertices, faces[np.isin(self.tri_object, casting)])
         m = [o.material for o in objs]
         self.ka = np.array([x.ambient for x in m])
         self.kd = np.array([x.diffuse for x in m])
@@ -160,15 +169,16 @@ class World:
         """(n,) bool: does any object lie on the rays o + λd, 0 < λ < tmax (None: anywhere)?"""
         bound = np.inf if tmax is None else tmax
         blocked = np.zeros(len(o), bool)
-        for _, shape in self.analytic:
+        for _, shape in self.occluders:
             if isinstance(shape, Sphere):
                 lam = ray_sphere(o, d, shape.center, shape.radius)
             else:
                 lam = ray_parallelogram(o, d, shape.origin, shape.edge_u, shape.edge_v)
             blocked |= lam < bound
-        if self.tracer is not None:
+        if self.shadow_tracer is not None:
             rest = np.flatnonzero(~blocked)
-            blocked[rest] = self.tracer.occluded(o[rest], d[rest], tmax, parallel=self.parallel)
+            blocked[rest] = self.shadow_tracer.occluded(o[rest], d[rest], tmax,
+                                                        parallel=self.parallel)
         return blocked
 
 
@@ -205,9 +215,11 @@ class ShadowRays:
         return self.facing & self.in_cone & ~self.blocked
 
 
-def shadow_rays(world: World, light, p: np.ndarray, n: np.ndarray) -> ShadowRays:
+def shadow_rays(world: World, light, p: np.ndarray, n: np.ndarray,
+                obj: np.ndarray | None = None) -> ShadowRays:
     """Shadow rays from points p (k, 3) with unit normals n (k, 3) facing the viewer toward
-    `light`; see `ShadowRays`."""
+    `light`; see `ShadowRays`.  obj (k,): the points' objects, none of whose points casts a
+    ray when it receives no shadow (nor any point when the light casts none)."""
     start = p + world.offset * n  # shadow rays leave on the viewer's side (n·l > 0 there)
     if isinstance(light, DirectionalLight):
         to_light = np.broadcast_to(-light.direction, p.shape)
@@ -224,7 +236,8 @@ def shadow_rays(world: World, light, p: np.ndarray, n: np.ndarray) -> ShadowRays
     in_cone = np.ones(len(p), bool)
     if isinstance(light, SpotLight):
         in_cone = dot(-l, light.direction) >= light.cos_cutoff
-    c = np.flatnonzero(facing & in_cone)
+    cast = facing & in_cone & light.shadows
+    c = np.flatnonzero(cast if obj is None else cast & world.receives[obj])
     blocked = np.zeros(len(p), bool)
     blocked[c] = world.occluded(start[c], direction[c], tmax)
     return ShadowRays(l, n_dot_l, facing, in_cone, start, direction, tmax, blocked)
@@ -236,7 +249,7 @@ def local_colour(world: World, scene: Scene, p, n, view, obj) -> np.ndarray:
     colour = world.ka[obj] * scene.ambient
     # an area light is its samples, each weighted by its share and its cosine at the light
     for light in (hard for lt in scene.lights for hard in hard_lights(lt)):
-        rays = shadow_rays(world, light, p, n)
+        rays = shadow_rays(world, light, p, n, obj)
         c = np.flatnonzero(rays.visible)
         l, n_dot_l = rays.to_light, rays.n_dot_l
         r = reflect(-l[c], n[c])  # the light's direction mirrored about n

@@ -134,6 +134,13 @@ def num(value, key: str, *, low: float | None = None, high: float | None = None,
     return x
 
 
+def flag(value, key: str) -> bool:
+    """A switch: true or false exactly (no 0, 1 or string), or a SceneError naming `key`."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise SceneError(key, f"expected true or false, got {shorten(value)}")
+    return bool(value)
+
+
 def unit(v: np.ndarray, key: str) -> np.ndarray:
     length = float(np.linalg.norm(v))
     if length == 0.0 or not math.isfinite(length):

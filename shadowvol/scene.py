@@ -25,6 +25,7 @@ import numpy as np
 from shadowvol.checks import (  # noqa: F401 (re-exported)
     MAX_MAGNITUDE,
     SceneError,
+    flag,
     frozen,
     is_number,
     num,
@@ -151,6 +152,9 @@ class Object:
     faces    : (m, 3) int64, read-only, indices into `vertices`; winding is not trusted by the
                renderers (surfaces are two-sided)
     analytic : the exact shape the triangles tessellate, or None for meshes
+    cast_shadows    : False: it blocks no light (no shadow volume, no shadow ray); still seen
+    receive_shadows : False: it is lit as if nothing blocked its lights (docs/CONVENTIONS.md,
+                      "Shadow switches")
     """
 
     name: str
@@ -158,8 +162,12 @@ class Object:
     faces: np.ndarray
     material: Material = field(default_factory=Material)
     analytic: Analytic | None = None
+    cast_shadows: bool = True
+    receive_shadows: bool = True
 
     def __post_init__(self):
+        for key in ("cast_shadows", "receive_shadows"):
+            object.__setattr__(self, key, flag(getattr(self, key), key))
         v = np.array(self.vertices, dtype=np.float64)
         f = np.array(self.faces)
         if v.ndim != 2 or v.shape[1] != 3:

@@ -9,6 +9,8 @@ here) `shadowvol.scenefile_write`.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import json
 import tomllib
 from pathlib import Path
@@ -57,15 +59,17 @@ RENDER_KEYS = {"max_depth"}
 MATERIAL_KEYS = {"ambient", "diffuse", "specular", "shininess", "reflectivity", "transparency",
                  "ior", "emission", "roughness"}
 LIGHT_KEYS = {
-    "point": {"type", "position", "color", "intensity"},
-    "directional": {"type", "direction", "color", "intensity"},
-    "spot": {"type", "position", "direction", "cone_angle", "color", "intensity"},
+    "point": {"type", "position", "color", "intensity", "shadows"},
+    "directional": {"type", "direction", "color", "intensity", "shadows"},
+    "spot": {"type", "position", "direction", "cone_angle", "color", "intensity", "shadows"},
 }
-AREA_KEYS = {"type", "center", "color", "intensity", "samples", "pattern", "seed"}
+AREA_KEYS = {"type", "center", "color", "intensity", "samples", "pattern", "seed", "shadows"}
 LIGHT_KEYS.update({"rect": AREA_KEYS | {"normal", "size"}, "disk": AREA_KEYS | {"normal", "radius"},
                    "sphere": AREA_KEYS | {"radius"}})
 TRANSFORM_KEYS = {"scale", "rotation", "translation"}
-COMMON_OBJECT_KEYS = {"type", "name", "material", "transform"}
+# the shadow switches (docs/CONVENTIONS.md, "Shadow switches"); an object's default: true
+SWITCH_KEYS = ("cast_shadows", "receive_shadows")
+COMMON_OBJECT_KEYS = {"type", "name", "material", "transform", *SWITCH_KEYS}
 OBJECT_KEYS = {
     "mesh": COMMON_OBJECT_KEYS | {"path", "vertices", "faces"},
     "sphere": COMMON_OBJECT_KEYS | {"center", "radius", "subdivisions"},
@@ -281,7 +285,18 @@ def light_from_dict(value, key: str = "light"):
 def _object(value, key: str, named: dict[str, Material], base_dir: Path,
             max_mesh_bytes: int = MAX_MESH_FILE_BYTES) -> list[Object]:
     """The objects of one `[[objects]]` entry: one, or for a mesh file of several parts (glTF
-    nodes, the meshes of a multi-mesh file) one per part (`scenefile_mesh.read_mesh`)."""
+    nodes, the meshes of a multi-mesh file) one per part (`scenefile_mesh.read_mesh`), each
+    with the entry's shadow switches."""
+    parts = _object_parts(value, key, named, base_dir, max_mesh_bytes)
+    switches = {k: value[k] for k in SWITCH_KEYS if k in value}
+    if not switches:
+        return parts
+    return [_build(key, functools.partial(dataclasses.replace, part), **switches)
+            for part in parts]
+
+
+def _object_parts(value, key: str, named: dict[str, Material], base_dir: Path,
+                  max_mesh_bytes: int = MAX_MESH_FILE_BYTES) -> list[Object]:
     table, kind = _typed(value, key, OBJECT_KEYS, "object")
     name = table.get("name", f"{kind}{key[len('objects'):]}")
     if not isinstance(name, str):

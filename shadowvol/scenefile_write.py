@@ -34,7 +34,9 @@ def scene_to_dict(scene: Scene) -> dict:
                 **({"roughness": m.roughness} if m.roughness else {})}
 
     def light(lt) -> dict:
-        out = {"color": lt.color.tolist(), "intensity": lt.intensity}
+        # the shadow switches only where off: files without them stay as they were
+        out = {"color": lt.color.tolist(), "intensity": lt.intensity,
+               **({} if lt.shadows else {"shadows": False})}
         if isinstance(lt, PointLight):
             return {"type": "point", "position": lt.position.tolist(), **out}
         if isinstance(lt, DirectionalLight):
@@ -62,7 +64,9 @@ def scene_to_dict(scene: Scene) -> dict:
         "render": {"max_depth": int(scene.max_depth)},
         "lights": [light(lt) for lt in scene.lights],
         "objects": [{"type": "mesh", "name": o.name, "vertices": o.vertices.tolist(),
-                     "faces": o.faces.tolist(), "material": material(o.material)}
+                     "faces": o.faces.tolist(), "material": material(o.material),
+                     **{k: False for k in ("cast_shadows", "receive_shadows")
+                        if not getattr(o, k)}}
                     for o in scene.objects],
     }
 

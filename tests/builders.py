@@ -398,3 +398,92 @@ def mixed_scene(seed: int, lights: int = 3) -> Scene:
                                intensity=0.3)]
     return Scene(camera=Camera(eye=[0, 4, 9], target=[0, 0.8, 0]), objects=objects,
                  lights=[kinds[i % 3]() for i in range(lights)], width=96, height=72)
+
+
+# ---- shadow switches (docs/CONVENTIONS.md, "Shadow switches") ---------------------------
+
+def overlapping_shadows(width: int = 80, height: int = 60) -> Scene:
+    """A floor (object 0), a post (1), a ball (2) and a card (3) above them whose shadows
+    overlap on the floor and on each other, under a point, a directional, a spot and a rect
+    area light of 4 samples."""
+    objects = [plane("floor", size=[8, 8]), box("post", [0.0, 0.75, 0.0], [0.5, 1.5, 0.5]),
+               sphere("ball", [0.7, 0.55, 0.5], 0.45, subdivisions=2),
+               plane("card", point=[0.3, 2.2, 0.3], size=[1.0, 1.0])]
+    lights = [PointLight([1.5, 4.0, 1.5], intensity=0.4),
+              DirectionalLight([-0.3, -1.0, -0.2], intensity=0.4),
+              SpotLight([-1.0, 4.0, 1.0], [0.2, -1.0, -0.2], cone_angle=40, intensity=0.4),
+              AreaLight("rect", [0.5, 4.0, 0.5], normal=[0.0, -1.0, 0.0], size=[1.0, 1.0],
+                        samples=4, intensity=0.4)]
+    return Scene(camera=Camera(eye=[0.5, 4.0, 5.0], target=[0.2, 0.6, 0.0], fov_y=45.0),
+                 objects=objects, lights=lights, width=width, height=height)
+
+
+def switched(scene: Scene, cast=(), receive=(), lights=()) -> Scene:
+    """`scene` with `cast_shadows` off for the objects `cast`, `receive_shadows` off for the
+    objects `receive` and `shadows` off for the lights `lights` (indices)."""
+    import dataclasses
+
+    objects = [dataclasses.replace(o, **({"cast_shadows": False} if k in cast else {}),
+                                   **({"receive_shadows": False} if k in receive else {}))
+               if k in cast or k in receive else o for k, o in enumerate(scene.objects)]
+    return scene.replace(objects=objects, lights=[
+        dataclasses.replace(lt, shadows=False) if k in lights else lt
+        for k, lt in enumerate(scene.lights)])
+
+
+def check_cast_switch(before, after, j: int, objects: int) -> np.ndarray:
+    """One renderer's frames (lit, lit_count, facing_count, casters, object_id, coverage)
+    before and after object j's `cast_shadows` is turned off: every bit of casters but j's
+    unchanged and j's cleared; where j alone shadowed a pixel (no other bit) it is lit by
+    every facing sample, where j's bit was not set nothing changed, elsewhere the count only
+    rose; the rest unchanged.  Returns `alone` (L, H, W) bool."""
+    from shadowvol.fields import decode_casters
+
+    bits = decode_casters(before.casters, objects)
+    others = np.delete(bits, j, axis=-1).any(-1)
+    alone = bits[..., j] & ~others
+    want = bits.copy()
+    want[..., j] = False
+    np.testing.assert_array_equal(decode_casters(after.casters, objects), want)
+    changed = after.lit_count != before.lit_count
+    assert not (changed & ~bits[..., j]).any(), "a count changed where j cast nothing"
+    np.testing.assert_array_equal(after.lit_count[alone], before.facing_count[alone])
+    assert (after.lit_count >= before.lit_count).all()
+    hard = before.samples == 1
+    np.testing.assert_array_equal(after.lit[hard], before.lit[hard] | alone[hard])
+    for name in ("coverage", "facing_count", "object_id"):
+        np.testing.assert_array_equal(getattr(after, name), getattr(before, name))
+    # the scene tests something: j alone, and j with another caster
+    assert alone.any() and (bits[..., j] & others).any()
+    return alone
+
+
+def check_receive_switch(before, after, k: int) -> np.ndarray:
+    """The same for object k's `receive_shadows` off: on k's pixels every light's count is
+    its facing count and no caster is named; everywhere else nothing changed.  Returns k's
+    pixels (H, W) bool."""
+    own = before.object_id == k + 1
+    np.testing.assert_array_equal(after.lit_count[:, own], before.facing_count[:, own])
+    assert not after.casters[:, own].any()
+    np.testing.assert_array_equal(after.lit_count[:, ~own], before.lit_count[:, ~own])
+    np.testing.assert_array_equal(after.casters[:, ~own], before.casters[:, ~own])
+    for name in ("coverage", "facing_count", "object_id"):
+        np.testing.assert_array_equal(getattr(after, name), getattr(before, name))
+    assert (before.lit_count[:, own] < before.facing_count[:, own]).any()   # k had shadow
+    return own
+
+
+def check_light_switch(before, after, i: int) -> None:
+    """The same for light i's `shadows` off: its lit is its own facing output (coverage ∧
+    n·l > 0 toward some sample, inside the cone) for every sample (lit_count ==
+    facing_count), no caster is named for it; every other light unchanged."""
+    np.testing.assert_array_equal(after.lit_count[i], before.facing_count[i])
+    np.testing.assert_array_equal(after.lit[i], before.facing_count[i] == before.samples[i])
+    if before.samples[i] == 1:
+        np.testing.assert_array_equal(after.lit[i], before.facing[i] & before.coverage)
+    assert not after.casters[i].any()
+    others = [m for m in range(len(before.lit)) if m != i]
+    for name in ("lit", "lit_count", "casters"):
+        np.testing.assert_array_equal(getattr(after, name)[others],
+                                      getattr(before, name)[others])
+    assert (before.lit_count[i] < before.facing_count[i]).any()   # it had shadow

@@ -111,6 +111,9 @@ class SceneGeometry:
         self.bounds = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)]
                                 for o in scene.objects])
         self.extent = scene.extent  # a property of the scene that walks every vertex: once
+        # the shadow switches (`Object.cast_shadows`, `receive_shadows`): (n_objects,) bool
+        self.casts = np.array([o.cast_shadows for o in scene.objects], bool)
+        self.receives = np.array([o.receive_shadows for o in scene.objects], bool)
         self._reach: dict[int, np.ndarray] = {}     # per far object, its triangles' reach
         self._far_corners: dict[int, np.ndarray] = {}   # and its frame corners (`set_view`)
         self._corners64: np.ndarray | None = None   # `soup_corners_f64`, made on first use

@@ -156,8 +156,8 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
     # way); the casters its samples counted with z-fail stay z-fail (valid)
     for i, k, light in ((i, k, hard) for i, lt in enumerate(lights)
                         for k, hard in enumerate(hard_lights(lt))):
-        if only is not None and (i, k) not in only:
-            continue   # its `light_bound` is below STENCIL_LIMIT
+        if only is not None and (i, k) not in only or not light.shadows:
+            continue   # its `light_bound` is below STENCIL_LIMIT, or it is never counted
         light4 = light.homogeneous
         if vols.light4 is None or not np.array_equal(vols.light4, light4):
             vols.prepare(light4)  # (the frame's last light is still prepared)

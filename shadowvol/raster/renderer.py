@@ -181,9 +181,10 @@ class Renderer:
 
     @property
     def count_bound(self) -> int:
-        """`overflow.count_bound` of the scene: below 256 no stencil count can wrap."""
+        """`overflow.count_bound` of the casting objects: below 256 no count can wrap."""
         if self._count_bound is None:
-            self._count_bound = overflow.count_bound(self.geometry.topologies)
+            self._count_bound = overflow.count_bound(
+                t for t, casts in zip(self.geometry.topologies, self.geometry.casts) if casts)
         return self._count_bound
 
     def _srgb_background(self) -> tuple[int, int, int]:
@@ -281,7 +282,7 @@ class Renderer:
         view_proj, origin = frame_view_projection(camera, self.scene.aspect)
         self.geometry.move_to(origin)
         self.geometry.set_view(view_proj, camera.near)   # huge triangles cut (`guard`)
-        passes.set_camera((self.programs.gbuffer, *vols.programs), view_proj, camera, origin)
+        passes.set_camera((*self.programs.framed, *vols.programs), view_proj, camera, origin)
         cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
                                 self.geometry.extent) if self.cull_back_faces else None
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
@@ -346,12 +347,12 @@ class Renderer:
             light4 = light.homogeneous
             choice = methods.choose(plan.method, self.geometry.bounds, camera,
                                     self.scene.aspect, light4, self.geometry.extent)
-            if shadows:
+            if shadows and light.shadows:   # a light switched off: its bit stays facing
                 vols.prepare(light4)
                 # the counts are 0: the mask pass cleared them, and each light's clear but the
                 # last zeroes them again (`stencil.where_shadowed`)
                 passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                     halve=plan.halve, clip_planes=clip,
+                                     halve=plan.halve, clip_planes=clip, receivers=progs,
                                      fbo=target.mark_fbo, clear=False, count_mask=count_mask)
                 if not in_stencil:
                     passes.clear_shadowed(self.ctx, self.gl, target, progs, k,
@@ -398,12 +399,12 @@ class Renderer:
                 light4 = light.homogeneous
                 choice = methods.choose(plan.method, self.geometry.bounds, camera,
                                         self.scene.aspect, light4, self.geometry.extent)
-                if shadows:
+                if shadows and light.shadows:
                     vols.prepare(light4)
                     # halving is safe only for casters `auto` chose z-pass for, and only when
                     # the counts themselves are not returned (see passes.count_volumes)
                     passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                         halve=plan.halve,
+                                         halve=plan.halve, receivers=progs,
                                          clip_planes=clip,
                                          # counted where it is marked: no framebuffer
                                          # change between the page's lights (llvmpipe
@@ -452,7 +453,7 @@ class Renderer:
         with stencil_gl.zero_to_one_depth(self.gl):
             for i, light in ((i, hard) for i, lt in enumerate(self.scene.lights if lights is None
                                                               else lights)
-                             for hard in hard_lights(lt)):  # an area light: every sample's
+                             for hard in hard_lights(lt) if hard.shadows):  # every sample
                 vols.prepare(light.homogeneous)
                 overlay.draw_volume_overlay(self.ctx, self.gl, self.target, vols,
                                             result.zfail[i])
