@@ -220,7 +220,7 @@ def supersampled(render, scene, width: int, height: int, samples: int,
 def project(scene, points4: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(n, 4) homogeneous world points -> (n, 2) pixel coordinates of `scene`'s image (x right,
     y down) and (n,) clip w (> 0: in front of the eye)."""
-    clip = np.asarray(points4, np.float64) @ view_projection(scene.camera, scene.aspect).T
+    clip = np.asarray(points4, np.float64) @ view_projection(scene.camera, scene.size).T
     w = clip[:, 3]
     safe = np.where(np.abs(w) < 1e-12, 1e-12, w)
     ndc = clip[:, :2] / safe[:, None]
@@ -334,7 +334,7 @@ def clip_near(points4: np.ndarray, w_min: float = 1e-6) -> np.ndarray:
 def polygon_pixels(scene, corners4: np.ndarray) -> np.ndarray:
     """(n, 4) homogeneous world corners (w = 0: at infinity) of a convex polygon -> (k, 2)
     pixel coordinates of its part in front of the eye (k = 0 when none is)."""
-    clip = np.asarray(corners4, np.float64) @ view_projection(scene.camera, scene.aspect).T
+    clip = np.asarray(corners4, np.float64) @ view_projection(scene.camera, scene.size).T
     clip = clip_near(clip)
     if len(clip) == 0:
         return np.zeros((0, 2))
