@@ -398,3 +398,24 @@ def mixed_scene(seed: int, lights: int = 3) -> Scene:
                                intensity=0.3)]
     return Scene(camera=Camera(eye=[0, 4, 9], target=[0, 0.8, 0]), objects=objects,
                  lights=[kinds[i % 3]() for i in range(lights)], width=96, height=72)
+
+
+def camera_from_matrices(K, camera_to_world, near: float = 0.05) -> Camera:
+    """The camera a dataset user reads back from a frame's K (3, 3) and camera_to_world
+    (4, 4) (docs/CONVENTIONS.md, "Camera matrices"); `near` is not in them."""
+    return Camera(fx=K[0, 0], fy=K[1, 1], cx=K[0, 2], cy=K[1, 2],
+                  camera_to_world=camera_to_world, near=near)
+
+
+def off_centre(scene: Scene, aspect: float = 1.3, shift=(0.21, -0.16)) -> Scene:
+    """`scene` seen through non-square pixels and an off-centre principal point: its look-at
+    camera's pose, fx = `aspect` * fy (fy its focal length in pixels), and the principal
+    point moved from the image centre by `shift` (fractions of the width and the height)."""
+    from shadowvol.cameras import calibration
+
+    cal = calibration(scene)
+    f = cal.K[1, 1]
+    camera = Camera(fx=aspect * f, fy=f, cx=scene.width * (0.5 + shift[0]),
+                    cy=scene.height * (0.5 + shift[1]), camera_to_world=cal.camera_to_world,
+                    near=scene.camera.near)
+    return scene.replace(camera=camera)
