@@ -188,3 +188,22 @@ def test_a_new_image_size_scales_the_intrinsics():
     assert scene.replace(width=50).camera is c
     look_at = cards_scene(width=50, height=30)
     assert look_at.replace(width=100).camera is look_at.camera
+
+
+def test_the_documented_matrix_camera_loads_and_is_calibrated_toml():
+    """scenes/README.md's "Cameras by matrices" block is a real camera: the one of the example
+    scene calibrated.toml, whose frame's K and camera_to_world are the file's numbers."""
+    import tomllib
+
+    text = (ROOT / "scenes" / "README.md").read_text()
+    block = text.split("## Cameras by matrices\n", 1)[1].split("```toml\n", 1)[1]
+    table = tomllib.loads(block.split("```", 1)[0])["camera"]
+    scene = load_scene(ROOT / "scenes" / "calibrated.toml")
+    documented = Camera(**table)
+    for name in ("fx", "fy", "cx", "cy", "near"):
+        assert getattr(documented, name) == getattr(scene.camera, name), name
+    np.testing.assert_array_equal(documented.camera_to_world, scene.camera.camera_to_world)
+    cal = calibration(scene)
+    np.testing.assert_array_equal(cal.camera_to_world, table["camera_to_world"])
+    assert cal.K.tolist() == [[table["fx"], 0, table["cx"]], [0, table["fy"], table["cy"]],
+                              [0, 0, 1]]
