@@ -6,6 +6,7 @@
 - Independent of the renderers: points placed at known pixels by K and camera_to_world in
   float64 (non-square pixels, an off-centre principal point, a turned camera) are seen at
   those pixels, at their depth, with their normal, and unproject back onto themselves.
+- The masks through such a camera are the float64 brute force's (tests/exact.py).
 """
 
 from __future__ import annotations
@@ -22,9 +23,11 @@ from builders import (
     pixel_targets,
 )
 
+from exact import check_exact
+
 import raytrace
 from shadowvol.cli.raytrace import main as raytrace_main
-from shadowvol.scene import Camera
+from shadowvol.scene import Camera, DirectionalLight, PointLight
 from shadowvol.scenefile import load_scene, save_scene
 
 SIZE = dict(width=96, height=72)
@@ -90,3 +93,12 @@ def test_random_look_at_cameras_read_back_bit_for_bit(seed):
     for name, value in {**a.arrays(), "lit": a.lit, "coverage": a.coverage}.items():
         other = {**b.arrays(), "lit": b.lit, "coverage": b.coverage}[name]
         assert value.dtype == other.dtype and np.array_equal(value, other, equal_nan=True), name
+
+
+@pytest.mark.parametrize("light", ["directional", "point"])
+def test_off_centre_masks_are_the_float64_brute_forces(request, light):
+    """Non-square pixels and an off-centre principal point: Embree's masks against the float64
+    brute force of tests/exact.py (every triangle tried per pixel ray), under its budget."""
+    lamp = (DirectionalLight([0.3, -1.0, -0.2]) if light == "directional"
+            else PointLight([0.4, 3.0, 0.6]))
+    check_exact(request, off_centre(cards_scene(96, 72, lamp)))
