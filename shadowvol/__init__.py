@@ -27,7 +27,8 @@ _LAZY = {**{name: "shadowvol.scene" for name in ("Camera", "DirectionalLight", "
                                                  "SpotLight")},
          "example_scene": "shadowvol.resources",
          "Renderer": "shadowvol.raster.renderer", "render": "shadowvol.raster.renderer",
-         "load_scene": "shadowvol.scenefile", "from_trimesh": "shadowvol.trimesh_scene", "save_scene": "shadowvol.scenefile",
+         "load_scene": "shadowvol.scenefile", "save_scene": "shadowvol.scenefile",
+         "from_trimesh": "shadowvol.trimesh_scene",
          "save_png": "shadowvol.io", "save_masks": "shadowvol.io", "show": "shadowvol.display"}
 
 

@@ -36,7 +36,8 @@ FAR_APEX_EXTENTS = 1e6
 ZPASS_BOX_MARGIN = 1e-3
 
 
-def near_clip_planes(camera: Camera, size: tuple[float, float], light4: np.ndarray) -> np.ndarray | None:
+def near_clip_planes(camera: Camera, size: tuple[float, float], light4: np.ndarray
+                     ) -> np.ndarray | None:
     """(5, 4) float64 planes (n, d) of the near-clip volume, n . x + d <= 0 inside, or None
     when the light lies in the near plane (degenerate hull)."""
     rect = near_rectangle(camera, size)                                 # (4, 3)
