@@ -8,6 +8,7 @@ was given, bit for bit; `Scene.replace` to a new size scales the intrinsics with
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -155,7 +156,7 @@ def test_a_camera_mixing_the_forms_in_python_is_refused():
         Camera(eye=[0, 0, 1], **{**GOOD, "camera_to_world": np.array(POSE)})
     camera = Camera(**GOOD)
     with pytest.raises(SceneError, match="eye: mixes"):   # moving it by its look-at keys
-        camera.__class__(**{**camera.__dict__, "eye": np.zeros(3)})
+        dataclasses.replace(camera, eye=np.zeros(3))
     assert Camera(**GOOD).translated([1, 2, 3]).eye.tolist() == [7.0, 3.0, 3.5]
 
 
