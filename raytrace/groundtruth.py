@@ -142,8 +142,7 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     # the output normals: world-space (b − a) × (c − a), normalised in float64 (CONVENTIONS),
     # not the frame's (the same up to rounding, and the same sign: `hit.side` turns either)
     world_normals = face_normals(vertices[faces]) if "normal" in out else None
-    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
-                                 target=scene.camera.target - origin)
+    camera = scene.camera.translated(-origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     # every sample of every light, as the light it counts for and a hard light
     lights = [(i, _local_light(sample, origin, triangles))

@@ -9,7 +9,6 @@ sphere is for images only.
 
 from __future__ import annotations
 
-import dataclasses
 from typing import NamedTuple
 
 import numpy as np
@@ -112,8 +111,7 @@ def shadow_masks(scene: Scene, backend: str | MaskTracer = "embree"
     coverage = np.zeros((H, W), bool)
     rows_per_tile = max(1, MASK_TILE_RAYS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
-    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
-                                 target=scene.camera.target - origin)
+    camera = scene.camera.translated(-origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     reach = scene.extent  # a ray that starts farther than this from its point has left the scene
     lights = [_local_light(light, origin, triangles) for light in scene.lights]

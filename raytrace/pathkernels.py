@@ -88,8 +88,7 @@ def tables(world) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 @_jit
-def _camera(eye, right, up, back, near, half_w, half_h, width, height, row0, rows, spp, jx, jy,
-            o, d):
+def _camera(eye, right, up, back, near, fx, fy, cx, cy, width, row0, rows, spp, jx, jy, o, d):
     """`pathtrace.camera_rays` for a tile's pixels (rows row0 .. row0 + rows, every column,
     spp times over, as `pathtrace.render` orders them) into o, d (n, 3) float64; jx, jy (n,)
     the jitter (0.5: the centres)."""
@@ -97,8 +96,8 @@ def _camera(eye, right, up, back, near, half_w, half_h, width, height, row0, row
     for _ in range(spp):
         for row in range(row0, row0 + rows):
             for col in range(width):
-                sx = ((col + jx[i]) / width * 2.0 - 1.0) * half_w
-                sy = (1.0 - (row + jy[i]) / height * 2.0) * half_h
+                sx = (col + jx[i] - cx) / fx
+                sy = (cy - (row + jy[i])) / fy
                 v0 = sx * right[0] + sy * up[0] - back[0]
                 v1 = sx * right[1] + sy * up[1] - back[1]
                 v2 = sx * right[2] + sy * up[2] - back[2]
@@ -116,20 +115,19 @@ def camera_rays(camera, width: int, height: int, rows: slice, spp: int,
     (the order `pathtrace.render` traces them): the same random numbers (or the jitter
     (jx, jy) given), the same rays, origins and directions (3, n) float64 (views of (n, 3)
     arrays)."""
-    from .camera import camera_basis
+    from .camera import camera_basis, pixel_focal
 
     right, up, back = camera_basis(camera)
+    fx, fy, cx, cy = pixel_focal(camera, width, height)
     n = (rows.stop - rows.start) * width * spp
     if jitter is not None:
         jx, jy = (np.ascontiguousarray(j, np.float64) for j in jitter)
     else:
         jx = rng.random(n) if rng is not None else np.full(n, 0.5)
         jy = rng.random(n) if rng is not None else np.full(n, 0.5)
-    half_h = math.tan(math.radians(camera.fov_y) / 2.0)
     o, d = np.empty((n, 3)), np.empty((n, 3))  # rows of (3, n) would alias in the cache
     _camera(np.asarray(camera.eye, np.float64), right, up, back, float(camera.near),
-            half_h * width / height, half_h, width, height, rows.start,
-            rows.stop - rows.start, spp, jx, jy, o, d)
+            fx, fy, cx, cy, width, rows.start, rows.stop - rows.start, spp, jx, jy, o, d)
     return o.T, d.T
 
 

@@ -18,8 +18,8 @@ import importlib
 __version__ = "0.2.0"
 
 __all__ = ["Camera", "DirectionalLight", "Material", "Object", "PointLight", "Renderer",
-           "Scene", "SceneError", "SpotLight", "__version__", "example_scene", "load_scene",
-           "render", "save_masks", "save_png", "save_scene", "show"]
+           "Scene", "SceneError", "SpotLight", "__version__", "example_scene", "from_trimesh",
+           "load_scene", "render", "save_masks", "save_png", "save_scene", "show"]
 
 # name -> the module that defines it, imported on first access (PEP 562)
 _LAZY = {**{name: "shadowvol.scene" for name in ("Camera", "DirectionalLight", "Material",
@@ -28,6 +28,7 @@ _LAZY = {**{name: "shadowvol.scene" for name in ("Camera", "DirectionalLight", "
          "example_scene": "shadowvol.resources",
          "Renderer": "shadowvol.raster.renderer", "render": "shadowvol.raster.renderer",
          "load_scene": "shadowvol.scenefile", "save_scene": "shadowvol.scenefile",
+         "from_trimesh": "shadowvol.trimesh_scene",
          "save_png": "shadowvol.io", "save_masks": "shadowvol.io", "show": "shadowvol.display"}
 
 

@@ -30,6 +30,7 @@ from shadowvol.checks import (  # noqa: F401 (re-exported)
     is_number,
     num,
     reject_unknown_keys,
+    rigid_matrix,
     shorten,
     unit,
     vec,
@@ -204,33 +205,66 @@ class Object:
 
 @dataclass(frozen=True, eq=False)
 class Camera:
-    """Look-at camera, OpenGL style (looks down its -z axis); see CONVENTIONS.md.
+    """A pinhole camera, OpenGL style (looks down its -z axis); see CONVENTIONS.md.  Given in
+    one of two forms, never both:
+
+    * look-at: `eye`, `target`, `up` (default +y) and the vertical field of view `fov_y` in
+      degrees (default 45): square pixels, the principal point at the image centre;
+    * matrices: intrinsics `fx`, `fy`, `cx`, `cy` (pixels, the `K` every frame carries:
+      u = fx X/Z + cx, v = fy Y/Z + cy in OpenCV camera axes, pixel (x, y) centred at
+      (x + 0.5, y + 0.5)) and `camera_to_world` (4, 4), OpenGL camera axes (x right, y up,
+      looking down -z) to world, rigid (`RIGID_TOLERANCE`), the matrix every frame carries.
+      Both are used as given, and every frame writes them back unchanged.  `eye`, `target`
+      (eye - the back axis) and `up` are then filled in from the matrix, and `fov_y` is None.
+      The intrinsics are pixels of the image rendered: `Scene.replace` with a new size scales
+      them with it.
 
     `aperture` (the lens radius, 0: a pinhole) and `focus_distance` (the eye-space depth of the
-    plane in focus; None: the distance to `target`) give Whitted's image depth of field
-    (`raytrace.camera.sample_rays`).  The rasterizer, every mask, the path tracer and radiosity
-    stay a pinhole.
+    plane in focus; None: the distance to `target`, which a matrix camera does not have) give
+    Whitted's image depth of field (`raytrace.camera.sample_rays`).  The rasterizer, every
+    mask, the path tracer and radiosity stay a pinhole.
     """
 
-    eye: np.ndarray
-    target: np.ndarray
-    up: np.ndarray = field(default_factory=lambda: vec([0, 1, 0], "up"))
-    fov_y: float = 45.0
+    eye: np.ndarray | None = None
+    target: np.ndarray | None = None
+    up: np.ndarray | None = None
+    fov_y: float | None = None
     near: float = 0.05
     aperture: float = 0.0
     focus_distance: float | None = None
+    fx: float | None = None
+    fy: float | None = None
+    cx: float | None = None
+    cy: float | None = None
+    camera_to_world: np.ndarray | None = None
 
     def __post_init__(self):
-        for name in ("eye", "target", "up"):
-            object.__setattr__(self, name, vec(getattr(self, name), name))
         object.__setattr__(self, "aperture", num(self.aperture, "aperture", low=0.0))
         if self.focus_distance is not None:
             object.__setattr__(self, "focus_distance", num(self.focus_distance,
                                                            "focus_distance", low=0.0,
                                                            low_open=True))
-        object.__setattr__(self, "fov_y", num(self.fov_y, "fov_y", low=0.0, high=179.0,
-                                              low_open=True))
         object.__setattr__(self, "near", num(self.near, "near", low=0.0, low_open=True))
+        if self.matrix_form:
+            self._check_matrices()
+        else:
+            self._check_look_at()
+
+    @property
+    def matrix_form(self) -> bool:
+        """Given by intrinsics and camera_to_world (some of those keys given), not look-at."""
+        return any(getattr(self, k) is not None for k in MATRIX_CAMERA_KEYS)
+
+    def _check_look_at(self) -> None:
+        for name in ("eye", "target"):
+            if getattr(self, name) is None:
+                raise SceneError(name, "missing (a camera needs eye and target, or fx, fy, "
+                                       "cx, cy and camera_to_world)")
+        object.__setattr__(self, "up", [0, 1, 0] if self.up is None else self.up)
+        for name in ("eye", "target", "up"):
+            object.__setattr__(self, name, vec(getattr(self, name), name))
+        object.__setattr__(self, "fov_y", num(45.0 if self.fov_y is None else self.fov_y,
+                                              "fov_y", low=0.0, high=179.0, low_open=True))
         view = self.target - self.eye
         if np.linalg.norm(view) == 0.0:
             raise SceneError("target", "eye and target are the same point")
@@ -241,12 +275,66 @@ class Camera:
         if sin < PARALLEL_TOLERANCE:
             raise SceneError("up", "up is parallel to the view direction (target - eye)")
 
+    def _check_matrices(self) -> None:
+        for name in MATRIX_CAMERA_KEYS:
+            if getattr(self, name) is None:
+                raise SceneError(name, "missing: a camera given by intrinsics needs fx, fy, "
+                                       "cx, cy and camera_to_world")
+        for name in ("fx", "fy"):
+            object.__setattr__(self, name, num(getattr(self, name), name, low=0.0,
+                                               low_open=True))
+        for name in ("cx", "cy"):
+            object.__setattr__(self, name, num(getattr(self, name), name))
+        m = rigid_matrix(self.camera_to_world, "camera_to_world")
+        object.__setattr__(self, "camera_to_world", m)
+        eye, up = frozen(m[:3, 3].copy()), frozen(m[:3, 1].copy())
+        target = frozen(eye - m[:3, 2])
+        # eye, target and up are the matrix's; given otherwise, they mix the two forms (a
+        # `dataclasses.replace` of another field passes them back unchanged)
+        for name, derived in (("eye", eye), ("target", target), ("up", up)):
+            value = getattr(self, name)
+            if value is not None and not np.array_equal(np.asarray(value, np.float64),
+                                                        derived):
+                raise SceneError(name, MIXED_FORMS)
+        if self.fov_y is not None:
+            raise SceneError("fov_y", MIXED_FORMS)
+        if self.aperture > 0.0 and self.focus_distance is None:
+            raise SceneError("focus_distance", "missing: a camera given by camera_to_world has "
+                                               "no target to focus on when aperture > 0")
+        object.__setattr__(self, "eye", eye)
+        object.__setattr__(self, "target", target)
+        object.__setattr__(self, "up", up)
+
     @property
     def focus(self) -> float:
         """The eye-space depth of the plane in focus: `focus_distance`, else |target - eye|."""
         if self.focus_distance is not None:
             return self.focus_distance
         return float(np.linalg.norm(self.target - self.eye))
+
+    def translated(self, offset) -> "Camera":
+        """The same camera moved by `offset` (3,) float64: eye (and target, or the matrix's
+        translation) + offset, each rounded once; everything else as it is."""
+        offset = np.asarray(offset, np.float64)
+        if not self.matrix_form:
+            return dataclasses.replace(self, eye=self.eye + offset, target=self.target + offset)
+        m = self.camera_to_world.copy()
+        m[:3, 3] += offset
+        return dataclasses.replace(self, camera_to_world=m, eye=None, target=None, up=None)
+
+    def scaled(self, sx: float, sy: float) -> "Camera":
+        """For an image sx times as wide and sy times as tall: a matrix camera's intrinsics
+        scaled with it (fx, cx by sx; fy, cy by sy); a look-at camera is unchanged."""
+        if not self.matrix_form or (sx == 1.0 and sy == 1.0):
+            return self
+        return dataclasses.replace(self, fx=self.fx * sx, cx=self.cx * sx, fy=self.fy * sy,
+                                   cy=self.cy * sy)
+
+
+MATRIX_CAMERA_KEYS = ("fx", "fy", "cx", "cy", "camera_to_world")
+LOOK_AT_CAMERA_KEYS = ("eye", "target", "up", "fov_y")
+MIXED_FORMS = ("mixes the two camera forms: give eye, target, up, fov_y or fx, fy, cx, cy, "
+               "camera_to_world, not both")
 
 
 @dataclass(frozen=True, eq=False)
@@ -289,6 +377,11 @@ class Scene:
     def aspect(self) -> float:
         return self.width / self.height
 
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) in pixels: what the camera's projection is of (`cameras.pinhole`)."""
+        return self.width, self.height
+
     def triangles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """All objects' triangles as one soup.
 
@@ -310,4 +403,10 @@ class Scene:
         return float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))) or 1.0
 
     def replace(self, **changes) -> "Scene":
+        """`dataclasses.replace`, except that a new width or height scales the intrinsics of a
+        matrix camera with the image (`Camera.scaled`), unless a camera is given too."""
+        if "camera" not in changes and ("width" in changes or "height" in changes):
+            changes["camera"] = self.camera.scaled(
+                changes.get("width", self.width) / self.width,
+                changes.get("height", self.height) / self.height)
         return dataclasses.replace(self, **changes)

@@ -20,6 +20,9 @@ import numpy as np
 from shadowvol import primitives
 from shadowvol.errors import out_of_memory_while
 from shadowvol.scene import (
+    LOOK_AT_CAMERA_KEYS,
+    MATRIX_CAMERA_KEYS,
+    MIXED_FORMS,
     AreaLight,
     Camera,
     DirectionalLight,
@@ -54,7 +57,8 @@ MAX_LIST_LENGTH = 1 << 24
 # Allowed keys per table; anything else is an error (a typo must not be silently ignored).
 TOP_KEYS = {"name", "image", "camera", "ambient", "render", "materials", "lights", "objects"}
 IMAGE_KEYS = {"width", "height", "background"}
-CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near", "aperture", "focus_distance"}
+CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near", "aperture", "focus_distance",
+               "fx", "fy", "cx", "cy", "camera_to_world"}
 RENDER_KEYS = {"max_depth"}
 MATERIAL_KEYS = {"ambient", "diffuse", "specular", "shininess", "reflectivity", "transparency",
                  "ior", "emission", "roughness"}
@@ -187,7 +191,7 @@ def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene
     if not isinstance(name, str):
         raise SceneError("name", f"expected a string, got {shorten(name)}")
     return _build("", Scene,
-                  camera=_build("camera", Camera, **camera),
+                  camera=camera_from_dict(camera, "camera"),
                   objects=[part for i, o in enumerate(objects)
                            for part in _object(o, f"objects[{i}]", named, base_dir,
                                                max_mesh_bytes)],
@@ -239,6 +243,18 @@ def _build(key: str, cls, **kwargs):
         return cls(**kwargs)
     except SceneError as exc:
         raise (exc.under(key) if key else exc) from None
+
+
+def camera_from_dict(table: dict, key: str = "camera") -> Camera:
+    """The camera of a `[camera]` table: look-at keys (eye, target, up, fov_y) or matrix keys
+    (fx, fy, cx, cy, camera_to_world), never some of both (`Camera`); SceneError naming
+    `key.<the key>` when it is wrong."""
+    table = _table(table, key, CAMERA_KEYS)
+    look_at = [k for k in LOOK_AT_CAMERA_KEYS if k in table]
+    matrices = [k for k in MATRIX_CAMERA_KEYS if k in table]
+    if look_at and matrices:
+        raise SceneError(f"{key}.{matrices[0]}", f"given with {look_at[0]}: {MIXED_FORMS}")
+    return _build(key, Camera, **table)
 
 
 def _material(value, key: str) -> Material:

@@ -51,13 +51,18 @@ def scene_to_dict(scene: Scene) -> dict:
                 "direction": lt.direction.tolist(), "cone_angle": lt.cone_angle, **out}
 
     cam = scene.camera
+    if cam.matrix_form:   # the form it was given in (the look-at keys are derived from it)
+        view = {"fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy,
+                "camera_to_world": cam.camera_to_world.tolist()}
+    else:
+        view = {"eye": cam.eye.tolist(), "target": cam.target.tolist(),
+                "up": cam.up.tolist(), "fov_y": cam.fov_y}
     return {
         "name": scene.name,
         "ambient": scene.ambient.tolist(),
         "image": {"width": int(scene.width), "height": int(scene.height),
                   "background": scene.background.tolist()},
-        "camera": {"eye": cam.eye.tolist(), "target": cam.target.tolist(), "up": cam.up.tolist(),
-                   "fov_y": cam.fov_y, "near": cam.near,
+        "camera": {**view, "near": cam.near,
                    **({"aperture": cam.aperture} if cam.aperture else {}),
                    **({} if cam.focus_distance is None
                       else {"focus_distance": cam.focus_distance})},

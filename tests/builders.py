@@ -25,12 +25,14 @@ import numpy as np
 import pytest
 
 from shadowvol.compare.maskdiff import count_edges, edge_pixels
+from shadowvol.cameras import calibration, unproject
 from shadowvol.primitives import box, plane, sphere
 from shadowvol.scene import (
     AreaLight,
     Camera,
     DirectionalLight,
     Material,
+    Object,
     PointLight,
     Scene,
     SpotLight,
@@ -487,3 +489,94 @@ def check_light_switch(before, after, i: int) -> None:
         np.testing.assert_array_equal(getattr(after, name)[others],
                                       getattr(before, name)[others])
     assert (before.lit_count[i] < before.facing_count[i]).any()   # it had shadow
+
+
+def camera_from_matrices(K, camera_to_world, near: float = 0.05) -> Camera:
+    """The camera a dataset user reads back from a frame's K (3, 3) and camera_to_world
+    (4, 4) (docs/CONVENTIONS.md, "Camera matrices"); `near` is not in them."""
+    return Camera(fx=K[0, 0], fy=K[1, 1], cx=K[0, 2], cy=K[1, 2],
+                  camera_to_world=camera_to_world, near=near)
+
+
+def off_centre(scene: Scene, aspect: float = 1.3, shift=(0.21, -0.16)) -> Scene:
+    """`scene` seen through non-square pixels and an off-centre principal point: its look-at
+    camera's pose, fx = `aspect` * fy (fy its focal length in pixels), and the principal
+    point moved from the image centre by `shift` (fractions of the width and the height)."""
+    cal = calibration(scene)
+    f = cal.K[1, 1]
+    camera = Camera(fx=aspect * f, fy=f, cx=scene.width * (0.5 + shift[0]),
+                    cy=scene.height * (0.5 + shift[1]), camera_to_world=cal.camera_to_world,
+                    near=scene.camera.near)
+    return scene.replace(camera=camera)
+
+
+# Cameras by matrices (`pixel_targets`): fronto-parallel squares of this half-size in pixels,
+# centred within MISS pixels of a pixel centre: a camera off by more than HALF - MISS = 0.2 px
+# (OpenCV's whole-number centres are 0.5 px off) misses the square at that pixel
+HALF, MISS = 0.3, 0.1
+# depth is the pixel's ray met with the triangle's float32 plane (CONVENTIONS, "depth")
+DEPTH_RTOL = 1e-6
+
+
+def rotation(axis, degrees: float) -> np.ndarray:
+    """(3, 3) float64 rotation about `axis` (Rodrigues)."""
+    k = np.asarray(axis, np.float64) / np.linalg.norm(axis)
+    a = np.radians(degrees)
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(a) * kx + (1 - np.cos(a)) * kx @ kx
+
+
+def project(K: np.ndarray, camera_to_world: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(n, 3) world points -> (n, 3) float64 (u, v, depth), plainly from the definitions: the
+    OpenGL camera coordinates by solving with camera_to_world, flipped to OpenCV's, times K."""
+    gl = np.linalg.solve(camera_to_world, np.c_[points, np.ones(len(points))].T).T[:, :3]
+    cv = gl * [1.0, -1.0, -1.0]
+    uvw = cv @ K.T
+    return np.c_[uvw[:, :2] / uvw[:, 2:], cv[:, 2]]
+
+
+def pixel_targets(seed: int, width: int = 64, height: int = 48, n: int = 8):
+    """A scene of `n` small squares facing a turned camera with fx != fy and an off-centre
+    principal point, each square centred near the centre of a known pixel, and the squares'
+    centres (n, 3), the pixels (n, 2) (x, y) and the camera's K."""
+    rng = np.random.default_rng(seed)
+    m = np.eye(4)
+    m[:3, :3] = rotation(rng.normal(size=3), rng.uniform(20, 160))
+    m[:3, 3] = rng.uniform(-5, 5, 3)
+    fx, fy = rng.uniform(50, 90), rng.uniform(50, 90)
+    cx, cy = width * rng.uniform(0.2, 0.8), height * rng.uniform(0.2, 0.8)
+    camera = Camera(fx=fx, fy=fy, cx=cx, cy=cy, camera_to_world=m)
+    K = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1.0]])
+    pixels = np.stack([rng.choice(np.arange(2, width - 2), n, replace=False),
+                       rng.choice(np.arange(2, height - 2), n, replace=False)], axis=1)
+    uv = pixels + 0.5 + rng.uniform(-MISS, MISS, (n, 2))
+    z = rng.uniform(2.0, 9.0, n)
+    right, up = m[:3, 0], m[:3, 1]
+    objects, centres = [], []
+    for k in range(n):
+        gl = np.array([(uv[k, 0] - cx) / fx * z[k], -(uv[k, 1] - cy) / fy * z[k], -z[k], 1.0])
+        c = (m @ gl)[:3]
+        hx, hy = HALF * z[k] / fx * right, HALF * z[k] / fy * up
+        corners = [c - hx - hy, c + hx - hy, c + hx + hy, c - hx + hy]
+        objects.append(Object(f"square{k}", corners, [[0, 1, 2], [0, 2, 3]]))
+        centres.append(c)
+    scene = Scene(camera=camera, objects=objects, lights=[DirectionalLight(-m[:3, 2])],
+                  width=width, height=height)
+    return scene, np.array(centres), pixels, K
+
+
+def check_seen(K, camera_to_world, centres, pixels, object_id, depth, normal) -> None:
+    """Each square k is seen at its pixel, at its depth, with its normal; unprojected, the
+    pixel gives back a point of the square (within its half-size)."""
+    uvz = project(K, camera_to_world, centres)
+    np.testing.assert_array_equal(np.floor(uvz[:, :2]).astype(int), pixels)
+    xs, ys = pixels[:, 0], pixels[:, 1]
+    assert object_id[ys, xs].tolist() == list(range(1, len(pixels) + 1))
+    np.testing.assert_allclose(depth[ys, xs], uvz[:, 2], rtol=DEPTH_RTOL)
+    back = camera_to_world[:3, 2]
+    np.testing.assert_allclose(np.abs(normal[ys, xs] @ back), 1.0, rtol=1e-6)
+    points = unproject(K, camera_to_world, depth)[ys, xs]
+    pixel_size = uvz[:, 2] / min(K[0, 0], K[1, 1])
+    assert (np.linalg.norm(points - centres, axis=1) <= (HALF + MISS) * 1.5 * pixel_size).all()
+    # and nothing else: a square is 0.6 px wide, so it covers at most 4 pixels
+    assert 0 < (object_id > 0).sum() <= 4 * len(pixels)

@@ -24,7 +24,7 @@ from builders import TEST_OUTPUT
 from hypothesis import note
 
 import raytrace
-from raytrace.camera import primary_rays
+from raytrace.camera import pixel_focal, primary_rays
 from raytrace.tolerances import LIFT_HEIGHTS, frame_origin, light_margin, shadow_height
 from shadowvol.compare.maskdiff import diff_image, edge_pixels, mask_report
 from shadowvol.io import save_png
@@ -412,7 +412,8 @@ def gl_vertex_ties(scene: Scene, precision: float = 1 / 64) -> np.ndarray:
     H, W = scene.height, scene.width
     o, d = primary_rays(scene.camera, W, H, unit=True)
     eye = np.asarray(scene.camera.eye, np.float64)
-    pixel = 2.0 * np.tan(np.radians(scene.camera.fov_y) / 2.0) / H
+    fx, fy, _, _ = pixel_focal(scene.camera, W, H)
+    pixel = 1.0 / min(fx, fy)   # the larger side of a pixel, at unit depth
     out = np.zeros(H * W, bool)
     rel = tri - eye
     normals = [np.cross(rel[:, i], rel[:, (i + 1) % 3]) for i in range(3)]

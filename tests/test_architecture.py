@@ -29,6 +29,7 @@ FLOORS = {
     "shadowvol.scenefile": (3, "model"),
     "shadowvol.scenefile_mesh": (3, "model"),
     "shadowvol.scenefile_write": (3, "model"),
+    "shadowvol.trimesh_scene": (3, "model"),
     "shadowvol.resources": (3, "model"),
     "shadowvol.memory": (3, "model"),
     "shadowvol.scene": (2, "model"),

@@ -16,7 +16,7 @@ import numpy as np
 
 from shadowvol.scene import (AreaLight, Camera, DirectionalLight, SceneError, is_number,
                              reject_unknown_keys, shorten)
-from shadowvol.scenefile import CAMERA_KEYS
+from shadowvol.scenefile import CAMERA_KEYS, MATRIX_CAMERA_KEYS
 
 ORBIT_KEYS = {"center", "radius", "elevation", "frames", "start", "sweep", "up", "fov_y",
               "near"}
@@ -72,7 +72,7 @@ def camera_dict(value, key: str) -> dict:
     the Camera (the scene's fov_y, near and up fill what is left out, in the worker)."""
     if not isinstance(value, dict):
         raise SceneError(key, f"expected a camera table, got {shorten(value)}")
-    reject_unknown_keys(value, CAMERA_KEYS, key)
+    reject_unknown_keys(value, CAMERA_KEYS - set(MATRIX_CAMERA_KEYS), key)   # look-at only
     for need in ("eye", "target"):
         if need not in value:
             raise SceneError(f"{key}.{need}", "missing")

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image, ImageDraw
 
-from raytrace.camera import camera_basis
+from raytrace.camera import camera_basis, pixel_focal
 from raytrace.raytree import (
     BLOCKED,
     FACES_AWAY,
@@ -48,13 +48,10 @@ def project(scene: Scene, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     right, up, back = camera_basis(scene.camera)
     rel = points - scene.camera.eye
     depth = -(rel @ back)
-    half_h = np.tan(np.radians(scene.camera.fov_y) / 2.0)
-    half_w = half_h * scene.aspect
+    fx, fy, cx, cy = pixel_focal(scene.camera, scene.width, scene.height)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ndc_x = (rel @ right) / (depth * half_w)
-        ndc_y = (rel @ up) / (depth * half_h)
-    px = (ndc_x + 1.0) / 2.0 * scene.width
-    py = (1.0 - ndc_y) / 2.0 * scene.height
+        px = fx * (rel @ right) / depth + cx
+        py = cy - fy * (rel @ up) / depth
     return np.stack([px, py], axis=1), depth
 
 

@@ -279,7 +279,7 @@ class Renderer:
         clip planes or None, the back faces to cull or None)."""
         # the GPU draws in the float32 frame of this camera's eye (`projection`), the ray
         # tracer's frame for the same camera: the geometry is re-expressed when the eye moves
-        view_proj, origin = frame_view_projection(camera, self.scene.aspect)
+        view_proj, origin = frame_view_projection(camera, self.scene.size)
         self.geometry.move_to(origin)
         self.geometry.set_view(view_proj, camera.near)   # huge triangles cut (`guard`)
         passes.set_camera((*self.programs.framed, *vols.programs), view_proj, camera, origin)
@@ -288,7 +288,7 @@ class Renderer:
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(
-            self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
+            self.geometry.bounds, camera, self.scene.size, self.geometry.extent)
         return view_proj, clip, cull
 
     def _read_masks(self, outputs, hard, samples, in_stencil, pages) -> tuple:
@@ -346,7 +346,7 @@ class Renderer:
         for k, (i, light) in enumerate(hard):
             light4 = light.homogeneous
             choice = methods.choose(plan.method, self.geometry.bounds, camera,
-                                    self.scene.aspect, light4, self.geometry.extent)
+                                    self.scene.size, light4, self.geometry.extent)
             if shadows and light.shadows:   # a light switched off: its bit stays facing
                 vols.prepare(light4)
                 # the counts are 0: the mask pass cleared them, and each light's clear but the
@@ -398,7 +398,7 @@ class Renderer:
             for bit, light in enumerate(page_lights):
                 light4 = light.homogeneous
                 choice = methods.choose(plan.method, self.geometry.bounds, camera,
-                                        self.scene.aspect, light4, self.geometry.extent)
+                                        self.scene.size, light4, self.geometry.extent)
                 if shadows and light.shadows:
                     vols.prepare(light4)
                     # halving is safe only for casters `auto` chose z-pass for, and only when

@@ -79,7 +79,7 @@ def _sample_casters(renderer, plan: FramePlan, camera: Camera, stored: np.ndarra
         return
     geometry = renderer.geometry
     light4 = light.homogeneous
-    choice = methods.choose(plan.method, geometry.bounds, camera, renderer.scene.aspect,
+    choice = methods.choose(plan.method, geometry.bounds, camera, renderer.scene.size,
                             light4, geometry.extent)
     candidates = [j for j in truth.caster_candidates(
         geometry.bounds, truth.cast_points(camera, stored, cast), light4) if geometry.casts[j]]
