@@ -131,15 +131,16 @@ def judge(task: Task, cases: list[Case], answers: list[dict]) -> TaskResult:
     return TaskResult(task, passed, len(cases), failure)
 
 
-def evaluate(task: Task, function) -> TaskResult:
-    """`function` judged on the task's cases in THIS process: no time limit, no isolation; for
-    the tests' many broken and mutated solutions (the cases and the judging are `grade`'s)."""
+def evaluate(task: Task, function, cases: list[Case] | None = None) -> TaskResult:
+    """`function` judged on the task's cases (or `cases`) in THIS process: no time limit, no
+    isolation; for the tests' many broken and mutated solutions (the cases, the answers' JSON
+    and the judging are `grade`'s)."""
+    cases = task.cases() if cases is None else cases
     answers = []
-    cases = task.cases()
     for case in cases:
         try:
-            answers.append({"value": plain(function(*[json.loads(json.dumps(a))
-                                                       for a in case.args]))})
+            value = function(*json.loads(json.dumps(list(case.args))))
+            answers.append(json.loads(json.dumps({"value": plain(value)})))
         except Exception as exc:  # noqa: BLE001 - a broken solution's error is its answer
             answers.append({"error": f"{type(exc).__name__}: {exc}"})
     return judge(task, cases, answers)

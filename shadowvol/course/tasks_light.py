@@ -160,9 +160,12 @@ def shadow_cases() -> list[Case]:
         ("the ray starts on its own sphere, nothing else in the way", *top, (1, 4, 2), [own]),
         ("the surface faces away from the light", *top, (0, -5, 0), [own]),
         ("the light exactly at the horizon", *top, (5, 1, 0), [own]),
+        ("a ray passing just beside a small sphere", *top, (0, 5, 0), [own, ((0.8, 3, 0), 0.5)]),
+        ("the light inside a sphere", *top, (0, 3, 0), [own, ((0, 3, 0), 0.5)]),
+        ("the point inside another sphere", *top, (0, 5, 0), [own, ((0, 1.2, 0), 0.5)]),
     ]
     rng = np.random.default_rng(6)
-    while len(fixed) < 18:
+    while len(fixed) < 21:
         p, n = _on_sphere(*own, rng.normal(size=3))
         light = np.round(rng.normal(size=3) * 4, 3)
         spheres = [own] + [(tuple(np.round(rng.uniform(-3, 3, 3), 3)),
@@ -220,7 +223,7 @@ def phong_cases() -> list[Case]:
          grey, *material),
         ("the light below the surface, the eye grazing", origin, up, (-10, 0, 1), (3, 0, -4),
          white, grey, *material),
-        ("the light exactly at the horizon", origin, up, (0, 2, 2), (3, 0, 0), white, grey,
+        ("the light exactly at the horizon", origin, up, (-2, 1, 2), (3, 0, 0), white, grey,
          *material),
         ("the eye in the mirror direction", origin, up, (3, 0, 3), (-2, 0, 2), white, grey,
          *material),

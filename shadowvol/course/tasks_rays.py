@@ -85,6 +85,8 @@ def sphere_cases() -> list[Case]:
         ("the origin on the sphere, entering it", (1, 0, 0), (-1, 0, 0), (0, 0, 0), 1.0),
         ("a circle in 2D", (4, 3), (-2, -1), (1, 1), 1.5),
         ("a direction that is not unit length", (0, -6, 0), (0, 4, 0), (0, 0, 0), 2.0),
+        ("inside the sphere, a direction not unit length", (0, 0, 0.5), (0, 0, 3), (0, 0, 0),
+         1.0),
     ]
     rng = np.random.default_rng(2)
     while len(fixed) < 16:
@@ -123,6 +125,8 @@ def triangle_cases() -> list[Case]:
         ("a miss past the edge b-c (β + γ > 1)", (1.5, 1.5, 2), down, *TRIANGLE),
         ("a miss beside the edge a-c (β < 0)", (-0.25, 1, 2), down, *TRIANGLE),
         ("the triangle behind the ray", (0.5, 0.5, -2), down, *TRIANGLE),
+        ("the origin on the triangle (λ = 0: no hit)", (0.5, 0.5, 0), down, *TRIANGLE),
+        ("a hit before the direction's length (λ < 1)", (0.5, 0.5, 1), (0, 0, -4), *TRIANGLE),
         ("a ray parallel to the triangle", (0.5, 0.5, 1), (1, 0, 0), *TRIANGLE),
         ("a hit on the back of the triangle", (0.5, 0.5, -2), (0, 0, 1), *TRIANGLE),
     ]

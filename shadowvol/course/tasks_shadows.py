@@ -49,7 +49,7 @@ def region_cases() -> list[Case]:
         ("the light in a corner", (0.0, 0.0), (0.5, 0.2), (0.2, 0.5)),
     ]
     rng = np.random.default_rng(8)
-    while len(fixed) < 18:
+    while len(fixed) < 26:
         L, a, b = (np.round(rng.uniform(0.05, 0.95, 2), 3) for _ in range(3))
         d = b - a
         if np.linalg.norm(d) > 0.1 and abs(d[0] * (L - a)[1] - d[1] * (L - a)[0]) > 0.02:
@@ -192,6 +192,8 @@ def count_cases() -> list[Case]:
         ("the eye inside the volume, the point lit", light, box, (1.2, 2.0), (-3.0, 0.0)),
         ("the eye above the occluder, looking through it", light, box, (1.2, 5.0), (1.3, 0.0)),
         ("a ray passing beside the volume", light, box, (-3.0, 2.0), (-1.0, 0.0)),
+        ("the eye a hair above P, the ray on into the far cap", light, box, (2.0, 0.01),
+         (2.0048, 0.0)),
         ("the point lit, the volume behind it", light, box, (-4.0, 0.5), (-1.0, 0.3)),
         ("a triangle, the eye below it", (1.0, 8.0), [(0.0, 3.0), (2.0, 3.5), (0.5, 4.5)],
          (1.0, 1.0), (3.0, 0.0)),
@@ -222,7 +224,8 @@ def _fair_count(L, poly, eye, p, margin: float = 1e-2) -> bool:
     vertex (and so no side) within `margin` of the eye ray's line, no side ray along it."""
     d = p - eye
     line = np.abs(d[0] * (poly[:, 1] - eye[1]) - d[1] * (poly[:, 0] - eye[0])) / np.linalg.norm(d)
-    inside = [bool(np.all(np.cross(np.roll(poly, -1, 0) - poly, q - poly) > 0))
+    edges = np.roll(poly, -1, 0) - poly
+    inside = [bool(np.all(edges[:, 0] * (q - poly)[:, 1] - edges[:, 1] * (q - poly)[:, 0] > 0))
               for q in (L, eye, p)]
     rays = poly - L
     turn = np.abs(d[0] * rays[:, 1] - d[1] * rays[:, 0]) / (
