@@ -22,7 +22,6 @@ A teacher hands out `course new DIR` (or a copy of it), collects the students' f
 runs `course grade` on each; `--json` writes Gradescope's results.json for an autograder.
 Each task runs in its own process with a time limit (--timeout), so an endless loop or a
 crash costs that task only.  The cases and their answers come from the project's own code.
-grade exits 1 short of full marks.
 """
 
 
@@ -44,7 +43,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     sol.set_defaults(func=command_new, solved=True)
     grade = blocks.command(sub, "grade", help="grade a workspace",
                            description="Grade every task of a workspace on hidden cases.",
-                           epilog="exit status: 0 full marks; 1 short of them; 2 bad input.")
+                           epilog="exit status: 0 full marks; 1 short of them; 2 bad input "
+                                  "(no such folder, not a workspace, a bad --json path).")
     grade.add_argument("folder", metavar="DIR", type=Path, help="the student's workspace")
     grade.add_argument("--json", metavar="F", type=Path, default=None,
                        help="also write the grade as Gradescope's results.json to F")
@@ -79,7 +79,7 @@ def command_grade(args) -> int:
         return status.BAD_INPUT
     print(grader.table(report))
     if args.json is not None:
-        write_bytes(args.json, (json.dumps(grader.gradescope(report), indent=2) + "\n")
-                    .encode("utf-8"))
+        text = json.dumps(grader.gradescope(report), indent=2, ensure_ascii=False)
+        write_bytes(args.json, (text + "\n").encode("utf-8"))
         print(f"wrote {args.json}")
     return status.OK if report.full_marks else status.OVER_BUDGET

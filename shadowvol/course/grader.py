@@ -127,7 +127,8 @@ def judge(task: Task, cases: list[Case], answers: list[dict]) -> TaskResult:
                 f"  input:    {task.show_args(case.args)}",
                 f"  expected: {task.show(case.expected)}",
                 f"  got:      {got}",
-                *([f"  wrong:    {why}"] if "error" not in answer else [])])
+                *([f"  wrong:    {why}"] if task.explains and "error" not in answer
+                  else [])])
     return TaskResult(task, passed, len(cases), failure)
 
 

@@ -40,7 +40,9 @@ class Task:
     """One exercise: the workspace module `name`.py with the function `function`.
 
     judge(expected, got) -> None when right, else why not (a sentence);
-    show_args(args) -> the inputs in words; show(value) -> an answer in words."""
+    show_args(args) -> the inputs in words; show(value) -> an answer in words; `explains`:
+    whether the judge's sentence says more than the expected and the got do (which component
+    of a vector, which edge) and is worth a line of the table."""
 
     name: str
     function: str
@@ -50,6 +52,7 @@ class Task:
     judge: Callable[[object, object], str | None]
     show_args: Callable[[tuple], str]
     show: Callable[[object], str] = field(default=lambda v: show_value(v))
+    explains: bool = True
 
     def check(self, case: Case, got) -> str | None:
         """None when `got` is right for `case` (its answer or an alternative), else why not."""

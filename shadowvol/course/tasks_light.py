@@ -258,7 +258,7 @@ TASKS = [
     Task("refraction", "refract", "refraction (Snell, total internal reflection)", 10,
          refraction_cases, _judge_refraction, _show_refraction, _show_refracted),
     Task("shadow_ray", "in_shadow", "the shadow ray", 10, shadow_cases, judge_exact,
-         _show_shadow),
+         _show_shadow, explains=False),
     Task("phong", "shade", "Phong at a point", 10, phong_cases,
          lambda e, g: judge_vector(e, g, "the colour"), _show_phong),
 ]

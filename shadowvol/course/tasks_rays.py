@@ -178,9 +178,9 @@ def _show_triangle_answer(v) -> str:
 
 TASKS = [
     Task("ray_plane", "intersect", "ray against plane", 10, plane_cases, judge_lambda,
-         _show_plane, lambda v: "no hit (None)" if v is None else f"λ = {num(v)}"),
+         _show_plane, lambda v: "no hit (None)" if v is None else f"λ = {num(v)}", False),
     Task("ray_sphere", "intersect", "ray against sphere", 10, sphere_cases, judge_lambda,
-         _show_sphere, lambda v: "no hit (None)" if v is None else f"λ = {num(v)}"),
+         _show_sphere, lambda v: "no hit (None)" if v is None else f"λ = {num(v)}", False),
     Task("ray_triangle", "intersect", "ray against triangle", 10, triangle_cases,
          _judge_triangle, _show_triangle, _show_triangle_answer),
 ]

@@ -9,12 +9,15 @@ import doctest
 import importlib.util
 import json
 import math
+import re
+from pathlib import Path
 
 import pytest
 
 from shadowvol.cli import status
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.course import grader
+from shadowvol.course.runner import plain
 from shadowvol.course.task import TOLERANCE
 from shadowvol.course.workspace import SOLUTIONS, solution_source, stub
 
@@ -155,7 +158,6 @@ def test_the_solutions_agree_with_the_witness_far_inside_the_tolerance(name):
     assert len(cases) >= 10
     result = grader.evaluate(task, getattr(module, task.function), cases)
     assert result.passed == result.total, result.failure
-    from shadowvol.course.runner import plain
     worst = 0.0
     for case in cases:
         got = plain(getattr(module, task.function)(*case.args))
@@ -176,3 +178,11 @@ def test_the_cases_hold_the_edges_the_lecture_warns_about():
     exercise = TASKS["ray_plane"].cases()[0]
     assert exercise.args == ([5.0, 1.0], [-1.0, 3.0], [2.0, 2.0], [1.0, -1.0])
     assert exercise.expected == 1.0
+
+
+def test_the_docs_table_of_tasks_is_the_graders():
+    text = (Path(__file__).resolve().parents[2] / "docs" / "course.md").read_text()
+    rows = re.findall(r"^\| (\d+) \| `(\w+)\.py` \| `(\w+)` \| .* \| (\d+) \| (\d+) \| .*\|$", text,
+                      re.M)
+    assert [(name, function, int(points), int(cases)) for _, name, function, points, cases in rows] \
+        == [(t.name, t.function, t.points, len(t.cases())) for t in grader.TASKS]
