@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -69,8 +70,9 @@ def command_new(args) -> int:
 def command_grade(args) -> int:
     if args.json is not None:
         outputs.check({"json": args.json}, {"json": "--json"})
-    if not args.timeout > 0:
-        print(f"error: --timeout must be positive, got {args.timeout:g}", file=sys.stderr)
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        print(f"error: --timeout must be a positive number of seconds, got {args.timeout:g}",
+              file=sys.stderr)
         return status.BAD_INPUT
     try:
         report = grader.grade(args.folder, timeout=args.timeout)

@@ -9,8 +9,7 @@ with the expected one, and says what is wrong in one sentence, or None when it i
 Tolerances.  Every case's numbers are of order 1 to 10 and its geometry well conditioned (no
 hit closer than 1e-3 to a miss, except the exact tangent and edge cases, whose inputs are small
 dyadic numbers that float64 computes exactly), so two correct formulas agree to about 1e-14
-relative (the reference solutions agree with the witness to 2e-15 or better, a test measures
-it).  The plausible mistakes move an answer by 1e-3 or more.  `TOLERANCE` = 1e-9 sits five
+relative (the reference solutions are at most 3e-16 off the witness; a test checks 1e-13).  The plausible mistakes move an answer by 1e-3 or more.  `TOLERANCE` = 1e-9 sits five
 orders from both: relative to 1 + |expected|, per number.
 """
 

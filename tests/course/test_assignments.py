@@ -104,7 +104,12 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     assert shadowvol_main(["course", "grade", str(tmp_path / "full")]) == status.BAD_INPUT
     assert shadowvol_main(["course", "grade", str(tmp_path / "full"), "--json",
                            str(tmp_path / "r.txt")]) == status.BAD_INPUT
+    for timeout in ("0", "nan", "inf", "-3"):
+        assert shadowvol_main(["course", "grade", str(tmp_path / "full"), "--timeout",
+                               timeout]) == status.BAD_INPUT
     err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 9 and all("--timeout must be" in line for line in err[5:])
+    err = err[:5]
     assert len(err) == 5 and all(line.startswith("error: ") for line in err), err
     assert "not empty" in err[0] and "no such folder" in err[2] and \
         "not a course workspace" in err[3] and "must end in .json" in err[4]
@@ -186,3 +191,12 @@ def test_the_docs_table_of_tasks_is_the_graders():
                       re.M)
     assert [(name, function, int(points), int(cases)) for _, name, function, points, cases in rows] \
         == [(t.name, t.function, t.points, len(t.cases())) for t in grader.TASKS]
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["course", "--help"], " ".join(status.EPILOG.split())),
+    (["course", "grade", "--help"], "exit status: 0 full marks; 1 short of them; 2 bad input")])
+def test_the_help_says_the_statuses(argv, words, capsys):
+    with pytest.raises(SystemExit):
+        shadowvol_main(argv)
+    assert words in " ".join(capsys.readouterr().out.split())
