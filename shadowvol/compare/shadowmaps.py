@@ -91,6 +91,7 @@ class ShadowMapper:
         if not len(self.points):
             raise ValueError(f"no visible point faces light {light}: nothing to compare")
         self.view = shadowmap.fit(scene, self.light, self.points)
+        self._last = (0, None)   # (resolution, depth map): a sweep over biases draws it once
 
     def _facing(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
         light = self.light
@@ -106,7 +107,12 @@ class ShadowMapper:
         return out & np.isfinite(points).all(axis=-1)
 
     def measure(self, resolution: int, bias: float, pcf: int = 1) -> ShadowMapError:
-        depth = shadowmap.depth_map(self.renderer.ctx, self.scene, self.view, resolution)
+        """The map of `resolution` texels a side, its `bias` and K x K filter (`pcf`), against
+        the exact shadow (the map drawn once for calls in a row at one resolution)."""
+        if self._last[0] != resolution:
+            self._last = (resolution, shadowmap.depth_map(self.renderer.ctx, self.scene,
+                                                          self.view, resolution))
+        depth = self._last[1]
         share = shadowmap.shadowed(self.view, depth, self.points, bias, pcf)
         lit_map = np.zeros_like(self.compared)
         lit_map[self.compared] = share <= 0.5
