@@ -200,3 +200,38 @@ def test_the_help_says_the_statuses(argv, words, capsys):
     with pytest.raises(SystemExit):
         shadowvol_main(argv)
     assert words in " ".join(capsys.readouterr().out.split())
+
+
+# ---------------------------------------------------------------------------------------------
+# The student's code renders
+# ---------------------------------------------------------------------------------------------
+
+WHITTED = Path(__file__).resolve().parents[2] / "scenes" / "whitted.toml"
+
+
+def test_the_students_functions_drive_the_whitted_tracer(tmp_path, capsys):
+    ws = tmp_path / "ws"
+    assert shadowvol_main(["course", "solutions", str(ws)]) == status.OK
+    args = ["course", "render", str(ws), str(WHITTED), "--size", "48x36", "-o"]
+    assert shadowvol_main(args + [str(tmp_path / "same.png")]) == status.OK
+    assert "0 of 1728 pixels differ" in capsys.readouterr().out
+    (ws / "ray_sphere.py").write_text(solution_source("ray_sphere").replace(
+        "    if near > 0.0:\n        return near\n", ""))         # the far root
+    assert shadowvol_main(args + [str(tmp_path / "far.png")]) == 1
+    out = capsys.readouterr().out
+    assert int(out.split(" of ")[0]) > 100 and (tmp_path / "far.png").stat().st_size > 0
+    (ws / "shadow_ray.py").write_text(stub(solution_source("shadow_ray")))
+    (ws / "ray_sphere.py").write_text(solution_source("ray_sphere").replace(
+        "    o, r, c = (", "    while True:\n        pass\n    o, r, c = ("))
+    assert shadowvol_main(args + [str(tmp_path / "loop.png"), "--timeout", "5"]) == 1
+    assert "time limit of 5 s" in capsys.readouterr().out
+
+
+def test_render_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
+    assert shadowvol_main(["course", "render", str(tmp_path / "no"), str(WHITTED), "-o",
+                           str(tmp_path / "x.png")]) == status.BAD_INPUT
+    assert shadowvol_main(["course", "new", str(tmp_path / "ws")]) == status.OK
+    assert shadowvol_main(["course", "render", str(tmp_path / "ws"), str(WHITTED), "-o",
+                           str(tmp_path / "x.png"), "--size", "big"]) == status.BAD_INPUT
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 2 and "no such folder" in err[0] and "--size" in err[1], err
