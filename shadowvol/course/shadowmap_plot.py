@@ -4,7 +4,8 @@
 Two panels over the map's resolution (256 to 4096 texels a side, log scale), one line per
 bias: the pixels the map calls shadowed that are lit (acne, falling as the bias grows) and
 those it calls lit that are shadowed (peter-panning, growing with the bias); both fall with
-the resolution.  LearnOpenGL's artefacts, counted against the exact shadow.
+the resolution.  LearnOpenGL's artefacts, counted against the exact shadow.  `slide` is the
+gallery's picture of it (the outlook's last word on shadow maps).
 """
 
 from __future__ import annotations
@@ -93,7 +94,7 @@ def slide(g) -> Picture:
         "per bias",
         f"shadowvol shadowmap {g.path('stack')} -o sm.png --plot plot.png",
         L.compose(title, [[(f"512², bias 0.002: {c['acne']} acne, {c['peter_panning']} "
-                            f"peter-panning", slides_fit(diff, w, h)),
+                            f"peter-panning", _pad(diff, w, h)),
                            ("pixels wrong against resolution",
                             plot(rows, "", w, h, text_px=L.px(22)))]],
                   legend=[("acne: lit, called shadowed", tuple(int(c) for c in ACNE_COLOUR)),
@@ -102,7 +103,7 @@ def slide(g) -> Picture:
         numbers=numbers)
 
 
-def slides_fit(image: np.ndarray, w: int, h: int) -> np.ndarray:
+def _pad(image: np.ndarray, w: int, h: int) -> np.ndarray:
     """`image` padded to (h, w) (the scene fitted to the cell is at most that size)."""
     out = np.zeros((h, w, 3), np.uint8)
     ih, iw = min(h, image.shape[0]), min(w, image.shape[1])
