@@ -8,7 +8,8 @@ JSON: {"workspace", "module", "function", "args": [[...], ...]}.  The answers ar
 the file RESULTS as JSON, one entry per case: {"value": ...} or {"error": "what it raised"}.
 This process never sees the expected answers.  It imports nothing of this project (it runs
 as a script, this folder taken off sys.path), so a student's module named like one of ours is
-still the student's.
+still the student's; and it lets no student module import it either (`Withheld`): the answers
+are the project's own functions, which a student's could otherwise simply call.
 """
 
 from __future__ import annotations
@@ -18,6 +19,19 @@ import json
 import os
 import sys
 import traceback
+
+
+WITHHELD = ("shadowvol", "raytrace")
+
+
+class Withheld:
+    """A meta-path finder refusing this project's packages to the student's code."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in WITHHELD:
+            raise ImportError(f"{name} is not available while grading: the grader checks "
+                              f"your code against it", name=name)
+        return None
 
 
 def plain(value):
@@ -66,6 +80,7 @@ def run(job: dict) -> list[dict]:
 def main(argv: list[str]) -> int:
     here = os.path.dirname(os.path.abspath(__file__))
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or ".") != here]   # students' win
+    sys.meta_path.insert(0, Withheld())
     job = json.load(sys.stdin)
     real_stdout, sys.stdout = sys.stdout, sys.stderr    # a student's prints are not results
     results = run(job)

@@ -83,6 +83,19 @@ def test_an_endless_loop_or_a_crash_costs_only_its_task(tmp_path):
     assert not report.full_marks
 
 
+def test_a_student_cannot_call_the_witness(tmp_path):
+    ws = tmp_path / "ws"
+    assert shadowvol_main(["course", "solutions", str(ws)]) == status.OK
+    (ws / "ray_plane.py").write_text(
+        "def intersect(o, r, a, n):\n"
+        "    from raytrace.exercise import solve_plane\n"
+        "    lam = solve_plane(o, r, a, n).lam\n"
+        "    return lam if lam != float('inf') else None\n")
+    result = grader.grade(ws, tasks=[TASKS["ray_plane"]]).results[0]
+    assert result.passed == 0 and "raytrace is not available while grading" in \
+        result.failure
+
+
 def test_the_table_names_the_first_failing_case_in_words(tmp_path):
     ws = tmp_path / "ws"
     assert shadowvol_main(["course", "solutions", str(ws)]) == status.OK
