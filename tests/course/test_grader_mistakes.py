@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 from shadowvol.course import grader
-from shadowvol.course.workspace import solution_source
+from shadowvol.course.workspace import solution_source, write_workspace
 
 TASKS = {t.name: t for t in grader.TASKS}
 
@@ -125,6 +125,20 @@ def test_a_broken_variant_is_rejected(task_name, mistake, right, wrong):
     result = grader.evaluate(TASKS[task_name], _function(task_name, source.replace(right, wrong)))
     assert result.passed < result.total, f"{task_name}: '{mistake}' got full marks"
     assert result.failure and "expected" in result.failure
+
+
+def test_the_real_grader_rejects_them_too(tmp_path):
+    """The first mistake of every task, handed in as files and graded by the command's own
+    path (a process per task): every task short of full marks, the others untouched."""
+    write_workspace(tmp_path / "ws", solved=True)
+    first = {}
+    for task_name, mistake, right, wrong in BROKEN:
+        first.setdefault(task_name, (mistake, right, wrong))
+    for task_name, (_, right, wrong) in first.items():
+        path = tmp_path / "ws" / f"{task_name}.py"
+        path.write_text(path.read_text().replace(right, wrong))
+    report = grader.grade(tmp_path / "ws")
+    assert {r.task.name for r in report.results if r.passed < r.total} == set(TASKS)
 
 
 # ---------------------------------------------------------------------------------------------
