@@ -23,7 +23,9 @@ from shadowvol.errors import (  # noqa: F401 - the statuses, named here for the 
 
 TABLE = (
     (OK, "success"),
-    (OVER_BUDGET, "a comparison over its budget (compare --max-interior)"),
+    (OVER_BUDGET, "a comparison over its budget (compare --max-interior), a grade short of "
+                  "full marks (course grade), a student's image not the reference's (course "
+                  "render)"),
     (BAD_INPUT, "bad input: a scene file, a mesh, an argument, an output path, a scene beyond "
                 "the documented limits or an image over the memory budget, or a missing "
                 "optional extra (named with the pip command that installs it)"),

@@ -71,7 +71,8 @@ def test_every_program_links(ctx):
     pairs = [("scene.vert", "ambient.frag", None), ("scene.vert", "phong.frag", None),
              ("scene.vert", "volume.frag", None), ("volume_side.vert", "volume.frag", None),
              ("far_cap.vert", "volume.frag", None), ("caps.vert", "volume.frag", None),
-             ("edge.vert", "volume.frag", "silhouette.geom")]
+             ("edge.vert", "volume.frag", "silhouette.geom"),
+             ("shadowmap.vert", "shadowmap.frag", None)]
     for vert, frag, geom in pairs:
         glsl.program(ctx, vert, frag, geom).release()
 
