@@ -147,26 +147,28 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise SceneError("-o", f"{str(out)!r} is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
     entries = _jobs(jobs)
     plan = _Plan(entries, 1 if format != "webdataset" else samples_per_tar, shard, format)
     own = manifest.manifest_name(shard)
-    store = TarStore(out) if format == "webdataset" else \
-        FileStore(out) if format == "files" else formats.DatasetStore(out, format)
-    kept, todo = _already_made(plan, manifest.read(out, own), store, format)
-    # temporary files a killed run left, for any file of this share (made or not)
-    if format != "webdataset":
-        store.clean([s for u in plan.mine for s in plan.units[u]])
-    else:
-        store.clean(list(plan.mine))
-    manifest.remove_stale_parts(out, {own})
-    units, mine = plan.units, plan.mine
-    summary = Summary(frames=sum(len(units[u]) for u in mine),
-                      skipped=sum(len(units[u]) for u in mine) - sum(len(units[u]) for u in todo),
-                      manifest=out / own)
+    out.mkdir(parents=True, exist_ok=True)
+    # the lock first: a run refused here has touched nothing of the one that holds it
     journal = manifest.Journal(out / own)
-    done: dict[str, dict] = dict(kept)
     try:
+        store = TarStore(out) if format == "webdataset" else \
+            FileStore(out) if format == "files" else formats.DatasetStore(out, format)
+        kept, todo = _already_made(plan, manifest.read(out, own), store, format)
+        # temporary files a killed run left, for any file of this share (made or not)
+        if format != "webdataset":
+            store.clean([s for u in plan.mine for s in plan.units[u]])
+        else:
+            store.clean(list(plan.mine))
+        manifest.remove_stale_parts(out, {own})
+        units, mine = plan.units, plan.mine
+        summary = Summary(frames=sum(len(units[u]) for u in mine),
+                          skipped=sum(len(units[u]) for u in mine) - sum(len(units[u])
+                                                                         for u in todo),
+                          manifest=out / own)
+        done: dict[str, dict] = dict(kept)
         _record_bad_jobs(entries, journal, done, summary)
         specs = [s for u in todo for s in units[u]]
         bar = _bar(len(specs), progress)

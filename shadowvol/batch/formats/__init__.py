@@ -54,7 +54,7 @@ class DatasetStore:
     def write(self, spec: dict, encoded: dict[str, bytes]) -> dict[str, dict]:
         files = {}
         for rel, data in encoded.items():
-            write_bytes(self.out / rel, data)
+            write_bytes(self.out / rel, data, follow_links=False)
             files[rel] = {"path": rel, "sha256": manifest.sha256(data), "bytes": len(data)}
         return files
 
@@ -117,4 +117,4 @@ def write_index(out: Path, format: str, specs: list[dict], hashes: dict[str, str
     mod = layout(format)
     for job, entries in jobs.items():
         for rel, data in mod.index(job, entries).items():
-            write_bytes(Path(out) / rel, data)
+            write_bytes(Path(out) / rel, data, follow_links=False)
