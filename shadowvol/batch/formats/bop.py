@@ -14,8 +14,6 @@ import numpy as np
 from shadowvol.batch.formats import encoding
 from shadowvol.io import encode_srgb, png_bytes
 
-CASTERS = False
-ALONE = True
 SCENE = "train/000000"
 FOLDERS = tuple(f"{SCENE}/{sub}" for sub in ("rgb", "depth", "mask", "mask_visib", "shadow"))
 INDEX = tuple(f"{SCENE}/{name}" for name in

@@ -16,8 +16,6 @@ import numpy as np
 from shadowvol.batch.formats import encoding
 from shadowvol.io import encode_srgb, png_bytes
 
-CASTERS = True
-ALONE = False
 FOLDERS = ("images",)
 INDEX = ("annotations.json",)
 SHADOW_IDS = 1 << 16   # above every object id (object_id is uint16)

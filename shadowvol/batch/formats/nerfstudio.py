@@ -17,8 +17,6 @@ from __future__ import annotations
 from shadowvol.batch.formats import encoding
 from shadowvol.io import encode_srgb, png_bytes
 
-CASTERS = False
-ALONE = False
 FOLDERS = ("images", "depth", "masks", "object_id", "shadow")
 INDEX = ("transforms.json",)
 INTRINSICS = ("fl_x", "fl_y", "cx", "cy", "w", "h")
