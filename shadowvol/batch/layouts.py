@@ -15,6 +15,7 @@ layout's frames carry its name as "format" (`tag`).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
@@ -22,6 +23,7 @@ from functools import partial
 from shadowvol.batch.formats import DatasetStore, bop, coco, nerfstudio
 from shadowvol.batch.formats.arrays import frame_arrays
 from shadowvol.batch.outputs import OUTPUTS
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.batch.store import FileStore, TarStore
 
 
@@ -63,7 +65,7 @@ def _outputs_arrays(worker, spec, scene, camera, lights) -> dict:
 
 def _outputs_encode(spec, arrays, scene) -> tuple[dict[str, bytes], None]:
     """The job's outputs, each encoded by its row of `outputs.OUTPUTS`."""
-    return {name: OUTPUTS[name].encode(arrays) for name in spec["outputs"]}, None
+    return {name: OUTPUTS[name].encode(arrays) for name in spec.outputs}, None
 
 
 def _dataset(name: str, module, casters: bool, alone: bool, first: tuple = ()) -> Layout:
@@ -91,14 +93,11 @@ DATASETS = tuple(name for name, layout in LAYOUTS.items() if layout.tag)
 _BY_TAG = {None: FILES, **{layout.tag: layout for layout in LAYOUTS.values() if layout.tag}}
 
 
-def of_spec(spec) -> Layout:
+def of_spec(spec: FrameSpec) -> Layout:
     """The layout that makes the bytes of the frame `spec`."""
-    return _BY_TAG[spec.get("format")]
+    return _BY_TAG[spec.format]
 
 
-def tag(specs: list, layout: Layout) -> list:
-    """Mark a layout's frame specs (so their spec hash, and the worker, know the layout)."""
-    if layout.tag is not None:
-        for spec in specs:
-            spec["format"] = layout.tag
-    return specs
+def tag(specs: list[FrameSpec], layout: Layout) -> list[FrameSpec]:
+    """A layout's frame specs (so their spec hash, and the worker, know the layout)."""
+    return [dataclasses.replace(spec, format=layout.tag) for spec in specs]

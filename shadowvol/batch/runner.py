@@ -26,6 +26,7 @@ from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.layouts import LAYOUTS
 from shadowvol.batch.sources import SOURCES
 from shadowvol.batch.store import Unit
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.errors import BAD_INPUT, OK, require
 from shadowvol.scene import Scene, SceneError
 
@@ -175,8 +176,8 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         # the final manifest: one line per frame of this share, in job-file order, then the
         # units' own lines (the tars)
         ordered = [done[f"job/{job.name}"] for job in entries if isinstance(job, JobError)]
-        ordered += [done[s["id"]] for u in plan.mine for s in plan.units[u].frames
-                    if s["id"] in done]
+        ordered += [done[s.id] for u in plan.mine for s in plan.units[u].frames
+                    if s.id in done]
         ordered += [r for u in plan.mine for r in done.get(_unit_key(u), ())]
         journal.finish(ordered)
         store.finish(plan.specs, plan.hashes)   # the index files, from every manifest in OUT
@@ -226,7 +227,7 @@ def _unit_key(u: int) -> tuple[str, int]:
 def _make(plan, todo, results, journal, done, summary, store, bar) -> None:
     """Record the frames as their results come (in any order); a unit is written once all of
     its frames are in (a frame's at once; a tar's when its last frame comes)."""
-    unit_of = {s["id"]: u for u in todo for s in plan.units[u].frames}
+    unit_of = {s.id: u for u in todo for s in plan.units[u].frames}
     waiting: dict[int, dict[str, dict]] = {u: {} for u in todo}  # unit -> id -> result
     for result in results:
         u = unit_of[result["id"]]
@@ -234,13 +235,13 @@ def _make(plan, todo, results, journal, done, summary, store, bar) -> None:
         unit = plan.units[u]
         if len(waiting[u]) == len(unit.frames):
             got = waiting.pop(u)
-            made = [got[s["id"]] for s in unit.frames]
+            made = [got[s.id] for s in unit.frames]
             start = time.perf_counter()
             written = store.write(unit, made)
             seconds = round(time.perf_counter() - start, 6)
             for spec, made_one in zip(unit.frames, made):
                 _record(journal, done, summary, spec, made_one, plan.hashes,
-                        written.files.get(spec["id"]), store.layout.name, seconds)
+                        written.files.get(spec.id), store.layout.name, seconds)
             for record in written.records:
                 journal.add(record)
             done[_unit_key(u)] = written.records
@@ -257,16 +258,16 @@ class _Plan:
     def __init__(self, entries, layout, samples_per_tar: int, shard: tuple[int, int]):
         self.scenes: dict[str, str | Scene] = {}
         digests: dict[str, str] = {}
-        self.specs: list[dict] = []
+        self.specs: list[FrameSpec] = []
         for job in entries:
             if isinstance(job, Job):
                 key = job.scene if isinstance(job.scene, str) else f"<Scene {id(job.scene)}>"
                 if key not in self.scenes:
                     self.scenes[key], digests[key] = job.scene, scene_digest(job.scene)
                 self.specs.extend(layouts.tag(frames.specs(job, key), layout))
-        self.hashes = {s["id"]: frames.spec_hash(s, digests[s["scene"]]) for s in self.specs}
+        self.hashes = {s.id: frames.spec_hash(s, digests[s.scene]) for s in self.specs}
         per_unit = layout.frames_per_unit(samples_per_tar)
-        self.units = [Unit(k, tuple(part), tuple(self.hashes[s["id"]] for s in part))
+        self.units = [Unit(k, tuple(part), tuple(self.hashes[s.id] for s in part))
                       for k, part in enumerate(self.specs[i:i + per_unit]
                                                for i in range(0, len(self.specs), per_unit))]
         self.mine = share(len(self.units), shard)
@@ -284,7 +285,7 @@ def _already_made(plan: _Plan, old: dict[str, dict], store) -> tuple[dict, list[
         if records is None:
             todo.append(u)
             continue
-        frame_ids = {s["id"] for s in plan.units[u].frames}
+        frame_ids = {s.id for s in plan.units[u].frames}
         kept.update((r["id"], r) for r in records if r["id"] in frame_ids)
         kept[_unit_key(u)] = tuple(r for r in records if r["id"] not in frame_ids)
     return kept, todo
@@ -293,26 +294,26 @@ def _already_made(plan: _Plan, old: dict[str, dict], store) -> tuple[dict, list[
 def _record(journal, done, summary, spec, result, hashes, files, layout: str,
             write_seconds: float) -> None:
     """Append a frame's manifest line: its files, or its error."""
-    base = {"id": spec["id"], "job": spec["job"], "frame": spec["index"],
-            "spec": hashes[spec["id"]], "renderer": spec["renderer"]}
+    base = {"id": spec.id, "job": spec.job, "frame": spec.index,
+            "spec": hashes[spec.id], "renderer": spec.renderer}
     if "error" in result:
         record = {**base, "error": result["error"], "status": result["status"]}
         summary.failed += 1
         summary.status = max(summary.status, result["status"])
-        summary.errors.append(f"{spec['id']}: {result['error']}")
+        summary.errors.append(f"{spec.id}: {result['error']}")
     else:
         seconds = dict(result["seconds"], write=write_seconds)
         record = {**base, "format": layout,
                   "files": files, "camera": result["camera"], "lights": result["lights"],
-                  "size": result["size"], "seed": spec["seed"],
-                  **SOURCES[spec["renderer"]].options(spec),
+                  "size": result["size"], "seed": spec.seed,
+                  **SOURCES[spec.renderer].options(spec),
                   "versions": result["versions"], "device": result["device"],
                   "worker": result["worker"],
                   "seconds": seconds, **({"dataset": result["dataset"]} if "dataset" in result
                                          else {})}
         summary.rendered += 1
     journal.add(record)
-    done[spec["id"]] = record
+    done[spec.id] = record
 
 
 def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_worker, budget):

@@ -17,6 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
+from shadowvol.batch.spec import FrameSpec
 from shadowvol import memory
 from shadowvol.io import GROUND_TRUTH, soft_arrays
 from shadowvol.scene import hard_lights
@@ -38,19 +39,19 @@ class FrameSource(Protocol):
     renders (its GL context, its Renderers); `wanted` the frame arrays asked for
     (`outputs.fields_of`), `truth` the ground-truth ones among them."""
 
-    def options(self, spec: dict) -> dict:
+    def options(self, spec: FrameSpec) -> dict:
         """The renderer's options of a frame, as its manifest line records them."""
 
     def estimate(self, worker, frame_scene, wanted: set, truth: list,
                  written: tuple) -> memory.Estimate:
         """The memory the frame will take (`shadowvol.memory`)."""
 
-    def arrays(self, worker, spec: dict, scene, camera, lights, wanted: tuple,
+    def arrays(self, worker, spec: FrameSpec, scene, camera, lights, wanted: tuple,
                truth: list) -> dict:
         """The frame's arrays by name (beside the camera and light samples, which the worker
         adds)."""
 
-    def alone(self, worker, spec: dict, single) -> np.ndarray:
+    def alone(self, worker, spec: FrameSpec, single) -> np.ndarray:
         """(H, W) bool: the coverage of `single`, a scene of one object and no lights."""
 
     def versions(self, worker) -> dict:
@@ -58,8 +59,8 @@ class FrameSource(Protocol):
 
 
 class Raster:
-    def options(self, spec: dict) -> dict:
-        return {"method": spec["method"]}
+    def options(self, spec: FrameSpec) -> dict:
+        return {"method": spec.method}
 
     def estimate(self, worker, frame_scene, wanted, truth, written) -> memory.Estimate:
         asked = tuple(name for name in wanted if name in RASTER_OUTPUTS)
@@ -67,11 +68,11 @@ class Raster:
             worker.gl_renderer is None or memory.gl_in_host(worker.gl_renderer)))
 
     def arrays(self, worker, spec, scene, camera, lights, wanted, truth) -> dict:
-        renderer = worker.renderer(spec["scene"], scene)
+        renderer = worker.renderer(spec.scene, scene)
         asked = tuple(name for name in wanted if name in RASTER_OUTPUTS)
         if "counts" in wanted and "lit" not in asked:
             asked += ("lit",)
-        result = renderer.render(spec["method"], camera=camera, lights=lights, outputs=asked)
+        result = renderer.render(spec.method, camera=camera, lights=lights, outputs=asked)
         arrays = {name: getattr(result, name) for name in asked}
         if "counts" in wanted:   # what a mask file holds of an area light
             arrays["counts"] = soft_arrays(result.lit_count, result.samples)
@@ -81,7 +82,7 @@ class Raster:
         from shadowvol.raster.renderer import Renderer
 
         with Renderer(single, worker.context()) as renderer:
-            return renderer.render(spec["method"], camera=single.camera, lights=(),
+            return renderer.render(spec.method, camera=single.camera, lights=(),
                                    outputs=("coverage",)).coverage
 
     def versions(self, worker) -> dict:
@@ -89,8 +90,8 @@ class Raster:
 
 
 class Rays:
-    def options(self, spec: dict) -> dict:
-        return {"max_depth": spec["max_depth"]}
+    def options(self, spec: FrameSpec) -> dict:
+        return {"max_depth": spec.max_depth}
 
     def estimate(self, worker, frame_scene, wanted, truth, written) -> memory.Estimate:
         parts = [memory.whitted(frame_scene, written=())] if "image" in wanted else []
@@ -105,7 +106,7 @@ class Rays:
         frame_scene = scene.replace(camera=camera, lights=lights)
         arrays = {}
         if "image" in wanted:
-            arrays["image"] = raytrace.render(frame_scene, max_depth=spec["max_depth"],
+            arrays["image"] = raytrace.render(frame_scene, max_depth=spec.max_depth,
                                               progress=False)
         soft = any(len(hard_lights(lt)) > 1 for lt in lights)
         if truth or (soft and {"lit", "coverage", "counts"} & set(wanted)):

@@ -25,6 +25,7 @@ from typing import Protocol
 
 from shadowvol.batch import manifest
 from shadowvol.batch.outputs import OUTPUTS
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.io import tar_bytes, write_bytes
 
 
@@ -34,7 +35,7 @@ class Unit:
     specs in frame order and their spec hashes (`frames.spec_hash`)."""
 
     index: int
-    frames: tuple
+    frames: tuple[FrameSpec, ...]
     hashes: tuple[str, ...]
 
 
@@ -65,7 +66,7 @@ class Store(Protocol):
     def clean(self, units: Sequence[Unit]) -> int:
         """Remove the temporary files a killed run left for these units' files."""
 
-    def finish(self, specs: list, hashes: dict[str, str]) -> None:
+    def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
         """After the run's manifest is written: what the layout makes of every frame."""
 
 
@@ -81,7 +82,7 @@ def made(unit: Unit, old: dict[str, dict], layout: str) -> list[dict | None]:
     this layout, else None."""
     found = []
     for spec, spec_hash in zip(unit.frames, unit.hashes):
-        record = old.get(spec["id"])
+        record = old.get(spec.id)
         ok = record is not None and "error" not in record and \
             record.get("spec") == spec_hash and record.get("format", "files") == layout
         found.append(record if ok else None)
@@ -99,15 +100,15 @@ class FileStore:
         self.out, self.layout = Path(out), layout
 
     @staticmethod
-    def paths(spec: dict) -> dict[str, str]:
+    def paths(spec: FrameSpec) -> dict[str, str]:
         """output name -> path relative to `out`."""
-        return {name: member_name(spec["id"], name) for name in spec["outputs"]}
+        return {name: member_name(spec.id, name) for name in spec.outputs}
 
     def write(self, unit: Unit, results: Sequence[dict]) -> Written:
         written = Written()
         for spec, result in zip(unit.frames, results):
             if "error" not in result:
-                written.files[spec["id"]] = {
+                written.files[spec.id] = {
                     name: put(self.out, rel, result["outputs"][name])
                     for name, rel in self.paths(spec).items()}
         return written
@@ -136,7 +137,7 @@ class FileStore:
         return sum(manifest.remove_stale_parts(folder, names)
                    for folder, names in by_folder.items())
 
-    def finish(self, specs: list, hashes: dict[str, str]) -> None:
+    def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
         pass   # per-frame files have no index
 
 
@@ -161,29 +162,29 @@ class TarStore:
         for spec, result in zip(unit.frames, results):
             if "error" in result:
                 continue
-            files[spec["id"]] = {}
-            for output in spec["outputs"]:
+            files[spec.id] = {}
+            for output in spec.outputs:
                 data = result["outputs"][output]
-                member = member_name(spec["id"], output)
+                member = member_name(spec.id, output)
                 members.append((member, data))
-                files[spec["id"]][output] = {"tar": name, "member": member,
+                files[spec.id][output] = {"tar": name, "member": member,
                                              "sha256": manifest.sha256(data),
                                              "bytes": len(data)}
         entry = put(self.out, name, tar_bytes(members))
         record = {"id": self.tar_id(unit.index), "tar": name, "sha256": entry["sha256"],
-                  "bytes": entry["bytes"], "frames": [spec["id"] for spec in unit.frames]}
+                  "bytes": entry["bytes"], "frames": [spec.id for spec in unit.frames]}
         return Written(files, (record,))
 
     def verify(self, unit: Unit, old: dict[str, dict]) -> list[dict] | None:
         records = made(unit, old, self.layout.name)
         tar = old.get(self.tar_id(unit.index))
         fine = all(records) and tar is not None and \
-            tar.get("frames") == [spec["id"] for spec in unit.frames] and \
+            tar.get("frames") == [spec.id for spec in unit.frames] and \
             manifest.file_sha256(self.out / self.tar_name(unit.index)) == tar.get("sha256")
         return [*records, tar] if fine else None
 
     def clean(self, units: Sequence[Unit]) -> int:
         return manifest.remove_stale_parts(self.out, {self.tar_name(u.index) for u in units})
 
-    def finish(self, specs: list, hashes: dict[str, str]) -> None:
+    def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
         pass   # the tars are the whole dataset

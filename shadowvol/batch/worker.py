@@ -25,6 +25,7 @@ from shadowvol import __version__, memory, signals
 from shadowvol.batch import egl, frames, layouts
 from shadowvol.batch.outputs import fields_of
 from shadowvol.batch.sources import SOURCES
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.cameras import calibration
 from shadowvol.errors import RENDER_FAILED, message, status_of
 from shadowvol.io import GROUND_TRUTH
@@ -135,7 +136,7 @@ class Worker:
         return self._renderers[slot]
 
     # -- frames ----------------------------------------------------------------------------
-    def render(self, spec: dict) -> dict:
+    def render(self, spec: FrameSpec) -> dict:
         """One frame: {"id", "outputs": {name: bytes}, "camera", "lights", "size", "seconds",
         "versions", "device"} or, when it fails, {"id", "error", "status"}."""
         start = time.perf_counter()
@@ -153,28 +154,28 @@ class Worker:
         except Exception as exc:  # noqa: BLE001 - a bad frame is recorded, the others go on
             code = status_of(exc)
             text = message(exc) if code is not None else f"{type(exc).__name__}: {exc}"
-            return {"id": spec["id"], "error": text,
+            return {"id": spec.id, "error": text,
                     "status": code if code is not None else RENDER_FAILED}
-        return {"id": spec["id"], "outputs": encoded, "camera": camera_dict(camera),
+        return {"id": spec.id, "outputs": encoded, "camera": camera_dict(camera),
                 "lights": [light_dict(x) for x in lights], "size": [scene.width, scene.height],
                 "seconds": {"scene": round(loaded - start, 6),
                             "render": round(rendered - loaded, 6),
                             "encode": round(done - rendered, 6)},
-                "versions": self.versions(spec["renderer"]), "device": self.device,
+                "versions": self.versions(spec.renderer), "device": self.device,
                 "worker": f"{self.label} (pid {os.getpid()})",
                 **({"dataset": dataset} if dataset is not None else {})}
 
-    def _frame_scene(self, spec: dict):
-        scene = self.scene(spec["scene"])
-        if spec["size"] is not None:
-            scene = scene.replace(width=spec["size"][0], height=spec["size"][1])
+    def _frame_scene(self, spec: FrameSpec):
+        scene = self.scene(spec.scene)
+        if spec.size is not None:
+            scene = scene.replace(width=spec.size[0], height=spec.size[1])
         base = scene.camera
         camera = Camera(**{"up": base.up, "fov_y": base.fov_y, "near": base.near,
-                           **spec["camera"]})
-        lights = scene.lights if spec["lights"] is None else tuple(
-            light_from_dict(x, f"lights[{i}]") for i, x in enumerate(spec["lights"]))
-        camera, lights = frames.jittered(camera, lights, spec["jitter"], spec["seed"],
-                                         spec["index"])
+                           **spec.camera})
+        lights = scene.lights if spec.lights is None else tuple(
+            light_from_dict(x, f"lights[{i}]") for i, x in enumerate(spec.lights))
+        camera, lights = frames.jittered(camera, lights, spec.jitter, spec.seed,
+                                         spec.index)
         return scene, camera, lights
 
     def _check_memory(self, spec, source, frame_scene: Scene, wanted, truth) -> None:
@@ -185,16 +186,16 @@ class Worker:
                                                 ("masks", bool({"lit", "coverage"} & wanted)))
                         if asks)
         estimate = source.estimate(self, frame_scene, wanted, truth, written)
-        where = self.scenes.get(spec["scene"])
+        where = self.scenes.get(spec.scene)
         memory.check(estimate, self.budget, where if isinstance(where, (str, os.PathLike))
-                     else spec["scene"])
+                     else spec.scene)
 
     def arrays(self, spec, scene: Scene, camera: Camera, lights) -> dict[str, np.ndarray]:
         """The frame arrays its outputs need (`outputs.fields_of`), by its renderer's
         `sources.FrameSource`."""
-        wanted = fields_of(spec["outputs"])
+        wanted = fields_of(spec.outputs)
         truth = [name for name in GROUND_TRUTH if name in wanted]
-        source = SOURCES[spec["renderer"]]
+        source = SOURCES[spec.renderer]
         frame_scene = scene.replace(camera=camera, lights=lights)
         self._check_memory(spec, source, frame_scene, set(wanted), truth)
         arrays = source.arrays(self, spec, scene, camera, lights, wanted, truth)
@@ -204,7 +205,7 @@ class Worker:
             arrays["light_samples"] = [light_samples(lt) for lt in lights]
         missing = [name for name in wanted if name not in arrays]
         if missing:
-            raise ValueError(f"the {spec['renderer']} renderer does not make {missing[0]!r}")
+            raise ValueError(f"the {spec.renderer} renderer does not make {missing[0]!r}")
         return arrays
 
     def versions(self, renderer: str) -> dict:

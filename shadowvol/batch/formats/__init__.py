@@ -20,6 +20,7 @@ from pathlib import Path
 from shadowvol.batch import manifest
 from shadowvol.batch.formats import encoding
 from shadowvol.batch.store import Unit, Written, made, put
+from shadowvol.batch.spec import FrameSpec
 
 
 class DatasetStore:
@@ -33,7 +34,7 @@ class DatasetStore:
         written = Written()
         for spec, result in zip(unit.frames, results):
             if "error" not in result:
-                written.files[spec["id"]] = {rel: put(self.out, rel, data)
+                written.files[spec.id] = {rel: put(self.out, rel, data)
                                              for rel, data in result["outputs"].items()}
         return written
 
@@ -52,29 +53,29 @@ class DatasetStore:
         layout = self.layout
         folders: dict[Path, set[str] | None] = {}
         for spec in (spec for unit in units for spec in unit.frames):
-            job = self.out / spec["job"]
+            job = self.out / spec.job
             for sub in layout.folders:
                 folders.setdefault(job / sub, set()).add(encoding.frame_stem(spec))
             for rel in layout.index_files:
                 names = folders.setdefault((job / rel).parent, set())
                 if names is not None:
                     names.add(Path(rel).name)
-            if spec["index"] == 0:
+            if spec.index == 0:
                 folders.update({job / sub: None for sub in layout.first})
         return sum(_remove_parts(folder, stems) for folder, stems in folders.items())
 
-    def finish(self, specs: list, hashes: dict[str, str]) -> None:
+    def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
         """Rebuild every job's index files from the made frames that every manifest in OUT
         records for `specs` (made from the same spec, in this layout), in frame order."""
         records = manifest.read(self.out)
         jobs: dict[str, list] = {}
         for spec in specs:
-            record = records.get(spec["id"])
-            ok = (record is not None and record.get("spec") == hashes[spec["id"]]
+            record = records.get(spec.id)
+            ok = (record is not None and record.get("spec") == hashes[spec.id]
                   and record.get("format") == self.layout.name and "dataset" in record)
-            jobs.setdefault(spec["job"], [])
+            jobs.setdefault(spec.job, [])
             if ok:
-                jobs[spec["job"]].append((spec, record["dataset"]))
+                jobs[spec.job].append((spec, record["dataset"]))
         for job, entries in jobs.items():
             for rel, data in self.layout.index(job, entries).items():
                 put(self.out, rel, data)
