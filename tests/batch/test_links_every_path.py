@@ -19,6 +19,7 @@ import pytest
 from builders import ROOT, job_lines, write_jobs
 
 from shadowvol import batch
+from shadowvol.batch import manifest
 from shadowvol.scene import SceneError
 
 pytestmark = pytest.mark.gl
@@ -187,3 +188,19 @@ def _read(path) -> bytes:
         return path.read_bytes()
     except FileNotFoundError:
         return b""
+
+
+def test_a_finished_manifest_stays_locked_until_the_run_closes_it(tmp_path):
+    """The manifest is replaced at the end of a run, before the index files are written: the
+    new file is locked before it takes the name, so no second run starts in between."""
+    path = tmp_path / MANIFEST
+    journal = manifest.Journal(path)
+    journal.add({"id": "a/000000"})
+    journal.finish([{"id": "a/000000"}])
+    try:
+        with pytest.raises(SceneError, match="another run is writing"):
+            manifest.Journal(path)
+    finally:
+        journal.close()
+    manifest.Journal(path).close()
+    assert path.read_bytes() == b'{"id":"a/000000"}\n'
