@@ -32,10 +32,10 @@ class Layout:
     """One layout.
 
     store   : the `store.Store` class, made as `store(out, layout)`
-    shards  : its units are tars of `samples_per_tar` frames (else one frame each)
-    tag     : the "format" its frame specs carry, None for the plain layouts
     arrays  : (worker, spec, scene, camera, lights) -> the frame's arrays, rendered
     encode  : (spec, arrays, frame scene) -> (name or path -> bytes, the index record or None)
+    shards  : its units are tars of `samples_per_tar` frames (else one frame each)
+    tag     : the "format" its frame specs carry, None for the plain layouts
     index   : (job, [(spec, record)]) -> {path: bytes}, a dataset's index files, or None
     folders, index_files, first : under OUT/<job>/, the folders of a frame's files, the index
               files, and the folders of what frame 0 adds (where temporaries are cleaned)
@@ -43,10 +43,10 @@ class Layout:
 
     name: str
     store: type
+    arrays: Callable
+    encode: Callable
     shards: bool = False
     tag: str | None = None
-    arrays: Callable = None
-    encode: Callable = None
     index: Callable | None = None
     folders: tuple[str, ...] = ()
     index_files: tuple[str, ...] = ()
@@ -69,15 +69,13 @@ def _outputs_encode(spec, arrays, scene) -> tuple[dict[str, bytes], None]:
 
 
 def _dataset(name: str, module, casters: bool, alone: bool, first: tuple = ()) -> Layout:
-    return Layout(name, DatasetStore, tag=name,
-                  arrays=partial(frame_arrays, casters=casters, alone=alone),
-                  encode=module.frame, index=module.index, folders=module.FOLDERS,
+    return Layout(name, DatasetStore, partial(frame_arrays, casters=casters, alone=alone),
+                  module.frame, tag=name, index=module.index, folders=module.FOLDERS,
                   index_files=module.INDEX, first=first)
 
 
-FILES = Layout("files", FileStore, arrays=_outputs_arrays, encode=_outputs_encode)
-WEBDATASET = Layout("webdataset", TarStore, shards=True, arrays=_outputs_arrays,
-                    encode=_outputs_encode)
+FILES = Layout("files", FileStore, _outputs_arrays, _outputs_encode)
+WEBDATASET = Layout("webdataset", TarStore, _outputs_arrays, _outputs_encode, shards=True)
 
 LAYOUTS: dict[str, Layout] = {layout.name: layout for layout in (
     FILES,

@@ -160,7 +160,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     journal = manifest.Journal(out / own)
     try:
         store = layout.make_store(out)
-        done, todo = _already_made(plan, manifest.read(out, own), store)
+        done, unit_lines, todo = _already_made(plan, manifest.read(out, own), store)
         # temporary files a killed run left, for any file of this share (made or not)
         store.clean([plan.units[u] for u in plan.mine])
         manifest.remove_stale_parts(out, {own})
@@ -172,13 +172,13 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
         bar = _bar(len(specs), progress)
         results = _results(specs, plan.scenes, workers, ray, egl_device, start_method,
                            gpus_per_worker, memory_budget)
-        _make(plan, todo, results, journal, done, summary, store, bar)
+        _make(plan, todo, results, journal, done, unit_lines, summary, store, bar)
         # the final manifest: one line per frame of this share, in job-file order, then the
         # units' own lines (the tars)
         ordered = [done[f"job/{job.name}"] for job in entries if isinstance(job, JobError)]
         ordered += [done[s.id] for u in plan.mine for s in plan.units[u].frames
                     if s.id in done]
-        ordered += [r for u in plan.mine for r in done.get(_unit_key(u), ())]
+        ordered += [r for u in plan.mine for r in unit_lines.get(u, ())]
         journal.finish(ordered)
         store.finish(plan.specs, plan.hashes)   # the index files, from every manifest in OUT
     finally:
@@ -219,14 +219,10 @@ def _record_bad_jobs(entries, journal, done, summary) -> None:
             summary.errors.append(f"{job.source}: {job.error}")
 
 
-def _unit_key(u: int) -> tuple[str, int]:
-    """Where `done` keeps unit u's own records (a tar's line): not a frame id."""
-    return ("unit", u)
-
-
-def _make(plan, todo, results, journal, done, summary, store, bar) -> None:
-    """Record the frames as their results come (in any order); a unit is written once all of
-    its frames are in (a frame's at once; a tar's when its last frame comes)."""
+def _make(plan, todo, results, journal, done, unit_lines, summary, store, bar) -> None:
+    """Record the frames as their results come (in any order, in `done` by frame id); a unit
+    is written once all of its frames are in (a frame's at once; a tar's when its last frame
+    comes), and its own lines kept in `unit_lines`."""
     unit_of = {s.id: u for u in todo for s in plan.units[u].frames}
     waiting: dict[int, dict[str, dict]] = {u: {} for u in todo}  # unit -> id -> result
     for result in results:
@@ -244,7 +240,7 @@ def _make(plan, todo, results, journal, done, summary, store, bar) -> None:
                         written.files.get(spec.id), store.layout.name, seconds)
             for record in written.records:
                 journal.add(record)
-            done[_unit_key(u)] = written.records
+            unit_lines[u] = written.records
         if bar is not None:
             bar.update()
     if bar is not None:
@@ -276,9 +272,12 @@ class _Plan:
         return sum(len(self.units[u].frames) for u in units)
 
 
-def _already_made(plan: _Plan, old: dict[str, dict], store) -> tuple[dict, list[int]]:
-    """(the records of this share's units that are made and check out, the units to make)."""
-    kept: dict = {}
+def _already_made(plan: _Plan, old: dict[str, dict], store
+                  ) -> tuple[dict[str, dict], dict[int, tuple], list[int]]:
+    """(the frame records of this share's units that are made and check out, by id; those
+    units' own lines (a tar's), by unit; the units to make)."""
+    kept: dict[str, dict] = {}
+    unit_lines: dict[int, tuple] = {}
     todo: list[int] = []
     for u in plan.mine:
         records = store.verify(plan.units[u], old)
@@ -287,8 +286,8 @@ def _already_made(plan: _Plan, old: dict[str, dict], store) -> tuple[dict, list[
             continue
         frame_ids = {s.id for s in plan.units[u].frames}
         kept.update((r["id"], r) for r in records if r["id"] in frame_ids)
-        kept[_unit_key(u)] = tuple(r for r in records if r["id"] not in frame_ids)
-    return kept, todo
+        unit_lines[u] = tuple(r for r in records if r["id"] not in frame_ids)
+    return kept, unit_lines, todo
 
 
 def _record(journal, done, summary, spec, result, hashes, files, layout: str,

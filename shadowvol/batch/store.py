@@ -105,13 +105,9 @@ class FileStore:
         return {name: member_name(spec.id, name) for name in spec.outputs}
 
     def write(self, unit: Unit, results: Sequence[dict]) -> Written:
-        written = Written()
-        for spec, result in zip(unit.frames, results):
-            if "error" not in result:
-                written.files[spec.id] = {
-                    name: put(self.out, rel, result["outputs"][name])
-                    for name, rel in self.paths(spec).items()}
-        return written
+        return Written({spec.id: {name: put(self.out, rel, result["outputs"][name])
+                                  for name, rel in self.paths(spec).items()}
+                        for spec, result in zip(unit.frames, results) if "error" not in result})
 
     def verify(self, unit: Unit, old: dict[str, dict]) -> list[dict] | None:
         """The record's files are there with its hashes, and are the files the spec wants."""

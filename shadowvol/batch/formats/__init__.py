@@ -31,12 +31,9 @@ class DatasetStore:
         self.out, self.layout = Path(out), layout
 
     def write(self, unit: Unit, results: Sequence[dict]) -> Written:
-        written = Written()
-        for spec, result in zip(unit.frames, results):
-            if "error" not in result:
-                written.files[spec.id] = {rel: put(self.out, rel, data)
-                                             for rel, data in result["outputs"].items()}
-        return written
+        return Written({spec.id: {rel: put(self.out, rel, data)
+                                  for rel, data in result["outputs"].items()}
+                        for spec, result in zip(unit.frames, results) if "error" not in result})
 
     def verify(self, unit: Unit, old: dict[str, dict]) -> list[dict] | None:
         records = made(unit, old, self.layout.name)
