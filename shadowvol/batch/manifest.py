@@ -22,7 +22,7 @@ import stat
 from pathlib import Path
 
 from shadowvol.errors import out_of_memory_while, short_path
-from shadowvol.io import atomic_write, write_bytes
+from shadowvol.io import atomic_write, linked_folder, write_bytes
 from shadowvol.scene import SceneError
 
 MANIFEST = "manifest.jsonl"
@@ -170,10 +170,14 @@ def rewrite(path: str | Path, records: list[dict]) -> None:
     write_bytes(path, b"".join(encode(r) for r in records), follow_links=False)
 
 
-def remove_stale_parts(folder: Path, names: set[str]) -> int:
+def remove_stale_parts(folder: Path, names: set[str], within: Path | None = None) -> int:
     """Remove the temporary files `shadowvol.io.atomic_write` left in `folder` for targets named
     in `names` (a run killed mid-write leaves `.NAME.XXXXXXXX.part`).  Only those: a shard
-    running beside this one has its own targets and its temporary files are left alone."""
+    running beside this one has its own targets and its temporary files are left alone.  With
+    `within` (the output folder), nothing is removed in a folder reached through a link below
+    it: that is not the dataset's."""
+    if within is not None and outside(within, folder):
+        return 0
     removed = 0
     try:
         entries = list(os.scandir(folder))
@@ -189,3 +193,8 @@ def remove_stale_parts(folder: Path, names: set[str]) -> int:
                 except FileNotFoundError:
                     pass
     return removed
+
+
+def outside(within: Path, folder: Path) -> bool:
+    """`folder` (below `within`) is reached through a symbolic link: not the dataset's."""
+    return linked_folder(within, Path(folder) / "_") is not None

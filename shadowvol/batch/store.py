@@ -71,9 +71,9 @@ class Store(Protocol):
 
 
 def put(out: Path, rel: str, data: bytes) -> dict:
-    """Write `data` to OUT/`rel` (atomically, replacing a link, never through it), and return
-    its manifest entry."""
-    write_bytes(Path(out) / rel, data, follow_links=False)
+    """Write `data` to OUT/`rel` (atomically, replacing a link, never through it; a folder of
+    `rel` that is a link is refused), and return its manifest entry."""
+    write_bytes(Path(out) / rel, data, follow_links=False, within=out)
     return {"path": rel, "sha256": manifest.sha256(data), "bytes": len(data)}
 
 
@@ -130,7 +130,7 @@ class FileStore:
                 for rel in self.paths(spec).values():
                     path = self.out / rel
                     by_folder.setdefault(path.parent, set()).add(path.name)
-        return sum(manifest.remove_stale_parts(folder, names)
+        return sum(manifest.remove_stale_parts(folder, names, within=self.out)
                    for folder, names in by_folder.items())
 
     def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
@@ -180,7 +180,8 @@ class TarStore:
         return [*records, tar] if fine else None
 
     def clean(self, units: Sequence[Unit]) -> int:
-        return manifest.remove_stale_parts(self.out, {self.tar_name(u.index) for u in units})
+        return manifest.remove_stale_parts(self.out, {self.tar_name(u.index) for u in units},
+                                           within=self.out)
 
     def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
         pass   # the tars are the whole dataset

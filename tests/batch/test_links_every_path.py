@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import re
 import subprocess
 import sys
 import time
@@ -119,6 +120,32 @@ def test_a_manifest_that_is_a_link_is_refused_before_anything_is_touched(made, t
         assert _tree(out) == before
         assert outside.read_bytes() == first[MANIFEST]
 
+
+@pytest.mark.parametrize("layout", ("files", "nerfstudio", "bop", "coco"))
+def test_a_folder_that_is_a_link_is_refused_and_what_it_points_to_is_left(made, tmp_path,
+                                                                          layout):
+    """A folder of the dataset that is a link (to another of its folders, else to an empty one
+    outside) would put files where they do not belong: the write is refused, status 2, and
+    no temporary-looking file there is removed as the run's own."""
+    jobs, out, first = made(layout)
+    folders = sorted(os.path.relpath(f, out) for f, _, _ in os.walk(out) if f != str(out))
+    assert folders
+    for k, folder in enumerate(folders):
+        others = [g for g in folders if g != folder and not g.startswith(folder + os.sep)
+                  and not folder.startswith(g + os.sep)]
+        for target in [out / g for g in others[:1]] + [tmp_path / f"outside-{k}"]:
+            os.rename(out / folder, tmp_path / "moved")
+            os.symlink(target, out / folder)
+            if not target.exists():   # outside: what the run would take for its temporaries
+                target.mkdir()
+                for name in os.listdir(tmp_path / "moved"):
+                    (target / f".{name}.planted.part").write_bytes(b"not the dataset's")
+            before = _tree(target)
+            with pytest.raises(OSError, match=re.escape(f"{folder} is a symbolic link")):
+                _run(jobs, out, layout)
+            assert _tree(target) == before, f"written through the folder link {folder}"
+            os.unlink(out / folder)
+            os.rename(tmp_path / "moved", out / folder)
 
 def _env() -> dict:
     return dict(os.environ, PYTHONPATH=os.pathsep.join(

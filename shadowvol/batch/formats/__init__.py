@@ -59,7 +59,8 @@ class DatasetStore:
                     names.add(Path(rel).name)
             if spec.index == 0:
                 folders.update({job / sub: None for sub in layout.first})
-        return sum(_remove_parts(folder, stems) for folder, stems in folders.items())
+        return sum(_remove_parts(folder, stems) for folder, stems in folders.items()
+                   if not manifest.outside(self.out, folder))
 
     def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
         """Rebuild every job's index files from the made frames that every manifest in OUT
