@@ -12,6 +12,7 @@ from __future__ import annotations
 import fcntl
 import os
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -192,22 +193,25 @@ def test_a_second_cli_run_beside_a_running_one_is_refused_and_the_first_ends_wel
     out = tmp_path / "out"
     command = [sys.executable, "-m", "shadowvol", "batch", str(jobs), "-o", str(out)]
     first = subprocess.Popen(command, env=_env(), stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 120
-    while first.poll() is None and b'{"id"' not in _read(out / MANIFEST):
-        assert time.monotonic() < deadline, "the first run made no frame in 120 s"
-        time.sleep(0.01)
-    assert first.poll() is None, "the first run ended before the second started: make it longer"
-    planted = out / "cage-turntable" / ".000059.png.inflight.part"
-    planted.write_bytes(b"the running run's temporary")
-    second = subprocess.run(command, env=_env(), capture_output=True, text=True, timeout=120)
-    running = first.poll() is None
+    try:
+        deadline = time.monotonic() + 120
+        while first.poll() is None and b'{"id"' not in _read(out / MANIFEST):
+            assert time.monotonic() < deadline, "the first run made no frame in 120 s"
+            time.sleep(0.01)
+        first.send_signal(signal.SIGSTOP)   # it holds its lock while the second one runs
+        assert first.poll() is None, "the first run ended before it was stopped: make it longer"
+        planted = out / "cage-turntable" / ".000059.png.inflight.part"
+        planted.write_bytes(b"the running run's temporary")
+        second = subprocess.run(command, env=_env(), capture_output=True, text=True,
+                                timeout=120)
+    finally:
+        first.send_signal(signal.SIGCONT)
     assert second.returncode == 2, second.stderr
     lines = second.stderr.strip().splitlines()
     assert len(lines) == 1 and "another run is writing" in lines[0], second.stderr
     assert planted.exists(), "the refused run removed the running run's temporary"
     assert planted.read_bytes() == b"the running run's temporary"
     assert first.wait(timeout=300) == 0, first.stderr.read()
-    assert running, "the first run ended while the second ran: make it longer"
 
 
 def _read(path) -> bytes:
