@@ -12,6 +12,7 @@ from __future__ import annotations
 import fcntl
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -46,15 +47,30 @@ def _tree(out) -> dict[str, bytes | str]:
     return found
 
 
+@pytest.fixture(scope="module")
+def references(tmp_path_factory):
+    """layout -> (jobs, OUT) of one complete run of 2 tiny frames in it, made once."""
+    made = {}
+
+    def reference(layout: str):
+        if layout not in made:
+            folder = tmp_path_factory.mktemp(f"reference-{layout}")
+            jobs = write_jobs(folder / "jobs.jsonl",
+                              job_lines(frames=2, size=(40, 30), raytrace=False))
+            summary = _run(jobs, folder / "out", layout)
+            assert (summary.status, summary.rendered) == (0, 2), summary.errors
+            made[layout] = (jobs, folder / "out")
+        return made[layout]
+    return reference
+
+
 @pytest.fixture
-def made(tmp_path):
-    """(jobs, out, layout) -> {path: bytes} of a first, complete run of 2 tiny frames."""
+def made(references, tmp_path):
+    """layout -> (jobs, OUT, {path: bytes}): a copy of the layout's reference run to spoil."""
     def make(layout: str):
-        jobs = write_jobs(tmp_path / "jobs.jsonl",
-                          job_lines(frames=2, size=(40, 30), raytrace=False))
+        jobs, reference = references(layout)
         out = tmp_path / "out"
-        summary = _run(jobs, out, layout)
-        assert (summary.status, summary.rendered) == (0, 2), summary.errors
+        shutil.copytree(reference, out, symlinks=True)
         return jobs, out, _tree(out)
     return make
 
