@@ -13,6 +13,7 @@ file against its recorded sha256.
 from __future__ import annotations
 
 import contextlib
+import errno
 import io
 import os
 import struct
@@ -64,7 +65,7 @@ STDOUT = "-"
 
 
 @contextlib.contextmanager
-def atomic_write(path: str | Path, follow_links: bool = True):
+def atomic_write(path: str | Path, follow_links: bool = True, within: str | Path | None = None):
     """Yield a binary file object that becomes `path` only once complete.
 
     A regular file (or a new name) is written to a temporary file beside it, fsynced and
@@ -73,13 +74,18 @@ def atomic_write(path: str | Path, follow_links: bool = True):
     its own folder, and the link stays; with `follow_links=False` the link itself is replaced
     by the file, and what it pointed to is left alone (a dataset's frames, where a link may
     point to another frame's file).  A device, a FIFO or "-" (standard output) cannot be
-    replaced: the data is written straight to it.  Errors are WriteError naming `path`.
+    replaced: the data is written straight to it.  With `within` (a folder above `path`), no
+    folder between it and `path` may be a link either: a dataset's file is written in the
+    dataset (a folder link would put it in another output's folder, or outside).  Errors are
+    WriteError naming `path`.
     """
     shown = short_path(path)
     if shown == STDOUT:
         yield _Stream(sys.stdout.buffer, shown)
         return
     path = Path(path)
+    if within is not None:
+        _no_folder_link(Path(within), path, shown)
     if path.is_symlink() and follow_links:
         path = Path(os.path.realpath(path))
     if not path.is_symlink() and path.exists() and not path.is_file() and not path.is_dir():
@@ -116,6 +122,26 @@ def atomic_write(path: str | Path, follow_links: bool = True):
             raise WriteError(exc.errno, f"{shown}: cannot write: {exc.strerror or exc}") \
                 from None
         raise
+
+
+def linked_folder(within: str | Path, path: str | Path) -> Path | None:
+    """The first folder of `path` below the folder `within` (`path` itself excluded) that is a
+    symbolic link, or None."""
+    folder = Path(within)
+    for part in Path(path).relative_to(within).parts[:-1]:
+        folder = folder / part
+        if folder.is_symlink():
+            return folder
+    return None
+
+
+def _no_folder_link(within: Path, path: Path, shown: str) -> None:
+    """WriteError when a folder of `path` below `within` is a symbolic link."""
+    folder = linked_folder(within, path)
+    if folder is not None:
+        raise WriteError(errno.ELOOP, f"{shown}: cannot write: {short_path(folder)} is a "
+                                      "symbolic link, and no file of the dataset is written "
+                                      "through one; make it a folder")
 
 
 class _Stream:
@@ -306,9 +332,10 @@ MASK_ARRAYS = {
 }
 
 
-def write_bytes(path: str | Path, data: bytes, follow_links: bool = True) -> None:
+def write_bytes(path: str | Path, data: bytes, follow_links: bool = True,
+                within: str | Path | None = None) -> None:
     """Write `data` to `path` atomically (see `atomic_write`)."""
-    with out_of_memory_while(f"writing {path}"), atomic_write(path, follow_links) as f:
+    with out_of_memory_while(f"writing {path}"), atomic_write(path, follow_links, within) as f:
         f.write(data)
 
 

@@ -66,7 +66,7 @@ def test_a_killed_worker_fails_only_the_frames_it_held():
         if victim is None and "error" not in result:
             victim = int(re.search(r"pid (\d+)", result["worker"]).group(1))
             os.kill(victim, signal.SIGKILL)
-    assert sorted(r["id"] for r in results) == [s["id"] for s in specs]
+    assert sorted(r["id"] for r in results) == [s.id for s in specs]
     failed = [r for r in results if "error" in r]
     assert 1 <= len(failed) <= local.IN_FLIGHT, failed
     assert all(r["status"] == status.RENDER_FAILED and "worker process died" in r["error"]
