@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from shadowvol.cameras import camera_to_world, intrinsics, unproject
-from shadowvol.pictures import labelled_row, tint
+from shadowvol.pictures import legible_rows, tint
 from shadowvol.io import encode_srgb
 from shadowvol.raster import shadowmap
 from shadowvol.raster.renderer import Renderer
@@ -64,10 +64,10 @@ class ShadowMapError:
         diff = tint(tint(base, self.acne, ACNE_COLOUR, 0.85), self.peter_panning,
                     PETER_PANNING_COLOUR, 0.85)
         c = self.counts()
-        return labelled_row([
+        return legible_rows([[
             (f"shadow map {self.resolution}^2, bias {self.bias:g}, PCF {self.pcf}", by_map),
             ("exact (shadow volumes)", exact),
-            (f"acne {c['acne']} (red), peter-panning {c['peter_panning']} (blue)", diff)])
+            (f"acne {c['acne']} (red), peter-panning {c['peter_panning']} (blue)", diff)]])
 
 
 class ShadowMapper:

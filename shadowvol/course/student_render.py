@@ -19,7 +19,7 @@ import numpy as np
 
 from raytrace.whitted import render
 from shadowvol.io import encode_srgb
-from shadowvol.pictures import labelled_row, tint
+from shadowvol.pictures import legible_rows, tint
 from shadowvol.scene import Scene
 
 # Two pixels differ when a channel of their linear colours does by more than this: far above
@@ -45,9 +45,9 @@ class RenderPair:
         ref = encode_srgb(self.reference)
         mine = encode_srgb(self.student) if self.student is not None else np.zeros_like(ref)
         n = int(self.differ.sum())
-        return labelled_row([("your ray_sphere and shadow_ray", mine),
+        return legible_rows([[("your ray_sphere and shadow_ray", mine),
                              ("the reference (raytrace's own)", ref),
-                             (f"{n} pixels differ (red)", tint(ref, self.differ))])
+                             (f"{n} pixels differ (red)", tint(ref, self.differ))]])
 
 
 def render_pair(workspace: Path, scene_path: Path, scene: Scene,
