@@ -72,6 +72,9 @@ def handled(restore: bool = True):
         if restore:
             signal.signal(signal.SIGINT, previous[0])
             signal.signal(signal.SIGTERM, previous[1])
+            # the block has answered its signal: left pending, it would stop every later atomic
+            # write of this process (`raise_pending`), in code that never saw it
+            _Pending.signum = None
 
 
 @contextlib.contextmanager

@@ -185,3 +185,18 @@ def test_deferred_holds_a_signal_until_the_block_ends(signum):
                 time.sleep(0.05)
                 reached.append("again")
         assert reached[-1] == "again"
+
+
+def test_a_signal_answered_inside_handled_is_not_pending_after_it(tmp_path):
+    """In one process (a notebook calling the CLI's main, say): a SIGTERM that `handled`
+    turned into Terminated is answered when the block ends; later writes go through."""
+    from shadowvol import signals
+    from shadowvol.io import write_bytes
+
+    with pytest.raises(signals.Terminated):
+        with signals.handled():
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)
+    assert signals.pending() is None
+    write_bytes(tmp_path / "after.bin", b"written")
+    assert (tmp_path / "after.bin").read_bytes() == b"written"
