@@ -26,7 +26,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from shadowvol.fields import caster_words
+from shadowvol.frame import caster_words
 from shadowvol.scene import Scene, SceneError, hard_lights
 
 ENV = "SHADOWVOL_MEMORY_BUDGET"

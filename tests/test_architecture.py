@@ -36,7 +36,7 @@ FLOORS = {
     "shadowvol.cameras": (2, "model"),
     "shadowvol.primitives": (2, "model"),
     "shadowvol.arealights": (2, "model"),
-    "shadowvol.fields": (2, "model"),
+    "shadowvol.frame": (2, "model"),
     "shadowvol.planes": (2, "model"),
     "shadowvol.checks": (2, "model"),
     "shadowvol.io": (1, "base"),
@@ -50,7 +50,7 @@ FLOORS = {
 ENTRY_FILES = {"shadowvol.__main__", "raytrace.__main__"}
 # What the witness may import of this project: the model it shares with the rasterizer.
 RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.lights", "shadowvol.cameras",
-                       "shadowvol.primitives", "shadowvol.arealights", "shadowvol.fields",
+                       "shadowvol.primitives", "shadowvol.arealights", "shadowvol.frame",
                        "shadowvol.planes", "shadowvol.checks", "shadowvol.errors", "shadowvol.io",
                        "shadowvol.signals"}
 # Third-party and standard modules that only one folder may import.

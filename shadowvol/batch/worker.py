@@ -27,7 +27,7 @@ from shadowvol.batch import egl, formats, frames
 from shadowvol.batch.outputs import OUTPUTS, fields_of
 from shadowvol.cameras import calibration
 from shadowvol.errors import RENDER_FAILED, message, status_of
-from shadowvol.io import GROUND_TRUTH, soft_arrays
+from shadowvol.frame import GROUND_TRUTH, soft_arrays
 from shadowvol.scene import Camera, Scene, hard_lights, light_samples
 from shadowvol.scenefile import light_from_dict, load_scene
 

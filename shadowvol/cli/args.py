@@ -11,7 +11,7 @@ import argparse
 
 from shadowvol import memory
 from shadowvol.cli import status
-from shadowvol.io import GROUND_TRUTH
+from shadowvol.frame import GROUND_TRUTH
 
 SCENE_HELP = "scene file (.toml or .json)"
 BACKEND_HELP = ("triangle intersection: 'embree' (fast, float32) or 'numpy' (the float64 "

@@ -10,7 +10,8 @@ from shadowvol import memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
-from shadowvol.io import save_masks, save_png
+from shadowvol.frame import save_masks
+from shadowvol.io import save_png
 from shadowvol.raster.planar_pass import ReceiverError, render_planar
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene

@@ -26,7 +26,7 @@ from pathlib import Path
 
 from raytrace import exercise, photon, shadow_masks  # (area lights: lit where every sample reaches)
 from raytrace.backends import BACKENDS
-from raytrace.groundtruth import check_outputs, ground_truth
+from raytrace.groundtruth import ground_truth
 from raytrace.photonmap import KERNELS
 from raytrace.raytree import format_tree, ray_tree
 from raytrace.sampling import FILTERS
@@ -38,13 +38,8 @@ from shadowvol.cli import outputs, raytrace_outlook, status
 from shadowvol.course import raytree_slide
 from shadowvol.course.exercise_picture import plane_figure, tir_figure
 from shadowvol.course.slides import Layout
-from shadowvol.io import (
-    atomic_write,
-    save_exr,
-    save_masks,
-    save_png,
-    save_png16,
-)
+from shadowvol.frame import save_masks
+from shadowvol.io import atomic_write, save_exr, save_png, save_png16
 from shadowvol.pictures import ground_truth_picture, masks_image
 from shadowvol.scene import SceneError, hard_lights, light_samples
 from shadowvol.scenefile import load_scene
@@ -233,7 +228,7 @@ def _masks(args) -> int:
                  args.memory_budget, args.scene)
     if wanted or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
         # the counts of an area light (lit_count, samples) come with the ground truth's rays
-        truth = ground_truth(scene, check_outputs(scene, wanted), backend=args.backend)
+        truth = ground_truth(scene, wanted, backend=args.backend)
         lit, coverage, arrays = truth.lit, truth.coverage, truth.arrays()
         picture = (ground_truth_picture(truth, [o.name for o in scene.objects]) if wanted
                    else masks_image(lit, coverage))

@@ -13,7 +13,8 @@ from shadowvol import memory
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
 from shadowvol.errors import OutOfMemory, RenderError
-from shadowvol.io import GROUND_TRUTH, encode_srgb, save_exr, save_masks, save_png, save_png16
+from shadowvol.frame import GROUND_TRUTH, save_masks
+from shadowvol.io import encode_srgb, save_exr, save_png, save_png16
 from shadowvol.pictures import ROLE_COLOURS, captioned, heat_maps
 from shadowvol.raster.context import create_context
 from shadowvol.raster.renderer import Renderer
