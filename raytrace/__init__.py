@@ -21,7 +21,7 @@ __all__ = ["GroundTruth", "ground_truth", "render", "shadow_masks", "soft_masks"
 # name -> the module that defines it, imported on first access (PEP 562): `import raytrace`
 # (and `python -m raytrace`, before its command line takes Ctrl-C) loads nothing but itself
 _LAZY = {"GroundTruth": "raytrace.groundtruth", "ground_truth": "raytrace.groundtruth",
-         "render": "raytrace.whitted", "soft_masks": "raytrace.soft"}
+         "render": "raytrace.outlook.whitted", "soft_masks": "raytrace.soft"}
 
 
 def __getattr__(name: str):

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
+from shadowvol import io
 from shadowvol.cameras import Calibration
 from shadowvol.errors import out_of_memory_while
-from shadowvol.io import npz_bytes, write_bytes
 from shadowvol.scene import AreaLight, SceneError, shorten
 
 __all__ = ["CASTER_WORD_BITS", "FIELDS", "Field", "Frame", "GROUND_TRUTH", "MASK_ARRAYS",
@@ -277,11 +277,11 @@ def masks_bytes(lit: np.ndarray, coverage: np.ndarray,
                 arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> bytes:
     """A mask file (`mask_file`) as `.npz` bytes: the same arrays give the same bytes
     (`shadowvol.io.npz_bytes`)."""
-    return npz_bytes(**mask_file(lit, coverage, arrays, light_samples))
+    return io.npz_bytes(**mask_file(lit, coverage, arrays, light_samples))
 
 
 def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
                arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> None:
     """Write a mask file (`masks_bytes`) through `shadowvol.io`'s atomic writer."""
     with out_of_memory_while(f"writing {path}"):
-        write_bytes(path, masks_bytes(lit, coverage, arrays, light_samples))
+        io.write_bytes(path, masks_bytes(lit, coverage, arrays, light_samples))

@@ -191,7 +191,7 @@ def ray_masks(scene: Scene, outputs=(), picture: bool = True) -> Estimate:
 
 
 def whitted(scene: Scene, written=("png",)) -> Estimate:
-    """`raytrace.whitted.render` of `scene` ((H, W, 3) float64) and the files written."""
+    """`raytrace.outlook.whitted.render` of `scene` ((H, W, 3) float64) and the files written."""
     per = {"image float64": 24} | _written(written, len(scene.lights), (), float64=True)
     fixed = {"tiles in flight": _tiles(scene.width, WHITTED_TILE_RAYS, WHITTED_RAY_BYTES,
                                        threads())}
@@ -200,8 +200,8 @@ def whitted(scene: Scene, written=("png",)) -> Estimate:
 
 
 def path_traced(scene: Scene, spp: int, written=("png",)) -> Estimate:
-    """`raytrace.pathtrace.render`: the float64 sums and squares, then the mean, the variance
-    and their temporaries (6 x 24 B/px at the end; one more as the margin measured: the
+    """`raytrace.outlook.path.pathtrace.render`: the float64 sums and squares, then the mean, the
+    variance and their temporaries (6 x 24 B/px at the end; one more as the margin measured: the
     tiles' results added into the sums), and the files written."""
     per = {"sums, mean, variance (float64)": 7 * 24} | \
         _written(written, len(scene.lights), (), float64=True)
@@ -212,7 +212,7 @@ def path_traced(scene: Scene, spp: int, written=("png",)) -> Estimate:
 
 
 def radiosity_display(scene: Scene, written=("png",), flat: bool = False) -> Estimate:
-    """`raytrace.radiosity.display`, untiled: every pixel's ray float64 (origin, direction,
+    """`raytrace.outlook.radiosity.display`, untiled: every pixel's ray float64 (origin, direction,
     their unit copy), the hits, the image and the barycentric blend's per-pixel arrays; with
     `flat` the interpolated image is kept while the flat one is made."""
     per = {"rays (float64)": 3 * 24 + 8 + 8, "image float64": 24 * (1 + flat),

@@ -84,7 +84,7 @@ CORNELL = SCENES / "cornell.toml"
 
 FALSE_ALARM = 1e-3  # probability that a correct renderer fails one statistical test function
 
-# Depth-1 path tracing vs the masks' quadrature (raytrace.direct): the midpoint rule on 4^3
+# Depth-1 path tracing vs the masks' quadrature (raytrace.outlook.direct): the midpoint rule on 4^3
 # points per emitter triangle misses or adds up to one point's share in deep penumbra; measured
 # at most 0.32% of the image's median radiance on a 4x4 block at 48x48, allowed 1%.
 QUADRATURE_ALLOWANCE = 0.01

@@ -78,7 +78,8 @@ def seed(p: argparse.ArgumentParser, help: str) -> None:
 
 
 def photon(p: argparse.ArgumentParser, kernels: tuple[str, ...]) -> None:
-    """The photon map's options on `raytrace render` (kernels: `raytrace.photonmap.KERNELS`)."""
+    """The photon map's options on `raytrace render` (kernels:
+    `raytrace.outlook.photonmap.KERNELS`)."""
     p.add_argument("--photons", type=int, default=200_000, metavar="N",
                    help="photon mapping: photons shot from the lights (default 200000); its "
                         "eye rays per pixel are --spp's")

@@ -16,10 +16,11 @@ import numpy as np
 import pytest
 from builders import ROOT, SCENES
 
+import raytrace.exercise
 import raytrace.masks
-import raytrace.pathtrace
-import raytrace.radiosity
-import raytrace.whitted
+import raytrace.outlook.path.pathtrace
+import raytrace.outlook.radiosity
+import raytrace.outlook.whitted
 import shadowvol.cli.compare
 import shadowvol.cli.demo
 import shadowvol.cli.planar
@@ -91,8 +92,8 @@ def test_the_default_budget_is_three_quarters_of_the_machine(monkeypatch):
 def test_the_model_agrees_with_the_code_it_counts():
     assert memory.GL_FRAME_BYTES_PER_PIXEL == target.BYTES_PER_PIXEL
     assert memory.MASK_TILE_RAYS == raytrace.masks.MASK_TILE_RAYS
-    assert memory.WHITTED_TILE_RAYS == raytrace.whitted.TILE_RAYS
-    assert memory.PATH_TILE_PATHS == raytrace.pathtrace.TILE_PATHS
+    assert memory.WHITTED_TILE_RAYS == raytrace.outlook.whitted.TILE_RAYS
+    assert memory.PATH_TILE_PATHS == raytrace.outlook.path.pathtrace.TILE_PATHS
     assert target.LIGHTS_PER_PAGE == 23  # memory.raster's pages
 
 
@@ -129,15 +130,17 @@ OVER_BUDGET = {  # command -> (argv, what must not run)
     "shadowvol planar": (["planar", "P", "-o", "O/x.png"],
                          (shadowvol.cli.planar, "render_planar")),
     "raytrace render": (["render", "S", "-o", "O/x.png", "--no-progress"],
-                        (shadowvol.cli.raytrace, "render")),
-    "raytrace masks": (["masks", "S", "-o", "O/x.npz"], (shadowvol.cli.raytrace, "shadow_masks")),
+                        (shadowvol.cli.raytrace.render, "render")),
+    "raytrace masks": (["masks", "S", "-o", "O/x.npz"],
+                       (shadowvol.cli.raytrace.masks, "shadow_masks")),
     "raytrace masks --outputs": (["masks", "S", "-o", "O/x.npz", "--outputs", "all"],
-                                 (shadowvol.cli.raytrace, "ground_truth")),
+                                 (shadowvol.cli.raytrace.masks, "ground_truth")),
     "raytrace path": (["render", "S", "-o", "O/x.png", "--integrator", "path", "--spp", "4"],
-                      (raytrace.pathtrace, "render")),
-    "raytrace radiosity": (["radiosity", "S", "-o", "O/x.png"], (raytrace.radiosity, "solve")),
+                      (raytrace.outlook.path.pathtrace, "render")),
+    "raytrace radiosity": (["radiosity", "S", "-o", "O/x.png"],
+                           (raytrace.outlook.radiosity, "solve")),
     "raytrace tree": (["tree", "S", "--pixel", "3", "3", "-o", "O/x.png"],
-                      (shadowvol.cli.raytrace, "ray_tree")),
+                      (shadowvol.cli.raytrace.tree, "ray_tree")),
 }
 
 
@@ -184,7 +187,7 @@ def test_the_tree_slide_is_judged_by_the_image_it_traces(tmp_path, monkeypatch):
     command goes on to trace (and is stopped there), it is not refused for the scene's size."""
     scene = _scene(tmp_path, width=4000, height=3000)
     assert memory.whitted(load_scene(scene)).total + memory.BASE > 512 * 2**20
-    monkeypatch.setattr(shadowvol.cli.raytrace, "ray_tree", _boom)
+    monkeypatch.setattr(shadowvol.cli.raytrace.tree, "ray_tree", _boom)
     with pytest.raises(AssertionError, match="the render was started"):
         raytrace_main(["tree", str(scene), "--pixel", "3", "3", "-o", str(tmp_path / "x.png"),
                        "--memory-budget", "512MiB"])
@@ -250,24 +253,25 @@ OUT_OF_MEMORY = {  # command -> (tool, argv, [(module, name)] to fail, "while ..
               "while rendering ("),  # the frame is named first: cage/000000
     "view": ("shadowvol", ["view", "S"], [], "while rendering ("),
     "raytrace render": ("raytrace", ["render", "S", "-o", "O/x.png", "--no-progress"],
-                        [(raytrace.whitted, "trace")], "while rendering ("),
+                        [(raytrace.outlook.whitted, "trace")], "while rendering ("),
     "raytrace render, writing": ("raytrace", ["render", "S", "-o", "O/x.png", "--exr", "O/x.exr",
                                               "--no-progress"],
                                  [(shadowvol.io, "exr_bytes")], "while writing O/x.exr ("),
     "raytrace masks": ("raytrace", ["masks", "S", "-o", "O/x.npz"],
                        [(raytrace.masks, "_tile_masks")], "while rendering ("),
     "raytrace masks --outputs": ("raytrace", ["masks", "S", "-o", "O/x.npz", "--outputs", "all"],
-                                 [(shadowvol.cli.raytrace, "ground_truth")], "while rendering ("),
+                                 [(shadowvol.cli.raytrace.masks, "ground_truth")],
+                                 "while rendering ("),
     "raytrace tree": ("raytrace", ["tree", "S", "--pixel", "3", "3", "-o", "O/x.png"],
-                      [(shadowvol.cli.raytrace, "ray_tree")], "while rendering ("),
+                      [(shadowvol.cli.raytrace.tree, "ray_tree")], "while rendering ("),
     "raytrace exercise": ("raytrace", ["exercise", "plane", "-o", "O/x.png"],
-                          [(shadowvol.cli.raytrace.exercise, "solve_plane")], "while rendering ("),
+                          [(raytrace.exercise, "solve_plane")], "while rendering ("),
     "raytrace path": ("raytrace", ["render", "R", "-o", "O/x.png", "--integrator", "path",
                                    "--spp", "1", "--no-progress"],
-                      [(raytrace.pathtrace, "trace_rows")], "while rendering ("),
+                      [(raytrace.outlook.path.pathtrace, "trace_rows")], "while rendering ("),
     "raytrace radiosity": ("raytrace", ["radiosity", "R", "-o", "O/x.png", "--level", "0",
                                         "--rays", "8"],
-                           [(raytrace.radiosity, "display")], "while rendering ("),
+                           [(raytrace.outlook.radiosity, "display")], "while rendering ("),
 }
 
 
