@@ -48,11 +48,12 @@ FLOORS = {
 }
 # Entry files: `python -m shadowvol` and `python -m raytrace` start the command line.
 ENTRY_FILES = {"shadowvol.__main__", "raytrace.__main__"}
-# What the witness may import of this project: the model it shares with the rasterizer.
+# What the witness may import of this project: the model it shares with the rasterizer (and
+# `memory`, the GL-free vocabulary each renderer gives its own memory estimate in).
 RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.lights", "shadowvol.cameras",
                        "shadowvol.primitives", "shadowvol.arealights", "shadowvol.frame",
                        "shadowvol.planes", "shadowvol.checks", "shadowvol.errors", "shadowvol.io",
-                       "shadowvol.signals"}
+                       "shadowvol.signals", "shadowvol.memory"}
 # Global illumination, beyond the witness: the rest of raytrace/ (the witness: masks, groundtruth,
 # soft, backends, intersect, tolerances, camera) never imports it; the package's door
 # (`raytrace/__init__.py`, which names `raytrace.render` lazily) may.

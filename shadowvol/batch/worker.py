@@ -199,15 +199,22 @@ class Worker:
                                                 ("masks", bool({"lit", "coverage"} & wanted)))
                         if asks)
         if spec["renderer"] == "raytrace":
-            parts = [memory.whitted(frame_scene, written=())] if "image" in wanted else []
+            import raytrace.estimate
+            import raytrace.outlook.estimate
+
+            parts = ([raytrace.outlook.estimate.whitted(frame_scene, written=())]
+                     if "image" in wanted else [])
             if truth or {"lit", "coverage"} & wanted:
-                parts.append(memory.ray_masks(frame_scene, truth, picture=False))
+                parts.append(raytrace.estimate.masks(frame_scene, truth, picture=False))
             estimate = memory.Estimate("the ray tracer", frame_scene.width, frame_scene.height,
                                        tuple(t for part in parts for t in part.terms))
         else:
+            import shadowvol.raster.estimate
+
             asked = tuple(name for name in wanted if name in RASTER_OUTPUTS)
-            estimate = memory.raster(frame_scene, asked, written=written, gl_in_host=(
-                self.gl_renderer is None or memory.gl_in_host(self.gl_renderer)))
+            estimate = shadowvol.raster.estimate.render(
+                frame_scene, asked, written=written,
+                gl_in_host=self.gl_renderer is None or memory.gl_in_host(self.gl_renderer))
         source = self.scenes.get(spec["scene"])
         memory.check(estimate, self.budget, source if isinstance(source, (str, os.PathLike))
                      else spec["scene"])

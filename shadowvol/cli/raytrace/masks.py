@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from raytrace import shadow_masks  # (area lights: lit where every sample reaches)
+from raytrace import estimate, shadow_masks  # (area lights: lit where every sample reaches)
 from raytrace.backends import BACKENDS
 from raytrace.groundtruth import ground_truth
 from shadowvol import memory
@@ -50,7 +50,7 @@ def command(args) -> int:
         paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
     outputs.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
     scene = load_scene(args.scene)
-    memory.check(memory.ray_masks(scene, wanted, picture="picture" in paths),
+    memory.check(estimate.masks(scene, wanted, picture="picture" in paths),
                  args.memory_budget, args.scene)
     if wanted or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
         # the counts of an area light (lit_count, samples) come with the ground truth's rays

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 from raytrace.backends import BACKENDS
-from raytrace.outlook import radiosity
+from raytrace.outlook import estimate, radiosity
 from shadowvol import memory
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
@@ -63,8 +63,8 @@ def command(args) -> int:
         if not ok:
             raise SceneError(flag, f"must be {rule}, got {value}")
     scene = load_scene(args.scene)
-    memory.check(memory.radiosity_display(scene, ("exr",) if args.exr else ("png",),
-                                          flat=bool(args.flat)),
+    memory.check(estimate.radiosity_display(scene, ("exr",) if args.exr else ("png",),
+                                            flat=bool(args.flat)),
                  args.memory_budget, args.scene)
     try:
         solution = radiosity.solve(scene, level=args.level, rays_per_patch=args.rays,

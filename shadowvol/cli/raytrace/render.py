@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from raytrace.backends import BACKENDS
-from raytrace.outlook import photon
+from raytrace.outlook import estimate, photon
 from raytrace.outlook.path import pathtrace
 from raytrace.outlook.photonmap import KERNELS
 from raytrace.outlook.sampling import FILTERS
@@ -74,7 +74,7 @@ def command(args) -> int:
         if value < low:
             raise SceneError(flag, f"must be >= {low}, got {value}")
     scene = load_scene(args.scene)
-    memory.check(memory.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
+    memory.check(estimate.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
     image = render(scene, max_depth=args.max_depth, backend=args.backend,
                    progress=False if args.no_progress else None, spp=spp, seed=args.seed,
@@ -102,7 +102,7 @@ def path_traced(args) -> int:
     if depth is not None and depth < 1:
         raise SceneError("--max-depth", f"must be >= 1 for path tracing, got {depth}")
     scene = load_scene(args.scene)
-    memory.check(memory.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
+    memory.check(estimate.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
     kwargs = {} if depth is None else {"max_depth": depth}
     result = pathtrace.render(scene, spp=spp, seed=args.seed, backend=args.backend,
@@ -134,14 +134,14 @@ def photon_mapped(args) -> int:
         raise SceneError("--knn", "give --knn or --radius, not both")
     try:
         k = photon.DEFAULT_K if args.knn is None else args.knn
-        estimate = photon.Estimate(k=None if args.radius is not None else k,
-                                   radius=args.radius, kernel=args.kernel)
+        density = photon.Estimate(k=None if args.radius is not None else k,
+                                  radius=args.radius, kernel=args.kernel)
     except ValueError as exc:
         raise SceneError("--radius" if args.radius is not None else "--knn", str(exc)) from None
     scene = load_scene(args.scene)
-    memory.check(memory.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
+    memory.check(estimate.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
-    result = photon.render(scene, photons=args.photons, estimate=estimate, spp=spp,
+    result = photon.render(scene, photons=args.photons, estimate=density, spp=spp,
                            gather=args.final_gather, seed=args.seed, backend=args.backend,
                            light_samples=args.light_samples)
     save_png(args.output, result.image)

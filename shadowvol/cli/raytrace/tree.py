@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from raytrace.backends import BACKENDS
+from raytrace.outlook.estimate import whitted
 from raytrace.outlook.raytree import format_tree, ray_tree
 from raytrace.outlook.whitted import render
 from shadowvol import memory
@@ -54,7 +55,7 @@ def command(args) -> int:
                                     "image")
     layout = Layout(supersample=1)  # the gallery's slide, its image traced once a pixel
     if args.output:
-        estimate = memory.whitted(raytree_slide.traced_scene(layout, scene))
+        estimate = whitted(raytree_slide.traced_scene(layout, scene))
         memory.check(dataclasses.replace(estimate, what=f"{estimate.what} on the ray tree "
                                                         "slide's image"),
                      args.memory_budget, args.scene)
