@@ -2,10 +2,11 @@
 
 An `Estimate` is a model of the bytes one command allocates for its image, per renderer and
 per output asked for, given by the renderer that allocates them (`shadowvol.raster.estimate`,
-`raytrace.estimate`, `raytrace.outlook.estimate`; `shadowvol.compare.estimate` adds two up,
-from the renderers' own numbers, never copies of them): the sum of named terms, each "bytes per pixel x pixels" or a fixed tile
-size, read off the code that allocates them (the arrays a call makes and keeps, its staging
-buffers and its largest temporaries, and the encoders' copies).  It counts what grows with the
+`raytrace.estimate`, `raytrace.outlook.estimate`; `shadowvol.compare.estimate` adds two up),
+from the renderers' own numbers, never copies of them: the sum of named terms, each "bytes
+per pixel x pixels" or a fixed tile size, read off the code that allocates them (the arrays a
+call makes and keeps, its staging buffers and its largest temporaries, and the encoders'
+copies).  It counts what grows with the
 image; the process itself (Python, numpy, the GL driver, Embree, the scene's geometry) is the
 fixed `BASE` allowance.  `tests/cli/test_memory_model.py` measures the peak RSS growth (VmHWM)
 of fresh processes and checks the model is an upper bound within a factor of it.
