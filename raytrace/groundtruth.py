@@ -146,7 +146,8 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     if "facing_count" in out:
         out["facing_count"] = counts["facing_count"]
     return GroundTruth(lit=lit.reshape(L, H, W), coverage=coverage.reshape(H, W),
-                       calibration=calibration(scene), lit_count=counts["lit_count"].reshape(L, H, W), samples=samples,
+                       calibration=calibration(scene),
+                       lit_count=counts["lit_count"].reshape(L, H, W), samples=samples,
                        **{name: value.reshape(frame.shape(name, L, H, W, objects=n))
                           for name, value in out.items()})
 

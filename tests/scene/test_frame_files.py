@@ -1,6 +1,7 @@
 """The writers of a frame's ground truth (shadowvol.frame, shadowvol.io): the mask file's extra
 arrays, checked by name, dtype and shape; linear OpenEXR read back by the OpenEXR package;
-16-bit PNG read back by Pillow; and the camera matrices (shadowvol.cameras) against their definitions."""
+16-bit PNG read back by Pillow; and the camera matrices (shadowvol.cameras) against their
+definitions."""
 
 from __future__ import annotations
 
