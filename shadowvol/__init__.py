@@ -29,7 +29,7 @@ _LAZY = {**{name: "shadowvol.scene" for name in ("Camera", "DirectionalLight", "
          "Renderer": "shadowvol.raster.renderer", "render": "shadowvol.raster.renderer",
          "load_scene": "shadowvol.scenefile", "save_scene": "shadowvol.scenefile",
          "from_trimesh": "shadowvol.trimesh_scene",
-         "save_png": "shadowvol.io", "save_masks": "shadowvol.io", "show": "shadowvol.display"}
+         "save_png": "shadowvol.io", "save_masks": "shadowvol.frame", "show": "shadowvol.display"}
 
 
 def __getattr__(name: str):

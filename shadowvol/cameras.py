@@ -53,7 +53,7 @@ class Calibration(NamedTuple):
     light_direction: np.ndarray
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """The arrays by their file names (`shadowvol.io.save_masks`)."""
+        """The arrays by their file names (`shadowvol.frame.save_masks`)."""
         return self._asdict()
 
 

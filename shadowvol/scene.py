@@ -68,11 +68,11 @@ class Material:
 
     `emission` is the radiance the surface emits itself, the same from both faces and in every
     direction (a Lambertian emitter): it makes an object an area light for the path tracer and
-    radiosity (`raytrace.pathtrace`, `raytrace.radiosity`).  The shadow-volume renderer, the
-    masks and Whitted ignore it: they light only with `Scene.lights`.
+    radiosity (`raytrace.outlook.path.pathtrace`, `raytrace.outlook.radiosity`).  The shadow-volume
+    renderer, the masks and Whitted ignore it: they light only with `Scene.lights`.
 
     `roughness` in [0, 1] blurs Whitted's reflection into a glossy lobe around the mirror
-    direction (`raytrace.sampling.glossy`); 0 is the exact mirror.  The rasterizer, the path
+    direction (`raytrace.outlook.sampling.glossy`); 0 is the exact mirror.  The rasterizer, the path
     tracer and radiosity ignore it.
     """
 

@@ -86,7 +86,7 @@ CORNELL = SCENES / "cornell.toml"
 
 FALSE_ALARM = 1e-3  # probability that a correct renderer fails one statistical test function
 
-# Depth-1 path tracing vs the masks' quadrature (raytrace.direct): the midpoint rule on 4^3
+# Depth-1 path tracing vs the masks' quadrature (raytrace.outlook.direct): the midpoint rule on 4^3
 # points per emitter triangle misses or adds up to one point's share in deep penumbra; measured
 # at most 0.32% of the image's median radiance on a 4x4 block at 48x48, allowed 1%.
 QUADRATURE_ALLOWANCE = 0.01
@@ -439,7 +439,7 @@ def check_cast_switch(before, after, j: int, objects: int) -> np.ndarray:
     unchanged and j's cleared; where j alone shadowed a pixel (no other bit) it is lit by
     every facing sample, where j's bit was not set nothing changed, elsewhere the count only
     rose; the rest unchanged.  Returns `alone` (L, H, W) bool."""
-    from shadowvol.fields import decode_casters
+    from shadowvol.frame import decode_casters
 
     bits = decode_casters(before.casters, objects)
     others = np.delete(bits, j, axis=-1).any(-1)

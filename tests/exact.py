@@ -30,7 +30,7 @@ from shadowvol.compare.maskdiff import diff_image, edge_pixels, mask_report
 from shadowvol.io import save_png
 from shadowvol.pictures import masks_image
 from shadowvol.scenefile import save_scene
-from shadowvol.fields import caster_words
+from shadowvol.frame import caster_words
 from shadowvol.scene import DirectionalLight, Scene, SpotLight, hard_lights
 
 # The checker's own float64 tolerance: a triangle met at t <= EXACT_T_MIN of the segment (or,

@@ -19,7 +19,7 @@ import numpy as np
 
 from shadowvol.batch.spec import FrameSpec
 from shadowvol import memory
-from shadowvol.io import GROUND_TRUTH, soft_arrays
+from shadowvol.frame import GROUND_TRUTH, soft_arrays
 from shadowvol.scene import hard_lights
 
 # what a batch frame asks `Renderer.render(outputs=...)` for (its OUTPUTS; named here, since
@@ -63,8 +63,10 @@ class Raster:
         return {"method": spec.method}
 
     def estimate(self, worker, frame_scene, wanted, truth, written) -> memory.Estimate:
+        import shadowvol.raster.estimate
+
         asked = tuple(name for name in wanted if name in RASTER_OUTPUTS)
-        return memory.raster(frame_scene, asked, written=written, gl_in_host=(
+        return shadowvol.raster.estimate.render(frame_scene, asked, written=written, gl_in_host=(
             worker.gl_renderer is None or memory.gl_in_host(worker.gl_renderer)))
 
     def arrays(self, worker, spec, scene, camera, lights, wanted, truth) -> dict:
@@ -94,9 +96,13 @@ class Rays:
         return {"max_depth": spec.max_depth}
 
     def estimate(self, worker, frame_scene, wanted, truth, written) -> memory.Estimate:
-        parts = [memory.whitted(frame_scene, written=())] if "image" in wanted else []
+        import raytrace.estimate
+        import raytrace.outlook.estimate
+
+        parts = ([raytrace.outlook.estimate.whitted(frame_scene, written=())]
+                 if "image" in wanted else [])
         if truth or {"lit", "coverage"} & wanted:
-            parts.append(memory.ray_masks(frame_scene, truth, picture=False))
+            parts.append(raytrace.estimate.masks(frame_scene, truth, picture=False))
         return memory.Estimate("the ray tracer", frame_scene.width, frame_scene.height,
                                tuple(t for part in parts for t in part.terms))
 

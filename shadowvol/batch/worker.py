@@ -28,7 +28,7 @@ from shadowvol.batch.sources import SOURCES
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.cameras import calibration
 from shadowvol.errors import RENDER_FAILED, message, status_of
-from shadowvol.io import GROUND_TRUTH
+from shadowvol.frame import GROUND_TRUTH
 from shadowvol.scene import Camera, Scene, light_samples
 from shadowvol.scenefile import light_from_dict, load_scene
 

@@ -14,6 +14,7 @@ from shadowvol.cli import outputs, status
 from shadowvol.compare.shadowmaps import ShadowMapper
 from shadowvol.course.shadowmap_plot import plot, sweep
 from shadowvol.io import save_png, write_bytes
+from shadowvol.raster import estimate
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
@@ -67,7 +68,7 @@ def command(args) -> int:
     outputs.check(paths, {"image": "-o", "json": "--json", "picture": "--plot"})
     _check(args)
     scene = load_scene(args.scene)
-    memory.check(memory.raster(scene, written=("png",)), args.memory_budget, args.scene)
+    memory.check(estimate.render(scene, written=("png",)), args.memory_budget, args.scene)
     try:
         mapper = ShadowMapper(scene, args.light)
     except ValueError as exc:

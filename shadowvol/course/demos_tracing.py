@@ -8,7 +8,7 @@ import numpy as np
 
 import raytrace
 from raytrace import exercise
-from raytrace.raytree import format_tree, ray_tree
+from raytrace.outlook.raytree import format_tree, ray_tree
 from shadowvol.compare import maskdiff
 from shadowvol.compare.comparison import compare
 from shadowvol.course import exercise_picture, raytree_diagram, raytree_slide, slides

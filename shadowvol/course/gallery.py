@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 from shadowvol import memory
+from shadowvol.compare import estimate
 from shadowvol.course import (
     demos_outlook,
     demos_tracing,
@@ -115,8 +116,8 @@ class Gallery:
                 scene = self.scene(path.stem)
             except SceneError:
                 continue
-            memory.check(memory.compare(scene.replace(width=self.size[0],
-                                                      height=self.size[1])), budget, str(path))
+            memory.check(estimate.compare(scene.replace(width=self.size[0],
+                                                        height=self.size[1])), budget, str(path))
 
     def path(self, name: str) -> str:
         """How a command names the scene file: scenes/<name>.toml in a checkout."""

@@ -4,12 +4,12 @@
     diagram = draw_diagram(scene, tree, 1000, 900, 28)    # (H, W, 3) uint8, left to right
     image = draw_rays(image, scene, tree, 28)             # the same rays over the render
 
-The root (the eye ray) is at the left, its children in the next column and so on; each box
-says the ray's number (as `raytrace.raytree.format_tree` prints it), its kind and what it meets,
-and each edge is labelled with Whitted's letters: S a shadow ray, R the reflected ray, T the
-transmitted (refracted) one.  Box colours are the rays' colours over the image
-(`COLOURS`), so the diagram and the picture read together.  Pillow only.  The slide that
-puts the two side by side is `raytree_slide`.
+The root (the eye ray) is at the left, its children in the next column and so on; each box says the
+ray's number (as `raytrace.outlook.raytree.format_tree` prints it), its kind and what it meets, and
+each edge is labelled with Whitted's letters: S a shadow ray, R the reflected ray, T the transmitted
+(refracted) one.  Box colours are the rays' colours over the image (`COLOURS`), so the diagram and
+the picture read together.  Pillow only.  The slide that puts the two side by side is
+`raytree_slide`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from raytrace.camera import camera_basis, pixel_focal
-from raytrace.raytree import (
+from raytrace.outlook.raytree import (
     BLOCKED,
     FACES_AWAY,
     LIT,

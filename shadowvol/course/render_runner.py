@@ -4,7 +4,7 @@ ray-sphere intersection and shadow test.
     python -m shadowvol.course.render_runner < job.json
 
 The job (JSON on stdin): {"workspace", "scene" (a scene file), "width", "height", "out" (an
-.npy path)}.  The tracer (`raytrace.whitted`) is the project's; in this process only, its
+.npy path)}.  The tracer (`raytrace.outlook.whitted`) is the project's; in this process only, its
 spheres are met by the student's `ray_sphere.intersect` and its shadow rays ask the student's
 `shadow_ray.in_shadow` about the spheres (planes and meshes stay the tracer's).  A function
 that is missing, raises NotImplementedError or fails on a first test call is left to the
@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raytrace import whitted
+from raytrace.outlook import whitted
 from shadowvol.scene import Sphere
 from shadowvol.scenefile import load_scene
 

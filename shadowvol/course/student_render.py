@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from raytrace.whitted import render
+from raytrace.outlook.whitted import render
 from shadowvol.io import encode_srgb
 from shadowvol.pictures import legible_rows, tint
 from shadowvol.scene import Scene

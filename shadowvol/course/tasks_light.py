@@ -1,5 +1,5 @@
 """The light's tasks' hidden cases, their answers computed by the ray tracer itself
-(`raytrace.intersect`, `raytrace.whitted`): the ideal reflection, Snell's refraction with total
+(`raytrace.intersect`, `raytrace.outlook.whitted`): the ideal reflection, Snell's refraction with total
 internal reflection, the shadow-ray test and Phong at a point.
 
 Every case list is built from fixed numbers and a seeded generator, the same on every run.
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from raytrace.intersect import ray_sphere, reflect, refract
-from raytrace.whitted import World, local_colour
+from raytrace.outlook.whitted import World, local_colour
 from shadowvol.course.task import Case, Task, judge_exact, judge_vector, num, show_value, vec
 from shadowvol.primitives import sphere
 from shadowvol.scene import Camera, Material, PointLight, Scene
@@ -200,7 +200,7 @@ def _show_shadow(args) -> str:
 
 def _phong(p, n, eye, light, colour, ambient, ka, kd, ks, shininess) -> list:
     """The ray tracer's local term at p: a sphere of radius 1 touching p with normal n there,
-    one point light, the Whitted shading (`raytrace.whitted.local_colour`)."""
+    one point light, the Whitted shading (`raytrace.outlook.whitted.local_colour`)."""
     p, n, eye = (np.asarray(v, float) for v in (p, n, eye))
     material = Material(ambient=ka, diffuse=kd, specular=ks, shininess=shininess)
     scene = Scene(camera=Camera(eye=eye, target=p, fov_y=30.0),

@@ -1,5 +1,5 @@
 """The ray tasks' hidden cases, their answers computed by the ray tracer itself
-(`raytrace.intersect`, `raytrace.whitted`): ray-plane, ray-sphere, ray-triangle, (the
+(`raytrace.intersect`, `raytrace.outlook.whitted`): ray-plane, ray-sphere, ray-triangle, (the
 light's tasks are `tasks_light`'s).
 
 Every case list is built from fixed numbers and a seeded generator, the same on every run.

@@ -23,6 +23,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.cameras import calibration
+from shadowvol.frame import check_light_kinds, check_outputs
 from shadowvol.raster import bits, methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import create_context, make_current
@@ -32,13 +33,14 @@ from shadowvol.raster.overflow_policy import LightBounds
 from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.recycle import ArrayPool
-from shadowvol.raster.result import SILHOUETTES, RenderResult, check_lights, check_outputs
+from shadowvol.raster.result import (DEFAULT_OUTPUTS, OUTPUTS, SILHOUETTES, RenderResult,
+                                     check_lights)
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
 from shadowvol.raster.truth_frame import frame_truth
 from shadowvol.raster.volumes import VolumeBuilder
 from shadowvol.raster.volumes_cpu import CpuVolumes
 from shadowvol.raster.volumes_gpu import GpuVolumes
-from shadowvol.scene import AreaLight, Camera, Light, Scene, hard_lights
+from shadowvol.scene import Camera, Light, Scene, hard_lights
 
 class Renderer:
     """Renders `scene` (its geometry and materials; camera and lights may change per frame).
@@ -120,7 +122,8 @@ class Renderer:
         if method not in methods.METHODS:
             raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
                              f"got {method!r}")
-        outputs = check_outputs(outputs, stencil)
+        outputs = set(check_outputs(outputs, OUTPUTS, DEFAULT_OUTPUTS)) | (
+            {"stencil"} if stencil else set())
         lights = check_lights(lights)
         make_current(self.ctx)
         to_check = self._lights_to_check(camera, lights) if shadows else []
@@ -226,8 +229,7 @@ class Renderer:
         srgb_direct = ("image_srgb" in outputs and "image" not in outputs
                        and len(hard) <= LIGHTS_PER_PAGE)
         h, w = self.scene.height, self.scene.width
-        if plan.want_stencil and any(isinstance(light, AreaLight) for light in lights):
-            raise ValueError("stencil counts are per hard light: not for area lights")
+        check_light_kinds(plan.outputs, lights)
         zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
         truth_pages: list = []
         counts: list[np.ndarray] = []

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shadowvol import fields
+from shadowvol import frame
 from shadowvol.raster import methods, truth
 from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.plane_depth import plane_depths
@@ -22,7 +22,7 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_p
     (light index, hard light) pairs, in the pages' order; truth_pages : the facing pass's
     (lit, facing) bits per page."""
     out: dict[str, np.ndarray] = {}
-    want = set(plan.outputs) & set(fields.GROUND_TRUTH)
+    want = set(plan.outputs) & set(frame.GROUND_TRUTH)
     if not want:
         return out
     target, geometry = renderer.target, renderer.geometry
@@ -49,7 +49,7 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_p
                            np.int64)
         lit_count = np.zeros((len(lights), h, w), np.uint16)
         facing_count = np.zeros((len(lights), h, w), np.uint16)
-        casters = (np.zeros(fields.shape("casters", len(lights), h, w,
+        casters = (np.zeros(frame.shape("casters", len(lights), h, w,
                                          objects=len(renderer.scene.objects)), np.uint64)
                    if "casters" in want else None)
         receiving = covered   # casters are named where the visible object receives shadows

@@ -13,7 +13,7 @@ from builders import overlapping_shadows, switched
 
 import raytrace
 from shadowvol import batch
-from shadowvol.fields import decode_casters
+from shadowvol.frame import decode_casters
 from shadowvol.io import load_mask_arrays
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scenefile import light_from_dict, load_scene, save_scene

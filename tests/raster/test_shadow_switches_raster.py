@@ -28,7 +28,7 @@ from builders import (
 
 from raytrace.groundtruth import ground_truth
 from shadowvol.compare.maskdiff import edge_pixels
-from shadowvol.fields import decode_casters
+from shadowvol.frame import decode_casters
 from shadowvol.primitives import mesh, plane
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import Camera, PointLight, Scene

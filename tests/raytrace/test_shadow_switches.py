@@ -32,9 +32,9 @@ from exact import exact_casters
 from raytrace import whitted
 from raytrace.camera import primary_rays
 from raytrace.groundtruth import ground_truth
-from raytrace.raytree import BLOCKED, LIT, ray_tree
+from raytrace.outlook.raytree import BLOCKED, LIT, ray_tree
 from shadowvol.compare.maskdiff import count_edges, edge_pixels
-from shadowvol.fields import decode_casters
+from shadowvol.frame import decode_casters
 
 OUTPUTS = ("facing", "facing_count", "casters", "object_id")
 SCENE = overlapping_shadows()

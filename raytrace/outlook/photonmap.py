@@ -17,7 +17,7 @@ corner, is not light arriving at x):
   weights integrate to the disc's area).
 
 The radiance a Lambertian surface sends is kd / pi times E; each photon's power already carries
-the 1 / (photons shot) of its light (`raytrace.photon.share`).  The known bias of density
+the 1 / (photons shot) of its light (`raytrace.outlook.photon.share`).  The known bias of density
 estimation -- the disc straddles an edge or a change of illumination -- shrinks with r, i.e.
 as photons grow for a fixed k or as the radius shrinks.
 """

@@ -29,15 +29,15 @@ ray.  Refraction decides entering / leaving by the geometric normal (outward for
 winding for triangles, edge_u × edge_v for parallelograms) against the ray, and assumes the
 other side is air (ior 1): nested media are not tracked.
 
-Distributed ray tracing (Cook, Porter, Carpenter 1984) generalises three of these: `spp`
-stratified samples per pixel through a box or tent filter (antialiasing), a lens of radius
-`camera.aperture` focused at `camera.focus` (depth of field) and a material's `roughness`
-(a glossy lobe instead of the mirror ray, one ray per pixel sample and generation), each
-dimension stratified over the pixel's samples (`raytrace.sampling`).  An area light stays its
-N fixed samples (`AreaLight.positions`, the masks' light), all of them summed at every hit:
-the soft shadow of each pixel sample is today's, so the image converges to today's averaged
-over the pixel.  At spp 1 with no lens and no roughness, the image is the classic one, bit for
-bit: the same pixel-centre rays (`primary_rays`) and the same mirror rays.
+Distributed ray tracing (Cook, Porter, Carpenter 1984) generalises three of these: `spp` stratified
+samples per pixel through a box or tent filter (antialiasing), a lens of radius `camera.aperture`
+focused at `camera.focus` (depth of field) and a material's `roughness` (a glossy lobe instead of
+the mirror ray, one ray per pixel sample and generation), each dimension stratified over the pixel's
+samples (`raytrace.outlook.sampling`).  An area light stays its N fixed samples
+(`AreaLight.positions`, the masks' light), all of them summed at every hit: the soft shadow of each
+pixel sample is today's, so the image converges to today's averaged over the pixel.  At spp 1 with
+no lens and no roughness, the image is the classic one, bit for bit: the same pixel-centre rays
+(`primary_rays`) and the same mirror rays.
 """
 
 from __future__ import annotations
@@ -57,12 +57,13 @@ from shadowvol.scene import (
     hard_lights,
 )
 
-from .backends import cpu_threads, make_backend
-from .camera import primary_rays, sample_rays
-from .intersect import dot, ray_parallelogram, ray_sphere, reflect, refract
+from raytrace.backends import cpu_threads, make_backend
+from raytrace.camera import primary_rays, sample_rays
+from raytrace.intersect import dot, ray_parallelogram, ray_sphere, reflect, refract
+from raytrace.tolerances import surface_offset
+
 from .progress import Progress
 from .sampling import FILTERS, concentric_disk, glossy, pixel_offsets, stratified
-from .tolerances import surface_offset
 
 # Primary rays per tile: bounds memory (a generation holds a few dozen float64 values per ray)
 # and sets the progress bar's step.  Tiles are traced one per core at a time.
@@ -185,7 +186,7 @@ class World:
 @dataclass(frozen=True, eq=False)
 class ShadowRays:
     """The shadow rays from k surface points toward one light, exactly as `local_colour`
-    traces them (the ray-tree exercise, raytrace.raytree, reads them too).
+    traces them (the ray-tree exercise, raytrace.outlook.raytree, reads them too).
 
     to_light  : (k, 3) float64, unit direction l from each point toward the light
     n_dot_l   : (k,) float64
@@ -371,9 +372,9 @@ def render(scene: Scene, max_depth: int | None = None, backend: str = "embree",
                    direct lighting alone (exactly what the rasterizer draws).
     backend      : "embree" or "numpy", for objects without an analytic form (meshes, boxes).
     progress     : a progress bar on stderr: None (default) when stderr is a terminal.
-    spp          : samples per pixel (`raytrace.sampling`); 1 is the pixel centre.
+    spp          : samples per pixel (`raytrace.outlook.sampling`); 1 is the pixel centre.
     seed         : >= 0; the same seed gives the same image, whatever the number of threads.
-    pixel_filter : "box" or "tent" (`raytrace.sampling.pixel_offsets`).
+    pixel_filter : "box" or "tent" (`raytrace.outlook.sampling.pixel_offsets`).
     """
     depth = scene.max_depth if max_depth is None else max_depth
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or depth < 0:

@@ -15,10 +15,10 @@ to one, so the estimate stays unbiased whatever h is:
 * "nee": no MIS, next-event estimation alone (weight 1); emitters hit by BSDF-sampled rays
   are not counted (weight 0), as camera rays and delta bounces still count them whole.
 
-Both weights are computed as 1 / (1 + r^beta), r = p_other / p_this, in float32
-(`pathstate.STATE`): a grazing emitter point makes p_light overflow float32, where the ratio
-form gives the right limits (weight 1 or 0) instead of inf / inf.  A zero p_this weighs 0.
-`raytrace.pathstages` repeats this arithmetic operation for operation (HEURISTICS' codes).
+Both weights are computed as 1 / (1 + r^beta), r = p_other / p_this, in float32 (`pathstate.STATE`):
+a grazing emitter point makes p_light overflow float32, where the ratio form gives the right limits
+(weight 1 or 0) instead of inf / inf.  A zero p_this weighs 0. `raytrace.outlook.path.pathstages`
+repeats this arithmetic operation for operation (HEURISTICS' codes).
 """
 
 from __future__ import annotations

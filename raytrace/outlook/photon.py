@@ -1,6 +1,6 @@
 """Photon tracing (Jensen 1996): a caustic map and a global map, read at the eye's diffuse hits.
 
-The lights as the path tracer sees them (`raytrace.pathtrace`):
+The lights as the path tracer sees them (`raytrace.outlook.path.pathtrace`):
 
 * emissive triangles emit from both faces: a photon starts at a point chosen with probability
   area x mean emission (`PathWorld.sample_emitters`), on a random face, in a cosine-weighted
@@ -20,16 +20,16 @@ before was a mirror or glass (L S+ D), else in the global map (L .* D .* D); bou
 roulette on the Phong bounces (survival = the throughput's largest channel, at most
 `RR_MAX_SURVIVAL`).
 
-From the eye (`shade_rows`): emission seen directly or through mirrors and glass; at a hit
-with a Phong lobe of weight w, direct light by shadow rays plus  w · kd / pi · E  with E the
-caustic map's estimate plus the global map's (`raytrace.photonmap`), or, with a final gather,
-the caustic map's plus the irradiance gathered by G cosine-weighted rays, each adding what
-leaves the diffuse point it finds (direct light and both maps there; emission found is direct
-light or caustic at x and is not counted again) times cos / pdf (`gather_weight`).  A glossy
-Phong lobe adds each photon of both maps weighted by the lobe's BRDF toward the eye (the
-gather serves the diffuse part).  The path continues through mirrors and glass as the path
-tracer chooses them.  Random numbers: two streams spawned from `SeedSequence(seed)`
-(photons, eye), used in a fixed order, so an image depends on the seed only.
+From the eye (`shade_rows`): emission seen directly or through mirrors and glass; at a hit with a
+Phong lobe of weight w, direct light by shadow rays plus  w · kd / pi · E  with E the caustic map's
+estimate plus the global map's (`raytrace.outlook.photonmap`), or, with a final gather, the caustic
+map's plus the irradiance gathered by G cosine-weighted rays, each adding what leaves the diffuse
+point it finds (direct light and both maps there; emission found is direct light or caustic at x and
+is not counted again) times cos / pdf (`gather_weight`).  A glossy Phong lobe adds each photon of
+both maps weighted by the lobe's BRDF toward the eye (the gather serves the diffuse part).  The path
+continues through mirrors and glass as the path tracer chooses them.  Random numbers: two streams
+spawned from `SeedSequence(seed)` (photons, eye), used in a fixed order, so an image depends on the
+seed only.
 """
 
 from __future__ import annotations
@@ -42,9 +42,11 @@ import numpy as np
 
 from shadowvol.scene import AreaSample, DirectionalLight, Scene, SpotLight
 
+from raytrace.outlook.path.pathstate import RR_MAX_SURVIVAL, STATE, PathWorld, take
+from raytrace.outlook.path.pathtrace import (_delta_bounce, _scatter, _scatter_add, camera_rays,
+                                             next_event)
+
 from .brdf import cosine_hemisphere_rows, dot_rows, phong_eval_rows
-from .pathstate import RR_MAX_SURVIVAL, STATE, PathWorld, take
-from .pathtrace import _delta_bounce, _scatter, _scatter_add, camera_rays, next_event
 from .photonmap import KERNELS, PhotonMap, kdtree
 
 DEFAULT_PHOTONS = 200_000

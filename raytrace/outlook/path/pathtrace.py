@@ -1,22 +1,22 @@
 """Unidirectional path tracing (Kajiya 1986) with next-event estimation, vectorised per bounce.
 
 The estimator, for every path vertex x reached from the eye (all rays of one bounce traced at
-once, per tile, like `raytrace.whitted`):
+once, per tile, like `raytrace.outlook.whitted`):
 
 * emission seen directly: a camera ray, or a ray leaving a mirror / glass (delta) bounce, adds
   the radiance `Material.emission` of what it hits;
 * next-event estimation at every non-delta vertex: one point y on the emissive triangles, chosen
-  with probability proportional to area x mean emitted radiance and uniformly within the
-  triangle, adds  f(wo, wi) L_e cos_x cos_y / (|x − y|^2 p_A(y))  if the segment is unblocked;
-  each point / spot / directional light of `scene.lights` (an area light: each of its samples,
-  also weighted by its cosine at the light, as in `raytrace.whitted`) adds  f · pi · radiance · cos_x
-  (these delta lights keep the Whitted convention: irradiance pi · radiance · n·l, no distance
-  fall-off, so a Lambertian surface gets kd · radiance · n·l as in Whitted);
-* the next direction is drawn from the material (`raytrace.brdf`); emission found by a ray drawn
-  from the Phong lobes is added too, and the two estimates of the same light are combined by
-  multiple importance sampling (`raytrace.mis`, Veach 1995: the power heuristic by default,
-  NEE's sample weighed p_light^2 / (p_light^2 + p_bsdf^2), the BSDF-sampled hit
-  p_bsdf^2 / (p_light^2 + p_bsdf^2), both densities in solid angle, p_light = p_A(y)
+  with probability proportional to area x mean emitted radiance and uniformly within the triangle,
+  adds  f(wo, wi) L_e cos_x cos_y / (|x − y|^2 p_A(y))  if the segment is unblocked; each point /
+  spot / directional light of `scene.lights` (an area light: each of its samples, also weighted by
+  its cosine at the light, as in `raytrace.outlook.whitted`) adds  f · pi · radiance · cos_x (these
+  delta lights keep the Whitted convention: irradiance pi · radiance · n·l, no distance fall-off, so
+  a Lambertian surface gets kd · radiance · n·l as in Whitted);
+* the next direction is drawn from the material (`raytrace.outlook.brdf`); emission found by a ray
+  drawn from the Phong lobes is added too, and the two estimates of the same light are combined by
+  multiple importance sampling (`raytrace.outlook.path.mis`, Veach 1995: the power heuristic by
+  default, NEE's sample weighed p_light^2 / (p_light^2 + p_bsdf^2), the BSDF-sampled hit p_bsdf^2 /
+  (p_light^2 + p_bsdf^2), both densities in solid angle, p_light = p_A(y)
   |x - y|^2 / cos_y; `mis` picks "balance", or "nee" for NEE alone).  MIS, not plain NEE: with
   NEE alone a point next to a large emitter (a corner of the furnace box) gets 1/r^2 spikes;
   the BSDF sample covers them.  Delta lights stay plain NEE (no BSDF sample can hit them);
@@ -33,17 +33,17 @@ light the scene.  `scene.ambient` is ignored (the integrator computes what ambie
 
 Every object is traced as its triangles (spheres as their icospheres), so the emitter that NEE
 samples is exactly the surface that rays hit.  Random numbers: one `numpy` generator per tile,
-spawned from `SeedSequence(seed)`, so an image depends on the seed only (not on the threads).
-With `sampler` "sobol" (the default) the pixel jitter and the first `sobol.LD_BOUNCES` bounces'
-emitter and BSDF samples are each pixel's Owen-scrambled Sobol points instead (`raytrace.sobol`:
-stratified per pixel, each sample still uniform), which cuts the error at equal samples 2-4x on
-the Cornell box; "independent" draws everything from the generator.
+spawned from `SeedSequence(seed)`, so an image depends on the seed only (not on the threads). With
+`sampler` "sobol" (the default) the pixel jitter and the first `sobol.LD_BOUNCES` bounces' emitter
+and BSDF samples are each pixel's Owen-scrambled Sobol points instead
+(`raytrace.outlook.path.sobol`: stratified per pixel, each sample still uniform), which cuts the
+error at equal samples 2-4x on the Cornell box; "independent" draws everything from the generator.
 
-Two shadings, one estimator.  What happens between the Embree casts of a bounce runs either as
-the numpy passes below (the reference, and the fallback) or compiled by numba
-(`raytrace.pathkernels`, the `fast` extra), which draws the same random numbers here in numpy and
-repeats the same float32 arithmetic: the same samples (`shading` picks one; $SHADOWVOL_PATHTRACE
-forces it).
+Two shadings, one estimator.  What happens between the Embree casts of a bounce runs either as the
+numpy passes below (the reference, and the fallback) or compiled by numba
+(`raytrace.outlook.path.pathkernels`, the `fast` extra), which draws the same random numbers here in
+numpy and repeats the same float32 arithmetic: the same samples (`shading` picks one;
+$SHADOWVOL_PATHTRACE forces it).
 
 Layout and precision.  The path state is rows, (3, k) arrays (`brdf`'s `_rows` kernels), in
 float32 (`pathstate.STATE`): Embree traces float32 anyway, and numpy's float32 loops are about
@@ -76,18 +76,19 @@ from shadowvol.scene import (
     SpotLight,
 )
 
-from .backends import cpu_threads
-from .brdf import (
+from raytrace.backends import cpu_threads
+from raytrace.camera import camera_rays  # noqa: F401  (`pathtrace.camera_rays`, as before)
+from raytrace.intersect import reflect, refract
+from raytrace.outlook.brdf import (
     dot_rows,
     phong_eval_rows,
     phong_pdf_rows,
     phong_sample_rows,
 )
-from .camera import camera_rays  # noqa: F401  (`pathtrace.camera_rays`, as before)
-from .intersect import reflect, refract
+from raytrace.outlook.progress import Progress
+
 from .mis import DEFAULT_HEURISTIC, bsdf_weight, code, emitter_pdf, hit_pdf, weight
 from .pathstate import RR_MAX_SURVIVAL, STATE, STATE_TINY, PathWorld, take
-from .progress import Progress
 from .sobol import DEFAULT_SAMPLER, SAMPLERS, TileSamples, render_key
 
 RR_START_BOUNCE = 5  # Russian roulette from the fifth bounce on (as Mitsuba 3's rr_depth)
@@ -126,12 +127,12 @@ def _scatter_add(L: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
 def next_event(world: PathWorld, rng, p, n, wo, surf: dict, beta, start, mis: bool = True,
                u=None, heuristic: str = DEFAULT_HEURISTIC) -> tuple[np.ndarray, int]:
     """Direct light (3, k) at vertices p (3, k) with normals n (3, k) facing wo (3, k), of
-    surfaces surf (`PathWorld.surface`), throughputs beta (3, k), from one emitter sample each
-    and every delta light; shadow rays leave from start (3, k), p + offset n.  mis: weigh the
-    emitter sample by its MIS share (`raytrace.mis`, heuristic; False at the last bounce,
-    where no BSDF sample follows to take the rest).  u: the emitter sample's uniforms
-    (`PathWorld.sample_emitters`), else drawn from rng.  Returns the contributions and the
-    shadow rays traced."""
+    surfaces surf (`PathWorld.surface`), throughputs beta (3, k), from one emitter sample each and
+    every delta light; shadow rays leave from start (3, k), p + offset n.  mis: weigh the emitter
+    sample by its MIS share (`raytrace.outlook.path.mis`, heuristic; False at the last bounce, where
+    no BSDF sample follows to take the rest).  u: the emitter sample's uniforms
+    (`PathWorld.sample_emitters`), else drawn from rng.  Returns the contributions and the shadow
+    rays traced."""
     k = p.shape[1]
     out = np.zeros((3, k), STATE)
     w_phong, glossy = surf["phong"], surf["glossy"]
@@ -224,7 +225,8 @@ def _delta_bounce(world, d, n, entering, surf, p, is_mirror, is_glass, new_o, ne
 
 
 def _kernels():
-    """`raytrace.pathkernels` (numba's compiled shading), or None where numba is missing."""
+    """`raytrace.outlook.path.pathkernels` (numba's compiled shading), or None where numba is
+    missing."""
     try:
         from . import pathkernels
     except ImportError:  # numba absent, or too old or new for this numpy
@@ -233,10 +235,10 @@ def _kernels():
 
 
 def shading(choice: str | None = None) -> str:
-    """Which per-bounce shading the path tracer runs: "numba" (`raytrace.pathkernels`, the
-    `fast` extra) or "numpy" (the reference below).  choice None: $SHADOWVOL_PATHTRACE, and
-    where that is unset or "auto", numba when it imports, else numpy.  Both give the same
-    samples (`raytrace.pathkernels`).  An unknown name is a SceneError naming where it came
+    """Which per-bounce shading the path tracer runs: "numba" (`raytrace.outlook.path.pathkernels`,
+    the `fast` extra) or "numpy" (the reference below).  choice None: $SHADOWVOL_PATHTRACE, and
+    where that is unset or "auto", numba when it imports, else numpy.  Both give the same samples
+    (`raytrace.outlook.path.pathkernels`).  An unknown name is a SceneError naming where it came
     from; numba asked for but missing is a MissingExtra (exit status 2 in the CLI)."""
     where = "shading"
     if choice is None:
@@ -261,7 +263,7 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
                samples: TileSamples | None = None) -> tuple[np.ndarray, int]:
     """`trace_paths` with rays and radiance as rows: o, d (3, n) float -> L (3, n) float64.
     shading_name: "numpy", "numba" or None (`shading()` decides); mis: the heuristic
-    (`raytrace.mis.HEURISTICS`); samples: the low-discrepancy numbers of these paths
+    (`raytrace.outlook.path.mis.HEURISTICS`); samples: the low-discrepancy numbers of these paths
     (`sobol.TileSamples`, path i its i-th), else every number is drawn from rng."""
     code(mis)
     if shading(shading_name) == "numba":
@@ -414,13 +416,14 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
 
     jitter : sample each pixel at random points (True) or always at its centre (False: then the
              image converges to the pixel-centre image that the masks and Whitted sample).
-    shading_name : "numpy", "numba" or None ($SHADOWVOL_PATHTRACE, else numba if installed).
-    mis : "power", "balance" or "nee" (`raytrace.mis`);  sampler : "sobol" (`raytrace.sobol`:
+    shading_name : "numpy", "numba" or None ($SHADOWVOL_PATHTRACE, else numba if installed). mis :
+    "power", "balance" or "nee" (`raytrace.outlook.path.mis`);  sampler : "sobol"
+    (`raytrace.outlook.path.sobol`:
           each pixel's samples stratified) or "independent" (every number from the tile's
           generator).
     The result depends on (scene, spp, seed, max_depth, rr_start, jitter, mis, sampler) only:
     tiles of whole rows, one random stream each, summed in tile order whatever the threads
-    (and the same samples from either shading: `raytrace.pathkernels`).
+    (and the same samples from either shading: `raytrace.outlook.path.pathkernels`).
     """
     for name, value, low in (("spp", spp, 1), ("max_depth", max_depth, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:

@@ -7,26 +7,27 @@ the system is the diffuse rendering equation discretised over patches,
     L_i = E_i + rho_i · sum_j F_ij L_j ,
 
 with E_i the material's `emission` and rho_i its diffuse albedo (the normalised Phong kd of
-`raytrace.brdf`; specular, mirror and glass terms are dropped: radiosity is the diffuse part).
+`raytrace.outlook.brdf`; specular, mirror and glass terms are dropped: radiosity is the diffuse
+part).
 
-Patches.  First, where an edge of one surface lies on another's plane (a block on the floor),
-the lower triangle is cut along that edge's line (`raytrace.contacts`): a patch running under a
-block would average its lit part with the buried one, and the blocks came out 1-2 % dark at
-every level and seed.  Then every triangle is split by midpoints into 4^k similar triangles, k
-the smallest making its longest edge at most  (the scene's longest triangle edge) / 2^level.
-Surfaces are two-sided, so each triangle has two patches, one per face: patch `t` is the face
-its winding normal points out of, patch `t + T` the other (T triangles).  A face that sees
-nothing (the outside of a wall) simply stays dark.
+Patches.  First, where an edge of one surface lies on another's plane (a block on the floor), the
+lower triangle is cut along that edge's line (`raytrace.outlook.contacts`): a patch running under a
+block would average its lit part with the buried one, and the blocks came out 1-2 % dark at every
+level and seed.  Then every triangle is split by midpoints into 4^k similar triangles, k the
+smallest making its longest edge at most  (the scene's longest triangle edge) / 2^level. Surfaces
+are two-sided, so each triangle has two patches, one per face: patch `t` is the face its winding
+normal points out of, patch `t + T` the other (T triangles).  A face that sees nothing (the outside
+of a wall) simply stays dark.
 
 Form factors by ray casting (Malley's method): from each patch, `rays_per_patch` rays leave
-stratified points of it in cosine-distributed directions (`raytrace.formrays`: stratified over
-the square, a quarter of them in a window around the emitters, each ray weighted so that a
-patch's weights sum to 1), and are traced through Embree; F_ij is the weight of the rays whose
-first hit is patch j (the face hit is the one facing the ray).  This estimates the area-to-area
-form factor with visibility, unbiased; sum_j F_ij <= 1 exactly (1 minus the escaping rays:
-exactly 1 in a closed box), reciprocity A_i F_ij = A_j F_ji holds in expectation only.  F is
-stored sparse (CSR), at most rays_per_patch entries a row.  The defaults (level 3, 4096 rays)
-put every object of the Cornell box within 1 % of the path tracer (docs/course.md).
+stratified points of it in cosine-distributed directions (`raytrace.outlook.formrays`: stratified
+over the square, a quarter of them in a window around the emitters, each ray weighted so that a
+patch's weights sum to 1), and are traced through Embree; F_ij is the weight of the rays whose first
+hit is patch j (the face hit is the one facing the ray).  This estimates the area-to-area form
+factor with visibility, unbiased; sum_j F_ij <= 1 exactly (1 minus the escaping rays: exactly 1 in a
+closed box), reciprocity A_i F_ij = A_j F_ji holds in expectation only.  F is stored sparse (CSR),
+at most rays_per_patch entries a row.  The defaults (level 3, 4096 rays) put every object of the
+Cornell box within 1 % of the path tracer (docs/course.md).
 
 Solver: progressive refinement by shooting (Cohen et al. 1988).  Each iteration shoots the
 unshot radiance of the `shots` patches holding the most unshot power (A_i · ΔL_i, summed over
@@ -53,13 +54,14 @@ if TYPE_CHECKING:
     import scipy.sparse as sp
 from shadowvol.scene import Scene
 
-from .backends import make_backend
+from raytrace.backends import make_backend
+from raytrace.camera import primary_rays
+from raytrace.intersect import dot
+from raytrace.tolerances import surface_offset
+
 from .brdf import around, normalised_phong
-from .camera import primary_rays
 from .contacts import sides, split_at_contacts
 from .formrays import concentric_disk, emitter_windows, ray_square_points, stratified
-from .intersect import dot
-from .tolerances import surface_offset
 
 DEFAULT_LEVEL = 3
 DEFAULT_RAYS_PER_PATCH = 4096  # per wall within 2 % of the path tracer (docs/course.md)
@@ -77,11 +79,10 @@ NORMAL_QUANTUM = 1e-4
 class PatchMesh:
     """The scene's triangles, subdivided.
 
-    vertices : (V, 3) float64;  faces : (T, 3) int64 (one patch per face of each triangle,
-    2T patches);  tri_object : (T,) int, the object of each triangle;  area : (T,) float64;
-    normal : (T, 3) float64 unit winding normals;  contacts : (C, 3, 3) the contact segments
-    the mesh was cut along (`raytrace.contacts`), which the interpolated display never blends
-    across.
+    vertices : (V, 3) float64;  faces : (T, 3) int64 (one patch per face of each triangle, 2T
+    patches);  tri_object : (T,) int, the object of each triangle;  area : (T,) float64; normal :
+    (T, 3) float64 unit winding normals;  contacts : (C, 3, 3) the contact segments the mesh was cut
+    along (`raytrace.outlook.contacts`), which the interpolated display never blends across.
     """
 
     vertices: np.ndarray
@@ -122,7 +123,7 @@ def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | Non
                  contacts: bool = True) -> PatchMesh:
     """Subdivide the scene's triangles (see the module docstring); `level` >= 0, or, given,
     `max_edge` (scene units, > 0) the longest edge allowed instead of longest / 2^level (the
-    scene's own longest edge, before the contact cuts: `raytrace.contacts`, unless
+    scene's own longest edge, before the contact cuts: `raytrace.outlook.contacts`, unless
     contacts=False)."""
     if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0:
         raise ValueError(f"level must be a whole number >= 0, got {level!r}")
@@ -160,8 +161,8 @@ def mesh_patches(scene: Scene, level: int = DEFAULT_LEVEL, max_edge: float | Non
 def form_factors(scene: Scene, mesh: PatchMesh, rays_per_patch: int = DEFAULT_RAYS_PER_PATCH,
                  seed: int = 0, backend: str = "embree") -> tuple[sp.csr_matrix, int]:
     """F (2T, 2T) CSR float64, F[i, j] = the weighted share of patch i's rays whose first hit
-    is patch j (`raytrace.formrays`: stratified, a share aimed at the emitters, weights summing
-    to 1 a patch); and the number of rays traced."""
+    is patch j (`raytrace.outlook.formrays`: stratified, a share aimed at the emitters, weights
+    summing to 1 a patch); and the number of rays traced."""
     rng = np.random.default_rng(seed)
     tracer = make_backend(backend, mesh.vertices, mesh.faces)
     T, P = mesh.triangles, mesh.patches

@@ -8,9 +8,9 @@ each pixel centre, with unit normal n facing the camera,
 
     L(x) = E(x) + sum_m  lit_m(x) · kd / pi · L_e(y_m) · cos_x cos_y a_m / |x − y_m|^2
 
-(E: the emission seen directly, kd the normalised diffuse albedo of `raytrace.brdf`; specular,
-mirror and glass terms are left out: use it on diffuse scenes).  The midpoint rule's error is
-O(4^-k) where the light is fully visible and the order of the sub-triangles' size in penumbrae.
+(E: the emission seen directly, kd the normalised diffuse albedo of `raytrace.outlook.brdf`;
+specular, mirror and glass terms are left out: use it on diffuse scenes).  The midpoint rule's error
+is O(4^-k) where the light is fully visible and the order of the sub-triangles' size in penumbrae.
 `scene.lights` are ignored: only emissive surfaces light the result.
 """
 
@@ -20,11 +20,12 @@ import numpy as np
 
 from shadowvol.scene import PointLight, Scene
 
-from .backends import make_backend
+from raytrace.backends import make_backend
+from raytrace.camera import primary_rays
+from raytrace.intersect import dot
+from raytrace.masks import shadow_masks
+
 from .brdf import normalised_phong
-from .camera import primary_rays
-from .intersect import dot
-from .masks import shadow_masks
 from .radiosity import split_triangles
 
 

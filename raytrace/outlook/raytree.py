@@ -11,7 +11,7 @@ transparent; when Snell's law has no solution that ray is the total internal ref
 "tir").
 
 Nothing here decides anything about light transport: hits, normals, shadow-ray verdicts, the
-offsets off the surface, reflection and refraction all come from `raytrace.whitted`'s own
+offsets off the surface, reflection and refraction all come from `raytrace.outlook.whitted`'s own
 functions (`World.nearest`, `surface_frame`, `shadow_rays`, `local_colour`, `secondary_rays`)
 called on one ray at a time, so the tree is the renderer's, and `tree_colour(tree)` is the
 pixel's colour in `raytrace.render(scene)` (up to floating-point summation order).
@@ -26,7 +26,8 @@ import numpy as np
 
 from shadowvol.scene import DirectionalLight, Scene
 
-from .camera import primary_rays
+from raytrace.camera import primary_rays
+
 from .whitted import World, local_colour, secondary_rays, shadow_rays, surface_frame
 
 PRIMARY, REFLECTED, REFRACTED, TIR, SHADOW = "primary", "reflected", "refracted", "tir", "shadow"

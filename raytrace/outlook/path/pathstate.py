@@ -1,9 +1,9 @@
 """The path tracer's state: its precision, and the scene as the path tracer sees it.
 
-Shared by the numpy shading (`raytrace.pathtrace`) and the compiled one
-(`raytrace.pathkernels`), which must agree bit for bit: the float32 of the state (`STATE`), the
-one division guard, the roulette's bound and the packed tables of `PathWorld` are defined once,
-here.
+Shared by the numpy shading (`raytrace.outlook.path.pathtrace`) and the compiled one
+(`raytrace.outlook.path.pathkernels`), which must agree bit for bit: the float32 of the state
+(`STATE`), the one division guard, the roulette's bound and the packed tables of `PathWorld` are
+defined once, here.
 """
 
 from __future__ import annotations
@@ -12,13 +12,14 @@ import numpy as np
 
 from shadowvol.scene import Scene, hard_lights
 
-from .backends import make_backend
-from .brdf import diffuse_probability, normalised_phong
-from .tolerances import surface_offset
+from raytrace.backends import make_backend
+from raytrace.outlook.brdf import diffuse_probability, normalised_phong
+from raytrace.tolerances import surface_offset
 
 RR_MAX_SURVIVAL = 0.95  # never certain survival: bounds the expected path length
 # The path state's precision (rays, hit points, throughputs, the tables; see
-# `raytrace.pathtrace`) and the smallest value a float32 division is kept from dividing by.
+# `raytrace.outlook.path.pathtrace`) and the smallest value a float32 division is kept from dividing
+# by.
 STATE = np.float32
 STATE_TINY = 1e-30
 
@@ -69,7 +70,7 @@ class PathWorld:
         # p_A(y) of `sample_emitters` for a point on each triangle (0 off the emitters)
         self.light_pdf_area = np.zeros(len(self.area))
         self.light_pdf_area[self.emitters] = self.emitter_prob / self.area[self.emitters]
-        # an area light of `scene.lights` is its samples (as in `raytrace.whitted`)
+        # an area light of `scene.lights` is its samples (as in `raytrace.outlook.whitted`)
         self.lights = tuple(hard for lt in scene.lights for hard in hard_lights(lt))
         # per triangle, one packed table (rows: `surface`), only the rows this scene needs
         ob = self.tri_object

@@ -1,9 +1,10 @@
-"""The compiled stages of one bounce of the path tracer (`raytrace.pathkernels` runs them):
-the BRDF per ray, the hit, next-event estimation's emitter sample and delta lights, the bounce.
+"""The compiled stages of one bounce of the path tracer (`raytrace.outlook.path.pathkernels` runs
+them): the BRDF per ray, the hit, next-event estimation's emitter sample and delta lights, the
+bounce.
 
-Each is the numpy path's (`raytrace.pathtrace`) operation for operation, in float32
-(`pathstate.STATE`) where it is float32 and float64 where it is float64, with float32 constants
-and no `fastmath` (see `raytrace.pathkernels` for why the images are then bit-identical).
+Each is the numpy path's (`raytrace.outlook.path.pathtrace`) operation for operation, in float32
+(`pathstate.STATE`) where it is float32 and float64 where it is float64, with float32 constants and
+no `fastmath` (see `raytrace.outlook.path.pathkernels` for why the images are then bit-identical).
 Vectors are (n, 3) float32, one ray's on one cache line; tables are `pathkernels.tables`'.
 """
 
@@ -42,7 +43,8 @@ def _jit(fn):
         return numba.njit(nogil=True, error_model="numpy")(fn)
 
 
-# ---- the BRDF, per ray (`raytrace.brdf`'s `_rows` kernels, operation for operation) ----------
+# ---- the BRDF, per ray (`raytrace.outlook.brdf`'s `_rows` kernels, operation for operation)
+# ----------
 
 @_jit
 def _cos_alpha(tab, t, n0, n1, n2, wo0, wo1, wo2, wi0, wi1, wi2):

@@ -1,20 +1,16 @@
-"""The `raytrace` commands of the rendering equation's outlook: path tracing and radiosity.
+"""`raytrace radiosity`: radiosity of the diffuse scene (patches, ray-cast form factors,
+progressive refinement), shown from the camera.
 
-    raytrace render scenes/cornell.toml --integrator path --spp 64 -o cornell.png [--exr c.exr]
     raytrace radiosity scenes/cornell.toml -o cornell-radiosity.png [--flat F.png] [--level 4]
-
-`shadowvol.cli.raytrace` registers them (`add_options`, `add_parsers`) and hands over
-(`path_traced`, `radiosity_command`); exit statuses are `shadowvol.cli.status`'s.
 """
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
-from raytrace import pathtrace, radiosity
 from raytrace.backends import BACKENDS
+from raytrace.outlook import estimate, radiosity
 from shadowvol import memory
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
@@ -23,28 +19,7 @@ from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 
-PATH_SPP = 16  # the path tracer's paths per pixel when --spp is not given
-
-
-def add_options(render: argparse.ArgumentParser) -> None:
-    """The path tracer's options on `raytrace render`."""
-    render.add_argument("--integrator", choices=("whitted", "path", "photon"), default="whitted",
-                        help="'whitted' (default) or 'path': unidirectional path tracing with "
-                             "next-event estimation of emissive surfaces (material.emission); "
-                             "'photon': photon mapping (needs scipy: the outlook extra)")
-    render.add_argument("--spp", type=int, default=None, metavar="N",
-                        help="samples per pixel: path tracing's paths and the photon map's eye "
-                             f"rays (default {PATH_SPP}); Whitted's stratified jittered samples, "
-                             "see --filter (default 1: the pixel centre, no jitter)")
-    blocks.seed(render, "random seed of the path tracer, the photon map and Whitted's "
-                        "distributed samples (--spp, roughness, aperture); the same seed gives "
-                        "the same image "
-                        "(default 0)")
-    blocks.exr(render, "also write the linear image as OpenEXR")
-
-
-def add_parsers(sub) -> None:
-    """The `radiosity` subcommand."""
+def add_parser(sub) -> None:
     r = blocks.command(sub, "radiosity", help="radiosity of the diffuse scene (patches, "
                                               "ray-cast form factors, progressive refinement)",
                        description="Mesh SCENE into patches, compute form factors by casting "
@@ -71,38 +46,10 @@ def add_parsers(sub) -> None:
     blocks.seed(r, "random seed (default 0)")
     blocks.backend(r, BACKENDS, "triangle intersection (default: embree)")
     blocks.memory_budget(r)
+    r.set_defaults(func=command)
 
 
-def path_traced(args) -> int:
-    """`raytrace render --integrator path`."""
-    paths = {"image": Path(args.output)}
-    if args.exr:
-        paths["exr"] = Path(args.exr)
-    outputs.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
-    spp = PATH_SPP if args.spp is None else args.spp
-    for flag, value, low in (("--spp", spp, 1), ("--seed", args.seed, 0)):
-        if value < low:
-            raise SceneError(flag, f"must be >= {low}, got {value}")
-    depth = args.max_depth
-    if depth is not None and depth < 1:
-        raise SceneError("--max-depth", f"must be >= 1 for path tracing, got {depth}")
-    scene = load_scene(args.scene)
-    memory.check(memory.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
-                 args.memory_budget, args.scene)
-    kwargs = {} if depth is None else {"max_depth": depth}
-    result = pathtrace.render(scene, spp=spp, seed=args.seed, backend=args.backend,
-                              progress=False if args.no_progress else None, **kwargs)
-    save_png(args.output, result.image)
-    if args.exr:
-        save_exr(args.exr, result.image)
-    print(f"{spp} spp, {result.rays / 1e6:.1f} M rays in {result.seconds:.1f} s "
-          f"({result.rays / result.seconds / 1e6:.2f} Mrays/s); wrote "
-          f"{', '.join(str(p) for p in paths.values())}", file=sys.stderr)
-    return status.OK
-
-
-def radiosity_command(args) -> int:
-    """`raytrace radiosity`."""
+def command(args) -> int:
     paths = {"image": Path(args.output)}
     if args.flat:
         paths["flat"] = Path(args.flat)
@@ -116,8 +63,8 @@ def radiosity_command(args) -> int:
         if not ok:
             raise SceneError(flag, f"must be {rule}, got {value}")
     scene = load_scene(args.scene)
-    memory.check(memory.radiosity_display(scene, ("exr",) if args.exr else ("png",),
-                                          flat=bool(args.flat)),
+    memory.check(estimate.radiosity_display(scene, ("exr",) if args.exr else ("png",),
+                                            flat=bool(args.flat)),
                  args.memory_budget, args.scene)
     try:
         solution = radiosity.solve(scene, level=args.level, rays_per_patch=args.rays,

@@ -1,12 +1,12 @@
 """The path tracer's per-bounce shading compiled with numba (the optional `fast` extra).
 
-`trace_rows` here is `raytrace.pathtrace.trace_rows` with the numpy stages between the Embree
-calls replaced by a few `@njit` loops over the rays of a bounce (`raytrace.pathstages`): the hit
-(compaction to the hits, surface gather, hit point, emission seen and its MIS share), the
-emitter sample of next-event estimation (its shadow rays, then its shading), each delta light's
-shadow rays and shading, and the bounce (BSDF sample, delta bounces, Russian roulette,
-compaction to the survivors).  Embree still traces each bounce's closest hits and each group of
-shadow rays as one batch, through `PathWorld.closest_rows` / `occluded_rows`.
+`trace_rows` here is `raytrace.outlook.path.pathtrace.trace_rows` with the numpy stages between the
+Embree calls replaced by a few `@njit` loops over the rays of a bounce
+(`raytrace.outlook.path.pathstages`): the hit (compaction to the hits, surface gather, hit point,
+emission seen and its MIS share), the emitter sample of next-event estimation (its shadow rays, then
+its shading), each delta light's shadow rays and shading, and the bounce (BSDF sample, delta
+bounces, Russian roulette, compaction to the survivors).  Embree still traces each bounce's closest
+hits and each group of shadow rays as one batch, through `PathWorld.closest_rows` / `occluded_rows`.
 
 Same estimator, same random numbers, same arithmetic.  The random numbers are drawn in numpy,
 from the same generator, in the same order and dtypes as the numpy path, and handed to the
@@ -35,9 +35,6 @@ import threading
 import numpy as np
 
 from .mis import code
-from .pathstate import STATE
-
-# the stages keep their names here too: `benchmarks/profile_outlook.py` times them as k._hits...
 from .pathstages import (  # (numba: an ImportError here where it is missing)
     AREA,
     DIRECTIONAL,
@@ -55,6 +52,7 @@ from .pathstages import (  # (numba: an ImportError here where it is missing)
     _light_add,
     _light_rays,
 )
+from .pathstate import STATE
 
 
 def _f32(rows) -> np.ndarray:
@@ -115,7 +113,7 @@ def camera_rays(camera, width: int, height: int, rows: slice, spp: int,
     (the order `pathtrace.render` traces them): the same random numbers (or the jitter
     (jx, jy) given), the same rays, origins and directions (3, n) float64 (views of (n, 3)
     arrays)."""
-    from .camera import camera_basis, pixel_focal
+    from raytrace.camera import camera_basis, pixel_focal
 
     right, up, back = camera_basis(camera)
     fx, fy, cx, cy = pixel_focal(camera, width, height)
@@ -191,8 +189,8 @@ def buffers(world, n: int) -> _Buffers:
 def _next_event(world, rng, b: _Buffers, k: int, tab, etab, cdf, lights, offset,
                 mis: int, u_light) -> int:
     """Next-event estimation at the k hits of a bounce into b.direct (zero on entry): one
-    emitter sample each (its random numbers those of `PathWorld.sample_emitters`, or u_light
-    (r, u1, u2) given), then every delta light; mis: the heuristic's code (`raytrace.mis`), -1
+    emitter sample each (its random numbers those of `PathWorld.sample_emitters`, or u_light (r, u1,
+    u2) given), then every delta light; mis: the heuristic's code (`raytrace.outlook.path.mis`), -1
     for none.  Returns the shadow rays traced."""
     glossy, delta = world.any_glossy, world.any_delta
     direct, rays = b.direct, 0
@@ -261,11 +259,11 @@ def _bounce_randoms(rng, b: _Buffers, k: int, tab, delta: bool, glossy: bool, ro
 def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
                max_depth: int, rr_start: int, heuristic: str = "power", samples=None
                ) -> tuple[np.ndarray, int]:
-    """`raytrace.pathtrace.trace_rows` (same arguments, same result) with compiled shading.
-    The kernels' vectors are (n, 3) float32, one ray's on one cache line: rows of (3, n)
+    """`raytrace.outlook.path.pathtrace.trace_rows` (same arguments, same result) with compiled
+    shading. The kernels' vectors are (n, 3) float32, one ray's on one cache line: rows of (3, n)
     arrays, 2^15 apart in a tile, alias in the cache and made them twice as slow.  They write
-    compacted rays into the first rows of whole buffers and are told how many are valid (every
-    array stays C-contiguous: one compiled version each)."""
+    compacted rays into the first rows of whole buffers and are told how many are valid (every array
+    stays C-contiguous: one compiled version each)."""
     tab, tri_emission, etab = tables(world)
     mis = code(heuristic)
     lights = _lights(world)
@@ -316,7 +314,8 @@ def trace_rows(world, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
     return np.ascontiguousarray(L.T), rays
 
 
-# ---- the low-discrepancy numbers (`raytrace.sobol`, bit for bit, in uint64 masked to 32) ----
+# ---- the low-discrepancy numbers (`raytrace.outlook.path.sobol`, bit for bit, in uint64 masked to
+# 32) ----
 
 M32 = np.uint64(0xFFFFFFFF)
 U1, U8, U15, U16 = np.uint64(1), np.uint64(8), np.uint64(15), np.uint64(16)
