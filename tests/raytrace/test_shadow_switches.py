@@ -29,7 +29,7 @@ from builders import (
 )
 from exact import exact_casters
 
-from raytrace import whitted
+from raytrace.outlook import whitted
 from raytrace.camera import primary_rays
 from raytrace.groundtruth import ground_truth
 from raytrace.outlook.raytree import BLOCKED, LIT, ray_tree
