@@ -4,7 +4,7 @@
     scene = shadowvol.load_scene(shadowvol.example_scene("cage"))
     result = shadowvol.render(scene)              # image, lit (L, H, W), coverage (H, W)
     shadowvol.save_png("cage.png", result.image)
-    shadowvol.save_masks("cage.npz", result.lit, result.coverage)
+    shadowvol.save_masks("cage.npz", result)     # masks, camera matrices, ground truth
 
 Importing the package loads nothing but itself (not even numpy): every name is imported on
 first use, GL with `Renderer` or `render`, trimesh when a mesh is first read.  The layers are drawn in

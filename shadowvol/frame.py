@@ -250,6 +250,9 @@ def mask_file(lit: np.ndarray, coverage: np.ndarray, arrays: dict[str, np.ndarra
             if samples.ndim != 2 or samples.shape[1] != 3:
                 raise ValueError(f"light_samples[{i}] must be (N, 3), got {samples.shape}")
             extra[f"light_samples_{i}"] = samples
+    if lit is None or coverage is None:
+        raise ValueError("a mask file needs lit and coverage, got None (a frame rendered "
+                         "without them? save_masks(path, frame) says which)")
     lit = np.asarray(lit)
     coverage = np.asarray(coverage)
     if lit.dtype != bool or lit.ndim != 3 or coverage.dtype != bool or \
@@ -280,8 +283,21 @@ def masks_bytes(lit: np.ndarray, coverage: np.ndarray,
     return io.npz_bytes(**mask_file(lit, coverage, arrays, light_samples))
 
 
-def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
+def save_masks(path: str | Path, lit, coverage: np.ndarray | None = None,
                arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> None:
-    """Write a mask file (`masks_bytes`) through `shadowvol.io`'s atomic writer."""
+    """Write a mask file (`masks_bytes`) through `shadowvol.io`'s atomic writer.
+
+    `save_masks(path, frame)` writes a frame of either renderer whole: its `lit` and
+    `coverage`, the camera matrices and light arrays, the ground truth it holds and an area
+    light's counts (`Frame.arrays`; `arrays=` adds more); `save_masks(path, lit, coverage)`
+    the masks alone, with what `arrays=` names."""
+    if isinstance(lit, Frame):
+        frame = lit
+        missing = [name for name in ("lit", "coverage") if getattr(frame, name) is None]
+        if missing:
+            raise ValueError(f"the frame has no {' and no '.join(missing)}: it was rendered "
+                             f"with outputs= leaving {'them' if len(missing) > 1 else 'it'} "
+                             f"out; add {', '.join(map(repr, missing))} to outputs")
+        lit, coverage, arrays = frame.lit, frame.coverage, frame.arrays() | (arrays or {})
     with out_of_memory_while(f"writing {path}"):
         io.write_bytes(path, masks_bytes(lit, coverage, arrays, light_samples))

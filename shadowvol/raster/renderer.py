@@ -114,8 +114,9 @@ class Renderer:
                outputs: tuple[str, ...] | None = None) -> RenderResult:
         """One frame.  `method`: "auto" (z-fail only for casters the near plane may cut),
         "zpass" or "zfail".  `camera`/`lights` override the scene's for this frame.
-        `outputs`: the arrays to read back (names in `result.OUTPUTS`; default image, lit and
-        coverage); the others are None in the result.  `stencil=True` adds "stencil": the
+        `outputs`: exactly the arrays to read back (names in `result.OUTPUTS`; default image,
+        lit and coverage), for lean frames; the others are None in the result (the function
+        `render` adds `outputs` to the defaults instead).  `stencil=True` adds "stencil": the
         per-light stencil counts (one extra read-back each).  `shadows=False` skips the volume
         passes (every count stays 0): the same frame without shadows, the benchmark's
         baseline."""
@@ -483,7 +484,10 @@ class Renderer:
 def render(scene: Scene, method: str = "auto", silhouettes: str = "cpu", *,
            stencil: bool = False, ctx: moderngl.Context | None = None,
            outputs: tuple[str, ...] | None = None) -> RenderResult:
-    """Render one frame of `scene` (a fresh context unless `ctx` is given); `outputs` as in
-    `Renderer.render`."""
+    """Render one frame of `scene` (a fresh context unless `ctx` is given).  `outputs` adds to
+    the default image, lit and coverage, as the command line's --outputs does (names as in
+    `Renderer.render`, whose `outputs=` names exactly the arrays made, for lean frames)."""
+    wanted = None if outputs is None else DEFAULT_OUTPUTS + tuple(
+        o for o in check_outputs(outputs, OUTPUTS) if o not in DEFAULT_OUTPUTS)
     with Renderer(scene, ctx) as renderer:
-        return renderer.render(method, silhouettes, stencil=stencil, outputs=outputs)
+        return renderer.render(method, silhouettes, stencil=stencil, outputs=wanted)
