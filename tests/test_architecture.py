@@ -39,6 +39,7 @@ FLOORS = {
     "shadowvol.fields": (2, "model"),
     "shadowvol.planes": (2, "model"),
     "shadowvol.checks": (2, "model"),
+    "shadowvol.textures": (2, "model"),
     "shadowvol.io": (1, "base"),
     "shadowvol.pictures": (1, "base"),
     "shadowvol.display": (1, "base"),
@@ -52,7 +53,7 @@ ENTRY_FILES = {"shadowvol.__main__", "raytrace.__main__"}
 RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.lights", "shadowvol.cameras",
                        "shadowvol.primitives", "shadowvol.arealights", "shadowvol.fields",
                        "shadowvol.planes", "shadowvol.checks", "shadowvol.errors", "shadowvol.io",
-                       "shadowvol.signals"}
+                       "shadowvol.signals", "shadowvol.textures"}
 # Third-party and standard modules that only one folder may import.
 CONFINED = {"moderngl": "shadowvol/raster/", "glcontext": "shadowvol/raster/",
             "OpenGL": "shadowvol/raster/", "ctypes": "shadowvol/raster/",
