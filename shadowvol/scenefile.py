@@ -327,7 +327,7 @@ def _object_parts(value, key: str, named: dict[str, Material], base_dir: Path,
         return [_build(key, primitives.mesh, name=part_name(name, part, len(parts)),
                        vertices=part.vertices, faces=part.faces,
                        material=part_material(material, part, "material" in table),
-                       transform=transform) for part in parts]
+                       transform=transform, uv=part.uv, colors=part.colors) for part in parts]
     builder = {"sphere": primitives.sphere, "plane": primitives.plane, "box": primitives.box}[kind]
     if kind == "sphere":
         for required in ("center", "radius"):
