@@ -31,6 +31,7 @@ from shadowvol.scenefile_texture import (
 
 MESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 MAX_MESH_FILE_BYTES = 1 << 30  # the size limit of each mesh file (`load_scene` takes others)
+AMBIENT_SHARE = 0.125  # a file's base colour as ambient: the default Material's 0.1 / 0.8
 
 
 def read_regular_file(path: Path, max_bytes: int, key: str = "", what: str | None = None
@@ -105,9 +106,11 @@ def part_name(name: str, part: MeshPart, parts: int) -> str:
 
 def part_material(material: Material, part: MeshPart, given: bool) -> Material:
     """The material of a part: the entry's when it names one (`given`), else the part's own
-    base colour as its diffuse colour, else the default; with the part's texture either way."""
+    base colour as its diffuse colour (and AMBIENT_SHARE of it as its ambient: the default
+    material's ratio, so that a red part stays red in shadow), else the default; with the
+    part's texture either way."""
     if not given and part.diffuse is not None:
-        material = Material(diffuse=part.diffuse)
+        material = Material(diffuse=part.diffuse, ambient=AMBIENT_SHARE * part.diffuse)
     if part.texture is not None:
         material = dataclasses.replace(material, texture=part.texture)
     return material
