@@ -37,6 +37,9 @@ BASE = 256 << 20
 
 # shadowvol.raster.target.BYTES_PER_PIXEL (a test checks they agree): GL memory of a frame
 GL_FRAME_BYTES_PER_PIXEL = 52
+# and target.SURFACE_BYTES_PER_PIXEL: the G-buffer's UVs and vertex colours, in a scene with
+# textures or vertex colours
+GL_SURFACE_BYTES_PER_PIXEL = 24
 # renderers that keep their "GPU" memory in the process's own memory
 SOFTWARE_GL = ("llvmpipe", "softpipe", "swrast", "lavapipe")
 
@@ -148,8 +151,25 @@ def raster(scene: Scene, outputs=("image", "lit", "coverage"), *, gl_in_host: bo
         # its frame's image, the RGBA read (a copy of the staging), its RGB copy
         t["volume view"] = 12 + 16 + 12
     t |= _written(written, L, truth, float64=False, stencil=stencil, words=K)
+    if surfaced(scene):
+        t["G-buffer UVs and colours"] = GL_SURFACE_BYTES_PER_PIXEL * gl_in_host
+    # the texels: the model's sRGB codes (3 B), the upload's RGBA copy of one texture at a
+    # time (4 B) and the storage buffer (4 B, in this process on a software GL)
+    fixed = {"textures": texels(scene) * (3 + 4 + 4 * gl_in_host)}
     return Estimate("the rasterizer", scene.width, scene.height,
-                    _terms(scene.width * scene.height, t))
+                    _terms(scene.width * scene.height, t, fixed))
+
+
+def texels(scene: Scene) -> int:
+    """How many texels the scene's textures hold (each texture once)."""
+    seen = {id(o.material.texture): o.material.texture for o in scene.objects
+            if o.material.texture is not None}
+    return sum(t.width * t.height for t in seen.values())
+
+
+def surfaced(scene: Scene) -> bool:
+    """Whether some object has a texture or vertex colours."""
+    return any(o.material.texture is not None or o.colors is not None for o in scene.objects)
 
 
 def _written(written, L: int, truth, float64: bool, stencil: bool = False, words: int = 1
@@ -194,7 +214,9 @@ def whitted(scene: Scene, written=("png",)) -> Estimate:
     """`raytrace.whitted.render` of `scene` ((H, W, 3) float64) and the files written."""
     per = {"image float64": 24} | _written(written, len(scene.lights), (), float64=True)
     fixed = {"tiles in flight": _tiles(scene.width, WHITTED_TILE_RAYS, WHITTED_RAY_BYTES,
-                                       threads())}
+                                       threads()),
+             # the model's sRGB codes and the ray tracer's float64 linear copy (`texture`)
+             "textures": texels(scene) * (3 + 24)}
     return Estimate("the Whitted ray tracer", scene.width, scene.height,
                     _terms(scene.width * scene.height, per, fixed))
 
@@ -206,7 +228,7 @@ def path_traced(scene: Scene, spp: int, written=("png",)) -> Estimate:
     per = {"sums, mean, variance (float64)": 7 * 24} | \
         _written(written, len(scene.lights), (), float64=True)
     fixed = {"tiles in flight": threads() * max(PATH_TILE_PATHS, scene.width * spp)
-             * PATH_RAY_BYTES}
+             * PATH_RAY_BYTES, "textures": texels(scene) * (3 + 24)}
     return Estimate("the path tracer", scene.width, scene.height,
                     _terms(scene.width * scene.height, per, fixed))
 

@@ -90,6 +90,7 @@ def test_the_default_budget_is_three_quarters_of_the_machine(monkeypatch):
 
 def test_the_model_agrees_with_the_code_it_counts():
     assert memory.GL_FRAME_BYTES_PER_PIXEL == target.BYTES_PER_PIXEL
+    assert memory.GL_SURFACE_BYTES_PER_PIXEL == target.SURFACE_BYTES_PER_PIXEL
     assert memory.MASK_TILE_RAYS == raytrace.masks.MASK_TILE_RAYS
     assert memory.WHITTED_TILE_RAYS == raytrace.whitted.TILE_RAYS
     assert memory.PATH_TILE_PATHS == raytrace.pathtrace.TILE_PATHS

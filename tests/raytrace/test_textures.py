@@ -27,8 +27,10 @@ from builders import (
 
 import raytrace
 from raytrace import pathtrace
+from shadowvol import memory
 from shadowvol.cli.raytrace import main
 from shadowvol.errors import IgnoredMaterial
+from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 # Whitted shades in float64 from the float64 hit: it must give the float64 answer to rounding
@@ -268,3 +270,27 @@ def test_the_quad_is_where_the_tests_think(tmp_path):
     quad = scene.objects[0]
     np.testing.assert_array_equal(quad.vertices, QUAD.astype(np.float64))
     np.testing.assert_allclose(quad.uv, QUAD_UV.astype(np.float64), rtol=0, atol=1e-7)
+
+
+def test_textures_count_in_the_memory_budget(tmp_path):
+    """A 1024 x 512 texture adds its texels to every renderer's estimate (the model's codes,
+    the ray tracer's float64 copy, the GL buffer and its upload), the G-buffer's UVs and
+    colours to the raster's; a budget that fits the untextured scene refuses it."""
+    big = np.random.default_rng(0).integers(0, 256, (512, 1024, 3)).astype(np.uint8)
+    textured_glb(tmp_path / "quad.glb", big)
+    scene = load_scene(textured_scene_file(tmp_path, "quad.glb"))
+    quad = scene.objects[0]
+    plain = scene.replace(objects=(dataclasses.replace(
+        quad, uv=None, material=dataclasses.replace(quad.material, texture=None)),))
+    n = 512 * 1024
+    assert memory.whitted(scene).total - memory.whitted(plain).total == n * 27
+    assert memory.path_traced(scene, 4).total - memory.path_traced(plain, 4).total == n * 27
+    px = scene.width * scene.height
+    assert memory.raster(scene).total - memory.raster(plain).total == n * 11 + 24 * px
+    assert memory.raster(scene, gl_in_host=False).total - \
+        memory.raster(plain, gl_in_host=False).total == n * 7
+    limit = memory.BASE + memory.whitted(plain).total + n * 10
+    memory.check(memory.whitted(plain), limit)
+    with pytest.raises(SceneError, match="budget"):
+        memory.check(memory.whitted(scene), limit)
+    assert "textures" in memory.whitted(scene).describe()
