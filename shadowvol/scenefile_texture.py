@@ -13,7 +13,12 @@ turned back here.  Vertex colours are linear RGB: glTF's COLOR_0 is linear by th
 
 from __future__ import annotations
 
+import base64
+import binascii
 import io
+import json
+import os
+import struct
 import warnings
 from pathlib import Path, PurePosixPath
 from typing import NamedTuple
@@ -26,6 +31,7 @@ from shadowvol.errors import IgnoredMaterial, short_path
 from shadowvol.textures import GLTF_FILTERS, GLTF_WRAPS, Texture
 
 MAX_TEXTURE_FILE_BYTES = 1 << 28   # the size limit of each texture or MTL file
+MAX_GLTF_FILE_BYTES = 1 << 30      # of a glTF file or buffer read for its images (a mesh's)
 # glTF material features not read (what the warning names)
 _GLTF_IGNORED = ("normalTexture", "occlusionTexture", "emissiveTexture")
 # MTL statements that name maps not read (any other map_ but map_Kd too)
@@ -77,7 +83,8 @@ def read_texture_file(path: Path, key: str, read, **sampler) -> Texture:
     if not path.is_file() and not path.exists():
         raise SceneError(key, f"texture file not found: {short_path(path)}")
     data = read(path, MAX_TEXTURE_FILE_BYTES, key, f"texture {short_path(path)}")
-    return Texture(decode_image(data, short_path(path), key), source=str(path), **sampler)
+    return Texture(decode_image(data, short_path(path), key), file=os.path.abspath(path),
+                   **sampler)
 
 
 def vertex_colours(mesh, linear: bool) -> np.ndarray | None:
@@ -143,6 +150,13 @@ def gltf_surfaces(path: Path, document: dict, loaded, key: str, read) -> dict:
         raise SceneError(key, f"{short_path(path)}: cannot tell which of its primitives each "
                               "mesh trimesh read is, so not which texture it has")
     ignored, out, made = [], {}, {}
+    kept = {}
+
+    def once(file, *args):   # each file read once (the GLB itself holds its images)
+        if file not in kept:
+            kept[file] = read(file, *args)
+        return kept[file]
+
     for name, (_, prim) in zip(names, prims) if aligned else ():
         mesh = loaded.geometry[name]
         index = prim.get("material")
@@ -156,8 +170,7 @@ def gltf_surfaces(path: Path, document: dict, loaded, key: str, read) -> dict:
             if isinstance(factor, list) and len(factor) >= 3:
                 diffuse = np.asarray(factor[:3], np.float64)
             if index not in made:
-                made[index] = _gltf_texture(path, document, material, mesh, key, ignored,
-                                            read)
+                made[index] = _gltf_texture(path, document, material, key, ignored, once)
             texture = made[index]
         uv = trimesh_uv(mesh) if texture is not None else None
         if texture is not None and uv is None:
@@ -197,7 +210,7 @@ def _gltf_ignored(material: dict) -> list[str]:
     return out
 
 
-def _gltf_texture(path: Path, document: dict, material: dict, mesh, key: str,
+def _gltf_texture(path: Path, document: dict, material: dict, key: str,
                   ignored: list, read) -> Texture | None:
     """The base-colour Texture of a glTF material (None: it has none, or one not read, named
     in `ignored`), its sampler's wrap and filter; the image trimesh decoded, or a SceneError
@@ -229,13 +242,80 @@ def _gltf_texture(path: Path, document: dict, material: dict, mesh, key: str,
     uri = image.get("uri")
     if isinstance(uri, str) and not uri.startswith("data:"):
         return read_texture_file(path.parent / unquote(uri), key, read, filter=filt, **wrap)
-    pil = getattr(getattr(mesh.visual, "material", None), "baseColorTexture", None)
-    if pil is None:
-        raise SceneError(key, f"cannot read texture {what}: not a readable image")
-    buffer = io.BytesIO()
-    pil.save(buffer, format="PNG")
-    return Texture(decode_image(buffer.getvalue(), what, key), source=what, filter=filt,
-                   **wrap)
+    return read_gltf_image(path, source, key, read, filter=filt, **wrap)
+
+
+def read_gltf_image(path: Path, index: int, key: str, read, **sampler) -> Texture:
+    """The Texture of image `index` of the glTF/GLB file `path` held in the file itself (a
+    bufferView or a data URI); `read` reads files (`read_texture_file`)."""
+    data = read(path, MAX_GLTF_FILE_BYTES, key)
+    what = f"image {index} of {short_path(path)}"
+    try:
+        document, chunk = _gltf_chunks(path, data)
+        image = document["images"][index]
+        if "bufferView" in image:
+            view = document["bufferViews"][image["bufferView"]]
+            buffer = _gltf_buffer(path, document, chunk, view.get("buffer", 0), key, read)
+            start = view.get("byteOffset", 0)
+            blob = buffer[start:start + view["byteLength"]]
+            if len(blob) != view["byteLength"]:
+                raise ValueError("its bufferView runs past its buffer")
+        else:
+            blob = _data_uri(image["uri"])
+    except (KeyError, IndexError, TypeError, ValueError, struct.error,
+            binascii.Error) as exc:
+        raise SceneError(key, f"cannot read texture {what}: {exc}") from None
+    return Texture(decode_image(blob, what, key), file=os.path.abspath(path), image=index,
+                   **sampler)
+
+
+def _gltf_chunks(path: Path, data: bytes) -> tuple[dict, bytes]:
+    """A glTF/GLB file's JSON and (GLB) its BIN chunk (b"" if none)."""
+    if path.suffix.lower() != ".glb":
+        return json.loads(data), b""
+    length = struct.unpack_from("<I", data, 12)[0]
+    document = json.loads(data[20:20 + length])
+    at = 20 + length
+    if len(data) >= at + 8 and data[at + 4:at + 8] == b"BIN\0":
+        return document, data[at + 8:at + 8 + struct.unpack_from("<I", data, at)[0]]
+    return document, b""
+
+
+def _gltf_buffer(path: Path, document: dict, chunk: bytes, index: int, key: str,
+                 read) -> bytes:
+    uri = document["buffers"][index].get("uri")
+    if uri is None:
+        return chunk           # a GLB's own BIN chunk
+    if uri.startswith("data:"):
+        return _data_uri(uri)
+    return read(path.parent / unquote(uri), MAX_GLTF_FILE_BYTES, key)
+
+
+def _data_uri(uri: str) -> bytes:
+    head, _, body = uri.partition(",")
+    if not head.startswith("data:") or not head.endswith(";base64"):
+        raise ValueError("not a base64 data URI")
+    return base64.b64decode(body, validate=True)
+
+
+def texture_from_dict(value, key: str, base_dir: Path, read) -> Texture:
+    """A material's `texture` table of a scene file (as `save_scene` writes it): `file` (an
+    image file, or with `image` a glTF/GLB file and the index of an image it holds) and the
+    sampler's `wrap_s`, `wrap_t`, `filter`."""
+    if not isinstance(value, dict):
+        raise SceneError(key, f"expected a table, got {type(value).__name__}")
+    unknown = set(value) - {"file", "image", "wrap_s", "wrap_t", "filter"}
+    if unknown:
+        raise SceneError(key, f"unknown key {sorted(unknown)[0]!r}")
+    file, image = value.get("file"), value.get("image")
+    if not isinstance(file, str) or not file:
+        raise SceneError(f"{key}.file", "expected a file path")
+    if image is not None and (isinstance(image, bool) or not isinstance(image, int)):
+        raise SceneError(f"{key}.image", f"expected an image index, got {image!r}")
+    sampler = {k: value[k] for k in ("wrap_s", "wrap_t", "filter") if k in value}
+    if image is None:
+        return read_texture_file(base_dir / file, key, read, **sampler)
+    return read_gltf_image(base_dir / file, image, key, read, **sampler)
 
 
 def _image_name(path: Path, image: dict, index) -> str:

@@ -37,14 +37,25 @@ class Texture:
     wrap_s, wrap_t : one of WRAPS, for u and v
     filter : one of FILTERS (glTF's magFilter, else the base filter of its minFilter, else
              linear), used at every distance: no mipmaps
-    source : where the texels came from (a file, or a file and its image), for messages
+    file   : the file the texels came from (an absolute path; "" for texels made in code):
+             the image file, or with `image` the glTF/GLB file holding it
+    image  : the index of the image in that glTF/GLB file's `images`, or None
+    (`file` and `image` are what `save_scene` writes: the texture is read again from them)
     """
 
     texels: np.ndarray
     wrap_s: str = "repeat"
     wrap_t: str = "repeat"
     filter: str = "linear"
-    source: str = ""
+    file: str = ""
+    image: int | None = None
+
+    @property
+    def source(self) -> str:
+        """Where the texels came from, in words (for messages)."""
+        if self.image is not None:
+            return f"image {self.image} of {self.file}"
+        return self.file or "a texture made in code"
 
     def __post_init__(self):
         t = np.asarray(self.texels)
@@ -76,11 +87,18 @@ class Texture:
         return int(self.texels.nbytes)
 
 
+def _floats(value, key: str) -> np.ndarray:
+    try:
+        return np.array(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise SceneError(key, "expected rows of numbers") from None
+
+
 def vertex_uv(uv, n: int) -> np.ndarray | None:
     """(n, 2) float64 read-only UVs (glTF's convention), or None; a SceneError if malformed."""
     if uv is None:
         return None
-    a = np.array(uv, dtype=np.float64)
+    a = _floats(uv, "uv")
     if a.shape != (n, 2):
         raise SceneError("uv", f"expected ({n}, 2) texture coordinates, got shape {a.shape}")
     if not np.isfinite(a).all():
@@ -92,7 +110,7 @@ def vertex_colours(colours, n: int) -> np.ndarray | None:
     """(n, 3) float64 read-only linear RGB vertex colours (>= 0), or None."""
     if colours is None:
         return None
-    a = np.array(colours, dtype=np.float64)
+    a = _floats(colours, "colors")
     if a.shape != (n, 3):
         raise SceneError("colors", f"expected ({n}, 3) vertex colours, got shape {a.shape}")
     if not np.isfinite(a).all() or (a < 0).any():

@@ -294,3 +294,32 @@ def test_textures_count_in_the_memory_budget(tmp_path):
     with pytest.raises(SceneError, match="budget"):
         memory.check(memory.whitted(scene), limit)
     assert "textures" in memory.whitted(scene).describe()
+
+
+@pytest.mark.parametrize("suffix", [".toml", ".json"])
+@pytest.mark.parametrize("where", ["in the GLB", "beside it"])
+def test_textured_meshes_survive_save_scene(tmp_path, suffix, where):
+    """save_scene writes the UVs, the vertex colours and the texture as the file it was read
+    from (the GLB and its image index, or the image file): loaded again, the same scene."""
+    textured_glb(tmp_path / "quad.glb", texels(2), wrap=GL_CLAMP, filt=GL_LINEAR,
+                 image_uri=None if where == "in the GLB" else "tex.png")
+    scene = load_scene(textured_scene_file(tmp_path, "quad.glb"))
+    quad = scene.objects[0]
+    colours = np.linspace(0.2, 1.0, 12).reshape(4, 3)
+    scene = scene.replace(objects=(dataclasses.replace(quad, colors=colours),))
+    saved = tmp_path / "elsewhere" / f"saved{suffix}"
+    saved.parent.mkdir()
+    from shadowvol.scenefile import save_scene
+
+    save_scene(scene, saved)
+    again = load_scene(saved).objects[0]
+    t, u = quad.material.texture, again.material.texture
+    np.testing.assert_array_equal(u.texels, t.texels)
+    assert (u.wrap_s, u.wrap_t, u.filter, u.file, u.image) == \
+        (t.wrap_s, t.wrap_t, t.filter, t.file, t.image)
+    assert (u.image is None) == (where == "beside it")
+    np.testing.assert_array_equal(again.uv, quad.uv)
+    np.testing.assert_array_equal(again.colors, colours)
+    np.testing.assert_array_equal(
+        raytrace.render(load_scene(saved), max_depth=0, progress=False),
+        raytrace.render(scene, max_depth=0, progress=False))
