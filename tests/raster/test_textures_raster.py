@@ -143,3 +143,29 @@ def test_textured_and_plain_objects_in_one_frame(ctx, tmp_path, assert_masks_mat
     lit, cov = raytrace.shadow_masks(scene)
     assert_masks_match(res, lit, cov)
     assert (~lit[0] & cov).sum() > 100   # the boxes' shadows are in the frame
+
+
+def test_a_huge_textured_ground_cut_to_the_guard_band(ctx, tmp_path):
+    """A ground 2e5 wide, seen from 1 above: its triangles are cut to the view's guard band
+    (`SceneGeometry.set_view`), and the pieces' UVs and colours, interpolated in float64 at
+    their corners, give the image the ray tracer gives for the whole triangles."""
+    from shadowvol.primitives import mesh
+    from shadowvol.scene import Camera, Scene
+    from shadowvol.textures import Texture
+
+    half = 1e5
+    v = np.array([[-half, 0, -half], [half, 0, -half], [half, 0, half], [-half, 0, half]])
+    uv = np.array([[0.0, 0.0], [8.0, 0.0], [8.0, 8.0], [0.0, 8.0]])
+    colours = np.array([[1.0, 0.2, 0.2], [0.2, 1.0, 0.2], [0.2, 0.2, 1.0], [1.0, 1.0, 1.0]])
+    tex = Texture(texels(7), "repeat", "mirror", "linear")
+    ground = mesh("ground", v, [[0, 1, 2], [0, 2, 3]], Material(texture=tex), uv=uv,
+                  colors=colours)
+    scene = Scene(Camera(eye=[3.0, 1.0, 5.0], target=[-40.0, 0.0, -200.0], fov_y=60),
+                  [ground], [PointLight([0.0, 50.0, 0.0])], width=96, height=64)
+    with Renderer(scene, ctx) as r:
+        raster = r.render().image
+        assert len(r.geometry.holes) == 2    # both triangles were cut
+    ray = raytrace.render(scene, max_depth=0, progress=False)
+    check_images(raster, ray, tmp_path, "huge")
+    covered = (ray != scene.background).any(axis=2)
+    assert len(np.unique(raster[covered].round(4), axis=0)) > 100
