@@ -169,3 +169,24 @@ def test_a_huge_textured_ground_cut_to_the_guard_band(ctx, tmp_path):
     check_images(raster, ray, tmp_path, "huge")
     covered = (ray != scene.background).any(axis=2)
     assert len(np.unique(raster[covered].round(4), axis=0)) > 100
+
+
+def test_textures_change_the_image_and_nothing_else(ctx, tmp_path):
+    """Every ground-truth output of a textured scene is the untextured scene's, bit for bit;
+    the 8-bit image the shading pass encodes itself is the float image's, within one code."""
+    from shadowvol.io import encode_srgb
+    from shadowvol.raster.result import OUTPUTS
+
+    textured_glb(tmp_path / "quad.glb", texels(8), wrap=GL_MIRROR, filt=GL_LINEAR)
+    scene = load_scene(textured_scene_file(tmp_path, "quad.glb"))
+    plain = scene.replace(objects=(untextured(scene.objects[0]),))
+    truth = tuple(o for o in OUTPUTS if o not in ("image", "image_srgb", "stencil"))
+    with Renderer(scene, ctx) as r:
+        got = r.render(outputs=truth + ("image_srgb",))
+        image = r.render().image
+    with Renderer(plain, ctx) as r:
+        want = r.render(outputs=truth + ("image_srgb",))
+    for name in truth:
+        np.testing.assert_array_equal(getattr(got, name), getattr(want, name), err_msg=name)
+    assert (got.image_srgb != want.image_srgb).any()
+    assert np.abs(got.image_srgb.astype(int) - encode_srgb(image)).max() <= 1
