@@ -516,10 +516,12 @@ def png_bytes(texels: np.ndarray) -> bytes:
 
 def textured_glb(path: Path, texels: np.ndarray, *, wrap=GL_REPEAT, filt=GL_NEAREST,
                  factor=(1.0, 1.0, 1.0, 1.0), material: dict | None = None,
-                 image_uri: str | None = None, vertices=QUAD, uv=QUAD_UV) -> Path:
+                 image_uri: str | None = None, vertices=QUAD, uv=QUAD_UV,
+                 colours=None) -> Path:
     """A GLB of one quad (two triangles) with a baseColorTexture of `texels` (h, w, 3) uint8
     (in the file, or at `image_uri` beside it), its sampler's wrap (both axes) and filter,
-    `factor` the baseColorFactor, `material` more keys of the material."""
+    `factor` the baseColorFactor, `material` more keys of the material, `colours` (4, 3)
+    float32 its COLOR_0."""
     chunks, views = [], []
 
     def view(data: bytes) -> int:
@@ -537,6 +539,11 @@ def textured_glb(path: Path, texels: np.ndarray, *, wrap=GL_REPEAT, filt=GL_NEAR
          "count": 4, "type": "VEC2"},
         {"bufferView": view(indices.tobytes()), "componentType": 5123, "count": 6,
          "type": "SCALAR"}]
+    attributes = {"POSITION": 0, "TEXCOORD_0": 1}
+    if colours is not None:
+        attributes["COLOR_0"] = len(accessors)
+        accessors.append({"bufferView": view(np.asarray(colours, np.float32).tobytes()),
+                          "componentType": 5126, "count": 4, "type": "VEC3"})
     image = {"uri": image_uri} if image_uri else \
         {"bufferView": view(png_bytes(texels)), "mimeType": "image/png"}
     if image_uri and texels is not None:
@@ -545,7 +552,7 @@ def textured_glb(path: Path, texels: np.ndarray, *, wrap=GL_REPEAT, filt=GL_NEAR
         "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
         "nodes": [{"name": "quad", "mesh": 0}],
         "meshes": [{"name": "quad", "primitives": [{
-            "attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+            "attributes": attributes, "indices": 2, "material": 0}]}],
         "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
                                                 "baseColorFactor": list(factor)},
                        **(material or {})}],

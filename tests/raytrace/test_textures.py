@@ -41,6 +41,9 @@ FLOAT32_TOL = 1e-5
 SAMPLERS = [(GL_NEAREST, GL_REPEAT), (GL_LINEAR, GL_REPEAT), (GL_NEAREST, GL_CLAMP),
             (GL_LINEAR, GL_CLAMP), (GL_LINEAR, GL_MIRROR)]
 FACTOR = (0.9, 0.7, 0.8, 1.0)
+# the quad's COLOR_0, linear (glTF), one colour a corner
+COLOURS = np.array([[1.0, 0.5, 0.5], [0.5, 1.0, 0.5], [0.5, 0.5, 1.0], [1.0, 1.0, 0.25]],
+                   np.float32)
 
 
 def texels(seed: int = 0) -> np.ndarray:
@@ -102,6 +105,10 @@ def expected_pixel(scene, x: int, y: int, tex, filt, wrap) -> tuple[np.ndarray, 
     uv0, uv2 = scene.objects[0].uv[0], scene.objects[0].uv[2]   # as loaded (float32 file)
     u, v = uv0[0] + s * (uv2[0] - uv0[0]), uv0[1] + t * (uv2[1] - uv0[1])
     base = texel_at(tex, u, v, filt, wrap)
+    colours = scene.objects[0].colors
+    if colours is not None:   # barycentric in triangle (0, 1, 2) (t <= s) or (0, 2, 3)
+        w = [1 - s, s - t, t, 0.0] if t <= s else [1 - t, 0.0, s, t - s]
+        base = base * (np.array(w) @ colours)
     m = scene.objects[0].material
     light = scene.lights[0]
     n = np.array([0.0, 1.0, 0.0])
@@ -115,9 +122,10 @@ def expected_pixel(scene, x: int, y: int, tex, filt, wrap) -> tuple[np.ndarray, 
     return colour, u * w, v * h
 
 
-def quad_scene(tmp_path, filt, wrap, seed=0):
+def quad_scene(tmp_path, filt, wrap, seed=0, colours=None):
     tex = texels(seed)
-    textured_glb(tmp_path / "quad.glb", tex, wrap=wrap, filt=filt, factor=FACTOR)
+    textured_glb(tmp_path / "quad.glb", tex, wrap=wrap, filt=filt, factor=FACTOR,
+                 colours=colours)
     return load_scene(textured_scene_file(tmp_path, "quad.glb")), tex
 
 
@@ -129,9 +137,12 @@ def on_quad(scene) -> np.ndarray:
     return np.stack([x + 1, y + 1], 1)
 
 
+@pytest.mark.parametrize("colours", [None, COLOURS], ids=["texture", "texture+COLOR_0"])
 @pytest.mark.parametrize("filt,wrap", SAMPLERS)
-def test_whitted_pixels_are_the_rules_texels(tmp_path, filt, wrap):
-    scene, tex = quad_scene(tmp_path, filt, wrap)
+def test_whitted_pixels_are_the_rules_texels(tmp_path, filt, wrap, colours):
+    scene, tex = quad_scene(tmp_path, filt, wrap, colours=colours)
+    if colours is not None:   # glTF's COLOR_0 is linear: read as it is, not decoded
+        np.testing.assert_array_equal(scene.objects[0].colors, colours.astype(np.float64))
     image = raytrace.render(scene, max_depth=0, progress=False)
     pixels = on_quad(scene)
     assert len(pixels) > 2000
