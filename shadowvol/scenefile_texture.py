@@ -229,7 +229,6 @@ def _gltf_texture(path: Path, document: dict, material: dict, key: str,
     if image is None:
         ignored.append("a baseColorTexture without an image (an extension's)")
         return None
-    what = _image_name(path, image, source)
     if image.get("mimeType") == "image/ktx2":
         ignored.append("KTX2 textures")
         return None
@@ -316,13 +315,6 @@ def texture_from_dict(value, key: str, base_dir: Path, read) -> Texture:
     if image is None:
         return read_texture_file(base_dir / file, key, read, **sampler)
     return read_gltf_image(base_dir / file, image, key, read, **sampler)
-
-
-def _image_name(path: Path, image: dict, index) -> str:
-    uri = image.get("uri")
-    if isinstance(uri, str) and not uri.startswith("data:"):
-        return short_path(path.parent / unquote(uri))
-    return f"image {index} of {short_path(path)}"
 
 
 # ---------------------------------------------------------------------------------------------
