@@ -28,7 +28,7 @@ import numpy as np
 
 from shadowvol.checks import SceneError
 from shadowvol.errors import IgnoredMaterial, short_path
-from shadowvol.textures import GLTF_FILTERS, GLTF_WRAPS, Texture
+from shadowvol.textures import FILTERS, GLTF_FILTERS, GLTF_WRAPS, WRAPS, Texture
 
 MAX_TEXTURE_FILE_BYTES = 1 << 28   # the size limit of each texture or MTL file
 MAX_GLTF_FILE_BYTES = 1 << 30      # of a glTF file or buffer read for its images (a mesh's)
@@ -312,6 +312,10 @@ def texture_from_dict(value, key: str, base_dir: Path, read) -> Texture:
     if image is not None and (isinstance(image, bool) or not isinstance(image, int)):
         raise SceneError(f"{key}.image", f"expected an image index, got {image!r}")
     sampler = {k: value[k] for k in ("wrap_s", "wrap_t", "filter") if k in value}
+    for k, v in sampler.items():
+        allowed = FILTERS if k == "filter" else WRAPS
+        if v not in allowed:
+            raise SceneError(f"{key}.{k}", f"expected one of {', '.join(allowed)}, got {v!r}")
     if image is None:
         return read_texture_file(base_dir / file, key, read, **sampler)
     return read_gltf_image(base_dir / file, image, key, read, **sampler)

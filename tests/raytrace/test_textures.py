@@ -334,3 +334,21 @@ def test_textured_meshes_survive_save_scene(tmp_path, suffix, where):
     np.testing.assert_array_equal(
         raytrace.render(load_scene(saved), max_depth=0, progress=False),
         raytrace.render(scene, max_depth=0, progress=False))
+
+
+@pytest.mark.parametrize("texture,key", [
+    ({"file": "tex.png", "wrap_s": "wrap"}, "objects[0].material.texture.wrap_s"),
+    ({"file": "tex.png", "filter": "cubic"}, "objects[0].material.texture.filter"),
+    ({"file": "none.png"}, "objects[0].material.texture"),
+    ({"file": "quad.glb", "image": 3}, "objects[0].material.texture"),
+    ({"image": 0}, "objects[0].material.texture.file")])
+def test_a_bad_texture_table_names_its_key(tmp_path, texture, key):
+    from shadowvol.scenefile import scene_from_dict
+
+    textured_glb(tmp_path / "quad.glb", texels(), image_uri="tex.png")
+    data = {"camera": {"eye": [0, 2, 2], "target": [0, 0, 0]},
+            "objects": [{"type": "mesh", "vertices": QUAD.tolist(), "faces": [[0, 1, 2]],
+                         "uv": QUAD_UV.tolist(), "material": {"texture": texture}}]}
+    with pytest.raises(SceneError) as caught:
+        scene_from_dict(data, tmp_path)
+    assert str(caught.value).startswith(key + ":"), str(caught.value)
