@@ -78,10 +78,12 @@ uniform sampler2D u_tint;       // and its vertex colour (rgb)
 layout(std430, binding = 1) readonly buffer Texels {
     uint texels[];              // every texture's RGBA8 sRGB codes, one texture after another
 };
+// per texture: first texel, width, height, flags (bits 0-1 wrap_s, 2-3 wrap_t: 0 repeat,
+// 1 clamp, 2 mirror; bit 4 bilinear)
 layout(std430, binding = 2) readonly buffer Records {
-    ivec4 records[];            // per texture: first texel, width, height, flags: wrap_s in
-};                              // bits 0-1, wrap_t in 2-3 (0 repeat, 1 clamp, 2 mirror),
-layout(std430, binding = 3) readonly buffer Decode {  // bit 4 bilinear
+    ivec4 records[];
+};
+layout(std430, binding = 3) readonly buffer Decode {
     float srgb_linear[256];     // 8-bit sRGB code -> linear (float64 rounded to float32)
 };
 
