@@ -114,6 +114,18 @@ def field_bytes(name: str, lights: int, words: int = 1) -> int:
     return n
 
 
+def texels(scene: Scene) -> int:
+    """How many texels the scene's textures hold (each texture once)."""
+    seen = {id(o.material.texture): o.material.texture for o in scene.objects
+            if o.material.texture is not None}
+    return sum(t.width * t.height for t in seen.values())
+
+
+def surfaced(scene: Scene) -> bool:
+    """Whether some object has a texture or vertex colours."""
+    return any(o.material.texture is not None or o.colors is not None for o in scene.objects)
+
+
 def written(files, L: int, truth, float64: bool, stencil: bool = False, words: int = 1
             ) -> dict:
     """The encoders' bytes per pixel for the `files` written ("png", "png16", "exr", "masks"

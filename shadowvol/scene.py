@@ -46,6 +46,7 @@ from shadowvol.lights import (  # noqa: F401 (re-exported)
     hard_lights,
     light_samples,
 )
+from shadowvol.textures import Texture, vertex_colours, vertex_uv
 
 # Geometric tolerances of the scene model itself (renderer tolerances live with each renderer).
 PARALLEL_TOLERANCE = 1e-9  # |sin| of the angle below which `up` counts as parallel to the view
@@ -74,6 +75,9 @@ class Material:
     `roughness` in [0, 1] blurs Whitted's reflection into a glossy lobe around the mirror
     direction (`raytrace.outlook.sampling.glossy`); 0 is the exact mirror.  The rasterizer, the path
     tracer and radiosity ignore it.
+
+    `texture`: a base-colour `Texture`, sampled at the object's UVs; with the object's vertex
+    colours it multiplies `ambient` and `diffuse` (docs/CONVENTIONS.md, "Textures").
     """
 
     ambient: np.ndarray = field(default_factory=lambda: vec([0.1, 0.1, 0.1], "ambient"))
@@ -85,8 +89,11 @@ class Material:
     ior: float = 1.5
     emission: np.ndarray = field(default_factory=lambda: vec([0.0, 0.0, 0.0], "emission"))
     roughness: float = 0.0
+    texture: Texture | None = None
 
     def __post_init__(self):
+        if self.texture is not None and not isinstance(self.texture, Texture):
+            raise SceneError("texture", f"not a Texture: {type(self.texture).__name__}")
         for name in ("ambient", "diffuse", "specular", "emission"):
             v = vec(getattr(self, name), name)
             if np.any(v < 0):
@@ -156,6 +163,9 @@ class Object:
     cast_shadows    : False: it blocks no light (no shadow volume, no shadow ray); still seen
     receive_shadows : False: it is lit as if nothing blocked its lights (docs/CONVENTIONS.md,
                       "Shadow switches")
+    uv       : (n, 2) float64, read-only, per-vertex texture coordinates (glTF's convention:
+               v down), or None; needed by a `material.texture`
+    colors   : (n, 3) float64, read-only, per-vertex linear RGB colours, or None (all 1)
     """
 
     name: str
@@ -165,6 +175,8 @@ class Object:
     analytic: Analytic | None = None
     cast_shadows: bool = True
     receive_shadows: bool = True
+    uv: np.ndarray | None = None
+    colors: np.ndarray | None = None
 
     def __post_init__(self):
         for key in ("cast_shadows", "receive_shadows"):
@@ -196,6 +208,10 @@ class Object:
                                          f"vertex {i} = {v[i].tolist()})")
         object.__setattr__(self, "vertices", frozen(v))
         object.__setattr__(self, "faces", frozen(f.astype(np.int64)))
+        object.__setattr__(self, "uv", vertex_uv(self.uv, len(v)))
+        object.__setattr__(self, "colors", vertex_colours(self.colors, len(v)))
+        if self.material.texture is not None and self.uv is None:
+            raise SceneError("uv", "a textured material needs texture coordinates (uv)")
 
     @property
     def triangles(self) -> np.ndarray:

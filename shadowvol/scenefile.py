@@ -43,6 +43,7 @@ from shadowvol.scenefile_mesh import (
     read_mesh,
     read_regular_file,
 )
+from shadowvol.scenefile_texture import texture_from_dict
 from shadowvol.scenefile_write import save_scene  # noqa: F401 (shadowvol.scenefile.save_scene)
 
 # Limits on what a scene file may make us read and build (all checked before the work):
@@ -61,7 +62,7 @@ CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near", "aperture", "focus_distan
                "fx", "fy", "cx", "cy", "camera_to_world"}
 RENDER_KEYS = {"max_depth"}
 MATERIAL_KEYS = {"ambient", "diffuse", "specular", "shininess", "reflectivity", "transparency",
-                 "ior", "emission", "roughness"}
+                 "ior", "emission", "roughness", "texture"}
 LIGHT_KEYS = {
     "point": {"type", "position", "color", "intensity", "shadows"},
     "directional": {"type", "direction", "color", "intensity", "shadows"},
@@ -75,7 +76,7 @@ TRANSFORM_KEYS = {"scale", "rotation", "translation"}
 SWITCH_KEYS = ("cast_shadows", "receive_shadows")
 COMMON_OBJECT_KEYS = {"type", "name", "material", "transform", *SWITCH_KEYS}
 OBJECT_KEYS = {
-    "mesh": COMMON_OBJECT_KEYS | {"path", "vertices", "faces"},
+    "mesh": COMMON_OBJECT_KEYS | {"path", "vertices", "faces", "uv", "colors"},
     "sphere": COMMON_OBJECT_KEYS | {"center", "radius", "subdivisions"},
     "plane": COMMON_OBJECT_KEYS | {"point", "normal", "size"},
     "box": COMMON_OBJECT_KEYS | {"center", "size"},
@@ -172,7 +173,8 @@ def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene
     render = _table(data.get("render", {}), "render", RENDER_KEYS)
 
     materials = _table(data.get("materials", {}), "materials", None)
-    named = {name: _material(m, f"materials.{name}") for name, m in materials.items()}
+    named = {name: _material(m, f"materials.{name}", base_dir)
+             for name, m in materials.items()}
 
     lights = _list(data.get("lights", []), "lights")
     objects = _list(_required(data, "objects", ""), "objects")
@@ -257,8 +259,12 @@ def camera_from_dict(table: dict, key: str = "camera") -> Camera:
     return _build(key, Camera, **table)
 
 
-def _material(value, key: str) -> Material:
-    return _build(key, Material, **_table(value, key, MATERIAL_KEYS))
+def _material(value, key: str, base_dir: Path = Path(".")) -> Material:
+    table = dict(_table(value, key, MATERIAL_KEYS))
+    if "texture" in table:   # as `save_scene` writes a texture: its file (and image)
+        table["texture"] = texture_from_dict(table["texture"], f"{key}.texture", base_dir,
+                                             read_regular_file)
+    return _build(key, Material, **table)
 
 
 def _typed(value, key: str, allowed_by_type: dict[str, set[str]], what: str) -> tuple[dict, str]:
@@ -327,7 +333,7 @@ def _object_parts(value, key: str, named: dict[str, Material], base_dir: Path,
                              f"no material named {shorten(material)} in [materials]")
         material = named[material]
     else:
-        material = _material(material, f"{key}.material")
+        material = _material(material, f"{key}.material", base_dir)
 
     transform = _build(f"{key}.transform", primitives.Transform,
                        **_table(table.get("transform", {}), f"{key}.transform", TRANSFORM_KEYS))
@@ -338,12 +344,13 @@ def _object_parts(value, key: str, named: dict[str, Material], base_dir: Path,
         if "vertices" in table:
             vertices, faces = _inline_mesh(table, key)
             return [_build(key, primitives.mesh, name=name, vertices=vertices, faces=faces,
-                           material=material, transform=transform)]
+                           material=material, transform=transform, uv=table.get("uv"),
+                           colors=table.get("colors"))]
         parts = read_mesh(table["path"], f"{key}.path", base_dir, max_mesh_bytes)
         return [_build(key, primitives.mesh, name=part_name(name, part, len(parts)),
                        vertices=part.vertices, faces=part.faces,
                        material=part_material(material, part, "material" in table),
-                       transform=transform) for part in parts]
+                       transform=transform, uv=part.uv, colors=part.colors) for part in parts]
     builder = {"sphere": primitives.sphere, "plane": primitives.plane, "box": primitives.box}[kind]
     if kind == "sphere":
         for required in ("center", "radius"):

@@ -31,7 +31,16 @@ def scene_to_dict(scene: Scene) -> dict:
                 "specular": m.specular.tolist(), "shininess": m.shininess,
                 "reflectivity": m.reflectivity, "transparency": m.transparency, "ior": m.ior,
                 "emission": m.emission.tolist(),
-                **({"roughness": m.roughness} if m.roughness else {})}
+                **({"roughness": m.roughness} if m.roughness else {}),
+                **({} if m.texture is None else {"texture": texture(m.texture)})}
+
+    def texture(t) -> dict:
+        # its file (and image): read again on load, so the texels are the file's
+        if not t.file:
+            raise SceneError("texture", "a texture made in code has no file: save_scene "
+                                        "writes a texture as the file it was read from")
+        return {"file": t.file, **({} if t.image is None else {"image": t.image}),
+                "wrap_s": t.wrap_s, "wrap_t": t.wrap_t, "filter": t.filter}
 
     def light(lt) -> dict:
         # the shadow switches only where off: files without them stay as they were
@@ -70,6 +79,8 @@ def scene_to_dict(scene: Scene) -> dict:
         "lights": [light(lt) for lt in scene.lights],
         "objects": [{"type": "mesh", "name": o.name, "vertices": o.vertices.tolist(),
                      "faces": o.faces.tolist(), "material": material(o.material),
+                     **({} if o.uv is None else {"uv": o.uv.tolist()}),
+                     **({} if o.colors is None else {"colors": o.colors.tolist()}),
                      **{k: False for k in ("cast_shadows", "receive_shadows")
                         if not getattr(o, k)}}
                     for o in scene.objects],

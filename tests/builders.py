@@ -580,3 +580,106 @@ def check_seen(K, camera_to_world, centres, pixels, object_id, depth, normal) ->
     assert (np.linalg.norm(points - centres, axis=1) <= (HALF + MISS) * 1.5 * pixel_size).all()
     # and nothing else: a square is 0.6 px wide, so it covers at most 4 pixels
     assert 0 < (object_id > 0).sum() <= 4 * len(pixels)
+
+
+# ---------------------------------------------------------------------------------------------
+# Textured meshes, written by hand (the files the loaders read, made in the tests themselves)
+# ---------------------------------------------------------------------------------------------
+
+# The raster-vs-ray image budget of `test_soft_raster.test_image_is_the_ray_tracers_direct_light`:
+# a channel more than IMAGE_TOL apart in at most IMAGE_BUDGET of the pixels (float32 against
+# float64 shading of the same point)
+IMAGE_TOL, IMAGE_BUDGET = 1e-4, 0.002
+# a quad on the ground (y = 0), its UVs (glTF's convention) reaching past [0, 1] so that the
+# wrap modes show, and the GL enums of glTF's samplers
+QUAD = np.array([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], np.float32)
+QUAD_UV = np.array([[-0.3, -0.2], [1.37, -0.2], [1.37, 1.61], [-0.3, 1.61]], np.float32)
+GL_NEAREST, GL_LINEAR, GL_REPEAT, GL_CLAMP, GL_MIRROR = 9728, 9729, 10497, 33071, 33648
+
+
+def png_bytes(texels: np.ndarray) -> bytes:
+    import io
+
+    from PIL import Image
+
+    buffer = io.BytesIO()
+    Image.fromarray(texels).save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
+def textured_glb(path: Path, texels: np.ndarray, *, wrap=GL_REPEAT, filt=GL_NEAREST,
+                 factor=(1.0, 1.0, 1.0, 1.0), material: dict | None = None,
+                 image_uri: str | None = None, vertices=QUAD, uv=QUAD_UV,
+                 colours=None) -> Path:
+    """A GLB of one quad (two triangles) with a baseColorTexture of `texels` (h, w, 3) uint8
+    (in the file, or at `image_uri` beside it), its sampler's wrap (both axes) and filter,
+    `factor` the baseColorFactor, `material` more keys of the material, `colours` (4, 3)
+    float32 its COLOR_0."""
+    chunks, views = [], []
+
+    def view(data: bytes) -> int:
+        views.append({"buffer": 0, "byteOffset": sum(len(c) for c in chunks),
+                      "byteLength": len(data)})
+        chunks.append(data + b"\0" * (-len(data) % 4))
+        return len(views) - 1
+
+    indices = np.array([0, 1, 2, 0, 2, 3], np.uint16)
+    accessors = [
+        {"bufferView": view(np.asarray(vertices, np.float32).tobytes()), "componentType": 5126,
+         "count": 4, "type": "VEC3", "min": np.min(vertices, 0).tolist(),
+         "max": np.max(vertices, 0).tolist()},
+        {"bufferView": view(np.asarray(uv, np.float32).tobytes()), "componentType": 5126,
+         "count": 4, "type": "VEC2"},
+        {"bufferView": view(indices.tobytes()), "componentType": 5123, "count": 6,
+         "type": "SCALAR"}]
+    attributes = {"POSITION": 0, "TEXCOORD_0": 1}
+    if colours is not None:
+        attributes["COLOR_0"] = len(accessors)
+        accessors.append({"bufferView": view(np.asarray(colours, np.float32).tobytes()),
+                          "componentType": 5126, "count": 4, "type": "VEC3"})
+    image = {"uri": image_uri} if image_uri else \
+        {"bufferView": view(png_bytes(texels)), "mimeType": "image/png"}
+    if image_uri and texels is not None:
+        (path.parent / image_uri).write_bytes(png_bytes(texels))
+    document = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "quad", "mesh": 0}],
+        "meshes": [{"name": "quad", "primitives": [{
+            "attributes": attributes, "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                                "baseColorFactor": list(factor)},
+                       **(material or {})}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"magFilter": filt, "minFilter": filt, "wrapS": wrap, "wrapT": wrap}],
+        "images": [image], "accessors": accessors, "bufferViews": views,
+        "buffers": [{"byteLength": sum(len(c) for c in chunks)}]}
+    text = json.dumps(document).encode()
+    text += b" " * (-len(text) % 4)
+    binary = b"".join(chunks)
+    body = (len(text).to_bytes(4, "little") + b"JSON" + text
+            + len(binary).to_bytes(4, "little") + b"BIN\0" + binary)
+    path.write_bytes(b"glTF" + (2).to_bytes(4, "little")
+                     + (12 + len(body)).to_bytes(4, "little") + body)
+    return path
+
+
+def textured_scene_file(folder: Path, mesh: str, width: int = 96, height: int = 80) -> Path:
+    """A scene file in `folder` of the mesh file `mesh` (a name in `folder`) seen from above
+    at an angle, lit by one point light."""
+    path = folder / "textured.toml"
+    path.write_text(f'''[image]
+width = {width}
+height = {height}
+[camera]
+eye = [0.3, 2.2, 1.9]
+target = [0.0, 0.0, 0.0]
+fov_y = 50
+[[lights]]
+type = "point"
+position = [0.5, 3.0, 1.0]
+intensity = 0.9
+[[objects]]
+type = "mesh"
+path = "{mesh}"
+''')
+    return path

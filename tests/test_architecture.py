@@ -28,6 +28,7 @@ FLOORS = {
     "raytrace": (4, "raytrace"),
     "shadowvol.scenefile": (3, "model"),
     "shadowvol.scenefile_mesh": (3, "model"),
+    "shadowvol.scenefile_texture": (3, "model"),
     "shadowvol.scenefile_write": (3, "model"),
     "shadowvol.trimesh_scene": (3, "model"),
     "shadowvol.resources": (3, "model"),
@@ -40,6 +41,7 @@ FLOORS = {
     "shadowvol.frame": (2, "model"),
     "shadowvol.planes": (2, "model"),
     "shadowvol.checks": (2, "model"),
+    "shadowvol.textures": (2, "model"),
     "shadowvol.io": (1, "base"),
     "shadowvol.pictures": (1, "base"),
     "shadowvol.display": (1, "base"),
@@ -54,7 +56,8 @@ ENTRY_FILES = {"shadowvol.__main__", "raytrace.__main__"}
 RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.lights", "shadowvol.cameras",
                        "shadowvol.primitives", "shadowvol.arealights", "shadowvol.frame",
                        "shadowvol.planes", "shadowvol.checks", "shadowvol.errors", "shadowvol.io",
-                       "shadowvol.signals", "shadowvol.memory"}
+                       "shadowvol.signals", "shadowvol.memory",
+                       "shadowvol.textures"}
 # Global illumination, beyond the witness: the rest of raytrace/ (the witness: masks, groundtruth,
 # soft, backends, intersect, tolerances, camera) never imports it; the package's door
 # (`raytrace/__init__.py`, which names `raytrace.render` lazily) may.

@@ -25,7 +25,9 @@ def whitted(scene: Scene, written=("png",)) -> memory.Estimate:
     """`raytrace.outlook.whitted.render` of `scene` ((H, W, 3) float64) and the files
     written."""
     per = {"image float64": 24} | memory.written(written, len(scene.lights), (), float64=True)
-    fixed = {"tiles in flight": whitted_tiles(scene.width)}
+    fixed = {"tiles in flight": whitted_tiles(scene.width),
+             # the model's sRGB codes and the ray tracer's float64 linear copy (`texture`)
+             "textures": memory.texels(scene) * (3 + 24)}
     return memory.Estimate("the Whitted ray tracer", scene.width, scene.height,
                            memory.terms(scene.width * scene.height, per, fixed))
 
@@ -37,7 +39,7 @@ def path_traced(scene: Scene, spp: int, written=("png",)) -> memory.Estimate:
     per = {"sums, mean, variance (float64)": 7 * 24} | \
         memory.written(written, len(scene.lights), (), float64=True)
     fixed = {"tiles in flight": memory.threads() * max(TILE_PATHS, scene.width * spp)
-             * PATH_RAY_BYTES}
+             * PATH_RAY_BYTES, "textures": memory.texels(scene) * (3 + 24)}
     return memory.Estimate("the path tracer", scene.width, scene.height,
                            memory.terms(scene.width * scene.height, per, fixed))
 

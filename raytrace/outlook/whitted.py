@@ -60,6 +60,7 @@ from shadowvol.scene import (
 from raytrace.backends import cpu_threads, make_backend
 from raytrace.camera import primary_rays, sample_rays
 from raytrace.intersect import dot, ray_parallelogram, ray_sphere, reflect, refract
+from raytrace.texture import SurfaceColours
 from raytrace.tolerances import surface_offset
 
 from .progress import Progress
@@ -111,6 +112,11 @@ class World:
             faces = np.concatenate([objs[i].faces + off for i, off in zip(meshes, offsets)])
             self.tri_object = np.concatenate([np.full(len(objs[i].faces), i) for i in meshes])
             self.tracer = make_backend(backend, vertices, faces)
+            # each object's first triangle in the backend (its faces' own indices: `hits`)
+            self.tri_first = np.zeros(K, np.int64)
+            self.tri_first[meshes] = np.cumsum([0] + [len(objs[i].faces) for i in meshes])[:-1]
+        # textures and vertex colours (None: the scene has neither)
+        self.surface = SurfaceColours.of(scene)
         # the shadow switches: shadow rays meet the casting objects only, and are not cast
         # from an object that receives none (`Object.cast_shadows`, `receive_shadows`)
         self.receives = np.array([o.receive_shadows for o in objs], bool)
@@ -137,6 +143,24 @@ class World:
         Returns t (n,) float64 (inf: miss), obj (n,) int (-1: miss) and the geometric normal
         (n, 3) float64, unit, outward / by winding (not yet facing the ray).
         """
+        return self.hits(o, d)[:3]
+
+    def base_colour(self, obj: np.ndarray, tri: np.ndarray, p: np.ndarray
+                    ) -> np.ndarray | None:
+        """(k,) hits' base colour (k, 3) float64 (`raytrace.texture`), from `hits`' obj and
+        tri and the points p (k, 3); None where the scene has no texture nor vertex colour
+        (1 everywhere)."""
+        if self.surface is None:
+            return None
+        out = np.ones((len(obj), 3))
+        m = np.flatnonzero(tri >= 0)   # triangles only: analytic shapes are untextured
+        out[m] = self.surface.colour(obj[m], tri[m] - self.tri_first[obj[m]], p[m])
+        return out
+
+    def hits(self, o: np.ndarray, d: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """`nearest`, and the hit triangle's index in the backend (n,) int (-1: a miss or an
+        analytic shape)."""
         n = len(o)
         t = np.full(n, np.inf)
         obj = np.full(n, -1)
@@ -164,7 +188,7 @@ class World:
         m = kind == self.TRIANGLES
         if m.any():
             normal[m] = self.tracer.normals[tri[m]]
-        return t, obj, normal
+        return t, obj, normal, tri
 
     def occluded(self, o: np.ndarray, d: np.ndarray, tmax: float | None) -> np.ndarray:
         """(n,) bool: does any object lie on the rays o + λd, 0 < λ < tmax (None: anywhere)?"""
@@ -244,10 +268,14 @@ def shadow_rays(world: World, light, p: np.ndarray, n: np.ndarray,
     return ShadowRays(l, n_dot_l, facing, in_cone, start, direction, tmax, blocked)
 
 
-def local_colour(world: World, scene: Scene, p, n, view, obj) -> np.ndarray:
+def local_colour(world: World, scene: Scene, p, n, view, obj, base=None) -> np.ndarray:
     """Phong local term (k, 3) float64 at points p (k, 3) with unit normals n (k, 3) facing the
-    viewer, unit view directions `view` (k, 3) (toward the viewer), objects obj (k,)."""
-    colour = world.ka[obj] * scene.ambient
+    viewer, unit view directions `view` (k, 3) (toward the viewer), objects obj (k,); `base`
+    (k, 3): the base colour multiplying ka and kd (`World.base_colour`; None: 1)."""
+    ka, kd = world.ka[obj], world.kd[obj]
+    if base is not None:
+        ka, kd = ka * base, kd * base
+    colour = ka * scene.ambient
     # an area light is its samples, each weighted by its share and its cosine at the light
     for light in (hard for lt in scene.lights for hard in hard_lights(lt)):
         rays = shadow_rays(world, light, p, n, obj)
@@ -256,7 +284,7 @@ def local_colour(world: World, scene: Scene, p, n, view, obj) -> np.ndarray:
         r = reflect(-l[c], n[c])  # the light's direction mirrored about n
         r_dot_v = np.maximum(dot(r, view[c]), 0.0)
         o = obj[c]
-        term = (world.kd[o] * n_dot_l[c, None]
+        term = (kd[c] * n_dot_l[c, None]
                 + world.ks[o] * (r_dot_v ** world.shininess[o])[:, None])
         colour[c] += term * light.radiance * np.reshape(emission_cosine(light, l[c]), (-1, 1))
     return colour
@@ -329,17 +357,17 @@ def trace(world: World, scene: Scene, origins, directions, max_depth: int,
     pixel = np.arange(n_rays)  # which primary ray each ray of this generation belongs to
     weight = np.ones(n_rays)  # product of refl / transp factors along the path
     for depth in range(max_depth + 1):
-        t, obj, geo_n = world.nearest(o, d)
+        t, obj, geo_n, tri = world.hits(o, d)
         hit = obj >= 0
         miss = ~hit
         _accumulate(colour, pixel[miss], weight[miss, None] * scene.background)
         if not hit.any():
             break
         h = np.flatnonzero(hit)
-        o, d, t, obj, geo_n, pixel, weight = o[h], d[h], t[h], obj[h], geo_n[h], pixel[h], \
-            weight[h]
+        o, d, t, obj, geo_n, pixel, weight, tri = o[h], d[h], t[h], obj[h], geo_n[h], \
+            pixel[h], weight[h], tri[h]
         p, entering, n = surface_frame(o, d, t, geo_n)
-        local = local_colour(world, scene, p, n, -d, obj)
+        local = local_colour(world, scene, p, n, -d, obj, world.base_colour(obj, tri, p))
         refl, transp = world.refl[obj], world.transp[obj]
         if depth == max_depth:
             _accumulate(colour, pixel, weight[:, None] * local)

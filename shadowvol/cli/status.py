@@ -8,8 +8,10 @@ command prints a traceback for an error it can name.  GL-free.
 from __future__ import annotations
 
 import sys
+import warnings
 
 from shadowvol import signals
+from shadowvol.errors import one_line_warning
 from shadowvol.errors import (  # noqa: F401 - the statuses, named here for the commands
     BAD_INPUT,
     INTERRUPTED,
@@ -54,7 +56,8 @@ def run(command, args) -> int:
     """Call `command(args)` with Ctrl-C and SIGTERM handled (`shadowvol.signals`) and turn what
     it raises into a status (see `report`); an interrupt that something swallowed on the way
     still ends in its status."""
-    with signals.handled():
+    with signals.handled(), warnings.catch_warnings():
+        warnings.showwarning = one_line_warning   # "warning: ...", one line each
         try:
             code = command(args)
             if code not in (INTERRUPTED, TERMINATED):  # else the command reported it already

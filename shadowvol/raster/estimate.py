@@ -8,7 +8,7 @@ import math
 
 from shadowvol import memory
 from shadowvol.frame import GROUND_TRUTH, caster_words
-from shadowvol.raster.target import BYTES_PER_PIXEL, LIGHTS_PER_PAGE
+from shadowvol.raster.target import BYTES_PER_PIXEL, LIGHTS_PER_PAGE, SURFACE_BYTES_PER_PIXEL
 from shadowvol.scene import Scene, hard_lights
 
 
@@ -55,5 +55,10 @@ def render(scene: Scene, outputs=("image", "lit", "coverage"), *, gl_in_host: bo
         # its frame's image, the RGBA read (a copy of the staging), its RGB copy
         t["volume view"] = 12 + 16 + 12
     t |= memory.written(written, L, truth, float64=False, stencil=stencil, words=K)
+    if memory.surfaced(scene):
+        t["G-buffer UVs and colours"] = SURFACE_BYTES_PER_PIXEL * gl_in_host
+    # the texels: the model's sRGB codes (3 B), the upload's RGBA copy of one texture at a
+    # time (4 B) and the storage buffer (4 B, in this process on a software GL)
+    fixed = {"textures": memory.texels(scene) * (3 + 4 + 4 * gl_in_host)}
     return memory.Estimate("the rasterizer", scene.width, scene.height,
-                           memory.terms(scene.width * scene.height, t))
+                           memory.terms(scene.width * scene.height, t, fixed))

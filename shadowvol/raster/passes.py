@@ -59,7 +59,9 @@ class ScenePrograms:
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
-        self.gbuffer = glsl.program(ctx, "scene.vert", "gbuffer.frag")
+        # textures or vertex colours: UVs and colours in the G-buffer (SURFACE)
+        self.surface = {"SURFACE": 1} if geometry.surface else {}
+        self.gbuffer = glsl.program(ctx, "scene.vert", "gbuffer.frag", defines=self.surface)
         self.gbuffer_vao = ctx.vertex_array(self.gbuffer, geometry.soup_bindings(self.gbuffer))
         self.mark = glsl.program(ctx, "fullscreen.vert", "mark.frag")
         self.mark_vao = ctx.vertex_array(self.mark, [])
@@ -88,7 +90,7 @@ class ScenePrograms:
         if key not in self._shade:
             defines = ({"LIGHTS": lights, "SPOT_LIGHTS": spots, "EMITTER_LIGHTS": emitters} |
                        ({} if colour else {"MASKS_ONLY": 1}) |
-                       ({"SRGB_OUT": 1} if srgb else {}))
+                       ({"SRGB_OUT": 1} if srgb else {}) | (self.surface if colour else {}))
             program = glsl.program(self.ctx, "fullscreen.vert", "shade.frag", defines=defines)
             self._shade[key] = (program, self.ctx.vertex_array(program, []))
         return self._shade[key]
@@ -339,6 +341,8 @@ def shade(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms
     for name, unit in (("u_materials", 0), ("u_position", 1), ("u_unshadowed", 2)):
         set_uniform(prog, name, unit)
     progs.geometry.triangle_data.bind_to_storage_buffer(0)
+    if colour and progs.geometry.surface:
+        progs.geometry.textures.bind(prog, target)
     if not lights:
         set_uniform(prog, "u_last_unshadowed", False)
         vao.render(moderngl.TRIANGLES, vertices=3)

@@ -88,7 +88,8 @@ class Renderer:
             make_current(self.ctx)
             self.gl = RawGL()
             self.geometry = self._own(SceneGeometry(self.ctx, scene))
-            self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
+            self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height,
+                                           surface=self.geometry.surface))
             self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
         except BaseException:
             self.release()

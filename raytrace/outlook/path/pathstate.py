@@ -14,6 +14,7 @@ from shadowvol.scene import Scene, hard_lights
 
 from raytrace.backends import make_backend
 from raytrace.outlook.brdf import diffuse_probability, normalised_phong
+from raytrace.texture import SurfaceColours
 from raytrace.tolerances import surface_offset
 
 RR_MAX_SURVIVAL = 0.95  # never certain survival: bounds the expected path length
@@ -63,6 +64,9 @@ class PathWorld:
         self.ior = np.array([x.ior for x in m])
         self.emission = np.array([x.emission for x in m])
         self.p_diffuse = diffuse_probability(self.kd, self.ks)
+        # textures and vertex colours (None: none in the scene): `textured_kd`
+        self.surface_colours = SurfaceColours.of(scene)
+        self.tri_first = np.cumsum([0] + [len(o.faces) for o in scene.objects])[:-1]
         power = self.area * self.emission[self.tri_object].mean(axis=1)
         self.emitters = np.flatnonzero(power > 0.0)
         self.emitter_cdf = np.cumsum(power[self.emitters]) / max(power.sum(), 1e-300)
@@ -121,6 +125,17 @@ class PathWorld:
         rows["glossy"] = np.flatnonzero(rows["glossy"]) if "glossy" in rows else \
             np.zeros(0, np.int64)
         return rows
+
+    def textured_kd(self, kd: np.ndarray, tri: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """kd (3, k) of hits on triangles tri (k,) at points p (3, k), times their base colour
+        (`raytrace.texture`: textures and vertex colours; the hit's barycentrics from its
+        `STATE` point, in float64); kd itself where the scene has neither."""
+        if self.surface_colours is None:
+            return kd
+        obj = self.tri_object[tri]
+        base = self.surface_colours.colour(obj, tri - self.tri_first[obj],
+                                           np.asarray(p, np.float64).T)
+        return (kd * base.T).astype(STATE)
 
     def intersect(self, o: np.ndarray, d: np.ndarray):
         """Closest hits of rays o, d (n, 3) float64: t (n,) (inf: miss), tri (n,) int (-1: miss),

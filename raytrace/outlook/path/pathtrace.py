@@ -257,6 +257,15 @@ def shading(choice: str | None = None) -> str:
     return "numpy"
 
 
+def _untextured(used: str, scene: Scene) -> str:
+    """The shading to run: numba's kernels read kd per triangle only, so a scene with
+    textures or vertex colours is shaded in numpy (`PathWorld.textured_kd`)."""
+    if used == "numba" and any(o.material.texture is not None or o.colors is not None
+                               for o in scene.objects):
+        return "numpy"
+    return used
+
+
 def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Generator,
                max_depth: int = DEFAULT_MAX_DEPTH, rr_start: int = RR_START_BOUNCE,
                shading_name: str | None = None, mis: str = DEFAULT_HEURISTIC,
@@ -266,7 +275,7 @@ def trace_rows(world: PathWorld, o: np.ndarray, d: np.ndarray, rng: np.random.Ge
     (`raytrace.outlook.path.mis.HEURISTICS`); samples: the low-discrepancy numbers of these paths
     (`sobol.TileSamples`, path i its i-th), else every number is drawn from rng."""
     code(mis)
-    if shading(shading_name) == "numba":
+    if _untextured(shading(shading_name), world.scene) == "numba":
         return _kernels().trace_rows(world, o, d, rng, max_depth, rr_start, mis, samples)
     return _trace_rows_numpy(world, o, d, rng, max_depth, rr_start, mis, samples)
 
@@ -306,6 +315,7 @@ def _trace_rows_numpy(world: PathWorld, o: np.ndarray, d: np.ndarray,
             t = (surf["plane_d"] - dot_rows(geo_n, o)) / d_n  # as backends.refine
         t = np.where(np.isfinite(t), t, 0.0)
         p = o + t * d
+        surf["kd"] = world.textured_kd(surf["kd"], tri, p)
         entering = d_n < 0.0
         n = geo_n * np.where(entering, STATE(1.0), STATE(-1.0))  # faces the ray's origin
         wo = -d if world.any_glossy else None  # only the glossy lobe looks at wo
@@ -432,7 +442,7 @@ def render(scene: Scene, spp: int = 16, seed: int = 0, max_depth: int = DEFAULT_
     if sampler not in SAMPLERS:
         raise ValueError(f"sampler must be one of {', '.join(SAMPLERS)}, got {sampler!r}")
     key = render_key(seed)
-    used = shading(shading_name)
+    used = _untextured(shading(shading_name), scene)
     start = time.perf_counter()
     H, W = scene.height, scene.width
     per_row = W * spp
