@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from shadowvol.frame import FIELDS
-from shadowvol.scene import SceneError
+from shadowvol.scene import Scene, SceneError
 
 ENV = "SHADOWVOL_MEMORY_BUDGET"
 DEFAULT_FRACTION = 0.75

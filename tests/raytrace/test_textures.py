@@ -26,7 +26,7 @@ from builders import (
 )
 
 import raytrace
-from raytrace import pathtrace
+from raytrace.outlook.path import pathtrace
 from shadowvol import memory
 from shadowvol.cli.raytrace import main
 from shadowvol.errors import IgnoredMaterial
@@ -35,7 +35,7 @@ from shadowvol.scenefile import load_scene
 
 # Whitted shades in float64 from the float64 hit: it must give the float64 answer to rounding
 FLOAT64_TOL = 1e-9
-# the path tracer's state is float32 (`raytrace.pathstate.STATE`): a direct-light value of at
+# the path tracer's state is float32 (`raytrace.outlook.path.pathstate.STATE`): a direct-light value of at
 # most 1 carries a few float32 roundings, ~1e-7 each
 FLOAT32_TOL = 1e-5
 SAMPLERS = [(GL_NEAREST, GL_REPEAT), (GL_LINEAR, GL_REPEAT), (GL_NEAREST, GL_CLAMP),
@@ -287,6 +287,9 @@ def test_textures_count_in_the_memory_budget(tmp_path):
     """A 1024 x 512 texture adds its texels to every renderer's estimate (the model's codes,
     the ray tracer's float64 copy, the GL buffer and its upload), the G-buffer's UVs and
     colours to the raster's; a budget that fits the untextured scene refuses it."""
+    import raytrace.outlook.estimate
+    import shadowvol.raster.estimate
+
     big = np.random.default_rng(0).integers(0, 256, (512, 1024, 3)).astype(np.uint8)
     textured_glb(tmp_path / "quad.glb", big)
     scene = load_scene(textured_scene_file(tmp_path, "quad.glb"))
@@ -294,17 +297,17 @@ def test_textures_count_in_the_memory_budget(tmp_path):
     plain = scene.replace(objects=(dataclasses.replace(
         quad, uv=None, material=dataclasses.replace(quad.material, texture=None)),))
     n = 512 * 1024
-    assert memory.whitted(scene).total - memory.whitted(plain).total == n * 27
-    assert memory.path_traced(scene, 4).total - memory.path_traced(plain, 4).total == n * 27
+    assert raytrace.outlook.estimate.whitted(scene).total - raytrace.outlook.estimate.whitted(plain).total == n * 27
+    assert raytrace.outlook.estimate.path_traced(scene, 4).total - raytrace.outlook.estimate.path_traced(plain, 4).total == n * 27
     px = scene.width * scene.height
-    assert memory.raster(scene).total - memory.raster(plain).total == n * 11 + 24 * px
-    assert memory.raster(scene, gl_in_host=False).total - \
-        memory.raster(plain, gl_in_host=False).total == n * 7
-    limit = memory.BASE + memory.whitted(plain).total + n * 10
-    memory.check(memory.whitted(plain), limit)
+    assert shadowvol.raster.estimate.render(scene).total - shadowvol.raster.estimate.render(plain).total == n * 11 + 24 * px
+    assert shadowvol.raster.estimate.render(scene, gl_in_host=False).total - \
+        shadowvol.raster.estimate.render(plain, gl_in_host=False).total == n * 7
+    limit = memory.BASE + raytrace.outlook.estimate.whitted(plain).total + n * 10
+    memory.check(raytrace.outlook.estimate.whitted(plain), limit)
     with pytest.raises(SceneError, match="budget"):
-        memory.check(memory.whitted(scene), limit)
-    assert "textures" in memory.whitted(scene).describe()
+        memory.check(raytrace.outlook.estimate.whitted(scene), limit)
+    assert "textures" in raytrace.outlook.estimate.whitted(scene).describe()
 
 
 @pytest.mark.parametrize("suffix", [".toml", ".json"])
