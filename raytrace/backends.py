@@ -37,6 +37,7 @@ import numpy as np
 from shadowvol.errors import require
 
 from .intersect import dot, ray_triangle
+from .neargrid import NearGrid
 from .tolerances import BVH_BOX_PAD_RELATIVE, error_weight, plane_error64
 
 BACKENDS = ("numpy", "embree")
@@ -339,8 +340,8 @@ class EmbreeBackend(TriangleSet):
         # embreex commits the scene (builds the BVH) lazily in the first run(); do it now, so
         # that threads never race to do it and the build is not billed to the first trace.
         self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
-        self._float64: NumpyBackend | None = None  # built on first use (occluded_leaving)
-        self._float64_lock = threading.Lock()
+        self._near: NearGrid | None = None  # built on first use (occluded_leaving)
+        self._near_lock = threading.Lock()
 
     def _run(self, origins, directions, dists, query: str, parallel: bool) -> np.ndarray:
         """Trace; returns primID (INTERSECT) or geomID (OCCLUDED), int32 (n,), -1 for a miss /
@@ -403,10 +404,11 @@ class EmbreeBackend(TriangleSet):
         return self._run(origins, directions, tmax, "OCCLUDED", parallel) != -1
 
     def occluded_leaving(self, origins, directions, tmax, own) -> np.ndarray:
-        """`NumpyBackend.occluded_leaving` on the same triangles, float64 (the few rays that
-        need it are short: the pieces a grazing shadow ray's lift skips).  The float64 BVH is
-        built on the first call, once, whichever thread makes it."""
-        with self._float64_lock:
-            if self._float64 is None:
-                self._float64 = NumpyBackend(self.vertices, self.faces)
-        return self._float64.occluded_leaving(origins, directions, tmax, own)
+        """`NumpyBackend.occluded_leaving` on the same triangles, float64: the walk's test on
+        the triangles whose padded boxes the pieces' boxes touch (`raytrace.neargrid`: the
+        pieces a grazing shadow ray's lift skips are short, and meet few).  The grid is built
+        on the first call, once, whichever thread makes it."""
+        with self._near_lock:
+            if self._near is None:
+                self._near = NearGrid(self.vertices, self.faces)
+        return self._near.occluded_leaving(self, origins, directions, tmax, own)

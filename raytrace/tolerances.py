@@ -50,7 +50,14 @@ Binder, Ray Tracing Gems ch. 6, bound the error of a hit point instead of guessi
    only (or contains it), so in exact arithmetic they never block.  Anything else the float64
    walk meets is a blocker, however grazing the light.  What the masks lose at the surface is
    therefore geometry within LIFT_HEIGHTS heights of p along the ray (a contact shadow
-   thinner than ~3e-5 of the distance to the eye), at every angle.
+   thinner than ~3e-5 of the distance to the eye), at every angle.  The Embree backend runs
+   that float64 test only on the triangles whose boxes the piece's box touches
+   (`raytrace.neargrid`), each box padded by a bound of where the test can report a hit:
+   the error of λ (off the plane) and of the barycentric coordinates (in it) is a few tens of
+   spacings of 2**-52 of the reach R (a bound of |x| of every corner and of p) divided by
+   sin² of the triangle's angle at its first corner; `NEAR_BOX_ERROR_ULPS` takes 1024 of
+   them, and a triangle with sin² below `NEAR_SLIVER_SIN2` (where that bound no longer holds
+   by itself) is tested with every piece.
 4. **At a point light, a bound of the light position's own error.**  The segment ends
    `light_margin` before the light: 8 spacings of the light's coordinates, of the segment's
    length (Embree's t is relative to it) and, if some triangle's plane passes through the light
@@ -111,6 +118,12 @@ LIGHT_ERROR_ULPS = 8.0
 # The longest lift along the segment, in heights (item 3b): where the lift would be longer
 # (n·l̂ < 1 / LIFT_HEIGHTS) the piece it skips is traced in float64.
 LIFT_HEIGHTS = 16.0
+
+# The float64 near pieces' candidates (item 3b, `raytrace.neargrid`): a triangle's box is
+# padded by NEAR_BOX_ERROR_ULPS spacings of 2**-52 of the reach over sin² of its angle at its
+# first corner; below NEAR_SLIVER_SIN2 (sin ~1e-5) every piece tests it.
+NEAR_BOX_ERROR_ULPS = 1024.0
+NEAR_SLIVER_SIN2 = 1e-10
 
 # A triangle whose smallest angle has a sine below 1 / SLIVER_SHAPE (~14.5 degrees) is a
 # sliver: the float32 error of its normal, relative, grows as 1 / sin(smallest angle), which
