@@ -38,7 +38,14 @@ from shadowvol.errors import require
 
 from .intersect import dot, ray_triangle
 from .neargrid import NearGrid
-from .tolerances import BVH_BOX_PAD_RELATIVE, error_weight, plane_error64
+from .tolerances import (
+    BVH_BOX_PAD_RELATIVE,
+    cross_rows,
+    error_weight,
+    is_sliver,
+    norm_rows,
+    plane_error64,
+)
 
 BACKENDS = ("numpy", "embree")
 
@@ -89,16 +96,21 @@ class TriangleSet:
     vertices : (N, 3) float64;  faces : (M, 3) int64.
     normals  : (M, 3) float64 unit face normals by winding, (b − a) × (c − a) normalised
                (zero for degenerate triangles);  plane_d : (M,) float64, normals · a.
+    weight   : (M,) float64, `tolerances.error_weight`;  fragile : (M,) bool,
+               `tolerances.is_sliver` (what the masks need per triangle).
     """
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray):
         self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         tri = self.vertices[self.faces]
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = np.linalg.norm(n, axis=1, keepdims=True)
+        n = cross_rows(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        length = norm_rows(n)[:, None]
         self.normals = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
         self.plane_d = dot(self.normals, tri[:, 0])
+        # what the masks need per triangle (`raytrace.tolerances`), from the same corners
+        self.weight = error_weight(self.normals, tri)
+        self.fragile = is_sliver(tri)
 
     def __len__(self) -> int:
         return len(self.faces)
@@ -156,7 +168,6 @@ class NumpyBackend(TriangleSet):
         super().__init__(vertices, faces)
         tri = self.vertices[self.faces]
         self._a, self._b, self._c = tri[:, 0], tri[:, 1], tri[:, 2]
-        self._weight = error_weight(self.normals, tri)  # for occluded_leaving
         pad = BVH_BOX_PAD_RELATIVE * float(np.abs(tri).max())
         lo_t, hi_t = tri.min(axis=1) - pad, tri.max(axis=1) + pad
         centroids = tri.mean(axis=1)
@@ -280,7 +291,7 @@ class NumpyBackend(TriangleSet):
         o = np.asarray(origins, dtype=np.float64)
         d = np.broadcast_to(np.asarray(directions, dtype=np.float64), o.shape)
         own = np.asarray(own, dtype=np.int64)
-        weight = self._weight
+        weight = self.weight
 
         def exclude(rays, tris):
             n = self.normals[tris]
@@ -410,5 +421,5 @@ class EmbreeBackend(TriangleSet):
         on the first call, once, whichever thread makes it."""
         with self._near_lock:
             if self._near is None:
-                self._near = NearGrid(self.vertices, self.faces)
+                self._near = NearGrid(self.vertices, self.faces, self.fragile)
         return self._near.occluded_leaving(self, origins, directions, tmax, own)

@@ -29,13 +29,14 @@ from .tolerances import (
     FLOAT64_EPS,
     NEAR_BOX_ERROR_ULPS,
     NEAR_SLIVER_SIN2,
+    SLIVER_SHAPE,
     error_weight,
     plane_error64,
 )
 
 # Tuning (speed only, never results): the finest cell, in median extents of the triangles'
 # boxes (from at most NEAR_CELL_SAMPLE of them); pairs tested at once (bounds the temporaries).
-NEAR_CELL_EXTENTS = 0.5
+NEAR_CELL_EXTENTS = 1.0
 NEAR_CELL_SAMPLE = 4096
 NEAR_PAIRS_PER_BATCH = 1 << 16
 # A piece whose box spans more than NEAR_PIECE_CELLS cells of a level meets that level's boxes
@@ -63,45 +64,51 @@ def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 class NearGrid:
-    """The padded boxes of triangles (vertices (N, 3) float64, faces (M, 3) int64) in a loose
-    grid of levels (vectors component-major, (3, M)): a box of extent at most
-    cell·2**level is registered once, at that level, in the cell holding its low corner, so
-    a box [lo, hi] can touch only the level's boxes whose low corners lie in
-    [lo − cell·2**level, hi].  `occluded_leaving` tests short float64 segments against the
-    triangles whose boxes theirs touch."""
+    """The padded boxes of triangles (vertices (N, 3) float64, faces (M, 3) int64, fragile (M,)
+    bool: `tolerances.is_sliver`) in a loose grid of levels (vectors component-major, (3, M)):
+    a box of extent at most cell·2**level is registered once, at that level, in the cell
+    holding its low corner, so a box [lo, hi] can touch only the level's boxes whose low
+    corners lie in [lo − cell·2**level, hi] (cells are numbered by a monotone function of the
+    coordinates).  `occluded_leaving` tests short float64 segments against the triangles
+    whose boxes theirs touch."""
 
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, fragile: np.ndarray):
         v = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64).T)
         f = np.asarray(faces, dtype=np.int64)
         a, b, c = (np.take(v, f[:, i], axis=1) for i in range(3))
         self.a, self.b, self.c = a, b, c
-        e1, e2 = b - a, c - a
+        # the reach: a bound of |x| (Euclidean) of every corner and of the pieces' starts
+        self.reach = float(np.sqrt(3.0) * np.abs(v).max()) if v.size else 0.0
+        # sin² of the first corner's angle: above 1 / SLIVER_SHAPE² unless `fragile` (the
+        # angle between the two longest edges is the largest but one); half that, for the
+        # rounding of is_sliver's test
+        sin2 = np.full(len(f), 0.5 / SLIVER_SHAPE ** 2)
+        live = np.ones(len(f), bool)
+        k = np.flatnonzero(fragile)
+        e1, e2 = b[:, k] - a[:, k], c[:, k] - a[:, k]
         # n = e1 x e2 as ray_triangle computes it (np.cross): exactly zero never meets a ray
         n = np.stack([e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                       e1[0] * e2[1] - e1[1] * e2[0]])
-        live = (n[0] != 0.0) | (n[1] != 0.0) | (n[2] != 0.0)
+        live[k] = (n[0] != 0.0) | (n[1] != 0.0) | (n[2] != 0.0)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
-            sin2 = _dot3(n, n) / (_dot3(e1, e1) * _dot3(e2, e2))
-        # the reach: a bound of |x| (Euclidean) of every corner and of the pieces' starts
-        self.reach = float(np.sqrt(3.0) * np.abs(v).max()) if v.size else 0.0
+            sin2[k] = np.minimum(_dot3(n, n) / (_dot3(e1, e1) * _dot3(e2, e2)), sin2[k])
         thin = live & ~(sin2 >= NEAR_SLIVER_SIN2)  # NaN: thin too
         self.always = np.flatnonzero(thin)
         boxed = np.flatnonzero(live & ~thin)
         pad = NEAR_BOX_ERROR_ULPS * FLOAT64_EPS * self.reach / sin2[boxed]
-        a, b, c = a[:, boxed], b[:, boxed], c[:, boxed]
+        if len(boxed) < len(f):
+            a, b, c = a[:, boxed], b[:, boxed], c[:, boxed]
         self.boxed = boxed
-        self.lo = np.minimum(np.minimum(a, b), c) - pad
-        self.hi = np.maximum(np.maximum(a, b), c) + pad
-        self._grid()
+        self._grid(np.minimum(np.minimum(a, b), c) - pad, np.maximum(np.maximum(a, b), c) + pad)
 
-    def _grid(self) -> None:
-        """Each boxed triangle's level and cell: keys (k,) the occupied cells' keys, sorted;
-        members, the rows of lo/hi by cell; starts (k + 1,) where each cell's begin; levels,
-        the levels in use."""
-        lo, hi = self.lo, self.hi
+    def _grid(self, lo: np.ndarray, hi: np.ndarray) -> None:
+        """Each boxed triangle's (its box lo, hi (3, m)) level and cell: keys (k,) the occupied cells' keys, sorted;
+        members, the triangles by cell, boxes (m, 6) their boxes (lo, hi); starts (k + 1,)
+        where each cell's begin; levels, the levels in use."""
         m = lo.shape[1]
         self.origin, self.cell = np.zeros(3), 1.0
         self.levels, self.keys, self.members = (np.zeros(0, np.int64),) * 3
+        self.boxes = np.zeros((0, 6))
         self.starts = np.zeros(1, np.int64)
         if m == 0:
             return
@@ -119,10 +126,19 @@ class NearGrid:
         width = np.ldexp(self.cell, level)
         keys = self._key(level, np.floor((lo - self.origin[:, None]) / width).astype(np.int64))
         order = np.argsort(keys)
-        keys, self.members = keys[order], order
+        keys, self.members = keys[order], self.boxed[order]
+        # the boxes in cell order, one row (lo, hi) each: a cell's boxes are read in one run
+        self.boxes = np.concatenate([lo[:, order], hi[:, order]]).T.copy()
         new = np.flatnonzero(np.diff(keys, prepend=-1))
         self.keys, self.starts = keys[new], np.append(new, len(keys))
         self.levels = np.unique(level)
+
+    @staticmethod
+    def _block(c0: np.ndarray, n: np.ndarray, rank: np.ndarray) -> np.ndarray:
+        """(3, k) cell number rank (k,) of the block of n (3, k) cells from c0 (3, k)."""
+        z = rank % n[2]
+        rank = rank // n[2]
+        return np.stack([c0[0] + rank // n[1], c0[1] + rank % n[1], c0[2] + z])
 
     @staticmethod
     def _key(level: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -168,32 +184,29 @@ class NearGrid:
         found = [self._level_pairs(pieces, lo, hi, level[w], which[w])
                  for w in np.flatnonzero(wide)]
         owner, rank = _expand(count)
-        z = rank % n[2, owner]
-        rank = rank // n[2, owner]
-        cells = np.stack([c0[0, owner] + rank // n[1, owner], c0[1, owner] + rank % n[1, owner],
-                          c0[2, owner] + z])
-        keys = self._key(level[owner], cells)
+        keys = self._key(level[owner], self._block(c0[:, owner], n[:, owner], rank))
         at = np.minimum(np.searchsorted(self.keys, keys), len(self.keys) - 1)
         hit = self.keys[at] == keys
         owner, at = owner[hit], at[hit]
         start = self.starts[at]
         cell, rank = _expand(self.starts[at + 1] - start)
-        row = self.members[start[cell] + rank]
+        row = start[cell] + rank
         j = which[owner[cell]]
-        tlo, thi, plo, phi = self.lo[:, row], self.hi[:, row], lo[:, j], hi[:, j]
-        touch = ((tlo[0] <= phi[0]) & (thi[0] >= plo[0]) & (tlo[1] <= phi[1]) &
-                 (thi[1] >= plo[1]) & (tlo[2] <= phi[2]) & (thi[2] >= plo[2]))
-        found.append((pieces[j[touch]], self.boxed[row[touch]]))
+        box, piece = self.boxes[row], np.concatenate([lo, hi]).T[j]
+        touch = ((box[:, 0] <= piece[:, 3]) & (box[:, 3] >= piece[:, 0]) &
+                 (box[:, 1] <= piece[:, 4]) & (box[:, 4] >= piece[:, 1]) &
+                 (box[:, 2] <= piece[:, 5]) & (box[:, 5] >= piece[:, 2]))
+        found.append((pieces[j[touch]], self.members[row[touch]]))
         return np.concatenate([p for p, _ in found]), np.concatenate([t for _, t in found])
 
     def _level_pairs(self, pieces, lo, hi, level: int, j: int):
         """The pairs of piece j and every triangle of `level` whose box touches its box."""
         first, last = np.searchsorted(self.keys, [level << 3 * AXIS_BITS,
                                                   (level + 1) << 3 * AXIS_BITS])
-        row = self.members[self.starts[first]:self.starts[last]]
-        touch = ((self.lo[:, row] <= hi[:, j, None]) &
-                 (self.hi[:, row] >= lo[:, j, None])).all(axis=0)
-        return np.full(int(touch.sum()), pieces[j]), self.boxed[row[touch]]
+        box = self.boxes[self.starts[first]:self.starts[last]]
+        touch = ((box[:, :3] <= hi[:, j]) & (box[:, 3:] >= lo[:, j])).all(axis=1)
+        return (np.full(int(touch.sum()), pieces[j]),
+                self.members[self.starts[first]:self.starts[last]][touch])
 
     def candidates(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray]:

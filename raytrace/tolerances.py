@@ -177,16 +177,35 @@ def error_weight(normals: np.ndarray, corners: np.ndarray) -> np.ndarray:
     """W = Σ_j |n_j| · max_i |corner_ij| per triangle: the size of the float32 rounding of its
     plane, in spacings.  normals : (M, 3) unit;  corners : (M, 3, 3), in the eye's frame.
     Returns (M,) float64."""
-    return np.einsum("mj,mj->m", np.abs(normals), np.abs(corners).max(axis=1))
+    biggest = np.maximum(np.maximum(np.abs(corners[:, 0]), np.abs(corners[:, 1])),
+                         np.abs(corners[:, 2]))  # = np.abs(corners).max(axis=1), faster
+    return np.einsum("mj,mj->m", np.abs(normals), biggest)
 
 
 def is_sliver(corners: np.ndarray) -> np.ndarray:
     """(M,) bool: the triangles corners (M, 3, 3) whose smallest angle is below
     asin(1 / SLIVER_SHAPE), or that are degenerate."""
-    e = corners[:, [1, 2, 2]] - corners[:, [0, 0, 1]]
-    length = np.sort(np.linalg.norm(e, axis=2), axis=1)
-    area2 = np.linalg.norm(np.cross(e[:, 0], e[:, 1]), axis=1)
-    return length[:, 1] * length[:, 2] >= SLIVER_SHAPE * area2
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    e1, e2, e3 = b - a, c - a, c - b
+    l1, l2, l3 = (np.sqrt(e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1] + e[:, 2] * e[:, 2])
+                  for e in (e1, e2, e3))
+    # the two longest edges' product: rounding is monotone, so it is the largest product
+    longest = np.maximum(np.maximum(l1 * l2, l1 * l3), l2 * l3)
+    return longest >= SLIVER_SHAPE * norm_rows(cross_rows(e1, e2))
+
+
+def cross_rows(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """u × v of rows (M, 3): np.cross's products and differences, without its copies."""
+    out = np.empty(np.broadcast_shapes(u.shape, v.shape))
+    out[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    out[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    out[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return out
+
+
+def norm_rows(u: np.ndarray) -> np.ndarray:
+    """|u| of rows (M, 3), summed in np.linalg.norm's order."""
+    return np.sqrt(u[:, 0] * u[:, 0] + u[:, 1] * u[:, 1] + u[:, 2] * u[:, 2])
 
 
 def shadow_height(weight):

@@ -20,6 +20,7 @@ from strategies import PROFILE, closed, offsets, profile, soup
 from raytrace.backends import EmbreeBackend, NumpyBackend
 from raytrace.intersect import ray_triangle
 from raytrace.neargrid import NearGrid
+from raytrace.tolerances import is_sliver
 
 
 @st.composite
@@ -73,7 +74,7 @@ def test_the_cheap_query_keeps_every_triangle_the_float64_test_meets(data):
     vertices, faces = data.draw(triangles())
     corners = vertices[faces]
     o, d, tmax, own = data.draw(pieces(corners))
-    grid = NearGrid(vertices, faces)
+    grid = NearGrid(vertices, faces, is_sliver(vertices[faces]))
     piece, tri = grid.candidates(o, d, tmax)
     lam = ray_triangle(o[:, None], d[:, None], corners[None, :, 0], corners[None, :, 1],
                        corners[None, :, 2])
@@ -95,7 +96,7 @@ def test_the_query_is_empty_away_from_the_geometry_and_full_beside_it():
     gets no candidate, one crossing it both of its triangles (and the walk agrees)."""
     vertices = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
     faces = np.array([[0, 1, 2], [0, 2, 3]])
-    grid = NearGrid(vertices, faces)
+    grid = NearGrid(vertices, faces, is_sliver(vertices[faces]))
     o = np.array([[0.5, 0.5, 0.5], [0.5, 0.5, -1.0], [0.6, 0.4, -1.0]])
     d = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
     tmax = np.array([0.1, 2.0, 0.5])
