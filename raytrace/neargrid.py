@@ -108,7 +108,7 @@ class NearGrid:
         m = lo.shape[1]
         self.origin, self.cell = np.zeros(3), 1.0
         self.levels, self.keys, self.members = (np.zeros(0, np.int64),) * 3
-        self.boxes = np.zeros((0, 6))
+        self.boxes = self.cellboxes = np.zeros((0, 6))
         self.starts = np.zeros(1, np.int64)
         if m == 0:
             return
@@ -131,6 +131,9 @@ class NearGrid:
         self.boxes = np.concatenate([lo[:, order], hi[:, order]]).T.copy()
         new = np.flatnonzero(np.diff(keys, prepend=-1))
         self.keys, self.starts = keys[new], np.append(new, len(keys))
+        # each cell's box around its boxes: a piece that misses it reads none of them
+        self.cellboxes = np.concatenate([np.minimum.reduceat(self.boxes[:, :3], new),
+                                         np.maximum.reduceat(self.boxes[:, 3:], new)], axis=1)
         self.levels = np.unique(level)
 
     @staticmethod
@@ -188,14 +191,14 @@ class NearGrid:
         at = np.minimum(np.searchsorted(self.keys, keys), len(self.keys) - 1)
         hit = self.keys[at] == keys
         owner, at = owner[hit], at[hit]
+        part = np.concatenate([lo, hi]).T  # (p, 6): one row (lo, hi) a piece
+        keep = _touch(self.cellboxes[at], part[which[owner]])
+        owner, at = owner[keep], at[keep]
         start = self.starts[at]
         cell, rank = _expand(self.starts[at + 1] - start)
         row = start[cell] + rank
         j = which[owner[cell]]
-        box, piece = self.boxes[row], np.concatenate([lo, hi]).T[j]
-        touch = ((box[:, 0] <= piece[:, 3]) & (box[:, 3] >= piece[:, 0]) &
-                 (box[:, 1] <= piece[:, 4]) & (box[:, 4] >= piece[:, 1]) &
-                 (box[:, 2] <= piece[:, 5]) & (box[:, 5] >= piece[:, 2]))
+        touch = _touch(self.boxes[row], part[j])
         found.append((pieces[j[touch]], self.members[row[touch]]))
         return np.concatenate([p for p, _ in found]), np.concatenate([t for _, t in found])
 
@@ -260,6 +263,12 @@ class NearGrid:
             hit = _pair_hits(triangles, self, o[p], d[p], tmax[p], k, own[p])
             blocked[p[hit]] = True
         return blocked
+
+
+def _touch(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n,) bool: do the boxes a, b (n, 6) (lo, hi, rows) overlap?"""
+    return ((a[:, 0] <= b[:, 3]) & (a[:, 3] >= b[:, 0]) & (a[:, 1] <= b[:, 4]) &
+            (a[:, 4] >= b[:, 1]) & (a[:, 2] <= b[:, 5]) & (a[:, 5] >= b[:, 2]))
 
 
 def _pair_hits(triangles, grid: NearGrid, o, d, tmax, k, own) -> np.ndarray:
