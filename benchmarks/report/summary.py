@@ -36,6 +36,15 @@ def header(results: dict, md_path: Path, png_path: Path) -> list[str]:
     add(f"- **Versions**: Python {m['python']}, " +
         ", ".join(f"{k} {v}" for k, v in m["versions"].items()))
     add(f"- **Code**: commit {m['commit']}; run {m['date']}, {results['wall_s']:.0f} s wall")
+    previous = results.get("previous")
+    if previous is not None:
+        worse = previous["regressions"]
+        add(f"- **Against the previous run** (commit {previous['commit']}, "
+            "`benchmarks.regressions`): " +
+            (f"{len(worse)} ratios worse by more than 15 %: " +
+             "; ".join(f"{g['name']} {g['old']:.3g} → {g['new']:.3g}" for g in worse[:8]) +
+             (f"; and {len(worse) - 8} more (results.json)" if len(worse) > 8 else "")
+             if worse else "no ratio worse by more than 15 %."))
     ls, le = m["load_start"], m["load_end"]
     add(f"- **Load** (1/5/15-min load average; other sessions share the 2 cores): at the start "
         f"{ls[0]:.2f} / {ls[1]:.2f} / {ls[2]:.2f}, at the end {le[0]:.2f} / {le[1]:.2f} / "
