@@ -102,9 +102,9 @@ class NearGrid:
         self._grid(np.minimum(np.minimum(a, b), c) - pad, np.maximum(np.maximum(a, b), c) + pad)
 
     def _grid(self, lo: np.ndarray, hi: np.ndarray) -> None:
-        """Each boxed triangle's (its box lo, hi (3, m)) level and cell: keys (k,) the occupied cells' keys, sorted;
-        members, the triangles by cell, boxes (m, 6) their boxes (lo, hi); starts (k + 1,)
-        where each cell's begin; levels, the levels in use."""
+        """Each boxed triangle's level and cell (its box lo, hi (3, m)): keys (k,) the occupied
+        cells' keys, sorted; members, the triangles by cell, boxes (m, 6) their boxes (lo, hi);
+        starts (k + 1,) where each cell's begin; levels, the levels in use."""
         m = lo.shape[1]
         self.origin, self.cell = np.zeros(3), 1.0
         self.levels, self.keys, self.members = (np.zeros(0, np.int64),) * 3
@@ -120,21 +120,24 @@ class NearGrid:
         # the finest cell; every cell coordinate of every level below 2**AXIS_BITS
         self.cell = max(NEAR_CELL_EXTENTS * float(np.median(sample)),
                         2.0 * span / 2 ** AXIS_BITS, 1e-300)
-        with np.errstate(divide="ignore"):
-            level = np.ceil(np.log2(np.maximum(extent / self.cell, 1.0))).astype(np.int64)
-        level = np.minimum(level, 2 ** LEVEL_BITS - 1)  # extent <= span < cell·2**AXIS_BITS
+        # the least level with extent <= cell·2**level: x = f·2**e, f in [0.5, 1), is at most
+        # 2**e, and at most 2**(e - 1) where f == 0.5
+        f, e = np.frexp(np.maximum(extent / self.cell, 1.0))
+        level = np.minimum(e - (f == 0.5), 2 ** LEVEL_BITS - 1).astype(np.int64)
         width = np.ldexp(self.cell, level)
         keys = self._key(level, np.floor((lo - self.origin[:, None]) / width).astype(np.int64))
         order = np.argsort(keys)
         keys, self.members = keys[order], self.boxed[order]
         # the boxes in cell order, one row (lo, hi) each: a cell's boxes are read in one run
-        self.boxes = np.concatenate([lo[:, order], hi[:, order]]).T.copy()
+        self.boxes = np.empty((m, 6))
+        for i in range(3):
+            self.boxes[:, i], self.boxes[:, 3 + i] = lo[i, order], hi[i, order]
         new = np.flatnonzero(np.diff(keys, prepend=-1))
         self.keys, self.starts = keys[new], np.append(new, len(keys))
         # each cell's box around its boxes: a piece that misses it reads none of them
         self.cellboxes = np.concatenate([np.minimum.reduceat(self.boxes[:, :3], new),
                                          np.maximum.reduceat(self.boxes[:, 3:], new)], axis=1)
-        self.levels = np.unique(level)
+        self.levels = np.flatnonzero(np.bincount(level))
 
     @staticmethod
     def _block(c0: np.ndarray, n: np.ndarray, rank: np.ndarray) -> np.ndarray:
