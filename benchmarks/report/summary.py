@@ -76,6 +76,11 @@ def guide() -> list[str]:
         "minutes, so load slows all of them alike; absolute times are noisier than ratios.  "
         "\"x / plain\" is in plain frames (1.5: half again a plain frame), a speed-up is theirs "
         "/ ours, a per-round ratio the median of each round's own.",
+        "- **Against the previous run**: before it replaces results.json, `benchmarks.run` "
+        "compares every ratio with the previous run's and prints (and lists at the top) each "
+        "one worse by more than 15 %, naming its benchmark and both commits "
+        "(`benchmarks/regressions.py`; `python -m benchmarks.regressions NEW OLD` compares two "
+        "results.json files).",
         "- **Floors and bounds**: a floor is the least GL work any exact frame of its kind does "
         "on the same triangles (`plain.DepthFloor`, `MaskFloor`, `ImageFloor`); floor + volume "
         "pass bounds every shadow-volume frame, so where a bound exceeds a target no such frame "
