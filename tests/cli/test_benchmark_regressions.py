@@ -113,3 +113,4 @@ def test_the_command_names_the_commits_and_each_regression(tmp_path):
                            str(tmp_path / "old.json"), str(tmp_path / "old.json")],
                           cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert same.returncode == 0 and "0 of" in same.stdout
+
