@@ -76,7 +76,7 @@ class NearGrid:
         v = np.ascontiguousarray(np.asarray(vertices, dtype=np.float64).T)
         f = np.asarray(faces, dtype=np.int64)
         a, b, c = (np.take(v, f[:, i], axis=1) for i in range(3))
-        self.a, self.b, self.c = a, b, c
+        self.vertices, self.faces = v, f  # the corners of candidates, gathered when tested
         # the reach: a bound of |x| (Euclidean) of every corner and of the pieces' starts
         self.reach = float(np.sqrt(3.0) * np.abs(v).max()) if v.size else 0.0
         # sin² of the first corner's angle: above 1 / SLIVER_SHAPE² unless `fragile` (the
@@ -157,7 +157,7 @@ class NearGrid:
         padded boxes touch the boxes [lo, hi] (3, q), the thin ones, and every triangle for
         the pieces where `everything` (q,) bool."""
         every = np.flatnonzero(everything)
-        piece, k = _expand(np.full(len(every), self.a.shape[1]))
+        piece, k = _expand(np.full(len(every), len(self.faces)))
         out = [(every[piece], k)]
         rest = np.flatnonzero(~everything)
         out.append(self._cell_pairs(rest, lo[:, rest], hi[:, rest]))
@@ -256,7 +256,7 @@ class NearGrid:
         own = np.asarray(own, dtype=np.int64)
         blocked = np.zeros(len(o), bool)
         go = np.flatnonzero(tmax > 0.0)
-        if len(go) == 0 or self.a.shape[1] == 0:
+        if len(go) == 0 or len(self.faces) == 0:
             return blocked
         piece, tri = self.candidates(o[go], d[go], tmax[go])
         piece = go[piece]
@@ -278,7 +278,7 @@ def _pair_hits(triangles, grid: NearGrid, o, d, tmax, k, own) -> np.ndarray:
     """(p,) bool: ray (o, d) (p, 3) float64 meets triangle k (p,) at 0 < λ < tmax (p,), k not
     `own` (p,) and its plane not through o up to float64 error -- the walk's own test
     (`NumpyBackend.occluded_leaving`) on the pairs alone."""
-    a, b, c = grid.a[:, k].T, grid.b[:, k].T, grid.c[:, k].T
+    a, b, c = (np.take(grid.vertices, grid.faces[k, i], axis=1).T for i in range(3))
     n = triangles.normals[k]
     height = np.abs(dot(o, n) - triangles.plane_d[k])
     bound = plane_error64(error_weight(n, np.stack([a, b, c], axis=1)) +
