@@ -42,9 +42,9 @@ from .tolerances import (
     BVH_BOX_PAD_RELATIVE,
     cross_rows,
     error_weight,
-    is_sliver,
     norm_rows,
     plane_error64,
+    sliver_edges,
 )
 
 BACKENDS = ("numpy", "embree")
@@ -104,13 +104,15 @@ class TriangleSet:
         self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         tri = self.vertices[self.faces]
-        n = cross_rows(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = norm_rows(n)[:, None]
+        e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+        n = cross_rows(e1, e2)
+        area2 = norm_rows(n)
+        length = area2[:, None]
         self.normals = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
         self.plane_d = dot(self.normals, tri[:, 0])
         # what the masks need per triangle (`raytrace.tolerances`), from the same corners
         self.weight = error_weight(self.normals, tri)
-        self.fragile = is_sliver(tri)
+        self.fragile = sliver_edges(e1, e2, tri[:, 2] - tri[:, 1], area2)  # = is_sliver(tri)
 
     def __len__(self) -> int:
         return len(self.faces)

@@ -186,12 +186,17 @@ def is_sliver(corners: np.ndarray) -> np.ndarray:
     """(M,) bool: the triangles corners (M, 3, 3) whose smallest angle is below
     asin(1 / SLIVER_SHAPE), or that are degenerate."""
     a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
-    e1, e2, e3 = b - a, c - a, c - b
-    l1, l2, l3 = (np.sqrt(e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1] + e[:, 2] * e[:, 2])
-                  for e in (e1, e2, e3))
+    e1, e2 = b - a, c - a
+    return sliver_edges(e1, e2, c - b, norm_rows(cross_rows(e1, e2)))
+
+
+def sliver_edges(e1: np.ndarray, e2: np.ndarray, e3: np.ndarray, area2: np.ndarray
+                 ) -> np.ndarray:
+    """`is_sliver` from the edges b − a, c − a, c − b (M, 3) and |e1 × e2| (M,)."""
+    l1, l2, l3 = (norm_rows(e) for e in (e1, e2, e3))
     # the two longest edges' product: rounding is monotone, so it is the largest product
     longest = np.maximum(np.maximum(l1 * l2, l1 * l3), l2 * l3)
-    return longest >= SLIVER_SHAPE * norm_rows(cross_rows(e1, e2))
+    return longest >= SLIVER_SHAPE * area2
 
 
 def cross_rows(u: np.ndarray, v: np.ndarray) -> np.ndarray:
