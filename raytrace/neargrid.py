@@ -3,21 +3,23 @@
 `TriangleBackend.occluded_leaving` asks, for a short segment leaving a surface at p, whether
 any triangle other than p's own (and those whose plane passes through p) meets it in float64
 (`raytrace.tolerances`, item 3b).  Walking a float64 BVH for every such piece cost the masks
-more than all their Embree rays.  Here a uniform grid of padded triangle boxes answers first
+more than all their Embree rays.  Here a loose grid of padded triangle boxes answers first
 the conservative question -- which triangles' boxes the piece's box touches (almost always
 none, or p's neighbours) -- and the float64 test of the walk (`intersect.ray_triangle`, the
 same exclusions) runs on those pairs only.
 
 Conservative: every triangle on which `ray_triangle` may report a hit at 0 < λ < tmax is a
 candidate.  The computed hit point lies on the piece (up to its own rounding, which pads the
-piece's box) and within `box_pad` of the triangle: the float64 error of λ (off the plane)
-and of the barycentric test (in it) grows as 1 / sin² of the triangle's angle at its first
-corner, so each triangle's box is padded by `tolerances.NEAR_BOX_ERROR_ULPS` spacings of the
-scene's reach divided by that sin²; a triangle too thin for that bound
+piece's box) and within the triangle's pad of the triangle: the float64 error of λ (off the
+plane) and of the barycentric test (in it) grows as 1 / sin² of the triangle's angle at its
+first corner, so each box is padded by `tolerances.NEAR_BOX_ERROR_ULPS` spacings of the
+scene's reach over that sin² (above 1 / SLIVER_SHAPE² at every corner of a triangle that is
+not a sliver; computed for slivers); a triangle too thin for that bound
 (`tolerances.NEAR_SLIVER_SIN2`) is a candidate of every piece, one whose cross product is
-exactly zero never meets a ray there (`ray_triangle`: n·r = 0) and of none.  A piece starting
-beyond the reach the pads assume, or whose box spans too many cells, is tested against every
-triangle.  `tests/raytrace/test_near_grid.py` checks the candidates against the walk.
+exactly zero (it never meets a ray: n·r = 0) of none.  A long piece is cut into parts a few
+cells long; a piece that starts beyond the reach the pads assume, would need too many parts
+or is not finite is tested against every triangle.  `tests/raytrace/test_near_grid.py`
+checks the candidates against a brute-force float64 test and the answers against the walk.
 """
 
 from __future__ import annotations
