@@ -308,6 +308,7 @@ def _record(journal, done, summary, spec, result, hashes, files, layout: str,
                   **SOURCES[spec.renderer].options(spec),
                   "versions": result["versions"], "device": result["device"],
                   "worker": result["worker"],
+                  **({"objects": result["objects"]} if "objects" in result else {}),
                   "seconds": seconds, **({"dataset": result["dataset"]} if "dataset" in result
                                          else {})}
         summary.rendered += 1

@@ -20,7 +20,8 @@ class FrameSpec:
     index     : its place in the job, from 0
     job       : the job's name
     scene     : the key of its scene among the run's (a path, or `<Scene id>` for a Scene)
-    camera    : {"eye", "target"[, "up", "fov_y", "near"]}: the scene's fill what is left out
+    camera    : {"eye", "target"[, "up", "fov_y", "near"]}: the scene's fill what is left out;
+                or {"fx", "fy", "cx", "cy", "camera_to_world"[, "near"]}
     lights    : the job's light tables (the scene-file schema), or None for the scene's
     size      : (width, height), or None for the scene's
     outputs   : the output names (`outputs.OUTPUTS`) it makes, in order
