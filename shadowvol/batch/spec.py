@@ -30,6 +30,8 @@ class FrameSpec:
     seed, jitter : the job's seed and jitter (`frames.jittered`)
     format    : the dataset layout its files are made as (`layouts.tag`), or None for the job's
                 outputs as they are (the files and webdataset layouts)
+    job_index : its job's place in the job file, from 0, for the layouts whose index is of the
+                whole dataset (BOP's scene folder; `layouts.tag`), else None
     """
 
     id: str
@@ -46,9 +48,11 @@ class FrameSpec:
     seed: int
     jitter: dict
     format: str | None = None
+    job_index: int | None = None
 
     def as_dict(self) -> dict:
-        """The spec as JSON data (lists for tuples; no "format" for the plain layouts)."""
+        """The spec as JSON data (lists for tuples; no "format" for the plain layouts, no
+        "job_index" where it is None)."""
         out = {"id": self.id, "index": self.index, "camera": self.camera, "job": self.job,
                "scene": self.scene, "lights": None if self.lights is None else list(self.lights),
                "size": None if self.size is None else list(self.size),
@@ -56,4 +60,6 @@ class FrameSpec:
                "max_depth": self.max_depth, "seed": self.seed, "jitter": self.jitter}
         if self.format is not None:
             out["format"] = self.format
+        if self.job_index is not None:
+            out["job_index"] = self.job_index
         return out
