@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from shadowvol.planes import default_plane_axes
+from shadowvol.checks import RIGID_TOLERANCE
 from shadowvol.scene import (
     Material,
     Object,
@@ -43,6 +44,8 @@ class Transform:
                  matrix=None):
         if matrix is not None:
             self.matrix, s = similarity_matrix(matrix, "matrix")
+            if abs(s - 1.0) <= RIGID_TOLERANCE:
+                s = 1.0   # a rotation's determinant is 1 only up to rounding: no scale
             self.scale = vec([s, s, s], "scale")
             self.rotation = None   # not given as angles
             self.translation = vec(self.matrix[:3, 3], "translation")
