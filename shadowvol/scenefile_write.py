@@ -70,6 +70,7 @@ def scene_to_dict(scene: Scene) -> dict:
         "lights": [light(lt) for lt in scene.lights],
         "objects": [{"type": "mesh", "name": o.name, "vertices": o.vertices.tolist(),
                      "faces": o.faces.tolist(), "material": material(o.material),
+                     **({} if o.category is None else {"category": o.category}),
                      **{k: False for k in ("cast_shadows", "receive_shadows")
                         if not getattr(o, k)}}
                     for o in scene.objects],

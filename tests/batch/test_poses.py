@@ -11,7 +11,7 @@ import json
 
 import numpy as np
 import pytest
-from builders import pose_jobs, write_jobs
+from builders import output_files, pose_jobs, write_jobs
 from PIL import Image
 
 from shadowvol import batch
@@ -170,3 +170,16 @@ def test_bop_poses_are_the_jittered_ones_of_the_manifest(made):
             "matrix = ")[-1].rstrip().rstrip("}")))[:3, :3]
         turned += not np.allclose(tilted, given, atol=1e-6)
     assert turned == 2
+
+
+def test_two_shards_make_the_datasets_of_one_run(made):
+    """Ids, models and the jittered poses do not depend on which shard made a frame."""
+    for fmt in ("bop", "coco"):
+        out = made / f"sharded-{fmt}"
+        for shard in ("0/2", "1/2"):
+            summary = batch.run(made / "jobs.jsonl", out, format=fmt, shard=shard,
+                                progress=False)
+            assert summary.status == 0, summary.errors
+        got, want = output_files(out), output_files(made / fmt)
+        assert sorted(got) == sorted(want)
+        assert [k for k in want if got[k] != want[k]] == []
