@@ -183,3 +183,15 @@ def test_two_shards_make_the_datasets_of_one_run(made):
         got, want = output_files(out), output_files(made / fmt)
         assert sorted(got) == sorted(want)
         assert [k for k in want if got[k] != want[k]] == []
+
+
+def test_bop_refuses_a_scale_jitter_naming_it(tmp_path):
+    job = dict(pose_jobs(tmp_path)[1], size=[16, 12], cameras=[{"eye": [0.5, 2.4, 4.2],
+                                                                 "target": [0.0, 0.3, 0.0]}],
+               jitter={"objects": {"scale": 0.2}})
+    summary = batch.run([job], tmp_path / "bop", format="bop", progress=False)
+    assert summary.status == 2 and len(summary.errors) == 1
+    assert "jitter.objects.scale: object 'ball' is scaled by" in summary.errors[0]
+    assert "\n" not in summary.errors[0]
+    # the same frame in COCO has no pose to write: made
+    assert batch.run([job], tmp_path / "coco", format="coco", progress=False).status == 0

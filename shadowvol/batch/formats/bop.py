@@ -44,7 +44,8 @@ def _rigid(obj) -> np.ndarray:
     scale = float(np.cbrt(np.linalg.det(pose[:3, :3])))
     if abs(scale - 1.0) > RIGID:
         raise SceneError("jitter.objects.scale", f"object {obj.name!r} is scaled by {scale:.6g} "
-                                                 "from its model: a BOP pose (cam_R_m2c, "
+                                                 "from its model (by the jitter, or a pose "
+                                                 "given in Python): a BOP pose (cam_R_m2c, "
                                                  "cam_t_m2c) cannot scale; leave out the scale "
                                                  "jitter for --format bop")
     return pose
