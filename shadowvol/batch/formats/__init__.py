@@ -91,13 +91,14 @@ class DatasetStore:
                    if not manifest.outside(self.out, folder))
 
     def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
-        """Rebuild every job's index files from the made frames that every manifest in OUT
-        records for `specs` (made from the same spec, in this layout), in frame order."""
+        """Rebuild every job's index files (or the dataset's, `Layout.dataset_index`) from the
+        made frames that every manifest in OUT records for `specs` (made from the same spec, in
+        this layout), in frame order."""
         records = manifest.read(self.out)
         if self.layout.dataset_index is not None:
-            made = {spec.id: records[spec.id]["dataset"] for spec in specs
+            done = {spec.id: records[spec.id]["dataset"] for spec in specs
                     if _made(records.get(spec.id), hashes[spec.id], self.layout.name)}
-            for rel, data in self.layout.dataset_index(specs, made, self.scene_of).items():
+            for rel, data in self.layout.dataset_index(specs, done, self.scene_of).items():
                 put(self.out, rel, data)
             return
         jobs: dict[str, list] = {}

@@ -144,8 +144,8 @@ def dataset_index(specs: list[FrameSpec], made: dict[str, dict], scene_of) -> di
     for spec in specs:
         tables = scenes.setdefault(root(spec), ({}, {}, {}))
         record = made.get(spec.id)
-        if record is None:
-            continue
+        if record is None or any(g["model"] not in ids for g in record["gt"]):
+            continue   # not made, or its scene could not be read again here
         first = first or record
         tables[0][str(spec.index)] = record["camera"]
         tables[1][str(spec.index)] = [{"cam_R_m2c": g["cam_R_m2c"], "cam_t_m2c": g["cam_t_m2c"],
