@@ -172,17 +172,22 @@ def test_bop_poses_are_the_jittered_ones_of_the_manifest(made):
     assert turned == 2
 
 
-def test_two_shards_make_the_datasets_of_one_run(made):
-    """Ids, models and the jittered poses do not depend on which shard made a frame."""
+def test_two_shards_or_two_workers_make_the_datasets_of_one_run(made):
+    """Ids, models and the jittered poses do not depend on which shard or process made a
+    frame."""
     for fmt in ("bop", "coco"):
         out = made / f"sharded-{fmt}"
         for shard in ("0/2", "1/2"):
             summary = batch.run(made / "jobs.jsonl", out, format=fmt, shard=shard,
                                 progress=False)
             assert summary.status == 0, summary.errors
-        got, want = output_files(out), output_files(made / fmt)
-        assert sorted(got) == sorted(want)
-        assert [k for k in want if got[k] != want[k]] == []
+        pooled = made / f"pooled-{fmt}"
+        assert batch.run(made / "jobs.jsonl", pooled, format=fmt, workers=2,
+                         progress=False).status == 0
+        want = output_files(made / fmt)
+        for got in (output_files(out), output_files(pooled)):
+            assert sorted(got) == sorted(want)
+            assert [k for k in want if got[k] != want[k]] == []
 
 
 def test_bop_refuses_a_scale_jitter_naming_it(tmp_path):
