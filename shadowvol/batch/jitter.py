@@ -102,9 +102,11 @@ def _box(vertices: np.ndarray) -> np.ndarray:
     return np.stack([vertices.min(axis=0), vertices.max(axis=0)])
 
 
-def _overlap(a: np.ndarray, b: np.ndarray, gap: float) -> bool:
-    """The open boxes a and b share a point, by more than `gap` on every axis."""
-    return bool(np.all(a[0] < b[1] - gap) and np.all(b[0] < a[1] - gap))
+def _overlaps(box: np.ndarray, boxes: np.ndarray, gap: float) -> np.ndarray:
+    """(m,) bool: the open box `box` (2, 3) and each of `boxes` (m, 2, 3) share a point, by
+    more than `gap` on every axis."""
+    return np.all(box[0] < boxes[:, 1] - gap, axis=1) & np.all(boxes[:, 0] < box[1] - gap,
+                                                               axis=1)
 
 
 def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -134,20 +136,20 @@ def _draw(rng: np.random.Generator, spec: dict, centre: np.ndarray) -> np.ndarra
 
 def _placed(objects: list[Object], spec: dict, rng: np.random.Generator,
             gap: float) -> list[Object]:
-    boxes = [_box(obj.vertices) for obj in objects]
-    ground = min(box[0, 1] for box in boxes)
+    boxes = np.stack([_box(obj.vertices) for obj in objects])   # (n, 2, 3)
+    ground = float(boxes[:, 0, 1].min())
     moving = [k for k, obj in enumerate(objects) if obj.label != BACKGROUND]
-    placed = [k for k in range(len(objects)) if k not in set(moving)]   # the stage
-    final = list(boxes)
+    placed = np.array([obj.label == BACKGROUND for obj in objects])   # the stage, then each
+    final = boxes.copy()                                              # object once placed
     for k in moving:
         obj, centre = objects[k], boxes[k].mean(axis=0)
-        others = [j for j in placed if not _overlap(boxes[k], boxes[j], gap)]
+        # the objects to keep clear of: placed, and apart from it in the scene as given
+        others = final[placed & ~_overlaps(boxes[k], boxes, gap)]
         for _ in range(TRIES):
             m = _draw(rng, spec, centre)
             vertices = obj.vertices @ m[:3, :3].T + m[:3, 3]
             box = _box(vertices)
-            if box[0, 1] >= ground - gap and not any(_overlap(box, final[j], gap)
-                                                     for j in others):
+            if box[0, 1] >= ground - gap and not _overlaps(box, others, gap).any():
                 break
         else:
             raise SceneError("jitter.objects", f"object {obj.name!r}: none of {TRIES} draws "
@@ -156,7 +158,7 @@ def _placed(objects: list[Object], spec: dict, rng: np.random.Generator,
                                                "boxes; make the jitter smaller")
         objects[k] = _moved(obj, m, vertices)
         final[k] = box
-        placed.append(k)
+        placed[k] = True
     return objects
 
 
