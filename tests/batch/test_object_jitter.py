@@ -146,3 +146,28 @@ def test_bad_jitter_is_a_job_error_naming_the_key(value, message):
            "jitter": value}
     (got,) = check_jobs([job])
     assert isinstance(got, JobError) and message in got.error, got
+
+
+def test_the_cli_names_the_job_line_and_the_key_of_a_bad_jitter(tmp_path):
+    """Exit 2 and one line (the job file's line, the key, the problem), no traceback."""
+    import json
+    import subprocess
+    import sys
+
+    from builders import ROOT, SCENES
+
+    job = {"name": "j", "scene": str(SCENES / "cage.toml"), "size": [8, 6],
+           "cameras": [{"eye": [4.2, 3.4, 5.2], "target": [-0.6, 1.0, -0.8]}],
+           "jitter": {"objects": {"rotation": 400}}}
+    jobs = tmp_path / "jobs.jsonl"
+    jobs.write_text(json.dumps(job) + "\n")
+    done = subprocess.run([sys.executable, "-m", "shadowvol", "batch", str(jobs), "-o",
+                           str(tmp_path / "out"), "--no-progress"], capture_output=True,
+                          text=True, cwd=tmp_path, env={"PYTHONPATH": str(ROOT),
+                                                        "PATH": "/usr/bin:/bin"})
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    lines = [line for line in done.stderr.splitlines()
+             if "jitter.objects.rotation" in line]
+    assert len(lines) == 1 and f"{jobs}:1" in lines[0] and "from 0 to 180" in lines[0], \
+        done.stderr

@@ -125,3 +125,22 @@ def test_an_object_pose_is_a_similarity():
     pose[:3, :3] = 2 * rotation([1, 1, 0], 30.0)
     obj = Object("o", v @ pose[:3, :3].T, f, pose=pose)
     assert np.allclose(obj.model_vertices(), v, atol=1e-12)
+
+
+def test_the_cli_names_the_file_and_the_key_of_a_bad_matrix(tmp_path):
+    """`shadowvol render` of a scene whose transform matrix shears: exit 2, one line."""
+    import subprocess
+    import sys
+
+    from builders import ROOT
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[camera]\neye = [0.0, 2.0, 6.0]\ntarget = [0.0, 0.0, 0.0]\n\n'
+                   '[[objects]]\ntype = "box"\ntransform = { matrix = [[1, 0.5, 0, 0], '
+                   '[0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]] }\n')
+    done = subprocess.run([sys.executable, "-m", "shadowvol", "render", str(bad), "-o",
+                           str(tmp_path / "out.png")], capture_output=True, text=True,
+                          cwd=tmp_path, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert str(bad) in lines[0] and "objects[0].transform.matrix: not a pose" in lines[0]
