@@ -145,10 +145,9 @@ def flag(value, key: str) -> bool:
     return bool(value)
 
 
-def rigid_matrix(value, key: str) -> np.ndarray:
-    """A read-only (4, 4) float64 rigid transform (rotation and translation; last row exactly
-    0 0 0 1) from `value`, 4 lists of 4 real numbers or a (4, 4) array, or a SceneError naming
-    `key`: wrong shape, non-finite, beyond the float32 range, a scale, shear or mirror."""
+def _matrix4(value, key: str) -> np.ndarray:
+    """A (4, 4) float64 array of finite numbers inside the float32 range, last row exactly
+    0 0 0 1 (affine), from 4 lists of 4 real numbers or a (4, 4) array; else a SceneError."""
     if isinstance(value, np.ndarray):
         ok = value.dtype.kind in "iuf" and value.shape == (4, 4)
     else:
@@ -171,6 +170,14 @@ def rigid_matrix(value, key: str) -> np.ndarray:
     if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
         raise SceneError(key, f"not rigid: the last row must be [0, 0, 0, 1], got "
                               f"{m[3].tolist()}")
+    return m
+
+
+def rigid_matrix(value, key: str) -> np.ndarray:
+    """A read-only (4, 4) float64 rigid transform (rotation and translation; last row exactly
+    0 0 0 1) from `value`, 4 lists of 4 real numbers or a (4, 4) array, or a SceneError naming
+    `key`: wrong shape, non-finite, beyond the float32 range, a scale, shear or mirror."""
+    m = _matrix4(value, key)
     r = m[:3, :3]
     error = float(np.abs(r.T @ r - np.eye(3)).max())
     if error > RIGID_TOLERANCE:
@@ -179,6 +186,31 @@ def rigid_matrix(value, key: str) -> np.ndarray:
     if np.linalg.det(r) < 0:
         raise SceneError(key, "not rigid: the rotation part is a mirror (determinant < 0)")
     return frozen(m)
+
+
+def similarity_matrix(value, key: str) -> tuple[np.ndarray, float]:
+    """(the read-only (4, 4) float64 matrix, its scale s) of a similarity transform: s R and a
+    translation, R a rotation (`RIGID_TOLERANCE` on R^T R - I), s > 0 the same on every axis;
+    else a SceneError naming `key` (shape, non-finite, last row not 0 0 0 1, a shear, a scale
+    that differs between axes, a mirror or a zero scale).  An object pose may scale; a camera
+    pose may not (`rigid_matrix`)."""
+    m = _matrix4(value, key)
+    r = m[:3, :3]
+    det = float(np.linalg.det(r))
+    if not det > 0:
+        raise SceneError(key, "not a pose: the 3x3 part is a mirror or flat (determinant "
+                              f"{det:.3g} <= 0)")
+    s = det ** (1.0 / 3.0)
+    if not MIN_POSITIVE <= s <= MAX_MAGNITUDE:
+        raise SceneError(key, f"not a pose: its scale {s:.3g} is outside the float32 range")
+    rotation = r / s
+    error = float(np.abs(rotation.T @ rotation - np.eye(3)).max())
+    if error > RIGID_TOLERANCE:
+        raise SceneError(key, f"not a pose: the 3x3 part is not a rotation times one scale "
+                              f"(|R^T R - I| = {error:.3g} > {RIGID_TOLERANCE:g} with R = the "
+                              f"3x3 part / {s:.6g}: a shear, or a scale that differs between "
+                              "axes; use transform = { scale = [...] } for that)")
+    return frozen(m), s
 
 
 def unit(v: np.ndarray, key: str) -> np.ndarray:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import hashlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,6 +33,7 @@ from shadowvol.checks import (  # noqa: F401 (re-exported)
     reject_unknown_keys,
     rigid_matrix,
     shorten,
+    similarity_matrix,
     unit,
     vec,
 )
@@ -166,6 +168,12 @@ class Object:
     uv       : (n, 2) float64, read-only, per-vertex texture coordinates (glTF's convention:
                v down), or None; needed by a `material.texture`
     colors   : (n, 3) float64, read-only, per-vertex linear RGB colours, or None (all 1)
+    category : its class name for the datasets (None: its name; `BACKGROUND` is the stage,
+               never annotated nor a model: docs/formats.md)
+    pose     : (4, 4) float64, read-only, model to world, a similarity (`vertices` = pose
+               applied to the model's vertices); None: the identity (the model is the world)
+    model    : the key of the model it is an instance of (the scene file sets the mesh file
+               and its scale); None: its own model (`model_key`)
     """
 
     name: str
@@ -177,10 +185,19 @@ class Object:
     receive_shadows: bool = True
     uv: np.ndarray | None = None
     colors: np.ndarray | None = None
+    category: str | None = None
+    pose: np.ndarray | None = None
+    model: str | None = None
 
     def __post_init__(self):
         for key in ("cast_shadows", "receive_shadows"):
             object.__setattr__(self, key, flag(getattr(self, key), key))
+        for key in ("category", "model"):
+            value = getattr(self, key)
+            if value is not None and (not isinstance(value, str) or not value):
+                raise SceneError(key, f"expected a non-empty string, got {shorten(value)}")
+        if self.pose is not None:
+            object.__setattr__(self, "pose", similarity_matrix(self.pose, "pose")[0])
         v = np.array(self.vertices, dtype=np.float64)
         f = np.array(self.faces)
         if v.ndim != 2 or v.shape[1] != 3:
@@ -217,6 +234,32 @@ class Object:
     def triangles(self) -> np.ndarray:
         """(m, 3, 3) float64: the corner positions of every triangle."""
         return self.vertices[self.faces]
+
+    @property
+    def label(self) -> str:
+        """Its class name: `category`, else its name."""
+        return self.name if self.category is None else self.category
+
+    @functools.cached_property
+    def model_key(self) -> str:
+        """The key of its model: `model`, else a hash of its own triangles and pose (so one
+        object of one scene is one model wherever it is rendered)."""
+        if self.model is not None:
+            return self.model
+        h = hashlib.sha256(np.ascontiguousarray(self.vertices).tobytes())
+        h.update(np.ascontiguousarray(self.faces).tobytes())
+        h.update(b"" if self.pose is None else self.pose.tobytes())
+        return "sha256:" + h.hexdigest()
+
+    def model_vertices(self) -> np.ndarray:
+        """(n, 3) float64: the vertices in its model frame (the pose undone)."""
+        if self.pose is None:
+            return self.vertices
+        scaled = self.pose[:3, :3]
+        return np.linalg.solve(scaled, (self.vertices - self.pose[:3, 3]).T).T
+
+
+BACKGROUND = "background"   # the category of the stage (docs/formats.md)
 
 
 @dataclass(frozen=True, eq=False)

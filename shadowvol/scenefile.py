@@ -20,6 +20,7 @@ import numpy as np
 from shadowvol import primitives
 from shadowvol.errors import out_of_memory_while
 from shadowvol.scene import (
+    BACKGROUND,
     LOOK_AT_CAMERA_KEYS,
     MATRIX_CAMERA_KEYS,
     MIXED_FORMS,
@@ -71,10 +72,10 @@ LIGHT_KEYS = {
 AREA_KEYS = {"type", "center", "color", "intensity", "samples", "pattern", "seed", "shadows"}
 LIGHT_KEYS.update({"rect": AREA_KEYS | {"normal", "size"}, "disk": AREA_KEYS | {"normal", "radius"},
                    "sphere": AREA_KEYS | {"radius"}})
-TRANSFORM_KEYS = {"scale", "rotation", "translation"}
+TRANSFORM_KEYS = {"scale", "rotation", "translation", "matrix"}
 # the shadow switches (docs/CONVENTIONS.md, "Shadow switches"); an object's default: true
 SWITCH_KEYS = ("cast_shadows", "receive_shadows")
-COMMON_OBJECT_KEYS = {"type", "name", "material", "transform", *SWITCH_KEYS}
+COMMON_OBJECT_KEYS = {"type", "name", "material", "transform", "category", *SWITCH_KEYS}
 OBJECT_KEYS = {
     "mesh": COMMON_OBJECT_KEYS | {"path", "vertices", "faces", "uv", "colors"},
     "sphere": COMMON_OBJECT_KEYS | {"center", "radius", "subdivisions"},
@@ -311,6 +312,14 @@ def _object(value, key: str, named: dict[str, Material], base_dir: Path,
     with the entry's shadow switches."""
     parts = _object_parts(value, key, named, base_dir, max_mesh_bytes)
     switches = {k: value[k] for k in SWITCH_KEYS if k in value}
+    if "category" in value:
+        category = value["category"]
+        if not isinstance(category, str) or not category:
+            raise SceneError(f"{key}.category", f"expected a class name (a non-empty "
+                                                f"string), got {given(category)}")
+        switches["category"] = category
+    elif value.get("type") == "plane":
+        switches["category"] = BACKGROUND   # a plane is the stage: a floor, a wall
     if not switches:
         return parts
     return [_build(key, functools.partial(dataclasses.replace, part), **switches)
@@ -335,8 +344,7 @@ def _object_parts(value, key: str, named: dict[str, Material], base_dir: Path,
     else:
         material = _material(material, f"{key}.material", base_dir)
 
-    transform = _build(f"{key}.transform", primitives.Transform,
-                       **_table(table.get("transform", {}), f"{key}.transform", TRANSFORM_KEYS))
+    transform = _transform(table.get("transform", {}), f"{key}.transform")
     args = {k: v for k, v in table.items() if k not in COMMON_OBJECT_KEYS}
     if kind == "mesh":
         if ("path" in table) == ("vertices" in table or "faces" in table):
@@ -347,15 +355,38 @@ def _object_parts(value, key: str, named: dict[str, Material], base_dir: Path,
                            material=material, transform=transform, uv=table.get("uv"),
                            colors=table.get("colors"))]
         parts = read_mesh(table["path"], f"{key}.path", base_dir, max_mesh_bytes)
-        return [_build(key, primitives.mesh, name=part_name(name, part, len(parts)),
-                       vertices=part.vertices, faces=part.faces,
-                       material=part_material(material, part, "material" in table),
-                       transform=transform, uv=part.uv, colors=part.colors) for part in parts]
+        model = _model_key(base_dir / table["path"], transform)
+        return [dataclasses.replace(
+                    _build(key, primitives.mesh, name=part_name(name, part, len(parts)),
+                           vertices=part.vertices, faces=part.faces,
+                           material=part_material(material, part, "material" in table),
+                           transform=transform, uv=part.uv, colors=part.colors),
+                    category=Path(table["path"]).stem,
+                    model=model if part.node is None else f"{model}#{part.node}")
+                for part in parts]
     builder = {"sphere": primitives.sphere, "plane": primitives.plane, "box": primitives.box}[kind]
     if kind == "sphere":
         for required in ("center", "radius"):
             _required(table, required, key)
     return [_build(key, builder, name=name, material=material, transform=transform, **args)]
+
+
+def _transform(value, key: str) -> primitives.Transform:
+    """`{ scale, rotation, translation }` or `{ matrix = [[4x4]] }` (a similarity: rotation,
+    one scale, translation), never both."""
+    table = _table(value, key, TRANSFORM_KEYS)
+    if "matrix" in table and len(table) > 1:
+        other = sorted(set(table) - {"matrix"})[0]
+        raise SceneError(f"{key}.{other}", "given with matrix: give the matrix alone, or "
+                                           "scale, rotation and translation")
+    return _build(key, primitives.Transform, **table)
+
+
+def _model_key(path: Path, transform: primitives.Transform) -> str:
+    """The model a mesh file's object is an instance of: the file (resolved) at its scale
+    (the scale is the model's; the pose is the rest of the transform)."""
+    scale = ",".join(repr(float(x)) for x in transform.scale)
+    return f"{path.resolve()}@{scale}"
 
 
 def _inline_mesh(table: dict, key: str) -> tuple[np.ndarray, np.ndarray]:

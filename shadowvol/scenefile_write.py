@@ -81,6 +81,7 @@ def scene_to_dict(scene: Scene) -> dict:
                      "faces": o.faces.tolist(), "material": material(o.material),
                      **({} if o.uv is None else {"uv": o.uv.tolist()}),
                      **({} if o.colors is None else {"colors": o.colors.tolist()}),
+                     **({} if o.category is None else {"category": o.category}),
                      **{k: False for k in ("cast_shadows", "receive_shadows")
                         if not getattr(o, k)}}
                     for o in scene.objects],

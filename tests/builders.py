@@ -683,3 +683,52 @@ type = "mesh"
 path = "{mesh}"
 ''')
     return path
+
+
+def pose_scenes(folder: Path) -> tuple[Path, Path]:
+    """Two scene files sharing classes and a mesh file (an asymmetric crate, `crate.obj`):
+    A: floor, two crates (a matrix and an Euler transform), a ball (category "ball");
+    B: floor, the same ball, a box of category "crate" (another model of that class), a crate
+    tilted by a matrix.  Planes are the background."""
+    corners = np.array([[x, y, z] for x in (-0.3, 0.3) for y in (-0.17, 0.17)
+                        for z in (-0.12, 0.12)])
+    corners[7] += [0.2, 0.05, 0.0]   # no symmetry: a wrong turn shows
+    faces = [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+             [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
+    (folder / "crate.obj").write_text(
+        "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in corners.tolist()) +
+        "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces))
+    turn = rotation([0, 1, 0], 35.0)
+    tilt = rotation([1, 0, 0], 25.0) @ rotation([0, 0, 1], 15.0)
+    matrix_a = [[*turn[i], [-0.8, 0.2, 0.0][i]] for i in range(3)] + [[0, 0, 0, 1]]
+    matrix_b = [[*tilt[i], [-0.7, 0.45, 0.2][i]] for i in range(3)] + [[0, 0, 0, 1]]
+    head = ('[camera]\neye = [0.0, 2.2, 4.5]\ntarget = [0.0, 0.3, 0.0]\nfov_y = 45.0\n\n'
+            '[[lights]]\ntype = "point"\nposition = [1.5, 3.0, 1.5]\n\n'
+            '[[objects]]\nname = "floor"\ntype = "plane"\nsize = [6.0, 6.0]\n\n')
+    ball = ('[[objects]]\nname = "ball"\ntype = "sphere"\ncenter = [0.0, 0.3, -0.6]\n'
+            'radius = 0.3\nsubdivisions = 2\ncategory = "ball"\n\n')
+    a = (head + '[[objects]]\nname = "crate left"\ntype = "mesh"\npath = "crate.obj"\n'
+         f'transform = {{ matrix = {json.dumps(matrix_a)} }}\n\n'
+         '[[objects]]\nname = "crate right"\ntype = "mesh"\npath = "crate.obj"\n'
+         'transform = { rotation = [0.0, -60.0, 0.0], translation = [0.7, 0.2, 0.3] }\n\n'
+         + ball)
+    b = (head + ball + '[[objects]]\nname = "box"\ntype = "box"\ncenter = [0.8, 0.25, 0.0]\n'
+         'size = [0.4, 0.5, 0.4]\ncategory = "crate"\n\n'
+         '[[objects]]\nname = "tilted crate"\ntype = "mesh"\npath = "crate.obj"\n'
+         f'transform = {{ matrix = {json.dumps(matrix_b)} }}\n')
+    (folder / "poses_a.toml").write_text(a)
+    (folder / "poses_b.toml").write_text(b)
+    return folder / "poses_a.toml", folder / "poses_b.toml"
+
+
+def pose_jobs(folder: Path) -> list[dict]:
+    """Two jobs of `pose_scenes`: A rasterized, B ray traced with its objects jittered."""
+    a, b = pose_scenes(folder)
+    return [{"name": "crates", "scene": str(a), "size": [64, 48], "outputs": ["image"],
+             "cameras": {"orbit": {"center": [0.0, 0.3, 0.0], "radius": 4.5,
+                                   "elevation": 25.0, "sweep": 50.0, "frames": 2}}},
+            {"name": "tossed", "scene": str(b), "size": [64, 48], "renderer": "raytrace",
+             "max_depth": 1, "seed": 3, "outputs": ["image"],
+             "jitter": {"objects": {"translation": 0.15, "rotation": 40.0}},
+             "cameras": [{"eye": [0.5, 2.4, 4.2], "target": [0.0, 0.3, 0.0]},
+                         {"eye": [-1.5, 2.0, 4.0], "target": [0.0, 0.3, 0.0]}]}]

@@ -5,8 +5,8 @@ where the files go.  A new layout is a row here (and, for a dataset, its module 
 
 files       OUT/<job>/<frame>.<suffix>, one file per output (`store.FileStore`)
 webdataset  OUT/shard-NNNNNN.tar of --samples-per-tar frames (`store.TarStore`)
-nerfstudio, bop, coco   OUT/<job>/ in that dataset's layout (`formats.DatasetStore`,
-            docs/formats.md)
+nerfstudio, coco   OUT/<job>/ in that dataset's layout, bop OUT/train/<job's place>/ and
+            OUT/models/ (`formats.DatasetStore`, docs/formats.md)
 
 Frames of the plain layouts (files, webdataset) are the job's outputs and carry no layout in
 their spec (so their spec hashes are those of the runs before layouts had names); a dataset
@@ -37,8 +37,15 @@ class Layout:
     shards  : its units are tars of `samples_per_tar` frames (else one frame each)
     tag     : the "format" its frame specs carry, None for the plain layouts
     index   : (job, [(spec, record)]) -> {path: bytes}, a dataset's index files, or None
-    folders, index_files, first : under OUT/<job>/, the folders of a frame's files, the index
-              files, and the folders of what frame 0 adds (where temporaries are cleaned)
+    dataset_index : (specs, records by id, scene_of) -> {path: bytes}, the index files of a
+              dataset of every job (ids shared by its jobs: COCO's categories and image ids,
+              BOP's models and scene folders), in place of `index`; its frame specs carry
+              their job's place (`tag`), and its store the run's scenes (`scene_of(key)`)
+    root    : spec -> the folder of the frame's files under OUT (None: `<job>`)
+    folders, index_files, first : under the frame's folder, the folders of a frame's files
+              and the index files; `first`: what frame 0 adds there (folders), or for a
+              `dataset_index`, what it writes under OUT (folders, or files: `name.json`)
+              (where temporaries are cleaned)
     """
 
     name: str
@@ -51,11 +58,17 @@ class Layout:
     folders: tuple[str, ...] = ()
     index_files: tuple[str, ...] = ()
     first: tuple[str, ...] = ()
+    dataset_index: Callable | None = None
+    root: Callable | None = None
 
     def frames_per_unit(self, samples_per_tar: int) -> int:
         return samples_per_tar if self.shards else 1
 
-    def make_store(self, out):
+    def make_store(self, out, scenes: dict | None = None):
+        """Its store of `out`; a `dataset_index` layout's is given the run's `scenes` (key ->
+        path or Scene)."""
+        if self.dataset_index is not None:
+            return self.store(out, self, scenes)
         return self.store(out, self)
 
 
@@ -70,8 +83,10 @@ def _outputs_encode(spec, arrays, scene) -> tuple[dict[str, bytes], None]:
 
 def _dataset(name: str, module, casters: bool, alone: bool, first: tuple = ()) -> Layout:
     return Layout(name, DatasetStore, partial(frame_arrays, casters=casters, alone=alone),
-                  module.frame, tag=name, index=module.index, folders=module.FOLDERS,
-                  index_files=module.INDEX, first=first)
+                  module.frame, tag=name, index=getattr(module, "index", None),
+                  folders=module.FOLDERS, index_files=module.INDEX, first=first,
+                  dataset_index=getattr(module, "dataset_index", None),
+                  root=getattr(module, "root", None))
 
 
 FILES = Layout("files", FileStore, _outputs_arrays, _outputs_encode)
@@ -82,7 +97,7 @@ LAYOUTS: dict[str, Layout] = {layout.name: layout for layout in (
     WEBDATASET,
     _dataset("nerfstudio", nerfstudio, casters=False, alone=False),
     _dataset("bop", bop, casters=False, alone=True, first=bop.FIRST),
-    _dataset("coco", coco, casters=True, alone=False),
+    _dataset("coco", coco, casters=True, alone=False, first=coco.FIRST),
 )}
 FORMATS = tuple(LAYOUTS)           # the names --format takes
 DATASETS = tuple(name for name, layout in LAYOUTS.items() if layout.tag)
@@ -96,6 +111,9 @@ def of_spec(spec: FrameSpec) -> Layout:
     return _BY_TAG[spec.format]
 
 
-def tag(specs: list[FrameSpec], layout: Layout) -> list[FrameSpec]:
-    """A layout's frame specs (so their spec hash, and the worker, know the layout)."""
-    return [dataclasses.replace(spec, format=layout.tag) for spec in specs]
+def tag(specs: list[FrameSpec], layout: Layout, job_index: int | None = None
+        ) -> list[FrameSpec]:
+    """A layout's frame specs (so their spec hash, and the worker, know the layout), with
+    their job's place in the job file where the layout's index is of the whole dataset."""
+    place = {"job_index": job_index} if layout.dataset_index is not None else {}
+    return [dataclasses.replace(spec, format=layout.tag, **place) for spec in specs]

@@ -159,7 +159,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     # the lock first: a run refused here has touched nothing of the one that holds it
     journal = manifest.Journal(out / own)
     try:
-        store = layout.make_store(out)
+        store = layout.make_store(out, plan.scenes)
         done, unit_lines, todo = _already_made(plan, manifest.read(out, own), store)
         # temporary files a killed run left, for any file of this share (made or not)
         store.clean([plan.units[u] for u in plan.mine])
@@ -255,12 +255,12 @@ class _Plan:
         self.scenes: dict[str, str | Scene] = {}
         digests: dict[str, str] = {}
         self.specs: list[FrameSpec] = []
-        for job in entries:
+        for place, job in enumerate(entries):
             if isinstance(job, Job):
                 key = job.scene if isinstance(job.scene, str) else f"<Scene {id(job.scene)}>"
                 if key not in self.scenes:
                     self.scenes[key], digests[key] = job.scene, scene_digest(job.scene)
-                self.specs.extend(layouts.tag(frames.specs(job, key), layout))
+                self.specs.extend(layouts.tag(frames.specs(job, key), layout, place))
         self.hashes = {s.id: frames.spec_hash(s, digests[s.scene]) for s in self.specs}
         per_unit = layout.frames_per_unit(samples_per_tar)
         self.units = [Unit(k, tuple(part), tuple(self.hashes[s.id] for s in part))
@@ -308,6 +308,7 @@ def _record(journal, done, summary, spec, result, hashes, files, layout: str,
                   **SOURCES[spec.renderer].options(spec),
                   "versions": result["versions"], "device": result["device"],
                   "worker": result["worker"],
+                  **({"objects": result["objects"]} if "objects" in result else {}),
                   "seconds": seconds, **({"dataset": result["dataset"]} if "dataset" in result
                                          else {})}
         summary.rendered += 1

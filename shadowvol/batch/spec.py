@@ -20,7 +20,8 @@ class FrameSpec:
     index     : its place in the job, from 0
     job       : the job's name
     scene     : the key of its scene among the run's (a path, or `<Scene id>` for a Scene)
-    camera    : {"eye", "target"[, "up", "fov_y", "near"]}: the scene's fill what is left out
+    camera    : {"eye", "target"[, "up", "fov_y", "near"]}: the scene's fill what is left out;
+                or {"fx", "fy", "cx", "cy", "camera_to_world"[, "near"]}
     lights    : the job's light tables (the scene-file schema), or None for the scene's
     size      : (width, height), or None for the scene's
     outputs   : the output names (`outputs.OUTPUTS`) it makes, in order
@@ -29,6 +30,8 @@ class FrameSpec:
     seed, jitter : the job's seed and jitter (`frames.jittered`)
     format    : the dataset layout its files are made as (`layouts.tag`), or None for the job's
                 outputs as they are (the files and webdataset layouts)
+    job_index : its job's place in the job file, from 0, for the layouts whose index is of the
+                whole dataset (BOP's scene folder; `layouts.tag`), else None
     """
 
     id: str
@@ -45,9 +48,11 @@ class FrameSpec:
     seed: int
     jitter: dict
     format: str | None = None
+    job_index: int | None = None
 
     def as_dict(self) -> dict:
-        """The spec as JSON data (lists for tuples; no "format" for the plain layouts)."""
+        """The spec as JSON data (lists for tuples; no "format" for the plain layouts, no
+        "job_index" where it is None)."""
         out = {"id": self.id, "index": self.index, "camera": self.camera, "job": self.job,
                "scene": self.scene, "lights": None if self.lights is None else list(self.lights),
                "size": None if self.size is None else list(self.size),
@@ -55,4 +60,6 @@ class FrameSpec:
                "max_depth": self.max_depth, "seed": self.seed, "jitter": self.jitter}
         if self.format is not None:
             out["format"] = self.format
+        if self.job_index is not None:
+            out["job_index"] = self.job_index
         return out

@@ -22,7 +22,7 @@ from collections import OrderedDict
 import numpy as np
 
 from shadowvol import __version__, memory, signals
-from shadowvol.batch import egl, frames, layouts
+from shadowvol.batch import egl, frames, jitter, layouts
 from shadowvol.batch.outputs import fields_of
 from shadowvol.batch.sources import SOURCES
 from shadowvol.batch.spec import FrameSpec
@@ -64,8 +64,23 @@ def light_dict(light) -> dict:
 
 
 def camera_dict(camera: Camera) -> dict:
-    return {"eye": camera.eye.tolist(), "target": camera.target.tolist(),
-            "up": camera.up.tolist(), "fov_y": camera.fov_y, "near": camera.near}
+    """A frame's camera for the manifest: eye, target, up, fov_y, near, and a matrix camera's
+    intrinsics and pose as given (fov_y None)."""
+    out = {"eye": camera.eye.tolist(), "target": camera.target.tolist(),
+           "up": camera.up.tolist(), "fov_y": camera.fov_y, "near": camera.near}
+    if camera.matrix_form:
+        out.update(fx=camera.fx, fy=camera.fy, cx=camera.cx, cy=camera.cy,
+                   camera_to_world=camera.camera_to_world.tolist())
+    return out
+
+
+def objects_dict(scene: Scene, jitter_spec: dict) -> list[dict]:
+    """A jittered frame's objects for the manifest: name, category, pose (model to world, None
+    for the identity) and, with colour jitter, the diffuse colour."""
+    return [{"name": obj.name, "category": obj.label,
+             "pose": None if obj.pose is None else obj.pose.tolist(),
+             **({"diffuse": obj.material.diffuse.tolist()} if "colors" in jitter_spec else {})}
+            for obj in scene.objects]
 
 
 class Worker:
@@ -127,8 +142,10 @@ class Worker:
 
         slot = (key, scene.width, scene.height)
         if slot in self._renderers:
-            self._renderers.move_to_end(slot)
-            return self._renderers[slot]
+            if self._renderers[slot].scene.objects is scene.objects:
+                self._renderers.move_to_end(slot)
+                return self._renderers[slot]
+            self._renderers.pop(slot).release()   # a frame's jittered objects: new geometry
         ctx = self.context()
         while len(self._renderers) >= MAX_RENDERERS:
             self._renderers.popitem(last=False)[1].release()
@@ -163,6 +180,8 @@ class Worker:
                             "encode": round(done - rendered, 6)},
                 "versions": self.versions(spec.renderer), "device": self.device,
                 "worker": f"{self.label} (pid {os.getpid()})",
+                **({"objects": objects_dict(scene, spec.jitter)}
+                   if jitter.applies(spec.jitter) else {}),
                 **({"dataset": dataset} if dataset is not None else {})}
 
     def _frame_scene(self, spec: FrameSpec):
@@ -170,12 +189,16 @@ class Worker:
         if spec.size is not None:
             scene = scene.replace(width=spec.size[0], height=spec.size[1])
         base = scene.camera
-        camera = Camera(**{"up": base.up, "fov_y": base.fov_y, "near": base.near,
-                           **spec.camera})
+        if "camera_to_world" in spec.camera:   # intrinsics and pose: the job's own
+            camera = Camera(**{"near": base.near, **spec.camera})
+        else:
+            camera = Camera(**{"up": base.up, "fov_y": base.fov_y, "near": base.near,
+                               **spec.camera})
         lights = scene.lights if spec.lights is None else tuple(
             light_from_dict(x, f"lights[{i}]") for i, x in enumerate(spec.lights))
         camera, lights = frames.jittered(camera, lights, spec.jitter, spec.seed,
                                          spec.index)
+        scene = jitter.jittered_scene(scene, spec.jitter, spec.seed, spec.index)
         return scene, camera, lights
 
     def _check_memory(self, spec, source, frame_scene: Scene, wanted, truth) -> None:

@@ -85,3 +85,19 @@ def test_no_layout_or_renderer_name_is_tested(module):
         if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
             assert node.slice.value not in {"format", "renderer"}, \
                 f"{module}:{node.lineno} reads [{node.slice.value!r}]"
+
+
+def test_a_whole_dataset_layouts_frames_carry_their_jobs_place():
+    """BOP's scene folder and COCO's ids are of the whole dataset: their specs carry the
+    job's place (so their hashes differ from a dataset made before they had it, which is made
+    again), nerfstudio's do not (its hashes stay)."""
+    (job,) = check_jobs(JOBS[:1])
+    specs = frames.specs(job, "key")
+    for name in ("bop", "coco"):
+        tagged = layouts.tag(specs, layouts.LAYOUTS[name], 3)
+        assert [s.job_index for s in tagged] == [3, 3]
+        assert tagged[0].as_dict()["job_index"] == 3
+        assert frames.spec_hash(tagged[0], "d") != frames.spec_hash(
+            layouts.tag(specs, layouts.LAYOUTS[name])[0], "d")
+    nerf = layouts.tag(specs, layouts.LAYOUTS["nerfstudio"], 3)
+    assert nerf[0].job_index is None and "job_index" not in nerf[0].as_dict()

@@ -21,14 +21,34 @@ from shadowvol.batch import manifest
 from shadowvol.batch.formats import encoding
 from shadowvol.batch.store import Unit, Written, made, put
 from shadowvol.batch.spec import FrameSpec
+from shadowvol.scene import Scene, SceneError
+from shadowvol.scenefile import load_scene
 
 
 class DatasetStore:
     """A layout's per-frame files under `out`, as the frame made them (their paths are in the
-    frame's record: how many files a frame has depends on its scene); units of one frame."""
+    frame's record: how many files a frame has depends on its scene); units of one frame.
+    `scenes` (key -> path or Scene): the run's, for a layout whose index is of the whole
+    dataset (`Layout.dataset_index`)."""
 
-    def __init__(self, out: Path, layout):
+    def __init__(self, out: Path, layout, scenes: dict | None = None):
         self.out, self.layout = Path(out), layout
+        self.scenes = scenes or {}
+        self._loaded: dict[str, Scene | None] = {}
+
+    def scene_of(self, key: str) -> Scene | None:
+        """The run's scene of `key`, loaded once here; None when it cannot be (its frames
+        failed for that reason and are in no index)."""
+        if key not in self._loaded:
+            source = self.scenes.get(key, key)
+            try:
+                self._loaded[key] = source if isinstance(source, Scene) else load_scene(source)
+            except (SceneError, OSError):
+                self._loaded[key] = None
+        return self._loaded[key]
+
+    def _root(self, spec: FrameSpec) -> Path:
+        return self.out / (spec.job if self.layout.root is None else self.layout.root(spec))
 
     def write(self, unit: Unit, results: Sequence[dict]) -> Written:
         return Written({spec.id: {rel: put(self.out, rel, data)
@@ -50,33 +70,52 @@ class DatasetStore:
         layout = self.layout
         folders: dict[Path, set[str] | None] = {}
         for spec in (spec for unit in units for spec in unit.frames):
-            job = self.out / spec.job
+            job = self._root(spec)
             for sub in layout.folders:
                 folders.setdefault(job / sub, set()).add(encoding.frame_stem(spec))
             for rel in layout.index_files:
                 names = folders.setdefault((job / rel).parent, set())
                 if names is not None:
                     names.add(Path(rel).name)
-            if spec.index == 0:
+            if spec.index == 0 and layout.dataset_index is None:
                 folders.update({job / sub: None for sub in layout.first})
+        if units and layout.dataset_index is not None:   # what the dataset's index writes
+            for rel in layout.first:
+                if Path(rel).suffix:
+                    names = folders.setdefault((self.out / rel).parent, set())
+                    if names is not None:
+                        names.add(Path(rel).name)
+                else:
+                    folders[self.out / rel] = None
         return sum(_remove_parts(folder, stems) for folder, stems in folders.items()
                    if not manifest.outside(self.out, folder))
 
     def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
-        """Rebuild every job's index files from the made frames that every manifest in OUT
-        records for `specs` (made from the same spec, in this layout), in frame order."""
+        """Rebuild every job's index files (or the dataset's, `Layout.dataset_index`) from the
+        made frames that every manifest in OUT records for `specs` (made from the same spec, in
+        this layout), in frame order."""
         records = manifest.read(self.out)
+        if self.layout.dataset_index is not None:
+            done = {spec.id: records[spec.id]["dataset"] for spec in specs
+                    if _made(records.get(spec.id), hashes[spec.id], self.layout.name)}
+            for rel, data in self.layout.dataset_index(specs, done, self.scene_of).items():
+                put(self.out, rel, data)
+            return
         jobs: dict[str, list] = {}
         for spec in specs:
             record = records.get(spec.id)
-            ok = (record is not None and record.get("spec") == hashes[spec.id]
-                  and record.get("format") == self.layout.name and "dataset" in record)
             jobs.setdefault(spec.job, [])
-            if ok:
+            if _made(record, hashes[spec.id], self.layout.name):
                 jobs[spec.job].append((spec, record["dataset"]))
         for job, entries in jobs.items():
             for rel, data in self.layout.index(job, entries).items():
                 put(self.out, rel, data)
+
+
+def _made(record: dict | None, spec_hash: str, layout: str) -> bool:
+    """The record says its frame was made from this spec in this layout."""
+    return (record is not None and record.get("spec") == spec_hash
+            and record.get("format") == layout and "dataset" in record)
 
 
 def _remove_parts(folder: Path, stems: set[str] | None) -> int:
