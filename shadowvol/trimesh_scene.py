@@ -67,7 +67,7 @@ def from_trimesh(scene, width: int | None = None, height: int | None = None,
                         near=cam.z_near if near is None else near)
     except SceneError as exc:
         raise exc.under("camera") from None
-    parts = _scene_parts(scene, [])
+    parts = _scene_parts(scene, [], {})   # no texture read from a file: the visuals trimesh made
     objects = [Object(part.node, part.vertices, part.faces,
                       part_material(Material(), part, False))
                for part in parts if len(part.faces)]
