@@ -124,9 +124,11 @@ def test_a_failed_frame_is_left_out_of_the_index(tmp_path, format):
     summary = batch.run(jobs, tmp_path / "out", format=format, progress=False)
     assert (summary.status, summary.rendered, summary.failed) == (2, 2, 1)
     index = {"nerfstudio": "transforms.json", "bop": "train/000000/scene_gt.json",
-             "coco": "annotations.json"}[format]
+             "coco": "annotations.json", "istd": "istd.json", "soba": "annotations.json",
+             "soba-lights": "annotations.json"}[format]
     made = json.loads((tmp_path / "out" / "cage-turntable" / index).read_text())
     lost = json.loads((tmp_path / "out" / "lost" / index).read_text())
     count = {"nerfstudio": lambda d: len(d["frames"]), "bop": len,
-             "coco": lambda d: len(d["images"])}[format]
+             "coco": lambda d: len(d["images"]), "istd": lambda d: len(d["frames"]),
+             "soba": lambda d: len(d["images"]), "soba-lights": lambda d: len(d["images"])}[format]
     assert (count(made), count(lost)) == (2, 0)
