@@ -1,4 +1,4 @@
-"""The dataset layouts (`--format nerfstudio|bop|coco`) are made like the other formats: a run
+"""The dataset layouts (`--format nerfstudio|bop|coco|istd|soba|soba-lights`) are made like the other formats: a run
 killed with SIGKILL and rerun, N shards, a process pool and Ray all end with the bytes of one
 uninterrupted run, index files included."""
 
