@@ -16,7 +16,8 @@ from builders import ROOT, SCENES, job_lines, output_files, write_jobs
 from PIL import Image
 
 from shadowvol import batch
-from shadowvol.batch.formats.istd import mattes, shadowless
+from shadowvol.batch.formats.istd import check_pair, mattes, shadowless
+from shadowvol.checks import SceneError
 from shadowvol.scenefile import load_scene
 
 pytestmark = pytest.mark.gl
@@ -102,6 +103,22 @@ def test_mattes_round_up_and_refuse_inconsistent_counts():
     assert mattes(lit, facing).tolist() == [[[0, 0, 255, 128, 255, 1, 255]]]
     with pytest.raises(ValueError, match="lit_count exceeds facing_count"):
         mattes(np.array([[[2]]]), np.array([[[1]]]))
+
+
+def test_a_pair_that_breaks_the_rule_is_refused():
+    free = np.full((2, 3, 3), 0.5, np.float32)
+    mask = np.array([[0, 255, 0], [0, 0, 7]], np.uint8)
+    shadowed = free.copy()
+    shadowed[0, 1] = shadowed[1, 2] = 0.25
+    check_pair(shadowed, free, mask)   # darker inside the mask: fine
+    drift = shadowed.copy()
+    drift[1, 0, 2] = np.nextafter(np.float32(0.5), np.float32(0))   # one ulp outside
+    with pytest.raises(SceneError, match="max_depth: .* at 1 pixels outside"):
+        check_pair(drift, free, mask)
+    brighter = shadowed.copy()
+    brighter[0, 1] = 0.75
+    with pytest.raises(ValueError, match="brighter"):
+        check_pair(brighter, free, mask)
 
 
 def _float_pair(render, scene):

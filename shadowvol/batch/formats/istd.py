@@ -70,19 +70,19 @@ def lit_counts(arrays: dict) -> np.ndarray:
     return np.asarray(arrays["lit"], np.uint16)
 
 
-def check_pair(shadowed: np.ndarray, free: np.ndarray, mask: np.ndarray, where: str) -> None:
+def check_pair(shadowed: np.ndarray, free: np.ndarray, mask: np.ndarray) -> None:
     """Refuse a triplet whose images differ outside `mask` (H, W) or are darker shadow-free
     inside it; `shadowed`, `free` (H, W, 3) float."""
     outside = (mask == 0)[..., None]
     differ = outside & (shadowed != free)
     if differ.any():
         count = int(differ.any(-1).sum())
-        raise SceneError("max_depth", f"{where}: the image differs from its shadow-free twin at "
+        raise SceneError("max_depth", f"the image differs from its shadow-free twin at "
                          f"{count} pixels outside the shadow mask (a mirror or glass shows a "
                          f"shadow); --format istd needs the direct light alone: max_depth 0")
     if (shadowed > free).any():
-        raise ValueError(f"{where}: the shadow image is brighter than the shadow-free one "
-                         "inside the mask")
+        raise ValueError("the shadow image is brighter than the shadow-free one inside the "
+                         "mask")
 
 
 def frame(spec: FrameSpec, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
@@ -91,7 +91,7 @@ def frame(spec: FrameSpec, arrays: dict, scene) -> tuple[dict[str, bytes], dict]
     mask = per_light.max(axis=0) if len(per_light) else \
         np.zeros((scene.height, scene.width), np.uint8)
     shadowed, free = arrays["image"], arrays["shadow_free"]
-    check_pair(shadowed, free, mask, spec.id)
+    check_pair(shadowed, free, mask)
     name = f"{stem}.png"
     files = {f"{job}/A/{name}": png_bytes(encode_srgb(shadowed)),
              f"{job}/B/{name}": _grey_png(mask),
