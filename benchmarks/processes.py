@@ -65,6 +65,10 @@ EXTRAS = (
     ("bench_batch.py", [],
      "shadowvol batch on the 36-view turntable of the shared meshes: 1 worker, 2 workers, 2 "
      "shards, Ray with 2 actors, and the machinery's overhead (issue: datasets at scale)"),
+    ("bench_soba.py", ["--json", "{json}"],
+     "36,000 exact instance-shadow pairs (--format soba-lights) from the shared meshes at random "
+     "poses, with the batch's eye and light jitter: pairs/s and peak RSS on one worker "
+     "(issue: shadow truth for learning)"),
     ("bench_outlook.py", ["--json", "{json}"],
      "path tracing Mrays/s against raw Embree casts, radiosity at ~1k/4k/16k patches (issue: "
      "the lecture's outlook)"),

@@ -5,8 +5,9 @@ where the files go.  A new layout is a row here (and, for a dataset, its module 
 
 files       OUT/<job>/<frame>.<suffix>, one file per output (`store.FileStore`)
 webdataset  OUT/shard-NNNNNN.tar of --samples-per-tar frames (`store.TarStore`)
-nerfstudio, coco   OUT/<job>/ in that dataset's layout, bop OUT/train/<job's place>/ and
-            OUT/models/ (`formats.DatasetStore`, docs/formats.md)
+nerfstudio, coco, istd, soba, soba-lights   OUT/<job>/ in that dataset's layout (COCO's merged
+            index OUT/annotations.json too), bop OUT/train/<job's place>/ and OUT/models/
+            (`formats.DatasetStore`, docs/formats.md)
 
 Frames of the plain layouts (files, webdataset) are the job's outputs and carry no layout in
 their spec (so their spec hashes are those of the runs before layouts had names); a dataset
@@ -20,7 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 
-from shadowvol.batch.formats import DatasetStore, bop, coco, nerfstudio
+from shadowvol.batch.formats import DatasetStore, bop, coco, istd, nerfstudio, soba
 from shadowvol.batch.formats.arrays import frame_arrays
 from shadowvol.batch.outputs import OUTPUTS
 from shadowvol.batch.spec import FrameSpec
@@ -89,6 +90,12 @@ def _dataset(name: str, module, casters: bool, alone: bool, first: tuple = ()) -
                   root=getattr(module, "root", None))
 
 
+def _own(name: str, module, arrays: Callable, encode: Callable) -> Layout:
+    """A dataset layout that renders its own arrays (the shadow-free twin, the casters)."""
+    return Layout(name, DatasetStore, arrays, encode, tag=name, index=module.index,
+                  folders=module.FOLDERS, index_files=module.INDEX)
+
+
 FILES = Layout("files", FileStore, _outputs_arrays, _outputs_encode)
 WEBDATASET = Layout("webdataset", TarStore, _outputs_arrays, _outputs_encode, shards=True)
 
@@ -98,6 +105,9 @@ LAYOUTS: dict[str, Layout] = {layout.name: layout for layout in (
     _dataset("nerfstudio", nerfstudio, casters=False, alone=False),
     _dataset("bop", bop, casters=False, alone=True, first=bop.FIRST),
     _dataset("coco", coco, casters=True, alone=False, first=coco.FIRST),
+    _own("istd", istd, istd.arrays, istd.frame),
+    _own("soba", soba, soba.arrays, partial(soba.frame, per_light=False)),
+    _own("soba-lights", soba, soba.arrays, partial(soba.frame, per_light=True)),
 )}
 FORMATS = tuple(LAYOUTS)           # the names --format takes
 DATASETS = tuple(name for name, layout in LAYOUTS.items() if layout.tag)

@@ -1,4 +1,4 @@
-"""The dataset layouts (`--format nerfstudio|bop|coco`) are made like the other formats: a run
+"""The dataset layouts (`--format nerfstudio|bop|coco|istd|soba|soba-lights`) are made like the other formats: a run
 killed with SIGKILL and rerun, N shards, a process pool and Ray all end with the bytes of one
 uninterrupted run, index files included."""
 
@@ -126,10 +126,13 @@ def test_a_failed_frame_is_left_out_of_the_index(tmp_path, format):
     # the index of each job: nerfstudio's and COCO's in its folder, BOP's in its scene folder
     # (the job's place in the job file)
     made, lost = ({"nerfstudio": f"{job}/transforms.json", "bop": f"train/{place}/scene_gt.json",
-                   "coco": f"{job}/annotations.json"}[format]
+                   "coco": f"{job}/annotations.json", "istd": f"{job}/istd.json",
+                   "soba": f"{job}/annotations.json",
+                   "soba-lights": f"{job}/annotations.json"}[format]
                   for job, place in (("cage-turntable", "000000"), ("lost", "000001")))
     made = json.loads((tmp_path / "out" / made).read_text())
     lost = json.loads((tmp_path / "out" / lost).read_text())
     count = {"nerfstudio": lambda d: len(d["frames"]), "bop": len,
-             "coco": lambda d: len(d["images"])}[format]
+             "coco": lambda d: len(d["images"]), "istd": lambda d: len(d["frames"]),
+             "soba": lambda d: len(d["images"]), "soba-lights": lambda d: len(d["images"])}[format]
     assert (count(made), count(lost)) == (2, 0)

@@ -49,7 +49,8 @@ def test_frame_specs_are_frozen_and_hash_as_before():
 
 def test_layouts_are_frozen_rows_with_one_store_interface():
     assert tuple(layouts.LAYOUTS) == layouts.FORMATS == ("files", "webdataset", "nerfstudio",
-                                                          "bop", "coco")
+                                                          "bop", "coco", "istd", "soba",
+                                                          "soba-lights")
     parser = add_parser(argparse.ArgumentParser().add_subparsers())
     choices = next(a.choices for a in parser._actions if "--format" in a.option_strings)
     assert tuple(choices) == layouts.FORMATS

@@ -27,7 +27,7 @@ from shadowvol.scene import SceneError
 
 pytestmark = pytest.mark.gl
 
-LAYOUTS = ("files", "webdataset", "nerfstudio", "bop", "coco")
+LAYOUTS = ("files", "webdataset", "nerfstudio", "bop", "coco", "istd", "soba", "soba-lights")
 MANIFEST = "manifest.jsonl"
 
 

@@ -1,10 +1,10 @@
-"""The dataset layouts training code loads: `shadowvol batch --format nerfstudio|bop|coco`
-(docs/formats.md).  Each job is one dataset folder `OUT/<job>/`.
+"""The dataset layouts training code loads: `shadowvol batch --format
+nerfstudio|bop|coco|istd|soba|soba-lights` (docs/formats.md).  Each job is one dataset folder `OUT/<job>/`.
 
 A layout's module has `frame(spec, arrays, scene) -> ({path: bytes}, record)`, the frame's
 files (paths relative to OUT) and the JSON its index entries are made from, kept in the frame's
 manifest line (`dataset`); and `index(job, entries) -> {path: bytes}`, the index files
-(transforms.json, scene_*.json, annotations.json) of a job from its (spec, record) pairs in
+(transforms.json, scene_*.json, annotations.json, istd.json) of a job from its (spec, record) pairs in
 frame order; what its frames need beside the image, masks, depth and ids (`arrays.frame_arrays`)
 and where its files go are fields of its row in `batch.layouts`.  The index is rebuilt at the
 end of every run from every manifest in OUT, never appended to, so a killed and resumed run, or
