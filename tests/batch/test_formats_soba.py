@@ -2,7 +2,8 @@
 is pycocotools' COCO loading `annotations` and, beside it, `association_anno` under the
 categories of `association`): every object mask is its `object_id` pixels, every shadow mask
 its `casters` bit (merged over the lights, or per light), every association the union of its
-pair; objects with no visible shadow and background objects (`cast_shadows` false) get none."""
+pair; objects with no visible shadow, objects that cast none and background objects (category
+"background") get none."""
 
 from __future__ import annotations
 
@@ -18,7 +19,8 @@ from builders import ROOT, job_lines, output_files, write_jobs
 
 from shadowvol import batch
 from shadowvol.primitives import box, plane
-from shadowvol.scene import Camera, PointLight, Scene
+from shadowvol.scene import BACKGROUND, Camera, PointLight, Scene
+from shadowvol.scenefile import load_scene
 
 # pycocotools' own decode warns under numpy 2 (its __array__ has no copy keyword)
 pytestmark = [pytest.mark.gl,
@@ -117,7 +119,10 @@ def made(tmp_path_factory):
 @pytest.mark.parametrize("job", ["cage-turntable", "cage-traced"])
 def test_shadows_are_the_casters_bits_merged_or_per_light(made, job):
     _, folder = made
-    casts = [True] * 4   # the cage scene: floor, two walls, cage
+    # the cage scene: floor, two walls (planes: the background by default), cage
+    casts = [o.cast_shadows and o.label != BACKGROUND
+             for o in load_scene(ROOT / "scenes" / "cage.toml").objects]
+    assert casts.count(True) >= 1
     merged = _check(folder / "soba" / job / "annotations.json", folder / "files" / job, casts,
                     per_light=False)
     apart = _check(folder / "soba-lights" / job / "annotations.json", folder / "files" / job,
@@ -127,33 +132,37 @@ def test_shadows_are_the_casters_bits_merged_or_per_light(made, job):
         assert apart > merged
 
 
-def _pillar_scene(background_casts: bool) -> Scene:
+def _pillar_scene(background_casts: bool, category: str | None = None) -> Scene:
     floor = replace(plane("floor", size=[8.0, 8.0]), cast_shadows=False)
     pillar = replace(box("pillar", center=(-1.0, 0.75, -1.0), size=(0.3, 1.5, 0.3)),
-                     cast_shadows=background_casts)
+                     cast_shadows=background_casts, category=category)
     cube = box("cube", center=(1.0, 0.25, 0.0), size=(0.5, 0.5, 0.5))
     camera = Camera(eye=[0.0, 4.0, 5.0], target=[0.0, 0.0, 0.0])
     return Scene(camera=camera, objects=(floor, pillar, cube),
                  lights=(PointLight(position=[0.0, 3.0, 0.5]),), width=48, height=36)
 
 
-@pytest.mark.parametrize("background_casts", [True, False])
+@pytest.mark.parametrize("background_casts, category", [(True, None), (False, None),
+                                                          (True, BACKGROUND)])
 def test_background_objects_and_objects_without_a_visible_shadow_get_no_pair(
-        tmp_path, background_casts):
-    scene = _pillar_scene(background_casts)
+        tmp_path, background_casts, category):
+    """The pillar casting, not casting, and casting but of category "background" (the stage:
+    never an instance, its shadow not annotated)."""
+    scene = _pillar_scene(background_casts, category)
     job = {"name": "pillar", "scene": scene, "cameras": [{"eye": [0.0, 4.0, 5.0],
                                                          "target": [0.0, 0.0, 0.0]}]}
     assert batch.run([job], tmp_path / "soba", format="soba", progress=False).status == 0
     truth = dict(job, outputs=["object_id", "casters"])
     assert batch.run([truth], tmp_path / "files", progress=False).status == 0
-    casts = [obj.cast_shadows for obj in scene.objects]
+    casts = [obj.cast_shadows and obj.label != BACKGROUND for obj in scene.objects]
     pairs = _check(tmp_path / "soba" / "pillar" / "annotations.json",
                    tmp_path / "files" / "pillar", casts, per_light=False)
     data = json.loads((tmp_path / "soba" / "pillar" / "annotations.json").read_text())
     paired = {a["object_id"] for a in data["annotations"]}
     assert 1 not in paired   # the floor casts nothing
-    assert (2 in paired) == background_casts and 3 in paired
-    assert pairs == 1 + background_casts
+    pillar = background_casts and category is None
+    assert (2 in paired) == pillar and 3 in paired
+    assert pairs == 1 + pillar
 
 
 def test_the_cli_writes_both_layouts_and_a_rerun_changes_nothing(made, tmp_path):

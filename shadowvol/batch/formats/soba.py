@@ -16,9 +16,10 @@ blocks some facing sample of the light; pixels on the object itself included): `
 the lights (the bit of any light; one pair per object, `light` lists the lights whose bit is
 set somewhere in it), `soba-lights` keeps them apart (one pair per object and light, `light`
 [i], the object's annotation repeated in each).  A pair needs both halves in view: an object
-with no visible shadow, or a shadow whose object is out of view, has none.  Objects whose
-`cast_shadows` is false are the background (a floor, a wall): they cast nothing, so no shadow
-of theirs is in the image and none is annotated, and they get no pair.  Segmentations are
+with no visible shadow, or a shadow whose object is out of view, has none.  The background (an
+object of category "background", as a floor plane is by default: docs/formats.md) is never an
+instance and gets no pair, nor does an object whose `cast_shadows` is false (it casts nothing,
+so no shadow of its is in the image).  Segmentations are
 compressed RLE, as pycocotools' `mask.encode` writes them; iscrowd 0.
 """
 
@@ -31,6 +32,7 @@ import numpy as np
 from shadowvol.batch.formats import encoding
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.io import encode_srgb, png_bytes
+from shadowvol.scene import BACKGROUND
 
 FOLDERS = ("images",)
 INDEX = ("annotations.json",)
@@ -63,7 +65,7 @@ def pairs(object_id: np.ndarray, casters: np.ndarray, objects, per_light: bool):
     found = []
     for j, obj in enumerate(objects):
         seen = object_id == j + 1
-        if not obj.cast_shadows or not seen.any():
+        if not obj.cast_shadows or obj.label == BACKGROUND or not seen.any():
             continue
         bits = caster_bit(casters, j)   # (L, H, W)
         shadows = [([i], bits[i]) for i in range(len(bits))] if per_light else \
