@@ -49,11 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    try:
-        args = build_parser().parse_args(argv)
-    except KeyboardInterrupt as exc:
-        return status.report(exc)
-    return status.run(args.func, args)
+    return status.main(build_parser, argv)
 
 
 if __name__ == "__main__":

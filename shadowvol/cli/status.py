@@ -65,3 +65,13 @@ def run(command, args) -> int:
             return code
         except (Exception, KeyboardInterrupt, signals.Terminated) as exc:  # noqa: BLE001
             return report(exc)  # report re-raises what has no status (a bug)
+
+
+def main(build_parser, argv) -> int:
+    """A tool's `main`: parse `argv` with the parser `build_parser()` makes and `run` the
+    command it names (an interrupt while parsing is reported too)."""
+    try:
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt as exc:
+        return report(exc)
+    return run(args.func, args)
