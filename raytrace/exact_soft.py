@@ -1,0 +1,402 @@
+"""Exact visibility of polygonal and disk lights: the visible part of the light, computed.
+
+For light i and a pixel's visible point p (float64: the pixel-centre ray met with its visible
+triangle's plane, as `depth` is), the visible region is the light's shape, cut to where p's
+camera-facing normal n sees it (n . (x - p) > 0), less the union of every triangle's shadow
+on it: the triangle cut to the pyramid from p over the light (its side planes and the light's
+plane) and carried from p onto the light's plane.  Both sides of a triangle occlude; only p's
+own triangle and those coplanar with it (COPLANAR_RELATIVE) are left out.  Then
+
+    visibility_exact = area(visible) / area(light)
+    irradiance_exact = Lambert's formula over the visible region's rings (unit radiance),
+
+0 for both where p is not on the light's emitting side.  docs/CONVENTIONS.md ("Exact soft
+shadows") says what is exact at a contact and at a tie.
+
+Candidates come from a conservative query, never from sampled rays: clusters of triangles and
+then triangles whose boxes meet the box of the pyramid, then the cut itself.  A closed,
+convex, consistently wound object (a box, a sphere's tessellation) shadows p from outside as
+one convex polygon, the hull of its cut triangles' shadows (the shadow of a convex body from a
+point outside it is convex), and not at all from its own outside; every other object's
+triangles are united one by one.  The polygon booleans are GEOS's (shapely >= 2, the optional
+extra `exact`); the measures are `raytrace.polygons`'.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+import numpy as np
+
+from shadowvol.errors import require
+from shadowvol.planes import default_plane_axes
+from shadowvol.scene import AreaLight, DirectionalLight, Scene, SceneError
+
+from . import polygons
+from .backends import for_each_tile
+from .camera import RayGrid
+from .masks import MASK_TILE_RAYS, MaskTracer, _primary_hits, scene_backend, shadow_masks
+
+EXACT_OUTPUTS = ("visibility_exact", "irradiance_exact")
+
+# A triangle is coplanar with p's own when its three corners lie within this much of the
+# largest corner coordinate (the frame's, from the eye) of the own triangle's plane: the
+# corners are float32 (the frame), each off its float64 position by up to 2^-24 of its
+# coordinate, so two triangles of one world plane can be 2 * sqrt(3) * 2^-24 apart; 2^-20 is
+# four times that.  Left in, such a triangle a rounding above p would cut the whole pyramid.
+COPLANAR_RELATIVE = 2.0 ** -20
+# An object is convex when no corner lies farther than this (of its largest coordinate) outside
+# any of its face planes, by the same float32 argument; and p is outside it when it lies
+# farther than this outside one of them.
+CONVEX_RELATIVE = 2.0 ** -20
+# Objects with more faces than this are not tested for convexity (faces x corners work).
+CONVEX_TEST_FACES = 4096
+# Triangles per cluster of the candidate query.
+CLUSTER = 16
+# Pixels per chunk (each chunk's candidate arrays are pixels x clusters).
+CHUNK_PIXELS = 2048
+
+
+class ExactVisibility(NamedTuple):
+    """visibility (L, H, W) float64 and irradiance (L, H, W) float64 (see the module)."""
+
+    visibility: np.ndarray
+    irradiance: np.ndarray
+
+
+class _Light(NamedTuple):
+    """An area light in the frame: centre (3,), unit emitting normal (3,), axes (2, 3) (u, v),
+    hull (k, 2) its convex outline, counter-clockwise (the pyramid's base), outline (m, 2)
+    its own (None: the hull), radius (a disk, else None), area."""
+
+    center: np.ndarray
+    normal: np.ndarray
+    axes: np.ndarray
+    hull: np.ndarray
+    outline: np.ndarray | None
+    radius: float | None
+    area: float
+
+
+def _frame_light(light: AreaLight, origin: np.ndarray, key: str) -> _Light:
+    if light.shape == "sphere":
+        raise SceneError(f"{key}.type", "a sphere light has no exact visibility (the part of "
+                                        "a sphere's surface seen past occluders is bounded by "
+                                        "small-circle arcs; not computed); use rect, disk or "
+                                        "polygon, or the sampled lit_count")
+    center = light.center - origin
+    u, v = default_plane_axes(light.normal)
+    axes = np.stack([u, v])
+    if light.shape == "rect":
+        w, h = light.size / 2
+        hull = np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
+        return _Light(center, light.normal, axes, hull, None, None, float(light.size.prod()))
+    if light.shape == "disk":
+        r = light.radius
+        hull = np.array([[-r, -r], [r, -r], [r, r], [-r, r]])
+        return _Light(center, light.normal, axes, hull, None, r, float(np.pi * r * r))
+    shapely = _shapely()
+    outline = (light.vertices - light.center) @ axes.T
+    ring = shapely.Polygon(outline)
+    hull = np.array(ring.convex_hull.exterior.coords)[:-1]
+    if shapely.is_ccw(shapely.LinearRing(hull)) is False:
+        hull = hull[::-1]
+    return _Light(center, light.normal, axes, hull, outline, None, float(ring.area))
+
+
+def _shapely():
+    return require("shapely", "exact visibility (visibility_exact, irradiance_exact)",
+                   extra="exact")
+
+
+class _Objects(NamedTuple):
+    """Per scene triangle: its object (M,) and whether that object is closed and convex
+    (convex (M,) bool), with its outward face normals (M, 3) (0 for the others); and the
+    candidate clusters: members (C, CLUSTER) int64 (−1 pads), lo, hi (C, 3) boxes."""
+
+    object: np.ndarray
+    convex: np.ndarray
+    outward: np.ndarray
+    members: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+
+
+def _objects(corners: np.ndarray, ids: np.ndarray) -> _Objects:
+    M = len(corners)
+    convex = np.zeros(M, bool)
+    outward = np.zeros((M, 3))
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    members = []
+    for j in np.unique(ids):
+        tris = np.flatnonzero(ids == j)
+        if _closed(corners[tris]) and len(tris) <= CONVEX_TEST_FACES:
+            c = corners[tris]
+            sign = 1.0 if np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])).sum() > 0 \
+                else -1.0
+            n = normals[tris] * sign
+            points = c.reshape(-1, 3)
+            off = n @ points.T - (n * c[:, 0]).sum(axis=1, keepdims=True)
+            if off.max() <= CONVEX_RELATIVE * np.abs(points).max() and (length[tris] > 0).all():
+                convex[tris] = True
+                outward[tris] = n
+        # clusters of consecutive triangles along the object's longest axis
+        centroid = corners[tris].mean(axis=1)
+        order = tris[np.argsort(centroid[:, np.ptp(centroid, axis=0).argmax()], kind="stable")]
+        pad = -len(order) % CLUSTER
+        members.append(np.concatenate([order, np.full(pad, -1)]).reshape(-1, CLUSTER))
+    members = np.concatenate(members)
+    box = corners[np.maximum(members, 0)]                      # (C, CLUSTER, 3, 3)
+    use = (members >= 0)[..., None, None]
+    lo = np.where(use, box, np.inf).min(axis=(1, 2))
+    hi = np.where(use, box, -np.inf).max(axis=(1, 2))
+    return _Objects(ids.astype(np.int64), convex, outward, members, lo, hi)
+
+
+def _closed(corners: np.ndarray) -> bool:
+    """Is every edge of these triangles (M, 3, 3) met exactly once each way (a closed,
+    consistently wound surface; corners welded by their coordinates)?"""
+    _, vid = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+    vid = vid.reshape(-1, 3)
+    edges = np.concatenate([vid[:, [0, 1]], vid[:, [1, 2]], vid[:, [2, 0]]])
+    if (edges[:, 0] == edges[:, 1]).any():
+        return False
+    fwd = np.unique(edges, axis=0, return_counts=True)
+    if (fwd[1] != 1).any():
+        return False
+    back = np.unique(edges[:, ::-1], axis=0)
+    return len(back) == len(fwd[0]) and (back == fwd[0]).all()
+
+
+def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree") -> ExactVisibility:
+    """`visibility_exact` and `irradiance_exact` of every light of `scene` (module docstring):
+    (L, H, W) float64 each.  A point, spot or directional light: 1 where `lit`, and
+    irradiance n . l there (a unit light without fall-off, as the renderers shade one).
+    SceneError for a sphere light."""
+    mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
+    tracer, triangles, origin = mt
+    H, W, L = scene.height, scene.width, len(scene.lights)
+    lights = [None if not isinstance(lt, AreaLight) else
+              _frame_light(lt, origin, f"lights[{i}]") for i, lt in enumerate(scene.lights)]
+    shapely = _shapely() if any(lights) else None
+    vis = np.zeros((L, H * W))
+    irr = np.zeros((L, H * W))
+    corners = tracer.vertices[tracer.faces].astype(np.float64)
+    objects = _objects(corners, scene.triangles()[2]) if any(lights) else None
+    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
+                                 target=scene.camera.target - origin)
+    grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
+    rows_per_tile = max(1, MASK_TILE_RAYS // W)
+    tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
+    hard = [i for i, lt in enumerate(lights) if lt is None]
+    lit = shadow_masks(scene.replace(lights=tuple(scene.lights[i] for i in hard)), mt)[0] \
+        if hard else None
+
+    def trace_tile(rows: slice) -> None:
+        _, index, hit = _primary_hits(tracer, triangles, grids, rows)
+        if hit is None:
+            return
+        pixel = rows.start * W + index
+        p = hit.point64.T
+        normal = (hit.normal * hit.side).T
+        for i, light in enumerate(lights):
+            if light is None:
+                k = hard.index(i)
+                on = lit[k].reshape(-1)[pixel]
+                vis[i, pixel] = on
+                irr[i, pixel] = on * _hard_cosine(scene.lights[i], p, normal, origin)
+                continue
+            for at in range(0, len(pixel), CHUNK_PIXELS):
+                part = slice(at, at + CHUNK_PIXELS)
+                v, e = _area_light(shapely, light, objects, corners, p[part], normal[part],
+                                   hit.tri[part])
+                vis[i, pixel[part]], irr[i, pixel[part]] = v, e
+
+    for_each_tile(trace_tile, tiles, tracer)
+    return ExactVisibility(vis.reshape(L, H, W), irr.reshape(L, H, W))
+
+
+def _hard_cosine(light, p: np.ndarray, normal: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """(n,) max(n . l, 0), l the unit direction from p toward a hard light."""
+    if isinstance(light, DirectionalLight):
+        to = np.broadcast_to(-light.direction, p.shape)
+    else:
+        to = light.position - origin - p
+        to = to / np.linalg.norm(to, axis=1, keepdims=True)
+    return np.maximum((normal * to).sum(axis=1), 0.0)
+
+
+def _area_light(shapely, light: _Light, objects: _Objects, corners: np.ndarray,
+                p: np.ndarray, normal: np.ndarray, own: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) visibility and irradiance of `light` at points p (n, 3) with camera-facing unit
+    normals (n, 3) on triangles own (n,)."""
+    n = len(p)
+    height = (p - light.center) @ light.normal
+    front = np.flatnonzero(height > 0)
+    out_v, out_e = np.zeros(n), np.zeros(n)
+    if len(front) == 0:
+        return out_v, out_e
+    p, normal, own = p[front], normal[front], own[front]
+    base = light.center + light.hull @ light.axes                 # (k, 3)
+    pieces = _shadows(shapely, light, objects, corners, p, normal, own, base)
+    # the light cut to p's side: its hull's box cut by n . (x - p) > 0, then the outline
+    box = np.array([light.hull.min(axis=0), [light.hull[:, 0].max(), light.hull[:, 1].min()],
+                    light.hull.max(axis=0), [light.hull[:, 0].min(), light.hull[:, 1].max()]])
+    flat = np.repeat(np.c_[box, np.zeros(4)][None], len(p), axis=0)
+    # n . (x - p) at the box's corners x = centre + a u + b v
+    dist = ((light.center - p) * normal).sum(axis=1)[:, None] + (box @ (light.axes @ normal.T)).T
+    cut, count = polygons.clip(flat, np.full(len(p), 4), dist)
+    seen = _polygons(shapely, cut[..., :2], count)
+    if light.outline is not None:  # a polygon light: its own outline (a rect, a disk: the box)
+        seen = shapely.intersection(seen, shapely.Polygon(light.outline))
+    has = np.flatnonzero(pieces != None)  # noqa: E711 (an object array)
+    if len(has):
+        seen[has] = shapely.difference(seen[has], pieces[has])
+    area, irr = _measure(shapely, light, seen, p, normal)
+    out_v[front] = area / light.area
+    out_e[front] = irr
+    return out_v, out_e
+
+
+def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """(n,) object array of shapely polygons from corners flat (n, k, 2), count (n,) (an empty
+    polygon where fewer than 3)."""
+    out = np.full(len(flat), shapely.Polygon(), object)
+    ok = np.flatnonzero(count >= 3)
+    if len(ok):
+        mask = np.arange(flat.shape[1])[None] < count[ok, None]
+        coords = flat[ok][mask]
+        which = np.repeat(np.arange(len(ok)), count[ok])
+        out[ok] = shapely.polygons(shapely.linearrings(coords, indices=which))
+    return out
+
+
+def _shadows(shapely, light: _Light, objects: _Objects, corners: np.ndarray, p: np.ndarray,
+             normal: np.ndarray, own: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """(n,) object array: the union of every triangle's shadow on the light's plane seen from
+    each p (None where none falls inside the pyramid)."""
+    n = len(p)
+    lo = np.minimum(p, base.min(axis=0))
+    hi = np.maximum(p, base.max(axis=0))
+    meet = (objects.lo[None] <= hi[:, None]).all(-1) & (objects.hi[None] >= lo[:, None]).all(-1)
+    pix, clu = np.nonzero(meet)
+    tri = objects.members[clu]                                     # (q, CLUSTER)
+    pix = np.repeat(pix, CLUSTER)
+    tri = tri.reshape(-1)
+    keep = tri >= 0
+    pix, tri = pix[keep], tri[keep]
+    box = corners[tri]
+    keep = (box.min(axis=1) <= hi[pix]).all(-1) & (box.max(axis=1) >= lo[pix]).all(-1)
+    keep &= tri != own[pix]
+    pix, tri = pix[keep], tri[keep]
+    # coplanar with p's own triangle
+    own_c = corners[own[pix]]
+    own_n = np.cross(own_c[:, 1] - own_c[:, 0], own_c[:, 2] - own_c[:, 0])
+    own_n /= np.maximum(np.linalg.norm(own_n, axis=1, keepdims=True), 1e-300)
+    c = corners[tri]
+    off = np.abs(np.einsum("qkj,qj->qk", c - own_c[:, :1], own_n)).max(axis=1)
+    scale = np.maximum(np.abs(own_c).max(axis=(1, 2)), np.abs(c).max(axis=(1, 2)))
+    keep = off > COPLANAR_RELATIVE * scale
+    # a convex object does not shadow p from its own outside
+    mine = objects.convex[tri] & (objects.object[tri] == objects.object[own[pix]])
+    outside = (objects.outward[own[pix]] * normal[pix]).sum(axis=1) > 0
+    keep &= ~(mine & outside)
+    pix, tri = pix[keep], tri[keep]
+    if len(pix) == 0:
+        return np.full(n, None, object)
+    # cut to the pyramid: the light's plane, then each side plane through p
+    poly = corners[tri].copy()
+    count = np.full(len(tri), 3)
+    planes = [lambda q, pp: (q - light.center) @ light.normal]
+    for j in range(len(base)):
+        a, b = base[j], base[(j + 1) % len(base)]
+        planes.append(lambda q, pp, a=a, b=b: _side(q, pp, a, b, light.center))
+    for plane in planes:
+        d = plane(poly, p[pix][:, None])
+        poly, count = polygons.clip(poly, count, d)
+        keep = count >= 3
+        poly, count, pix, tri = poly[keep], count[keep], pix[keep], tri[keep]
+    if len(pix) == 0:
+        return np.full(n, None, object)
+    flat = polygons.project(poly, p[pix], light.center, light.normal, light.axes)
+    # a convex object seen from outside: one hull per (pixel, object)
+    obj = objects.object[tri]
+    hullable = objects.convex[tri] & _outside(objects, corners, p, pix, tri)
+    shapes = []
+    owner = []
+    if hullable.any():
+        h = np.flatnonzero(hullable)
+        key = pix[h] * (objects.object.max() + 1) + obj[h]
+        group, which = np.unique(key, return_inverse=True)
+        mask = np.arange(flat.shape[1])[None] < count[h, None]
+        points = flat[h][mask]
+        pts_group = np.repeat(which, count[h])
+        hulls = shapely.convex_hull(shapely.multipoints(points, indices=pts_group))
+        shapes.append(hulls)
+        owner.append(group // (objects.object.max() + 1))
+    rest = np.flatnonzero(~hullable)
+    if len(rest):
+        shapes.append(_polygons(shapely, flat[rest], count[rest]))
+        owner.append(pix[rest])
+    shapes = np.concatenate(shapes)
+    owner = np.concatenate(owner)
+    order = np.argsort(owner, kind="stable")
+    shapes, owner = shapes[order], owner[order]
+    out = np.full(n, None, object)
+    starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+    ends = np.r_[starts[1:], len(owner)]
+    single = ends - starts == 1
+    out[owner[starts[single]]] = shapes[starts[single]]
+    for s, e in zip(starts[~single], ends[~single]):
+        out[owner[s]] = shapely.union_all(shapes[s:e])
+    return out
+
+
+def _side(q: np.ndarray, p: np.ndarray, a: np.ndarray, b: np.ndarray, inner: np.ndarray
+          ) -> np.ndarray:
+    """Signed distance-like value of points q (m, k, 3) from the plane through p (m, 1, 3), a
+    and b, positive on the side of `inner`."""
+    m = np.cross(a - p[:, 0], b - p[:, 0])                         # (m, 3)
+    sign = np.sign(((inner - p[:, 0]) * m).sum(axis=1))
+    return np.einsum("mkj,mj->mk", q - p, m * sign[:, None])
+
+
+def _outside(objects: _Objects, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
+             tri: np.ndarray) -> np.ndarray:
+    """(q,) bool: p[pix] lies outside the convex object of tri (q,) by more than
+    CONVEX_RELATIVE: beyond one of its face planes (False for a non-convex object)."""
+    out = np.zeros(len(pix), bool)
+    for j in np.unique(objects.object[tri[objects.convex[tri]]]):
+        faces = np.flatnonzero(objects.object == j)
+        at = np.flatnonzero((objects.object[tri] == j) & objects.convex[tri])
+        who, inv = np.unique(pix[at], return_inverse=True)
+        n = objects.outward[faces]
+        c = corners[faces][:, 0]
+        off = p[who] @ n.T - (n * c).sum(axis=1)
+        scale = np.maximum(np.abs(p[who]).max(axis=1), np.abs(corners[faces]).max())
+        out[at] = (off.max(axis=1) > CONVEX_RELATIVE * scale)[inv]
+    return out
+
+
+def _measure(shapely, light: _Light, seen: np.ndarray, p: np.ndarray, normal: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) area and irradiance of the regions `seen` (n,) seen from p (n, 3) with normals."""
+    parts, part_of = shapely.get_parts(seen, return_index=True)
+    rings, ring_of = shapely.get_rings(parts, return_index=True)
+    n = len(seen)
+    if len(rings) == 0:
+        return np.zeros(n), np.zeros(n)
+    # the first ring of each part is its outside, the others its holes
+    sign = np.where(np.r_[True, ring_of[1:] != ring_of[:-1]], 1.0, -1.0)
+    coords, which = shapely.get_coordinates(rings, return_index=True)
+    owner = part_of[ring_of]
+    args = (p[owner], normal[owner], light.center, light.axes)
+    if light.radius is None:
+        area, irr = polygons.ring_measures(coords, which, len(rings), *args)
+    else:
+        area, irr = polygons.disk_ring_measures(coords, which, len(rings), light.radius, *args)
+    return (np.bincount(owner, sign * area, n), np.bincount(owner, sign * irr, n))
