@@ -113,7 +113,8 @@ def _shapely():
 class _Objects(NamedTuple):
     """Per scene triangle: its object (M,) and whether that object is closed and convex
     (convex (M,) bool), with its outward face normals (M, 3) (0 for the others); and the
-    candidate clusters: members (C, CLUSTER) int64 (−1 pads), lo, hi (C, 3) boxes."""
+    candidate clusters: members (C, CLUSTER) int64 (−1 pads), lo, hi (C, 3) boxes, owner (C,)
+    each cluster's object; bodies: per object its `_Convex`, or None."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -121,6 +122,31 @@ class _Objects(NamedTuple):
     members: np.ndarray
     lo: np.ndarray
     hi: np.ndarray
+    owner: np.ndarray
+    bodies: list
+
+
+class _Convex(NamedTuple):
+    """A closed, convex, consistently wound object: points (V, 3) its distinct corners,
+    outward (F, 3) unit face normals, offset (F,) normal . corner, edges (E, 2) the corners
+    and sides (E, 2) the two faces of each edge."""
+
+    points: np.ndarray
+    outward: np.ndarray
+    offset: np.ndarray
+    edges: np.ndarray
+    sides: np.ndarray
+
+    def silhouette(self, eye: np.ndarray) -> np.ndarray:
+        """(n, V) bool: the corners on an edge between a face turned toward eye (n, 3) and
+        one turned away (the hull of their shadows is the object's)."""
+        toward = eye @ self.outward.T > self.offset
+        cut = toward[:, self.sides[:, 0]] != toward[:, self.sides[:, 1]]
+        out = np.zeros((len(eye), len(self.points)), bool)
+        rows = np.nonzero(cut)
+        out[rows[0], self.edges[rows[1], 0]] = True
+        out[rows[0], self.edges[rows[1], 1]] = True
+        return out
 
 
 def _objects(corners: np.ndarray, ids: np.ndarray) -> _Objects:
@@ -130,45 +156,62 @@ def _objects(corners: np.ndarray, ids: np.ndarray) -> _Objects:
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
-    members = []
-    for j in np.unique(ids):
+    members, owner, bodies = [], [], []
+    for j in range(int(ids.max(initial=-1)) + 1):
         tris = np.flatnonzero(ids == j)
-        if _closed(corners[tris]) and len(tris) <= CONVEX_TEST_FACES:
+        bodies.append(None)
+        if len(tris) == 0:
+            continue
+        topology = _topology(corners[tris]) if len(tris) <= CONVEX_TEST_FACES else None
+        if topology is not None and (length[tris] > 0).all():
             c = corners[tris]
             sign = 1.0 if np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])).sum() > 0 \
                 else -1.0
             n = normals[tris] * sign
-            points = c.reshape(-1, 3)
-            off = n @ points.T - (n * c[:, 0]).sum(axis=1, keepdims=True)
-            if off.max() <= CONVEX_RELATIVE * np.abs(points).max() and (length[tris] > 0).all():
+            points = topology[0]
+            offset = (n * c[:, 0]).sum(axis=1)
+            off = n @ points.T - offset[:, None]
+            if off.max() <= CONVEX_RELATIVE * np.abs(points).max():
                 convex[tris] = True
                 outward[tris] = n
+                bodies[-1] = _Convex(points, n, offset, *topology[1:])
         # clusters of consecutive triangles along the object's longest axis
         centroid = corners[tris].mean(axis=1)
         order = tris[np.argsort(centroid[:, np.ptp(centroid, axis=0).argmax()], kind="stable")]
         pad = -len(order) % CLUSTER
         members.append(np.concatenate([order, np.full(pad, -1)]).reshape(-1, CLUSTER))
-    members = np.concatenate(members)
+        owner.append(np.full(len(members[-1]), j))
+    members, owner = np.concatenate(members), np.concatenate(owner)
     box = corners[np.maximum(members, 0)]                      # (C, CLUSTER, 3, 3)
     use = (members >= 0)[..., None, None]
     lo = np.where(use, box, np.inf).min(axis=(1, 2))
     hi = np.where(use, box, -np.inf).max(axis=(1, 2))
-    return _Objects(ids.astype(np.int64), convex, outward, members, lo, hi)
+    return _Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies)
 
 
-def _closed(corners: np.ndarray) -> bool:
-    """Is every edge of these triangles (M, 3, 3) met exactly once each way (a closed,
-    consistently wound surface; corners welded by their coordinates)?"""
-    _, vid = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+def _topology(corners: np.ndarray):
+    """For triangles (F, 3, 3) that make a closed, consistently wound surface (every edge met
+    exactly once each way, corners welded by their coordinates): (points (V, 3), edges (E, 2)
+    corner indices, sides (E, 2) the two faces of each); None for any other."""
+    points, vid = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
     vid = vid.reshape(-1, 3)
-    edges = np.concatenate([vid[:, [0, 1]], vid[:, [1, 2]], vid[:, [2, 0]]])
-    if (edges[:, 0] == edges[:, 1]).any():
-        return False
-    fwd = np.unique(edges, axis=0, return_counts=True)
-    if (fwd[1] != 1).any():
-        return False
-    back = np.unique(edges[:, ::-1], axis=0)
-    return len(back) == len(fwd[0]) and (back == fwd[0]).all()
+    V = len(points)
+    a = np.concatenate([vid[:, 0], vid[:, 1], vid[:, 2]])
+    b = np.concatenate([vid[:, 1], vid[:, 2], vid[:, 0]])
+    face = np.tile(np.arange(len(vid)), 3)
+    if (a == b).any():
+        return None
+    key = a * V + b
+    order = np.argsort(key)
+    if (np.diff(key[order]) == 0).any():
+        return None
+    at = np.searchsorted(key[order], b * V + a)
+    if (at >= len(key)).any() or (key[order][np.minimum(at, len(key) - 1)] != b * V + a).any():
+        return None
+    twin = face[order][at]
+    once = a < b
+    return (points, np.stack([a[once], b[once]], axis=1),
+            np.stack([face[once], twin[once]], axis=1))
 
 
 def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree") -> ExactVisibility:
@@ -283,6 +326,28 @@ def _shadows(shapely, light: _Light, objects: _Objects, corners: np.ndarray, p: 
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = (objects.lo[None] <= hi[:, None]).all(-1) & (objects.hi[None] >= lo[:, None]).all(-1)
+    shapes, owner = [], []
+    # A convex object wholly between p's parallel plane and the light's (0 <= h < h(p), h the
+    # height over the light's plane toward p) casts the hull of its corners' shadows: p is
+    # outside it, and its whole shadow is the pyramid's part of it.
+    height = (p - light.center) @ light.normal
+    for j, body in enumerate(objects.bodies):
+        clusters = objects.owner == j
+        if body is None:
+            continue
+        h = (body.points - light.center) @ light.normal
+        whole = meet[:, clusters].any(axis=1) & (h.min() >= 0) & (h.max() < height)
+        whole &= ~((objects.object[own] == j) & ((objects.outward[own] * normal).sum(axis=1) > 0))
+        at = np.flatnonzero(whole)
+        if len(at):
+            rim = body.silhouette(p[at])
+            row, corner = np.nonzero(rim)
+            flat = polygons.project(body.points[corner][:, None], p[at][row], light.center,
+                                    light.normal, light.axes)[:, 0]
+            points = shapely.multipoints(flat, indices=row, out=np.full(len(at), None, object))
+            shapes.append(shapely.convex_hull(points))
+            owner.append(at)
+        meet[np.ix_(at, clusters)] = False
     pix, clu = np.nonzero(meet)
     tri = objects.members[clu]                                     # (q, CLUSTER)
     pix = np.repeat(pix, CLUSTER)
@@ -306,8 +371,6 @@ def _shadows(shapely, light: _Light, objects: _Objects, corners: np.ndarray, p: 
     outside = (objects.outward[own[pix]] * normal[pix]).sum(axis=1) > 0
     keep &= ~(mine & outside)
     pix, tri = pix[keep], tri[keep]
-    if len(pix) == 0:
-        return np.full(n, None, object)
     # cut to the pyramid: the light's plane, then each side plane through p
     poly = corners[tri].copy()
     count = np.full(len(tri), 3)
@@ -320,14 +383,10 @@ def _shadows(shapely, light: _Light, objects: _Objects, corners: np.ndarray, p: 
         poly, count = polygons.clip(poly, count, d)
         keep = count >= 3
         poly, count, pix, tri = poly[keep], count[keep], pix[keep], tri[keep]
-    if len(pix) == 0:
-        return np.full(n, None, object)
     flat = polygons.project(poly, p[pix], light.center, light.normal, light.axes)
     # a convex object seen from outside: one hull per (pixel, object)
     obj = objects.object[tri]
     hullable = objects.convex[tri] & _outside(objects, corners, p, pix, tri)
-    shapes = []
-    owner = []
     if hullable.any():
         h = np.flatnonzero(hullable)
         key = pix[h] * (objects.object.max() + 1) + obj[h]
@@ -342,6 +401,8 @@ def _shadows(shapely, light: _Light, objects: _Objects, corners: np.ndarray, p: 
     if len(rest):
         shapes.append(_polygons(shapely, flat[rest], count[rest]))
         owner.append(pix[rest])
+    if not shapes:
+        return np.full(n, None, object)
     shapes = np.concatenate(shapes)
     owner = np.concatenate(owner)
     order = np.argsort(owner, kind="stable")

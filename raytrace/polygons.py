@@ -56,9 +56,9 @@ def project(points: np.ndarray, eye: np.ndarray, center: np.ndarray, normal: np.
     and beyond-or-on the light's (the cut pyramid guarantees it)."""
     ray = points - eye[:, None]
     height = (eye - center) @ normal                      # (n,), > 0: the emitting side
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # unused slots past a polygon's count
         scale = height[:, None] / -(ray @ normal)          # (n, k)
-    return ((eye - center) @ axes.T)[:, None] + scale[..., None] * (ray @ axes.T)
+        return ((eye - center) @ axes.T)[:, None] + scale[..., None] * (ray @ axes.T)
 
 
 def _edges(coords: np.ndarray, ring: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

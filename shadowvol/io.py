@@ -298,6 +298,9 @@ MASK_ARRAYS = {
     "casters": (np.uint64, ("L", "H", "W", "K")),
     "lit_count": (np.uint16, ("L", "H", "W")),
     "samples": (np.int64, ("L",)),
+    # the ray tracer's exact visibility of area lights (raytrace.exact_soft)
+    "visibility_exact": (np.float64, ("L", "H", "W")),
+    "irradiance_exact": (np.float64, ("L", "H", "W")),
     "K": (np.float64, (3, 3)),
     "world_to_camera": (np.float64, (4, 4)),
     "camera_to_world": (np.float64, (4, 4)),

@@ -168,9 +168,10 @@ def _written(written, L: int, truth, float64: bool, stencil: bool = False, words
     return {"writing (" + ", ".join(written) + ")": largest} if written else {}
 
 
-def ray_masks(scene: Scene, outputs=(), picture: bool = True) -> Estimate:
+def ray_masks(scene: Scene, outputs=(), picture: bool = True, exact: int = 0) -> Estimate:
     """`raytrace.shadow_masks` / `ground_truth` / `soft_masks` of `scene` and `raytrace masks`
-    writing them (the .npz and, with `picture`, its PNG)."""
+    writing them (the .npz and, with `picture`, its PNG); `exact`: how many of the float64
+    (L, H, W) exact-visibility outputs (`raytrace.exact_soft`) come too."""
     L = len(scene.lights)
     truth = set(outputs)
     per = {"lit + coverage": L + 1,
@@ -181,6 +182,8 @@ def ray_masks(scene: Scene, outputs=(), picture: bool = True) -> Estimate:
                             + (L + 1) * bool(truth)),
            # soft lights: lit_count uint16 and facing per light
            "lit_count": 3 * L if any(len(hard_lights(lt)) > 1 for lt in scene.lights) else 0,
+           # both computed at once (float64), those asked for written (npz: twice, compressed)
+           "exact visibility": (16 + 2 * 1.01 * 8 * exact) * L if exact else 0,
            # one RGB uint8 panel per light (and per output), the joined picture, its PNG;
            # the outputs' heat maps colour one panel at a time in float64
            "picture": ((L + len(truth)) * 3 * 2 + 24 * bool(truth) + PNG) if picture else 0}

@@ -19,20 +19,23 @@ SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".pn
             "json": ".json", "picture": ".png", "exr": ".exr", "flat": ".png", "png16": ".png"}
 
 
-def ground_truth(text: str | None, flag: str = "--outputs") -> tuple[str, ...]:
+def ground_truth(text: str | None, flag: str = "--outputs", extra: tuple[str, ...] = ()
+                 ) -> tuple[str, ...]:
     """The ground-truth outputs named by a command line's comma-separated list (or `all`),
-    in `shadowvol.io.GROUND_TRUTH`'s order; () for None.  SceneError (exit 2) for an unknown
+    in `shadowvol.io.GROUND_TRUTH`'s order, then those of `extra` (outputs one command has
+    besides; named only, never in `all`); () for None.  SceneError (exit 2) for an unknown
     name."""
     if text is None:
         return ()
     names = [n.strip() for n in text.split(",") if n.strip()]
     if names == ["all"]:
         return GROUND_TRUTH
-    unknown = [n for n in names if n not in GROUND_TRUTH]
+    known = GROUND_TRUTH + tuple(extra)
+    unknown = [n for n in names if n not in known]
     if unknown or not names:
         raise SceneError(flag, f"unknown output {shorten(unknown[0] if unknown else text)} "
-                               f"(a comma-separated list of: {', '.join(GROUND_TRUTH)}; or all)")
-    return tuple(n for n in GROUND_TRUTH if n in names)
+                               f"(a comma-separated list of: {', '.join(known)}; or all)")
+    return tuple(n for n in known if n in names)
 
 
 def check(outputs: dict[str, Path], flags: dict[str, str] | None = None,
