@@ -54,6 +54,9 @@ CONVEX_RELATIVE = 2.0 ** -20
 CONVEX_TEST_FACES = 4096
 # Triangles per cluster of the candidate query.
 CLUSTER = 16
+# Pieces of shadow per pixel that are united pairwise over all pixels at once (more: one
+# cascaded union per pixel).
+FEW_PIECES = 8
 # Pixels per chunk (each chunk's candidate arrays are pixels x clusters).
 CHUNK_PIXELS = 2048
 
@@ -293,16 +296,47 @@ def _area_light(shapely, light: _Light, objects: _Objects, corners: np.ndarray,
     # n . (x - p) at the box's corners x = centre + a u + b v
     dist = ((light.center - p) * normal).sum(axis=1)[:, None] + (box @ (light.axes @ normal.T)).T
     cut, count = polygons.clip(flat, np.full(len(p), 4), dist)
-    seen = _polygons(shapely, cut[..., :2], count)
-    if light.outline is not None:  # a polygon light: its own outline (a rect, a disk: the box)
-        seen = shapely.intersection(seen, shapely.Polygon(light.outline))
-    has = np.flatnonzero(pieces != None)  # noqa: E711 (an object array)
-    if len(has):
-        seen[has] = shapely.difference(seen[has], pieces[has])
-    area, irr = _measure(shapely, light, seen, p, normal)
+    cut = cut[..., :2]
+    area, irr = np.zeros(len(p)), np.zeros(len(p))
+    has = pieces != None  # noqa: E711 (an object array)
+    # nothing in the way of a rect or disk: its box cut to p's side, measured as it is
+    plain = np.flatnonzero(~has & (count >= 3)) if light.outline is None else np.zeros(0, int)
+    if len(plain):
+        coords, ring = _closed_rings(cut[plain], count[plain])
+        area[plain], irr[plain] = _ring_measures(light, coords, ring, p[plain], normal[plain])
+    rest = np.setdiff1d(np.arange(len(p)), plain)
+    if len(rest):
+        seen = _polygons(shapely, cut[rest], count[rest])
+        if light.outline is not None:  # a polygon light: its own outline
+            seen = shapely.intersection(seen, shapely.Polygon(light.outline))
+        hit = np.flatnonzero(has[rest])
+        seen[hit] = shapely.difference(seen[hit], pieces[rest[hit]])
+        area[rest], irr[rest] = _measure(shapely, light, seen, p[rest], normal[rest])
     out_v[front] = area / light.area
     out_e[front] = irr
     return out_v, out_e
+
+
+def _closed_rings(flat: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Polygons flat (n, k, 2) with count (n,) corners as closed rings: coords (c, 2) (each
+    ring's first corner again at its end) and ring (c,) the row of each."""
+    n, k, _ = flat.shape
+    at = np.arange(k + 1)[None]
+    use = at <= count[:, None]
+    index = np.where(at == count[:, None], 0, np.minimum(at, k - 1))
+    coords = np.take_along_axis(flat, index[..., None], 1)[use]
+    return coords, np.broadcast_to(np.arange(n)[:, None], use.shape)[use]
+
+
+def _ring_measures(light: _Light, coords: np.ndarray, ring: np.ndarray, p: np.ndarray,
+                   normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """|area| and |irradiance| (rings,) of closed rings (`polygons.ring_measures`; a disk's
+    part inside them for a disk light), ring r seen from p[r] with normal[r]."""
+    args = (coords, ring, len(p))
+    if light.radius is None:
+        return polygons.ring_measures(*args, p, normal, light.center, light.axes)
+    return polygons.disk_ring_measures(*args, light.radius, p, normal, light.center,
+                                       light.axes)
 
 
 def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
@@ -340,12 +374,19 @@ def _shadows(shapely, light: _Light, objects: _Objects, corners: np.ndarray, p: 
         whole &= ~((objects.object[own] == j) & ((objects.outward[own] * normal).sum(axis=1) > 0))
         at = np.flatnonzero(whole)
         if len(at):
-            rim = body.silhouette(p[at])
-            row, corner = np.nonzero(rim)
+            # the silhouette's corners all lie on the shadow's outline: in order around
+            # their mean, they are the convex polygon
+            row, corner = np.nonzero(body.silhouette(p[at]))
             flat = polygons.project(body.points[corner][:, None], p[at][row], light.center,
                                     light.normal, light.axes)[:, 0]
-            points = shapely.multipoints(flat, indices=row, out=np.full(len(at), None, object))
-            shapes.append(shapely.convex_hull(points))
+            many = np.bincount(row, minlength=len(at))
+            mean = np.stack([np.bincount(row, flat[:, k], len(at)) for k in (0, 1)], 1)
+            rel = flat - mean[row] / many[row, None]
+            order = np.lexsort((np.arctan2(rel[:, 1], rel[:, 0]), row))
+            enough = many[row[order]] >= 3
+            rings = shapely.linearrings(flat[order][enough], indices=row[order][enough],
+                                        out=np.full(len(at), None, object))
+            shapes.append(shapely.polygons(rings))
             owner.append(at)
         meet[np.ix_(at, clusters)] = False
     pix, clu = np.nonzero(meet)
@@ -407,13 +448,22 @@ def _shadows(shapely, light: _Light, objects: _Objects, corners: np.ndarray, p: 
     owner = np.concatenate(owner)
     order = np.argsort(owner, kind="stable")
     shapes, owner = shapes[order], owner[order]
+    real = ~shapely.is_empty(shapes) & (shapes != None)  # noqa: E711
+    shapes, owner = shapes[real], owner[real]
     out = np.full(n, None, object)
+    if len(owner) == 0:
+        return out
     starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
-    ends = np.r_[starts[1:], len(owner)]
-    single = ends - starts == 1
-    out[owner[starts[single]]] = shapes[starts[single]]
-    for s, e in zip(starts[~single], ends[~single]):
-        out[owner[s]] = shapely.union_all(shapes[s:e])
+    sizes = np.diff(np.r_[starts, len(owner)])
+    # a few pieces: united rank by rank, all pixels at once; many: GEOS's cascaded union
+    few = sizes <= FEW_PIECES
+    acc = shapes[starts]
+    for rank in range(1, int(sizes[few].max(initial=1))):
+        more = np.flatnonzero(few & (sizes > rank))
+        acc[more] = shapely.union(acc[more], shapes[starts[more] + rank])
+    for k in np.flatnonzero(~few):
+        acc[k] = shapely.union_all(shapes[starts[k]:starts[k] + sizes[k]])
+    out[owner[starts]] = acc
     return out
 
 
@@ -455,9 +505,5 @@ def _measure(shapely, light: _Light, seen: np.ndarray, p: np.ndarray, normal: np
     sign = np.where(np.r_[True, ring_of[1:] != ring_of[:-1]], 1.0, -1.0)
     coords, which = shapely.get_coordinates(rings, return_index=True)
     owner = part_of[ring_of]
-    args = (p[owner], normal[owner], light.center, light.axes)
-    if light.radius is None:
-        area, irr = polygons.ring_measures(coords, which, len(rings), *args)
-    else:
-        area, irr = polygons.disk_ring_measures(coords, which, len(rings), light.radius, *args)
+    area, irr = _ring_measures(light, coords, which, p[owner], normal[owner])
     return (np.bincount(owner, sign * area, n), np.bincount(owner, sign * irr, n))
