@@ -34,6 +34,7 @@ from shadowvol.planes import default_plane_axes
 from shadowvol.scene import AreaLight, DirectionalLight, Scene, SceneError
 
 from . import polygons
+from .occluders import CLUSTER, CONVEX_RELATIVE, Objects, objects as _objects
 from .backends import for_each_tile
 from .camera import RayGrid
 from .masks import MASK_TILE_RAYS, MaskTracer, _primary_hits, scene_backend, shadow_masks
@@ -46,14 +47,6 @@ EXACT_OUTPUTS = ("visibility_exact", "irradiance_exact")
 # coordinate, so two triangles of one world plane can be 2 * sqrt(3) * 2^-24 apart; 2^-20 is
 # four times that.  Left in, such a triangle a rounding above p would cut the whole pyramid.
 COPLANAR_RELATIVE = 2.0 ** -20
-# An object is convex when no corner lies farther than this (of its largest coordinate) outside
-# any of its face planes, by the same float32 argument; and p is outside it when it lies
-# farther than this outside one of them.
-CONVEX_RELATIVE = 2.0 ** -20
-# Objects with more faces than this are not tested for convexity (faces x corners work).
-CONVEX_TEST_FACES = 4096
-# Triangles per cluster of the candidate query.
-CLUSTER = 16
 # Pieces of shadow per pixel that are united pairwise over all pixels at once (more: one
 # cascaded union per pixel).
 FEW_PIECES = 8
@@ -113,111 +106,21 @@ def _shapely():
                    extra="exact")
 
 
-class _Objects(NamedTuple):
-    """Per scene triangle: its object (M,) and whether that object is closed and convex
-    (convex (M,) bool), with its outward face normals (M, 3) (0 for the others); and the
-    candidate clusters: members (C, CLUSTER) int64 (−1 pads), lo, hi (C, 3) boxes, owner (C,)
-    each cluster's object; bodies: per object its `_Convex`, or None."""
-
-    object: np.ndarray
-    convex: np.ndarray
-    outward: np.ndarray
-    members: np.ndarray
-    lo: np.ndarray
-    hi: np.ndarray
-    owner: np.ndarray
-    bodies: list
+def visible_regions(scene: Scene, light_index: int, backend: str | MaskTracer = "embree"
+                    ) -> tuple[np.ndarray, "_Light"]:
+    """(H, W) object array: the visible region of area light `light_index` at each pixel (a
+    shapely geometry in the light's plane coordinates, `_Light.axes` about its centre; None
+    where nothing is covered or the point is behind the light), and the light in the frame.
+    For tests and pictures; `exact_visibility` measures the same regions."""
+    regions = np.full(scene.height * scene.width, None, object)
+    exact_visibility(scene, backend, _regions=(light_index, regions))
+    mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
+    return regions.reshape(scene.height, scene.width), _frame_light(
+        scene.lights[light_index], mt.origin, f"lights[{light_index}]")
 
 
-class _Convex(NamedTuple):
-    """A closed, convex, consistently wound object: points (V, 3) its distinct corners,
-    outward (F, 3) unit face normals, offset (F,) normal . corner, edges (E, 2) the corners
-    and sides (E, 2) the two faces of each edge."""
-
-    points: np.ndarray
-    outward: np.ndarray
-    offset: np.ndarray
-    edges: np.ndarray
-    sides: np.ndarray
-
-    def silhouette(self, eye: np.ndarray) -> np.ndarray:
-        """(n, V) bool: the corners on an edge between a face turned toward eye (n, 3) and
-        one turned away (the hull of their shadows is the object's)."""
-        toward = eye @ self.outward.T > self.offset
-        cut = toward[:, self.sides[:, 0]] != toward[:, self.sides[:, 1]]
-        out = np.zeros((len(eye), len(self.points)), bool)
-        rows = np.nonzero(cut)
-        out[rows[0], self.edges[rows[1], 0]] = True
-        out[rows[0], self.edges[rows[1], 1]] = True
-        return out
-
-
-def _objects(corners: np.ndarray, ids: np.ndarray) -> _Objects:
-    M = len(corners)
-    convex = np.zeros(M, bool)
-    outward = np.zeros((M, 3))
-    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
-    members, owner, bodies = [], [], []
-    for j in range(int(ids.max(initial=-1)) + 1):
-        tris = np.flatnonzero(ids == j)
-        bodies.append(None)
-        if len(tris) == 0:
-            continue
-        topology = _topology(corners[tris]) if len(tris) <= CONVEX_TEST_FACES else None
-        if topology is not None and (length[tris] > 0).all():
-            c = corners[tris]
-            sign = 1.0 if np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])).sum() > 0 \
-                else -1.0
-            n = normals[tris] * sign
-            points = topology[0]
-            offset = (n * c[:, 0]).sum(axis=1)
-            off = n @ points.T - offset[:, None]
-            if off.max() <= CONVEX_RELATIVE * np.abs(points).max():
-                convex[tris] = True
-                outward[tris] = n
-                bodies[-1] = _Convex(points, n, offset, *topology[1:])
-        # clusters of consecutive triangles along the object's longest axis
-        centroid = corners[tris].mean(axis=1)
-        order = tris[np.argsort(centroid[:, np.ptp(centroid, axis=0).argmax()], kind="stable")]
-        pad = -len(order) % CLUSTER
-        members.append(np.concatenate([order, np.full(pad, -1)]).reshape(-1, CLUSTER))
-        owner.append(np.full(len(members[-1]), j))
-    members, owner = np.concatenate(members), np.concatenate(owner)
-    box = corners[np.maximum(members, 0)]                      # (C, CLUSTER, 3, 3)
-    use = (members >= 0)[..., None, None]
-    lo = np.where(use, box, np.inf).min(axis=(1, 2))
-    hi = np.where(use, box, -np.inf).max(axis=(1, 2))
-    return _Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies)
-
-
-def _topology(corners: np.ndarray):
-    """For triangles (F, 3, 3) that make a closed, consistently wound surface (every edge met
-    exactly once each way, corners welded by their coordinates): (points (V, 3), edges (E, 2)
-    corner indices, sides (E, 2) the two faces of each); None for any other."""
-    points, vid = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
-    vid = vid.reshape(-1, 3)
-    V = len(points)
-    a = np.concatenate([vid[:, 0], vid[:, 1], vid[:, 2]])
-    b = np.concatenate([vid[:, 1], vid[:, 2], vid[:, 0]])
-    face = np.tile(np.arange(len(vid)), 3)
-    if (a == b).any():
-        return None
-    key = a * V + b
-    order = np.argsort(key)
-    if (np.diff(key[order]) == 0).any():
-        return None
-    at = np.searchsorted(key[order], b * V + a)
-    if (at >= len(key)).any() or (key[order][np.minimum(at, len(key) - 1)] != b * V + a).any():
-        return None
-    twin = face[order][at]
-    once = a < b
-    return (points, np.stack([a[once], b[once]], axis=1),
-            np.stack([face[once], twin[once]], axis=1))
-
-
-def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree") -> ExactVisibility:
+def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
+                     _regions=None) -> ExactVisibility:
     """`visibility_exact` and `irradiance_exact` of every light of `scene` (module docstring):
     (L, H, W) float64 each.  A point, spot or directional light: 1 where `lit`, and
     irradiance n . l there (a unit light without fall-off, as the renderers shade one).
@@ -257,8 +160,12 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree") -> Exac
                 continue
             for at in range(0, len(pixel), CHUNK_PIXELS):
                 part = slice(at, at + CHUNK_PIXELS)
+                keep = None if _regions is None or _regions[0] != i else \
+                    np.full(len(p[part]), None, object)
                 v, e = _area_light(shapely, light, objects, corners, p[part], normal[part],
-                                   hit.tri[part])
+                                   hit.tri[part], keep)
+                if keep is not None:
+                    _regions[1][pixel[part]] = keep
                 vis[i, pixel[part]], irr[i, pixel[part]] = v, e
 
     for_each_tile(trace_tile, tiles, tracer)
@@ -275,11 +182,12 @@ def _hard_cosine(light, p: np.ndarray, normal: np.ndarray, origin: np.ndarray) -
     return np.maximum((normal * to).sum(axis=1), 0.0)
 
 
-def _area_light(shapely, light: _Light, objects: _Objects, corners: np.ndarray,
-                p: np.ndarray, normal: np.ndarray, own: np.ndarray
+def _area_light(shapely, light: _Light, objects: Objects, corners: np.ndarray,
+                p: np.ndarray, normal: np.ndarray, own: np.ndarray, regions=None
                 ) -> tuple[np.ndarray, np.ndarray]:
     """(n,) visibility and irradiance of `light` at points p (n, 3) with camera-facing unit
-    normals (n, 3) on triangles own (n,)."""
+    normals (n, 3) on triangles own (n,); `regions` (n,) object array: filled with the
+    visible regions (shapely, the light's plane coordinates) where given."""
     n = len(p)
     height = (p - light.center) @ light.normal
     front = np.flatnonzero(height > 0)
@@ -300,7 +208,8 @@ def _area_light(shapely, light: _Light, objects: _Objects, corners: np.ndarray,
     area, irr = np.zeros(len(p)), np.zeros(len(p))
     has = pieces != None  # noqa: E711 (an object array)
     # nothing in the way of a rect or disk: its box cut to p's side, measured as it is
-    plain = np.flatnonzero(~has & (count >= 3)) if light.outline is None else np.zeros(0, int)
+    plain = np.flatnonzero(~has & (count >= 3)) if light.outline is None and regions is None \
+        else np.zeros(0, int)
     if len(plain):
         coords, ring = _closed_rings(cut[plain], count[plain])
         area[plain], irr[plain] = _ring_measures(light, coords, ring, p[plain], normal[plain])
@@ -312,6 +221,8 @@ def _area_light(shapely, light: _Light, objects: _Objects, corners: np.ndarray,
         hit = np.flatnonzero(has[rest])
         seen[hit] = shapely.difference(seen[hit], pieces[rest[hit]])
         area[rest], irr[rest] = _measure(shapely, light, seen, p[rest], normal[rest])
+        if regions is not None:
+            regions[front[rest]] = seen
     out_v[front] = area / light.area
     out_e[front] = irr
     return out_v, out_e
@@ -352,79 +263,16 @@ def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
     return out
 
 
-def _shadows(shapely, light: _Light, objects: _Objects, corners: np.ndarray, p: np.ndarray,
+def _shadows(shapely, light: _Light, objects: Objects, corners: np.ndarray, p: np.ndarray,
              normal: np.ndarray, own: np.ndarray, base: np.ndarray) -> np.ndarray:
     """(n,) object array: the union of every triangle's shadow on the light's plane seen from
-    each p (None where none falls inside the pyramid)."""
-    n = len(p)
+    each p (None where none falls inside the pyramid over `base` (k, 3))."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = (objects.lo[None] <= hi[:, None]).all(-1) & (objects.hi[None] >= lo[:, None]).all(-1)
-    shapes, owner = [], []
-    # A convex object wholly between p's parallel plane and the light's (0 <= h < h(p), h the
-    # height over the light's plane toward p) casts the hull of its corners' shadows: p is
-    # outside it, and its whole shadow is the pyramid's part of it.
-    height = (p - light.center) @ light.normal
-    for j, body in enumerate(objects.bodies):
-        clusters = objects.owner == j
-        if body is None:
-            continue
-        h = (body.points - light.center) @ light.normal
-        whole = meet[:, clusters].any(axis=1) & (h.min() >= 0) & (h.max() < height)
-        whole &= ~((objects.object[own] == j) & ((objects.outward[own] * normal).sum(axis=1) > 0))
-        at = np.flatnonzero(whole)
-        if len(at):
-            # the silhouette's corners all lie on the shadow's outline: in order around
-            # their mean, they are the convex polygon
-            row, corner = np.nonzero(body.silhouette(p[at]))
-            flat = polygons.project(body.points[corner][:, None], p[at][row], light.center,
-                                    light.normal, light.axes)[:, 0]
-            many = np.bincount(row, minlength=len(at))
-            mean = np.stack([np.bincount(row, flat[:, k], len(at)) for k in (0, 1)], 1)
-            rel = flat - mean[row] / many[row, None]
-            order = np.lexsort((np.arctan2(rel[:, 1], rel[:, 0]), row))
-            enough = many[row[order]] >= 3
-            rings = shapely.linearrings(flat[order][enough], indices=row[order][enough],
-                                        out=np.full(len(at), None, object))
-            shapes.append(shapely.polygons(rings))
-            owner.append(at)
-        meet[np.ix_(at, clusters)] = False
-    pix, clu = np.nonzero(meet)
-    tri = objects.members[clu]                                     # (q, CLUSTER)
-    pix = np.repeat(pix, CLUSTER)
-    tri = tri.reshape(-1)
-    keep = tri >= 0
-    pix, tri = pix[keep], tri[keep]
-    box = corners[tri]
-    keep = (box.min(axis=1) <= hi[pix]).all(-1) & (box.max(axis=1) >= lo[pix]).all(-1)
-    keep &= tri != own[pix]
-    pix, tri = pix[keep], tri[keep]
-    # coplanar with p's own triangle
-    own_c = corners[own[pix]]
-    own_n = np.cross(own_c[:, 1] - own_c[:, 0], own_c[:, 2] - own_c[:, 0])
-    own_n /= np.maximum(np.linalg.norm(own_n, axis=1, keepdims=True), 1e-300)
-    c = corners[tri]
-    off = np.abs(np.einsum("qkj,qj->qk", c - own_c[:, :1], own_n)).max(axis=1)
-    scale = np.maximum(np.abs(own_c).max(axis=(1, 2)), np.abs(c).max(axis=(1, 2)))
-    keep = off > COPLANAR_RELATIVE * scale
-    # a convex object does not shadow p from its own outside
-    mine = objects.convex[tri] & (objects.object[tri] == objects.object[own[pix]])
-    outside = (objects.outward[own[pix]] * normal[pix]).sum(axis=1) > 0
-    keep &= ~(mine & outside)
-    pix, tri = pix[keep], tri[keep]
-    # cut to the pyramid: the light's plane, then each side plane through p
-    poly = corners[tri].copy()
-    count = np.full(len(tri), 3)
-    planes = [lambda q, pp: (q - light.center) @ light.normal]
-    for j in range(len(base)):
-        a, b = base[j], base[(j + 1) % len(base)]
-        planes.append(lambda q, pp, a=a, b=b: _side(q, pp, a, b, light.center))
-    for plane in planes:
-        d = plane(poly, p[pix][:, None])
-        poly, count = polygons.clip(poly, count, d)
-        keep = count >= 3
-        poly, count, pix, tri = poly[keep], count[keep], pix[keep], tri[keep]
-    flat = polygons.project(poly, p[pix], light.center, light.normal, light.axes)
+    shapes, owner = _whole_bodies(shapely, light, objects, p, normal, own, meet)
+    pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi)
+    flat, count, pix, tri = _cut(light, corners, p, pix, tri, base)
     # a convex object seen from outside: one hull per (pixel, object)
     obj = objects.object[tri]
     hullable = objects.convex[tri] & _outside(objects, corners, p, pix, tri)
@@ -433,24 +281,110 @@ def _shadows(shapely, light: _Light, objects: _Objects, corners: np.ndarray, p: 
         key = pix[h] * (objects.object.max() + 1) + obj[h]
         group, which = np.unique(key, return_inverse=True)
         mask = np.arange(flat.shape[1])[None] < count[h, None]
-        points = flat[h][mask]
-        pts_group = np.repeat(which, count[h])
-        hulls = shapely.convex_hull(shapely.multipoints(points, indices=pts_group))
-        shapes.append(hulls)
+        points = shapely.multipoints(flat[h][mask], indices=np.repeat(which, count[h]))
+        shapes.append(shapely.convex_hull(points))
         owner.append(group // (objects.object.max() + 1))
     rest = np.flatnonzero(~hullable)
     if len(rest):
         shapes.append(_polygons(shapely, flat[rest], count[rest]))
         owner.append(pix[rest])
+    return _unite(shapely, shapes, owner, len(p))
+
+
+def _whole_bodies(shapely, light: _Light, objects: Objects, p: np.ndarray, normal: np.ndarray,
+                  own: np.ndarray, meet: np.ndarray) -> tuple[list, list]:
+    """The shadows of convex objects wholly between p's parallel plane and the light's
+    (0 <= h < h(p), h the height over the light's plane toward p): p is outside such an
+    object and its whole shadow is the pyramid's part of it, the polygon of its silhouette's
+    corners' shadows.  Returns (shapes, owners) lists of arrays; their clusters are taken out
+    of `meet` (n, C) for those p."""
+    shapes, owner = [], []
+    height = (p - light.center) @ light.normal
+    for j, body in enumerate(objects.bodies):
+        if body is None:
+            continue
+        clusters = objects.owner == j
+        h = (body.points - light.center) @ light.normal
+        whole = meet[:, clusters].any(axis=1) & (h.min() >= 0) & (h.max() < height)
+        at = np.flatnonzero(whole)
+        if len(at) == 0:
+            continue
+        # the silhouette's corners all lie on the shadow's outline: in order around their
+        # mean, they are the convex polygon
+        row, corner = np.nonzero(body.silhouette(p[at]))
+        flat = polygons.project(body.points[corner][:, None], p[at][row], light.center,
+                                light.normal, light.axes)[:, 0]
+        many = np.bincount(row, minlength=len(at))
+        mean = np.stack([np.bincount(row, flat[:, k], len(at)) for k in (0, 1)], 1)
+        rel = flat - mean[row] / np.maximum(many[row, None], 1)
+        order = np.lexsort((np.arctan2(rel[:, 1], rel[:, 0]), row))
+        enough = many[row[order]] >= 3
+        rings = shapely.linearrings(flat[order][enough], indices=row[order][enough],
+                                    out=np.full(len(at), None, object))
+        shapes.append(shapely.polygons(rings))
+        owner.append(at)
+        meet[np.ix_(at, clusters)] = False
+    return shapes, owner
+
+
+def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarray,
+                own: np.ndarray, meet: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """(pixel, triangle) pairs (q,) int64 each: the triangles of the clusters that `meet`
+    (n, C) says meet p's pyramid box [lo, hi] (n, 3), whose own boxes meet it too, less p's
+    own triangle, those coplanar with it, and a convex object's from its own outside."""
+    pix, clu = np.nonzero(meet)
+    pix = np.repeat(pix, CLUSTER)
+    tri = objects.members[clu].reshape(-1)
+    keep = tri >= 0
+    pix, tri = pix[keep], tri[keep]
+    box = corners[tri]
+    keep = (box.min(axis=1) <= hi[pix]).all(-1) & (box.max(axis=1) >= lo[pix]).all(-1)
+    keep &= tri != own[pix]
+    pix, tri = pix[keep], tri[keep]
+    own_c = corners[own[pix]]
+    own_n = np.cross(own_c[:, 1] - own_c[:, 0], own_c[:, 2] - own_c[:, 0])
+    own_n /= np.maximum(np.linalg.norm(own_n, axis=1, keepdims=True), 1e-300)
+    c = corners[tri]
+    off = np.abs(np.einsum("qkj,qj->qk", c - own_c[:, :1], own_n)).max(axis=1)
+    scale = np.maximum(np.abs(own_c).max(axis=(1, 2)), np.abs(c).max(axis=(1, 2)))
+    keep = off > COPLANAR_RELATIVE * scale
+    mine = objects.convex[tri] & (objects.object[tri] == objects.object[own[pix]])
+    outside = (objects.outward[own[pix]] * normal[pix]).sum(axis=1) > 0
+    keep &= ~(mine & outside)
+    return pix[keep], tri[keep]
+
+
+def _cut(light: _Light, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.ndarray,
+         base: np.ndarray):
+    """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (the light's plane, then
+    each side plane through p) and carried onto the light's plane: (flat (q', k, 2), count
+    (q',), pix, tri) of those with something left."""
+    poly = corners[tri].copy()
+    count = np.full(len(tri), 3)
+    planes = [lambda q, pp: (q - light.center) @ light.normal]
+    for j in range(len(base)):
+        a, b = base[j], base[(j + 1) % len(base)]
+        planes.append(lambda q, pp, a=a, b=b: _side(q, pp, a, b, light.center))
+    for plane in planes:
+        poly, count = polygons.clip(poly, count, plane(poly, p[pix][:, None]))
+        keep = count >= 3
+        poly, count, pix, tri = poly[keep], count[keep], pix[keep], tri[keep]
+    return polygons.project(poly, p[pix], light.center, light.normal, light.axes), count, pix, tri
+
+
+def _unite(shapely, shapes: list, owner: list, n: int) -> np.ndarray:
+    """(n,) object array: per pixel the union of the shapes (arrays) whose owners (arrays of
+    pixel indices) name it; None where none."""
+    out = np.full(n, None, object)
     if not shapes:
-        return np.full(n, None, object)
-    shapes = np.concatenate(shapes)
-    owner = np.concatenate(owner)
+        return out
+    shapes, owner = np.concatenate(shapes), np.concatenate(owner)
     order = np.argsort(owner, kind="stable")
     shapes, owner = shapes[order], owner[order]
-    real = ~shapely.is_empty(shapes) & (shapes != None)  # noqa: E711
+    real = (shapes != None)  # noqa: E711 (an object array)
+    real[real] = ~shapely.is_empty(shapes[real])
     shapes, owner = shapes[real], owner[real]
-    out = np.full(n, None, object)
     if len(owner) == 0:
         return out
     starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
@@ -476,7 +410,7 @@ def _side(q: np.ndarray, p: np.ndarray, a: np.ndarray, b: np.ndarray, inner: np.
     return np.einsum("mkj,mj->mk", q - p, m * sign[:, None])
 
 
-def _outside(objects: _Objects, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
+def _outside(objects: Objects, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
              tri: np.ndarray) -> np.ndarray:
     """(q,) bool: p[pix] lies outside the convex object of tri (q,) by more than
     CONVEX_RELATIVE: beyond one of its face planes (False for a non-convex object)."""

@@ -1,0 +1,127 @@
+"""The scene's triangles as the exact visibility queries them (`raytrace.exact_soft`): per
+object whether it is closed and convex (then its shadow from a point outside is one convex
+polygon), its silhouette from a point, and clusters of triangles with their boxes for the
+conservative candidate query.  float64, numpy, in the masks' frame.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+# An object is convex when no corner lies farther than this (of its largest coordinate) outside
+# any of its face planes: its corners are float32 (the frame), each off its float64 position by
+# up to 2^-24 of its coordinate, so a convex world object can look 2 * sqrt(3) * 2^-24 concave;
+# 2^-20 is four times that.  p is outside a convex object when farther than this beyond one of
+# its face planes.
+CONVEX_RELATIVE = 2.0 ** -20
+# Objects with more faces than this are not tested for convexity (faces x corners work); they
+# are united triangle by triangle, which is exact too.
+CONVEX_TEST_FACES = 4096
+# Triangles per cluster of the candidate query.
+CLUSTER = 16
+
+
+class Objects(NamedTuple):
+    """Per scene triangle: its object (M,) and whether that object is closed and convex
+    (convex (M,) bool), with its outward face normals (M, 3) (0 for the others); and the
+    candidate clusters: members (C, CLUSTER) int64 (−1 pads), lo, hi (C, 3) boxes, owner (C,)
+    each cluster's object; bodies: per object its `Convex`, or None."""
+
+    object: np.ndarray
+    convex: np.ndarray
+    outward: np.ndarray
+    members: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    owner: np.ndarray
+    bodies: list
+
+
+class Convex(NamedTuple):
+    """A closed, convex, consistently wound object: points (V, 3) its distinct corners,
+    outward (F, 3) unit face normals, offset (F,) normal . corner, edges (E, 2) the corners
+    and sides (E, 2) the two faces of each edge."""
+
+    points: np.ndarray
+    outward: np.ndarray
+    offset: np.ndarray
+    edges: np.ndarray
+    sides: np.ndarray
+
+    def silhouette(self, eye: np.ndarray) -> np.ndarray:
+        """(n, V) bool: the corners on an edge between a face turned toward eye (n, 3) and
+        one turned away (the hull of their shadows is the object's)."""
+        toward = eye @ self.outward.T > self.offset
+        cut = toward[:, self.sides[:, 0]] != toward[:, self.sides[:, 1]]
+        out = np.zeros((len(eye), len(self.points)), bool)
+        rows = np.nonzero(cut)
+        out[rows[0], self.edges[rows[1], 0]] = True
+        out[rows[0], self.edges[rows[1], 1]] = True
+        return out
+
+
+def objects(corners: np.ndarray, ids: np.ndarray) -> Objects:
+    M = len(corners)
+    convex = np.zeros(M, bool)
+    outward = np.zeros((M, 3))
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    members, owner, bodies = [], [], []
+    for j in range(int(ids.max(initial=-1)) + 1):
+        tris = np.flatnonzero(ids == j)
+        bodies.append(None)
+        if len(tris) == 0:
+            continue
+        topology = _topology(corners[tris]) if len(tris) <= CONVEX_TEST_FACES else None
+        if topology is not None and (length[tris] > 0).all():
+            c = corners[tris]
+            sign = 1.0 if np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])).sum() > 0 \
+                else -1.0
+            n = normals[tris] * sign
+            points = topology[0]
+            offset = (n * c[:, 0]).sum(axis=1)
+            off = n @ points.T - offset[:, None]
+            if off.max() <= CONVEX_RELATIVE * np.abs(points).max():
+                convex[tris] = True
+                outward[tris] = n
+                bodies[-1] = Convex(points, n, offset, *topology[1:])
+        # clusters of consecutive triangles along the object's longest axis
+        centroid = corners[tris].mean(axis=1)
+        order = tris[np.argsort(centroid[:, np.ptp(centroid, axis=0).argmax()], kind="stable")]
+        pad = -len(order) % CLUSTER
+        members.append(np.concatenate([order, np.full(pad, -1)]).reshape(-1, CLUSTER))
+        owner.append(np.full(len(members[-1]), j))
+    members, owner = np.concatenate(members), np.concatenate(owner)
+    box = corners[np.maximum(members, 0)]                      # (C, CLUSTER, 3, 3)
+    use = (members >= 0)[..., None, None]
+    lo = np.where(use, box, np.inf).min(axis=(1, 2))
+    hi = np.where(use, box, -np.inf).max(axis=(1, 2))
+    return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies)
+
+
+def _topology(corners: np.ndarray):
+    """For triangles (F, 3, 3) that make a closed, consistently wound surface (every edge met
+    exactly once each way, corners welded by their coordinates): (points (V, 3), edges (E, 2)
+    corner indices, sides (E, 2) the two faces of each); None for any other."""
+    points, vid = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+    vid = vid.reshape(-1, 3)
+    V = len(points)
+    a = np.concatenate([vid[:, 0], vid[:, 1], vid[:, 2]])
+    b = np.concatenate([vid[:, 1], vid[:, 2], vid[:, 0]])
+    face = np.tile(np.arange(len(vid)), 3)
+    if (a == b).any():
+        return None
+    key = a * V + b
+    order = np.argsort(key)
+    if (np.diff(key[order]) == 0).any():
+        return None
+    at = np.searchsorted(key[order], b * V + a)
+    if (at >= len(key)).any() or (key[order][np.minimum(at, len(key) - 1)] != b * V + a).any():
+        return None
+    twin = face[order][at]
+    once = a < b
+    return (points, np.stack([a[once], b[once]], axis=1),
+            np.stack([face[once], twin[once]], axis=1))
