@@ -43,10 +43,11 @@ EXACT_OUTPUTS = ("visibility_exact", "irradiance_exact")
 
 # A triangle is coplanar with p's own when its three corners lie within this much of the
 # largest corner coordinate (the frame's, from the eye) of the own triangle's plane: the
-# corners are float32 (the frame), each off its float64 position by up to 2^-24 of its
-# coordinate, so two triangles of one world plane can be 2 * sqrt(3) * 2^-24 apart; 2^-20 is
-# four times that.  Left in, such a triangle a rounding above p would cut the whole pyramid.
-COPLANAR_RELATIVE = 2.0 ** -20
+# corners are float64 world positions (each a few roundings of 2^-53 from its transform) less
+# the eye (one more), so two triangles of one world plane lie ~1e-15 of their coordinates
+# apart; 2^-40 (~1e-12) is a thousand times that, and no model places a real occluder so
+# flat and so close.  Left in, such a triangle a rounding above p would cut the whole pyramid.
+COPLANAR_RELATIVE = 2.0 ** -40
 # Pieces of shadow per pixel that are united pairwise over all pixels at once (more: one
 # cascaded union per pixel).
 FEW_PIECES = 8

@@ -11,11 +11,11 @@ from typing import NamedTuple
 import numpy as np
 
 # An object is convex when no corner lies farther than this (of its largest coordinate) outside
-# any of its face planes: its corners are float32 (the frame), each off its float64 position by
-# up to 2^-24 of its coordinate, so a convex world object can look 2 * sqrt(3) * 2^-24 concave;
-# 2^-20 is four times that.  p is outside a convex object when farther than this beyond one of
-# its face planes.
-CONVEX_RELATIVE = 2.0 ** -20
+# any of its face planes: its corners are float64 (the frame: world less the eye), each a few
+# roundings (~1e-16 of its coordinate) off, so a flat face's two triangles can look ~1e-15
+# concave; 2^-40 (~1e-12) is a thousand times that.  p is outside a convex object when
+# farther than this beyond one of its face planes.
+CONVEX_RELATIVE = 2.0 ** -40
 # Objects with more faces than this are not tested for convexity (faces x corners work); they
 # are united triangle by triangle, which is exact too.
 CONVEX_TEST_FACES = 4096
