@@ -102,6 +102,16 @@ def _frame_light(light: AreaLight, origin: np.ndarray, key: str) -> _Light:
     return _Light(center, light.normal, axes, hull, outline, None, float(ring.area))
 
 
+def check_exact(scene: Scene) -> None:
+    """SceneError for a light with no exact visibility (a sphere), MissingExtra without
+    shapely where an area light needs it: what `exact_visibility` would refuse, before any
+    work."""
+    for i, light in enumerate(scene.lights):
+        if isinstance(light, AreaLight):
+            _frame_light(light, np.zeros(3), f"lights[{i}]")
+            _shapely()
+
+
 def _shapely():
     return require("shapely", "exact visibility (visibility_exact, irradiance_exact)",
                    extra="exact")

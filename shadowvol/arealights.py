@@ -96,6 +96,8 @@ def polygon_frame(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     normal = newell / area if area > 0 else newell
     fan = np.cross(vertices[1:-1] - vertices[0], vertices[2:] - vertices[0]) @ normal / 2
     centroids = (vertices[0] + vertices[1:-1] + vertices[2:]) / 3
+    if area == 0 or fan.sum() == 0:  # no area (the caller refuses it): the corners' mean
+        return normal, vertices.mean(axis=0), area
     return normal, (fan[:, None] * centroids).sum(axis=0) / fan.sum(), area
 
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 from raytrace import exercise, photon, shadow_masks  # (area lights: lit where every sample reaches)
 from raytrace.backends import BACKENDS
-from raytrace.exact_soft import EXACT_OUTPUTS, exact_visibility
+from raytrace.exact_soft import EXACT_OUTPUTS, check_exact, exact_visibility
 from raytrace.groundtruth import check_outputs, ground_truth
 from raytrace.photonmap import KERNELS
 from raytrace.raytree import format_tree, ray_tree
@@ -236,6 +236,11 @@ def _masks(args) -> int:
     scene = load_scene(args.scene)
     memory.check(memory.ray_masks(scene, wanted, picture="picture" in paths, exact=len(exact)),
                  args.memory_budget, args.scene)
+    if exact:
+        try:
+            check_exact(scene)
+        except SceneError as exc:
+            raise exc.in_file(args.scene) from None
     if wanted or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
         # the counts of an area light (lit_count, samples) come with the ground truth's rays
         truth = ground_truth(scene, check_outputs(scene, wanted), backend=args.backend)
