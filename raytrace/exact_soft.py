@@ -281,6 +281,7 @@ def _shadows(shapely, light: _Light, objects: Objects, corners: np.ndarray, p: n
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = (objects.lo[None] <= hi[:, None]).all(-1) & (objects.hi[None] >= lo[:, None]).all(-1)
+    meet &= _sphere_meets(light, objects, p, base)
     shapes, owner = _whole_bodies(shapely, light, objects, p, normal, own, meet)
     pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi)
     flat, count, pix, tri = _cut(light, corners, p, pix, tri, base)
@@ -336,6 +337,22 @@ def _whole_bodies(shapely, light: _Light, objects: Objects, p: np.ndarray, norma
         owner.append(at)
         meet[np.ix_(at, clusters)] = False
     return shapes, owner
+
+
+def _sphere_meets(light: _Light, objects: Objects, p: np.ndarray, base: np.ndarray
+                  ) -> np.ndarray:
+    """(n, C) bool: cluster c's bounding sphere is not wholly outside one of the planes that
+    bound the pyramid from p over `base` (k, 3): its side planes through p, the light's plane
+    and p's parallel plane (a sphere beyond a face of a convex body cannot meet it)."""
+    height = (objects.centre - light.center) @ light.normal              # (C,)
+    ok = (height >= -objects.radius)[None] & \
+        (height[None] <= ((p - light.center) @ light.normal)[:, None] + objects.radius[None])
+    for j in range(len(base)):
+        m = np.cross(base[j] - p, base[(j + 1) % len(base)] - p)      # (n, 3)
+        m *= np.sign(((light.center - p) * m).sum(axis=1))[:, None]
+        m /= np.linalg.norm(m, axis=1, keepdims=True)
+        ok &= m @ objects.centre.T - (m * p).sum(axis=1)[:, None] >= -objects.radius[None]
+    return ok
 
 
 def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarray,

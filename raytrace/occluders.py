@@ -27,7 +27,8 @@ class Objects(NamedTuple):
     """Per scene triangle: its object (M,) and whether that object is closed and convex
     (convex (M,) bool), with its outward face normals (M, 3) (0 for the others); and the
     candidate clusters: members (C, CLUSTER) int64 (−1 pads), lo, hi (C, 3) boxes, owner (C,)
-    each cluster's object; bodies: per object its `Convex`, or None."""
+    each cluster's object, centre (C, 3) and radius (C,) a sphere around each cluster's box;
+    bodies: per object its `Convex`, or None."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -37,6 +38,8 @@ class Objects(NamedTuple):
     hi: np.ndarray
     owner: np.ndarray
     bodies: list
+    centre: np.ndarray
+    radius: np.ndarray
 
 
 class Convex(NamedTuple):
@@ -99,7 +102,11 @@ def objects(corners: np.ndarray, ids: np.ndarray) -> Objects:
     use = (members >= 0)[..., None, None]
     lo = np.where(use, box, np.inf).min(axis=(1, 2))
     hi = np.where(use, box, -np.inf).max(axis=(1, 2))
-    return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies)
+    centre = (lo + hi) / 2
+    # the half diagonal, a little more for its own rounding: the sphere must hold the box
+    radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
+    return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
+                   centre, radius)
 
 
 def _topology(corners: np.ndarray):
