@@ -29,15 +29,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from shadowvol.errors import require
-from shadowvol.planes import default_plane_axes
-from shadowvol.scene import AreaLight, DirectionalLight, Scene, SceneError
+from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
 from . import polygons
-from .occluders import CLUSTER, CONVEX_RELATIVE, Objects, objects as _objects
 from .backends import for_each_tile
 from .camera import RayGrid
+from .lightshapes import FramedLight, frame_light, shapely_module
 from .masks import MASK_TILE_RAYS, MaskTracer, _primary_hits, scene_backend, shadow_masks
+from .occluders import CLUSTER, CONVEX_RELATIVE, Objects
+from .occluders import objects as _objects
 
 EXACT_OUTPUTS = ("visibility_exact", "irradiance_exact")
 
@@ -62,71 +62,26 @@ class ExactVisibility(NamedTuple):
     irradiance: np.ndarray
 
 
-class _Light(NamedTuple):
-    """An area light in the frame: centre (3,), unit emitting normal (3,), axes (2, 3) (u, v),
-    hull (k, 2) its convex outline, counter-clockwise (the pyramid's base), outline (m, 2)
-    its own (None: the hull), radius (a disk, else None), area."""
-
-    center: np.ndarray
-    normal: np.ndarray
-    axes: np.ndarray
-    hull: np.ndarray
-    outline: np.ndarray | None
-    radius: float | None
-    area: float
-
-
-def _frame_light(light: AreaLight, origin: np.ndarray, key: str) -> _Light:
-    if light.shape == "sphere":
-        raise SceneError(f"{key}.type", "a sphere light has no exact visibility (the part of "
-                                        "a sphere's surface seen past occluders is bounded by "
-                                        "small-circle arcs; not computed); use rect, disk or "
-                                        "polygon, or the sampled lit_count")
-    center = light.center - origin
-    u, v = default_plane_axes(light.normal)
-    axes = np.stack([u, v])
-    if light.shape == "rect":
-        w, h = light.size / 2
-        hull = np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
-        return _Light(center, light.normal, axes, hull, None, None, float(light.size.prod()))
-    if light.shape == "disk":
-        r = light.radius
-        hull = np.array([[-r, -r], [r, -r], [r, r], [-r, r]])
-        return _Light(center, light.normal, axes, hull, None, r, float(np.pi * r * r))
-    shapely = _shapely()
-    outline = (light.vertices - light.center) @ axes.T
-    ring = shapely.Polygon(outline)
-    hull = np.array(ring.convex_hull.exterior.coords)[:-1]
-    if shapely.is_ccw(shapely.LinearRing(hull)) is False:
-        hull = hull[::-1]
-    return _Light(center, light.normal, axes, hull, outline, None, float(ring.area))
-
-
 def check_exact(scene: Scene) -> None:
     """SceneError for a light with no exact visibility (a sphere), MissingExtra without
     shapely where an area light needs it: what `exact_visibility` would refuse, before any
     work."""
     for i, light in enumerate(scene.lights):
         if isinstance(light, AreaLight):
-            _frame_light(light, np.zeros(3), f"lights[{i}]")
-            _shapely()
-
-
-def _shapely():
-    return require("shapely", "exact visibility (visibility_exact, irradiance_exact)",
-                   extra="exact")
+            frame_light(light, np.zeros(3), f"lights[{i}]")
+            shapely_module()
 
 
 def visible_regions(scene: Scene, light_index: int, backend: str | MaskTracer = "embree"
-                    ) -> tuple[np.ndarray, "_Light"]:
+                    ) -> tuple[np.ndarray, "FramedLight"]:
     """(H, W) object array: the visible region of area light `light_index` at each pixel (a
-    shapely geometry in the light's plane coordinates, `_Light.axes` about its centre; None
+    shapely geometry in the light's plane coordinates, `FramedLight.axes` about its centre; None
     where nothing is covered or the point is behind the light), and the light in the frame.
     For tests and pictures; `exact_visibility` measures the same regions."""
     regions = np.full(scene.height * scene.width, None, object)
     exact_visibility(scene, backend, _regions=(light_index, regions))
     mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
-    return regions.reshape(scene.height, scene.width), _frame_light(
+    return regions.reshape(scene.height, scene.width), frame_light(
         scene.lights[light_index], mt.origin, f"lights[{light_index}]")
 
 
@@ -140,8 +95,8 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     tracer, triangles, origin = mt
     H, W, L = scene.height, scene.width, len(scene.lights)
     lights = [None if not isinstance(lt, AreaLight) else
-              _frame_light(lt, origin, f"lights[{i}]") for i, lt in enumerate(scene.lights)]
-    shapely = _shapely() if any(lights) else None
+              frame_light(lt, origin, f"lights[{i}]") for i, lt in enumerate(scene.lights)]
+    shapely = shapely_module() if any(lights) else None
     vis = np.zeros((L, H * W))
     irr = np.zeros((L, H * W))
     corners = tracer.vertices[tracer.faces].astype(np.float64)
@@ -193,7 +148,7 @@ def _hard_cosine(light, p: np.ndarray, normal: np.ndarray, origin: np.ndarray) -
     return np.maximum((normal * to).sum(axis=1), 0.0)
 
 
-def _area_light(shapely, light: _Light, objects: Objects, corners: np.ndarray,
+def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
                 p: np.ndarray, normal: np.ndarray, own: np.ndarray, regions=None
                 ) -> tuple[np.ndarray, np.ndarray]:
     """(n,) visibility and irradiance of `light` at points p (n, 3) with camera-facing unit
@@ -228,9 +183,11 @@ def _area_light(shapely, light: _Light, objects: Objects, corners: np.ndarray,
     if len(rest):
         seen = _polygons(shapely, cut[rest], count[rest])
         if light.outline is not None:  # a polygon light: its own outline
-            seen = shapely.intersection(seen, shapely.Polygon(light.outline))
+            seen = _polygonal(shapely, shapely.intersection(seen, shapely.Polygon(light.outline),
+                                                            grid_size=light.grid))
         hit = np.flatnonzero(has[rest])
-        seen[hit] = shapely.difference(seen[hit], pieces[rest[hit]])
+        seen[hit] = _polygonal(shapely, shapely.difference(seen[hit], pieces[rest[hit]],
+                                                            grid_size=light.grid))
         area[rest], irr[rest] = _measure(shapely, light, seen, p[rest], normal[rest])
         if regions is not None:
             regions[front[rest]] = seen
@@ -250,7 +207,7 @@ def _closed_rings(flat: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.n
     return coords, np.broadcast_to(np.arange(n)[:, None], use.shape)[use]
 
 
-def _ring_measures(light: _Light, coords: np.ndarray, ring: np.ndarray, p: np.ndarray,
+def _ring_measures(light: FramedLight, coords: np.ndarray, ring: np.ndarray, p: np.ndarray,
                    normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """|area| and |irradiance| (rings,) of closed rings (`polygons.ring_measures`; a disk's
     part inside them for a disk light), ring r seen from p[r] with normal[r]."""
@@ -274,7 +231,7 @@ def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
     return out
 
 
-def _shadows(shapely, light: _Light, objects: Objects, corners: np.ndarray, p: np.ndarray,
+def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
              normal: np.ndarray, own: np.ndarray, base: np.ndarray) -> np.ndarray:
     """(n,) object array: the union of every triangle's shadow on the light's plane seen from
     each p (None where none falls inside the pyramid over `base` (k, 3))."""
@@ -300,10 +257,10 @@ def _shadows(shapely, light: _Light, objects: Objects, corners: np.ndarray, p: n
     if len(rest):
         shapes.append(_polygons(shapely, flat[rest], count[rest]))
         owner.append(pix[rest])
-    return _unite(shapely, shapes, owner, len(p))
+    return _unite(shapely, shapes, owner, len(p), light.grid)
 
 
-def _whole_bodies(shapely, light: _Light, objects: Objects, p: np.ndarray, normal: np.ndarray,
+def _whole_bodies(shapely, light: FramedLight, objects: Objects, p: np.ndarray, normal: np.ndarray,
                   own: np.ndarray, meet: np.ndarray) -> tuple[list, list]:
     """The shadows of convex objects wholly between p's parallel plane and the light's
     (0 <= h < h(p), h the height over the light's plane toward p): p is outside such an
@@ -339,7 +296,7 @@ def _whole_bodies(shapely, light: _Light, objects: Objects, p: np.ndarray, norma
     return shapes, owner
 
 
-def _sphere_meets(light: _Light, objects: Objects, p: np.ndarray, base: np.ndarray
+def _sphere_meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.ndarray
                   ) -> np.ndarray:
     """(n, C) bool: cluster c's bounding sphere is not wholly outside one of the planes that
     bound the pyramid from p over `base` (k, 3): its side planes through p, the light's plane
@@ -383,7 +340,7 @@ def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np
     return pix[keep], tri[keep]
 
 
-def _cut(light: _Light, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.ndarray,
+def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.ndarray,
          base: np.ndarray):
     """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (the light's plane, then
     each side plane through p) and carried onto the light's plane: (flat (q', k, 2), count
@@ -401,9 +358,19 @@ def _cut(light: _Light, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri
     return polygons.project(poly, p[pix], light.center, light.normal, light.axes), count, pix, tri
 
 
-def _unite(shapely, shapes: list, owner: list, n: int) -> np.ndarray:
+def _polygonal(shapely, geoms: np.ndarray) -> np.ndarray:
+    """geoms (n,) with the parts of no area of any geometry collection among them dropped (an
+    overlay that snaps a sliver to its grid may return the collapsed sliver as a line)."""
+    mixed = np.flatnonzero(shapely.get_type_id(geoms) == 7)
+    for k in mixed:
+        parts = shapely.get_parts(shapely.get_parts(geoms[k]))   # multipolygons in it too
+        geoms[k] = shapely.multipolygons(parts[shapely.get_type_id(parts) == 3])
+    return geoms
+
+
+def _unite(shapely, shapes: list, owner: list, n: int, grid: float) -> np.ndarray:
     """(n,) object array: per pixel the union of the shapes (arrays) whose owners (arrays of
-    pixel indices) name it; None where none."""
+    pixel indices) name it, snap-rounded to `grid`; None where none."""
     out = np.full(n, None, object)
     if not shapes:
         return out
@@ -411,7 +378,9 @@ def _unite(shapely, shapes: list, owner: list, n: int) -> np.ndarray:
     order = np.argsort(owner, kind="stable")
     shapes, owner = shapes[order], owner[order]
     real = (shapes != None)  # noqa: E711 (an object array)
-    real[real] = ~shapely.is_empty(shapes[real])
+    # polygons only: a hull of collinear corners (a body seen edge-on) is a line, no area
+    real[real] = ~shapely.is_empty(shapes[real]) & np.isin(shapely.get_type_id(shapes[real]),
+                                                           (3, 6))
     shapes, owner = shapes[real], owner[real]
     if len(owner) == 0:
         return out
@@ -422,9 +391,11 @@ def _unite(shapely, shapes: list, owner: list, n: int) -> np.ndarray:
     acc = shapes[starts]
     for rank in range(1, int(sizes[few].max(initial=1))):
         more = np.flatnonzero(few & (sizes > rank))
-        acc[more] = shapely.union(acc[more], shapes[starts[more] + rank])
+        acc[more] = _polygonal(shapely, shapely.union(acc[more], shapes[starts[more] + rank],
+                                                      grid_size=grid))
     for k in np.flatnonzero(~few):
-        acc[k] = shapely.union_all(shapes[starts[k]:starts[k] + sizes[k]])
+        acc[k] = _polygonal(shapely, np.array([shapely.union_all(
+            shapes[starts[k]:starts[k] + sizes[k]], grid_size=grid)], object))[0]
     out[owner[starts]] = acc
     return out
 
@@ -455,7 +426,7 @@ def _outside(objects: Objects, corners: np.ndarray, p: np.ndarray, pix: np.ndarr
     return out
 
 
-def _measure(shapely, light: _Light, seen: np.ndarray, p: np.ndarray, normal: np.ndarray
+def _measure(shapely, light: FramedLight, seen: np.ndarray, p: np.ndarray, normal: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray]:
     """(n,) area and irradiance of the regions `seen` (n,) seen from p (n, 3) with normals."""
     parts, part_of = shapely.get_parts(seen, return_index=True)

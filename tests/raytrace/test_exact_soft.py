@@ -270,3 +270,22 @@ def test_a_sphere_light_is_refused():
     scene = _floor_scene(AreaLight("sphere", [0, 2, 0], radius=0.3, samples=4))
     with pytest.raises(SceneError, match=r"lights\[0\]\.type.*sphere light has no exact"):
         exact_visibility(scene)
+
+
+def test_far_from_the_origin_the_same():
+    """The parallel squares moved 1e4 along x and z: V is the same up to the rounding of
+    coordinates of 1e4 (ulp 1.8e-12; the shadow edges move by a few of them, times the
+    projection's factor 2.5, over a light of 1.2: < 1e-10)."""
+    import dataclasses
+    scene = square_over_floor(square_light(16), size=32)
+    shift = np.array([1e4, 0.0, 1e4])
+    moved = scene.replace(
+        objects=[dataclasses.replace(o, vertices=o.vertices + shift) for o in scene.objects],
+        lights=[AreaLight("rect", scene.lights[0].center + shift, normal=[0, -1, 0],
+                          size=[LIGHT_SIDE, LIGHT_SIDE], samples=16)],
+        camera=dataclasses.replace(scene.camera, eye=scene.camera.eye + shift,
+                                   target=scene.camera.target + shift))
+    near, far = exact_visibility(scene), exact_visibility(moved)
+    assert ((near.visibility > 0.01) & (near.visibility < 0.99)).sum() > 50
+    assert np.abs(near.visibility - far.visibility).max() <= 1e-10
+    assert np.abs(near.irradiance - far.irradiance).max() <= 1e-10
