@@ -155,29 +155,79 @@ def _segment_hits(p, targets, tri):
     return (a != 0) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0) & (t < 1)
 
 
-def test_one_random_triangle_against_a_dense_grid():
-    """V at penumbra pixels against the fraction of an n x n midpoint grid of the light whose
-    segments miss the triangle.  The blocked set on the light is one convex polygon: its
-    outline crosses each of the n + 1 grid lines of either direction at most twice, so it
-    passes through at most 4 (n + 1) + 1 cells, and only those cells' samples can be counted
-    wrong, each by at most 1 / n²."""
-    rng = np.random.default_rng(7)
-    corners = np.array([[0, 1.2, 0]]) + rng.uniform(-0.7, 0.7, (3, 3)) * [1, 0.4, 1]
-    scene = _floor_scene(AreaLight(samples=4, **SHAPES["rect"]),
-                         [mesh("tri", corners, [[0, 1, 2]], MATTE)], size=32)
+# An L-shaped light (the 1.2 x 0.8 rect less its quarter x > 0, z > 0), counter-clockwise seen
+# from below; its outline lies on the midpoint grid's cell boundaries below (n = 2000 divides
+# it), so it adds no crossed cell.
+L_LIGHT = dict(shape="polygon", center=None, vertices=[
+    [0.6, LIGHT_Y, -0.4], [0.6, LIGHT_Y, 0.0], [0.0, LIGHT_Y, 0.0], [0.0, LIGHT_Y, 0.4],
+    [-0.6, LIGHT_Y, 0.4], [-0.6, LIGHT_Y, -0.4]])
+
+
+def _dense_check(scene, casters, inside, n, pieces, rng, pixels=8):
+    """V at penumbra floor pixels against the fraction of the light's n x n midpoint grid
+    (over its 1.2 x 0.8 box, the points `inside` (u, v) keeps) whose segments miss every
+    caster triangle.  The blocked set is `pieces` convex polygons (a triangle's shadow, or a
+    convex body's): each outline crosses each of the n + 1 grid lines of either direction at
+    most twice, so passes through at most 4 (n + 1) + 1 cells, and only the samples of those
+    cells can be counted wrong, each by one."""
     found = exact_visibility(scene)
     p, floor = _on_floor(scene)
     v = found.visibility[0]
     pick = np.argwhere(floor & (v > 0.05) & (v < 0.95))
-    assert len(pick) >= 8
-    n = 2000
+    assert len(pick) >= pixels
+    grid = (np.arange(n) + 0.5) / n
+    u, w = np.meshgrid(-0.6 + 1.2 * grid, -0.4 + 0.8 * grid, indexing="ij")
+    keep = inside(u.ravel(), w.ravel())
+    targets = np.stack([u.ravel(), np.full(u.size, LIGHT_Y), w.ravel()], 1)[keep]
+    bound = pieces * (4 * (n + 1) + 1) / keep.sum()
+    for y, x in pick[rng.choice(len(pick), pixels, replace=False)]:
+        hit = np.zeros(len(targets), bool)
+        for tri in casters:
+            hit |= _segment_hits(p[y, x], targets, tri)
+        assert abs(v[y, x] - (1 - hit.mean())) <= bound, (y, x, v[y, x], 1 - hit.mean())
+    return pick
+
+
+@pytest.mark.parametrize("light", ["rect", "L"])
+def test_one_random_triangle_against_a_dense_grid(light):
+    rng = np.random.default_rng(7)
+    corners = np.array([[0, 1.2, 0]]) + rng.uniform(-0.7, 0.7, (3, 3)) * [1, 0.4, 1]
+    shape = SHAPES["rect"] if light == "rect" else L_LIGHT
+    scene = _floor_scene(AreaLight(samples=4, **shape),
+                         [mesh("tri", corners, [[0, 1, 2]], MATTE)], size=32)
+    inside = (lambda u, w: np.ones(u.shape, bool)) if light == "rect" else \
+        (lambda u, w: (u < 0) | (w < 0))
+    _dense_check(scene, [corners], inside, 2000, 1, rng)
+
+
+def test_contact_shadow_against_a_dense_grid():
+    """A box standing on the floor: the floor's penumbra right at its foot (within 3 pixels of
+    pixels that see the box) against the dense grid; no margin drops the box there."""
+    rng = np.random.default_rng(3)
+    cube = box("box", center=[0.3, 0.25, -0.2], size=[0.5, 0.5, 0.5], material=MATTE,
+               transform=Transform(rotation=[0, 30, 0]))
+    scene = _floor_scene(AreaLight(samples=4, **SHAPES["rect"]), [cube], size=48)
+    seen_box = ground_truth(scene, outputs=("object_id",)).object_id == 2
+    near = np.zeros_like(seen_box)
+    for dy in range(-3, 4):
+        for dx in range(-3, 4):
+            near |= np.roll(np.roll(seen_box, dy, 0), dx, 1)
+    found = exact_visibility(scene)
+    p, floor = _on_floor(scene)
+    v = found.visibility[0]
+    pick = np.argwhere(floor & near & (v > 0.02) & (v < 0.98))
+    assert len(pick) >= 6
+    n = 1000
     grid = (np.arange(n) + 0.5) / n
     u, w = np.meshgrid(-0.6 + 1.2 * grid, -0.4 + 0.8 * grid, indexing="ij")
     targets = np.stack([u.ravel(), np.full(u.size, LIGHT_Y), w.ravel()], 1)
-    bound = (4 * (n + 1) + 1) / n ** 2
-    for y, x in pick[rng.choice(len(pick), 8, replace=False)]:
-        brute = 1 - _segment_hits(p[y, x], targets, corners).mean()
-        assert abs(v[y, x] - brute) <= bound, (y, x, v[y, x], brute)
+    bound = (4 * (n + 1) + 1) / n ** 2     # one convex body: one convex shadow
+    tris = cube.vertices[cube.faces]
+    for y, x in pick[rng.choice(len(pick), 6, replace=False)]:
+        hit = np.zeros(len(targets), bool)
+        for tri in tris:
+            hit |= _segment_hits(p[y, x], targets, tri)
+        assert abs(v[y, x] - (1 - hit.mean())) <= bound, (y, x, v[y, x], 1 - hit.mean())
 
 
 def _random_scene(seed: int, samples: int, size: int = 36) -> Scene:
