@@ -162,7 +162,7 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
         return out_v, out_e
     p, normal, own = p[front], normal[front], own[front]
     base = light.center + light.hull @ light.axes                 # (k, 3)
-    pieces = _shadows(shapely, light, objects, corners, p, normal, own, base)
+    pieces, single = _shadows(shapely, light, objects, corners, p, normal, own, base)
     # the light cut to p's side: its hull's box cut by n . (x - p) > 0, then the outline
     box = np.array([light.hull.min(axis=0), [light.hull[:, 0].max(), light.hull[:, 1].min()],
                     light.hull.max(axis=0), [light.hull[:, 0].min(), light.hull[:, 1].max()]])
@@ -179,7 +179,13 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     if len(plain):
         coords, ring = _closed_rings(cut[plain], count[plain])
         area[plain], irr[plain] = _ring_measures(light, coords, ring, p[plain], normal[plain])
-    rest = np.setdiff1d(np.arange(len(p)), plain)
+    # one convex shadow on a rect or disk: the light less it, in numpy
+    lone = np.flatnonzero(single & (count >= 3)) if light.outline is None and regions is None \
+        else np.zeros(0, int)
+    if len(lone):
+        area[lone], irr[lone] = _minus_convex(shapely, light, cut[lone], count[lone],
+                                              pieces[lone], p[lone], normal[lone])
+    rest = np.setdiff1d(np.arange(len(p)), np.r_[plain, lone])
     if len(rest):
         seen = _polygons(shapely, cut[rest], count[rest])
         if light.outline is not None:  # a polygon light: its own outline
@@ -191,9 +197,38 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
         area[rest], irr[rest] = _measure(shapely, light, seen, p[rest], normal[rest])
         if regions is not None:
             regions[front[rest]] = seen
-    out_v[front] = area / light.area
-    out_e[front] = irr
+    # the subtractions leave roundings of ~1e-14 either side of 0 and 1
+    out_v[front] = np.clip(area / light.area, 0.0, 1.0)
+    out_e[front] = np.maximum(irr, 0.0)
     return out_v, out_e
+
+
+def _minus_convex(shapely, light: FramedLight, cut: np.ndarray, count: np.ndarray,
+                  pieces: np.ndarray, p: np.ndarray, normal: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) area and irradiance of the convex polygons cut (n, k, 2), count (n,) less one
+    convex polygon each, `pieces` (n,) (shapely): the measure of cut less that of its part
+    inside the piece, which is cut clipped by each of the piece's edges (no GEOS)."""
+    coords, which = shapely.get_coordinates(shapely.get_exterior_ring(pieces),
+                                            return_index=True)
+    m = np.bincount(which, minlength=len(pieces)) - 1        # corners (the closing one repeats)
+    first = np.r_[0, np.cumsum(m + 1)[:-1]]
+    at = np.minimum(np.arange(m.max())[None], m[:, None] - 1)
+    a, b = coords[first[:, None] + at], coords[first[:, None] + at + 1]
+    turn = np.sign(((a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
+                    * (np.arange(m.max())[None] < m[:, None])).sum(axis=1))
+    whole = _ring_measures(light, *_closed_rings(cut, count), p, normal)
+    inner, inner_count = cut, count
+    for e in range(m.max()):
+        edge, start = b[:, e] - a[:, e], a[:, e]
+        d = (edge[:, None, 0] * (inner[..., 1] - start[:, None, 1])
+             - edge[:, None, 1] * (inner[..., 0] - start[:, None, 0])) * turn[:, None]
+        # past a piece's last edge: keep all; a piece of no area (turn 0) hides nothing
+        d = np.where((e < m)[:, None], d, 1.0)
+        d = np.where((turn == 0)[:, None], -1.0, d)
+        inner, inner_count = polygons.clip(inner, inner_count, d)
+    part = _ring_measures(light, *_closed_rings(inner, inner_count), p, normal)
+    return whole[0] - part[0], whole[1] - part[1]
 
 
 def _closed_rings(flat: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -232,9 +267,11 @@ def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
 
 
 def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
-             normal: np.ndarray, own: np.ndarray, base: np.ndarray) -> np.ndarray:
+             normal: np.ndarray, own: np.ndarray, base: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray]:
     """(n,) object array: the union of every triangle's shadow on the light's plane seen from
-    each p (None where none falls inside the pyramid over `base` (k, 3))."""
+    each p (None where none falls inside the pyramid over `base` (k, 3)); and where that is
+    one convex polygon (`_unite`)."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = (objects.lo[None] <= hi[:, None]).all(-1) & (objects.hi[None] >= lo[:, None]).all(-1)
@@ -368,12 +405,14 @@ def _polygonal(shapely, geoms: np.ndarray) -> np.ndarray:
     return geoms
 
 
-def _unite(shapely, shapes: list, owner: list, n: int, grid: float) -> np.ndarray:
+def _unite(shapely, shapes: list, owner: list, n: int, grid: float
+           ) -> tuple[np.ndarray, np.ndarray]:
     """(n,) object array: per pixel the union of the shapes (arrays) whose owners (arrays of
-    pixel indices) name it, snap-rounded to `grid`; None where none."""
-    out = np.full(n, None, object)
+    pixel indices) name it, snap-rounded to `grid`, None where none; and (n,) bool, the pixels
+    with one shape (convex, as every shape here is)."""
+    out, single = np.full(n, None, object), np.zeros(n, bool)
     if not shapes:
-        return out
+        return out, single
     shapes, owner = np.concatenate(shapes), np.concatenate(owner)
     order = np.argsort(owner, kind="stable")
     shapes, owner = shapes[order], owner[order]
@@ -383,7 +422,7 @@ def _unite(shapely, shapes: list, owner: list, n: int, grid: float) -> np.ndarra
                                                            (3, 6))
     shapes, owner = shapes[real], owner[real]
     if len(owner) == 0:
-        return out
+        return out, single
     starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
     sizes = np.diff(np.r_[starts, len(owner)])
     # a few pieces: united rank by rank, all pixels at once; many: GEOS's cascaded union
@@ -397,7 +436,8 @@ def _unite(shapely, shapes: list, owner: list, n: int, grid: float) -> np.ndarra
         acc[k] = _polygonal(shapely, np.array([shapely.union_all(
             shapes[starts[k]:starts[k] + sizes[k]], grid_size=grid)], object))[0]
     out[owner[starts]] = acc
-    return out
+    single[owner[starts[sizes == 1]]] = True
+    return out, single
 
 
 def _side(q: np.ndarray, p: np.ndarray, a: np.ndarray, b: np.ndarray, inner: np.ndarray

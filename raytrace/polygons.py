@@ -24,11 +24,11 @@ def clip(points: np.ndarray, counts: np.ndarray, dist: np.ndarray
          ) -> tuple[np.ndarray, np.ndarray]:
     """Convex polygons cut to where `dist` >= 0.
 
-    points : (n, k, 3) float64, polygon i is points[i, :counts[i]] (in order)
+    points : (n, k, d) float64, polygon i is points[i, :counts[i]] (in order), d = 2 or 3
     dist : (n, k) float64, the signed distance of each corner from polygon i's plane
     Returns (points (n, k', 3), counts (n,)): the kept part of each, k' <= k + 1 (0 corners
     where nothing is kept).  A crossing edge's new corner is its float64 interpolation."""
-    n, k, _ = points.shape
+    n, k, dim = points.shape
     at = np.arange(k)[None]
     valid = at < counts[:, None]
     after = (at + 1) % np.maximum(counts[:, None], 1)
@@ -40,7 +40,7 @@ def clip(points: np.ndarray, counts: np.ndarray, dist: np.ndarray
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(cross, dist / np.where(cross, dist - d1, 1.0), 0.0)
     meet = points + t[..., None] * (p1 - points)
-    slots = np.stack([points, meet], axis=2).reshape(n, 2 * k, 3)
+    slots = np.stack([points, meet], axis=2).reshape(n, 2 * k, dim)
     ok = np.stack([keep, cross], axis=2).reshape(n, 2 * k)
     new = ok.sum(axis=1)
     width = max(int(new.max(initial=0)), 1)
