@@ -10,16 +10,19 @@ own triangle and those coplanar with it (COPLANAR_RELATIVE) are left out.  Then
     visibility_exact = area(visible) / area(light)
     irradiance_exact = Lambert's formula over the visible region's rings (unit radiance),
 
-0 for both where p is not on the light's emitting side.  docs/CONVENTIONS.md ("Exact soft
-shadows") says what is exact at a contact and at a tie.
+0 for both where p is not on the light's emitting side.  docs/CONVENTIONS.md ("Area lights:
+exact visibility") says what is exact at a contact and at a tie.
 
-Candidates come from a conservative query, never from sampled rays: clusters of triangles and
-then triangles whose boxes meet the box of the pyramid, then the cut itself.  A closed,
-convex, consistently wound object (a box, a sphere's tessellation) shadows p from outside as
-one convex polygon, the hull of its cut triangles' shadows (the shadow of a convex body from a
-point outside it is convex), and not at all from its own outside; every other object's
-triangles are united one by one.  The polygon booleans are GEOS's (shapely >= 2, the optional
-extra `exact`); the measures are `raytrace.polygons`'.
+Candidates come from a conservative query, never from sampled rays: clusters of triangles whose
+bounding spheres are inside every plane of the pyramid and whose boxes meet its box, then
+triangles whose boxes do, then the cut itself.  A closed, convex, consistently wound object (a
+box, a sphere's tessellation) shadows p from outside as one convex polygon (the shadow of a
+convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
+where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
+not at all from its own outside.  Every other object's triangles are united one by one.  One
+convex shadow on a rect or disk is taken away in numpy (clipped edge by edge); several are
+united, and taken away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
+(`lightshapes.OVERLAY_GRID`); the measures are `raytrace.polygons`'.
 """
 
 from __future__ import annotations
