@@ -209,26 +209,23 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
 def _minus_convex(shapely, light: FramedLight, cut: np.ndarray, count: np.ndarray,
                   pieces: np.ndarray, p: np.ndarray, normal: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray]:
-    """(n,) area and irradiance of the convex polygons cut (n, k, 2), count (n,) less one
-    convex polygon each, `pieces` (n,) (shapely): the measure of cut less that of its part
-    inside the piece, which is cut clipped by each of the piece's edges (no GEOS)."""
+    """(n,) area and irradiance of the convex polygons cut (n, k, 2), count (n,) (counter-
+    clockwise, as `_area_light` cuts the light's box) less one convex polygon each, `pieces`
+    (n,) (shapely): the measure of cut less that of the piece clipped by each of cut's edges
+    (no GEOS)."""
     coords, which = shapely.get_coordinates(shapely.get_exterior_ring(pieces),
                                             return_index=True)
     m = np.bincount(which, minlength=len(pieces)) - 1        # corners (the closing one repeats)
     first = np.r_[0, np.cumsum(m + 1)[:-1]]
-    at = np.minimum(np.arange(m.max())[None], m[:, None] - 1)
-    a, b = coords[first[:, None] + at], coords[first[:, None] + at + 1]
-    turn = np.sign(((a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0])
-                    * (np.arange(m.max())[None] < m[:, None])).sum(axis=1))
+    inner = coords[first[:, None] + np.minimum(np.arange(m.max())[None], m[:, None] - 1)]
+    inner_count = np.where(m >= 3, m, 0)
     whole = _ring_measures(light, *_closed_rings(cut, count), p, normal)
-    inner, inner_count = cut, count
-    for e in range(m.max()):
-        edge, start = b[:, e] - a[:, e], a[:, e]
+    for e in range(cut.shape[1]):
+        start = cut[:, e]
+        edge = cut[np.arange(len(cut)), (e + 1) % np.maximum(count, 1)] - start
         d = (edge[:, None, 0] * (inner[..., 1] - start[:, None, 1])
-             - edge[:, None, 1] * (inner[..., 0] - start[:, None, 0])) * turn[:, None]
-        # past a piece's last edge: keep all; a piece of no area (turn 0) hides nothing
-        d = np.where((e < m)[:, None], d, 1.0)
-        d = np.where((turn == 0)[:, None], -1.0, d)
+             - edge[:, None, 1] * (inner[..., 0] - start[:, None, 0]))
+        d = np.where((e < count)[:, None], d, 1.0)           # past the cut's last edge: keep
         inner, inner_count = polygons.clip(inner, inner_count, d)
     part = _ring_measures(light, *_closed_rings(inner, inner_count), p, normal)
     return whole[0] - part[0], whole[1] - part[1]
