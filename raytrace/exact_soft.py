@@ -360,17 +360,21 @@ def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np
     tri = objects.members[clu].reshape(-1)
     keep = tri >= 0
     pix, tri = pix[keep], tri[keep]
-    box = corners[tri]
-    keep = (box.min(axis=1) <= hi[pix]).all(-1) & (box.max(axis=1) >= lo[pix]).all(-1)
+    keep = (objects.tri_lo[tri] <= hi[pix]).all(-1) & (objects.tri_hi[tri] >= lo[pix]).all(-1)
     keep &= tri != own[pix]
     pix, tri = pix[keep], tri[keep]
-    own_c = corners[own[pix]]
-    own_n = np.cross(own_c[:, 1] - own_c[:, 0], own_c[:, 2] - own_c[:, 0])
-    own_n /= np.maximum(np.linalg.norm(own_n, axis=1, keepdims=True), 1e-300)
-    c = corners[tri]
-    off = np.abs(np.einsum("qkj,qj->qk", c - own_c[:, :1], own_n)).max(axis=1)
-    scale = np.maximum(np.abs(own_c).max(axis=(1, 2)), np.abs(c).max(axis=(1, 2)))
-    keep = off > COPLANAR_RELATIVE * scale
+    # coplanar: every corner within COPLANAR_RELATIVE of p's own triangle's plane.  Only near-
+    # parallel triangles are looked at: one tilted by more than 0.045 rad with its corners that
+    # close to the plane is smaller than 2^-40 / 0.045 of its coordinates.
+    own_n = objects.normal[own[pix]]
+    parallel = np.flatnonzero(np.abs((own_n * objects.normal[tri]).sum(axis=1)) > 1 - 1e-3)
+    keep = np.ones(len(tri), bool)
+    if len(parallel):
+        near, t = own[pix[parallel]], tri[parallel]
+        off = np.abs(corners[t] @ objects.normal[near][..., None]
+                     - objects.offset[near, None, None])
+        scale = np.maximum(objects.scale[near], objects.scale[t])
+        keep[parallel] = off.max(axis=(1, 2)) > COPLANAR_RELATIVE * scale
     mine = objects.convex[tri] & (objects.object[tri] == objects.object[own[pix]])
     outside = (objects.outward[own[pix]] * normal[pix]).sum(axis=1) > 0
     keep &= ~(mine & outside)

@@ -40,6 +40,8 @@ class FramedLight(NamedTuple):
 
 
 def frame_light(light: AreaLight, origin: np.ndarray, key: str) -> FramedLight:
+    """`light` in the frame of `origin` (its centre less the origin); SceneError naming `key`
+    for a sphere light."""
     if light.shape == "sphere":
         raise SceneError(f"{key}.type", "a sphere light has no exact visibility (the part of "
                                         "a sphere's surface seen past occluders is bounded by "
@@ -51,19 +53,21 @@ def frame_light(light: AreaLight, origin: np.ndarray, key: str) -> FramedLight:
     if light.shape == "rect":
         w, h = light.size / 2
         hull = np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
-        return FramedLight(center, light.normal, axes, hull, None, None, float(light.size.prod()),
-                      _grid(hull))
+        return FramedLight(center, light.normal, axes, hull, None, None,
+                           float(light.size.prod()), _grid(hull))
     if light.shape == "disk":
         r = light.radius
         hull = np.array([[-r, -r], [r, -r], [r, r], [-r, r]])
-        return FramedLight(center, light.normal, axes, hull, None, r, float(np.pi * r * r), _grid(hull))
+        return FramedLight(center, light.normal, axes, hull, None, r, float(np.pi * r * r),
+                           _grid(hull))
     shapely = shapely_module()
     outline = (light.vertices - light.center) @ axes.T
     ring = shapely.Polygon(outline)
     hull = np.array(ring.convex_hull.exterior.coords)[:-1]
     if shapely.is_ccw(shapely.LinearRing(hull)) is False:
         hull = hull[::-1]
-    return FramedLight(center, light.normal, axes, hull, outline, None, float(ring.area), _grid(hull))
+    return FramedLight(center, light.normal, axes, hull, outline, None, float(ring.area),
+                       _grid(hull))
 
 
 def _grid(hull: np.ndarray) -> float:

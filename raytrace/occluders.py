@@ -28,7 +28,9 @@ class Objects(NamedTuple):
     (convex (M,) bool), with its outward face normals (M, 3) (0 for the others); and the
     candidate clusters: members (C, CLUSTER) int64 (−1 pads), lo, hi (C, 3) boxes, owner (C,)
     each cluster's object, centre (C, 3) and radius (C,) a sphere around each cluster's box;
-    bodies: per object its `Convex`, or None."""
+    bodies: per object its `Convex`, or None; per triangle its box tri_lo, tri_hi (M, 3), unit
+    normal (M, 3) (0 if degenerate), offset (M,) normal . corner and scale (M,) its largest
+    corner coordinate."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -40,6 +42,11 @@ class Objects(NamedTuple):
     bodies: list
     centre: np.ndarray
     radius: np.ndarray
+    tri_lo: np.ndarray
+    tri_hi: np.ndarray
+    normal: np.ndarray
+    offset: np.ndarray
+    scale: np.ndarray
 
 
 class Convex(NamedTuple):
@@ -106,7 +113,8 @@ def objects(corners: np.ndarray, ids: np.ndarray) -> Objects:
     # the half diagonal, a little more for its own rounding: the sphere must hold the box
     radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
-                   centre, radius)
+                   centre, radius, corners.min(axis=1), corners.max(axis=1), normals,
+                   (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)))
 
 
 def _topology(corners: np.ndarray):

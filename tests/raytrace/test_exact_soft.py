@@ -131,7 +131,8 @@ def test_parallel_squares_give_the_product_of_overlaps():
     for axis, a in enumerate((0, 2)):
         s0 = p[..., a] + k * (lo[axis] - p[..., a])
         s1 = p[..., a] + k * (hi[axis] - p[..., a])
-        overlap = np.clip(np.minimum(s1, LIGHT_SIDE / 2) - np.maximum(s0, -LIGHT_SIDE / 2), 0, None)
+        half_light = LIGHT_SIDE / 2
+        overlap = np.clip(np.minimum(s1, half_light) - np.maximum(s0, -half_light), 0, None)
         blocked *= overlap / LIGHT_SIDE
     want = 1 - blocked
     assert ((want > 0.01) & (want < 0.99) & floor).sum() > 100   # a real penumbra
