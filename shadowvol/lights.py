@@ -152,10 +152,9 @@ class AreaLight(_Emitter):
         if self.shape == "polygon" and self.vertices is not None:
             vertices, normal, center = _polygon(self.vertices)
             object.__setattr__(self, "vertices", vertices)
-            need += ("center", "normal")  # computed, not given
-            if self.center is not None or self.normal is not None:
-                raise SceneError("center" if self.center is not None else "normal",
-                                 "not a key of a polygon light (computed from its vertices)")
+            # computed from the vertices (a scene file may not give them; `dataclasses.replace`
+            # passes the old ones, replaced here)
+            need += ("center", "normal")
             object.__setattr__(self, "center", center)
             object.__setattr__(self, "normal", normal)
         for key in ("center", "normal", "size", "radius", "vertices"):
