@@ -201,13 +201,18 @@ def test_one_random_triangle_against_a_dense_grid(light):
     _dense_check(scene, [corners], inside, 2000, 1, rng)
 
 
-def test_contact_shadow_against_a_dense_grid():
+@pytest.mark.parametrize("kind", ["rect", "disk"])
+def test_contact_shadow_against_a_dense_grid(kind):
     """A box standing on the floor: the floor's penumbra right at its foot (within 3 pixels of
-    pixels that see the box) against the dense grid; no margin drops the box there."""
+    pixels that see the box) against the light's midpoint grid; no margin drops the box there.
+    The box is convex: its shadow is one convex polygon, whose outline crosses at most
+    c = 4 (n + 1) + 1 cells.  A rect's outline runs along the grid; a disk's crosses c more,
+    and the fraction's denominator (the points inside the disk) is off by at most c too: the
+    bound is c / (points inside) for the rect, 3 c / (points inside) for the disk."""
     rng = np.random.default_rng(3)
     cube = box("box", center=[0.3, 0.25, -0.2], size=[0.5, 0.5, 0.5], material=MATTE,
                transform=Transform(rotation=[0, 30, 0]))
-    scene = _floor_scene(AreaLight(samples=4, **SHAPES["rect"]), [cube], size=48)
+    scene = _floor_scene(AreaLight(samples=4, **SHAPES[kind]), [cube], size=48)
     seen_box = ground_truth(scene, outputs=("object_id",)).object_id == 2
     near = np.zeros_like(seen_box)
     for dy in range(-3, 4):
@@ -220,9 +225,13 @@ def test_contact_shadow_against_a_dense_grid():
     assert len(pick) >= 6
     n = 1000
     grid = (np.arange(n) + 0.5) / n
-    u, w = np.meshgrid(-0.6 + 1.2 * grid, -0.4 + 0.8 * grid, indexing="ij")
+    half_w, half_h = (0.6, 0.4) if kind == "rect" else (0.6, 0.6)
+    u, w = np.meshgrid(-half_w + 2 * half_w * grid, -half_h + 2 * half_h * grid, indexing="ij")
     targets = np.stack([u.ravel(), np.full(u.size, LIGHT_Y), w.ravel()], 1)
-    bound = (4 * (n + 1) + 1) / n ** 2     # one convex body: one convex shadow
+    if kind == "disk":
+        targets = targets[np.hypot(targets[:, 0], targets[:, 2]) <= 0.6]
+    cells = 4 * (n + 1) + 1
+    bound = (1 if kind == "rect" else 3) * cells / len(targets)
     tris = cube.vertices[cube.faces]
     for y, x in pick[rng.choice(len(pick), 6, replace=False)]:
         hit = np.zeros(len(targets), bool)
