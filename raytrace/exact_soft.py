@@ -32,6 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
 from . import polygons
@@ -41,8 +42,10 @@ from .lightshapes import FramedLight, frame_light, shapely_module
 from .masks import MASK_TILE_RAYS, MaskTracer, _primary_hits, scene_backend, shadow_masks
 from .occluders import CLUSTER, CONVEX_RELATIVE, Objects
 from .occluders import objects as _objects
+from .switches import casting, receiving_objects
 
-EXACT_OUTPUTS = ("visibility_exact", "irradiance_exact")
+__all__ = ["EXACT_OUTPUTS", "ExactVisibility", "check_exact", "exact_visibility",
+           "visible_regions"]
 
 # A triangle is coplanar with p's own when its three corners lie within this much of the
 # largest corner coordinate (the frame's, from the eye) of the own triangle's plane: the
@@ -103,7 +106,10 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     vis = np.zeros((L, H * W))
     irr = np.zeros((L, H * W))
     corners = tracer.vertices[tracer.faces].astype(np.float64)
-    objects = _objects(corners, scene.triangles()[2]) if any(lights) else None
+    ids = scene.triangles()[2]
+    objects = _objects(corners, ids, casting(scene)) if any(lights) else None
+    # per triangle: its object receives shadows (docs/CONVENTIONS.md, "Shadow switches")
+    receives = receiving_objects(scene)[ids] if len(ids) else np.zeros(0, bool)
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
                                  target=scene.camera.target - origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
@@ -131,8 +137,9 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
                 part = slice(at, at + CHUNK_PIXELS)
                 keep = None if _regions is None or _regions[0] != i else \
                     np.full(len(p[part]), None, object)
+                shadowed = receives[hit.tri[part]] & scene.lights[i].shadows
                 v, e = _area_light(shapely, light, objects, corners, p[part], normal[part],
-                                   hit.tri[part], keep)
+                                   hit.tri[part], keep, shadowed)
                 if keep is not None:
                     _regions[1][pixel[part]] = keep
                 vis[i, pixel[part]], irr[i, pixel[part]] = v, e
@@ -152,11 +159,13 @@ def _hard_cosine(light, p: np.ndarray, normal: np.ndarray, origin: np.ndarray) -
 
 
 def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
-                p: np.ndarray, normal: np.ndarray, own: np.ndarray, regions=None
-                ) -> tuple[np.ndarray, np.ndarray]:
+                p: np.ndarray, normal: np.ndarray, own: np.ndarray, regions=None,
+                shadowed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(n,) visibility and irradiance of `light` at points p (n, 3) with camera-facing unit
     normals (n, 3) on triangles own (n,); `regions` (n,) object array: filled with the
-    visible regions (shapely, the light's plane coordinates) where given."""
+    visible regions (shapely, the light's plane coordinates) where given; `shadowed` (n,)
+    bool (default all): the points that receive shadows from this light (the others see the
+    light's part on their side whole: the shadow switches)."""
     n = len(p)
     height = (p - light.center) @ light.normal
     front = np.flatnonzero(height > 0)
@@ -165,7 +174,11 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
         return out_v, out_e
     p, normal, own = p[front], normal[front], own[front]
     base = light.center + light.hull @ light.axes                 # (k, 3)
-    pieces, single = _shadows(shapely, light, objects, corners, p, normal, own, base)
+    pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
+    at = np.arange(len(p)) if shadowed is None else np.flatnonzero(shadowed[front])
+    if len(at) and len(objects.members):
+        pieces[at], single[at] = _shadows(shapely, light, objects, corners, p[at], normal[at],
+                                          own[at], base)
     # the light cut to p's side: its hull's box cut by n . (x - p) > 0, then the outline
     box = np.array([light.hull.min(axis=0), [light.hull[:, 0].max(), light.hull[:, 1].min()],
                     light.hull.max(axis=0), [light.hull[:, 0].min(), light.hull[:, 1].max()]])

@@ -9,7 +9,6 @@ sphere is for images only.
 
 from __future__ import annotations
 
-import dataclasses
 from typing import NamedTuple
 
 import numpy as np
@@ -18,6 +17,7 @@ from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 
 from .backends import TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
+from .switches import receiving, switched_backend
 from .tolerances import (
     LIFT_HEIGHTS,
     OWN_HIT_RETRIES,
@@ -51,10 +51,11 @@ class MaskTracer(NamedTuple):
 def scene_backend(scene: Scene, backend: str = "embree") -> MaskTracer:
     """The scene's triangles in a backend, ready for `shadow_masks` (build once, trace often),
     in the float32 frame of `tolerances.frame_origin` (the eye): float64 coordinates minus the
-    origin, subtracted before anything is rounded."""
+    origin, subtracted before anything is rounded.  Objects switched off (`cast_shadows`,
+    `receive_shadows`) are traced as `raytrace.switches` says."""
     vertices, faces, _ = scene.triangles()
     origin = frame_origin(scene)
-    tracer = make_backend(backend, vertices - origin, faces)
+    tracer = switched_backend(scene, make_backend(backend, vertices - origin, faces), origin)
     return MaskTracer(tracer, _Triangles.of(tracer), origin)
 
 
@@ -110,8 +111,7 @@ def shadow_masks(scene: Scene, backend: str | MaskTracer = "embree"
     coverage = np.zeros((H, W), bool)
     rows_per_tile = max(1, MASK_TILE_RAYS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
-    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
-                                 target=scene.camera.target - origin)
+    camera = scene.camera.translated(-origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     reach = scene.extent  # a ray that starts farther than this from its point has left the scene
     lights = [_local_light(light, origin, triangles) for light in scene.lights]
@@ -300,7 +300,7 @@ def _near_blocked(tracer: TriangleBackend, near: _NearPieces, own: np.ndarray) -
 def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) -> np.ndarray:
     """(h,) bool: which of the tile's hit points the light reaches: facing it, and their
     shadow ray (`_segments`) not blocked by a triangle other than their own (`_blocked`)."""
-    seg = _segments(local, hit, reach)
+    seg = receiving(tracer, local.light, _segments(local, hit, reach), hit)
     out = seg.facing.copy()
     out[seg.rays] = ~_blocked(tracer, seg.start, seg.direction, seg.tmax, hit.tri[seg.rays],
                               hit.fragile[seg.rays])

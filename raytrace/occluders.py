@@ -72,7 +72,10 @@ class Convex(NamedTuple):
         return out
 
 
-def objects(corners: np.ndarray, ids: np.ndarray) -> Objects:
+def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = None) -> Objects:
+    """The `Objects` of triangles corners (M, 3, 3) of objects ids (M,); `casts` (n_objects,)
+    bool: the objects that cast shadows (`cast_shadows`; default all): only theirs are in the
+    clusters and bodies (the others are met by no query)."""
     M = len(corners)
     convex = np.zeros(M, bool)
     outward = np.zeros((M, 3))
@@ -83,7 +86,7 @@ def objects(corners: np.ndarray, ids: np.ndarray) -> Objects:
     for j in range(int(ids.max(initial=-1)) + 1):
         tris = np.flatnonzero(ids == j)
         bodies.append(None)
-        if len(tris) == 0:
+        if len(tris) == 0 or (casts is not None and not casts[j]):
             continue
         topology = _topology(corners[tris]) if len(tris) <= CONVEX_TEST_FACES else None
         if topology is not None and (length[tris] > 0).all():
@@ -104,7 +107,8 @@ def objects(corners: np.ndarray, ids: np.ndarray) -> Objects:
         pad = -len(order) % CLUSTER
         members.append(np.concatenate([order, np.full(pad, -1)]).reshape(-1, CLUSTER))
         owner.append(np.full(len(members[-1]), j))
-    members, owner = np.concatenate(members), np.concatenate(owner)
+    members = np.concatenate(members) if members else np.zeros((0, CLUSTER), np.int64)
+    owner = np.concatenate(owner) if owner else np.zeros(0, np.int64)
     box = corners[np.maximum(members, 0)]                      # (C, CLUSTER, 3, 3)
     use = (members >= 0)[..., None, None]
     lo = np.where(use, box, np.inf).min(axis=(1, 2))

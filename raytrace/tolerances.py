@@ -76,10 +76,9 @@ version) grows with the distance from the world's origin: 5 cm kerbs under a low
 shadows once the scene was translated by 1e4, and a light margin of the whole scene's largest
 coordinate let a lamp shade on a 1e6-wide ground quad leak light (3.8 units of margin).
 
-The Whitted images keep their own offset
------------------------------------------
-`raytrace.whitted` (images, reflection and refraction rays, whose start points must lie off the
-surface on a given side) still starts secondary rays at p + `surface_offset`·n, 1e-4 of the
+The Whitted images keep their own offset -----------------------------------------
+`raytrace.outlook.whitted` (images, reflection and refraction rays, whose start points must lie off
+the surface on a given side) still starts secondary rays at p + `surface_offset`·n, 1e-4 of the
 scene's length scale, as before: the images are not compared pixel by pixel, and reflected and
 refracted rays have no segment to stay on.
 

@@ -24,6 +24,10 @@ MIN_POSITIVE = 1e-18
 # echoed whole), and a SceneError's key and problem are cut to one line of at most this length.
 MAX_QUOTE = 80
 MAX_MESSAGE = 400
+# How far from orthonormal the rotation of a rigid 4x4 matrix (a camera pose) may be: the
+# largest |R^T R - I| entry.  Poses computed in float32 elsewhere reach ~1e-7; a scale or a
+# shear of 1e-6 is refused.  The matrix is used as given (not re-orthonormalised).
+RIGID_TOLERANCE = 1e-6
 
 
 def shorten(value, limit: int = MAX_QUOTE) -> str:
@@ -132,6 +136,49 @@ def num(value, key: str, *, low: float | None = None, high: float | None = None,
     if high is not None and x > high:
         raise SceneError(key, f"must be <= {high}, got {value!r}")
     return x
+
+
+def flag(value, key: str) -> bool:
+    """A switch: true or false exactly (no 0, 1 or string), or a SceneError naming `key`."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise SceneError(key, f"expected true or false, got {shorten(value)}")
+    return bool(value)
+
+
+def rigid_matrix(value, key: str) -> np.ndarray:
+    """A read-only (4, 4) float64 rigid transform (rotation and translation; last row exactly
+    0 0 0 1) from `value`, 4 lists of 4 real numbers or a (4, 4) array, or a SceneError naming
+    `key`: wrong shape, non-finite, beyond the float32 range, a scale, shear or mirror."""
+    if isinstance(value, np.ndarray):
+        ok = value.dtype.kind in "iuf" and value.shape == (4, 4)
+    else:
+        ok = (isinstance(value, (list, tuple)) and len(value) == 4
+              and all(_numbers(row) and len(row) == 4 for row in value))
+    if not ok:
+        got = (f"an array of shape {value.shape} ({value.dtype})"
+               if isinstance(value, np.ndarray) else shorten(value))
+        raise SceneError(key, f"expected a 4x4 matrix (4 rows of 4 numbers), got {got}")
+    try:
+        m = np.array(value, dtype=np.float64)
+    except OverflowError:   # an integer past float64 (1e400)
+        raise SceneError(key, f"{shorten(value)} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})") from None
+    if not np.all(np.isfinite(m)):
+        raise SceneError(key, f"non-finite number in {shorten(value)}")
+    if np.any(np.abs(m) > MAX_MAGNITUDE):
+        raise SceneError(key, f"{shorten(value)} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})")
+    if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
+        raise SceneError(key, f"not rigid: the last row must be [0, 0, 0, 1], got "
+                              f"{m[3].tolist()}")
+    r = m[:3, :3]
+    error = float(np.abs(r.T @ r - np.eye(3)).max())
+    if error > RIGID_TOLERANCE:
+        raise SceneError(key, f"not rigid: the rotation part is not orthonormal (|R^T R - I| "
+                              f"= {error:.3g} > {RIGID_TOLERANCE:g}; no scale or shear)")
+    if np.linalg.det(r) < 0:
+        raise SceneError(key, "not rigid: the rotation part is a mirror (determinant < 0)")
+    return frozen(m)
 
 
 def unit(v: np.ndarray, key: str) -> np.ndarray:

@@ -70,13 +70,14 @@ IDENTITY = Transform()
 
 
 def mesh(name: str, vertices, faces, material: Material | None = None,
-         transform: Transform = IDENTITY) -> Object:
-    """An object from a triangle mesh, kept exactly as given (no welding, no reordering)."""
+         transform: Transform = IDENTITY, uv=None, colors=None) -> Object:
+    """An object from a triangle mesh, kept exactly as given (no welding, no reordering);
+    `uv`, `colors`: per-vertex texture coordinates and linear colours (`Object`)."""
     v = np.asarray(vertices, dtype=np.float64)
     if v.ndim == 2 and v.shape[1] == 3 and np.isfinite(v).all():
         v = transform.points(v)
     # else: Object rejects the vertices, naming them as given (not as the transform mangled them)
-    return Object(name, v, np.asarray(faces), material or Material())
+    return Object(name, v, np.asarray(faces), material or Material(), uv=uv, colors=colors)
 
 
 def sphere(name: str, center, radius: float, material: Material | None = None,

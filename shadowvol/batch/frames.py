@@ -1,9 +1,10 @@
 """The frames of a job: cameras from a list, an orbit (turntable) or a path of key poses;
 stable ids; the seeded per-frame generator; the frame specs the workers render.
 
-A frame spec is a plain dict (JSON types only), made in the parent from the job alone, so that
-every process given it renders the same frame: its id `<job>/<index:06d>`, the camera, the
-light overrides, the size, the outputs, the renderer and its options, the seed and jitter.
+A frame spec is a `spec.FrameSpec` (typed, frozen, of JSON data), made in the parent from the
+job alone, so that every process given it renders the same frame: its id `<job>/<index:06d>`,
+the camera, the light overrides, the size, the outputs, the renderer and its options, the seed
+and jitter.
 """
 
 from __future__ import annotations
@@ -14,9 +15,10 @@ import math
 
 import numpy as np
 
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.scene import (AreaLight, Camera, DirectionalLight, SceneError, is_number,
                              reject_unknown_keys, shorten)
-from shadowvol.scenefile import CAMERA_KEYS
+from shadowvol.scenefile import CAMERA_KEYS, MATRIX_CAMERA_KEYS
 
 ORBIT_KEYS = {"center", "radius", "elevation", "frames", "start", "sweep", "up", "fov_y",
               "near"}
@@ -72,7 +74,7 @@ def camera_dict(value, key: str) -> dict:
     the Camera (the scene's fov_y, near and up fill what is left out, in the worker)."""
     if not isinstance(value, dict):
         raise SceneError(key, f"expected a camera table, got {shorten(value)}")
-    reject_unknown_keys(value, CAMERA_KEYS, key)
+    reject_unknown_keys(value, CAMERA_KEYS - set(MATRIX_CAMERA_KEYS), key)   # look-at only
     for need in ("eye", "target"):
         if need not in value:
             raise SceneError(f"{key}.{need}", "missing")
@@ -182,19 +184,20 @@ def jittered(camera: Camera, lights: tuple, jitter: dict, seed: int, index: int)
     return camera, tuple(moved)
 
 
-def specs(job, scene_key: str) -> list[dict]:
+def specs(job, scene_key: str) -> list[FrameSpec]:
     """The frame specs of a checked `jobs.Job`, in index order."""
-    common = {"job": job.name, "scene": scene_key,
-              "lights": None if job.lights is None else list(job.lights),
-              "size": None if job.size is None else list(job.size),
-              "outputs": list(job.outputs), "renderer": job.renderer, "method": job.method,
-              "max_depth": job.max_depth, "seed": job.seed, "jitter": dict(job.jitter)}
-    return [{"id": frame_id(job.name, i), "index": i, "camera": camera, **common}
+    return [FrameSpec(id=frame_id(job.name, i), index=i, job=job.name, scene=scene_key,
+                      camera=camera,
+                      lights=None if job.lights is None else tuple(job.lights),
+                      size=None if job.size is None else tuple(job.size),
+                      outputs=tuple(job.outputs), renderer=job.renderer, method=job.method,
+                      max_depth=job.max_depth, seed=job.seed, jitter=dict(job.jitter))
             for i, camera in enumerate(job.cameras)]
 
 
-def spec_hash(spec: dict, scene_sha256: str) -> str:
+def spec_hash(spec: FrameSpec, scene_sha256: str) -> str:
     """sha256 of everything that decides a frame's files: the spec and the scene file's bytes
     (a mesh file that changes under an unchanged scene file is not seen)."""
-    text = json.dumps({**spec, "scene": scene_sha256}, sort_keys=True, separators=(",", ":"))
+    text = json.dumps({**spec.as_dict(), "scene": scene_sha256}, sort_keys=True,
+                      separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()

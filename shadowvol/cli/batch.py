@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from shadowvol.batch.runner import DEFAULT_SAMPLES_PER_TAR, parse_shard, run
-from shadowvol.batch.store import FORMATS
+from shadowvol.batch.layouts import FORMATS
 from shadowvol.cli import args as blocks
 from shadowvol.cli import status
 

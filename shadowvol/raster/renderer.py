@@ -23,6 +23,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.cameras import calibration
+from shadowvol.frame import check_light_kinds, check_outputs
 from shadowvol.raster import bits, methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import create_context, make_current
@@ -32,13 +33,14 @@ from shadowvol.raster.overflow_policy import LightBounds
 from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.recycle import ArrayPool
-from shadowvol.raster.result import SILHOUETTES, RenderResult, check_lights, check_outputs
+from shadowvol.raster.result import (DEFAULT_OUTPUTS, OUTPUTS, SILHOUETTES, RenderResult,
+                                     check_lights)
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
 from shadowvol.raster.truth_frame import frame_truth
 from shadowvol.raster.volumes import VolumeBuilder
 from shadowvol.raster.volumes_cpu import CpuVolumes
 from shadowvol.raster.volumes_gpu import GpuVolumes
-from shadowvol.scene import AreaLight, Camera, Light, Scene, hard_lights
+from shadowvol.scene import Camera, Light, Scene, hard_lights
 
 class Renderer:
     """Renders `scene` (its geometry and materials; camera and lights may change per frame).
@@ -86,7 +88,8 @@ class Renderer:
             make_current(self.ctx)
             self.gl = RawGL()
             self.geometry = self._own(SceneGeometry(self.ctx, scene))
-            self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
+            self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height,
+                                           surface=self.geometry.surface))
             self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
         except BaseException:
             self.release()
@@ -112,15 +115,17 @@ class Renderer:
                outputs: tuple[str, ...] | None = None) -> RenderResult:
         """One frame.  `method`: "auto" (z-fail only for casters the near plane may cut),
         "zpass" or "zfail".  `camera`/`lights` override the scene's for this frame.
-        `outputs`: the arrays to read back (names in `result.OUTPUTS`; default image, lit and
-        coverage); the others are None in the result.  `stencil=True` adds "stencil": the
+        `outputs`: exactly the arrays to read back (names in `result.OUTPUTS`; default image,
+        lit and coverage), for lean frames; the others are None in the result (the function
+        `render` adds `outputs` to the defaults instead).  `stencil=True` adds "stencil": the
         per-light stencil counts (one extra read-back each).  `shadows=False` skips the volume
         passes (every count stays 0): the same frame without shadows, the benchmark's
         baseline."""
         if method not in methods.METHODS:
             raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
                              f"got {method!r}")
-        outputs = check_outputs(outputs, stencil)
+        outputs = set(check_outputs(outputs, OUTPUTS, DEFAULT_OUTPUTS)) | (
+            {"stencil"} if stencil else set())
         lights = check_lights(lights)
         make_current(self.ctx)
         to_check = self._lights_to_check(camera, lights) if shadows else []
@@ -181,9 +186,10 @@ class Renderer:
 
     @property
     def count_bound(self) -> int:
-        """`overflow.count_bound` of the scene: below 256 no stencil count can wrap."""
+        """`overflow.count_bound` of the casting objects: below 256 no count can wrap."""
         if self._count_bound is None:
-            self._count_bound = overflow.count_bound(self.geometry.topologies)
+            self._count_bound = overflow.count_bound(
+                t for t, casts in zip(self.geometry.topologies, self.geometry.casts) if casts)
         return self._count_bound
 
     def _srgb_background(self) -> tuple[int, int, int]:
@@ -225,8 +231,7 @@ class Renderer:
         srgb_direct = ("image_srgb" in outputs and "image" not in outputs
                        and len(hard) <= LIGHTS_PER_PAGE)
         h, w = self.scene.height, self.scene.width
-        if plan.want_stencil and any(isinstance(light, AreaLight) for light in lights):
-            raise ValueError("stencil counts are per hard light: not for area lights")
+        check_light_kinds(plan.outputs, lights)
         zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
         truth_pages: list = []
         counts: list[np.ndarray] = []
@@ -278,16 +283,16 @@ class Renderer:
         clip planes or None, the back faces to cull or None)."""
         # the GPU draws in the float32 frame of this camera's eye (`projection`), the ray
         # tracer's frame for the same camera: the geometry is re-expressed when the eye moves
-        view_proj, origin = frame_view_projection(camera, self.scene.aspect)
+        view_proj, origin = frame_view_projection(camera, self.scene.size)
         self.geometry.move_to(origin)
         self.geometry.set_view(view_proj, camera.near)   # huge triangles cut (`guard`)
-        passes.set_camera((self.programs.gbuffer, *vols.programs), view_proj, camera, origin)
+        passes.set_camera((*self.programs.framed, *vols.programs), view_proj, camera, origin)
         cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
                                 self.geometry.extent) if self.cull_back_faces else None
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(
-            self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
+            self.geometry.bounds, camera, self.scene.size, self.geometry.extent)
         return view_proj, clip, cull
 
     def _read_masks(self, outputs, hard, samples, in_stencil, pages) -> tuple:
@@ -345,13 +350,13 @@ class Renderer:
         for k, (i, light) in enumerate(hard):
             light4 = light.homogeneous
             choice = methods.choose(plan.method, self.geometry.bounds, camera,
-                                    self.scene.aspect, light4, self.geometry.extent)
-            if shadows:
+                                    self.scene.size, light4, self.geometry.extent)
+            if shadows and light.shadows:   # a light switched off: its bit stays facing
                 vols.prepare(light4)
                 # the counts are 0: the mask pass cleared them, and each light's clear but the
                 # last zeroes them again (`stencil.where_shadowed`)
                 passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                     halve=plan.halve, clip_planes=clip,
+                                     halve=plan.halve, clip_planes=clip, receivers=progs,
                                      fbo=target.mark_fbo, clear=False, count_mask=count_mask)
                 if not in_stencil:
                     passes.clear_shadowed(self.ctx, self.gl, target, progs, k,
@@ -397,13 +402,13 @@ class Renderer:
             for bit, light in enumerate(page_lights):
                 light4 = light.homogeneous
                 choice = methods.choose(plan.method, self.geometry.bounds, camera,
-                                        self.scene.aspect, light4, self.geometry.extent)
-                if shadows:
+                                        self.scene.size, light4, self.geometry.extent)
+                if shadows and light.shadows:
                     vols.prepare(light4)
                     # halving is safe only for casters `auto` chose z-pass for, and only when
                     # the counts themselves are not returned (see passes.count_volumes)
                     passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                         halve=plan.halve,
+                                         halve=plan.halve, receivers=progs,
                                          clip_planes=clip,
                                          # counted where it is marked: no framebuffer
                                          # change between the page's lights (llvmpipe
@@ -452,7 +457,7 @@ class Renderer:
         with stencil_gl.zero_to_one_depth(self.gl):
             for i, light in ((i, hard) for i, lt in enumerate(self.scene.lights if lights is None
                                                               else lights)
-                             for hard in hard_lights(lt)):  # an area light: every sample's
+                             for hard in hard_lights(lt) if hard.shadows):  # every sample
                 vols.prepare(light.homogeneous)
                 overlay.draw_volume_overlay(self.ctx, self.gl, self.target, vols,
                                             result.zfail[i])
@@ -480,7 +485,10 @@ class Renderer:
 def render(scene: Scene, method: str = "auto", silhouettes: str = "cpu", *,
            stencil: bool = False, ctx: moderngl.Context | None = None,
            outputs: tuple[str, ...] | None = None) -> RenderResult:
-    """Render one frame of `scene` (a fresh context unless `ctx` is given); `outputs` as in
-    `Renderer.render`."""
+    """Render one frame of `scene` (a fresh context unless `ctx` is given).  `outputs` adds to
+    the default image, lit and coverage, as the command line's --outputs does (names as in
+    `Renderer.render`, whose `outputs=` names exactly the arrays made, for lean frames)."""
+    wanted = None if outputs is None else DEFAULT_OUTPUTS + tuple(
+        o for o in check_outputs(outputs, OUTPUTS) if o not in DEFAULT_OUTPUTS)
     with Renderer(scene, ctx) as renderer:
-        return renderer.render(method, silhouettes, stencil=stencil, outputs=outputs)
+        return renderer.render(method, silhouettes, stencil=stencil, outputs=wanted)

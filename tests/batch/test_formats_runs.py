@@ -15,7 +15,7 @@ import pytest
 from builders import ROOT, job_lines, output_files, write_jobs
 
 from shadowvol import batch
-from shadowvol.batch.formats import NAMES
+from shadowvol.batch.layouts import DATASETS as NAMES
 
 pytestmark = pytest.mark.gl
 

@@ -46,6 +46,10 @@ def test_readme_python_example_runs_from_any_folder(tmp_path):
     assert line in block, "the example no longer loads the installed cage example"
     code = block.replace(line, line + ".replace(width=48, height=36)") + textwrap.dedent("""
         assert frame.lit.shape == lit.shape == (1, 36, 48) and len(frames) == 10
+        import numpy as np
+        with np.load("cage.npz") as saved:   # the camera matrices the README promises
+            assert {"lit", "coverage", "K", "camera_to_world", "world_to_camera"} <= set(saved)
+            assert (saved["lit"] == frame.lit).all()
         """)
     done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                           text=True, timeout=300)

@@ -19,7 +19,8 @@ import pytest
 
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.cli.render import safe_name
-from shadowvol.io import atomic_write, save_masks, save_png
+from shadowvol.frame import save_masks
+from shadowvol.io import atomic_write, save_png
 from shadowvol.primitives import box, plane
 from shadowvol.scene import Camera, PointLight, Scene
 from shadowvol.scenefile import save_scene

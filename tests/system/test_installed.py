@@ -145,6 +145,22 @@ def test_the_wheel_ships_every_module_shader_and_scene(installed):
     assert not missing, f"not in the installed package: {missing}"
 
 
+def test_the_installed_package_loads_its_own_shaders_and_scenes(installed):
+    """shadowvol.shaders and shadowvol.scenes (the top-level shaders/ and scenes/ mapped into the
+    package) are found inside the installed package, not in a checkout."""
+    site = installed.site_packages()
+    done = installed.python("""
+        import shadowvol
+        from shadowvol.raster import glsl
+        assert glsl.shader_source("scene.vert").startswith("#version")
+        print(glsl.shader_path("scene.vert")); print(shadowvol.example_scene("cage"))
+        """)
+    assert done.returncode == 0, done.stderr
+    shader, scene = map(Path, done.stdout.split())
+    assert shader == site / "shadowvol" / "shaders" / "scene.vert"
+    assert scene == site / "shadowvol" / "scenes" / "cage.toml"
+
+
 def test_every_public_module_imports(installed):
     """Each public module imports with the runtime dependencies alone, except where the one
     package it lacks is an optional extra's (the `fast` extra's numba, say)."""

@@ -12,10 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 from shadowvol.batch.formats import encoding
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.io import encode_srgb, png_bytes
 
-CASTERS = False
-ALONE = True
 SCENE = "train/000000"
 FOLDERS = tuple(f"{SCENE}/{sub}" for sub in ("rgb", "depth", "mask", "mask_visib", "shadow"))
 INDEX = tuple(f"{SCENE}/{name}" for name in
@@ -29,8 +28,8 @@ def _centre(obj) -> np.ndarray:
     return (v.min(axis=0) + v.max(axis=0)) / 2
 
 
-def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
-    stem, root = encoding.frame_stem(spec), f"{spec['job']}/{SCENE}"
+def frame(spec: FrameSpec, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
+    stem, root = encoding.frame_stem(spec), f"{spec.job}/{SCENE}"
     cam = arrays["camera"]
     K = np.array(cam["K"], np.float64)
     K[:2, 2] -= 0.5  # BOP projects with OpenCV's pixel centres
@@ -52,8 +51,8 @@ def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
                      "px_count_visib": seen, "visib_fract": seen / all_ if all_ else 0.0})
     for i, lit in enumerate(arrays["lit"]):
         files[f"{root}/shadow/{stem}_{i:06d}.png"] = encoding.mask_png(arrays["coverage"] & ~lit)
-    if spec["index"] == 0:
-        files.update(_models(spec["job"], scene, K))
+    if spec.index == 0:
+        files.update(_models(spec.job, scene, K))
     camera = {"cam_K": K.reshape(-1).tolist(), "cam_R_w2c": R.reshape(-1).tolist(),
               "cam_t_w2c": (t * encoding.MM_PER_UNIT).tolist(), "depth_scale": DEPTH_SCALE}
     return files, {"camera": camera, "gt": gt, "gt_info": info}
@@ -99,10 +98,10 @@ def _models(job: str, scene, K: np.ndarray) -> dict[str, bytes]:
     return files
 
 
-def index(job: str, entries: list[tuple[dict, dict]]) -> dict[str, bytes]:
+def index(job: str, entries: list[tuple[FrameSpec, dict]]) -> dict[str, bytes]:
     """scene_camera.json, scene_gt.json, scene_gt_info.json: keyed by image id, frame order."""
     tables = ({}, {}, {})
     for spec, record in entries:
         for table, part in zip(tables, ("camera", "gt", "gt_info")):
-            table[str(spec["index"])] = record[part]
+            table[str(spec.index)] = record[part]
     return {f"{job}/{rel}": encoding.json_bytes(table) for rel, table in zip(INDEX, tables)}

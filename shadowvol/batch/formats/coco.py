@@ -14,10 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from shadowvol.batch.formats import encoding
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.io import encode_srgb, png_bytes
 
-CASTERS = True
-ALONE = False
 FOLDERS = ("images",)
 INDEX = ("annotations.json",)
 SHADOW_IDS = 1 << 16   # above every object id (object_id is uint16)
@@ -28,10 +27,10 @@ def _instance(category: int, mask: np.ndarray) -> dict:
             "area": int(mask.sum()), "bbox": encoding.bbox(mask), "iscrowd": 0}
 
 
-def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
+def frame(spec: FrameSpec, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
     stem, ids = encoding.frame_stem(spec), arrays["object_id"]
     image = f"images/{stem}.png"
-    files = {f"{spec['job']}/{image}": png_bytes(encode_srgb(arrays["image"]))}
+    files = {f"{spec.job}/{image}": png_bytes(encode_srgb(arrays["image"]))}
     found = []
     for k in range(1, len(scene.objects) + 1):
         mask = ids == k
@@ -60,14 +59,14 @@ def _categories(record: dict) -> list[dict]:
     return out
 
 
-def index(job: str, entries: list[tuple[dict, dict]]) -> dict[str, bytes]:
+def index(job: str, entries: list[tuple[FrameSpec, dict]]) -> dict[str, bytes]:
     """annotations.json: images and annotations in frame order, annotation ids from 1."""
     first = entries[0][1] if entries else {"objects": [], "shadow_lights": []}
     images, annotations = [], []
     for spec, record in entries:
-        images.append({"id": spec["index"], **record["image"]})
+        images.append({"id": spec.index, **record["image"]})
         for found in record["annotations"]:
-            annotations.append({"id": len(annotations) + 1, "image_id": spec["index"],
+            annotations.append({"id": len(annotations) + 1, "image_id": spec.index,
                                 **found})
     data = {"info": {"description": f"shadowvol batch job {job}",
                      "shadow_lights": first["shadow_lights"]},
