@@ -36,6 +36,10 @@ from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
 from . import polygons
+from .regions import closed_rings as _closed_rings
+from .regions import measure as _measure
+from .regions import minus_convex as _minus_convex
+from .regions import ring_measures as _ring_measures
 from .backends import for_each_tile
 from .camera import RayGrid
 from .lightshapes import FramedLight, frame_light, shapely_module
@@ -62,10 +66,15 @@ CHUNK_PIXELS = 2048
 
 
 class ExactVisibility(NamedTuple):
-    """visibility (L, H, W) float64 and irradiance (L, H, W) float64 (see the module)."""
+    """visibility (L, H, W) float64 and irradiance (L, H, W) float64 (see the module); direct
+    (L, H, W) float64 with `exact_visibility(direct=True)`, else None: the integral over the
+    visible region of cos(at p) cos(at the light) dA over the light's area, the limit of the
+    renderers' sampled shading (no fall-off: docs/CONVENTIONS.md); for a hard light, as
+    irradiance."""
 
     visibility: np.ndarray
     irradiance: np.ndarray
+    direct: np.ndarray | None = None
 
 
 def check_exact(scene: Scene) -> None:
@@ -92,7 +101,7 @@ def visible_regions(scene: Scene, light_index: int, backend: str | MaskTracer = 
 
 
 def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
-                     _regions=None) -> ExactVisibility:
+                     _regions=None, direct: bool = False) -> ExactVisibility:
     """`visibility_exact` and `irradiance_exact` of every light of `scene` (module docstring):
     (L, H, W) float64 each.  A point, spot or directional light: 1 where `lit`, and
     irradiance n . l there (a unit light without fall-off, as the renderers shade one).
@@ -105,6 +114,7 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     shapely = shapely_module() if any(lights) else None
     vis = np.zeros((L, H * W))
     irr = np.zeros((L, H * W))
+    unatt = np.zeros((L, H * W)) if direct else None
     corners = tracer.vertices[tracer.faces].astype(np.float64)
     ids = scene.triangles()[2]
     objects = _objects(corners, ids, casting(scene)) if any(lights) else None
@@ -132,20 +142,25 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
                 on = lit[k].reshape(-1)[pixel]
                 vis[i, pixel] = on
                 irr[i, pixel] = on * _hard_cosine(scene.lights[i], p, normal, origin)
+                if direct:
+                    unatt[i, pixel] = irr[i, pixel]
                 continue
             for at in range(0, len(pixel), CHUNK_PIXELS):
                 part = slice(at, at + CHUNK_PIXELS)
                 keep = None if _regions is None or _regions[0] != i else \
                     np.full(len(p[part]), None, object)
                 shadowed = receives[hit.tri[part]] & scene.lights[i].shadows
-                v, e = _area_light(shapely, light, objects, corners, p[part], normal[part],
-                                   hit.tri[part], keep, shadowed)
+                got = _area_light(shapely, light, objects, corners, p[part], normal[part],
+                                  hit.tri[part], keep, shadowed, direct)
                 if keep is not None:
                     _regions[1][pixel[part]] = keep
-                vis[i, pixel[part]], irr[i, pixel[part]] = v, e
+                vis[i, pixel[part]], irr[i, pixel[part]] = got[:2]
+                if direct:
+                    unatt[i, pixel[part]] = got[2]
 
     for_each_tile(trace_tile, tiles, tracer)
-    return ExactVisibility(vis.reshape(L, H, W), irr.reshape(L, H, W))
+    return ExactVisibility(vis.reshape(L, H, W), irr.reshape(L, H, W),
+                           None if unatt is None else unatt.reshape(L, H, W))
 
 
 def _hard_cosine(light, p: np.ndarray, normal: np.ndarray, origin: np.ndarray) -> np.ndarray:
@@ -160,18 +175,20 @@ def _hard_cosine(light, p: np.ndarray, normal: np.ndarray, origin: np.ndarray) -
 
 def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
                 p: np.ndarray, normal: np.ndarray, own: np.ndarray, regions=None,
-                shadowed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                shadowed: np.ndarray | None = None, direct: bool = False
+                ) -> tuple[np.ndarray, ...]:
     """(n,) visibility and irradiance of `light` at points p (n, 3) with camera-facing unit
     normals (n, 3) on triangles own (n,); `regions` (n,) object array: filled with the
     visible regions (shapely, the light's plane coordinates) where given; `shadowed` (n,)
     bool (default all): the points that receive shadows from this light (the others see the
-    light's part on their side whole: the shadow switches)."""
+    light's part on their side whole: the shadow switches); `direct`: the unattenuated
+    measure over the light's area too (`ExactVisibility.direct`)."""
     n = len(p)
     height = (p - light.center) @ light.normal
     front = np.flatnonzero(height > 0)
-    out_v, out_e = np.zeros(n), np.zeros(n)
+    out_v, out_e, out_d = np.zeros(n), np.zeros(n), np.zeros(n)
     if len(front) == 0:
-        return out_v, out_e
+        return (out_v, out_e, out_d) if direct else (out_v, out_e)
     p, normal, own = p[front], normal[front], own[front]
     base = light.center + light.hull @ light.axes                 # (k, 3)
     pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
@@ -187,20 +204,25 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     dist = ((light.center - p) * normal).sum(axis=1)[:, None] + (box @ (light.axes @ normal.T)).T
     cut, count = polygons.clip(flat, np.full(len(p), 4), dist)
     cut = cut[..., :2]
-    area, irr = np.zeros(len(p)), np.zeros(len(p))
+    area, irr, unatt = np.zeros(len(p)), np.zeros(len(p)), np.zeros(len(p))
+    measures = (area, irr, unatt) if direct else (area, irr)
     has = pieces != None  # noqa: E711 (an object array)
     # nothing in the way of a rect or disk: its box cut to p's side, measured as it is
     plain = np.flatnonzero(~has & (count >= 3)) if light.outline is None and regions is None \
         else np.zeros(0, int)
     if len(plain):
         coords, ring = _closed_rings(cut[plain], count[plain])
-        area[plain], irr[plain] = _ring_measures(light, coords, ring, p[plain], normal[plain])
+        for out, got in zip(measures, _ring_measures(light, coords, ring, p[plain],
+                                                     normal[plain], direct)):
+            out[plain] = got
     # one convex shadow on a rect or disk: the light less it, in numpy
     lone = np.flatnonzero(single & (count >= 3)) if light.outline is None and regions is None \
         else np.zeros(0, int)
     if len(lone):
-        area[lone], irr[lone] = _minus_convex(shapely, light, cut[lone], count[lone],
-                                              pieces[lone], p[lone], normal[lone])
+        for out, got in zip(measures, _minus_convex(shapely, light, cut[lone], count[lone],
+                                                    pieces[lone], p[lone], normal[lone],
+                                                    direct)):
+            out[lone] = got
     rest = np.setdiff1d(np.arange(len(p)), np.r_[plain, lone])
     if len(rest):
         seen = _polygons(shapely, cut[rest], count[rest])
@@ -210,60 +232,24 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
         hit = np.flatnonzero(has[rest])
         seen[hit] = _polygonal(shapely, shapely.difference(seen[hit], pieces[rest[hit]],
                                                             grid_size=light.grid))
-        area[rest], irr[rest] = _measure(shapely, light, seen, p[rest], normal[rest])
+        for out, got in zip(measures, _measure(shapely, light, seen, p[rest], normal[rest],
+                                               direct)):
+            out[rest] = got
         if regions is not None:
             regions[front[rest]] = seen
     # the subtractions leave roundings of ~1e-14 either side of 0 and 1
     out_v[front] = np.clip(area / light.area, 0.0, 1.0)
     out_e[front] = np.maximum(irr, 0.0)
-    return out_v, out_e
+    if not direct:
+        return out_v, out_e
+    out_d[front] = np.maximum(unatt / light.area, 0.0)
+    return out_v, out_e, out_d
 
 
-def _minus_convex(shapely, light: FramedLight, cut: np.ndarray, count: np.ndarray,
-                  pieces: np.ndarray, p: np.ndarray, normal: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """(n,) area and irradiance of the convex polygons cut (n, k, 2), count (n,) (counter-
-    clockwise, as `_area_light` cuts the light's box) less one convex polygon each, `pieces`
-    (n,) (shapely): the measure of cut less that of the piece clipped by each of cut's edges
-    (no GEOS)."""
-    coords, which = shapely.get_coordinates(shapely.get_exterior_ring(pieces),
-                                            return_index=True)
-    m = np.bincount(which, minlength=len(pieces)) - 1        # corners (the closing one repeats)
-    first = np.r_[0, np.cumsum(m + 1)[:-1]]
-    inner = coords[first[:, None] + np.minimum(np.arange(m.max())[None], m[:, None] - 1)]
-    inner_count = np.where(m >= 3, m, 0)
-    whole = _ring_measures(light, *_closed_rings(cut, count), p, normal)
-    for e in range(cut.shape[1]):
-        start = cut[:, e]
-        edge = cut[np.arange(len(cut)), (e + 1) % np.maximum(count, 1)] - start
-        d = (edge[:, None, 0] * (inner[..., 1] - start[:, None, 1])
-             - edge[:, None, 1] * (inner[..., 0] - start[:, None, 0]))
-        d = np.where((e < count)[:, None], d, 1.0)           # past the cut's last edge: keep
-        inner, inner_count = polygons.clip(inner, inner_count, d)
-    part = _ring_measures(light, *_closed_rings(inner, inner_count), p, normal)
-    return whole[0] - part[0], whole[1] - part[1]
 
 
-def _closed_rings(flat: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Polygons flat (n, k, 2) with count (n,) corners as closed rings: coords (c, 2) (each
-    ring's first corner again at its end) and ring (c,) the row of each."""
-    n, k, _ = flat.shape
-    at = np.arange(k + 1)[None]
-    use = at <= count[:, None]
-    index = np.where(at == count[:, None], 0, np.minimum(at, k - 1))
-    coords = np.take_along_axis(flat, index[..., None], 1)[use]
-    return coords, np.broadcast_to(np.arange(n)[:, None], use.shape)[use]
 
 
-def _ring_measures(light: FramedLight, coords: np.ndarray, ring: np.ndarray, p: np.ndarray,
-                   normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """|area| and |irradiance| (rings,) of closed rings (`polygons.ring_measures`; a disk's
-    part inside them for a disk light), ring r seen from p[r] with normal[r]."""
-    args = (coords, ring, len(p))
-    if light.radius is None:
-        return polygons.ring_measures(*args, p, normal, light.center, light.axes)
-    return polygons.disk_ring_measures(*args, light.radius, p, normal, light.center,
-                                       light.axes)
 
 
 def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
@@ -481,19 +467,3 @@ def _outside(objects: Objects, corners: np.ndarray, p: np.ndarray, pix: np.ndarr
         scale = np.maximum(np.abs(p[who]).max(axis=1), np.abs(corners[faces]).max())
         out[at] = (off.max(axis=1) > CONVEX_RELATIVE * scale)[inv]
     return out
-
-
-def _measure(shapely, light: FramedLight, seen: np.ndarray, p: np.ndarray, normal: np.ndarray
-             ) -> tuple[np.ndarray, np.ndarray]:
-    """(n,) area and irradiance of the regions `seen` (n,) seen from p (n, 3) with normals."""
-    parts, part_of = shapely.get_parts(seen, return_index=True)
-    rings, ring_of = shapely.get_rings(parts, return_index=True)
-    n = len(seen)
-    if len(rings) == 0:
-        return np.zeros(n), np.zeros(n)
-    # the first ring of each part is its outside, the others its holes
-    sign = np.where(np.r_[True, ring_of[1:] != ring_of[:-1]], 1.0, -1.0)
-    coords, which = shapely.get_coordinates(rings, return_index=True)
-    owner = part_of[ring_of]
-    area, irr = _ring_measures(light, coords, which, p[owner], normal[owner])
-    return (np.bincount(owner, sign * area, n), np.bincount(owner, sign * irr, n))

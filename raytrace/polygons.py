@@ -69,9 +69,10 @@ def _edges(coords: np.ndarray, ring: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 
 def ring_measures(coords: np.ndarray, ring: np.ndarray, rings: int, eye: np.ndarray,
-                  normal: np.ndarray, center: np.ndarray, axes: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """Per ring (rings,): |area| and |Lambert's irradiance| at its eye, unit radiance.
+                  normal: np.ndarray, center: np.ndarray, axes: np.ndarray,
+                  direct: bool = False) -> tuple[np.ndarray, ...]:
+    """Per ring (rings,): |area| and |Lambert's irradiance| at its eye, unit radiance; with
+    `direct` also the unattenuated measure (`direct_measure`).
 
     coords : (c, 2) closed rings in the light's plane coordinates, ring (c,) their ring index;
     eye, normal : (rings, 3) each ring's receiving point and its unit normal; center (3,),
@@ -81,7 +82,93 @@ def ring_measures(coords: np.ndarray, ring: np.ndarray, rings: int, eye: np.ndar
     x0 = center + a @ axes - eye[r]
     x1 = center + b @ axes - eye[r]
     lam = _edge_lambert(x0, x1, normal[r])
-    return np.abs(area), np.abs(np.bincount(r, lam, rings))
+    out = (np.abs(area), np.abs(np.bincount(r, lam, rings)))
+    if direct:
+        out += (direct_measure(*_segments(a, b, r, eye, center, axes), rings, eye, normal,
+                               center, axes),)
+    return out
+
+
+# Gauss-Legendre nodes and weights on [-1, 1] for the boundary integrals of `direct_measure`.
+GAUSS_NODES, GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(16)
+# Pieces a boundary curve is cut into at most (each no longer than the eye's height over the
+# light's plane, below this many).
+MAX_PIECES = 512
+
+
+def _pieces(length: np.ndarray, height: np.ndarray) -> np.ndarray:
+    """(e,) pieces per curve of `length` (e,) seen from `height` (e,) over the plane: each
+    piece no longer than the height (then the integrands' nearest complex singularity is at
+    least a piece's length off it and 16 Gauss points give ~1e-16 of it)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        m = np.ceil(length / np.abs(height))
+    return np.clip(np.nan_to_num(m, nan=1.0, posinf=MAX_PIECES), 1, MAX_PIECES).astype(np.int64)
+
+
+def _nodes(m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For curves cut into m (e,) pieces: per node, its curve (k,), its parameter in [0, 1]
+    (k,) and its weight (k,) (summing to 1 over a curve)."""
+    curve = np.repeat(np.arange(len(m)), m)
+    piece = np.arange(len(curve)) - np.repeat(np.cumsum(m) - m, m)
+    per = m[curve][:, None]
+    t = (piece[:, None] + (GAUSS_NODES[None] + 1) / 2) / per
+    w = np.broadcast_to(GAUSS_WEIGHTS[None] / 2, t.shape) / per
+    return np.repeat(curve, len(GAUSS_NODES)), t.reshape(-1), w.reshape(-1)
+
+
+def _height(eye: np.ndarray, center: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    return (eye - center) @ np.cross(axes[0], axes[1])
+
+
+def _segments(a: np.ndarray, b: np.ndarray, r: np.ndarray, eye: np.ndarray,
+              center: np.ndarray, axes: np.ndarray):
+    """Quadrature nodes of the straight edges a -> b (e, 2) of rings r (e,): points (k, 2),
+    derivatives times weights (k, 2), ring (k,)."""
+    d = b - a
+    m = _pieces(np.linalg.norm(d, axis=1), _height(eye[r], center, axes))
+    e, t, w = _nodes(m)
+    return a[e] + t[:, None] * d[e], d[e] * w[:, None], r[e]
+
+
+def _arc_nodes(radius: float, start: np.ndarray, sweep: np.ndarray, r: np.ndarray,
+               eye: np.ndarray, center: np.ndarray, axes: np.ndarray):
+    """Quadrature nodes of the arcs of the circle about the plane's origin from angle `start`
+    through `sweep` (e,): as `_segments`."""
+    m = _pieces(radius * np.abs(sweep), _height(eye[r], center, axes))
+    e, t, w = _nodes(m)
+    phi = start[e] + t * sweep[e]
+    y = radius * np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    dy = radius * np.stack([-np.sin(phi), np.cos(phi)], axis=1) * (sweep[e] * w)[:, None]
+    return y, dy, r[e]
+
+
+def direct_measure(y: np.ndarray, dy: np.ndarray, r: np.ndarray, rings: int, eye: np.ndarray,
+                   normal: np.ndarray, center: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """Per ring (rings,): |integral over its inside of cos(at the eye) cos(at the light) dA|,
+    the light's cosine-weighted measure without the inverse-square fall-off (the limit of the
+    renderers' sampled area light, docs/CONVENTIONS.md), from quadrature nodes of the ring's
+    boundary: points y (k, 2) in the plane's coordinates, dy (k, 2) their derivative times
+    weight, r (k,) their ring.
+
+    With q the eye's foot and h its height over the plane, z = y - q, t = |z|^2:
+    cos cos = |h| (c + a . z) / (t + h^2) (a, c: the eye's normal in the plane's terms), and
+    by the divergence theorem (nu ds = (dy_v, -dy_u), outward for a counter-clockwise ring)
+      int a . z / (t + h^2) dA = oint 1/2 ln(t + h^2) a . nu ds,
+      int 1 / (t + h^2) dA    = oint z . nu ln(1 + t / h^2) / (2 t) ds.
+    The integrands are smooth (h != 0); Gauss-Legendre on pieces no longer than |h|."""
+    e_eye, e_normal = eye[r], normal[r]
+    w = center - e_eye                                     # (k, 3)
+    h = w @ np.cross(axes[0], axes[1])
+    q = -(w @ axes.T)
+    a = e_normal @ axes.T                                  # (k, 2)
+    c = (e_normal * w).sum(axis=1) + (a * q).sum(axis=1)
+    z = y - q
+    t = (z * z).sum(axis=1)
+    nu = np.stack([dy[:, 1], -dy[:, 0]], axis=1)
+    h2 = h * h
+    term = (0.5 * np.log(t + h2) * (a * nu).sum(axis=1)
+            + c * (z * nu).sum(axis=1) * _log1pc(t / h2) / (2 * h2))
+    return np.abs(np.bincount(r, np.abs(h) * term, rings))
 
 
 def _edge_lambert(x0: np.ndarray, x1: np.ndarray, normal: np.ndarray) -> np.ndarray:
@@ -96,10 +183,11 @@ def _edge_lambert(x0: np.ndarray, x1: np.ndarray, normal: np.ndarray) -> np.ndar
 
 def disk_ring_measures(coords: np.ndarray, ring: np.ndarray, rings: int, radius: float,
                        eye: np.ndarray, normal: np.ndarray, center: np.ndarray,
-                       axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                       axes: np.ndarray, direct: bool = False) -> tuple[np.ndarray, ...]:
     """Per ring (rings,): the area of the disk (centre `center`, the origin of the plane's
     coordinates, `radius`) inside the ring and Lambert's irradiance from that part, both
-    >= 0; arguments as `ring_measures`.
+    >= 0, and with `direct` the unattenuated measure (`direct_measure`); arguments as
+    `ring_measures`.
 
     Each edge a -> b is cut where it crosses the circle: its part inside is a straight piece,
     each part outside is replaced by the circle's arc between the same rays from the centre
@@ -122,12 +210,20 @@ def disk_ring_measures(coords: np.ndarray, ring: np.ndarray, rings: int, radius:
     e_eye, e_normal = eye[r], normal[r]
     lam = _edge_lambert(center + p0 @ axes - e_eye, center + p1 @ axes - e_eye, e_normal)
     arcs = _Arcs(radius, center - e_eye, e_normal, axes)
+    nodes = [_segments(p0, p1, r, eye, center, axes)] if direct else []
     for start, end in ((a, p0), (p1, b)):
         sweep = np.arctan2(start[:, 0] * end[:, 1] - start[:, 1] * end[:, 0],
                            (start * end).sum(axis=1))
         area = area + radius * radius * sweep / 2
-        lam = lam + arcs.integral(np.arctan2(start[:, 1], start[:, 0]), sweep)
-    return (np.abs(np.bincount(r, area, rings)), np.abs(np.bincount(r, lam, rings)))
+        angle = np.arctan2(start[:, 1], start[:, 0])
+        lam = lam + arcs.integral(angle, sweep)
+        if direct:
+            nodes.append(_arc_nodes(radius, angle, sweep, r, eye, center, axes))
+    out = (np.abs(np.bincount(r, area, rings)), np.abs(np.bincount(r, lam, rings)))
+    if direct:
+        y, dy, k = (np.concatenate(part) for part in zip(*nodes))
+        out += (direct_measure(y, dy, k, rings, eye, normal, center, axes),)
+    return out
 
 
 class _Arcs:
