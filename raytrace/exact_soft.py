@@ -276,7 +276,12 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     meet = (objects.lo[None] <= hi[:, None]).all(-1) & (objects.hi[None] >= lo[:, None]).all(-1)
     meet &= _sphere_meets(light, objects, p, base)
     shapes, owner = _whole_bodies(shapely, light, objects, p, normal, own, meet)
-    pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi)
+    # the objects wholly on the light's emitting side (every corner strictly above its plane):
+    # the light is outside them
+    height = ((corners - light.center) @ light.normal).min(axis=1)
+    clear = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
+    np.minimum.at(clear, objects.object, height)
+    pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
     flat, count, pix, tri = _cut(light, corners, p, pix, tri, base)
     # a convex object seen from outside: one hull per (pixel, object)
     obj = objects.object[tri]
@@ -349,11 +354,16 @@ def _sphere_meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.
 
 
 def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarray,
-                own: np.ndarray, meet: np.ndarray, lo: np.ndarray, hi: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
+                own: np.ndarray, meet: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                clear: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(pixel, triangle) pairs (q,) int64 each: the triangles of the clusters that `meet`
     (n, C) says meet p's pyramid box [lo, hi] (n, 3), whose own boxes meet it too, less p's
-    own triangle, those coplanar with it, and a convex object's from its own outside."""
+    own triangle, those coplanar with it, a convex object's from its own outside, and the
+    triangles of a closed non-convex object that do not turn their back to p where the light
+    is outside that object (`clear` (n_objects,) bool): a segment from p to a point of the
+    light outside a closed surface that meets it leaves it last through a face turned away
+    from p, so those faces' shadows alone make the object's (up to segments grazing an edge:
+    no area)."""
     pix, clu = np.nonzero(meet)
     pix = np.repeat(pix, CLUSTER)
     tri = objects.members[clu].reshape(-1)
@@ -377,6 +387,12 @@ def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np
     mine = objects.convex[tri] & (objects.object[tri] == objects.object[own[pix]])
     outside = (objects.outward[own[pix]] * normal[pix]).sum(axis=1) > 0
     keep &= ~(mine & outside)
+    if clear is not None:
+        shell = objects.shell[tri]
+        closed = (shell != 0).any(axis=1) & ~objects.convex[tri] & clear[objects.object[tri]]
+        at = np.flatnonzero(closed & keep)
+        toward = (shell[at] * (corners[tri[at], 0] - p[pix[at]])).sum(axis=1) <= 0
+        keep[at[toward]] = False
     return pix[keep], tri[keep]
 
 

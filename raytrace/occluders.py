@@ -30,7 +30,8 @@ class Objects(NamedTuple):
     each cluster's object, centre (C, 3) and radius (C,) a sphere around each cluster's box;
     bodies: per object its `Convex`, or None; per triangle its box tri_lo, tri_hi (M, 3), unit
     normal (M, 3) (0 if degenerate), offset (M,) normal . corner and scale (M,) its largest
-    corner coordinate."""
+    corner coordinate; shell (M, 3): for a closed, consistently wound object (convex or not)
+    its triangles' outward unit normals, 0 for the others."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -47,6 +48,7 @@ class Objects(NamedTuple):
     normal: np.ndarray
     offset: np.ndarray
     scale: np.ndarray
+    shell: np.ndarray
 
 
 class Convex(NamedTuple):
@@ -83,17 +85,21 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
     members, owner, bodies = [], [], []
+    shell = np.zeros((M, 3))
     for j in range(int(ids.max(initial=-1)) + 1):
         tris = np.flatnonzero(ids == j)
         bodies.append(None)
         if len(tris) == 0 or (casts is not None and not casts[j]):
             continue
-        topology = _topology(corners[tris]) if len(tris) <= CONVEX_TEST_FACES else None
+        topology = _topology(corners[tris])
         if topology is not None and (length[tris] > 0).all():
             c = corners[tris]
             sign = 1.0 if np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])).sum() > 0 \
                 else -1.0
             n = normals[tris] * sign
+            shell[tris] = n
+        if topology is not None and (length[tris] > 0).all() and \
+                len(tris) <= CONVEX_TEST_FACES:
             points = topology[0]
             offset = (n * c[:, 0]).sum(axis=1)
             off = n @ points.T - offset[:, None]
@@ -118,7 +124,8 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, corners.min(axis=1), corners.max(axis=1), normals,
-                   (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)))
+                   (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)),
+                   shell)
 
 
 def _topology(corners: np.ndarray):

@@ -326,6 +326,38 @@ def test_convex_hulls_equal_the_triangle_union(monkeypatch):
     assert ((fast.visibility > 0) & (fast.visibility < 1)).sum() > 30
 
 
+def test_a_closed_non_convex_mesh_casts_its_back_faces_union(monkeypatch):
+    """A closed, non-convex mesh (a noisy icosphere) whose shadow is the union of the faces
+    turned away from each point only (it is closed and not convex: the cull applies),
+    against the same triangles as two open halves (every triangle united); wound inward,
+    the same (outward is taken from its signed volume)."""
+    import trimesh
+
+    ico = trimesh.creation.icosphere(subdivisions=2, radius=0.45)
+    rng = np.random.default_rng(3)
+    v = ico.vertices * (1 + 0.15 * rng.standard_normal((len(ico.vertices), 1)))
+    v = v + [0.1, 1.1, -0.1]
+    faces = np.asarray(ico.faces)
+    light = AreaLight(samples=4, **SHAPES["rect"])
+    whole = _floor_scene(light, [mesh("blob", v, faces, material=MATTE)], size=32)
+    half = len(faces) // 2
+    split = _floor_scene(light, [mesh("a", v, faces[:half], material=MATTE),
+                                 mesh("b", v, faces[half:], material=MATTE)], size=32)
+    found = raytrace.occluders.objects(whole.triangles()[0][whole.triangles()[1]],
+                                       whole.triangles()[2])
+    assert found.shell[found.object == 1].any(axis=1).all() and not found.convex.any()
+    fast, slow = exact_visibility(whole), exact_visibility(split)
+    ids = ground_truth(whole, outputs=("object_id",)).object_id
+    seen = ids > 0                                   # the floor and the blob's own shadows
+    assert ((fast.visibility > 0) & (fast.visibility < 1) & (ids == 1)).sum() > 30
+    assert ((fast.visibility < 1) & (ids == 2)).sum() > 5
+    assert np.abs(fast.visibility - slow.visibility)[0][seen].max() <= ROUNDING
+    assert np.abs(fast.irradiance - slow.irradiance)[0][seen].max() <= ROUNDING
+    flipped = _floor_scene(light, [mesh("blob", v, faces[:, ::-1], material=MATTE)], size=32)
+    assert np.abs(exact_visibility(flipped).visibility - fast.visibility)[0][seen].max() \
+        <= ROUNDING
+
+
 def test_a_sphere_light_is_refused():
     scene = _floor_scene(AreaLight("sphere", [0, 2, 0], radius=0.3, samples=4))
     with pytest.raises(SceneError, match=r"lights\[0\]\.type.*sphere light has no exact"):
