@@ -72,6 +72,9 @@ EXTRAS = (
      "the path tracer's CPU time to a fixed RMSE on the Cornell box against Mitsuba 3's path "
      "integrator (an optional peer: the bench extra) in the same run (issue: the path tracer "
      "as efficient as the best)"),
+    ("bench_exact_soft.py", [],
+     "exact soft shadows (raytrace.exact_soft) against counting 64, 256 and 1,024 samples on "
+     "scenes/soft.toml and on a closed non-convex mesh of 5,120 triangles (issue 41)"),
     ("bench_viewer.py", ["--frames", "15"],
      "the viewer's frame rate on the shipped scenes, under its own Xvfb (issue: the course)"),
 )
