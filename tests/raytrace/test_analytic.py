@@ -106,3 +106,20 @@ def test_a_sphere_light_is_refused(tmp_path, capsys):
                  "analytic"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "s.toml" in err[0] and "lights[0]" in err[0]
+
+
+def test_the_command_writes_the_same_png_twice_and_refuses_spp(tmp_path, capsys):
+    from shadowvol.cli.raytrace import main
+
+    text = open("scenes/soft.toml").read().replace("width = 640", "width = 48") \
+        .replace("height = 480", "height = 36")
+    scene = tmp_path / "soft.toml"
+    scene.write_text(text)
+    a, b = tmp_path / "a.png", tmp_path / "b.png"
+    for out in (a, b):
+        assert main(["render", str(scene), "-o", str(out), "--integrator", "analytic"]) == 0
+    assert a.read_bytes() == b.read_bytes()
+    capsys.readouterr()
+    code = main(["render", str(scene), "-o", str(a), "--integrator", "analytic", "--spp", "4"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--spp" in err[0]
