@@ -21,9 +21,10 @@ def tiles_in_flight(width: int) -> int:
     return memory.tiles(width, MASK_TILE_RAYS, MASK_RAY_BYTES, memory.threads())
 
 
-def masks(scene: Scene, outputs=(), picture: bool = True) -> memory.Estimate:
+def masks(scene: Scene, outputs=(), picture: bool = True, exact: int = 0) -> memory.Estimate:
     """`raytrace.shadow_masks` / `ground_truth` / `soft_masks` of `scene` and `raytrace masks`
-    writing them (the .npz and, with `picture`, its PNG)."""
+    writing them (the .npz and, with `picture`, its PNG); `exact`: how many of the float64
+    (L, H, W) exact-visibility outputs (`raytrace.exact_soft`) come too."""
     L = len(scene.lights)
     K = caster_words(len(scene.objects))
     truth = set(outputs)
@@ -32,6 +33,8 @@ def masks(scene: Scene, outputs=(), picture: bool = True) -> memory.Estimate:
                             + (L + 1) * bool(truth)),
            # soft lights: lit_count uint16 and facing per light
            "lit_count": 3 * L if any(len(hard_lights(lt)) > 1 for lt in scene.lights) else 0,
+           # both computed at once (float64), those asked for written (npz: twice, compressed)
+           "exact visibility": (16 + 2 * 1.01 * 8 * exact) * L if exact else 0,
            # one RGB uint8 panel per light (and per output), the joined picture, its PNG;
            # the outputs' heat maps colour one panel at a time in float64
            "picture": ((L + len(truth)) * 3 * 2 + 24 * bool(truth) + memory.PNG)

@@ -85,3 +85,61 @@ def sphere_points(uv: np.ndarray, center: np.ndarray, radius: float) -> np.ndarr
     ring = np.sqrt(np.maximum(0.0, 1.0 - y * y))
     phi = 2.0 * math.pi * uv[:, 1]
     return center + radius * np.stack([ring * np.cos(phi), y, ring * np.sin(phi)], axis=1)
+
+
+def polygon_frame(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """A plane polygon's unit normal by Newell's method (its vertices (m, 3) run
+    counter-clockwise seen from the side it points to), its area centroid (3,) and area."""
+    nxt = np.roll(vertices, -1, axis=0)
+    newell = 0.5 * np.cross(vertices, nxt).sum(axis=0)
+    area = float(np.linalg.norm(newell))
+    normal = newell / area if area > 0 else newell
+    fan = np.cross(vertices[1:-1] - vertices[0], vertices[2:] - vertices[0]) @ normal / 2
+    centroids = (vertices[0] + vertices[1:-1] + vertices[2:]) / 3
+    if area == 0 or fan.sum() == 0:  # no area (the caller refuses it): the corners' mean
+        return normal, vertices.mean(axis=0), area
+    return normal, (fan[:, None] * centroids).sum(axis=0) / fan.sum(), area
+
+
+def triangulate(points: np.ndarray) -> np.ndarray:
+    """(m - 2, 3) int64: the triangles of the simple polygon `points` (m, 2), counter-clockwise,
+    by ear clipping (O(m^3), lights have few vertices): a corner is cut off when it turns left
+    and no other vertex lies in its triangle."""
+    left = list(range(len(points)))
+    out = []
+    while len(left) > 3:
+        for k in range(len(left)):
+            a, b, c = left[k - 1], left[k], left[(k + 1) % len(left)]
+            if _cross2(points[a], points[b], points[c]) <= 0:
+                continue
+            others = [i for i in left if i not in (a, b, c)]
+            if not any(_inside(points[i], points[a], points[b], points[c]) for i in others):
+                out.append((a, b, c))
+                del left[k]
+                break
+        else:  # rounding left no ear: the rest is (nearly) a line of zero area
+            break
+    out.append(tuple(left[:3]))
+    return np.array(out, np.int64)
+
+
+def _cross2(a, b, c) -> float:
+    return float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+
+def _inside(q, a, b, c) -> bool:
+    return _cross2(a, b, q) >= 0 and _cross2(b, c, q) >= 0 and _cross2(c, a, q) >= 0
+
+
+def polygon_points(uv: np.ndarray, corners: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(n, 3): uv (n, 2) in [0, 1)^2 on the polygon made of `triangles` (t, 3) of `corners`
+    (m, 3), area-preserving: u picks a triangle by its share of the area (and is stretched
+    back to [0, 1) inside it), then (u, v) -> the triangle by the square-root map."""
+    a, b, c = (corners[triangles[:, k]] for k in range(3))
+    areas = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    edges = np.concatenate([[0.0], np.cumsum(areas) / areas.sum()])
+    k = np.clip(np.searchsorted(edges, uv[:, 0], side="right") - 1, 0, len(areas) - 1)
+    s = np.clip((uv[:, 0] - edges[k]) / (edges[k + 1] - edges[k]), 0.0, 1.0)
+    root = np.sqrt(s)[:, None]
+    t = uv[:, 1:]
+    return (1 - root) * a[k] + root * (1 - t) * b[k] + root * t * c[k]

@@ -20,8 +20,8 @@ from shadowvol.cameras import Calibration
 from shadowvol.errors import out_of_memory_while
 from shadowvol.scene import AreaLight, SceneError, shorten
 
-__all__ = ["CASTER_WORD_BITS", "FIELDS", "Field", "Frame", "GROUND_TRUTH", "MASK_ARRAYS",
-           "MAX_OBJECT_IDS", "blank", "caster_words", "check_light_kinds", "check_object_ids",
+__all__ = ["CASTER_WORD_BITS", "EXACT_OUTPUTS", "FIELDS", "Field", "Frame", "GROUND_TRUTH",
+           "MASK_ARRAYS", "MAX_OBJECT_IDS", "blank", "caster_words", "check_light_kinds", "check_object_ids",
            "check_outputs", "decode_casters", "mask_file", "masks_bytes", "save_masks",
            "shape", "soft_arrays"]
 
@@ -42,7 +42,9 @@ class Field:
         words K = max(1, ceil(n_objects / 64)); a number is that many
     lights : the light kinds that have it (EVERY or HARD)
     stored : when a mask file holds it: "always", "asked" (a ground-truth output, when asked
-        for), "soft" (when some light has more than one sample), or "" (never: images)
+        for), "soft" (when some light has more than one sample), "exact" (the ray tracer's
+        exact visibility of area lights, `raytrace.exact_soft`: when named, never in `all`,
+        and no ground truth the rasterizer must produce), or "" (never: images)
     nothing : what it holds where nothing is hit
     """
 
@@ -69,6 +71,9 @@ FIELDS = {
     "casters": Field(np.uint64, ("L", "H", "W", "K"), stored="asked"),
     "lit_count": Field(np.uint16, ("L", "H", "W"), stored="soft"),
     "samples": Field(np.int64, ("L",), stored="soft"),
+    # the ray tracer's exact visibility of area lights (raytrace.exact_soft)
+    "visibility_exact": Field(np.float64, ("L", "H", "W"), stored="exact"),
+    "irradiance_exact": Field(np.float64, ("L", "H", "W"), stored="exact"),
     # the camera matrices and light arrays (`shadowvol.cameras.Calibration`)
     "K": Field(np.float64, (3, 3)),
     "world_to_camera": Field(np.float64, (4, 4)),
@@ -79,6 +84,8 @@ FIELDS = {
 
 # The ground-truth outputs a frame may carry, by name, in this order (docs/CONVENTIONS.md).
 GROUND_TRUTH = tuple(name for name, f in FIELDS.items() if f.stored == "asked")
+# The ray tracer's exact outputs (`raytrace masks --outputs`): named only, never in `all`.
+EXACT_OUTPUTS = tuple(name for name, f in FIELDS.items() if f.stored == "exact")
 # The arrays a mask file may hold beside `lit` and `coverage`: name -> (dtype, dims).
 MASK_ARRAYS = {name: (f.dtype, f.dims) for name, f in FIELDS.items()
                if f.stored and name not in ("lit", "coverage")}

@@ -107,7 +107,10 @@ class AreaSample(SpotLight):
 
 
 MAX_LIGHT_SAMPLES = 65535  # lit counts are uint16
-AREA_SHAPES = ("rect", "disk", "sphere")
+AREA_SHAPES = ("rect", "disk", "sphere", "polygon")
+# A polygon light's vertices may leave its plane by this much of its diameter: far above the
+# rounding of decimal coordinates (~1e-16), far below any visible offset.
+PLANAR_RELATIVE = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,7 +119,9 @@ class AreaLight(_Emitter):
 
     shape   : "rect" (centre, normal, size along the plane axes u, v of
               `shadowvol.planes.default_plane_axes`), "disk" (centre, normal, radius) or
-              "sphere" (centre, radius)
+              "sphere" (centre, radius), or "polygon" (vertices (m, 3), m >= 3, planar and
+              simple, convex or not, counter-clockwise seen from the side it emits to; its
+              centre and normal are computed)
     samples : N >= 1; pattern "stratified" (a jittered grid) or "halton"; seed (see
               `shadowvol.arealights`)
     Computed once: positions (N, 3) float64 and weights (N,) float64 (each 1/N) of the samples.
@@ -130,7 +135,7 @@ class AreaLight(_Emitter):
     """
 
     shape: str
-    center: np.ndarray
+    center: np.ndarray | None
     normal: np.ndarray | None = None
     size: np.ndarray | None = None
     radius: float | None = None
@@ -139,6 +144,7 @@ class AreaLight(_Emitter):
     seed: int = 0
     color: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "color"))
     intensity: float = 1.0
+    vertices: np.ndarray | None = None
     shadows: bool = True
     positions: np.ndarray = field(init=False, repr=False)
     weights: np.ndarray = field(init=False, repr=False)
@@ -147,14 +153,22 @@ class AreaLight(_Emitter):
         if self.shape not in AREA_SHAPES:
             raise SceneError("type", f"unknown area light shape {self.shape!r} "
                                      f"(one of: {', '.join(AREA_SHAPES)})")
-        object.__setattr__(self, "center", vec(self.center, "center"))
-        need = {"rect": ("normal", "size"), "disk": ("normal", "radius"),
-                "sphere": ("radius",)}[self.shape]
-        for key in ("normal", "size", "radius"):
+        need = {"rect": ("center", "normal", "size"), "disk": ("center", "normal", "radius"),
+                "sphere": ("center", "radius"), "polygon": ("vertices",)}[self.shape]
+        if self.shape == "polygon" and self.vertices is not None:
+            vertices, normal, center = _polygon(self.vertices)
+            object.__setattr__(self, "vertices", vertices)
+            # computed from the vertices (a scene file may not give them; `dataclasses.replace`
+            # passes the old ones, replaced here)
+            need += ("center", "normal")
+            object.__setattr__(self, "center", center)
+            object.__setattr__(self, "normal", normal)
+        for key in ("center", "normal", "size", "radius", "vertices"):
             given = getattr(self, key) is not None
             if given != (key in need):
                 raise SceneError(key, "missing" if not given else
                                  f"not a key of a {self.shape} light")
+        object.__setattr__(self, "center", vec(self.center, "center"))
         if self.normal is not None:
             object.__setattr__(self, "normal", unit(vec(self.normal, "normal"), "normal"))
         if self.size is not None:
@@ -184,9 +198,14 @@ class AreaLight(_Emitter):
             if self.shape == "rect" and self.size[1] > self.size[0]:
                 grid = grid[::-1]  # more cells along the longer side
             uv = arealights.unit_square(n, self.pattern, int(s), grid)
-            points = (arealights.rect_points(uv, self.center, u, v, self.size)
-                      if self.shape == "rect" else
-                      arealights.disk_points(uv, self.center, u, v, self.radius))
+            if self.shape == "polygon":
+                flat = (self.vertices - self.center) @ np.stack([u, v], axis=1)
+                points = arealights.polygon_points(uv, self.vertices,
+                                                   arealights.triangulate(flat))
+            else:
+                points = (arealights.rect_points(uv, self.center, u, v, self.size)
+                          if self.shape == "rect" else
+                          arealights.disk_points(uv, self.center, u, v, self.radius))
         object.__setattr__(self, "samples", n)
         object.__setattr__(self, "seed", int(s))
         object.__setattr__(self, "positions", frozen(np.ascontiguousarray(points)))
@@ -202,6 +221,52 @@ class AreaLight(_Emitter):
         return tuple(AreaSample(p, self.normal, 90.0, self.color, self.intensity * w,
                                 self.shadows)
                      for p, w in zip(self.positions, self.weights))
+
+
+def _polygon(value) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A polygon light's vertices (m, 3) float64 (read-only), its unit normal and its area
+    centroid, checked: m >= 3 finite points, planar (PLANAR_RELATIVE), non-zero area, no two
+    edges crossing or touching but neighbours at their shared corner."""
+    try:
+        v = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.ndim != 2 or v.shape[0] < 3 or v.shape[1] != 3 or \
+            not np.isfinite(v).all():
+        raise SceneError("vertices", "expected a list of at least 3 points [x, y, z]")
+    normal, center, area = arealights.polygon_frame(v)
+    diameter = float(np.ptp(v, axis=0).max())
+    if area <= (PLANAR_RELATIVE * diameter) ** 2:
+        raise SceneError("vertices", "the polygon has no area")
+    off = float(np.abs((v - center) @ normal).max())
+    if off > PLANAR_RELATIVE * diameter:
+        raise SceneError("vertices", f"not planar: a vertex is {off:.3g} off the polygon's "
+                                     f"plane (at most {PLANAR_RELATIVE:g} of its size)")
+    u, w = default_plane_axes(normal)
+    flat = (v - center) @ np.stack([u, w], axis=1)
+    m = len(flat)
+    for i in range(m):
+        for j in range(i + 1, m):
+            if j == i + 1 or (i == 0 and j == m - 1):
+                continue
+            if _segments_meet(flat[i], flat[(i + 1) % m], flat[j], flat[(j + 1) % m]):
+                raise SceneError("vertices", f"edges {i} and {j} cross: the polygon must be "
+                                             "simple")
+    return frozen(v), frozen(normal), center
+
+
+def _segments_meet(a, b, c, d) -> bool:
+    """Do the closed segments ab and cd of the plane meet?"""
+    def side(p, q, r):
+        return np.sign((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
+    s1, s2, s3, s4 = side(a, b, c), side(a, b, d), side(c, d, a), side(c, d, b)
+    if s1 * s2 < 0 and s3 * s4 < 0:
+        return True
+    def on(p, q, r):  # r on segment pq, given collinear
+        return min(p[0], q[0]) <= r[0] <= max(p[0], q[0]) and \
+            min(p[1], q[1]) <= r[1] <= max(p[1], q[1])
+    return bool((s1 == 0 and on(a, b, c)) or (s2 == 0 and on(a, b, d)) or
+                (s3 == 0 and on(c, d, a)) or (s4 == 0 and on(c, d, b)))
 
 
 Light = PointLight | DirectionalLight | SpotLight | AreaLight

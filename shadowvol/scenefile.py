@@ -71,7 +71,8 @@ LIGHT_KEYS = {
 }
 AREA_KEYS = {"type", "center", "color", "intensity", "samples", "pattern", "seed", "shadows"}
 LIGHT_KEYS.update({"rect": AREA_KEYS | {"normal", "size"}, "disk": AREA_KEYS | {"normal", "radius"},
-                   "sphere": AREA_KEYS | {"radius"}})
+                   "sphere": AREA_KEYS | {"radius"},
+                   "polygon": AREA_KEYS - {"center"} | {"vertices"}})
 TRANSFORM_KEYS = {"scale", "rotation", "translation", "matrix"}
 # the shadow switches (docs/CONVENTIONS.md, "Shadow switches"); an object's default: true
 SWITCH_KEYS = ("cast_shadows", "receive_shadows")
@@ -286,9 +287,9 @@ REQUIRED_LIGHT_KEYS = {"point": ("position",), "directional": ("direction",),
 def _light(value, key: str):
     table, kind = _typed(value, key, LIGHT_KEYS, "light")
     args = {k: v for k, v in table.items() if k != "type"}
-    if kind in ("rect", "disk", "sphere"):
-        _required(table, "center", key)
-        return _build(key, AreaLight, shape=kind, **args)
+    if kind in ("rect", "disk", "sphere", "polygon"):
+        _required(table, "vertices" if kind == "polygon" else "center", key)
+        return _build(key, AreaLight, shape=kind, **({"center": None} | args))
     cls = {"point": PointLight, "directional": DirectionalLight, "spot": SpotLight}[kind]
     for name in REQUIRED_LIGHT_KEYS[kind]:
         _required(table, name, key)

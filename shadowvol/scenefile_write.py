@@ -51,8 +51,10 @@ def scene_to_dict(scene: Scene) -> dict:
         if isinstance(lt, DirectionalLight):
             return {"type": "directional", "direction": lt.direction.tolist(), **out}
         if isinstance(lt, AreaLight):
-            shape = {"normal": lt.normal, "size": lt.size, "radius": lt.radius}
-            return {"type": lt.shape, "center": lt.center.tolist(), "samples": lt.samples,
+            shape = ({"vertices": lt.vertices} if lt.shape == "polygon" else  # centre computed
+                     {"center": lt.center, "normal": lt.normal, "size": lt.size,
+                      "radius": lt.radius})
+            return {"type": lt.shape, "samples": lt.samples,
                     "pattern": lt.pattern, "seed": lt.seed, **out,
                     **{k: (v.tolist() if isinstance(v, np.ndarray) else v)
                        for k, v in shape.items() if v is not None}}

@@ -19,19 +19,22 @@ SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".pn
             "json": ".json", "picture": ".png", "exr": ".exr", "flat": ".png", "png16": ".png"}
 
 
-def ground_truth(text: str | None, flag: str = "--outputs") -> tuple[str, ...]:
+def ground_truth(text: str | None, flag: str = "--outputs", extra: tuple[str, ...] = ()
+                 ) -> tuple[str, ...]:
     """The ground-truth outputs named by a command line's comma-separated list (or `all`),
-    in `shadowvol.frame.GROUND_TRUTH`'s order; () for None.  SceneError (exit 2) naming
-    `flag` for an unknown name (`shadowvol.frame.check_outputs`)."""
+    in `shadowvol.frame.GROUND_TRUTH`'s order, then those of `extra` (outputs one command has
+    besides, e.g. `shadowvol.frame.EXACT_OUTPUTS`; named only, never in `all`); () for None.
+    SceneError (exit 2) naming `flag` for an unknown name (`shadowvol.frame.check_outputs`)."""
     if text is None:
         return ()
     names = [n.strip() for n in text.split(",") if n.strip()]
     if names == ["all"]:
         return GROUND_TRUTH
+    known = GROUND_TRUTH + tuple(extra)
     if not names:
         raise SceneError(flag, f"unknown output {shorten(text)} (a comma-separated list of: "
-                               f"{', '.join(GROUND_TRUTH)}; or all)")
-    return check_outputs(names, GROUND_TRUTH, key=flag)
+                               f"{', '.join(known)}; or all)")
+    return check_outputs(names, known, key=flag)
 
 
 def check(outputs: dict[str, Path], flags: dict[str, str] | None = None,

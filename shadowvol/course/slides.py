@@ -288,10 +288,13 @@ def mark_lights(image: np.ndarray, scene, layout: Layout, lights=None) -> np.nda
 
 
 def area_outline(light, n: int = 48) -> np.ndarray:
-    """(k, 3) world points around an area light's edge: a rect's four corners, a disk's rim
-    (n points); none (k = 0) for a sphere, whose samples lie on its surface."""
+    """(k, 3) world points around an area light's edge: a rect's four corners, a polygon's
+    vertices, a disk's rim (n points); none (k = 0) for a sphere, whose samples lie on its
+    surface."""
     if light.shape == "sphere":
         return np.zeros((0, 3))
+    if light.shape == "polygon":
+        return np.asarray(light.vertices)
     u, v = default_plane_axes(light.normal)
     if light.shape == "rect":
         a, b = light.size / 2

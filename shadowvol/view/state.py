@@ -154,15 +154,19 @@ def change_samples(state: ViewState, factor: float) -> ViewState:
 
 
 def resize_light(state: ViewState, steps: int) -> ViewState:
-    """Grow (steps > 0) or shrink the probed light if it is an area light: its size (rect) or
-    radius (disk, sphere) scales by RESIZE_PER_STEP per step, with the same number of samples
-    made anew (the umbra shrinks and the penumbra widens as it grows).  Other lights stay."""
+    """Grow (steps > 0) or shrink the probed light if it is an area light: its size (rect),
+    radius (disk, sphere) or vertices about its centre (polygon) scale by RESIZE_PER_STEP per
+    step, with the same number of samples made anew (the umbra shrinks and the penumbra widens
+    as it grows).  Other lights stay."""
     if not state.lights or not isinstance(state.lights[state.probe_light], AreaLight):
         return state
     light = state.lights[state.probe_light]
     scale = RESIZE_PER_STEP ** steps
-    new = (replace(light, size=light.size * scale) if light.shape == "rect"
-           else replace(light, radius=light.radius * scale))
+    if light.shape == "polygon":
+        new = replace(light, vertices=light.center + (light.vertices - light.center) * scale)
+    else:
+        new = (replace(light, size=light.size * scale) if light.shape == "rect"
+               else replace(light, radius=light.radius * scale))
     lights = list(state.lights)
     lights[state.probe_light] = new
     return replace(state, lights=tuple(lights))

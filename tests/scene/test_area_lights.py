@@ -90,8 +90,9 @@ def test_the_documented_area_lights_load():
     text = (SCENES / "README.md").read_text()
     block = text.split("## Area lights\n\n```toml\n", 1)[1].split("```", 1)[0]
     lights = scene_from_dict(tomllib.loads(HEAD + block)).lights
-    assert [lt.shape for lt in lights] == ["rect", "disk", "sphere"]
-    assert [lt.samples for lt in lights] == [16, 16, 16]
+    assert [lt.shape for lt in lights] == ["rect", "disk", "sphere", "polygon"]
+    assert [lt.samples for lt in lights] == [16, 16, 16, 16]
+    assert np.allclose(lights[3].normal, [0, -1, 0])   # counter-clockwise seen from below
 
 
 def _rect(**kw):
@@ -119,6 +120,40 @@ def test_samples_lie_on_the_shapes(pattern):
         assert light.positions.shape == (light.samples, 3) and light.positions.dtype == np.float64
         assert not light.positions.flags.writeable
         assert np.isclose(light.weights.sum(), 1.0)
+
+
+@pytest.mark.parametrize("pattern", ["stratified", "halton"])
+def test_polygon_samples_lie_in_the_polygon_evenly(pattern):
+    """An L (three unit squares) tilted out of the axes: every sample on its plane and inside
+    it; with the stratified 32 x 24 grid, each of its triangles holds its area's share of the
+    samples up to 2 x 24: u picks the triangle, so every whole column of cells inside its
+    u-interval puts 24 samples in it and only the two partial columns at its ends may not."""
+    flat = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], float)
+    tilt = np.array([[1.0, 0.0, 0.3], [0.0, 1.0, -0.2]])
+    corner = np.array([5.0, 1.0, -2.0])
+    light = AreaLight("polygon", None, vertices=flat @ tilt + corner, samples=768,
+                      pattern=pattern, seed=2)
+    local = np.linalg.lstsq(tilt.T, (light.positions - corner).T, rcond=None)[0].T
+    assert np.abs(local @ tilt - (light.positions - corner)).max() < 1e-12
+    x, y = local[:, 0], local[:, 1]
+    assert ((x >= -1e-12) & (y >= -1e-12) & (x <= 2 + 1e-12) & (y <= 2 + 1e-12)
+            & ((x <= 1 + 1e-12) | (y <= 1 + 1e-12))).all()
+    if pattern == "stratified":
+        assert arealights.grid_shape(768) == (32, 24)
+        u, v = planes.default_plane_axes(light.normal)
+        axes = np.stack([u, v], axis=1)
+        f = (light.vertices - light.center) @ axes
+        q = (light.positions - light.center) @ axes
+        triangles = arealights.triangulate(f)
+        counts, shares = [], []
+        for a, b, c in f[triangles]:
+            m = np.linalg.inv(np.stack([b - a, c - a], axis=1))
+            st = (q - a) @ m.T
+            s, t = st[:, 0], st[:, 1]
+            counts.append(((s >= -1e-12) & (t >= -1e-12) & (s + t <= 1 + 1e-12)).sum())
+            shares.append(abs(np.cross(np.r_[b - a, 0], np.r_[c - a, 0])[2]) / 2 / 3)
+        assert sum(counts) >= 768
+        assert np.abs(np.array(counts) - 768 * np.array(shares)).max() <= 2 * 24
 
 
 def test_stratified_puts_one_sample_per_cell():

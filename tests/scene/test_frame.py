@@ -15,9 +15,15 @@ from shadowvol.scene import AreaLight, PointLight, SceneError
 def test_the_table_gives_the_ground_truth_and_the_mask_file_in_conventions_order():
     assert frame.GROUND_TRUTH == ("depth", "distance", "normal", "object_id", "facing",
                                   "facing_count", "casters")
-    assert list(frame.MASK_ARRAYS) == [*frame.GROUND_TRUTH, "lit_count", "samples", "K",
+    assert list(frame.MASK_ARRAYS) == [*frame.GROUND_TRUTH, "lit_count", "samples",
+                                       "visibility_exact", "irradiance_exact", "K",
                                        "world_to_camera", "camera_to_world", "light_position",
                                        "light_direction"]
+    # the ray tracer's exact outputs: in a mask file when named, never ground truth the
+    # rasterizer must produce
+    assert frame.EXACT_OUTPUTS == ("visibility_exact", "irradiance_exact")
+    assert not set(frame.EXACT_OUTPUTS) & set(frame.GROUND_TRUTH)
+    assert frame.MASK_ARRAYS["visibility_exact"] == (np.float64, ("L", "H", "W"))
     assert frame.MASK_ARRAYS["casters"] == (np.uint64, ("L", "H", "W", "K"))
     assert frame.shape("casters", 2, 3, 4, objects=65) == (2, 3, 4, 2)
     assert frame.shape("normal", 2, 3, 4, flat=True) == (12, 3)
@@ -34,7 +40,7 @@ def test_both_results_are_frames_that_declare_only_what_they_add():
     assert base - {"calibration"} <= set(frame.FIELDS)
     assert set(frame.FIELDS) - base == {"image", "image_srgb", "stencil", "K",
                                         "world_to_camera", "camera_to_world", "light_position",
-                                        "light_direction"}
+                                        "light_direction", *frame.EXACT_OUTPUTS}
     for result, adds in ((RenderResult, {"image", "image_srgb", "stencil", "zfail"}),
                          (GroundTruth, set())):
         assert issubclass(result, frame.Frame)

@@ -8,15 +8,16 @@ from pathlib import Path
 
 from raytrace import estimate, shadow_masks  # (area lights: lit where every sample reaches)
 from raytrace.backends import BACKENDS
+from raytrace.exact_soft import check_exact, exact_visibility
 from raytrace.groundtruth import ground_truth
 from shadowvol import memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
-from shadowvol.frame import save_masks
+from shadowvol.frame import EXACT_OUTPUTS, save_masks
 from shadowvol.io import save_png
 from shadowvol.pictures import ground_truth_picture, masks_image
-from shadowvol.scene import hard_lights, light_samples
+from shadowvol.scene import SceneError, hard_lights, light_samples
 from shadowvol.scenefile import load_scene
 
 
@@ -37,21 +38,30 @@ def add_parser(sub) -> None:
                         "side (default: beside the .npz, same name, .png)")
     m.add_argument("--no-png", action="store_true", help="write the .npz only")
     blocks.ground_truth(m, "ground truth to add to the .npz, comma-separated: "
-                           f"{blocks.GROUND_TRUTH_LIST} (or all); see docs/CONVENTIONS.md")
+                           f"{blocks.GROUND_TRUTH_LIST} (or all), and visibility_exact, "
+                           "irradiance_exact (the exact visible part of rect, disk and polygon "
+                           "lights, float64; named only); see docs/CONVENTIONS.md")
     blocks.backend(m, BACKENDS)
     blocks.memory_budget(m)
     m.set_defaults(func=command)
 
 
 def command(args) -> int:
-    wanted = outputs.ground_truth(args.outputs)
+    wanted = outputs.ground_truth(args.outputs, extra=EXACT_OUTPUTS)
+    exact = tuple(o for o in wanted if o in EXACT_OUTPUTS)
+    wanted = tuple(o for o in wanted if o not in EXACT_OUTPUTS)
     paths = {"masks": Path(args.output)}
     if not args.no_png:
         paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
     outputs.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
     scene = load_scene(args.scene)
-    memory.check(estimate.masks(scene, wanted, picture="picture" in paths),
+    memory.check(estimate.masks(scene, wanted, picture="picture" in paths, exact=len(exact)),
                  args.memory_budget, args.scene)
+    if exact:
+        try:
+            check_exact(scene)
+        except SceneError as exc:
+            raise exc.in_file(args.scene) from None
     if wanted or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
         # the counts of an area light (lit_count, samples) come with the ground truth's rays
         truth = ground_truth(scene, wanted, backend=args.backend)
@@ -62,6 +72,9 @@ def command(args) -> int:
         lit, coverage = shadow_masks(scene, backend=args.backend)
         arrays = calibration(scene).arrays()
         picture = masks_image(lit, coverage)
+    if exact:
+        found = exact_visibility(scene, backend=args.backend)
+        arrays = arrays | {name: getattr(found, name.removesuffix("_exact")) for name in exact}
     save_masks(paths["masks"], lit, coverage,
                light_samples=[light_samples(lt) for lt in scene.lights], arrays=arrays)
     if "picture" in paths:

@@ -40,10 +40,14 @@ def add_parser(sub) -> None:
     r.add_argument("--filter", choices=FILTERS, default="box",
                    help="Whitted with --spp N: the pixel filter the samples are drawn from, "
                         "'box' (the pixel's square, default) or 'tent' (radius 1 pixel)")
-    r.add_argument("--integrator", choices=("whitted", "path", "photon"), default="whitted",
+    r.add_argument("--integrator", choices=("whitted", "path", "photon", "analytic"),
+                   default="whitted",
                    help="'whitted' (default) or 'path': unidirectional path tracing with "
                         "next-event estimation of emissive surfaces (material.emission); "
-                        "'photon': photon mapping (needs scipy: the outlook extra)")
+                        "'photon': photon mapping (needs scipy: the outlook extra); "
+                        "'analytic': Whitted's direct light with the diffuse light of rect, "
+                        "disk and polygon lights exact, no sample noise (needs shapely: the "
+                        "exact extra)")
     r.add_argument("--spp", type=int, default=None, metavar="N",
                    help="samples per pixel: path tracing's paths and the photon map's eye "
                         f"rays (default {PATH_SPP}); Whitted's stratified jittered samples, "
@@ -62,6 +66,8 @@ def command(args) -> int:
         return path_traced(args)
     if args.integrator == "photon":
         return photon_mapped(args)
+    if args.integrator == "analytic":
+        return analytic_rendered(args)
     paths = {"image": Path(args.output)}
     for kind in ("exr", "png16"):
         if getattr(args, kind):
@@ -79,6 +85,35 @@ def command(args) -> int:
     image = render(scene, max_depth=args.max_depth, backend=args.backend,
                    progress=False if args.no_progress else None, spp=spp, seed=args.seed,
                    pixel_filter=args.filter)
+    save_png(args.output, image)
+    if "exr" in paths:
+        save_exr(paths["exr"], image)
+    if "png16" in paths:
+        save_png16(paths["png16"], image)
+    print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)
+    return status.OK
+
+
+def analytic_rendered(args) -> int:
+    """`raytrace render --integrator analytic` (`raytrace.outlook.analytic`)."""
+    from raytrace.outlook import analytic
+
+    paths = {"image": Path(args.output)}
+    for kind in ("exr", "png16"):
+        if getattr(args, kind):
+            paths[kind] = Path(getattr(args, kind))
+    outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
+    for flag, value in (("--spp", args.spp), ("--max-depth", args.max_depth)):
+        if value is not None:
+            raise SceneError(flag, "not with --integrator analytic (the direct light at the "
+                                   "pixel centres)")
+    scene = load_scene(args.scene)
+    memory.check(estimate.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
+                 args.memory_budget, args.scene)
+    try:
+        image = analytic.render(scene, backend=args.backend)
+    except SceneError as exc:
+        raise exc.in_file(args.scene) from None
     save_png(args.output, image)
     if "exr" in paths:
         save_exr(paths["exr"], image)

@@ -1,0 +1,485 @@
+"""Exact visibility of polygonal and disk lights: the visible part of the light, computed.
+
+For light i and a pixel's visible point p (float64: the pixel-centre ray met with its visible
+triangle's plane, as `depth` is), the visible region is the light's shape, cut to where p's
+camera-facing normal n sees it (n . (x - p) > 0), less the union of every triangle's shadow
+on it: the triangle cut to the pyramid from p over the light (its side planes and the light's
+plane) and carried from p onto the light's plane.  Both sides of a triangle occlude; only p's
+own triangle and those coplanar with it (COPLANAR_RELATIVE) are left out.  Then
+
+    visibility_exact = area(visible) / area(light)
+    irradiance_exact = Lambert's formula over the visible region's rings (unit radiance),
+
+0 for both where p is not on the light's emitting side.  docs/CONVENTIONS.md ("Area lights:
+exact visibility") says what is exact at a contact and at a tie.
+
+Candidates come from a conservative query, never from sampled rays: clusters of triangles whose
+bounding spheres are inside every plane of the pyramid and whose boxes meet its box, then
+triangles whose boxes do, then the cut itself.  A closed, convex, consistently wound object (a
+box, a sphere's tessellation) shadows p from outside as one convex polygon (the shadow of a
+convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
+where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
+not at all from its own outside.  Every other object's triangles are united one by one.  One
+convex shadow on a rect or disk is taken away in numpy (clipped edge by edge); several are
+united, and taken away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
+(`lightshapes.OVERLAY_GRID`); the measures are `raytrace.polygons`'.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+import numpy as np
+
+from shadowvol.frame import EXACT_OUTPUTS
+from shadowvol.scene import AreaLight, DirectionalLight, Scene
+
+from . import polygons
+from .regions import closed_rings as _closed_rings
+from .regions import measure as _measure
+from .regions import minus_convex as _minus_convex
+from .regions import ring_measures as _ring_measures
+from .backends import for_each_tile
+from .camera import RayGrid
+from .lightshapes import FramedLight, frame_light, shapely_module
+from .masks import MASK_TILE_RAYS, MaskTracer, _primary_hits, scene_backend, shadow_masks
+from .occluders import CLUSTER, CONVEX_RELATIVE, Objects
+from .occluders import objects as _objects
+from .switches import casting, receiving_objects
+
+__all__ = ["EXACT_OUTPUTS", "ExactVisibility", "check_exact", "exact_visibility",
+           "visible_regions"]
+
+# A triangle is coplanar with p's own when its three corners lie within this much of the
+# largest corner coordinate (the frame's, from the eye) of the own triangle's plane: the
+# corners are float64 world positions (each a few roundings of 2^-53 from its transform) less
+# the eye (one more), so two triangles of one world plane lie ~1e-15 of their coordinates
+# apart; 2^-40 (~1e-12) is a thousand times that, and no model places a real occluder so
+# flat and so close.  Left in, such a triangle a rounding above p would cut the whole pyramid.
+COPLANAR_RELATIVE = 2.0 ** -40
+# Pieces of shadow per pixel that are united pairwise over all pixels at once (more: one
+# cascaded union per pixel).
+FEW_PIECES = 8
+# Pixels per chunk (each chunk's candidate arrays are pixels x clusters).
+CHUNK_PIXELS = 2048
+
+
+class ExactVisibility(NamedTuple):
+    """visibility (L, H, W) float64 and irradiance (L, H, W) float64 (see the module); direct
+    (L, H, W) float64 with `exact_visibility(direct=True)`, else None: the integral over the
+    visible region of cos(at p) cos(at the light) dA over the light's area, the limit of the
+    renderers' sampled shading (no fall-off: docs/CONVENTIONS.md); for a hard light, as
+    irradiance."""
+
+    visibility: np.ndarray
+    irradiance: np.ndarray
+    direct: np.ndarray | None = None
+
+
+def check_exact(scene: Scene) -> None:
+    """SceneError for a light with no exact visibility (a sphere), MissingExtra without
+    shapely where an area light needs it: what `exact_visibility` would refuse, before any
+    work."""
+    for i, light in enumerate(scene.lights):
+        if isinstance(light, AreaLight):
+            frame_light(light, np.zeros(3), f"lights[{i}]")
+            shapely_module()
+
+
+def visible_regions(scene: Scene, light_index: int, backend: str | MaskTracer = "embree"
+                    ) -> tuple[np.ndarray, "FramedLight"]:
+    """(H, W) object array: the visible region of area light `light_index` at each pixel (a
+    shapely geometry in the light's plane coordinates, `FramedLight.axes` about its centre; None
+    where nothing is covered or the point is behind the light), and the light in the frame.
+    For tests and pictures; `exact_visibility` measures the same regions."""
+    regions = np.full(scene.height * scene.width, None, object)
+    exact_visibility(scene, backend, _regions=(light_index, regions))
+    mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
+    return regions.reshape(scene.height, scene.width), frame_light(
+        scene.lights[light_index], mt.origin, f"lights[{light_index}]")
+
+
+def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
+                     _regions=None, direct: bool = False) -> ExactVisibility:
+    """`visibility_exact` and `irradiance_exact` of every light of `scene` (module docstring):
+    (L, H, W) float64 each.  A point, spot or directional light: 1 where `lit`, and
+    irradiance n . l there (a unit light without fall-off, as the renderers shade one).
+    SceneError for a sphere light."""
+    mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
+    tracer, triangles, origin = mt
+    H, W, L = scene.height, scene.width, len(scene.lights)
+    lights = [None if not isinstance(lt, AreaLight) else
+              frame_light(lt, origin, f"lights[{i}]") for i, lt in enumerate(scene.lights)]
+    shapely = shapely_module() if any(lights) else None
+    vis = np.zeros((L, H * W))
+    irr = np.zeros((L, H * W))
+    unatt = np.zeros((L, H * W)) if direct else None
+    corners = tracer.vertices[tracer.faces].astype(np.float64)
+    ids = scene.triangles()[2]
+    objects = _objects(corners, ids, casting(scene)) if any(lights) else None
+    # per triangle: its object receives shadows (docs/CONVENTIONS.md, "Shadow switches")
+    receives = receiving_objects(scene)[ids] if len(ids) else np.zeros(0, bool)
+    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
+                                 target=scene.camera.target - origin)
+    grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
+    rows_per_tile = max(1, MASK_TILE_RAYS // W)
+    tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
+    hard = [i for i, lt in enumerate(lights) if lt is None]
+    lit = shadow_masks(scene.replace(lights=tuple(scene.lights[i] for i in hard)), mt)[0] \
+        if hard else None
+
+    def trace_tile(rows: slice) -> None:
+        _, index, hit = _primary_hits(tracer, triangles, grids, rows)
+        if hit is None:
+            return
+        pixel = rows.start * W + index
+        p = hit.point64.T
+        normal = (hit.normal * hit.side).T
+        for i, light in enumerate(lights):
+            if light is None:
+                k = hard.index(i)
+                on = lit[k].reshape(-1)[pixel]
+                vis[i, pixel] = on
+                irr[i, pixel] = on * _hard_cosine(scene.lights[i], p, normal, origin)
+                if direct:
+                    unatt[i, pixel] = irr[i, pixel]
+                continue
+            for at in range(0, len(pixel), CHUNK_PIXELS):
+                part = slice(at, at + CHUNK_PIXELS)
+                keep = None if _regions is None or _regions[0] != i else \
+                    np.full(len(p[part]), None, object)
+                shadowed = receives[hit.tri[part]] & scene.lights[i].shadows
+                got = _area_light(shapely, light, objects, corners, p[part], normal[part],
+                                  hit.tri[part], keep, shadowed, direct)
+                if keep is not None:
+                    _regions[1][pixel[part]] = keep
+                vis[i, pixel[part]], irr[i, pixel[part]] = got[:2]
+                if direct:
+                    unatt[i, pixel[part]] = got[2]
+
+    for_each_tile(trace_tile, tiles, tracer)
+    return ExactVisibility(vis.reshape(L, H, W), irr.reshape(L, H, W),
+                           None if unatt is None else unatt.reshape(L, H, W))
+
+
+def _hard_cosine(light, p: np.ndarray, normal: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """(n,) max(n . l, 0), l the unit direction from p toward a hard light."""
+    if isinstance(light, DirectionalLight):
+        to = np.broadcast_to(-light.direction, p.shape)
+    else:
+        to = light.position - origin - p
+        to = to / np.linalg.norm(to, axis=1, keepdims=True)
+    return np.maximum((normal * to).sum(axis=1), 0.0)
+
+
+def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
+                p: np.ndarray, normal: np.ndarray, own: np.ndarray, regions=None,
+                shadowed: np.ndarray | None = None, direct: bool = False
+                ) -> tuple[np.ndarray, ...]:
+    """(n,) visibility and irradiance of `light` at points p (n, 3) with camera-facing unit
+    normals (n, 3) on triangles own (n,); `regions` (n,) object array: filled with the
+    visible regions (shapely, the light's plane coordinates) where given; `shadowed` (n,)
+    bool (default all): the points that receive shadows from this light (the others see the
+    light's part on their side whole: the shadow switches); `direct`: the unattenuated
+    measure over the light's area too (`ExactVisibility.direct`)."""
+    n = len(p)
+    height = (p - light.center) @ light.normal
+    front = np.flatnonzero(height > 0)
+    out_v, out_e, out_d = np.zeros(n), np.zeros(n), np.zeros(n)
+    if len(front) == 0:
+        return (out_v, out_e, out_d) if direct else (out_v, out_e)
+    p, normal, own = p[front], normal[front], own[front]
+    base = light.center + light.hull @ light.axes                 # (k, 3)
+    pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
+    at = np.arange(len(p)) if shadowed is None else np.flatnonzero(shadowed[front])
+    if len(at) and len(objects.members):
+        pieces[at], single[at] = _shadows(shapely, light, objects, corners, p[at], normal[at],
+                                          own[at], base)
+    # the light cut to p's side: its hull's box cut by n . (x - p) > 0, then the outline
+    box = np.array([light.hull.min(axis=0), [light.hull[:, 0].max(), light.hull[:, 1].min()],
+                    light.hull.max(axis=0), [light.hull[:, 0].min(), light.hull[:, 1].max()]])
+    flat = np.repeat(np.c_[box, np.zeros(4)][None], len(p), axis=0)
+    # n . (x - p) at the box's corners x = centre + a u + b v
+    dist = ((light.center - p) * normal).sum(axis=1)[:, None] + (box @ (light.axes @ normal.T)).T
+    cut, count = polygons.clip(flat, np.full(len(p), 4), dist)
+    cut = cut[..., :2]
+    area, irr, unatt = np.zeros(len(p)), np.zeros(len(p)), np.zeros(len(p))
+    measures = (area, irr, unatt) if direct else (area, irr)
+    has = pieces != None  # noqa: E711 (an object array)
+    # nothing in the way of a rect or disk: its box cut to p's side, measured as it is
+    plain = np.flatnonzero(~has & (count >= 3)) if light.outline is None and regions is None \
+        else np.zeros(0, int)
+    if len(plain):
+        coords, ring = _closed_rings(cut[plain], count[plain])
+        for out, got in zip(measures, _ring_measures(light, coords, ring, p[plain],
+                                                     normal[plain], direct)):
+            out[plain] = got
+    # one convex shadow on a rect or disk: the light less it, in numpy
+    lone = np.flatnonzero(single & (count >= 3)) if light.outline is None and regions is None \
+        else np.zeros(0, int)
+    if len(lone):
+        for out, got in zip(measures, _minus_convex(shapely, light, cut[lone], count[lone],
+                                                    pieces[lone], p[lone], normal[lone],
+                                                    direct)):
+            out[lone] = got
+    rest = np.setdiff1d(np.arange(len(p)), np.r_[plain, lone])
+    if len(rest):
+        seen = _polygons(shapely, cut[rest], count[rest])
+        if light.outline is not None:  # a polygon light: its own outline
+            seen = _polygonal(shapely, shapely.intersection(seen, shapely.Polygon(light.outline),
+                                                            grid_size=light.grid))
+        hit = np.flatnonzero(has[rest])
+        seen[hit] = _polygonal(shapely, shapely.difference(seen[hit], pieces[rest[hit]],
+                                                            grid_size=light.grid))
+        for out, got in zip(measures, _measure(shapely, light, seen, p[rest], normal[rest],
+                                               direct)):
+            out[rest] = got
+        if regions is not None:
+            regions[front[rest]] = seen
+    # the subtractions leave roundings of ~1e-14 either side of 0 and 1
+    out_v[front] = np.clip(area / light.area, 0.0, 1.0)
+    out_e[front] = np.maximum(irr, 0.0)
+    if not direct:
+        return out_v, out_e
+    out_d[front] = np.maximum(unatt / light.area, 0.0)
+    return out_v, out_e, out_d
+
+
+
+
+
+
+
+
+def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """(n,) object array of shapely polygons from corners flat (n, k, 2), count (n,) (an empty
+    polygon where fewer than 3)."""
+    out = np.full(len(flat), shapely.Polygon(), object)
+    ok = np.flatnonzero(count >= 3)
+    if len(ok):
+        mask = np.arange(flat.shape[1])[None] < count[ok, None]
+        coords = flat[ok][mask]
+        which = np.repeat(np.arange(len(ok)), count[ok])
+        out[ok] = shapely.polygons(shapely.linearrings(coords, indices=which))
+    return out
+
+
+def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
+             normal: np.ndarray, own: np.ndarray, base: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) object array: the union of every triangle's shadow on the light's plane seen from
+    each p (None where none falls inside the pyramid over `base` (k, 3)); and where that is
+    one convex polygon (`_unite`)."""
+    lo = np.minimum(p, base.min(axis=0))
+    hi = np.maximum(p, base.max(axis=0))
+    meet = (objects.lo[None] <= hi[:, None]).all(-1) & (objects.hi[None] >= lo[:, None]).all(-1)
+    meet &= _sphere_meets(light, objects, p, base)
+    shapes, owner = _whole_bodies(shapely, light, objects, p, normal, own, meet)
+    # the objects wholly on the light's emitting side (every corner strictly above its plane):
+    # the light is outside them
+    height = ((corners - light.center) @ light.normal).min(axis=1)
+    clear = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
+    np.minimum.at(clear, objects.object, height)
+    pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
+    flat, count, pix, tri = _cut(light, corners, p, pix, tri, base)
+    # a convex object seen from outside: one hull per (pixel, object)
+    obj = objects.object[tri]
+    hullable = objects.convex[tri] & _outside(objects, corners, p, pix, tri)
+    if hullable.any():
+        h = np.flatnonzero(hullable)
+        key = pix[h] * (objects.object.max() + 1) + obj[h]
+        group, which = np.unique(key, return_inverse=True)
+        mask = np.arange(flat.shape[1])[None] < count[h, None]
+        points = shapely.multipoints(flat[h][mask], indices=np.repeat(which, count[h]))
+        shapes.append(shapely.convex_hull(points))
+        owner.append(group // (objects.object.max() + 1))
+    rest = np.flatnonzero(~hullable)
+    if len(rest):
+        shapes.append(_polygons(shapely, flat[rest], count[rest]))
+        owner.append(pix[rest])
+    return _unite(shapely, shapes, owner, len(p), light.grid)
+
+
+def _whole_bodies(shapely, light: FramedLight, objects: Objects, p: np.ndarray, normal: np.ndarray,
+                  own: np.ndarray, meet: np.ndarray) -> tuple[list, list]:
+    """The shadows of convex objects wholly between p's parallel plane and the light's
+    (0 <= h < h(p), h the height over the light's plane toward p): p is outside such an
+    object and its whole shadow is the pyramid's part of it, the polygon of its silhouette's
+    corners' shadows.  Returns (shapes, owners) lists of arrays; their clusters are taken out
+    of `meet` (n, C) for those p."""
+    shapes, owner = [], []
+    height = (p - light.center) @ light.normal
+    for j, body in enumerate(objects.bodies):
+        if body is None:
+            continue
+        clusters = objects.owner == j
+        h = (body.points - light.center) @ light.normal
+        whole = meet[:, clusters].any(axis=1) & (h.min() >= 0) & (h.max() < height)
+        at = np.flatnonzero(whole)
+        if len(at) == 0:
+            continue
+        # the silhouette's corners all lie on the shadow's outline: in order around their
+        # mean, they are the convex polygon
+        row, corner = np.nonzero(body.silhouette(p[at]))
+        flat = polygons.project(body.points[corner][:, None], p[at][row], light.center,
+                                light.normal, light.axes)[:, 0]
+        many = np.bincount(row, minlength=len(at))
+        mean = np.stack([np.bincount(row, flat[:, k], len(at)) for k in (0, 1)], 1)
+        rel = flat - mean[row] / np.maximum(many[row, None], 1)
+        order = np.lexsort((np.arctan2(rel[:, 1], rel[:, 0]), row))
+        enough = many[row[order]] >= 3
+        rings = shapely.linearrings(flat[order][enough], indices=row[order][enough],
+                                    out=np.full(len(at), None, object))
+        shapes.append(shapely.polygons(rings))
+        owner.append(at)
+        meet[np.ix_(at, clusters)] = False
+    return shapes, owner
+
+
+def _sphere_meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.ndarray
+                  ) -> np.ndarray:
+    """(n, C) bool: cluster c's bounding sphere is not wholly outside one of the planes that
+    bound the pyramid from p over `base` (k, 3): its side planes through p, the light's plane
+    and p's parallel plane (a sphere beyond a face of a convex body cannot meet it)."""
+    height = (objects.centre - light.center) @ light.normal              # (C,)
+    ok = (height >= -objects.radius)[None] & \
+        (height[None] <= ((p - light.center) @ light.normal)[:, None] + objects.radius[None])
+    for j in range(len(base)):
+        m = np.cross(base[j] - p, base[(j + 1) % len(base)] - p)      # (n, 3)
+        m *= np.sign(((light.center - p) * m).sum(axis=1))[:, None]
+        m /= np.linalg.norm(m, axis=1, keepdims=True)
+        ok &= m @ objects.centre.T - (m * p).sum(axis=1)[:, None] >= -objects.radius[None]
+    return ok
+
+
+def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarray,
+                own: np.ndarray, meet: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                clear: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(pixel, triangle) pairs (q,) int64 each: the triangles of the clusters that `meet`
+    (n, C) says meet p's pyramid box [lo, hi] (n, 3), whose own boxes meet it too, less p's
+    own triangle, those coplanar with it, a convex object's from its own outside, and the
+    triangles of a closed non-convex object that do not turn their back to p where the light
+    is outside that object (`clear` (n_objects,) bool): a segment from p to a point of the
+    light outside a closed surface that meets it leaves it last through a face turned away
+    from p, so those faces' shadows alone make the object's (up to segments grazing an edge:
+    no area)."""
+    pix, clu = np.nonzero(meet)
+    pix = np.repeat(pix, CLUSTER)
+    tri = objects.members[clu].reshape(-1)
+    keep = tri >= 0
+    pix, tri = pix[keep], tri[keep]
+    keep = (objects.tri_lo[tri] <= hi[pix]).all(-1) & (objects.tri_hi[tri] >= lo[pix]).all(-1)
+    keep &= tri != own[pix]
+    pix, tri = pix[keep], tri[keep]
+    # coplanar: every corner within COPLANAR_RELATIVE of p's own triangle's plane.  Only near-
+    # parallel triangles are looked at: one tilted by more than 0.045 rad with its corners that
+    # close to the plane is smaller than 2^-40 / 0.045 of its coordinates.
+    own_n = objects.normal[own[pix]]
+    parallel = np.flatnonzero(np.abs((own_n * objects.normal[tri]).sum(axis=1)) > 1 - 1e-3)
+    keep = np.ones(len(tri), bool)
+    if len(parallel):
+        near, t = own[pix[parallel]], tri[parallel]
+        off = np.abs(corners[t] @ objects.normal[near][..., None]
+                     - objects.offset[near, None, None])
+        scale = np.maximum(objects.scale[near], objects.scale[t])
+        keep[parallel] = off.max(axis=(1, 2)) > COPLANAR_RELATIVE * scale
+    mine = objects.convex[tri] & (objects.object[tri] == objects.object[own[pix]])
+    outside = (objects.outward[own[pix]] * normal[pix]).sum(axis=1) > 0
+    keep &= ~(mine & outside)
+    if clear is not None:
+        shell = objects.shell[tri]
+        closed = (shell != 0).any(axis=1) & ~objects.convex[tri] & clear[objects.object[tri]]
+        at = np.flatnonzero(closed & keep)
+        toward = (shell[at] * (corners[tri[at], 0] - p[pix[at]])).sum(axis=1) <= 0
+        keep[at[toward]] = False
+    return pix[keep], tri[keep]
+
+
+def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.ndarray,
+         base: np.ndarray):
+    """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (the light's plane, then
+    each side plane through p) and carried onto the light's plane: (flat (q', k, 2), count
+    (q',), pix, tri) of those with something left."""
+    poly = corners[tri].copy()
+    count = np.full(len(tri), 3)
+    planes = [lambda q, pp: (q - light.center) @ light.normal]
+    for j in range(len(base)):
+        a, b = base[j], base[(j + 1) % len(base)]
+        planes.append(lambda q, pp, a=a, b=b: _side(q, pp, a, b, light.center))
+    for plane in planes:
+        poly, count = polygons.clip(poly, count, plane(poly, p[pix][:, None]))
+        keep = count >= 3
+        poly, count, pix, tri = poly[keep], count[keep], pix[keep], tri[keep]
+    return polygons.project(poly, p[pix], light.center, light.normal, light.axes), count, pix, tri
+
+
+def _polygonal(shapely, geoms: np.ndarray) -> np.ndarray:
+    """geoms (n,) with the parts of no area of any geometry collection among them dropped (an
+    overlay that snaps a sliver to its grid may return the collapsed sliver as a line)."""
+    mixed = np.flatnonzero(shapely.get_type_id(geoms) == 7)
+    for k in mixed:
+        parts = shapely.get_parts(shapely.get_parts(geoms[k]))   # multipolygons in it too
+        geoms[k] = shapely.multipolygons(parts[shapely.get_type_id(parts) == 3])
+    return geoms
+
+
+def _unite(shapely, shapes: list, owner: list, n: int, grid: float
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) object array: per pixel the union of the shapes (arrays) whose owners (arrays of
+    pixel indices) name it, snap-rounded to `grid`, None where none; and (n,) bool, the pixels
+    with one shape (convex, as every shape here is)."""
+    out, single = np.full(n, None, object), np.zeros(n, bool)
+    if not shapes:
+        return out, single
+    shapes, owner = np.concatenate(shapes), np.concatenate(owner)
+    order = np.argsort(owner, kind="stable")
+    shapes, owner = shapes[order], owner[order]
+    real = (shapes != None)  # noqa: E711 (an object array)
+    # polygons only: a hull of collinear corners (a body seen edge-on) is a line, no area
+    real[real] = ~shapely.is_empty(shapes[real]) & np.isin(shapely.get_type_id(shapes[real]),
+                                                           (3, 6))
+    shapes, owner = shapes[real], owner[real]
+    if len(owner) == 0:
+        return out, single
+    starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+    sizes = np.diff(np.r_[starts, len(owner)])
+    # a few pieces: united rank by rank, all pixels at once; many: GEOS's cascaded union
+    few = sizes <= FEW_PIECES
+    acc = shapes[starts]
+    for rank in range(1, int(sizes[few].max(initial=1))):
+        more = np.flatnonzero(few & (sizes > rank))
+        acc[more] = _polygonal(shapely, shapely.union(acc[more], shapes[starts[more] + rank],
+                                                      grid_size=grid))
+    for k in np.flatnonzero(~few):
+        acc[k] = _polygonal(shapely, np.array([shapely.union_all(
+            shapes[starts[k]:starts[k] + sizes[k]], grid_size=grid)], object))[0]
+    out[owner[starts]] = acc
+    single[owner[starts[sizes == 1]]] = True
+    return out, single
+
+
+def _side(q: np.ndarray, p: np.ndarray, a: np.ndarray, b: np.ndarray, inner: np.ndarray
+          ) -> np.ndarray:
+    """Signed distance-like value of points q (m, k, 3) from the plane through p (m, 1, 3), a
+    and b, positive on the side of `inner`."""
+    m = np.cross(a - p[:, 0], b - p[:, 0])                         # (m, 3)
+    sign = np.sign(((inner - p[:, 0]) * m).sum(axis=1))
+    return np.einsum("mkj,mj->mk", q - p, m * sign[:, None])
+
+
+def _outside(objects: Objects, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
+             tri: np.ndarray) -> np.ndarray:
+    """(q,) bool: p[pix] lies outside the convex object of tri (q,) by more than
+    CONVEX_RELATIVE: beyond one of its face planes (False for a non-convex object)."""
+    out = np.zeros(len(pix), bool)
+    for j in np.unique(objects.object[tri[objects.convex[tri]]]):
+        faces = np.flatnonzero(objects.object == j)
+        at = np.flatnonzero((objects.object[tri] == j) & objects.convex[tri])
+        who, inv = np.unique(pix[at], return_inverse=True)
+        n = objects.outward[faces]
+        c = corners[faces][:, 0]
+        off = p[who] @ n.T - (n * c).sum(axis=1)
+        scale = np.maximum(np.abs(p[who]).max(axis=1), np.abs(corners[faces]).max())
+        out[at] = (off.max(axis=1) > CONVEX_RELATIVE * scale)[inv]
+    return out

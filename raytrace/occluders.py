@@ -1,0 +1,153 @@
+"""The scene's triangles as the exact visibility queries them (`raytrace.exact_soft`): per
+object whether it is closed and convex (then its shadow from a point outside is one convex
+polygon), its silhouette from a point, and clusters of triangles with their boxes for the
+conservative candidate query.  float64, numpy, in the masks' frame.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+# An object is convex when no corner lies farther than this (of its largest coordinate) outside
+# any of its face planes: its corners are float64 (the frame: world less the eye), each a few
+# roundings (~1e-16 of its coordinate) off, so a flat face's two triangles can look ~1e-15
+# concave; 2^-40 (~1e-12) is a thousand times that.  p is outside a convex object when
+# farther than this beyond one of its face planes.
+CONVEX_RELATIVE = 2.0 ** -40
+# Objects with more faces than this are not tested for convexity (faces x corners work); they
+# are united triangle by triangle, which is exact too.
+CONVEX_TEST_FACES = 4096
+# Triangles per cluster of the candidate query.
+CLUSTER = 16
+
+
+class Objects(NamedTuple):
+    """Per scene triangle: its object (M,) and whether that object is closed and convex
+    (convex (M,) bool), with its outward face normals (M, 3) (0 for the others); and the
+    candidate clusters: members (C, CLUSTER) int64 (−1 pads), lo, hi (C, 3) boxes, owner (C,)
+    each cluster's object, centre (C, 3) and radius (C,) a sphere around each cluster's box;
+    bodies: per object its `Convex`, or None; per triangle its box tri_lo, tri_hi (M, 3), unit
+    normal (M, 3) (0 if degenerate), offset (M,) normal . corner and scale (M,) its largest
+    corner coordinate; shell (M, 3): for a closed, consistently wound object (convex or not)
+    its triangles' outward unit normals, 0 for the others."""
+
+    object: np.ndarray
+    convex: np.ndarray
+    outward: np.ndarray
+    members: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    owner: np.ndarray
+    bodies: list
+    centre: np.ndarray
+    radius: np.ndarray
+    tri_lo: np.ndarray
+    tri_hi: np.ndarray
+    normal: np.ndarray
+    offset: np.ndarray
+    scale: np.ndarray
+    shell: np.ndarray
+
+
+class Convex(NamedTuple):
+    """A closed, convex, consistently wound object: points (V, 3) its distinct corners,
+    outward (F, 3) unit face normals, offset (F,) normal . corner, edges (E, 2) the corners
+    and sides (E, 2) the two faces of each edge."""
+
+    points: np.ndarray
+    outward: np.ndarray
+    offset: np.ndarray
+    edges: np.ndarray
+    sides: np.ndarray
+
+    def silhouette(self, eye: np.ndarray) -> np.ndarray:
+        """(n, V) bool: the corners on an edge between a face turned toward eye (n, 3) and
+        one turned away (the hull of their shadows is the object's)."""
+        toward = eye @ self.outward.T > self.offset
+        cut = toward[:, self.sides[:, 0]] != toward[:, self.sides[:, 1]]
+        out = np.zeros((len(eye), len(self.points)), bool)
+        rows = np.nonzero(cut)
+        out[rows[0], self.edges[rows[1], 0]] = True
+        out[rows[0], self.edges[rows[1], 1]] = True
+        return out
+
+
+def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = None) -> Objects:
+    """The `Objects` of triangles corners (M, 3, 3) of objects ids (M,); `casts` (n_objects,)
+    bool: the objects that cast shadows (`cast_shadows`; default all): only theirs are in the
+    clusters and bodies (the others are met by no query)."""
+    M = len(corners)
+    convex = np.zeros(M, bool)
+    outward = np.zeros((M, 3))
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    members, owner, bodies = [], [], []
+    shell = np.zeros((M, 3))
+    for j in range(int(ids.max(initial=-1)) + 1):
+        tris = np.flatnonzero(ids == j)
+        bodies.append(None)
+        if len(tris) == 0 or (casts is not None and not casts[j]):
+            continue
+        topology = _topology(corners[tris])
+        if topology is not None and (length[tris] > 0).all():
+            c = corners[tris]
+            sign = 1.0 if np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])).sum() > 0 \
+                else -1.0
+            n = normals[tris] * sign
+            shell[tris] = n
+        if topology is not None and (length[tris] > 0).all() and \
+                len(tris) <= CONVEX_TEST_FACES:
+            points = topology[0]
+            offset = (n * c[:, 0]).sum(axis=1)
+            off = n @ points.T - offset[:, None]
+            if off.max() <= CONVEX_RELATIVE * np.abs(points).max():
+                convex[tris] = True
+                outward[tris] = n
+                bodies[-1] = Convex(points, n, offset, *topology[1:])
+        # clusters of consecutive triangles along the object's longest axis
+        centroid = corners[tris].mean(axis=1)
+        order = tris[np.argsort(centroid[:, np.ptp(centroid, axis=0).argmax()], kind="stable")]
+        pad = -len(order) % CLUSTER
+        members.append(np.concatenate([order, np.full(pad, -1)]).reshape(-1, CLUSTER))
+        owner.append(np.full(len(members[-1]), j))
+    members = np.concatenate(members) if members else np.zeros((0, CLUSTER), np.int64)
+    owner = np.concatenate(owner) if owner else np.zeros(0, np.int64)
+    box = corners[np.maximum(members, 0)]                      # (C, CLUSTER, 3, 3)
+    use = (members >= 0)[..., None, None]
+    lo = np.where(use, box, np.inf).min(axis=(1, 2))
+    hi = np.where(use, box, -np.inf).max(axis=(1, 2))
+    centre = (lo + hi) / 2
+    # the half diagonal, a little more for its own rounding: the sphere must hold the box
+    radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
+    return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
+                   centre, radius, corners.min(axis=1), corners.max(axis=1), normals,
+                   (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)),
+                   shell)
+
+
+def _topology(corners: np.ndarray):
+    """For triangles (F, 3, 3) that make a closed, consistently wound surface (every edge met
+    exactly once each way, corners welded by their coordinates): (points (V, 3), edges (E, 2)
+    corner indices, sides (E, 2) the two faces of each); None for any other."""
+    points, vid = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+    vid = vid.reshape(-1, 3)
+    V = len(points)
+    a = np.concatenate([vid[:, 0], vid[:, 1], vid[:, 2]])
+    b = np.concatenate([vid[:, 1], vid[:, 2], vid[:, 0]])
+    face = np.tile(np.arange(len(vid)), 3)
+    if (a == b).any():
+        return None
+    key = a * V + b
+    order = np.argsort(key)
+    if (np.diff(key[order]) == 0).any():
+        return None
+    at = np.searchsorted(key[order], b * V + a)
+    if (at >= len(key)).any() or (key[order][np.minimum(at, len(key) - 1)] != b * V + a).any():
+        return None
+    twin = face[order][at]
+    once = a < b
+    return (points, np.stack([a[once], b[once]], axis=1),
+            np.stack([face[once], twin[once]], axis=1))
