@@ -8,6 +8,7 @@ one `MeshPart` per node instance, in the file's node order.
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import re
@@ -37,6 +38,19 @@ def read_regular_file(path: Path, max_bytes: int, key: str = "", what: str | Non
     if len(data) > max_bytes:
         raise SceneError(key, f"{what} grew past {max_bytes} bytes while being read")
     return data
+
+
+def check_regular_file(path: Path, key: str = "", what: str | None = None) -> None:
+    """SceneError under `key` when `path` exists and is not a regular file (a FIFO, a device, a
+    directory, a socket), found by stat alone: nothing is opened, so nothing can block.  A
+    missing file passes (the reader says so when it opens it)."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return
+    if not stat.S_ISREG(mode):
+        raise SceneError(key, f"{what or path} is {_file_kind(mode)}, not a regular file: "
+                              "not read")
 
 
 def _open_regular(path: Path, max_bytes: int, key: str, what: str) -> int:
@@ -116,7 +130,12 @@ def read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYTE
     data = read_regular_file(path, max_bytes, key)
     check_mesh_bytes(path, data, key)
     try:
-        loaded = trimesh.load(str(path), process=False)
+        # parsed from the bytes checked above (the path is not opened again), and the files a
+        # glTF names (buffers, images) read by `_Resolver`: regular files, bounded
+        loaded = trimesh.load(io.BytesIO(data), file_type=path.suffix.lower()[1:],
+                              resolver=_resolver(path, max_bytes, key), process=False)
+    except SceneError:
+        raise
     except ImportError as exc:  # an optional package of trimesh's, for this format
         raise SceneError(key, f"reading {path} needs the Python package {exc.name!r}, which is "
                               f"not installed (pip install {exc.name})") from None
@@ -138,6 +157,30 @@ def read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYTE
             bad = int((~np.isfinite(part.vertices).all(axis=1)).sum())
             raise SceneError(key, f"{path}: {bad} vertices are NaN or infinite")
     return parts
+
+
+def _resolver(path: Path, max_bytes: int, key: str):
+    """trimesh's resolver of the files a mesh file names (a glTF's buffers and images), beside
+    `path`, each read as `read_regular_file` reads (a FIFO or a device is refused, unread)."""
+    from trimesh.resolvers import FilePathResolver
+
+    class _Resolver(FilePathResolver):
+        def get(self, name: str) -> bytes:
+            for candidate in (name.strip(), name.strip().lstrip("/"), os.path.split(name)[-1]):
+                try:
+                    found = self.absolute(candidate)
+                except ValueError:
+                    continue
+                if os.path.lexists(found):
+                    return read_regular_file(found, max_bytes, key,
+                                             f"{path}: the file it names {shorten(name)}")
+            self.absolute(name)  # the error trimesh gives for a name outside the folder
+            raise FileNotFoundError(name)
+
+        def namespaced(self, namespace: str):
+            return _resolver(Path(self.parent) / namespace / path.name, max_bytes, key)
+
+    return _Resolver(str(path))
 
 
 def _part(node: str | None, mesh, matrix: np.ndarray | None) -> MeshPart:
