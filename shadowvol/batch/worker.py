@@ -28,7 +28,7 @@ from shadowvol.batch.outputs import OUTPUTS, fields_of
 from shadowvol.cameras import calibration
 from shadowvol.errors import RENDER_FAILED, message, status_of
 from shadowvol.io import GROUND_TRUTH, soft_arrays
-from shadowvol.scene import Camera, Scene, hard_lights, light_samples
+from shadowvol.scene import Camera, Scene, SceneError, hard_lights, light_samples
 from shadowvol.scenefile import light_from_dict, load_scene
 
 # what a batch frame asks `Renderer.render(outputs=...)` for (its OUTPUTS; named here, since
@@ -165,6 +165,9 @@ class Worker:
         except (KeyboardInterrupt, signals.Terminated):
             raise
         except Exception as exc:  # noqa: BLE001 - a bad frame is recorded, the others go on
+            source = self.scenes.get(spec["scene"])
+            if isinstance(exc, SceneError) and exc.file is None and isinstance(source, str):
+                exc = exc.in_file(source)  # the renderer's refusal (`image`), named by file
             code = status_of(exc)
             text = message(exc) if code is not None else f"{type(exc).__name__}: {exc}"
             return {"id": spec["id"], "error": text,

@@ -25,7 +25,12 @@ import numpy as np
 from shadowvol.cameras import calibration
 from shadowvol.raster import bits, methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
-from shadowvol.raster.context import create_context, make_current
+from shadowvol.raster.context import (
+    clear_errors,
+    create_context,
+    errors_cleared_on_failure,
+    make_current,
+)
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.gl import RawGL
 from shadowvol.raster.overflow_policy import LightBounds
@@ -33,7 +38,7 @@ from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.recycle import ArrayPool
 from shadowvol.raster.result import SILHOUETTES, RenderResult, check_lights, check_outputs
-from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
+from shadowvol.raster.target import LIGHTS_PER_PAGE, Target, check_frame_size
 from shadowvol.raster.truth_frame import frame_truth
 from shadowvol.raster.volumes import VolumeBuilder
 from shadowvol.raster.volumes_cpu import CpuVolumes
@@ -84,12 +89,16 @@ class Renderer:
             # (gl.RawGL) go to whichever context is current, e.g. after another renderer
             # with its own context has run
             make_current(self.ctx)
+            check_frame_size(self.ctx, scene.width, scene.height)  # bad input, not a GL error
             self.gl = RawGL()
             self.geometry = self._own(SceneGeometry(self.ctx, scene))
             self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
             self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
         except BaseException:
+            ctx = self.ctx
             self.release()
+            if not self._own_ctx:  # the caller's context keeps no GL error of this failure
+                clear_errors(ctx)
             raise
 
     def _own(self, obj):
@@ -126,7 +135,7 @@ class Renderer:
         to_check = self._lights_to_check(camera, lights) if shadows else []
         # the overflow check needs the lit masks, asked for or not
         plan = FramePlan.of(method, outputs | ({"lit"} if to_check else set()))
-        with stencil_gl.zero_to_one_depth(self.gl):
+        with errors_cleared_on_failure(self.ctx), stencil_gl.zero_to_one_depth(self.gl):
             result = self._render(plan, silhouettes, camera, lights, shadows)
             if to_check:
                 overflow.check_frame(self, result, silhouettes, camera, lights,

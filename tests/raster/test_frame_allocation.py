@@ -55,3 +55,34 @@ def test_the_cli_says_so_with_status_3(tmp_path, monkeypatch, capsys):
     assert err.startswith("error: the GL could not allocate a 64x48 frame") and \
         err.count("\n") == 1
     assert not (tmp_path / "x.png").exists()
+
+
+def test_the_renderer_refuses_a_frame_wider_than_the_gl_as_bad_input(ctx):
+    """Every caller of the Renderer (the CLI, batch, Python) gets the GL's size limit as a
+    SceneError on `image` (exit 2), before anything is allocated."""
+    from shadowvol.raster.renderer import Renderer
+    from shadowvol.scene import SceneError
+
+    scene = load_scene(SCENES / "cage.toml").replace(width=40000, height=8)
+    with pytest.raises(SceneError, match=r"^image: 40000x8 is larger than this GL allows "
+                                         r"\(\d+ pixels per side\)$"):
+        Renderer(scene, ctx)
+    assert ctx.error == "GL_NO_ERROR"
+
+
+def test_a_failed_frame_leaves_no_gl_error_for_the_next(ctx, monkeypatch):
+    """A frame the GL could not allocate (the size check passed, as a driver may claim more
+    than it can make) fails with status 3 and leaves the context's error flags clear: the next
+    renderer on the context renders what it renders on a clean one."""
+    from shadowvol.raster.renderer import Renderer
+
+    scene = load_scene(SCENES / "cage.toml").replace(width=40, height=30)
+    with Renderer(scene, ctx) as r:
+        want = r.render().image
+    monkeypatch.setattr("shadowvol.raster.renderer.check_frame_size",
+                        lambda ctx, width, height: None, raising=False)
+    with pytest.raises(target_module.FrameAllocationError, match="40000x8"):
+        Renderer(scene.replace(width=40000, height=8), ctx)
+    assert ctx.error == "GL_NO_ERROR"
+    with Renderer(scene, ctx) as r:
+        assert (r.render().image == want).all()
