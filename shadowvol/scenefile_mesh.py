@@ -280,3 +280,54 @@ def check_mesh_bytes(path: Path, data: bytes, key: str) -> None:
             raise SceneError(key, f"{path} is not valid glTF JSON (truncated?): {exc}") from None
         except RecursionError:
             raise SceneError(key, f"{path}: glTF JSON nested too deeply") from None
+    if suffix in (".gltf", ".glb"):
+        check_node_tree(path, _gltf_document(path, data), key)
+
+
+def _gltf_document(path: Path, data: bytes):
+    """The JSON of a glTF or GLB file, or None when it cannot be read (trimesh says why)."""
+    try:
+        if path.suffix.lower() == ".glb":
+            length = struct.unpack_from("<I", data, 12)[0]
+            return json.loads(data[20:20 + length])
+        return json.loads(data)
+    except (ValueError, struct.error, RecursionError):
+        return None
+
+
+def check_node_tree(path: Path, document, key: str) -> None:
+    """SceneError unless a glTF's nodes form trees, as the glTF spec requires: every child an
+    index of a node, no node the child of two parents, none its own ancestor (a cycle, which
+    trimesh would walk until its iteration limit, or not at all)."""
+    nodes = document.get("nodes") if isinstance(document, dict) else None
+    if not isinstance(nodes, list):
+        return
+    parent: dict[int, int] = {}
+    for i, node in enumerate(nodes):
+        children = node.get("children", []) if isinstance(node, dict) else []
+        if not isinstance(children, list):
+            raise SceneError(key, f"{path}: nodes[{i}].children: expected a list of node "
+                                  f"indices, got {shorten(children)}")
+        for child in children:
+            if isinstance(child, bool) or not isinstance(child, int) or \
+                    not 0 <= child < len(nodes):
+                raise SceneError(key, f"{path}: nodes[{i}].children: {shorten(child)} is not "
+                                      f"a node index (0..{len(nodes) - 1})")
+            if child in parent:
+                raise SceneError(key, f"{path}: nodes[{i}].children: node {child} is also a "
+                                      f"child of node {parent[child]} (glTF nodes form trees)")
+            parent[child] = i
+    state = [0] * len(nodes)  # 0: not seen, 1: on the climb from `start`, 2: done
+    for start in range(len(nodes)):  # climb to the root: each node once, however long
+        climb, node = [], start
+        while node is not None and state[node] == 0:
+            state[node] = 1
+            climb.append(node)
+            node = parent.get(node)
+        if node is not None and state[node] == 1:
+            cycle = climb[climb.index(node):]  # the node, its parent, ... back to it
+            chain = " -> ".join(map(str, [cycle[0], *reversed(cycle[1:]), cycle[0]]))
+            raise SceneError(key, f"{path}: nodes[{cycle[0]}]: node {cycle[0]} is its own "
+                                  f"ancestor (the node graph has a cycle: {chain})")
+        for node in climb:
+            state[node] = 2

@@ -34,7 +34,7 @@ from pathlib import Path
 from shadowvol.batch import frames as camera_paths
 from shadowvol.batch.outputs import DEFAULT, OUTPUTS
 from shadowvol.scene import Scene, SceneError, is_number, reject_unknown_keys, shorten
-from shadowvol.scenefile import light_from_dict
+from shadowvol.scenefile import MAX_NESTING, check_shape, light_from_dict
 from shadowvol.scenefile_mesh import check_regular_file, read_regular_file
 
 KEYS = {"name", "scene", "cameras", "lights", "size", "outputs", "renderer", "method",
@@ -94,6 +94,10 @@ def read_jobs(path: str | Path) -> list[Job | JobError]:
         except json.JSONDecodeError as exc:
             entries.append(JobError(f"line-{number}", source, f"not valid JSON: {exc}"))
             continue
+        except RecursionError:  # json's parser recurses once a level
+            entries.append(JobError(f"line-{number}", source,
+                                    f"nested more than {MAX_NESTING} levels deep"))
+            continue
         if not isinstance(data, dict):
             entries.append(JobError(f"line-{number}", source, "a job must be a JSON object"))
             continue
@@ -126,6 +130,7 @@ def check_jobs(entries, base_dir: str | Path = ".") -> list[Job | JobError]:
 def _job(data: dict, source: str, base_dir: Path, position: int) -> Job | JobError:
     fallback = data.get("name") if isinstance(data.get("name"), str) else f"job-{position}"
     try:
+        check_shape(data)  # nesting and list lengths, iteratively: never a RecursionError
         reject_unknown_keys(data, KEYS)
         scene = data.get("scene")
         if isinstance(scene, Scene):
