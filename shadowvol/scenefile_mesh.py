@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from shadowvol.scene import Material, SceneError, shorten
+from shadowvol.scenefile_gltf import check_layout, check_node_tree, gltf_document
 
 MESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 MAX_MESH_FILE_BYTES = 1 << 30  # the size limit of each mesh file (`load_scene` takes others)
@@ -140,7 +141,8 @@ def read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYTE
         raise SceneError(key, f"reading {path} needs the Python package {exc.name!r}, which is "
                               f"not installed (pip install {exc.name})") from None
     except Exception as exc:  # trimesh raises many types for malformed files
-        raise SceneError(key, f"cannot parse mesh {path}: {type(exc).__name__}: {exc}") from None
+        raise SceneError(key, f"cannot parse mesh {path}: {type(exc).__name__}: "
+                              f"{str(exc) or _failed_check(exc)}") from None
     if isinstance(loaded, trimesh.Scene):
         if not loaded.geometry:
             raise SceneError(key, f"{path} holds no geometry")
@@ -181,6 +183,19 @@ def _resolver(path: Path, max_bytes: int, key: str):
             return _resolver(Path(self.parent) / namespace / path.name, max_bytes, key)
 
     return _Resolver(str(path))
+
+
+def _failed_check(exc: BaseException) -> str:
+    """What a message-less exception (trimesh's bare `assert`s) was raised by: the failed
+    statement and where it is, e.g. "assert 0 <= start (trimesh/exchange/gltf.py:1562)"."""
+    import traceback
+
+    frames = traceback.extract_tb(exc.__traceback__)
+    if not frames:
+        return "no message"
+    last = frames[-1]
+    where = "/".join(Path(last.filename).parts[-3:])
+    return f"{(last.line or '').strip() or 'no message'} ({where}:{last.lineno})"
 
 
 def _part(node: str | None, mesh, matrix: np.ndarray | None) -> MeshPart:
@@ -281,53 +296,6 @@ def check_mesh_bytes(path: Path, data: bytes, key: str) -> None:
         except RecursionError:
             raise SceneError(key, f"{path}: glTF JSON nested too deeply") from None
     if suffix in (".gltf", ".glb"):
-        check_node_tree(path, _gltf_document(path, data), key)
-
-
-def _gltf_document(path: Path, data: bytes):
-    """The JSON of a glTF or GLB file, or None when it cannot be read (trimesh says why)."""
-    try:
-        if path.suffix.lower() == ".glb":
-            length = struct.unpack_from("<I", data, 12)[0]
-            return json.loads(data[20:20 + length])
-        return json.loads(data)
-    except (ValueError, struct.error, RecursionError):
-        return None
-
-
-def check_node_tree(path: Path, document, key: str) -> None:
-    """SceneError unless a glTF's nodes form trees, as the glTF spec requires: every child an
-    index of a node, no node the child of two parents, none its own ancestor (a cycle, which
-    trimesh would walk until its iteration limit, or not at all)."""
-    nodes = document.get("nodes") if isinstance(document, dict) else None
-    if not isinstance(nodes, list):
-        return
-    parent: dict[int, int] = {}
-    for i, node in enumerate(nodes):
-        children = node.get("children", []) if isinstance(node, dict) else []
-        if not isinstance(children, list):
-            raise SceneError(key, f"{path}: nodes[{i}].children: expected a list of node "
-                                  f"indices, got {shorten(children)}")
-        for child in children:
-            if isinstance(child, bool) or not isinstance(child, int) or \
-                    not 0 <= child < len(nodes):
-                raise SceneError(key, f"{path}: nodes[{i}].children: {shorten(child)} is not "
-                                      f"a node index (0..{len(nodes) - 1})")
-            if child in parent:
-                raise SceneError(key, f"{path}: nodes[{i}].children: node {child} is also a "
-                                      f"child of node {parent[child]} (glTF nodes form trees)")
-            parent[child] = i
-    state = [0] * len(nodes)  # 0: not seen, 1: on the climb from `start`, 2: done
-    for start in range(len(nodes)):  # climb to the root: each node once, however long
-        climb, node = [], start
-        while node is not None and state[node] == 0:
-            state[node] = 1
-            climb.append(node)
-            node = parent.get(node)
-        if node is not None and state[node] == 1:
-            cycle = climb[climb.index(node):]  # the node, its parent, ... back to it
-            chain = " -> ".join(map(str, [cycle[0], *reversed(cycle[1:]), cycle[0]]))
-            raise SceneError(key, f"{path}: nodes[{cycle[0]}]: node {cycle[0]} is its own "
-                                  f"ancestor (the node graph has a cycle: {chain})")
-        for node in climb:
-            state[node] = 2
+        document = gltf_document(path, data)
+        check_node_tree(path, document, key)
+        check_layout(path, document, data, key)

@@ -8,6 +8,7 @@ light overrides, the size, the outputs, the renderer and its options, the seed a
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
@@ -167,19 +168,32 @@ def jittered(camera: Camera, lights: tuple, jitter: dict, seed: int, index: int)
     import dataclasses
 
     rng = frame_rng(seed, index)
-    eye = camera.eye + _in_ball(rng, jitter.get("eye", 0.0))
-    camera = dataclasses.replace(camera, eye=eye)
+    with _jitter_named("eye", jitter, "the eye"):
+        camera = dataclasses.replace(camera, eye=camera.eye + _in_ball(rng, jitter.get("eye",
+                                                                                       0.0)))
     moved = []
-    for light in lights:
-        if isinstance(light, DirectionalLight):
-            moved.append(light)
-        elif isinstance(light, AreaLight):
-            moved.append(dataclasses.replace(
-                light, center=light.center + _in_ball(rng, jitter.get("lights", 0.0))))
-        else:
-            moved.append(dataclasses.replace(
-                light, position=light.position + _in_ball(rng, jitter.get("lights", 0.0))))
+    for i, light in enumerate(lights):
+        with _jitter_named("lights", jitter, f"lights[{i}]"):
+            if isinstance(light, DirectionalLight):
+                moved.append(light)
+            elif isinstance(light, AreaLight):
+                moved.append(dataclasses.replace(
+                    light, center=light.center + _in_ball(rng, jitter.get("lights", 0.0))))
+            else:
+                moved.append(dataclasses.replace(
+                    light, position=light.position + _in_ball(rng, jitter.get("lights", 0.0))))
     return camera, tuple(moved)
+
+
+@contextlib.contextmanager
+def _jitter_named(key: str, jitter: dict, what: str):
+    """A jittered eye or light the model refuses (past float32) is the job's `jitter.<key>`'s
+    fault: the SceneError names that key and what it moved, not the model's own key."""
+    try:
+        yield
+    except SceneError as exc:
+        raise SceneError(f"jitter.{key}", f"a radius of {jitter.get(key, 0.0):g} moved {what} out of "
+                                          f"range: {exc.key}: {exc.problem}") from None
 
 
 def specs(job, scene_key: str) -> list[dict]:

@@ -33,7 +33,14 @@ from pathlib import Path
 
 from shadowvol.batch import frames as camera_paths
 from shadowvol.batch.outputs import DEFAULT, OUTPUTS
-from shadowvol.scene import Scene, SceneError, is_number, reject_unknown_keys, shorten
+from shadowvol.scene import (
+    MAX_MAGNITUDE,
+    Scene,
+    SceneError,
+    is_number,
+    reject_unknown_keys,
+    shorten,
+)
 from shadowvol.scenefile import MAX_NESTING, check_shape, light_from_dict
 from shadowvol.scenefile_mesh import check_regular_file, read_regular_file
 
@@ -225,4 +232,8 @@ def _jitter(value) -> dict:
     for key, r in value.items():
         if not is_number(r) or not math.isfinite(r) or r < 0:
             raise SceneError(f"jitter.{key}", f"must be a radius >= 0, got {shorten(r)}")
+        if r > MAX_MAGNITUDE:
+            raise SceneError(f"jitter.{key}", f"a radius of {r:g} would move the {key} beyond "
+                                              f"the float32 range the renderers use (|x| <= "
+                                              f"{MAX_MAGNITUDE:g})")
     return {k: float(v) for k, v in value.items()}

@@ -20,7 +20,8 @@ import os
 import stat
 from pathlib import Path
 
-from shadowvol.io import write_bytes
+from shadowvol.errors import short_path
+from shadowvol.io import WriteError, write_bytes
 from shadowvol.scene import SceneError
 
 MANIFEST = "manifest.jsonl"
@@ -104,8 +105,12 @@ class Journal:
                 f.truncate(data.rfind(b"\n") + 1)
 
     def add(self, record: dict) -> None:
-        self._file.write(encode(record))
-        self._file.flush()
+        try:
+            self._file.write(encode(record))
+            self._file.flush()
+        except OSError as exc:  # a full disk: name the manifest, not only "[Errno 28]"
+            raise WriteError(exc.errno, f"{short_path(self.path)}: cannot write: "
+                                        f"{exc.strerror or exc}") from None
 
     def finish(self, records: list[dict]) -> None:
         """Replace the manifest with `records` (atomically, still holding the lock), then close."""

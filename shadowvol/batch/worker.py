@@ -142,7 +142,11 @@ class Worker:
         ctx = self._context()
         while len(self._renderers) >= MAX_RENDERERS:
             self._renderers.popitem(last=False)[1].release()
-        self._renderers[slot] = Renderer(scene, ctx)
+        try:
+            self._renderers[slot] = Renderer(scene, ctx)
+        except SceneError as exc:  # the GL's limits (`image`, `objects`): name the scene file
+            source = self.scenes.get(key)
+            raise (exc.in_file(source) if isinstance(source, str) else exc) from None
         return self._renderers[slot]
 
     # -- frames ----------------------------------------------------------------------------
@@ -165,9 +169,6 @@ class Worker:
         except (KeyboardInterrupt, signals.Terminated):
             raise
         except Exception as exc:  # noqa: BLE001 - a bad frame is recorded, the others go on
-            source = self.scenes.get(spec["scene"])
-            if isinstance(exc, SceneError) and exc.file is None and isinstance(source, str):
-                exc = exc.in_file(source)  # the renderer's refusal (`image`), named by file
             code = status_of(exc)
             text = message(exc) if code is not None else f"{type(exc).__name__}: {exc}"
             return {"id": spec["id"], "error": text,

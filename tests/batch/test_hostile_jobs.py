@@ -48,3 +48,27 @@ def test_the_batch_records_it_and_makes_the_others(tmp_path, capsys):
     records = [json.loads(line) for line in (out / "manifest.jsonl").open()]
     assert [r["id"] for r in records] == ["job/line-1", "job/mid", "good/000000"]
     assert "error" not in records[2] and (out / records[2]["files"]["masks"]["path"]).is_file()
+
+
+def test_jitter_past_float32_names_jitter(tmp_path):
+    """A radius past the renderers' float32 range is a bad job (`jitter.eye`); one within it
+    that moves an eye near the range's edge out of it fails that frame naming `jitter.eye`
+    and the eye as a list (was: `eye: array([...]) is beyond ...`, no word of jitter)."""
+    far = dict(GOOD, name="far", cameras=[{"eye": [9.9e17, 0, 0], "target": [0, 0, 0]}] * 4,
+               jitter={"eye": 5e17})
+    huge = dict(GOOD, name="huge", jitter={"lights": 1e300})
+    path = tmp_path / "jobs.jsonl"
+    path.write_text(f"{json.dumps(far)}\n{json.dumps(huge)}\n")
+    far_job, huge_job = read_jobs(path)
+    assert isinstance(far_job, Job)
+    assert isinstance(huge_job, JobError) and huge_job.error == (
+        "jitter.lights: a radius of 1e+300 would move the lights beyond the float32 range the "
+        "renderers use (|x| <= 1e+18)")
+    out = tmp_path / "out"
+    assert main(["batch", str(path), "-o", str(out), "--no-progress"]) == status.BAD_INPUT
+    records = [json.loads(line) for line in (out / "manifest.jsonl").open()]
+    failed = [r["error"] for r in records if r["id"].startswith("far/") and "error" in r]
+    assert failed, "no frame's eye left the float32 range: the test needs another seed"
+    for error in failed:
+        assert error.startswith("jitter.eye: a radius of 5e+17 moved the eye out of range: "
+                                "eye: [") and "array(" not in error, error

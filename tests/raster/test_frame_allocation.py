@@ -86,3 +86,33 @@ def test_a_failed_frame_leaves_no_gl_error_for_the_next(ctx, monkeypatch):
     assert ctx.error == "GL_NO_ERROR"
     with Renderer(scene, ctx) as r:
         assert (r.render().image == want).all()
+
+
+def test_more_objects_than_the_gl_allows_is_blamed_on_the_objects(ctx, tmp_path, capsys):
+    """One row of the materials' texture per object: past GL_MAX_TEXTURE_SIZE objects the
+    scene is refused naming `objects` and the limit (was: "could not allocate a 8x6 frame",
+    the texture's GL error read by the frame's allocation)."""
+    import dataclasses
+
+    import numpy as np
+
+    from shadowvol.primitives import mesh
+    from shadowvol.raster.renderer import Renderer
+    from shadowvol.scene import Camera, PointLight, Scene, SceneError
+
+    n = ctx.info["GL_MAX_TEXTURE_SIZE"] + 1
+    one = mesh(name="t", vertices=np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]]),
+               faces=np.array([[0, 1, 2]]))
+    scene = Scene(camera=Camera(eye=[0, 0, 3], target=[0, 0, 0]), width=8, height=6,
+                  objects=[dataclasses.replace(one, name=f"t{i}") for i in range(n)],
+                  lights=[PointLight(position=[0, 0, 2])])
+    with pytest.raises(SceneError, match=rf"^objects: {n:,} objects, more than this GL allows "
+                                         rf"\({n - 1:,}: "):
+        Renderer(scene, ctx)
+    assert ctx.error == "GL_NO_ERROR"
+    path = tmp_path / "many.json"
+    save_scene(scene, path)
+    assert shadowvol_main(["render", str(path), "-o", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {path}: objects: {n:,} objects, more than this GL allows")
+    assert err.count("\n") == 1 and not (tmp_path / "x.png").exists()

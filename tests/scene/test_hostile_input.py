@@ -277,6 +277,39 @@ def test_gltf_nodes_that_are_no_tree_are_refused(tmp_path, nodes, problem):
     refused(with_mesh(tmp_path, "c.gltf", tiny_gltf(nodes)), problem)
 
 
+@pytest.mark.parametrize("change, problem", [
+    ({"bufferViews": [{"buffer": 0, "byteLength": 48}]},
+     r"bufferViews\[0\]: bytes 0\.\.48 reach past the end of buffers\[0\] \(36 bytes\)"),
+    ({"bufferViews": [{"buffer": 0, "byteLength": 48}],
+      "buffers": [{"byteLength": 48, "uri": "data:application/octet-stream;base64,"
+                   + base64.b64encode(bytes(36)).decode()}]},
+     r"bufferViews\[0\]: bytes 0\.\.48 reach past the end of buffers\[0\] \(36 bytes\)"),
+    ({"bufferViews": [{"buffer": 0, "byteLength": 36, "byteStride": 24}]},
+     r"accessors\[0\]: 3 VEC3 items of 12 bytes from byte 0 \(stride 24\) need 60 bytes, "
+     r"bufferViews\[0\] has 36"),
+    ({"bufferViews": [{"buffer": 0, "byteLength": 36, "byteStride": 0}]},
+     r"bufferViews\[0\]\.byteStride: must be 4\.\.252 \(glTF\), got 0"),
+    ({"bufferViews": [{"buffer": 3, "byteLength": 36}]},
+     r"bufferViews\[0\]\.buffer: 3 is not a buffer index \(the file has 1 buffers\)"),
+])
+def test_a_gltf_buffer_view_or_accessor_past_its_data_is_named(tmp_path, change, problem):
+    """trimesh checks these with bare asserts: the message was `AssertionError: ` alone."""
+    refused(with_mesh(tmp_path, "b.gltf", tiny_gltf([{"mesh": 0}], **change)),
+            rf"objects\[0\]\.path: .*b\.gltf: {problem}$")
+
+
+def test_a_bare_assert_in_the_mesh_reader_is_named(tmp_path, monkeypatch):
+    """Any other message-less failure of trimesh's names the statement that failed and where."""
+    import trimesh
+
+    def broken(*args, **kwargs):  # as a bare `assert` (pytest would rewrite one here)
+        raise AssertionError()
+    monkeypatch.setattr(trimesh, "load", broken)
+    refused(with_mesh(tmp_path, "ok.gltf", tiny_gltf([{"mesh": 0}])),
+            r"cannot parse mesh .*ok\.gltf: AssertionError: raise AssertionError\(\) "
+            r"\(tests/scene/test_hostile_input\.py:\d+\)$")
+
+
 def test_the_cli_refuses_a_gltf_cycle_in_one_line(tmp_path, capsys):
     path = with_mesh(tmp_path, "c.gltf", tiny_gltf([{"mesh": 0, "children": [1]},
                                                     {"children": [0]}]))
