@@ -65,6 +65,10 @@ EXTRAS = (
     ("bench_batch.py", [],
      "shadowvol batch on the 36-view turntable of the shared meshes: 1 worker, 2 workers, 2 "
      "shards, Ray with 2 actors, and the machinery's overhead (issue: datasets at scale)"),
+    ("bench_batch_memory.py", ["--json", "{json}"],
+     "RSS through a 10,000-frame batch with a jittered eye and light (the cage at 16x12, "
+     "image + masks): the second half's growth, goal <= 5 MB (issue: as shipped, nothing "
+     "lost)"),
     ("bench_outlook.py", ["--json", "{json}"],
      "path tracing Mrays/s against raw Embree casts, radiosity at ~1k/4k/16k patches (issue: "
      "the lecture's outlook)"),

@@ -19,6 +19,7 @@ import json
 import os
 import stat
 from pathlib import Path
+from typing import NamedTuple
 
 from shadowvol.errors import short_path
 from shadowvol.io import WriteError, write_bytes
@@ -81,6 +82,13 @@ def read(out: str | Path, own: str = MANIFEST) -> dict[str, dict]:
     return records
 
 
+class Line(NamedTuple):
+    """Where `Journal.add` wrote a record: its line's offset and length in the journal."""
+
+    offset: int
+    length: int
+
+
 class Journal:
     """Appends records to a manifest, one line each, flushed as written.  Holds an exclusive
     lock on the file while open: a second run of the same share into the same folder is
@@ -104,17 +112,25 @@ class Journal:
             if data and not data.endswith(b"\n"):
                 f.truncate(data.rfind(b"\n") + 1)
 
-    def add(self, record: dict) -> None:
+    def add(self, record: dict) -> "Line":
+        """Append `record`; returns where its line is, which `finish` takes in its place (a
+        run that keeps the Line, not the record, keeps a few bytes a frame in memory)."""
+        line = encode(record)
         try:
-            self._file.write(encode(record))
+            offset = self._file.seek(0, os.SEEK_END)  # the end: another handle cut it at open
+            self._file.write(line)
             self._file.flush()
         except OSError as exc:  # a full disk: name the manifest, not only "[Errno 28]"
             raise WriteError(exc.errno, f"{short_path(self.path)}: cannot write: "
                                         f"{exc.strerror or exc}") from None
+        return Line(offset, len(line))
 
-    def finish(self, records: list[dict]) -> None:
-        """Replace the manifest with `records` (atomically, still holding the lock), then close."""
-        rewrite(self.path, records)
+    def finish(self, records: list) -> None:
+        """Replace the manifest with `records` (dicts, or the Lines `add` returned: read back
+        from the journal) atomically, still holding the lock, then close."""
+        journal = self.path.read_bytes() if any(isinstance(r, Line) for r in records) else b""
+        rewrite(self.path, [journal[r.offset:r.offset + r.length] if isinstance(r, Line)
+                            else r for r in records])
         self.close()
 
     def close(self) -> None:
@@ -122,7 +138,10 @@ class Journal:
             self._file.close()  # and the lock with it
 
 
-def encode(record: dict) -> bytes:
+def encode(record: dict | bytes) -> bytes:
+    """A record as its manifest line (a line already encoded, as it is)."""
+    if isinstance(record, bytes):
+        return record
     return (json.dumps(record, separators=(",", ":"), allow_nan=False) + "\n").encode()
 
 

@@ -165,7 +165,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
                       skipped=sum(len(units[u]) for u in mine) - sum(len(units[u]) for u in todo),
                       manifest=out / own)
     journal = manifest.Journal(out / own)
-    done: dict[str, dict] = dict(kept)
+    done: dict[str, dict | manifest.Line] = dict(kept)
     try:
         _record_bad_jobs(entries, journal, done, summary)
         specs = [s for u in todo for s in units[u]]
@@ -319,8 +319,7 @@ def _record(journal, done, summary, spec, result, hashes, store, files=None) -> 
                   "seconds": seconds, **({"dataset": result["dataset"]} if "dataset" in result
                                          else {})}
         summary.rendered += 1
-    journal.add(record)
-    done[spec["id"]] = record
+    done[spec["id"]] = journal.add(record)  # where its line is: memory stays flat, however long
 
 
 def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_worker, budget):
