@@ -7,6 +7,7 @@ command prints a traceback for an error it can name.  GL-free.
 
 from __future__ import annotations
 
+import contextlib
 import sys
 
 from shadowvol import signals
@@ -60,3 +61,16 @@ def run(command, args) -> int:
             return code
         except (Exception, KeyboardInterrupt, signals.Terminated) as exc:  # noqa: BLE001
             return report(exc)  # report re-raises what has no status (a bug)
+
+
+@contextlib.contextmanager
+def naming(scene_path):
+    """A SceneError raised inside without a file (the Renderer's refusals: `image`, `objects`,
+    which it knows only as a Scene) names `scene_path`."""
+    try:
+        yield
+    except ValueError as exc:
+        scene = sys.modules.get("shadowvol.scene")
+        if scene is not None and isinstance(exc, scene.SceneError) and exc.file is None:
+            raise exc.in_file(str(scene_path)) from None
+        raise
