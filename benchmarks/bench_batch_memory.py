@@ -9,7 +9,7 @@ jittered in every frame (so every frame's light is new to every cache keyed by l
 and masks, rendered by `shadowvol.batch.run` in this process (one worker) into a temporary
 folder.  A thread samples this process's VmRSS a few times a second, with the frames made so
 far (the manifest's journal lines); the report gives RSS at the middle and at the end of the
-frames (the highest sample in the last twentieth before each), the second half's growth
+frames (the highest sample in the twentieth of the frames before each), the second half's growth
 against the goal (at most 5 MB over 10,000 frames), and the frames/s.  Exit status 0, or with
 --check 1 when the goal is not met.
 """
@@ -42,7 +42,7 @@ class Sampler(threading.Thread):
     """(frames made, VmRSS MB) every `every` seconds while a batch writes `journal`: the frames
     are its lines, read as they are appended (never the whole file at once)."""
 
-    def __init__(self, journal: Path, every: float = 0.2):
+    def __init__(self, journal: Path, every: float = 0.1):
         super().__init__(daemon=True)
         self.journal, self.every = journal, every
         self.samples: list[tuple[int, float]] = []
@@ -69,8 +69,11 @@ def job(frames: int, size: tuple[int, int]) -> dict:
 
 
 def peak_before(samples: list[tuple[int, float]], frames: int, window: int) -> float:
-    """The highest RSS sampled with between frames - window and frames made."""
-    near = [rss for made, rss in samples if frames - window <= made <= frames]
+    """The highest RSS sampled with frames - window up to (not including) frames made: the
+    frames' own, never the final manifest's rewrite after the last one."""
+    near = [rss for made, rss in samples if frames - window <= made < frames]
+    if not near:   # a fast run: none in the window, so the last sample before it
+        near = [rss for made, rss in samples if made < frames][-1:]
     return max(near) if near else float("nan")
 
 

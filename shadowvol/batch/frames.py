@@ -192,8 +192,9 @@ def _jitter_named(key: str, jitter: dict, what: str):
     try:
         yield
     except SceneError as exc:
-        raise SceneError(f"jitter.{key}", f"a radius of {jitter.get(key, 0.0):g} moved {what} out of "
-                                          f"range: {exc.key}: {exc.problem}") from None
+        radius = jitter.get(key, 0.0)
+        raise SceneError(f"jitter.{key}", f"a radius of {radius:g} moved {what} out of range: "
+                                          f"{exc.key}: {exc.problem}") from None
 
 
 def specs(job, scene_key: str) -> list[dict]:

@@ -21,8 +21,8 @@ import stat
 from pathlib import Path
 from typing import NamedTuple
 
-from shadowvol.errors import short_path
-from shadowvol.io import WriteError, write_bytes
+from shadowvol.errors import out_of_memory_while, short_path
+from shadowvol.io import WriteError, atomic_write, write_bytes
 from shadowvol.scene import SceneError
 
 MANIFEST = "manifest.jsonl"
@@ -127,10 +127,16 @@ class Journal:
 
     def finish(self, records: list) -> None:
         """Replace the manifest with `records` (dicts, or the Lines `add` returned: read back
-        from the journal) atomically, still holding the lock, then close."""
-        journal = self.path.read_bytes() if any(isinstance(r, Line) for r in records) else b""
-        rewrite(self.path, [journal[r.offset:r.offset + r.length] if isinstance(r, Line)
-                            else r for r in records])
+        from the journal one at a time, never all at once) atomically, still holding the
+        lock, then close."""
+        with open(self.path, "rb") as journal, \
+                out_of_memory_while(f"writing {self.path}"), atomic_write(self.path) as out:
+            for record in records:
+                if isinstance(record, Line):
+                    journal.seek(record.offset)
+                    out.write(journal.read(record.length))
+                else:
+                    out.write(encode(record))
         self.close()
 
     def close(self) -> None:
