@@ -64,7 +64,7 @@ def measure(ctx, runs: int = 5, width: int = 640, height: int = 480) -> dict:
     import raytrace
     from raytrace.masks import scene_backend
     from shadowvol import Renderer
-    from shadowvol.fields import caster_words
+    from shadowvol.frame import caster_words
 
     out: dict = {"raster": {}, "raytrace": {}}
     for n in COUNTS:

@@ -2,8 +2,8 @@
 
     python -m benchmarks.bench_outlook [--size 512] [--spp 4] [--runs 3] [--json PATH]
 
-1. Path tracing throughput: `raytrace.pathtrace.render` of scenes/cornell.toml at size x size,
-   Mrays/s counting every ray it traced (camera, bounce and shadow rays), against two raw
+1. Path tracing throughput: `raytrace.outlook.path.pathtrace.render` of scenes/cornell.toml at size
+   x size, Mrays/s counting every ray it traced (camera, bounce and shadow rays), against two raw
    embreex baselines, each on as many threads as the path tracer uses (`cpu_threads()`):
    * `raw`: the same number of closest-hit rays, random origins inside the box and random
      directions, float32 arrays prepared before the clock, one chunk per thread on a thread
@@ -14,15 +14,15 @@
      queries, in the same batches, float32 as Embree gets them), each thread replaying the
      batches one of the path tracer's tile threads cast, on a pool of the same size: the path
      tracer's time with its shading made free.
-   Both per-bounce shadings of the path tracer (`raytrace.pathtrace.shading`: numpy, and numba
-   where it imports) are timed; the top-level figures, and the target, are the default one's
-   (numba when installed; `by_shading` has both, and whether their images are identical), and
-   `numba_compile_seconds` the first numba render's time with a cold and a warm cache.
-   All are interleaved round by round (path trace numpy, numba, raw, replay), medians
-   reported, in wall time and in this process's CPU time (`time.process_time`, all threads):
-   other sessions on the same cores stretch wall times unevenly (a thread pool waits for its
-   slowest thread), CPU times much less, so `cpu_ratio_to_raw` is the steadier figure under
-   load; on an idle machine the two ratios agree when both sides keep the cores equally busy.
+   Both per-bounce shadings of the path tracer (`raytrace.outlook.path.pathtrace.shading`: numpy,
+   and numba where it imports) are timed; the top-level figures, and the target, are the default
+   one's (numba when installed; `by_shading` has both, and whether their images are identical), and
+   `numba_compile_seconds` the first numba render's time with a cold and a warm cache. All are
+   interleaved round by round (path trace numpy, numba, raw, replay), medians reported, in wall time
+   and in this process's CPU time (`time.process_time`, all threads): other sessions on the same
+   cores stretch wall times unevenly (a thread pool waits for its slowest thread), CPU times much
+   less, so `cpu_ratio_to_raw` is the steadier figure under load; on an idle machine the two ratios
+   agree when both sides keep the cores equally busy.
 2. Radiosity time (meshing, form factors, solve, as `raytrace radiosity` runs it) at about 1k,
    4k and 16k triangles (each triangle is two patches, one per face).
 
@@ -82,7 +82,7 @@ def raw_embree_seconds(scene, n_rays: int, runs: int, cpu: list | None = None) -
 def _recorded_batches(scene, spp: int, seed: int) -> list[list[tuple]]:
     """The Embree queries of one path-traced render, per thread that cast them, in order:
     (query, origins (n, 3) float32, directions (n, 3) float32, tfar or None)."""
-    from raytrace import pathtrace
+    from raytrace.outlook.path import pathtrace
 
     per_thread: dict[int, list[tuple]] = {}
 
@@ -130,7 +130,7 @@ def compile_seconds() -> dict:
     import tempfile
 
     code = ("import sys, time; "
-            "from raytrace.pathtrace import render; from shadowvol import load_scene; "
+            "from raytrace.outlook.path.pathtrace import render; from shadowvol import load_scene; "
             "s = load_scene(sys.argv[1]).replace(width=16, height=16); out = []\n"
             "for name in ('numba', 'numpy'):\n"
             "    t = time.perf_counter(); render(s, spp=1, shading_name=name, progress=False)\n"
@@ -153,7 +153,7 @@ def path_tracing(size: int, spp: int, runs: int) -> dict:
     from embreex.mesh_construction import TriangleMesh
 
     from raytrace.backends import cpu_threads
-    from raytrace.pathtrace import render, shading
+    from raytrace.outlook.path.pathtrace import render, shading
     from shadowvol import load_scene
 
     default = shading()
@@ -218,7 +218,7 @@ def path_tracing(size: int, spp: int, runs: int) -> dict:
 
 
 def radiosity_times(targets=PATCH_TARGETS, rays_per_patch: int = 256) -> list[dict]:
-    from raytrace import radiosity
+    from raytrace.outlook import radiosity
     from shadowvol import load_scene
 
     scene = load_scene(CORNELL)

@@ -46,7 +46,7 @@ def object_ids(scene) -> np.ndarray:
 
 def path_reference(scene, spp: int, seed: int, cache: Path | None) -> np.ndarray:
     """(H*W, 3) the path tracer at pixel centres, from the cache when it holds it."""
-    from raytrace import pathtrace
+    from raytrace.outlook.path import pathtrace
 
     path = None if cache is None else cache / f"pt-{scene.width}-{spp}-{seed}.npy"
     if path is not None and path.exists():
@@ -69,7 +69,7 @@ def camera_side(obj, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
 def path_areas(scene, points: int, cache: Path | None, seed: int = 1000) -> dict:
     """{name: (mean (3,), standard error (3,))}: `points` path-traced points spread uniformly
     over each object's area, looking at its camera-side face (cached by points and seed)."""
-    from raytrace.pathtrace import PathWorld, radiance_leaving
+    from raytrace.outlook.path.pathtrace import PathWorld, radiance_leaving
 
     path = None if cache is None else cache / f"pt-area-{points}-{seed}.json"
     if path is not None and path.exists():
@@ -117,7 +117,7 @@ def measure(size: int = 64, spp: int = 256, seeds=(0, 1, 2), points: int = 40000
             cache: Path | None = Path("/tmp/shadowvol-radiosity-bench"), **settings) -> dict:
     """Per seed: radiosity's time and, per object, the image and area means (see the module
     docstring).  `settings` go to `radiosity.solve` (level, rays_per_patch, tol, shots)."""
-    from raytrace import radiosity
+    from raytrace.outlook import radiosity
     from shadowvol.scenefile import load_scene
 
     scene = load_scene(CORNELL).replace(width=size, height=size)

@@ -80,7 +80,7 @@ def mitsuba_scene(scene, max_depth: int, sampler: str, folder: Path):
     written into folder."""
     import mitsuba as mi
 
-    from raytrace.brdf import normalised_phong
+    from raytrace.outlook.brdf import normalised_phong
 
     vertices, faces, tri_object = scene.triangles()
     d = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth + 1}}
@@ -123,7 +123,7 @@ def timed(fn):
 
 def _renderers(scene, max_depth: int, folder: Path, peers: bool) -> dict:
     """name -> fn(spp, seed) -> (H, W, 3) float64."""
-    from raytrace import pathtrace
+    from raytrace.outlook.path import pathtrace
 
     fns = {}
     for name, kw in OURS:
@@ -151,7 +151,7 @@ def reference(scene, max_depth: int, folder: Path, spp: int, chunks: int, peers:
                  for c in range(chunks)]
         who = f"Mitsuba 3 {VARIANT} independent, {spp} spp"
     else:
-        from raytrace import pathtrace
+        from raytrace.outlook.path import pathtrace
 
         parts = [pathtrace.render(scene, spp=spp // chunks, seed=10_000 + c,
                                   max_depth=max_depth, sampler="independent",

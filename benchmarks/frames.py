@@ -195,7 +195,7 @@ def gpu_silhouette_times(renderer: Renderer, repeat: int, lights=None) -> dict:
     from shadowvol.raster.projection import frame_view_projection
     make_current(ctx)
     scene = renderer.scene
-    view_proj, origin = frame_view_projection(scene.camera, scene.aspect)
+    view_proj, origin = frame_view_projection(scene.camera, scene.size)
     renderer.geometry.move_to(origin)
     passes.set_camera(vols.programs, view_proj, scene.camera, origin)
     objects = [r.index for r in renderer.geometry.ranges]

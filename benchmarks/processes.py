@@ -69,6 +69,10 @@ EXTRAS = (
      "RSS through a 10,000-frame batch with a jittered eye and light (the cage at 16x12, "
      "image + masks): the second half's growth, goal <= 5 MB (issue: as shipped, nothing "
      "lost)"),
+    ("bench_soba.py", ["--json", "{json}"],
+     "36,000 exact instance-shadow pairs (--format soba-lights) from the shared meshes at random "
+     "poses, with the batch's eye and light jitter: pairs/s and peak RSS on one worker "
+     "(issue: shadow truth for learning)"),
     ("bench_outlook.py", ["--json", "{json}"],
      "path tracing Mrays/s against raw Embree casts, radiosity at ~1k/4k/16k patches (issue: "
      "the lecture's outlook)"),
@@ -76,6 +80,13 @@ EXTRAS = (
      "the path tracer's CPU time to a fixed RMSE on the Cornell box against Mitsuba 3's path "
      "integrator (an optional peer: the bench extra) in the same run (issue: the path tracer "
      "as efficient as the best)"),
+    ("bench_turntable_masks.py", ["--views", "36", "--rounds", "2"],
+     "raytrace.shadow_masks per view of the 36-view turntable of the shared meshes (point, "
+     "directional and spot light), this checkout alone (`--against` older checkouts for the "
+     "before/after; issue: rays at full speed)"),
+    ("bench_open3d.py", ["--json", "{json}"],
+     "raytrace.shadow_masks against the naive masks of Open3D's RaycastingScene (an optional "
+     "peer: the bench extra), bunny and turntable (issue: rays at full speed)"),
     ("bench_viewer.py", ["--frames", "15"],
      "the viewer's frame rate on the shipped scenes, under its own Xvfb (issue: the course)"),
 )

@@ -2,14 +2,14 @@
 
     python -m benchmarks.profile_outlook [--size 512] [--spp 1] [--shading numpy|numba]
 
-One thread (tiles in turn, Embree on the calling thread), so that the stages add up to the
-frame, in that thread's CPU time (`time.thread_time`: other processes' load on the cores does
-not count, as it does in wall time): each stage is a function of `raytrace.pathtrace` /
-`raytrace.brdf` (the numpy shading) or a kernel of `raytrace.pathkernels` (the numba shading)
-timed exclusively (a stage's time leaves out the stages it calls).  "paths: ..." is what the
-path loop (`trace_rows`) does itself: with numba, drawing the random numbers (in numpy, as the
-numpy path draws them) and the azimuths' cos and sin.  Prints a table and the time of the
-Embree casts beside the rest.
+One thread (tiles in turn, Embree on the calling thread), so that the stages add up to the frame, in
+that thread's CPU time (`time.thread_time`: other processes' load on the cores does not count, as it
+does in wall time): each stage is a function of `raytrace.outlook.path.pathtrace` /
+`raytrace.outlook.brdf` (the numpy shading) or a kernel of `raytrace.outlook.path.pathkernels` (the
+numba shading) timed exclusively (a stage's time leaves out the stages it calls).  "paths: ..." is
+what the path loop (`trace_rows`) does itself: with numba, drawing the random numbers (in numpy, as
+the numpy path draws them) and the azimuths' cos and sin.  Prints a table and the time of the Embree
+casts beside the rest.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ STAGES = (
     ("trace_rows", "paths: hit point, MIS, roulette, compaction"),
     ("render", "tiles: set-up and sums per pixel"),
 )
-# the same for the numba shading: kernels of raytrace.pathkernels ("k." prefix)
+# the same for the numba shading: kernels of raytrace.outlook.path.pathkernels ("k." prefix)
 NUMBA_STAGES = (
     ("k.camera_rays", "camera rays (kernel; the jitter drawn in numpy)"),
     ("PathWorld.closest_rows", "Embree: closest hits"),
@@ -55,14 +55,14 @@ NUMBA_STAGES = (
 
 
 def profile(size: int, spp: int, shading: str = "numpy") -> list[tuple[str, float]]:
-    from raytrace import pathtrace
+    from raytrace.outlook.path import pathtrace
     from shadowvol import load_scene
 
     scene = load_scene(CORNELL).replace(width=size, height=size)
     pathtrace.render(scene.replace(width=16, height=16), spp=1, shading_name=shading)  # warm-up
     stages = STAGES
     if shading == "numba":
-        from raytrace import pathkernels
+        from raytrace.outlook.path import pathkernels
         stages = NUMBA_STAGES
     spent = {name: 0.0 for _, name in stages}
     stack: list[float] = []  # time spent in the children of each open stage

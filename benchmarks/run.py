@@ -23,6 +23,10 @@ variants interleaved round by round in the same run:
 * raytrace masks against raw embreex casts of the same rays (`bench_masks.measure`), and a full
   Whitted render.
 
+Against the previous run: before it overwrites results.json, the run compares every ratio with
+the previous run's (`regressions`: the commit of each, from `git rev-parse`) and prints each one
+that got worse by more than 15 %, naming its benchmark; BENCHMARKS.md lists them too.
+
 Where: the sections measured on this process's GL context are `sections`, those in processes
 of their own (peak RSS, the other benchmark modules) `processes`, the machine `machine`; the
 markdown is written by `report` from the measured numbers and links the hand-written history
@@ -39,7 +43,7 @@ import sys
 import time
 from pathlib import Path
 
-from . import bench_groundtruth, report
+from . import bench_groundtruth, regressions, report
 from .machine import log, machine, maxrss_mb
 from .processes import extras_section, rss_section
 from .sections import (
@@ -156,6 +160,14 @@ def _measure(args, cfg: dict) -> dict:
     return results
 
 
+def _previous(path: Path) -> dict | None:
+    """The previous run's results (the results.json this run replaces), or None."""
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+
+
 def main(argv=None) -> int:
     args = _arguments().parse_args(argv)
     cfg = QUICK if args.quick else FULL
@@ -166,7 +178,14 @@ def main(argv=None) -> int:
         log(f"rewrote {paths['md']} and {paths['png']} from {args.report_only}")
         return 0
 
+    previous = _previous(paths["json"])
     results = _measure(args, cfg)
+    if previous is not None:
+        # the guard against the next slowdown: every ratio worse than in the previous run
+        results["previous"] = {"commit": regressions.commit(previous), "regressions": [
+            g._asdict() for g in regressions.compare(results, previous)]}
+        for line in regressions.report(results, previous):
+            log(line)
     paths["json"].write_text(json.dumps(results, indent=1, default=str))
     report.write(results, paths["md"], paths["png"])
     log(f"wrote {paths['md']}, {paths['png']} and {paths['json']} "

@@ -6,10 +6,13 @@
     soft = raytrace.soft_masks(scene)             # per-sample counts of area lights
     truth = raytrace.ground_truth(scene)          # + depth, normal, object_id, facing, casters
 
-It shares with the rasterizer only the scene model, the writers (`shadowvol.io`,
-`shadowvol.pictures`), the errors and their exit statuses (`shadowvol.errors`) and
-docs/CONVENTIONS.md, never its code, so that it stays an independent witness.  It never imports
-GL, and holds no command: its command line is `shadowvol.cli.raytrace`.
+It shares with the rasterizer only the scene model and the frame (`shadowvol.frame`), the
+writers (`shadowvol.io`, `shadowvol.pictures`), the errors and their exit statuses
+(`shadowvol.errors`) and docs/CONVENTIONS.md, never its code, so that it stays an independent
+witness.  The witness is this package's top (masks, groundtruth, soft, backends, intersect,
+tolerances, camera); global illumination, Whitted's `render` among it, is `raytrace.outlook`,
+which the witness never imports.  It never imports GL, and holds no command: its command line
+is `shadowvol.cli.raytrace`.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ __all__ = ["GroundTruth", "ground_truth", "render", "shadow_masks", "soft_masks"
 # name -> the module that defines it, imported on first access (PEP 562): `import raytrace`
 # (and `python -m raytrace`, before its command line takes Ctrl-C) loads nothing but itself
 _LAZY = {"GroundTruth": "raytrace.groundtruth", "ground_truth": "raytrace.groundtruth",
-         "render": "raytrace.whitted", "soft_masks": "raytrace.soft"}
+         "render": "raytrace.outlook.whitted", "soft_masks": "raytrace.soft"}
 
 
 def __getattr__(name: str):

@@ -37,7 +37,15 @@ import numpy as np
 from shadowvol.errors import require
 
 from .intersect import dot, ray_triangle
-from .tolerances import BVH_BOX_PAD_RELATIVE, error_weight, plane_error64
+from .neargrid import NearGrid
+from .tolerances import (
+    BVH_BOX_PAD_RELATIVE,
+    cross_rows,
+    error_weight,
+    norm_rows,
+    plane_error64,
+    sliver_edges,
+)
 
 BACKENDS = ("numpy", "embree")
 
@@ -88,16 +96,23 @@ class TriangleSet:
     vertices : (N, 3) float64;  faces : (M, 3) int64.
     normals  : (M, 3) float64 unit face normals by winding, (b − a) × (c − a) normalised
                (zero for degenerate triangles);  plane_d : (M,) float64, normals · a.
+    weight   : (M,) float64, `tolerances.error_weight`;  fragile : (M,) bool,
+               `tolerances.is_sliver` (what the masks need per triangle).
     """
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray):
         self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         tri = self.vertices[self.faces]
-        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        length = np.linalg.norm(n, axis=1, keepdims=True)
+        e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+        n = cross_rows(e1, e2)
+        area2 = norm_rows(n)
+        length = area2[:, None]
         self.normals = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
         self.plane_d = dot(self.normals, tri[:, 0])
+        # what the masks need per triangle (`raytrace.tolerances`), from the same corners
+        self.weight = error_weight(self.normals, tri)
+        self.fragile = sliver_edges(e1, e2, tri[:, 2] - tri[:, 1], area2)  # = is_sliver(tri)
 
     def __len__(self) -> int:
         return len(self.faces)
@@ -155,7 +170,6 @@ class NumpyBackend(TriangleSet):
         super().__init__(vertices, faces)
         tri = self.vertices[self.faces]
         self._a, self._b, self._c = tri[:, 0], tri[:, 1], tri[:, 2]
-        self._weight = error_weight(self.normals, tri)  # for occluded_leaving
         pad = BVH_BOX_PAD_RELATIVE * float(np.abs(tri).max())
         lo_t, hi_t = tri.min(axis=1) - pad, tri.max(axis=1) + pad
         centroids = tri.mean(axis=1)
@@ -279,7 +293,7 @@ class NumpyBackend(TriangleSet):
         o = np.asarray(origins, dtype=np.float64)
         d = np.broadcast_to(np.asarray(directions, dtype=np.float64), o.shape)
         own = np.asarray(own, dtype=np.int64)
-        weight = self._weight
+        weight = self.weight
 
         def exclude(rays, tris):
             n = self.normals[tris]
@@ -339,8 +353,8 @@ class EmbreeBackend(TriangleSet):
         # embreex commits the scene (builds the BVH) lazily in the first run(); do it now, so
         # that threads never race to do it and the build is not billed to the first trace.
         self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
-        self._float64: NumpyBackend | None = None  # built on first use (occluded_leaving)
-        self._float64_lock = threading.Lock()
+        self._near: NearGrid | None = None  # built on first use (occluded_leaving)
+        self._near_lock = threading.Lock()
 
     def _run(self, origins, directions, dists, query: str, parallel: bool) -> np.ndarray:
         """Trace; returns primID (INTERSECT) or geomID (OCCLUDED), int32 (n,), -1 for a miss /
@@ -403,10 +417,11 @@ class EmbreeBackend(TriangleSet):
         return self._run(origins, directions, tmax, "OCCLUDED", parallel) != -1
 
     def occluded_leaving(self, origins, directions, tmax, own) -> np.ndarray:
-        """`NumpyBackend.occluded_leaving` on the same triangles, float64 (the few rays that
-        need it are short: the pieces a grazing shadow ray's lift skips).  The float64 BVH is
-        built on the first call, once, whichever thread makes it."""
-        with self._float64_lock:
-            if self._float64 is None:
-                self._float64 = NumpyBackend(self.vertices, self.faces)
-        return self._float64.occluded_leaving(origins, directions, tmax, own)
+        """`NumpyBackend.occluded_leaving` on the same triangles, float64: the walk's test on
+        the triangles whose padded boxes the pieces' boxes touch (`raytrace.neargrid`: the
+        pieces a grazing shadow ray's lift skips are short, and meet few).  The grid is built
+        on the first call, once, whichever thread makes it."""
+        with self._near_lock:
+            if self._near is None:
+                self._near = NearGrid(self.vertices, self.faces, self.fragile)
+        return self._near.occluded_leaving(self, origins, directions, tmax, own)

@@ -1,8 +1,16 @@
 """Primary rays, exactly as CONVENTIONS.md defines the camera and the pixels.
 
-The basis is computed here from the `Camera` fields alone (not borrowed from the rasterizer: the
-ray tracer is an independent witness).  OpenGL-style look-at: the camera looks down its -z axis,
-x to the right, y up.
+The basis and the intrinsics are computed here from the `Camera` fields alone (not borrowed
+from the rasterizer: the ray tracer is an independent witness).  OpenGL style: the camera looks
+down its -z axis, x to the right, y up.  A look-at camera's basis comes from eye, target and
+up, its intrinsics from fov_y (square pixels, the principal point at the image centre); a
+camera given by matrices has them as data: the columns of `camera_to_world` and fx, fy, cx, cy.
+The ray through the point (u, v) of the image (pixel (x, y) covers [x, x+1) x [y, y+1), row 0
+at the top) has, at eye-space depth 1, the direction
+
+    right · (u - cx) / fx + up · (cy - v) / fy - back
+
+which is the pixel K maps it to (docs/CONVENTIONS.md, "Camera matrices").
 """
 
 from __future__ import annotations
@@ -14,7 +22,11 @@ import numpy as np
 
 def camera_basis(camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The camera's orthonormal basis in world space: right (x), up (y), back (z), each (3,)
-    float64.  The view direction is -back."""
+    float64.  The view direction is -back.  A matrix camera's: its camera_to_world's
+    columns."""
+    if camera.camera_to_world is not None:
+        m = np.asarray(camera.camera_to_world, np.float64)
+        return m[:3, 0].copy(), m[:3, 1].copy(), m[:3, 2].copy()
     back = camera.eye - camera.target
     back = back / np.linalg.norm(back)
     right = np.cross(camera.up, back)
@@ -23,22 +35,21 @@ def camera_basis(camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return right, up, back
 
 
-def pixel_ndc(width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
-    """Normalised device coordinates of the pixel centres (CONVENTIONS.md), row 0 at the TOP.
-
-    Returns ndc_x : (W,) float64, (x + 0.5) / W * 2 - 1 per column, and ndc_y : (H,) float64,
-    1 - (y + 0.5) / H * 2 per row.
-    """
-    return ((np.arange(width) + 0.5) / width * 2.0 - 1.0,
-            1.0 - (np.arange(height) + 0.5) / height * 2.0)
+def pixel_focal(camera, width: int, height: int) -> tuple[float, float, float, float]:
+    """(fx, fy, cx, cy) in pixels of a W x H image: a matrix camera's own; a look-at camera's
+    fx = fy = (H / 2) / tan(fov_y / 2), cx = W / 2, cy = H / 2 (CONVENTIONS.md)."""
+    if camera.camera_to_world is not None:
+        return float(camera.fx), float(camera.fy), float(camera.cx), float(camera.cy)
+    f = (height / 2.0) / math.tan(math.radians(camera.fov_y) / 2.0)
+    return f, f, width / 2.0, height / 2.0
 
 
 class RayGrid:
-    """The primary rays of a W x H image, factored: the direction through pixel (x, y), scaled to
-    eye-space depth 1, is  col[:, x] + row[:, y]  with
+    """The primary rays of a W x H image, factored: the direction through pixel (x, y)'s centre,
+    scaled to eye-space depth 1, is  col[:, x] + row[:, y]  with
 
-        col[:, x] = ndc_x · tan(fov_y / 2) · aspect · right − back     (3, W)
-        row[:, y] = ndc_y · tan(fov_y / 2) · up                        (3, H)
+        col[:, x] = right · (x + 0.5 - cx) / fx − back     (3, W)
+        row[:, y] = up · (cy − (y + 0.5)) / fy             (3, H)
 
     and the ray starts on the near plane at  eye + near · direction.  Stored component-major
     (3, n) in `dtype` because numpy is fast on long contiguous rows (the masks' hot path).
@@ -46,14 +57,14 @@ class RayGrid:
 
     def __init__(self, camera, width: int, height: int, dtype=np.float64):
         right, up, back = camera_basis(camera)
-        x, y = pixel_ndc(width, height)
-        half_h = math.tan(math.radians(camera.fov_y) / 2.0)
-        half_w = half_h * (width / height)
+        fx, fy, cx, cy = pixel_focal(camera, width, height)
+        x = (np.arange(width) + 0.5 - cx) / fx
+        y = (cy - (np.arange(height) + 0.5)) / fy
         self.width, self.height, self.dtype = width, height, dtype
         self.eye = camera.eye.astype(dtype)
         self.near = dtype(camera.near)
-        self.col = (right[:, None] * (x * half_w) - back[:, None]).astype(dtype)
-        self.row = (up[:, None] * (y * half_h)).astype(dtype)
+        self.col = (right[:, None] * x - back[:, None]).astype(dtype)
+        self.row = (up[:, None] * y).astype(dtype)
 
     def directions(self, rows: slice | None = None) -> np.ndarray:
         """(3, R*W) directions of eye-space depth 1 for the image rows `rows` (default all),
@@ -77,10 +88,10 @@ def primary_rays(camera, width: int, height: int, rows: slice | None = None,
     Returns origins : (R*W, 3) and directions : (R*W, 3) of `dtype`, in row-major pixel order
     (index = row * W + x within `rows`).
 
-    In eye space the ray through NDC (sx, sy) has direction (sx * tan(fov_y / 2) * aspect,
-    sy * tan(fov_y / 2), -1); scaled by `near` it reaches the near plane (eye-space depth == near,
-    a plane, not a sphere), which is where the ray starts: geometry nearer than that is clipped,
-    as in the rasterizer.
+    In eye space the ray through the pixel centre (u, v) has direction ((u - cx) / fx,
+    (cy - v) / fy, -1) (the module); scaled by `near` it reaches the near plane (eye-space
+    depth == near, a plane, not a sphere), which is where the ray starts: geometry nearer than
+    that is clipped, as in the rasterizer.
     """
     grid = RayGrid(camera, width, height, dtype)
     d = grid.directions(rows)
@@ -97,7 +108,7 @@ def sample_rays(camera, width: int, height: int, pixels: np.ndarray, offsets: np
 
     pixels  : (P,) int, row-major pixel indices y * W + x, row 0 at the top.
     offsets : (P, S, 2) float64, each ray's position in pixel units from its pixel's top-left
-              corner (x right, y down); 0.5 is the centre, as in `pixel_ndc`.
+              corner (x right, y down); 0.5 is the centre.
     lens    : (P, S, 2) float64 points of the unit disk, scaled by `camera.aperture` (the
               lens radius) along right and up; None or aperture 0: a pinhole.
     Returns origins, unit directions : (P*S, 3) float64, sample-minor (the i-th pixel's
@@ -106,13 +117,12 @@ def sample_rays(camera, width: int, height: int, pixels: np.ndarray, offsets: np
     Every ray starts on the near plane.
     """
     right, up, back = camera_basis(camera)
-    half_h = math.tan(math.radians(camera.fov_y) / 2.0)
-    half_w = half_h * (width / height)
+    fx, fy, cx, cy = pixel_focal(camera, width, height)
     px = (pixels % width)[:, None] + offsets[..., 0]
     py = (pixels // width)[:, None] + offsets[..., 1]
-    x = (px / width * 2.0 - 1.0).reshape(-1)
-    y = (1.0 - py / height * 2.0).reshape(-1)
-    d = up * (y * half_h)[:, None] + (right * (x * half_w)[:, None] - back)  # depth 1
+    x = ((px - cx) / fx).reshape(-1)
+    y = ((cy - py) / fy).reshape(-1)
+    d = up * y[:, None] + (right * x[:, None] - back)  # depth 1
     start = np.broadcast_to(camera.eye, d.shape)
     if lens is not None and camera.aperture > 0.0:
         disk = camera.aperture * lens.reshape(-1, 2)
@@ -135,10 +145,9 @@ def camera_rays(camera, width: int, height: int, rows: np.ndarray, cols: np.ndar
     else:
         jx = rng.random(len(rows)) if rng is not None else 0.5
         jy = rng.random(len(rows)) if rng is not None else 0.5
-    half_h = math.tan(math.radians(camera.fov_y) / 2.0)
-    half_w = half_h * width / height
-    sx = ((cols + jx) / width * 2.0 - 1.0) * half_w
-    sy = (1.0 - (rows + jy) / height * 2.0) * half_h
+    fx, fy, cx, cy = pixel_focal(camera, width, height)
+    sx = (cols + jx - cx) / fx
+    sy = (cy - (rows + jy)) / fy
     d = sx * right[:, None] + sy * up[:, None] - back[:, None]
     o = np.asarray(camera.eye, np.float64)[:, None] + camera.near * d
     return o, d / np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])

@@ -19,13 +19,12 @@ import dataclasses
 
 import numpy as np
 
-from shadowvol import fields
-from shadowvol.cameras import Calibration, calibration
-from shadowvol.fields import GROUND_TRUTH
-from shadowvol.io import GroundTruthFrame
-from shadowvol.scene import Scene, SceneError, hard_lights
+from shadowvol import frame
+from shadowvol.cameras import calibration
+from shadowvol.frame import GROUND_TRUTH, Frame, check_outputs
+from shadowvol.scene import Scene, hard_lights
 
-from .backends import NumpyBackend, TriangleBackend, for_each_tile, make_backend
+from .backends import TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
 from .masks import (
     MASK_TILE_RAYS,
@@ -37,6 +36,7 @@ from .masks import (
     _segments,
     scene_backend,
 )
+from .switches import backend_kind, receiving
 
 # An object's box is widened by this much of its largest coordinate (eye's frame) before a
 # segment is culled against it: float32 rounding of the corners (2**-24) and of the segment's
@@ -45,13 +45,12 @@ from .masks import (
 BOX_PAD_RELATIVE = 1e-5
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class GroundTruth(GroundTruthFrame):
-    """One frame's masks, the ground-truth outputs asked for (None otherwise) and the camera.
+@dataclasses.dataclass(frozen=True, eq=False, kw_only=True)
+class GroundTruth(Frame):
+    """One frame's masks, the ground-truth outputs asked for (None otherwise) and the camera
+    (`shadowvol.frame.Frame`); the ray tracer adds nothing to it, and always gives `lit`,
+    `coverage`, `lit_count`, `samples` and `calibration`.
 
-    lit : (L, H, W) bool and coverage : (H, W) bool, as `shadow_masks` returns them
-    lit_count : (L, H, W) uint16, how many of light i's samples reach the pixel
-    samples : (L,) int64, N per light (1 for a point, spot or directional light)
     depth : (H, W) float32, eye-space depth (along the view axis); inf where nothing is hit
     distance : (H, W) float32, from the eye along the pixel's ray; inf where nothing is hit
     normal : (H, W, 3) float32, the world-space unit face normal, turned toward the camera;
@@ -62,35 +61,7 @@ class GroundTruth(GroundTruthFrame):
         sample's cone (a spot light's; a rect or disk sample's 90 degrees)
     casters : (L, H, W, K) uint64, K = max(1, ceil(n_objects / 64)): bit j mod 64 of word
         j div 64 set when scene.objects[j] blocks the segment to some facing sample
-    calibration : the camera matrices and light arrays (`shadowvol.cameras.Calibration`)
     """
-
-    lit: np.ndarray
-    coverage: np.ndarray
-    calibration: Calibration
-    lit_count: np.ndarray | None = None
-    samples: np.ndarray | None = None
-    depth: np.ndarray | None = None
-    distance: np.ndarray | None = None
-    normal: np.ndarray | None = None
-    object_id: np.ndarray | None = None
-    facing: np.ndarray | None = None
-    facing_count: np.ndarray | None = None
-    casters: np.ndarray | None = None
-
-
-
-def check_outputs(scene: Scene, outputs) -> tuple[str, ...]:
-    """The outputs asked for, checked: names from `shadowvol.io.GROUND_TRUTH` and what the
-    scene allows (SceneError otherwise); in GROUND_TRUTH's order."""
-    outputs = (outputs,) if isinstance(outputs, str) else tuple(outputs)
-    unknown = [o for o in outputs if o not in GROUND_TRUTH]
-    if unknown:
-        raise SceneError("outputs", f"unknown output {unknown[0]!r} (one of: "
-                                    f"{', '.join(GROUND_TRUTH)})")
-    if "object_id" in outputs:
-        fields.check_object_ids(len(scene.objects))
-    return tuple(o for o in GROUND_TRUTH if o in outputs)
 
 
 class _ObjectTracers:
@@ -102,14 +73,16 @@ class _ObjectTracers:
     that misses the padded box cannot meet the object in float32 either)."""
 
     def __init__(self, scene: Scene, mask_tracer: MaskTracer):
-        kind = "numpy" if isinstance(mask_tracer.tracer, NumpyBackend) else "embree"
+        kind = backend_kind(mask_tracer.tracer)
         _, _, ids = scene.triangles()
         self.object = ids.astype(np.int64)
         self.first = np.searchsorted(self.object, np.arange(len(scene.objects) + 1))
-        # each object's own vertices and faces (its face k is scene triangle first[j] + k)
+        # each object's own vertices and faces (its face k is scene triangle first[j] + k);
+        # None for an object that casts no shadow (`Object.cast_shadows`): it blocks nothing
         local = [o.vertices - mask_tracer.origin for o in scene.objects]
-        self.tracers: list[TriangleBackend] = [make_backend(kind, v, o.faces)
-                                               for v, o in zip(local, scene.objects)]
+        self.tracers: list[TriangleBackend | None] = [
+            make_backend(kind, v, o.faces) if o.cast_shadows else None
+            for v, o in zip(local, scene.objects)]
         lo = np.array([v[o.faces.reshape(-1)].min(axis=0) for v, o in zip(local, scene.objects)])
         hi = np.array([v[o.faces.reshape(-1)].max(axis=0) for v, o in zip(local, scene.objects)])
         pad = BOX_PAD_RELATIVE * np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, keepdims=True)
@@ -120,27 +93,26 @@ class _ObjectTracers:
 def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer = "embree"
                  ) -> GroundTruth:
     """The masks of `scene` with the ground-truth `outputs` (names from
-    `shadowvol.io.GROUND_TRUTH`; default all), the counts and the calibration.
+    `shadowvol.frame.GROUND_TRUTH`; default all), the counts and the calibration.
 
     backend : "embree", "numpy", or `raytrace.masks.scene_backend(scene, ...)` built once.
     `lit` and `coverage` equal `shadow_masks(scene, backend)`; `casters.any(-1)` equals
     `lit_count < facing_count`.  Tiled and threaded as `shadow_masks` is."""
-    outputs = check_outputs(scene, outputs)
+    outputs = check_outputs(outputs, GROUND_TRUTH, objects=len(scene.objects))
     mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
     tracer, triangles, origin = mt
     H, W, L, n = scene.height, scene.width, len(scene.lights), len(scene.objects)
     objects = _ObjectTracers(scene, mt) if "casters" in outputs else None
     coverage = np.zeros(H * W, bool)
     # the outputs asked for, flat (pixels row-major), with what is stored where nothing is hit
-    out = {name: fields.blank(name, fields.shape(name, L, H, W, flat=True, objects=n))
+    out = {name: frame.blank(name, frame.shape(name, L, H, W, flat=True, objects=n))
            for name in outputs}
     counts = {name: np.zeros((L, H * W), np.uint16) for name in ("lit_count", "facing_count")}
     vertices, faces, ids = scene.triangles()
     # the output normals: world-space (b − a) × (c − a), normalised in float64 (CONVENTIONS),
     # not the frame's (the same up to rounding, and the same sign: `hit.side` turns either)
     world_normals = face_normals(vertices[faces]) if "normal" in out else None
-    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
-                                 target=scene.camera.target - origin)
+    camera = scene.camera.translated(-origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     # every sample of every light, as the light it counts for and a hard light
     lights = [(i, _local_light(sample, origin, triangles))
@@ -175,9 +147,10 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
         out["facing"] = counts["facing_count"] > 0
     if "facing_count" in out:
         out["facing_count"] = counts["facing_count"]
-    return GroundTruth(lit.reshape(L, H, W), coverage.reshape(H, W), calibration(scene),
+    return GroundTruth(lit=lit.reshape(L, H, W), coverage=coverage.reshape(H, W),
+                       calibration=calibration(scene),
                        lit_count=counts["lit_count"].reshape(L, H, W), samples=samples,
-                       **{name: value.reshape(fields.shape(name, L, H, W, objects=n))
+                       **{name: value.reshape(frame.shape(name, L, H, W, objects=n))
                           for name, value in out.items()})
 
 
@@ -189,7 +162,7 @@ def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: floa
     `casters` (L, H * W, K) uint64 when given.  Lit as `masks._lit` decides it: the segment
     past the lift unblocked, and then the float64 near piece a long lift skips
     (`masks._NearPieces`) unblocked too."""
-    seg = _segments(light, hit, reach)
+    seg = receiving(tracer, light.light, _segments(light, hit, reach), hit)
     own, fragile = hit.tri[seg.rays], hit.fragile[seg.rays]
     start = seg.start.copy() if casters is not None else seg.start
     tmax = None if seg.tmax is None else seg.tmax.copy()
@@ -227,7 +200,7 @@ def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarr
     segments as `_segments` made them (before `_blocked` moved any start); own (b,) int64 the
     scene triangle each leaves, fragile (b,) bool.  Each object's backend is asked the masks'
     own question (`_blocked`), its own triangle excluded by id in the object it belongs to."""
-    bits = np.zeros((len(own), fields.caster_words(len(objects.tracers))), np.uint64)
+    bits = np.zeros((len(own), frame.caster_words(len(objects.tracers))), np.uint64)
     own_object = objects.object[own]
     start64 = start.astype(np.float64)
     direction64 = np.broadcast_to(direction, start.shape).astype(np.float64)
@@ -235,6 +208,8 @@ def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarr
         inverse = 1.0 / direction64
     end = np.inf if tmax is None else tmax.astype(np.float64)
     for j, tracer in enumerate(objects.tracers):
+        if tracer is None:
+            continue
         mine = own_object == j
         near = _meets_box(start64, inverse, end, objects.lo[j], objects.hi[j]) | mine
         k = np.flatnonzero(near)
@@ -244,8 +219,8 @@ def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarr
         hit = _blocked(tracer, start[:, k], direction if direction.shape[1] == 1
                        else direction[:, k], None if tmax is None else tmax[k].copy(),
                        local_own, fragile[k] & mine[k])
-        bits[k[hit], j // fields.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
-            j % fields.CASTER_WORD_BITS)
+        bits[k[hit], j // frame.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
+            j % frame.CASTER_WORD_BITS)
     return bits
 
 
@@ -255,12 +230,14 @@ def _near_caster_bits(objects: _ObjectTracers, near, own: np.ndarray) -> np.ndar
     j mod 64 of word j div 64).  Each object's backend is asked the masks' own question
     (`masks._near_blocked`), its own triangle excluded by id in the object it belongs to; a
     piece that misses an object's padded box is not asked of it."""
-    bits = np.zeros((len(own), fields.caster_words(len(objects.tracers))), np.uint64)
+    bits = np.zeros((len(own), frame.caster_words(len(objects.tracers))), np.uint64)
     own_object = objects.object[own]
     direction = np.broadcast_to(near.direction, near.origin.shape)
     with np.errstate(divide="ignore"):
         inverse = 1.0 / direction
     for j, tracer in enumerate(objects.tracers):
+        if tracer is None:
+            continue
         mine = own_object == j
         ask = _meets_box(near.origin, inverse, near.tmax, objects.lo[j], objects.hi[j]) | mine
         if not ask.any():
@@ -268,8 +245,8 @@ def _near_caster_bits(objects: _ObjectTracers, near, own: np.ndarray) -> np.ndar
         k = np.flatnonzero(ask)
         local_own = np.where(mine[k], own[k] - objects.first[j], -1)
         hit = _near_blocked(tracer, near.where(ask), local_own)
-        bits[k[hit], j // fields.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
-            j % fields.CASTER_WORD_BITS)
+        bits[k[hit], j // frame.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
+            j % frame.CASTER_WORD_BITS)
     return bits
 
 

@@ -9,7 +9,6 @@ sphere is for images only.
 
 from __future__ import annotations
 
-import dataclasses
 from typing import NamedTuple
 
 import numpy as np
@@ -18,12 +17,11 @@ from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 
 from .backends import TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
+from .switches import receiving, switched_backend
 from .tolerances import (
     LIFT_HEIGHTS,
     OWN_HIT_RETRIES,
-    error_weight,
     frame_origin,
-    is_sliver,
     light_margin,
     shadow_height,
     through_light,
@@ -51,10 +49,11 @@ class MaskTracer(NamedTuple):
 def scene_backend(scene: Scene, backend: str = "embree") -> MaskTracer:
     """The scene's triangles in a backend, ready for `shadow_masks` (build once, trace often),
     in the float32 frame of `tolerances.frame_origin` (the eye): float64 coordinates minus the
-    origin, subtracted before anything is rounded."""
+    origin, subtracted before anything is rounded.  Objects switched off (`cast_shadows`,
+    `receive_shadows`) are traced as `raytrace.switches` says."""
     vertices, faces, _ = scene.triangles()
     origin = frame_origin(scene)
-    tracer = make_backend(backend, vertices - origin, faces)
+    tracer = switched_backend(scene, make_backend(backend, vertices - origin, faces), origin)
     return MaskTracer(tracer, _Triangles.of(tracer), origin)
 
 
@@ -71,9 +70,8 @@ class _Triangles(NamedTuple):
 
     @classmethod
     def of(cls, tracer: TriangleBackend) -> "_Triangles":
-        corners = tracer.vertices[tracer.faces]
-        return cls(np.ascontiguousarray(tracer.normals.T), tracer.plane_d,
-                   error_weight(tracer.normals, corners), is_sliver(corners))
+        return cls(np.ascontiguousarray(tracer.normals.T), tracer.plane_d, tracer.weight,
+                   tracer.fragile)
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -110,8 +108,7 @@ def shadow_masks(scene: Scene, backend: str | MaskTracer = "embree"
     coverage = np.zeros((H, W), bool)
     rows_per_tile = max(1, MASK_TILE_RAYS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
-    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
-                                 target=scene.camera.target - origin)
+    camera = scene.camera.translated(-origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     reach = scene.extent  # a ray that starts farther than this from its point has left the scene
     lights = [_local_light(light, origin, triangles) for light in scene.lights]
@@ -177,8 +174,19 @@ def _tile_masks(scene: Scene, tracer: TriangleBackend, triangles: _Triangles,
                                         need_hits=bool(scene.lights))
     lit = np.zeros((len(scene.lights), covered.size), bool)
     if hit is not None:
+        near = []
         for i, light in enumerate(lights):
-            lit[i, index] = _lit(tracer, light, hit, reach)
+            lit[i, index], pieces = _lit(tracer, light, hit, reach)
+            near.append(pieces)
+        # the near pieces of all the lights in one float64 query (its cost is mostly per call)
+        rays = np.concatenate([p.rays for p in near])
+        which = np.repeat(np.arange(len(near)), [len(p.rays) for p in near])
+        pieces = _NearPieces(rays, np.concatenate([p.origin for p in near], axis=1),
+                             np.concatenate([np.broadcast_to(p.direction, p.origin.shape)
+                                             for p in near], axis=1),
+                             np.concatenate([p.tmax for p in near]))
+        blocked = _near_blocked(tracer, pieces, hit.tri[rays])
+        lit[which[blocked], index[rays[blocked]]] = False
     return lit.reshape((-1,) + shape), covered.reshape(shape)
 
 
@@ -297,16 +305,17 @@ def _near_blocked(tracer: TriangleBackend, near: _NearPieces, own: np.ndarray) -
     return tracer.occluded_leaving(near.origin.T, near.direction.T, near.tmax, own)
 
 
-def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float) -> np.ndarray:
+def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float
+         ) -> tuple[np.ndarray, "_NearPieces"]:
     """(h,) bool: which of the tile's hit points the light reaches: facing it, and their
-    shadow ray (`_segments`) not blocked by a triangle other than their own (`_blocked`)."""
-    seg = _segments(local, hit, reach)
+    shadow ray (`_segments`) not blocked by a triangle other than their own (`_blocked`) --
+    but for the near pieces a long lift skips (`_NearPieces`, those of the points lit so
+    far), returned too: lit where `_near_blocked` finds them clear."""
+    seg = receiving(tracer, local.light, _segments(local, hit, reach), hit)
     out = seg.facing.copy()
     out[seg.rays] = ~_blocked(tracer, seg.start, seg.direction, seg.tmax, hit.tri[seg.rays],
                               hit.fragile[seg.rays])
-    near = seg.near.where(out[seg.near.rays])  # those the rest of the segment left lit
-    out[near.rays] = ~_near_blocked(tracer, near, hit.tri[near.rays])
-    return out
+    return out, seg.near.where(out[seg.near.rays])  # those the rest of the segment left lit
 
 
 def _segments(local: _LocalLight, hit: _Hits, reach: float) -> _Segments:

@@ -50,7 +50,14 @@ Binder, Ray Tracing Gems ch. 6, bound the error of a hit point instead of guessi
    only (or contains it), so in exact arithmetic they never block.  Anything else the float64
    walk meets is a blocker, however grazing the light.  What the masks lose at the surface is
    therefore geometry within LIFT_HEIGHTS heights of p along the ray (a contact shadow
-   thinner than ~3e-5 of the distance to the eye), at every angle.
+   thinner than ~3e-5 of the distance to the eye), at every angle.  The Embree backend runs
+   that float64 test only on the triangles whose boxes the piece's box touches
+   (`raytrace.neargrid`), each box padded by a bound of where the test can report a hit:
+   the error of λ (off the plane) and of the barycentric coordinates (in it) is a few tens of
+   spacings of 2**-52 of the reach R (a bound of |x| of every corner and of p) divided by
+   sin² of the triangle's angle at its first corner; `NEAR_BOX_ERROR_ULPS` takes 1024 of
+   them, and a triangle with sin² below `NEAR_SLIVER_SIN2` (where that bound no longer holds
+   by itself) is tested with every piece.
 4. **At a point light, a bound of the light position's own error.**  The segment ends
    `light_margin` before the light: 8 spacings of the light's coordinates, of the segment's
    length (Embree's t is relative to it) and, if some triangle's plane passes through the light
@@ -76,10 +83,9 @@ version) grows with the distance from the world's origin: 5 cm kerbs under a low
 shadows once the scene was translated by 1e4, and a light margin of the whole scene's largest
 coordinate let a lamp shade on a 1e6-wide ground quad leak light (3.8 units of margin).
 
-The Whitted images keep their own offset
------------------------------------------
-`raytrace.whitted` (images, reflection and refraction rays, whose start points must lie off the
-surface on a given side) still starts secondary rays at p + `surface_offset`·n, 1e-4 of the
+The Whitted images keep their own offset -----------------------------------------
+`raytrace.outlook.whitted` (images, reflection and refraction rays, whose start points must lie off
+the surface on a given side) still starts secondary rays at p + `surface_offset`·n, 1e-4 of the
 scene's length scale, as before: the images are not compared pixel by pixel, and reflected and
 refracted rays have no segment to stay on.
 
@@ -111,6 +117,12 @@ LIGHT_ERROR_ULPS = 8.0
 # The longest lift along the segment, in heights (item 3b): where the lift would be longer
 # (n·l̂ < 1 / LIFT_HEIGHTS) the piece it skips is traced in float64.
 LIFT_HEIGHTS = 16.0
+
+# The float64 near pieces' candidates (item 3b, `raytrace.neargrid`): a triangle's box is
+# padded by NEAR_BOX_ERROR_ULPS spacings of 2**-52 of the reach over sin² of its angle at its
+# first corner; below NEAR_SLIVER_SIN2 (sin ~1e-5) every piece tests it.
+NEAR_BOX_ERROR_ULPS = 1024.0
+NEAR_SLIVER_SIN2 = 1e-10
 
 # A triangle whose smallest angle has a sine below 1 / SLIVER_SHAPE (~14.5 degrees) is a
 # sliver: the float32 error of its normal, relative, grows as 1 / sin(smallest angle), which
@@ -164,16 +176,40 @@ def error_weight(normals: np.ndarray, corners: np.ndarray) -> np.ndarray:
     """W = Σ_j |n_j| · max_i |corner_ij| per triangle: the size of the float32 rounding of its
     plane, in spacings.  normals : (M, 3) unit;  corners : (M, 3, 3), in the eye's frame.
     Returns (M,) float64."""
-    return np.einsum("mj,mj->m", np.abs(normals), np.abs(corners).max(axis=1))
+    biggest = np.maximum(np.maximum(np.abs(corners[:, 0]), np.abs(corners[:, 1])),
+                         np.abs(corners[:, 2]))  # = np.abs(corners).max(axis=1), faster
+    return np.einsum("mj,mj->m", np.abs(normals), biggest)
 
 
 def is_sliver(corners: np.ndarray) -> np.ndarray:
     """(M,) bool: the triangles corners (M, 3, 3) whose smallest angle is below
     asin(1 / SLIVER_SHAPE), or that are degenerate."""
-    e = corners[:, [1, 2, 2]] - corners[:, [0, 0, 1]]
-    length = np.sort(np.linalg.norm(e, axis=2), axis=1)
-    area2 = np.linalg.norm(np.cross(e[:, 0], e[:, 1]), axis=1)
-    return length[:, 1] * length[:, 2] >= SLIVER_SHAPE * area2
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    e1, e2 = b - a, c - a
+    return sliver_edges(e1, e2, c - b, norm_rows(cross_rows(e1, e2)))
+
+
+def sliver_edges(e1: np.ndarray, e2: np.ndarray, e3: np.ndarray, area2: np.ndarray
+                 ) -> np.ndarray:
+    """`is_sliver` from the edges b − a, c − a, c − b (M, 3) and |e1 × e2| (M,)."""
+    l1, l2, l3 = (norm_rows(e) for e in (e1, e2, e3))
+    # the two longest edges' product: rounding is monotone, so it is the largest product
+    longest = np.maximum(np.maximum(l1 * l2, l1 * l3), l2 * l3)
+    return longest >= SLIVER_SHAPE * area2
+
+
+def cross_rows(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """u × v of rows (M, 3): np.cross's products and differences, without its copies."""
+    out = np.empty(np.broadcast_shapes(u.shape, v.shape))
+    out[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    out[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    out[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return out
+
+
+def norm_rows(u: np.ndarray) -> np.ndarray:
+    """|u| of rows (M, 3), summed in np.linalg.norm's order."""
+    return np.sqrt(u[:, 0] * u[:, 0] + u[:, 1] * u[:, 1] + u[:, 2] * u[:, 2])
 
 
 def shadow_height(weight):

@@ -17,6 +17,12 @@ in vec3 in_position;        // world space (float32: what the GPU draws)
 in vec3 in_normal;          // unit face normal, cross(v1 - v0, v2 - v0) as wound
 in vec3 in_corner;          // the triangle's first corner v0 (the same for its three vertices)
 in int in_object;           // index of the object (row of the material texture)
+#ifdef SURFACE              // the geometry pass of a scene with textures or vertex colours
+in vec2 in_uv;              // the vertex's texture coordinates (glTF's convention)
+in vec3 in_colour;          // its linear vertex colour (1 where the object has none)
+out vec2 v_uv;
+out vec3 v_colour;
+#endif
 
 out vec3 v_world;
 flat out vec3 v_normal;
@@ -59,4 +65,8 @@ void main() {
 #endif
     v_object = in_object;
     v_triangle = gl_VertexID / 3;
+#ifdef SURFACE
+    v_uv = in_uv;
+    v_colour = in_colour;
+#endif
 }

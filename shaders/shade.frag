@@ -24,6 +24,12 @@
 // not 0 (passes.clear_shadowed).  Only the pixels that survive the depth test keep their
 // bits, so they are the deferred frame's lit bits exactly.
 //
+// SURFACE (a scene with textures or vertex colours): the base colour, the G-buffer's
+// interpolated vertex colour times the object's texture at the G-buffer's UVs, multiplies
+// ka and kd; `base_colour` below is docs/CONVENTIONS.md's rule, "Textures" (raytrace.texture
+// is the ray tracer's): texels fetched by index from one storage buffer, each decoded from
+// sRGB by the table, then filtered (nearest, or bilinear at level 0), indices wrapped.
+//
 // STENCIL_BITS (with MASK_PASS, at most 6 lights): the same bits written into the stencil
 // instead of a colour target (gl_FragStencilRefARB, stencil.exported_bits), reversed: bit 7
 // covered, bit 6 - i light i, and the low bits 0, where the lights' counts then go
@@ -66,6 +72,56 @@ uniform float u_emitter_cosine[LIGHTS]; // 1: a one-sided area light's sample, w
 layout(std430, binding = 0) readonly buffer Triangles {
     vec4 triangle_data[];       // per triangle: (unit normal, object), (first corner, 0)
 };
+#if defined(SURFACE) && !defined(MASK_PASS) && !defined(MASKS_ONLY)
+uniform sampler2D u_uv;         // the visible surface's UVs (the geometry pass's)
+uniform sampler2D u_tint;       // and its vertex colour (rgb)
+layout(std430, binding = 1) readonly buffer Texels {
+    uint texels[];              // every texture's RGBA8 sRGB codes, one texture after another
+};
+// per texture: first texel, width, height, flags (bits 0-1 wrap_s, 2-3 wrap_t: 0 repeat,
+// 1 clamp, 2 mirror; bit 4 bilinear)
+layout(std430, binding = 2) readonly buffer Records {
+    ivec4 records[];
+};
+layout(std430, binding = 3) readonly buffer Decode {
+    float srgb_linear[256];     // 8-bit sRGB code -> linear (float64 rounded to float32)
+};
+
+// Texel index i wrapped into 0..n-1 by `mode`.
+int wrap_index(int i, int n, int mode) {
+    if (mode == 1) {
+        return clamp(i, 0, n - 1);
+    }
+    int period = mode == 0 ? n : 2 * n;
+    int k = i % period;
+    k = k < 0 ? k + period : k;
+    return k < n ? k : period - 1 - k;
+}
+
+// Texel (i, j) (column, row from the top) of texture `r`, wrapped and decoded to linear.
+vec3 texel(ivec4 r, int i, int j) {
+    int x = wrap_index(i, r.y, r.w & 3);
+    int y = wrap_index(j, r.z, (r.w >> 2) & 3);
+    uint c = texels[r.x + y * r.y + x];
+    return vec3(srgb_linear[c & 0xFFu], srgb_linear[(c >> 8) & 0xFFu],
+                srgb_linear[(c >> 16) & 0xFFu]);
+}
+
+vec3 base_colour(ivec4 r, vec2 uv) {
+    vec2 xy = uv * vec2(r.yz);
+    if ((r.w & 16) == 0) {
+        ivec2 ij = ivec2(floor(xy));
+        return texel(r, ij.x, ij.y);
+    }
+    xy -= 0.5;                  // texel centres at whole numbers
+    vec2 f = floor(xy);
+    ivec2 ij = ivec2(f);
+    vec2 a = xy - f;
+    vec3 top = texel(r, ij.x, ij.y) * (1.0 - a.x) + texel(r, ij.x + 1, ij.y) * a.x;
+    vec3 bottom = texel(r, ij.x, ij.y + 1) * (1.0 - a.x) + texel(r, ij.x + 1, ij.y + 1) * a.x;
+    return top * (1.0 - a.y) + bottom * a.y;
+}
+#endif
 
 #if defined(MASK_PASS) && !defined(STENCIL_BITS)
 layout(location = 0) out uint f_lit_bits;  // bit 0 covered, bit i + 1 faces light i
@@ -128,8 +184,17 @@ void main() {
     vec3 kd = texelFetch(u_materials, ivec2(1, object), 0).rgb;
     vec4 ks = texelFetch(u_materials, ivec2(2, object), 0);
     vec3 v = normalize(u_eye - world);
-    vec3 colour = u_first_page ? texelFetch(u_materials, ivec2(0, object), 0).rgb * u_ambient
-                               : vec3(0.0);
+    vec3 ka = texelFetch(u_materials, ivec2(0, object), 0).rgb;
+#ifdef SURFACE
+    vec3 base = texelFetch(u_tint, p, 0).rgb;
+    int tex = int(texelFetch(u_materials, ivec2(3, object), 0).r);
+    if (tex >= 0) {
+        base *= base_colour(records[tex], texelFetch(u_uv, p, 0).xy);
+    }
+    ka *= base;
+    kd *= base;
+#endif
+    vec3 colour = u_first_page ? ka * u_ambient : vec3(0.0);
 #endif
     uint lit = u_first_page ? 1u : 0u;
 #if LIGHTS > 0

@@ -19,7 +19,11 @@ pipeline without knowing our look-at camera:
 * `light_direction` (L, 3): the direction a directional light travels, a spot light's axis, a
   rect or disk light's normal (the side it emits to), (0, 0, 0) for a point or sphere light.
 
-All float64.  The basis is the look-at basis of CONVENTIONS.md ("Camera and pixels").
+All float64.  A look-at camera's basis is the look-at basis of CONVENTIONS.md ("Camera and
+pixels") and its K has fx = fy and the principal point at the image centre; a camera given by
+matrices (`Camera.fx` ... `Camera.camera_to_world`) has the ones it was given, returned
+unchanged, so that a frame's K and camera_to_world, read back as its camera, give the same
+frame bit for bit.
 
 `frame_origin` is the origin of the float32 frame both renderers draw and trace in (the eye):
 the one definition, so that both round the same float64 differences to the same float32
@@ -49,7 +53,7 @@ class Calibration(NamedTuple):
     light_direction: np.ndarray
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """The arrays by their file names (`shadowvol.io.save_masks`)."""
+        """The arrays by their file names (`shadowvol.frame.save_masks`)."""
         return self._asdict()
 
 
@@ -62,7 +66,11 @@ def frame_origin(camera: Camera) -> np.ndarray:
 
 def look_at_basis(camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The camera's orthonormal basis in world space: right (x), up (y), back (z), each (3,)
-    float64; the camera looks down −back."""
+    float64; the camera looks down −back.  A matrix camera's: the columns of its
+    camera_to_world, as given."""
+    if camera.matrix_form:
+        m = camera.camera_to_world
+        return m[:3, 0].copy(), m[:3, 1].copy(), m[:3, 2].copy()
     back = camera.eye - camera.target
     back = back / np.linalg.norm(back)
     right = np.cross(camera.up, back)
@@ -70,15 +78,27 @@ def look_at_basis(camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return right, np.cross(back, right), back
 
 
-def intrinsics(camera: Camera, width: int, height: int) -> np.ndarray:
-    """K (3, 3) float64 of a W × H image (see the module): square pixels,
-    fx = fy = (H / 2) / tan(fov_y / 2), principal point (W / 2, H / 2)."""
+def pinhole(camera: Camera, width: int, height: int) -> tuple[float, float, float, float]:
+    """(fx, fy, cx, cy) of a W × H image in pixels (see the module): a look-at camera's
+    square pixels, fx = fy = (H / 2) / tan(fov_y / 2), principal point (W / 2, H / 2); a
+    matrix camera's own."""
+    if camera.matrix_form:
+        return camera.fx, camera.fy, camera.cx, camera.cy
     f = (height / 2.0) / math.tan(math.radians(camera.fov_y) / 2.0)
-    return np.array([[f, 0.0, width / 2.0], [0.0, f, height / 2.0], [0.0, 0.0, 1.0]])
+    return f, f, width / 2.0, height / 2.0
+
+
+def intrinsics(camera: Camera, width: int, height: int) -> np.ndarray:
+    """K (3, 3) float64 of a W × H image (see the module and `pinhole`)."""
+    fx, fy, cx, cy = pinhole(camera, width, height)
+    return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
 
 
 def camera_to_world(camera: Camera) -> np.ndarray:
-    """(4, 4) float64: OpenGL camera coordinates -> world (columns right, up, back, eye)."""
+    """(4, 4) float64: OpenGL camera coordinates -> world (columns right, up, back, eye); a
+    matrix camera's own, as given."""
+    if camera.matrix_form:
+        return camera.camera_to_world.copy()
     m = np.eye(4)
     m[:3, :3] = np.column_stack(look_at_basis(camera))
     m[:3, 3] = camera.eye

@@ -24,6 +24,10 @@ MIN_POSITIVE = 1e-18
 # echoed whole), and a SceneError's key and problem are cut to one line of at most this length.
 MAX_QUOTE = 80
 MAX_MESSAGE = 400
+# How far from orthonormal the rotation of a rigid 4x4 matrix (a camera pose) may be: the
+# largest |R^T R - I| entry.  Poses computed in float32 elsewhere reach ~1e-7; a scale or a
+# shear of 1e-6 is refused.  The matrix is used as given (not re-orthonormalised).
+RIGID_TOLERANCE = 1e-6
 
 
 def shorten(value, limit: int = MAX_QUOTE) -> str:
@@ -133,6 +137,81 @@ def num(value, key: str, *, low: float | None = None, high: float | None = None,
     if high is not None and x > high:
         raise SceneError(key, f"must be <= {high}, got {value!r}")
     return x
+
+
+def flag(value, key: str) -> bool:
+    """A switch: true or false exactly (no 0, 1 or string), or a SceneError naming `key`."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise SceneError(key, f"expected true or false, got {shorten(value)}")
+    return bool(value)
+
+
+def _matrix4(value, key: str) -> np.ndarray:
+    """A (4, 4) float64 array of finite numbers inside the float32 range, last row exactly
+    0 0 0 1 (affine), from 4 lists of 4 real numbers or a (4, 4) array; else a SceneError."""
+    if isinstance(value, np.ndarray):
+        ok = value.dtype.kind in "iuf" and value.shape == (4, 4)
+    else:
+        ok = (isinstance(value, (list, tuple)) and len(value) == 4
+              and all(_numbers(row) and len(row) == 4 for row in value))
+    if not ok:
+        got = (f"an array of shape {value.shape} ({value.dtype})"
+               if isinstance(value, np.ndarray) else shorten(value))
+        raise SceneError(key, f"expected a 4x4 matrix (4 rows of 4 numbers), got {got}")
+    try:
+        m = np.array(value, dtype=np.float64)
+    except OverflowError:   # an integer past float64 (1e400)
+        raise SceneError(key, f"{shorten(value)} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})") from None
+    if not np.all(np.isfinite(m)):
+        raise SceneError(key, f"non-finite number in {shorten(value)}")
+    if np.any(np.abs(m) > MAX_MAGNITUDE):
+        raise SceneError(key, f"{shorten(value)} is beyond the float32 range the renderers use "
+                              f"(|x| <= {MAX_MAGNITUDE:g})")
+    if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
+        raise SceneError(key, f"not rigid: the last row must be [0, 0, 0, 1], got "
+                              f"{m[3].tolist()}")
+    return m
+
+
+def rigid_matrix(value, key: str) -> np.ndarray:
+    """A read-only (4, 4) float64 rigid transform (rotation and translation; last row exactly
+    0 0 0 1) from `value`, 4 lists of 4 real numbers or a (4, 4) array, or a SceneError naming
+    `key`: wrong shape, non-finite, beyond the float32 range, a scale, shear or mirror."""
+    m = _matrix4(value, key)
+    r = m[:3, :3]
+    error = float(np.abs(r.T @ r - np.eye(3)).max())
+    if error > RIGID_TOLERANCE:
+        raise SceneError(key, f"not rigid: the rotation part is not orthonormal (|R^T R - I| "
+                              f"= {error:.3g} > {RIGID_TOLERANCE:g}; no scale or shear)")
+    if np.linalg.det(r) < 0:
+        raise SceneError(key, "not rigid: the rotation part is a mirror (determinant < 0)")
+    return frozen(m)
+
+
+def similarity_matrix(value, key: str) -> tuple[np.ndarray, float]:
+    """(the read-only (4, 4) float64 matrix, its scale s) of a similarity transform: s R and a
+    translation, R a rotation (`RIGID_TOLERANCE` on R^T R - I), s > 0 the same on every axis;
+    else a SceneError naming `key` (shape, non-finite, last row not 0 0 0 1, a shear, a scale
+    that differs between axes, a mirror or a zero scale).  An object pose may scale; a camera
+    pose may not (`rigid_matrix`)."""
+    m = _matrix4(value, key)
+    r = m[:3, :3]
+    det = float(np.linalg.det(r))
+    if not det > 0:
+        raise SceneError(key, "not a pose: the 3x3 part is a mirror or flat (determinant "
+                              f"{det:.3g} <= 0)")
+    s = det ** (1.0 / 3.0)
+    if not MIN_POSITIVE <= s <= MAX_MAGNITUDE:
+        raise SceneError(key, f"not a pose: its scale {s:.3g} is outside the float32 range")
+    rotation = r / s
+    error = float(np.abs(rotation.T @ rotation - np.eye(3)).max())
+    if error > RIGID_TOLERANCE:
+        raise SceneError(key, f"not a pose: the 3x3 part is not a rotation times one scale "
+                              f"(|R^T R - I| = {error:.3g} > {RIGID_TOLERANCE:g} with R = the "
+                              f"3x3 part / {s:.6g}: a shear, or a scale that differs between "
+                              "axes; use transform = { scale = [...] } for that)")
+    return frozen(m), s
 
 
 def unit(v: np.ndarray, key: str) -> np.ndarray:

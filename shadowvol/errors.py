@@ -49,6 +49,17 @@ def out_of_memory_while(doing: str):
         raise OutOfMemory(doing, str(exc)) from None
 
 
+class IgnoredMaterial(UserWarning):
+    """What of a mesh file's materials the renderers do not read (normal maps, ...): one line
+    naming the file (`shadowvol.scenefile_texture.warn_ignored`)."""
+
+
+def one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """`warnings.showwarning` for the command line: "warning: <message>", one line on
+    stderr, for every warning."""
+    print(f"warning: {message}", file=sys.stderr if file is None else file)
+
+
 class MissingExtra(ImportError):
     """An optional package is not installed; the message names the pip command that installs
     it.  Exit status 2 (the request cannot be met as given)."""

@@ -1,5 +1,6 @@
-"""The one writer: PNG images (8- and 16-bit), OpenEXR images, mask files, tar archives and
-raw bytes, atomically.
+"""The one writer: PNG images (8- and 16-bit), OpenEXR images, `.npz` and `.npy` arrays, tar
+archives and raw bytes, atomically; bytes only: what a frame's files hold is
+`shadowvol.frame`'s (`shadowvol.frame.save_masks` writes its mask file through here).
 
 Renderers return arrays; the CLI, batch jobs and the course call these.  Every file goes
 through `atomic_write`: the data goes to a temporary file beside the target, which replaces the
@@ -13,6 +14,7 @@ file against its recorded sha256.
 from __future__ import annotations
 
 import contextlib
+import errno
 import io
 import os
 import struct
@@ -64,7 +66,7 @@ STDOUT = "-"
 
 
 @contextlib.contextmanager
-def atomic_write(path: str | Path, follow_links: bool = True):
+def atomic_write(path: str | Path, follow_links: bool = True, within: str | Path | None = None):
     """Yield a binary file object that becomes `path` only once complete.
 
     A regular file (or a new name) is written to a temporary file beside it, fsynced and
@@ -73,13 +75,18 @@ def atomic_write(path: str | Path, follow_links: bool = True):
     its own folder, and the link stays; with `follow_links=False` the link itself is replaced
     by the file, and what it pointed to is left alone (a dataset's frames, where a link may
     point to another frame's file).  A device, a FIFO or "-" (standard output) cannot be
-    replaced: the data is written straight to it.  Errors are WriteError naming `path`.
+    replaced: the data is written straight to it.  With `within` (a folder above `path`), no
+    folder between it and `path` may be a link either: a dataset's file is written in the
+    dataset (a folder link would put it in another output's folder, or outside).  Errors are
+    WriteError naming `path`.
     """
     shown = short_path(path)
     if shown == STDOUT:
         yield _Stream(sys.stdout.buffer, shown)
         return
     path = Path(path)
+    if within is not None:
+        _no_folder_link(Path(within), path, shown)
     if path.is_symlink() and follow_links:
         path = Path(os.path.realpath(path))
     if not path.is_symlink() and path.exists() and not path.is_file() and not path.is_dir():
@@ -116,6 +123,26 @@ def atomic_write(path: str | Path, follow_links: bool = True):
             raise WriteError(exc.errno, f"{shown}: cannot write: {exc.strerror or exc}") \
                 from None
         raise
+
+
+def linked_folder(within: str | Path, path: str | Path) -> Path | None:
+    """The first folder of `path` below the folder `within` (`path` itself excluded) that is a
+    symbolic link, or None."""
+    folder = Path(within)
+    for part in Path(path).relative_to(within).parts[:-1]:
+        folder = folder / part
+        if folder.is_symlink():
+            return folder
+    return None
+
+
+def _no_folder_link(within: Path, path: Path, shown: str) -> None:
+    """WriteError when a folder of `path` below `within` is a symbolic link."""
+    folder = linked_folder(within, path)
+    if folder is not None:
+        raise WriteError(errno.ELOOP, f"{shown}: cannot write: {short_path(folder)} is a "
+                                      "symbolic link, and no file of the dataset is written "
+                                      "through one; make it a folder")
 
 
 class _Stream:
@@ -232,83 +259,10 @@ def save_exr(path: str | Path, image: np.ndarray) -> None:
             f.write(data)
 
 
-# The ground-truth outputs a frame may carry, by name, in this order (docs/CONVENTIONS.md).
-GROUND_TRUTH = ("depth", "distance", "normal", "object_id", "facing", "facing_count", "casters")
-
-
-class GroundTruthFrame:
-    """What a frame of either renderer derives from its arrays, as docs/CONVENTIONS.md defines
-    it: the cast and the attached shadow, the umbra and the penumbra, and its arrays by their
-    mask-file names.  Mixed into both renderers' results, which hold `lit`, `coverage`,
-    `lit_count`, `samples`, `calibration` and the GROUND_TRUTH outputs (None where not asked
-    for)."""
-
-    @property
-    def cast(self) -> np.ndarray:
-        """(L, H, W) bool: some sample facing the pixel is blocked (lit_count <
-        facing_count; hard lights: facing & ~lit); `casters.any(-1)` exactly."""
-        if self.facing_count is not None and self.lit_count is not None:
-            return self.lit_count < self.facing_count
-        return self.facing & ~self.lit
-
-    @property
-    def attached(self) -> np.ndarray:
-        """(L, H, W) bool: covered, but no sample faces the pixel (needs facing, coverage)."""
-        return self.coverage[None] & ~self.facing
-
-    @property
-    def umbra(self) -> np.ndarray:
-        """(L, H, W) bool: some sample faces the pixel and none reaches it (needs facing,
-        lit_count)."""
-        return self.facing & (self.lit_count == 0)
-
-    @property
-    def penumbra(self) -> np.ndarray:
-        """(L, H, W) bool: some samples reach the pixel, not all (0 < lit_count < N)."""
-        return (self.lit_count > 0) & (self.lit_count < self.samples[:, None, None])
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The ground truth computed, the counts when some light has more than one sample,
-        and the calibration, by their mask-file names (`save_masks`)."""
-        out = {name: getattr(self, name) for name in GROUND_TRUTH
-               if getattr(self, name) is not None}
-        return out | soft_arrays(self.lit_count, self.samples) | self.calibration.arrays()
-
-
-def soft_arrays(lit_count: np.ndarray | None, samples: np.ndarray | None
-                ) -> dict[str, np.ndarray]:
-    """`lit_count` and `samples` by name when some light has more than one sample (a mask
-    file of hard lights alone stays as it was), else nothing."""
-    if samples is None or lit_count is None or not (np.asarray(samples) > 1).any():
-        return {}
-    return {"lit_count": np.asarray(lit_count, np.uint16),
-            "samples": np.asarray(samples, np.int64)}
-
-
-# The arrays a mask file may hold beside `lit` and `coverage` (docs/CONVENTIONS.md): name ->
-# (dtype, shape), the shape in terms of the lights L, the height H, the width W and the
-# casters' words K = max(1, ceil(n_objects / 64)) (taken from the array itself).
-MASK_ARRAYS = {
-    "depth": (np.float32, ("H", "W")),
-    "distance": (np.float32, ("H", "W")),
-    "normal": (np.float32, ("H", "W", 3)),
-    "object_id": (np.uint16, ("H", "W")),
-    "facing": (np.bool_, ("L", "H", "W")),
-    "facing_count": (np.uint16, ("L", "H", "W")),
-    "casters": (np.uint64, ("L", "H", "W", "K")),
-    "lit_count": (np.uint16, ("L", "H", "W")),
-    "samples": (np.int64, ("L",)),
-    "K": (np.float64, (3, 3)),
-    "world_to_camera": (np.float64, (4, 4)),
-    "camera_to_world": (np.float64, (4, 4)),
-    "light_position": (np.float64, ("L", 4)),
-    "light_direction": (np.float64, ("L", 3)),
-}
-
-
-def write_bytes(path: str | Path, data: bytes, follow_links: bool = True) -> None:
+def write_bytes(path: str | Path, data: bytes, follow_links: bool = True,
+                within: str | Path | None = None) -> None:
     """Write `data` to `path` atomically (see `atomic_write`)."""
-    with out_of_memory_while(f"writing {path}"), atomic_write(path, follow_links) as f:
+    with out_of_memory_while(f"writing {path}"), atomic_write(path, follow_links, within) as f:
         f.write(data)
 
 
@@ -339,48 +293,6 @@ def npy_bytes(array: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
-def masks_bytes(lit: np.ndarray, coverage: np.ndarray,
-                arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> bytes:
-    """A mask file as docs/CONVENTIONS.md defines it: `lit` (L, H, W) bool, `coverage` (H, W),
-    and
-
-    arrays : more arrays by name: the ground-truth outputs and the camera and light arrays
-        (`shadowvol.cameras.Calibration.arrays()`), each of the dtype and shape `MASK_ARRAYS`
-        gives it (ValueError otherwise, and for a name it does not know);
-    light_samples : per light an (N, 3) float64 array of its sample positions
-        (`shadowvol.scene.light_samples`) or None (a directional light), written as
-        `light_samples_<i>`.
-    The same arrays give the same bytes (`npz_bytes`)."""
-    extra = {}
-    for i, samples in enumerate(light_samples or ()):
-        if samples is not None:
-            samples = np.asarray(samples, np.float64)
-            if samples.ndim != 2 or samples.shape[1] != 3:
-                raise ValueError(f"light_samples[{i}] must be (N, 3), got {samples.shape}")
-            extra[f"light_samples_{i}"] = samples
-    lit = np.asarray(lit)
-    coverage = np.asarray(coverage)
-    if lit.dtype != bool or lit.ndim != 3 or coverage.dtype != bool or \
-            coverage.shape != lit.shape[1:]:
-        raise ValueError(f"masks must be lit (L, H, W) bool and coverage (H, W) bool, got "
-                         f"{lit.dtype}{lit.shape} and {coverage.dtype}{coverage.shape}")
-    sizes = dict(zip("LHW", lit.shape))
-    for name, value in (arrays or {}).items():
-        if name not in MASK_ARRAYS:
-            raise ValueError(f"a mask file holds no array {name!r} (known: "
-                             f"{', '.join(MASK_ARRAYS)})")
-        dtype, shape = MASK_ARRAYS[name]
-        value = np.asarray(value)
-        # K, the casters' words: the array's own (at least 1)
-        words = {"K": max(1, value.shape[-1]) if value.ndim == len(shape) else 1}
-        want = tuple(sizes.get(n, words.get(n, n)) for n in shape)
-        if value.dtype != dtype or value.shape != want:
-            raise ValueError(f"{name} must be {np.dtype(dtype)}{want}, got "
-                             f"{value.dtype}{value.shape}")
-        extra[name] = value
-    return npz_bytes(lit=lit, coverage=coverage, **extra)
-
-
 def tar_bytes(members: list[tuple[str, bytes]]) -> bytes:
     """An uncompressed POSIX tar of (name, data) members in the given order, with fixed time
     stamps, owners and modes (the same members give the same bytes)."""
@@ -406,13 +318,6 @@ def save_png(path: str | Path, image: np.ndarray) -> None:
         data = png_bytes(arr)
         with atomic_write(path) as f:
             f.write(data)
-
-
-def save_masks(path: str | Path, lit: np.ndarray, coverage: np.ndarray,
-               arrays: dict[str, np.ndarray] | None = None, light_samples=None) -> None:
-    """Write a mask file (`masks_bytes`), atomically."""
-    with out_of_memory_while(f"writing {path}"):
-        write_bytes(path, masks_bytes(lit, coverage, arrays, light_samples))
 
 
 def load_masks(path: str | Path) -> tuple[np.ndarray, np.ndarray]:

@@ -15,14 +15,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from shadowvol import arealights
-from shadowvol.checks import SceneError, frozen, num, unit, vec
+from shadowvol.checks import SceneError, flag, frozen, num, unit, vec
 from shadowvol.planes import default_plane_axes
 
 
 class _Emitter:
-    """What every light has: a colour (linear RGB, (3,) float64) times an intensity."""
+    """What every light has: a colour (linear RGB, (3,) float64) times an intensity, and
+    `shadows` (False: nothing blocks it; it lights every point its n . l and cone reach)."""
 
     def _check_colour(self) -> None:
+        object.__setattr__(self, "shadows", flag(self.shadows, "shadows"))
         c = vec(self.color, "color")
         if np.any(c < 0):
             raise SceneError("color", f"colour components must be >= 0, got {c.tolist()}")
@@ -52,6 +54,7 @@ class PointLight(_Emitter):
     position: np.ndarray
     color: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "color"))
     intensity: float = 1.0
+    shadows: bool = True
 
     def __post_init__(self):
         object.__setattr__(self, "position", vec(self.position, "position"))
@@ -65,6 +68,7 @@ class DirectionalLight(_Emitter):
     direction: np.ndarray
     color: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "color"))
     intensity: float = 1.0
+    shadows: bool = True
 
     def __post_init__(self):
         object.__setattr__(self, "direction", unit(vec(self.direction, "direction"), "direction"))
@@ -81,6 +85,7 @@ class SpotLight(_Emitter):
     cone_angle: float = 30.0
     color: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "color"))
     intensity: float = 1.0
+    shadows: bool = True
 
     def __post_init__(self):
         object.__setattr__(self, "position", vec(self.position, "position"))
@@ -134,6 +139,7 @@ class AreaLight(_Emitter):
     seed: int = 0
     color: np.ndarray = field(default_factory=lambda: vec([1, 1, 1], "color"))
     intensity: float = 1.0
+    shadows: bool = True
     positions: np.ndarray = field(init=False, repr=False)
     weights: np.ndarray = field(init=False, repr=False)
 
@@ -191,9 +197,10 @@ class AreaLight(_Emitter):
         """The N sample lights, in sample order, each with intensity * weight: AreaSample for a
         rect or disk, PointLight for a sphere."""
         if self.shape == "sphere":
-            return tuple(PointLight(p, self.color, self.intensity * w)
+            return tuple(PointLight(p, self.color, self.intensity * w, self.shadows)
                          for p, w in zip(self.positions, self.weights))
-        return tuple(AreaSample(p, self.normal, 90.0, self.color, self.intensity * w)
+        return tuple(AreaSample(p, self.normal, 90.0, self.color, self.intensity * w,
+                                self.shadows)
                      for p, w in zip(self.positions, self.weights))
 
 

@@ -17,10 +17,6 @@ WHITE = (255, 255, 255)
 TITLE_BACKGROUND = (40, 40, 48)
 GAP = 4  # pixels between neighbouring panels
 
-# Bitmap-font strips (Pillow's built-in font): compare's labels and the swatch legends.
-LABEL_HEIGHT = 16
-LEGEND_HEIGHT = 20
-
 # Fitted text strips shrink their font down to this, then cut the text short.
 MIN_TEXT_SIZE = 8
 
@@ -60,14 +56,6 @@ def column(rows: list[np.ndarray], gap: int = GAP) -> np.ndarray:
     return join(rows, axis=0, gap=gap)
 
 
-def label_strip(text: str, width: int, height: int = LABEL_HEIGHT) -> np.ndarray:
-    """(height, width, 3) uint8 white strip with `text` in black, Pillow's bitmap font."""
-
-    strip = Image.new("RGB", (width, height), WHITE)
-    ImageDraw.Draw(strip).text((3, 2), text, fill=(0, 0, 0))
-    return np.asarray(strip, np.uint8)
-
-
 @functools.lru_cache(maxsize=64)
 def font(px: int, bold: bool = False):
     """DejaVu Sans at `px` pixels (at least MIN_TEXT_SIZE): the font matplotlib draws the 2D
@@ -100,30 +88,9 @@ def blank(height: int, width: int, text: str) -> np.ndarray:
     """(height, width, 3) uint8 grey panel saying `text` in its middle."""
 
     panel = Image.new("RGB", (width, height), (70, 70, 70))
-    ImageDraw.Draw(panel).text((6, height // 2 - 6), text, fill=(235, 235, 235))
+    ImageDraw.Draw(panel).text((6, height // 2), text, fill=(235, 235, 235),
+                               font=font(caption_px(height)), anchor="lm")
     return np.asarray(panel, np.uint8)
-
-
-def labelled_row(panels: list[tuple[str, np.ndarray]]) -> np.ndarray:
-    """(label, (H, W, 3) uint8) pairs: each panel under its bitmap-font label, side by side."""
-    return row([np.concatenate([label_strip(label, image.shape[1]), image])
-                for label, image in panels])
-
-
-def legend(width: int, entries, spacing: int = 24, char_width: int | None = None) -> np.ndarray:
-    """(LEGEND_HEIGHT, width, 3) uint8: a swatch and its name per (label, colour) entry,
-    `spacing` pixels plus the label's width from one entry to the next (the label's drawn
-    width, or `char_width` per character when given: the heat legend's fixed spacing)."""
-
-    strip = Image.new("RGB", (width, LEGEND_HEIGHT), WHITE)
-    draw = ImageDraw.Draw(strip)
-    x = 4
-    for label, colour in entries:
-        draw.rectangle([x, 4, x + 11, 15], fill=tuple(map(int, colour)), outline=(0, 0, 0))
-        draw.text((x + 15, 5), label, fill=(0, 0, 0))
-        x += spacing + (int(draw.textlength(label)) if char_width is None
-                        else char_width * len(label))
-    return np.asarray(strip, np.uint8)
 
 
 def heat_map(counts: np.ndarray, image: np.ndarray | None = None) -> np.ndarray:
@@ -188,6 +155,41 @@ def swatch_legend(width: int, entries, px: int) -> np.ndarray:
         draw.text((x + sw + px // 3, y + line // 2), label, fill=(0, 0, 0), font=f,
                   anchor="lm")
     return np.asarray(strip, np.uint8)
+
+
+# Text of a picture at least this fraction of its whole height: legible when the picture is
+# shown on a slide (`legible_rows`: compare's picture, raytrace masks' ground truth).
+MIN_TEXT_FRACTION = 0.02
+
+
+def titled_rows(rows: list[list[tuple[str, np.ndarray]]], entries, px: int) -> np.ndarray:
+    """Rows of (title, (H, W, 3) uint8) panels, each panel under its title strip at `px`, short
+    rows padded with white panels, one row under another, the `swatch_legend` of `entries`
+    below (none when empty)."""
+    per_row = max(len(r) for r in rows)
+    strip_h = round(1.6 * px)
+    lines = []
+    for r in rows:
+        h, w = r[0][1].shape[:2]
+        r = r + [("", np.full((h, w, 3), 255, np.uint8))] * (per_row - len(r))
+        lines.append(row([np.concatenate([text_strip(label, img.shape[1], strip_h, px), img])
+                          for label, img in r]))
+    out = column(lines)
+    return np.concatenate([out, swatch_legend(out.shape[1], entries, px)]) if entries else out
+
+
+def legible_rows(rows: list[list[tuple[str, np.ndarray]]], entries=()) -> np.ndarray:
+    """`titled_rows` with the text at least `MIN_TEXT_FRACTION` of the whole picture's height
+    (and `caption_px` of a panel's): a picture of several rows gets a larger font than one row
+    would.  Text too long for its panel's width still shrinks to fit (`text_strip`)."""
+    px = caption_px(max(img.shape[0] for r in rows for _, img in r))
+    for _ in range(16):  # the strips grow with px: a few steps reach the fixed point
+        out = titled_rows(rows, entries, px)
+        need = int(np.ceil(MIN_TEXT_FRACTION * out.shape[0]))
+        if px >= need:
+            return out
+        px = need
+    return out
 
 
 def captioned(panels: list[tuple[str, np.ndarray]], entries=(), px: int | None = None,
@@ -341,10 +343,5 @@ def ground_truth_picture(truth, names: list[str], image: np.ndarray | None = Non
             panels.append((f"light {i}: casters", casters_image(truth.casters[i],
                                                                 truth.coverage)))
         rows.append(panels)
-    per_row = max(len(r) for r in rows)
-    h, w = truth.coverage.shape
-    strips = [labelled_row(r + [("", np.full((h, w, 3), 255, np.uint8))] * (per_row - len(r)))
-              for r in rows]
-    out = column(strips)
     entries = [(name, tuple(c)) for name, c in zip(names, object_colours(len(names)))]
-    return np.concatenate([out, legend(out.shape[1], entries, spacing=18)])
+    return legible_rows(rows, entries)

@@ -14,13 +14,16 @@ import math
 import numpy as np
 
 from shadowvol.planes import default_plane_axes
+from shadowvol.checks import RIGID_TOLERANCE
 from shadowvol.scene import (
     Material,
     Object,
     Parallelogram,
     SceneError,
     Sphere,
+    frozen,
     num,
+    similarity_matrix,
     unit,
     vec,
 )
@@ -30,9 +33,26 @@ DEFAULT_SPHERE_SUBDIVISIONS = 3  # icosphere level: 1280 triangles
 
 class Transform:
     """Scale, then rotate (Euler angles in degrees about x, then y, then z, fixed axes), then
-    translate.  `matrix` is the (4, 4) float64 M = T @ Rz @ Ry @ Rx @ S."""
+    translate: `matrix` is the (4, 4) float64 M = T @ Rz @ Ry @ Rx @ S.  Or a given (4, 4)
+    `matrix`, a similarity (a rotation, one positive scale, a translation; no shear, no mirror:
+    `checks.similarity_matrix`), instead of the three.
 
-    def __init__(self, scale=1.0, rotation=(0.0, 0.0, 0.0), translation=(0.0, 0.0, 0.0)):
+    `pose` is the rigid part (T @ R: the object's pose) and `scale` the (3,) scale, which
+    belongs to the model: `matrix = pose @ diag(scale)`, exactly for the three keys."""
+
+    def __init__(self, scale=1.0, rotation=(0.0, 0.0, 0.0), translation=(0.0, 0.0, 0.0),
+                 matrix=None):
+        if matrix is not None:
+            self.matrix, s = similarity_matrix(matrix, "matrix")
+            if abs(s - 1.0) <= RIGID_TOLERANCE:
+                s = 1.0   # a rotation's determinant is 1 only up to rounding: no scale
+            self.scale = vec([s, s, s], "scale")
+            self.rotation = None   # not given as angles
+            self.translation = vec(self.matrix[:3, 3], "translation")
+            pose = self.matrix.copy()
+            pose[:3, :3] /= s
+            self.pose = frozen(pose)
+            return
         if np.ndim(scale) == 0:
             scale = [num(scale, "scale", low=0.0, low_open=True)] * 3
         self.scale = vec(scale, "scale", positive=True)
@@ -48,6 +68,10 @@ class Transform:
         m[:3, :3] = Rz @ Ry @ Rx @ np.diag(self.scale)
         m[:3, 3] = self.translation
         self.matrix = m
+        pose = np.eye(4)
+        pose[:3, :3] = Rz @ Ry @ Rx
+        pose[:3, 3] = self.translation
+        self.pose = frozen(pose)
 
     @property
     def is_identity(self) -> bool:
@@ -69,14 +93,21 @@ class Transform:
 IDENTITY = Transform()
 
 
+def _pose(transform: Transform) -> np.ndarray | None:
+    """An object's pose from its transform: the rigid part, None for the identity."""
+    return None if transform.is_identity else transform.pose
+
+
 def mesh(name: str, vertices, faces, material: Material | None = None,
-         transform: Transform = IDENTITY) -> Object:
-    """An object from a triangle mesh, kept exactly as given (no welding, no reordering)."""
+         transform: Transform = IDENTITY, uv=None, colors=None) -> Object:
+    """An object from a triangle mesh, kept exactly as given (no welding, no reordering);
+    `uv`, `colors`: per-vertex texture coordinates and linear colours (`Object`)."""
     v = np.asarray(vertices, dtype=np.float64)
     if v.ndim == 2 and v.shape[1] == 3 and np.isfinite(v).all():
         v = transform.points(v)
     # else: Object rejects the vertices, naming them as given (not as the transform mangled them)
-    return Object(name, v, np.asarray(faces), material or Material())
+    return Object(name, v, np.asarray(faces), material or Material(), uv=uv, colors=colors,
+                  pose=_pose(transform))
 
 
 def sphere(name: str, center, radius: float, material: Material | None = None,
@@ -97,7 +128,7 @@ def sphere(name: str, center, radius: float, material: Material | None = None,
     world_center = transform.points(center[None])[0]
     exact = Sphere(world_center, radius * float(transform.scale[0]))
     return Object(name, transform.points(local), np.asarray(ico.faces), material or Material(),
-                  analytic=exact)
+                  analytic=exact, pose=_pose(transform))
 
 
 def plane(name: str, point=(0.0, 0.0, 0.0), normal=(0.0, 1.0, 0.0), size=(10.0, 10.0),
@@ -113,7 +144,7 @@ def plane(name: str, point=(0.0, 0.0, 0.0), normal=(0.0, 1.0, 0.0), size=(10.0, 
     world = transform.points(corners)
     exact = Parallelogram(world[0], world[1] - world[0], world[3] - world[0])
     return Object(name, world, np.array([[0, 1, 2], [0, 2, 3]]), material or Material(),
-                  analytic=exact)
+                  analytic=exact, pose=_pose(transform))
 
 
 def box(name: str, center=(0.0, 0.0, 0.0), size=(1.0, 1.0, 1.0),
@@ -126,4 +157,4 @@ def box(name: str, center=(0.0, 0.0, 0.0), size=(1.0, 1.0, 1.0),
 
     b = trimesh.creation.box(extents=size)
     return Object(name, transform.points(np.asarray(b.vertices) + center), np.asarray(b.faces),
-                  material or Material())
+                  material or Material(), pose=_pose(transform))

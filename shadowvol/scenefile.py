@@ -9,6 +9,8 @@ here) `shadowvol.scenefile_write`.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import json
 import tomllib
 from pathlib import Path
@@ -18,6 +20,10 @@ import numpy as np
 from shadowvol import primitives
 from shadowvol.errors import out_of_memory_while
 from shadowvol.scene import (
+    BACKGROUND,
+    LOOK_AT_CAMERA_KEYS,
+    MATRIX_CAMERA_KEYS,
+    MIXED_FORMS,
     AreaLight,
     Camera,
     DirectionalLight,
@@ -38,6 +44,7 @@ from shadowvol.scenefile_mesh import (
     read_mesh,
     read_regular_file,
 )
+from shadowvol.scenefile_texture import texture_from_dict
 from shadowvol.scenefile_write import save_scene  # noqa: F401 (shadowvol.scenefile.save_scene)
 
 # Limits on what a scene file may make us read and build (all checked before the work):
@@ -52,22 +59,25 @@ MAX_LIST_LENGTH = 1 << 24
 # Allowed keys per table; anything else is an error (a typo must not be silently ignored).
 TOP_KEYS = {"name", "image", "camera", "ambient", "render", "materials", "lights", "objects"}
 IMAGE_KEYS = {"width", "height", "background"}
-CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near", "aperture", "focus_distance"}
+CAMERA_KEYS = {"eye", "target", "up", "fov_y", "near", "aperture", "focus_distance",
+               "fx", "fy", "cx", "cy", "camera_to_world"}
 RENDER_KEYS = {"max_depth"}
 MATERIAL_KEYS = {"ambient", "diffuse", "specular", "shininess", "reflectivity", "transparency",
-                 "ior", "emission", "roughness"}
+                 "ior", "emission", "roughness", "texture"}
 LIGHT_KEYS = {
-    "point": {"type", "position", "color", "intensity"},
-    "directional": {"type", "direction", "color", "intensity"},
-    "spot": {"type", "position", "direction", "cone_angle", "color", "intensity"},
+    "point": {"type", "position", "color", "intensity", "shadows"},
+    "directional": {"type", "direction", "color", "intensity", "shadows"},
+    "spot": {"type", "position", "direction", "cone_angle", "color", "intensity", "shadows"},
 }
-AREA_KEYS = {"type", "center", "color", "intensity", "samples", "pattern", "seed"}
+AREA_KEYS = {"type", "center", "color", "intensity", "samples", "pattern", "seed", "shadows"}
 LIGHT_KEYS.update({"rect": AREA_KEYS | {"normal", "size"}, "disk": AREA_KEYS | {"normal", "radius"},
                    "sphere": AREA_KEYS | {"radius"}})
-TRANSFORM_KEYS = {"scale", "rotation", "translation"}
-COMMON_OBJECT_KEYS = {"type", "name", "material", "transform"}
+TRANSFORM_KEYS = {"scale", "rotation", "translation", "matrix"}
+# the shadow switches (docs/CONVENTIONS.md, "Shadow switches"); an object's default: true
+SWITCH_KEYS = ("cast_shadows", "receive_shadows")
+COMMON_OBJECT_KEYS = {"type", "name", "material", "transform", "category", *SWITCH_KEYS}
 OBJECT_KEYS = {
-    "mesh": COMMON_OBJECT_KEYS | {"path", "vertices", "faces"},
+    "mesh": COMMON_OBJECT_KEYS | {"path", "vertices", "faces", "uv", "colors"},
     "sphere": COMMON_OBJECT_KEYS | {"center", "radius", "subdivisions"},
     "plane": COMMON_OBJECT_KEYS | {"point", "normal", "size"},
     "box": COMMON_OBJECT_KEYS | {"center", "size"},
@@ -164,7 +174,8 @@ def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene
     render = _table(data.get("render", {}), "render", RENDER_KEYS)
 
     materials = _table(data.get("materials", {}), "materials", None)
-    named = {name: _material(m, f"materials.{name}") for name, m in materials.items()}
+    named = {name: _material(m, f"materials.{name}", base_dir)
+             for name, m in materials.items()}
 
     lights = _list(data.get("lights", []), "lights")
     objects = _list(_required(data, "objects", ""), "objects")
@@ -183,7 +194,7 @@ def scene_from_dict(data, base_dir: Path = Path("."), default_name: str = "scene
     if not isinstance(name, str):
         raise SceneError("name", f"expected a string, got {shorten(name)}")
     return _build("", Scene,
-                  camera=_build("camera", Camera, **camera),
+                  camera=camera_from_dict(camera, "camera"),
                   objects=[part for i, o in enumerate(objects)
                            for part in _object(o, f"objects[{i}]", named, base_dir,
                                                max_mesh_bytes)],
@@ -237,8 +248,24 @@ def _build(key: str, cls, **kwargs):
         raise (exc.under(key) if key else exc) from None
 
 
-def _material(value, key: str) -> Material:
-    return _build(key, Material, **_table(value, key, MATERIAL_KEYS))
+def camera_from_dict(table: dict, key: str = "camera") -> Camera:
+    """The camera of a `[camera]` table: look-at keys (eye, target, up, fov_y) or matrix keys
+    (fx, fy, cx, cy, camera_to_world), never some of both (`Camera`); SceneError naming
+    `key.<the key>` when it is wrong."""
+    table = _table(table, key, CAMERA_KEYS)
+    look_at = [k for k in LOOK_AT_CAMERA_KEYS if k in table]
+    matrices = [k for k in MATRIX_CAMERA_KEYS if k in table]
+    if look_at and matrices:
+        raise SceneError(f"{key}.{matrices[0]}", f"given with {look_at[0]}: {MIXED_FORMS}")
+    return _build(key, Camera, **table)
+
+
+def _material(value, key: str, base_dir: Path = Path(".")) -> Material:
+    table = dict(_table(value, key, MATERIAL_KEYS))
+    if "texture" in table:   # as `save_scene` writes a texture: its file (and image)
+        table["texture"] = texture_from_dict(table["texture"], f"{key}.texture", base_dir,
+                                             read_regular_file)
+    return _build(key, Material, **table)
 
 
 def _typed(value, key: str, allowed_by_type: dict[str, set[str]], what: str) -> tuple[dict, str]:
@@ -281,7 +308,26 @@ def light_from_dict(value, key: str = "light"):
 def _object(value, key: str, named: dict[str, Material], base_dir: Path,
             max_mesh_bytes: int = MAX_MESH_FILE_BYTES) -> list[Object]:
     """The objects of one `[[objects]]` entry: one, or for a mesh file of several parts (glTF
-    nodes, the meshes of a multi-mesh file) one per part (`scenefile_mesh.read_mesh`)."""
+    nodes, the meshes of a multi-mesh file) one per part (`scenefile_mesh.read_mesh`), each
+    with the entry's shadow switches."""
+    parts = _object_parts(value, key, named, base_dir, max_mesh_bytes)
+    switches = {k: value[k] for k in SWITCH_KEYS if k in value}
+    if "category" in value:
+        category = value["category"]
+        if not isinstance(category, str) or not category:
+            raise SceneError(f"{key}.category", f"expected a class name (a non-empty "
+                                                f"string), got {given(category)}")
+        switches["category"] = category
+    elif value.get("type") == "plane":
+        switches["category"] = BACKGROUND   # a plane is the stage: a floor, a wall
+    if not switches:
+        return parts
+    return [_build(key, functools.partial(dataclasses.replace, part), **switches)
+            for part in parts]
+
+
+def _object_parts(value, key: str, named: dict[str, Material], base_dir: Path,
+                  max_mesh_bytes: int = MAX_MESH_FILE_BYTES) -> list[Object]:
     table, kind = _typed(value, key, OBJECT_KEYS, "object")
     name = table.get("name", f"{kind}{key[len('objects'):]}")
     if not isinstance(name, str):
@@ -296,10 +342,9 @@ def _object(value, key: str, named: dict[str, Material], base_dir: Path,
                              f"no material named {shorten(material)} in [materials]")
         material = named[material]
     else:
-        material = _material(material, f"{key}.material")
+        material = _material(material, f"{key}.material", base_dir)
 
-    transform = _build(f"{key}.transform", primitives.Transform,
-                       **_table(table.get("transform", {}), f"{key}.transform", TRANSFORM_KEYS))
+    transform = _transform(table.get("transform", {}), f"{key}.transform")
     args = {k: v for k, v in table.items() if k not in COMMON_OBJECT_KEYS}
     if kind == "mesh":
         if ("path" in table) == ("vertices" in table or "faces" in table):
@@ -307,17 +352,41 @@ def _object(value, key: str, named: dict[str, Material], base_dir: Path,
         if "vertices" in table:
             vertices, faces = _inline_mesh(table, key)
             return [_build(key, primitives.mesh, name=name, vertices=vertices, faces=faces,
-                           material=material, transform=transform)]
+                           material=material, transform=transform, uv=table.get("uv"),
+                           colors=table.get("colors"))]
         parts = read_mesh(table["path"], f"{key}.path", base_dir, max_mesh_bytes)
-        return [_build(key, primitives.mesh, name=part_name(name, part, len(parts)),
-                       vertices=part.vertices, faces=part.faces,
-                       material=part_material(material, part, "material" in table),
-                       transform=transform) for part in parts]
+        model = _model_key(base_dir / table["path"], transform)
+        return [dataclasses.replace(
+                    _build(key, primitives.mesh, name=part_name(name, part, len(parts)),
+                           vertices=part.vertices, faces=part.faces,
+                           material=part_material(material, part, "material" in table),
+                           transform=transform, uv=part.uv, colors=part.colors),
+                    category=Path(table["path"]).stem,
+                    model=model if part.node is None else f"{model}#{part.node}")
+                for part in parts]
     builder = {"sphere": primitives.sphere, "plane": primitives.plane, "box": primitives.box}[kind]
     if kind == "sphere":
         for required in ("center", "radius"):
             _required(table, required, key)
     return [_build(key, builder, name=name, material=material, transform=transform, **args)]
+
+
+def _transform(value, key: str) -> primitives.Transform:
+    """`{ scale, rotation, translation }` or `{ matrix = [[4x4]] }` (a similarity: rotation,
+    one scale, translation), never both."""
+    table = _table(value, key, TRANSFORM_KEYS)
+    if "matrix" in table and len(table) > 1:
+        other = sorted(set(table) - {"matrix"})[0]
+        raise SceneError(f"{key}.{other}", "given with matrix: give the matrix alone, or "
+                                           "scale, rotation and translation")
+    return _build(key, primitives.Transform, **table)
+
+
+def _model_key(path: Path, transform: primitives.Transform) -> str:
+    """The model a mesh file's object is an instance of: the file (resolved) at its scale
+    (the scale is the model's; the pose is the rest of the transform)."""
+    scale = ",".join(repr(float(x)) for x in transform.scale)
+    return f"{path.resolve()}@{scale}"
 
 
 def _inline_mesh(table: dict, key: str) -> tuple[np.ndarray, np.ndarray]:

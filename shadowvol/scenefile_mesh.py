@@ -8,6 +8,7 @@ one `MeshPart` per node instance, in the file's node order.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import os
@@ -21,9 +22,18 @@ import numpy as np
 
 from shadowvol.scene import Material, SceneError, shorten
 from shadowvol.scenefile_gltf import check_layout, check_node_tree, gltf_document
+from shadowvol.scenefile_texture import (
+    Surface,
+    gltf_surfaces,
+    obj_materials,
+    trimesh_uv,
+    vertex_colours,
+    warn_ignored,
+)
 
 MESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 MAX_MESH_FILE_BYTES = 1 << 30  # the size limit of each mesh file (`load_scene` takes others)
+AMBIENT_SHARE = 0.125  # a file's base colour as ambient: the default Material's 0.1 / 0.8
 
 
 def read_regular_file(path: Path, max_bytes: int, key: str = "", what: str | None = None
@@ -90,13 +100,18 @@ class MeshPart(NamedTuple):
 
     node     : the node's (or geometry's) name in the file, None for a single-mesh file
     vertices : (n, 3) float64;  faces : (m, 3) int64, as stored (seam duplicates kept)
-    diffuse  : (3,) float64, the part's glTF baseColorFactor (linear RGB), or None
+    diffuse  : (3,) float64, the part's glTF baseColorFactor or MTL Kd (linear RGB), or None
+    texture, uv, colors : its base-colour texture, UVs and vertex colours, or None
+                          (`scenefile_texture`)
     """
 
     node: str | None
     vertices: np.ndarray
     faces: np.ndarray
     diffuse: np.ndarray | None
+    texture: object = None
+    uv: np.ndarray | None = None
+    colors: np.ndarray | None = None
 
 
 def part_name(name: str, part: MeshPart, parts: int) -> str:
@@ -106,10 +121,14 @@ def part_name(name: str, part: MeshPart, parts: int) -> str:
 
 def part_material(material: Material, part: MeshPart, given: bool) -> Material:
     """The material of a part: the entry's when it names one (`given`), else the part's own
-    base colour as its diffuse colour, else the default."""
-    if given or part.diffuse is None:
-        return material
-    return Material(diffuse=part.diffuse)
+    base colour as its diffuse colour (and AMBIENT_SHARE of it as its ambient: the default
+    material's ratio, so that a red part stays red in shadow), else the default; with the
+    part's texture either way."""
+    if not given and part.diffuse is not None:
+        material = Material(diffuse=part.diffuse, ambient=AMBIENT_SHARE * part.diffuse)
+    if part.texture is not None:
+        material = dataclasses.replace(material, texture=part.texture)
+    return material
 
 
 def read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYTES
@@ -143,12 +162,13 @@ def read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYTE
     except Exception as exc:  # trimesh raises many types for malformed files
         raise SceneError(key, f"cannot parse mesh {path}: {type(exc).__name__}: "
                               f"{str(exc) or _failed_check(exc)}") from None
+    surfaces = _surfaces(path, data, loaded, key)
     if isinstance(loaded, trimesh.Scene):
         if not loaded.geometry:
             raise SceneError(key, f"{path} holds no geometry")
-        parts = _scene_parts(loaded, _node_order(path, data))
+        parts = _scene_parts(loaded, _node_order(path, data), surfaces)
     elif isinstance(loaded, trimesh.Trimesh):
-        parts = [_part(None, loaded, None)]
+        parts = [_part(None, loaded, None, surfaces.get(None))]
     else:
         parts = []
     parts = [p for p in parts if len(p.faces)]
@@ -198,8 +218,36 @@ def _failed_check(exc: BaseException) -> str:
     return f"{(last.line or '').strip() or 'no message'} ({where}:{last.lineno})"
 
 
-def _part(node: str | None, mesh, matrix: np.ndarray | None) -> MeshPart:
-    """A MeshPart of a trimesh.Trimesh, moved by the (4, 4) node `matrix` (None: as it is)."""
+def _surfaces(path: Path, data: bytes, loaded, key: str) -> dict:
+    """geometry name (None: a lone mesh) -> its `Surface`, by the file's format."""
+    import trimesh
+
+    suffix = path.suffix.lower()
+    geometry = loaded.geometry if isinstance(loaded, trimesh.Scene) else {None: loaded}
+    if suffix in (".glb", ".gltf") and isinstance(loaded, trimesh.Scene):
+        return gltf_surfaces(path, gltf_document(path, data) or {}, loaded, key,
+                             read_regular_file)
+    named, ignored = obj_materials(path, data, key, read_regular_file) if suffix == ".obj" \
+        else ({}, [])
+    out = {}
+    for name, mesh in geometry.items():
+        if not hasattr(mesh, "faces"):
+            continue
+        material = getattr(getattr(mesh, "visual", None), "material", None)
+        own = named.get(getattr(material, "name", None), Surface())
+        uv = trimesh_uv(mesh) if own.texture is not None else None
+        if own.texture is not None and uv is None:
+            ignored.append("map_Kd on faces without texture coordinates")
+            own = own._replace(texture=None)
+        out[name] = own._replace(uv=uv, colors=vertex_colours(mesh, linear=False))
+    warn_ignored(path, ignored)
+    return out
+
+
+def _part(node: str | None, mesh, matrix: np.ndarray | None,
+          surface: Surface | None = None) -> MeshPart:
+    """A MeshPart of a trimesh.Trimesh, moved by the (4, 4) node `matrix` (None: as it is),
+    with its `surface` (the file's base colour, texture, UVs, vertex colours)."""
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     if matrix is not None:
         vertices = vertices @ matrix[:3, :3].T + matrix[:3, 3]
@@ -210,11 +258,14 @@ def _part(node: str | None, mesh, matrix: np.ndarray | None) -> MeshPart:
         diffuse = factor[:3].astype(np.float64)
         if factor.dtype == np.uint8:  # trimesh keeps glTF's factor as 0..255
             diffuse = diffuse / 255.0
+    surface = surface or Surface()
+    if surface.diffuse is not None:   # the file's own numbers, not trimesh's 8-bit ones
+        diffuse = surface.diffuse
     return MeshPart(node, vertices, np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3),
-                    diffuse)
+                    diffuse, surface.texture, surface.uv, surface.colors)
 
 
-def _scene_parts(loaded, order: list[str]) -> list[MeshPart]:
+def _scene_parts(loaded, order: list[str], surfaces: dict) -> list[MeshPart]:
     """Every instance of a geometry in a trimesh.Scene's graph (its world transform applied),
     ordered by the node's place in `order` (the file's node names), then depth-first."""
     graph = loaded.graph
@@ -232,7 +283,8 @@ def _scene_parts(loaded, order: list[str]) -> list[MeshPart]:
         matrix, geometry = graph[node]
         mesh = loaded.geometry.get(geometry)
         if mesh is not None and hasattr(mesh, "faces"):
-            parts.append(_part(node, mesh, np.asarray(matrix, dtype=np.float64)))
+            parts.append(_part(node, mesh, np.asarray(matrix, dtype=np.float64),
+                               surfaces.get(geometry)))
     return parts
 
 

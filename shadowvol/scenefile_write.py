@@ -31,10 +31,21 @@ def scene_to_dict(scene: Scene) -> dict:
                 "specular": m.specular.tolist(), "shininess": m.shininess,
                 "reflectivity": m.reflectivity, "transparency": m.transparency, "ior": m.ior,
                 "emission": m.emission.tolist(),
-                **({"roughness": m.roughness} if m.roughness else {})}
+                **({"roughness": m.roughness} if m.roughness else {}),
+                **({} if m.texture is None else {"texture": texture(m.texture)})}
+
+    def texture(t) -> dict:
+        # its file (and image): read again on load, so the texels are the file's
+        if not t.file:
+            raise SceneError("texture", "a texture made in code has no file: save_scene "
+                                        "writes a texture as the file it was read from")
+        return {"file": t.file, **({} if t.image is None else {"image": t.image}),
+                "wrap_s": t.wrap_s, "wrap_t": t.wrap_t, "filter": t.filter}
 
     def light(lt) -> dict:
-        out = {"color": lt.color.tolist(), "intensity": lt.intensity}
+        # the shadow switches only where off: files without them stay as they were
+        out = {"color": lt.color.tolist(), "intensity": lt.intensity,
+               **({} if lt.shadows else {"shadows": False})}
         if isinstance(lt, PointLight):
             return {"type": "point", "position": lt.position.tolist(), **out}
         if isinstance(lt, DirectionalLight):
@@ -49,20 +60,30 @@ def scene_to_dict(scene: Scene) -> dict:
                 "direction": lt.direction.tolist(), "cone_angle": lt.cone_angle, **out}
 
     cam = scene.camera
+    if cam.matrix_form:   # the form it was given in (the look-at keys are derived from it)
+        view = {"fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy,
+                "camera_to_world": cam.camera_to_world.tolist()}
+    else:
+        view = {"eye": cam.eye.tolist(), "target": cam.target.tolist(),
+                "up": cam.up.tolist(), "fov_y": cam.fov_y}
     return {
         "name": scene.name,
         "ambient": scene.ambient.tolist(),
         "image": {"width": int(scene.width), "height": int(scene.height),
                   "background": scene.background.tolist()},
-        "camera": {"eye": cam.eye.tolist(), "target": cam.target.tolist(), "up": cam.up.tolist(),
-                   "fov_y": cam.fov_y, "near": cam.near,
+        "camera": {**view, "near": cam.near,
                    **({"aperture": cam.aperture} if cam.aperture else {}),
                    **({} if cam.focus_distance is None
                       else {"focus_distance": cam.focus_distance})},
         "render": {"max_depth": int(scene.max_depth)},
         "lights": [light(lt) for lt in scene.lights],
         "objects": [{"type": "mesh", "name": o.name, "vertices": o.vertices.tolist(),
-                     "faces": o.faces.tolist(), "material": material(o.material)}
+                     "faces": o.faces.tolist(), "material": material(o.material),
+                     **({} if o.uv is None else {"uv": o.uv.tolist()}),
+                     **({} if o.colors is None else {"colors": o.colors.tolist()}),
+                     **({} if o.category is None else {"category": o.category}),
+                     **{k: False for k in ("cast_shadows", "receive_shadows")
+                        if not getattr(o, k)}}
                     for o in scene.objects],
     }
 

@@ -72,6 +72,35 @@ def handled(restore: bool = True):
         if restore:
             signal.signal(signal.SIGINT, previous[0])
             signal.signal(signal.SIGTERM, previous[1])
+            # the block has answered its signal: left pending, it would stop every later atomic
+            # write of this process (`raise_pending`), in code that never saw it
+            _Pending.signum = None
+
+
+@contextlib.contextmanager
+def deferred():
+    """While inside, SIGINT and SIGTERM are remembered, not raised; on the way out the first
+    that came is raised again through the handlers that were there before (those of `handled`,
+    or Python's).  For the few lines that must not be cut in half: a child process being
+    started, which once cut is left behind (it then dies reading its half-sent start-up data,
+    printing a traceback).  Only the main thread can install handlers; elsewhere it defers
+    nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[int] = []
+
+    def remember(signum, frame):
+        came.append(signum)
+
+    previous = signal.signal(signal.SIGINT, remember), signal.signal(signal.SIGTERM, remember)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous[0])
+        signal.signal(signal.SIGTERM, previous[1])
+        if came:
+            signal.raise_signal(came[0])
 
 
 def finished() -> None:

@@ -25,12 +25,14 @@ import numpy as np
 import pytest
 
 from shadowvol.compare.maskdiff import count_edges, edge_pixels
+from shadowvol.cameras import calibration, unproject
 from shadowvol.primitives import box, plane, sphere
 from shadowvol.scene import (
     AreaLight,
     Camera,
     DirectionalLight,
     Material,
+    Object,
     PointLight,
     Scene,
     SpotLight,
@@ -84,7 +86,7 @@ CORNELL = SCENES / "cornell.toml"
 
 FALSE_ALARM = 1e-3  # probability that a correct renderer fails one statistical test function
 
-# Depth-1 path tracing vs the masks' quadrature (raytrace.direct): the midpoint rule on 4^3
+# Depth-1 path tracing vs the masks' quadrature (raytrace.outlook.direct): the midpoint rule on 4^3
 # points per emitter triangle misses or adds up to one point's share in deep penumbra; measured
 # at most 0.32% of the image's median radiance on a 4x4 block at 48x48, allowed 1%.
 QUADRATURE_ALLOWANCE = 0.01
@@ -398,3 +400,335 @@ def mixed_scene(seed: int, lights: int = 3) -> Scene:
                                intensity=0.3)]
     return Scene(camera=Camera(eye=[0, 4, 9], target=[0, 0.8, 0]), objects=objects,
                  lights=[kinds[i % 3]() for i in range(lights)], width=96, height=72)
+
+
+# ---- shadow switches (docs/CONVENTIONS.md, "Shadow switches") ---------------------------
+
+def overlapping_shadows(width: int = 80, height: int = 60) -> Scene:
+    """A floor (object 0), a post (1), a ball (2) and a card (3) above them whose shadows
+    overlap on the floor and on each other, under a point, a directional, a spot and a rect
+    area light of 4 samples."""
+    objects = [plane("floor", size=[8, 8]), box("post", [0.0, 0.75, 0.0], [0.5, 1.5, 0.5]),
+               sphere("ball", [0.7, 0.55, 0.5], 0.45, subdivisions=2),
+               plane("card", point=[0.3, 2.2, 0.3], size=[1.0, 1.0])]
+    lights = [PointLight([1.5, 4.0, 1.5], intensity=0.4),
+              DirectionalLight([-0.3, -1.0, -0.2], intensity=0.4),
+              SpotLight([-1.0, 4.0, 1.0], [0.2, -1.0, -0.2], cone_angle=40, intensity=0.4),
+              AreaLight("rect", [0.5, 4.0, 0.5], normal=[0.0, -1.0, 0.0], size=[1.0, 1.0],
+                        samples=4, intensity=0.4)]
+    return Scene(camera=Camera(eye=[0.5, 4.0, 5.0], target=[0.2, 0.6, 0.0], fov_y=45.0),
+                 objects=objects, lights=lights, width=width, height=height)
+
+
+def switched(scene: Scene, cast=(), receive=(), lights=()) -> Scene:
+    """`scene` with `cast_shadows` off for the objects `cast`, `receive_shadows` off for the
+    objects `receive` and `shadows` off for the lights `lights` (indices)."""
+    import dataclasses
+
+    objects = [dataclasses.replace(o, **({"cast_shadows": False} if k in cast else {}),
+                                   **({"receive_shadows": False} if k in receive else {}))
+               if k in cast or k in receive else o for k, o in enumerate(scene.objects)]
+    return scene.replace(objects=objects, lights=[
+        dataclasses.replace(lt, shadows=False) if k in lights else lt
+        for k, lt in enumerate(scene.lights)])
+
+
+def check_cast_switch(before, after, j: int, objects: int) -> np.ndarray:
+    """One renderer's frames (lit, lit_count, facing_count, casters, object_id, coverage)
+    before and after object j's `cast_shadows` is turned off: every bit of casters but j's
+    unchanged and j's cleared; where j alone shadowed a pixel (no other bit) it is lit by
+    every facing sample, where j's bit was not set nothing changed, elsewhere the count only
+    rose; the rest unchanged.  Returns `alone` (L, H, W) bool."""
+    from shadowvol.frame import decode_casters
+
+    bits = decode_casters(before.casters, objects)
+    others = np.delete(bits, j, axis=-1).any(-1)
+    alone = bits[..., j] & ~others
+    want = bits.copy()
+    want[..., j] = False
+    np.testing.assert_array_equal(decode_casters(after.casters, objects), want)
+    changed = after.lit_count != before.lit_count
+    assert not (changed & ~bits[..., j]).any(), "a count changed where j cast nothing"
+    np.testing.assert_array_equal(after.lit_count[alone], before.facing_count[alone])
+    assert (after.lit_count >= before.lit_count).all()
+    hard = before.samples == 1
+    np.testing.assert_array_equal(after.lit[hard], before.lit[hard] | alone[hard])
+    for name in ("coverage", "facing_count", "object_id"):
+        np.testing.assert_array_equal(getattr(after, name), getattr(before, name))
+    # the scene tests something: j alone, and j with another caster
+    assert alone.any() and (bits[..., j] & others).any()
+    return alone
+
+
+def check_receive_switch(before, after, k: int) -> np.ndarray:
+    """The same for object k's `receive_shadows` off: on k's pixels every light's count is
+    its facing count and no caster is named; everywhere else nothing changed.  Returns k's
+    pixels (H, W) bool."""
+    own = before.object_id == k + 1
+    np.testing.assert_array_equal(after.lit_count[:, own], before.facing_count[:, own])
+    assert not after.casters[:, own].any()
+    np.testing.assert_array_equal(after.lit_count[:, ~own], before.lit_count[:, ~own])
+    np.testing.assert_array_equal(after.casters[:, ~own], before.casters[:, ~own])
+    for name in ("coverage", "facing_count", "object_id"):
+        np.testing.assert_array_equal(getattr(after, name), getattr(before, name))
+    assert (before.lit_count[:, own] < before.facing_count[:, own]).any()   # k had shadow
+    return own
+
+
+def check_light_switch(before, after, i: int) -> None:
+    """The same for light i's `shadows` off: its lit is its own facing output (coverage ∧
+    n·l > 0 toward some sample, inside the cone) for every sample (lit_count ==
+    facing_count), no caster is named for it; every other light unchanged."""
+    np.testing.assert_array_equal(after.lit_count[i], before.facing_count[i])
+    np.testing.assert_array_equal(after.lit[i], before.facing_count[i] == before.samples[i])
+    if before.samples[i] == 1:
+        np.testing.assert_array_equal(after.lit[i], before.facing[i] & before.coverage)
+    assert not after.casters[i].any()
+    others = [m for m in range(len(before.lit)) if m != i]
+    for name in ("lit", "lit_count", "casters"):
+        np.testing.assert_array_equal(getattr(after, name)[others],
+                                      getattr(before, name)[others])
+    assert (before.lit_count[i] < before.facing_count[i]).any()   # it had shadow
+
+
+def camera_from_matrices(K, camera_to_world, near: float = 0.05) -> Camera:
+    """The camera a dataset user reads back from a frame's K (3, 3) and camera_to_world
+    (4, 4) (docs/CONVENTIONS.md, "Camera matrices"); `near` is not in them."""
+    return Camera(fx=K[0, 0], fy=K[1, 1], cx=K[0, 2], cy=K[1, 2],
+                  camera_to_world=camera_to_world, near=near)
+
+
+def off_centre(scene: Scene, aspect: float = 1.3, shift=(0.21, -0.16)) -> Scene:
+    """`scene` seen through non-square pixels and an off-centre principal point: its look-at
+    camera's pose, fx = `aspect` * fy (fy its focal length in pixels), and the principal
+    point moved from the image centre by `shift` (fractions of the width and the height)."""
+    cal = calibration(scene)
+    f = cal.K[1, 1]
+    camera = Camera(fx=aspect * f, fy=f, cx=scene.width * (0.5 + shift[0]),
+                    cy=scene.height * (0.5 + shift[1]), camera_to_world=cal.camera_to_world,
+                    near=scene.camera.near)
+    return scene.replace(camera=camera)
+
+
+# Cameras by matrices (`pixel_targets`): fronto-parallel squares of this half-size in pixels,
+# centred within MISS pixels of a pixel centre: a camera off by more than HALF - MISS = 0.2 px
+# (OpenCV's whole-number centres are 0.5 px off) misses the square at that pixel
+HALF, MISS = 0.3, 0.1
+# depth is the pixel's ray met with the triangle's float32 plane (CONVENTIONS, "depth")
+DEPTH_RTOL = 1e-6
+
+
+def rotation(axis, degrees: float) -> np.ndarray:
+    """(3, 3) float64 rotation about `axis` (Rodrigues)."""
+    k = np.asarray(axis, np.float64) / np.linalg.norm(axis)
+    a = np.radians(degrees)
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(a) * kx + (1 - np.cos(a)) * kx @ kx
+
+
+def project(K: np.ndarray, camera_to_world: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(n, 3) world points -> (n, 3) float64 (u, v, depth), plainly from the definitions: the
+    OpenGL camera coordinates by solving with camera_to_world, flipped to OpenCV's, times K."""
+    gl = np.linalg.solve(camera_to_world, np.c_[points, np.ones(len(points))].T).T[:, :3]
+    cv = gl * [1.0, -1.0, -1.0]
+    uvw = cv @ K.T
+    return np.c_[uvw[:, :2] / uvw[:, 2:], cv[:, 2]]
+
+
+def pixel_targets(seed: int, width: int = 64, height: int = 48, n: int = 8):
+    """A scene of `n` small squares facing a turned camera with fx != fy and an off-centre
+    principal point, each square centred near the centre of a known pixel, and the squares'
+    centres (n, 3), the pixels (n, 2) (x, y) and the camera's K."""
+    rng = np.random.default_rng(seed)
+    m = np.eye(4)
+    m[:3, :3] = rotation(rng.normal(size=3), rng.uniform(20, 160))
+    m[:3, 3] = rng.uniform(-5, 5, 3)
+    fx, fy = rng.uniform(50, 90), rng.uniform(50, 90)
+    cx, cy = width * rng.uniform(0.2, 0.8), height * rng.uniform(0.2, 0.8)
+    camera = Camera(fx=fx, fy=fy, cx=cx, cy=cy, camera_to_world=m)
+    K = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1.0]])
+    pixels = np.stack([rng.choice(np.arange(2, width - 2), n, replace=False),
+                       rng.choice(np.arange(2, height - 2), n, replace=False)], axis=1)
+    uv = pixels + 0.5 + rng.uniform(-MISS, MISS, (n, 2))
+    z = rng.uniform(2.0, 9.0, n)
+    right, up = m[:3, 0], m[:3, 1]
+    objects, centres = [], []
+    for k in range(n):
+        gl = np.array([(uv[k, 0] - cx) / fx * z[k], -(uv[k, 1] - cy) / fy * z[k], -z[k], 1.0])
+        c = (m @ gl)[:3]
+        hx, hy = HALF * z[k] / fx * right, HALF * z[k] / fy * up
+        corners = [c - hx - hy, c + hx - hy, c + hx + hy, c - hx + hy]
+        objects.append(Object(f"square{k}", corners, [[0, 1, 2], [0, 2, 3]]))
+        centres.append(c)
+    scene = Scene(camera=camera, objects=objects, lights=[DirectionalLight(-m[:3, 2])],
+                  width=width, height=height)
+    return scene, np.array(centres), pixels, K
+
+
+def check_seen(K, camera_to_world, centres, pixels, object_id, depth, normal) -> None:
+    """Each square k is seen at its pixel, at its depth, with its normal; unprojected, the
+    pixel gives back a point of the square (within its half-size)."""
+    uvz = project(K, camera_to_world, centres)
+    np.testing.assert_array_equal(np.floor(uvz[:, :2]).astype(int), pixels)
+    xs, ys = pixels[:, 0], pixels[:, 1]
+    assert object_id[ys, xs].tolist() == list(range(1, len(pixels) + 1))
+    np.testing.assert_allclose(depth[ys, xs], uvz[:, 2], rtol=DEPTH_RTOL)
+    back = camera_to_world[:3, 2]
+    np.testing.assert_allclose(np.abs(normal[ys, xs] @ back), 1.0, rtol=1e-6)
+    points = unproject(K, camera_to_world, depth)[ys, xs]
+    pixel_size = uvz[:, 2] / min(K[0, 0], K[1, 1])
+    assert (np.linalg.norm(points - centres, axis=1) <= (HALF + MISS) * 1.5 * pixel_size).all()
+    # and nothing else: a square is 0.6 px wide, so it covers at most 4 pixels
+    assert 0 < (object_id > 0).sum() <= 4 * len(pixels)
+
+
+# ---------------------------------------------------------------------------------------------
+# Textured meshes, written by hand (the files the loaders read, made in the tests themselves)
+# ---------------------------------------------------------------------------------------------
+
+# The raster-vs-ray image budget of `test_soft_raster.test_image_is_the_ray_tracers_direct_light`:
+# a channel more than IMAGE_TOL apart in at most IMAGE_BUDGET of the pixels (float32 against
+# float64 shading of the same point)
+IMAGE_TOL, IMAGE_BUDGET = 1e-4, 0.002
+# a quad on the ground (y = 0), its UVs (glTF's convention) reaching past [0, 1] so that the
+# wrap modes show, and the GL enums of glTF's samplers
+QUAD = np.array([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], np.float32)
+QUAD_UV = np.array([[-0.3, -0.2], [1.37, -0.2], [1.37, 1.61], [-0.3, 1.61]], np.float32)
+GL_NEAREST, GL_LINEAR, GL_REPEAT, GL_CLAMP, GL_MIRROR = 9728, 9729, 10497, 33071, 33648
+
+
+def png_bytes(texels: np.ndarray) -> bytes:
+    import io
+
+    from PIL import Image
+
+    buffer = io.BytesIO()
+    Image.fromarray(texels).save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
+def textured_glb(path: Path, texels: np.ndarray, *, wrap=GL_REPEAT, filt=GL_NEAREST,
+                 factor=(1.0, 1.0, 1.0, 1.0), material: dict | None = None,
+                 image_uri: str | None = None, vertices=QUAD, uv=QUAD_UV,
+                 colours=None) -> Path:
+    """A GLB of one quad (two triangles) with a baseColorTexture of `texels` (h, w, 3) uint8
+    (in the file, or at `image_uri` beside it), its sampler's wrap (both axes) and filter,
+    `factor` the baseColorFactor, `material` more keys of the material, `colours` (4, 3)
+    float32 its COLOR_0."""
+    chunks, views = [], []
+
+    def view(data: bytes) -> int:
+        views.append({"buffer": 0, "byteOffset": sum(len(c) for c in chunks),
+                      "byteLength": len(data)})
+        chunks.append(data + b"\0" * (-len(data) % 4))
+        return len(views) - 1
+
+    indices = np.array([0, 1, 2, 0, 2, 3], np.uint16)
+    accessors = [
+        {"bufferView": view(np.asarray(vertices, np.float32).tobytes()), "componentType": 5126,
+         "count": 4, "type": "VEC3", "min": np.min(vertices, 0).tolist(),
+         "max": np.max(vertices, 0).tolist()},
+        {"bufferView": view(np.asarray(uv, np.float32).tobytes()), "componentType": 5126,
+         "count": 4, "type": "VEC2"},
+        {"bufferView": view(indices.tobytes()), "componentType": 5123, "count": 6,
+         "type": "SCALAR"}]
+    attributes = {"POSITION": 0, "TEXCOORD_0": 1}
+    if colours is not None:
+        attributes["COLOR_0"] = len(accessors)
+        accessors.append({"bufferView": view(np.asarray(colours, np.float32).tobytes()),
+                          "componentType": 5126, "count": 4, "type": "VEC3"})
+    image = {"uri": image_uri} if image_uri else \
+        {"bufferView": view(png_bytes(texels)), "mimeType": "image/png"}
+    if image_uri and texels is not None:
+        (path.parent / image_uri).write_bytes(png_bytes(texels))
+    document = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "quad", "mesh": 0}],
+        "meshes": [{"name": "quad", "primitives": [{
+            "attributes": attributes, "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                                "baseColorFactor": list(factor)},
+                       **(material or {})}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"magFilter": filt, "minFilter": filt, "wrapS": wrap, "wrapT": wrap}],
+        "images": [image], "accessors": accessors, "bufferViews": views,
+        "buffers": [{"byteLength": sum(len(c) for c in chunks)}]}
+    text = json.dumps(document).encode()
+    text += b" " * (-len(text) % 4)
+    binary = b"".join(chunks)
+    body = (len(text).to_bytes(4, "little") + b"JSON" + text
+            + len(binary).to_bytes(4, "little") + b"BIN\0" + binary)
+    path.write_bytes(b"glTF" + (2).to_bytes(4, "little")
+                     + (12 + len(body)).to_bytes(4, "little") + body)
+    return path
+
+
+def textured_scene_file(folder: Path, mesh: str, width: int = 96, height: int = 80) -> Path:
+    """A scene file in `folder` of the mesh file `mesh` (a name in `folder`) seen from above
+    at an angle, lit by one point light."""
+    path = folder / "textured.toml"
+    path.write_text(f'''[image]
+width = {width}
+height = {height}
+[camera]
+eye = [0.3, 2.2, 1.9]
+target = [0.0, 0.0, 0.0]
+fov_y = 50
+[[lights]]
+type = "point"
+position = [0.5, 3.0, 1.0]
+intensity = 0.9
+[[objects]]
+type = "mesh"
+path = "{mesh}"
+''')
+    return path
+
+
+def pose_scenes(folder: Path) -> tuple[Path, Path]:
+    """Two scene files sharing classes and a mesh file (an asymmetric crate, `crate.obj`):
+    A: floor, two crates (a matrix and an Euler transform), a ball (category "ball");
+    B: floor, the same ball, a box of category "crate" (another model of that class), a crate
+    tilted by a matrix.  Planes are the background."""
+    corners = np.array([[x, y, z] for x in (-0.3, 0.3) for y in (-0.17, 0.17)
+                        for z in (-0.12, 0.12)])
+    corners[7] += [0.2, 0.05, 0.0]   # no symmetry: a wrong turn shows
+    faces = [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+             [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
+    (folder / "crate.obj").write_text(
+        "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in corners.tolist()) +
+        "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces))
+    turn = rotation([0, 1, 0], 35.0)
+    tilt = rotation([1, 0, 0], 25.0) @ rotation([0, 0, 1], 15.0)
+    matrix_a = [[*turn[i], [-0.8, 0.2, 0.0][i]] for i in range(3)] + [[0, 0, 0, 1]]
+    matrix_b = [[*tilt[i], [-0.7, 0.45, 0.2][i]] for i in range(3)] + [[0, 0, 0, 1]]
+    head = ('[camera]\neye = [0.0, 2.2, 4.5]\ntarget = [0.0, 0.3, 0.0]\nfov_y = 45.0\n\n'
+            '[[lights]]\ntype = "point"\nposition = [1.5, 3.0, 1.5]\n\n'
+            '[[objects]]\nname = "floor"\ntype = "plane"\nsize = [6.0, 6.0]\n\n')
+    ball = ('[[objects]]\nname = "ball"\ntype = "sphere"\ncenter = [0.0, 0.3, -0.6]\n'
+            'radius = 0.3\nsubdivisions = 2\ncategory = "ball"\n\n')
+    a = (head + '[[objects]]\nname = "crate left"\ntype = "mesh"\npath = "crate.obj"\n'
+         f'transform = {{ matrix = {json.dumps(matrix_a)} }}\n\n'
+         '[[objects]]\nname = "crate right"\ntype = "mesh"\npath = "crate.obj"\n'
+         'transform = { rotation = [0.0, -60.0, 0.0], translation = [0.7, 0.2, 0.3] }\n\n'
+         + ball)
+    b = (head + ball + '[[objects]]\nname = "box"\ntype = "box"\ncenter = [0.8, 0.25, 0.0]\n'
+         'size = [0.4, 0.5, 0.4]\ncategory = "crate"\n\n'
+         '[[objects]]\nname = "tilted crate"\ntype = "mesh"\npath = "crate.obj"\n'
+         f'transform = {{ matrix = {json.dumps(matrix_b)} }}\n')
+    (folder / "poses_a.toml").write_text(a)
+    (folder / "poses_b.toml").write_text(b)
+    return folder / "poses_a.toml", folder / "poses_b.toml"
+
+
+def pose_jobs(folder: Path) -> list[dict]:
+    """Two jobs of `pose_scenes`: A rasterized, B ray traced with its objects jittered."""
+    a, b = pose_scenes(folder)
+    return [{"name": "crates", "scene": str(a), "size": [64, 48], "outputs": ["image"],
+             "cameras": {"orbit": {"center": [0.0, 0.3, 0.0], "radius": 4.5,
+                                   "elevation": 25.0, "sweep": 50.0, "frames": 2}}},
+            {"name": "tossed", "scene": str(b), "size": [64, 48], "renderer": "raytrace",
+             "max_depth": 1, "seed": 3, "outputs": ["image"],
+             "jitter": {"objects": {"translation": 0.15, "rotation": 40.0}},
+             "cameras": [{"eye": [0.5, 2.4, 4.2], "target": [0.0, 0.3, 0.0]},
+                         {"eye": [-1.5, 2.0, 4.0], "target": [0.0, 0.3, 0.0]}]}]

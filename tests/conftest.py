@@ -52,8 +52,8 @@ def _no_gl_unless_marked(request, monkeypatch):
 
 @pytest.fixture(params=["numpy", "numba"])
 def path_shading(request, monkeypatch):
-    """The path tracer's per-bounce shading (`raytrace.pathtrace.shading`), set for the test
-    through $SHADOWVOL_PATHTRACE: a test that takes this runs on both; the numba one skips,
+    """The path tracer's per-bounce shading (`raytrace.outlook.path.pathtrace.shading`), set for the
+    test through $SHADOWVOL_PATHTRACE: a test that takes this runs on both; the numba one skips,
     saying why, where numba is not installed (the `fast` extra; the `test` extra has it)."""
     if request.param == "numba":
         pytest.importorskip("numba", reason="the numba shading needs numba: "

@@ -24,13 +24,13 @@ from builders import TEST_OUTPUT
 from hypothesis import note
 
 import raytrace
-from raytrace.camera import primary_rays
+from raytrace.camera import pixel_focal, primary_rays
 from raytrace.tolerances import LIFT_HEIGHTS, frame_origin, light_margin, shadow_height
 from shadowvol.compare.maskdiff import diff_image, edge_pixels, mask_report
 from shadowvol.io import save_png
 from shadowvol.pictures import masks_image
 from shadowvol.scenefile import save_scene
-from shadowvol.fields import caster_words
+from shadowvol.frame import caster_words
 from shadowvol.scene import DirectionalLight, Scene, SpotLight, hard_lights
 
 # The checker's own float64 tolerance: a triangle met at t <= EXACT_T_MIN of the segment (or,
@@ -72,6 +72,7 @@ def exact_masks(scene: Scene, rows: slice = slice(None), cols: slice = slice(Non
     pix = np.arange(H * W).reshape(H, W)[rows, cols]
     shape = pix.shape
     tri, first, covered, p, n = _primary(scene, pix.reshape(-1))
+    casts, receives = _switches(scene, first)
     lit = np.zeros((len(scene.lights), len(first)), bool)
     idx = np.flatnonzero(covered)
     for i, light in enumerate(scene.lights):
@@ -85,13 +86,15 @@ def exact_masks(scene: Scene, rows: slice = slice(None), cols: slice = slice(Non
         if isinstance(light, SpotLight):
             away = -seg
             ok &= away @ light.direction >= light.cos_cutoff * np.linalg.norm(away, axis=1)
+        lit[i] = ok   # blocked below, where the light and the pixel's object take shadows
         for c in _chunks(len(idx), len(tri)):
             k = idx[c]
-            k = k[ok[k]]
+            k = k[ok[k] & receives[k] & light.shadows]
             if len(k) == 0:
                 continue
             t = _ray_triangles(p[k], np.ascontiguousarray(seg[k]), tri)
             t[np.arange(len(k)), first[k]] = np.inf  # skip only the visible triangle
+            t[:, ~casts] = np.inf  # an object that casts no shadow blocks nothing
             blocked = ((t > EXACT_T_MIN) & (t < t_max)).any(axis=1)
             lit[i, k] = ~blocked
     return lit.reshape((-1,) + shape), covered.reshape(shape)
@@ -253,6 +256,16 @@ def check_exact(request, scene: Scene, rows: slice = slice(None), cols: slice = 
     return report
 
 
+def _switches(scene: Scene, first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The shadow switches (CONVENTIONS.md, "Shadow switches") as plainly as possible: casts
+    (M,) bool, each triangle's object casts shadows; receives (P,) bool, the object the pixel
+    sees (`first` (P,), −1: none) receives them."""
+    _, _, owner = scene.triangles()
+    casts = np.array([o.cast_shadows for o in scene.objects], bool)
+    receives = np.array([o.receive_shadows for o in scene.objects], bool)
+    return casts[owner], receives[owner[np.maximum(first, 0)]]
+
+
 def _primary(scene: Scene, pixels: np.ndarray | None = None):
     """The nearest triangle in float64 of `pixels` (flat indices, default every pixel): tri
     (M, 3, 3), first (P,) (−1: nothing), covered (P,), p (P, 3) the hit points, n (P, 3) their
@@ -284,6 +297,7 @@ def exact_casters(scene: Scene) -> dict[str, np.ndarray]:
     cone; object j casts when one of its triangles meets the segment (t in (EXACT_T_MIN,
     t_max), the visible triangle skipped), every triangle of every object tried."""
     tri, first, covered, p, n = _primary(scene)
+    casts, receives = _switches(scene, first)
     _, _, owner = scene.triangles()
     objects, L, P = len(scene.objects), len(scene.lights), len(p)
     starts = np.searchsorted(owner, np.arange(objects))   # each object's first triangle
@@ -302,11 +316,13 @@ def exact_casters(scene: Scene) -> dict[str, np.ndarray]:
                 away = -seg
                 ok &= away @ sample.direction >= sample.cos_cutoff * np.linalg.norm(away, axis=1)
             facing_count[i] += ok
-            idx = np.flatnonzero(ok)
+            lit_count[i] += ok & ~(receives & sample.shadows)   # nothing blocks these
+            idx = np.flatnonzero(ok & receives & sample.shadows)
             for c in _chunks(len(idx), len(tri)):
                 k = idx[c]
                 t = _ray_triangles(p[k], np.ascontiguousarray(seg[k]), tri)
                 t[np.arange(len(k)), first[k]] = np.inf
+                t[:, ~casts] = np.inf
                 between = (t > EXACT_T_MIN) & (t < t_max)
                 per_object = np.logical_or.reduceat(between, starts, axis=1)   # (k, objects)
                 lit_count[i, k] += ~per_object.any(axis=1)
@@ -396,7 +412,8 @@ def gl_vertex_ties(scene: Scene, precision: float = 1 / 64) -> np.ndarray:
     H, W = scene.height, scene.width
     o, d = primary_rays(scene.camera, W, H, unit=True)
     eye = np.asarray(scene.camera.eye, np.float64)
-    pixel = 2.0 * np.tan(np.radians(scene.camera.fov_y) / 2.0) / H
+    fx, fy, _, _ = pixel_focal(scene.camera, W, H)
+    pixel = 1.0 / min(fx, fy)   # the larger side of a pixel, at unit depth
     out = np.zeros(H * W, bool)
     rel = tri - eye
     normals = [np.cross(rel[:, i], rel[:, (i + 1) % 3]) for i in range(3)]

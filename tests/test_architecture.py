@@ -29,7 +29,9 @@ FLOORS = {
     "shadowvol.scenefile": (3, "model"),
     "shadowvol.scenefile_mesh": (3, "model"),
     "shadowvol.scenefile_gltf": (3, "model"),
+    "shadowvol.scenefile_texture": (3, "model"),
     "shadowvol.scenefile_write": (3, "model"),
+    "shadowvol.trimesh_scene": (3, "model"),
     "shadowvol.resources": (3, "model"),
     "shadowvol.memory": (3, "model"),
     "shadowvol.scene": (2, "model"),
@@ -37,9 +39,10 @@ FLOORS = {
     "shadowvol.cameras": (2, "model"),
     "shadowvol.primitives": (2, "model"),
     "shadowvol.arealights": (2, "model"),
-    "shadowvol.fields": (2, "model"),
+    "shadowvol.frame": (2, "model"),
     "shadowvol.planes": (2, "model"),
     "shadowvol.checks": (2, "model"),
+    "shadowvol.textures": (2, "model"),
     "shadowvol.io": (1, "base"),
     "shadowvol.pictures": (1, "base"),
     "shadowvol.display": (1, "base"),
@@ -49,11 +52,18 @@ FLOORS = {
 }
 # Entry files: `python -m shadowvol` and `python -m raytrace` start the command line.
 ENTRY_FILES = {"shadowvol.__main__", "raytrace.__main__"}
-# What the witness may import of this project: the model it shares with the rasterizer.
+# What the witness may import of this project: the model it shares with the rasterizer (and
+# `memory`, the GL-free vocabulary each renderer gives its own memory estimate in).
 RAYTRACE_MAY_IMPORT = {"shadowvol", "shadowvol.scene", "shadowvol.lights", "shadowvol.cameras",
-                       "shadowvol.primitives", "shadowvol.arealights", "shadowvol.fields",
+                       "shadowvol.primitives", "shadowvol.arealights", "shadowvol.frame",
                        "shadowvol.planes", "shadowvol.checks", "shadowvol.errors", "shadowvol.io",
-                       "shadowvol.signals"}
+                       "shadowvol.signals", "shadowvol.memory",
+                       "shadowvol.textures"}
+# Global illumination, beyond the witness: the rest of raytrace/ (the witness: masks, groundtruth,
+# soft, backends, intersect, tolerances, camera) never imports it; the package's door
+# (`raytrace/__init__.py`, which names `raytrace.render` lazily) may.
+OUTLOOK = "raytrace.outlook"
+WITNESS_DOOR = {"raytrace"}
 # Third-party and standard modules that only one folder may import.
 CONFINED = {"moderngl": "shadowvol/raster/", "glcontext": "shadowvol/raster/",
             "OpenGL": "shadowvol/raster/", "ctypes": "shadowvol/raster/",
@@ -207,6 +217,21 @@ def witness_imports(root: Path) -> list[str]:
     return out
 
 
+def witness_apart(root: Path) -> list[str]:
+    found = modules(root)
+    out = []
+    for name, path in found.items():
+        if (not name.startswith("raytrace") or name == OUTLOOK or name.startswith(OUTLOOK + ".")
+                or name in ENTRY_FILES | WITNESS_DOOR):
+            continue
+        for target, line in imports_of(name, path, found):
+            if target == OUTLOOK or target.startswith(OUTLOOK + "."):
+                out.append(f"{_rel(root, path)}:{line}: the witness imports {target}; "
+                           f"{OUTLOOK.replace('.', '/')}/ (global illumination) may import the "
+                           "witness, never the reverse")
+    return out
+
+
 def oversized(root: Path) -> list[str]:
     out = []
     for path in modules(root, SIZED).values():
@@ -338,7 +363,7 @@ def broken_references(root: Path) -> list[str]:
 
 
 RULES = [unplaced_modules, upward_imports, import_cycles, confined_imports, witness_imports,
-         oversized, long_docs, broken_references]
+         witness_apart, oversized, long_docs, broken_references]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -375,7 +400,10 @@ def _tree(tmp_path: Path, files: dict[str, str]) -> Path:
 
 def test_a_clean_planted_tree_keeps_every_rule(tmp_path):
     root = _tree(tmp_path, {"shadowvol/raster/passes.py": "import moderngl\n"
-                                                          "from shadowvol.scene import x\n"})
+                                                          "from shadowvol.scene import x\n",
+                            "raytrace/masks.py": "", "raytrace/outlook/__init__.py": "",
+                            "raytrace/outlook/path/pathtrace.py": "from raytrace.masks import x\n"
+                                                                  "from raytrace import masks\n"})
     assert [v for rule in RULES for v in rule(root)] == []
 
 
@@ -403,6 +431,17 @@ PLANTED = {
     "witness": (witness_imports, {"raytrace/x.py": "from shadowvol import scenefile\n",
                                   "shadowvol/scenefile.py": ""},
                 "raytrace/x.py:1: the witness imports shadowvol.scenefile", "only the model"),
+    "witness apart": (witness_apart,
+                      {"raytrace/masks.py": "from raytrace.outlook import whitted\n",
+                       "raytrace/outlook/__init__.py": "", "raytrace/outlook/whitted.py": ""},
+                      "raytrace/masks.py:1: the witness imports raytrace.outlook.whitted",
+                      "never the reverse"),
+    "witness apart, lazily": (witness_apart,
+                              {"raytrace/soft.py": "def f():\n"
+                                                   "    import raytrace.outlook.path.sobol\n",
+                               "raytrace/outlook/path/sobol.py": ""},
+                              "raytrace/soft.py:2: the witness imports raytrace.outlook.path.sobol",
+                              "global illumination"),
     "unplaced": (unplaced_modules, {"shadowvol/util.py": ""},
                  "shadowvol/util.py: module shadowvol.util has no floor", "FLOORS"),
     "long module": (oversized, {"shadowvol/scene.py": "x = 1\n" * 501},

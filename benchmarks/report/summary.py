@@ -36,6 +36,15 @@ def header(results: dict, md_path: Path, png_path: Path) -> list[str]:
     add(f"- **Versions**: Python {m['python']}, " +
         ", ".join(f"{k} {v}" for k, v in m["versions"].items()))
     add(f"- **Code**: commit {m['commit']}; run {m['date']}, {results['wall_s']:.0f} s wall")
+    previous = results.get("previous")
+    if previous is not None:
+        worse = previous["regressions"]
+        add(f"- **Against the previous run** (commit {previous['commit']}, "
+            "`benchmarks.regressions`): " +
+            (f"{len(worse)} ratios worse by more than 15 %: " +
+             "; ".join(f"{g['name']} {g['old']:.3g} → {g['new']:.3g}" for g in worse[:8]) +
+             (f"; and {len(worse) - 8} more (results.json)" if len(worse) > 8 else "")
+             if worse else "no ratio worse by more than 15 %."))
     ls, le = m["load_start"], m["load_end"]
     add(f"- **Load** (1/5/15-min load average; other sessions share the 2 cores): at the start "
         f"{ls[0]:.2f} / {ls[1]:.2f} / {ls[2]:.2f}, at the end {le[0]:.2f} / {le[1]:.2f} / "
@@ -67,6 +76,11 @@ def guide() -> list[str]:
         "minutes, so load slows all of them alike; absolute times are noisier than ratios.  "
         "\"x / plain\" is in plain frames (1.5: half again a plain frame), a speed-up is theirs "
         "/ ours, a per-round ratio the median of each round's own.",
+        "- **Against the previous run**: before it replaces results.json, `benchmarks.run` "
+        "compares every ratio with the previous run's and prints (and lists at the top) each "
+        "one worse by more than 15 %, naming its benchmark and both commits "
+        "(`benchmarks/regressions.py`; `python -m benchmarks.regressions NEW OLD` compares two "
+        "results.json files).",
         "- **Floors and bounds**: a floor is the least GL work any exact frame of its kind does "
         "on the same triangles (`plain.DepthFloor`, `MaskFloor`, `ImageFloor`); floor + volume "
         "pass bounds every shadow-volume frame, so where a bound exceeds a target no such frame "

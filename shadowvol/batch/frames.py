@@ -1,9 +1,10 @@
 """The frames of a job: cameras from a list, an orbit (turntable) or a path of key poses;
 stable ids; the seeded per-frame generator; the frame specs the workers render.
 
-A frame spec is a plain dict (JSON types only), made in the parent from the job alone, so that
-every process given it renders the same frame: its id `<job>/<index:06d>`, the camera, the
-light overrides, the size, the outputs, the renderer and its options, the seed and jitter.
+A frame spec is a `spec.FrameSpec` (typed, frozen, of JSON data), made in the parent from the
+job alone, so that every process given it renders the same frame: its id `<job>/<index:06d>`,
+the camera, the light overrides, the size, the outputs, the renderer and its options, the seed
+and jitter.
 """
 
 from __future__ import annotations
@@ -15,9 +16,11 @@ import math
 
 import numpy as np
 
-from shadowvol.scene import (AreaLight, Camera, DirectionalLight, SceneError, is_number,
-                             reject_unknown_keys, shorten)
-from shadowvol.scenefile import CAMERA_KEYS
+from shadowvol.batch.spec import FrameSpec
+from shadowvol.scene import (LOOK_AT_CAMERA_KEYS, MIXED_FORMS, AreaLight, Camera,
+                             DirectionalLight, SceneError, is_number, reject_unknown_keys,
+                             shorten)
+from shadowvol.scenefile import CAMERA_KEYS, MATRIX_CAMERA_KEYS
 
 ORBIT_KEYS = {"center", "radius", "elevation", "frames", "start", "sweep", "up", "fov_y",
               "near"}
@@ -68,12 +71,17 @@ def _optics(table: dict, key: str) -> dict:
     return out
 
 
-def camera_dict(value, key: str) -> dict:
-    """One camera of a job: eye and target, and up/fov_y/near where given; checked by building
-    the Camera (the scene's fov_y, near and up fill what is left out, in the worker)."""
+def camera_dict(value, key: str, matrices: bool = True) -> dict:
+    """One camera of a job: eye and target, and up/fov_y/near where given (the scene's fov_y,
+    near and up fill what is left out, in the worker); or, with `matrices`, fx, fy, cx, cy,
+    camera_to_world and near where given (`Camera`'s matrix form).  Checked by building the
+    Camera."""
     if not isinstance(value, dict):
         raise SceneError(key, f"expected a camera table, got {shorten(value)}")
-    reject_unknown_keys(value, CAMERA_KEYS, key)
+    given = [k for k in MATRIX_CAMERA_KEYS if k in value]
+    if given and matrices:
+        return _matrix_camera(value, key, given)
+    reject_unknown_keys(value, CAMERA_KEYS - set(MATRIX_CAMERA_KEYS), key)   # look-at only
     for need in ("eye", "target"):
         if need not in value:
             raise SceneError(f"{key}.{need}", "missing")
@@ -84,6 +92,26 @@ def camera_dict(value, key: str) -> dict:
     except SceneError as exc:
         raise exc.under(key) from None
     return cam
+
+
+def _matrix_camera(value: dict, key: str, given: list[str]) -> dict:
+    """A camera of intrinsics and pose: fx, fy, cx, cy, camera_to_world, near where given."""
+    look_at = [k for k in LOOK_AT_CAMERA_KEYS if k in value]
+    if look_at:
+        raise SceneError(f"{key}.{given[0]}", f"given with {look_at[0]}: {MIXED_FORMS}")
+    reject_unknown_keys(value, set(MATRIX_CAMERA_KEYS) | {"near"}, key)
+    for need in MATRIX_CAMERA_KEYS:
+        if need not in value:
+            raise SceneError(f"{key}.{need}", "missing (a camera given by intrinsics needs "
+                                              "fx, fy, cx, cy and camera_to_world)")
+    cam = {name: _number(value[name], f"{key}.{name}") for name in ("fx", "fy", "cx", "cy")}
+    if "near" in value:
+        cam["near"] = _number(value["near"], f"{key}.near")
+    try:
+        camera = Camera(**cam, camera_to_world=value["camera_to_world"])
+    except SceneError as exc:
+        raise exc.under(key) from None
+    return {**cam, "camera_to_world": camera.camera_to_world.tolist()}
 
 
 def orbit(value) -> tuple[dict, ...]:
@@ -127,7 +155,7 @@ def path(value) -> tuple[dict, ...]:
     keys = value.get("keys")
     if not isinstance(keys, list) or len(keys) < 2:
         raise SceneError(f"{key}.keys", "expected a list of at least 2 cameras")
-    poses = [camera_dict(c, f"{key}.keys[{i}]") for i, c in enumerate(keys)]
+    poses = [camera_dict(c, f"{key}.keys[{i}]", matrices=False) for i, c in enumerate(keys)]
     for name in ("up", "fov_y", "near"):
         if len({name in p for p in poses}) != 1:
             raise SceneError(f"{key}.keys", f"give {name} in every key or in none")
@@ -143,7 +171,7 @@ def path(value) -> tuple[dict, ...]:
             cam["fov_y"] = a["fov_y"] * (1 - u) + b["fov_y"] * u
         if "near" in a:
             cam["near"] = a["near"]
-        cameras.append(camera_dict(cam, f"{key} frame {i}"))
+        cameras.append(camera_dict(cam, f"{key} frame {i}", matrices=False))
     return tuple(cameras)
 
 
@@ -160,7 +188,8 @@ def _in_ball(rng: np.random.Generator, radius: float) -> np.ndarray:
 
 
 def jittered(camera: Camera, lights: tuple, jitter: dict, seed: int, index: int):
-    """(camera, lights) of a frame with `jitter` applied: the eye, then each point/spot light's
+    """(camera, lights) of a frame with `jitter` applied: the eye (a look-at camera's eye, its
+    target kept; a matrix camera's whole pose, its axes kept), then each point/spot light's
     position and each area light's centre (the whole emitter: its samples move with it), moved
     by offsets drawn in that order from `frame_rng(seed, index)`."""
     if not jitter:
@@ -168,9 +197,12 @@ def jittered(camera: Camera, lights: tuple, jitter: dict, seed: int, index: int)
     import dataclasses
 
     rng = frame_rng(seed, index)
+    offset = _in_ball(rng, jitter.get("eye", 0.0))
     with _jitter_named("eye", jitter, "the eye"):
-        camera = dataclasses.replace(camera, eye=camera.eye + _in_ball(rng, jitter.get("eye",
-                                                                                       0.0)))
+        if camera.matrix_form:   # the whole pose moves: a matrix camera has no target to keep
+            camera = camera.translated(offset)
+        else:
+            camera = dataclasses.replace(camera, eye=camera.eye + offset)
     moved = []
     for i, light in enumerate(lights):
         with _jitter_named("lights", jitter, f"lights[{i}]"):
@@ -197,19 +229,20 @@ def _jitter_named(key: str, jitter: dict, what: str):
                                           f"{exc.key}: {exc.problem}") from None
 
 
-def specs(job, scene_key: str) -> list[dict]:
+def specs(job, scene_key: str) -> list[FrameSpec]:
     """The frame specs of a checked `jobs.Job`, in index order."""
-    common = {"job": job.name, "scene": scene_key,
-              "lights": None if job.lights is None else list(job.lights),
-              "size": None if job.size is None else list(job.size),
-              "outputs": list(job.outputs), "renderer": job.renderer, "method": job.method,
-              "max_depth": job.max_depth, "seed": job.seed, "jitter": dict(job.jitter)}
-    return [{"id": frame_id(job.name, i), "index": i, "camera": camera, **common}
+    return [FrameSpec(id=frame_id(job.name, i), index=i, job=job.name, scene=scene_key,
+                      camera=camera,
+                      lights=None if job.lights is None else tuple(job.lights),
+                      size=None if job.size is None else tuple(job.size),
+                      outputs=tuple(job.outputs), renderer=job.renderer, method=job.method,
+                      max_depth=job.max_depth, seed=job.seed, jitter=dict(job.jitter))
             for i, camera in enumerate(job.cameras)]
 
 
-def spec_hash(spec: dict, scene_sha256: str) -> str:
+def spec_hash(spec: FrameSpec, scene_sha256: str) -> str:
     """sha256 of everything that decides a frame's files: the spec and the scene file's bytes
     (a mesh file that changes under an unchanged scene file is not seen)."""
-    text = json.dumps({**spec, "scene": scene_sha256}, sort_keys=True, separators=(",", ":"))
+    text = json.dumps({**spec.as_dict(), "scene": scene_sha256}, sort_keys=True,
+                      separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()

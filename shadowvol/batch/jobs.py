@@ -9,8 +9,10 @@ Keys (only `scene` and `cameras` are required):
   `<name>/<index:06d>`.  Default: the scene file's name without its suffix.
 - scene: a scene file (relative to the job file's folder), or from Python a `Scene`.
 - cameras: a list of cameras ({"eye", "target", and optionally "up", "fov_y", "near": the
-  scene camera's where left out}), or {"orbit": {...}} (a turntable, `frames.orbit`), or
-  {"path": {"keys": [camera, ...], "frames": n}} (key poses, linearly interpolated).
+  scene camera's where left out}, or {"fx", "fy", "cx", "cy", "camera_to_world"[, "near"]}:
+  intrinsics in pixels of the job's size and a pose, as a scene file's camera), or
+  {"orbit": {...}} (a turntable, `frames.orbit`), or {"path": {"keys": [camera, ...],
+  "frames": n}} (look-at key poses, linearly interpolated).
 - lights: a list of lights in the scene-file schema ([[lights]] tables), replacing the scene's.
 - size: [width, height] of the images (default: the scene's).
 - outputs: names from `batch.outputs.OUTPUTS` (default: image and masks).
@@ -18,7 +20,9 @@ Keys (only `scene` and `cameras` are required):
   max_depth: the ray tracer's recursion (default: the scene's).
 - seed (default 0) and jitter: {"eye": r, "lights": r} moves each frame's eye and point/spot
   lights by a random offset within a ball of radius r, drawn from the frame's own generator
-  (`frames.frame_rng(seed, index)`), so a frame is the same wherever and whenever it is made.
+  (`frames.frame_rng(seed, index)`), so a frame is the same wherever and whenever it is made;
+  {"objects": {"translation", "rotation", "scale", "axis"}, "colors": c} moves, turns, scales
+  and recolours the objects (`batch.jitter`, which says what it guarantees).
 
 A job that is wrong is a `JobError` in the list, recorded in the manifest; the others go on.
 """
@@ -32,6 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from shadowvol.batch import frames as camera_paths
+from shadowvol.batch import jitter
 from shadowvol.batch.outputs import DEFAULT, OUTPUTS
 from shadowvol.scene import (
     MAX_MAGNITUDE,
@@ -226,14 +231,21 @@ def _whole(value, key: str, low: int):
 
 
 def _jitter(value) -> dict:
-    if not isinstance(value, dict) or set(value) - {"eye", "lights"}:
-        raise SceneError("jitter", f"expected {{\"eye\": r, \"lights\": r}}, got "
-                                   f"{shorten(value)}")
+    if not isinstance(value, dict) or set(value) - {"eye", "lights", "objects", "colors"}:
+        raise SceneError("jitter", f"expected {{\"eye\": r, \"lights\": r, \"objects\": "
+                                   f"{{...}}, \"colors\": c}}, got {shorten(value)}")
+    out = {}
     for key, r in value.items():
-        if not is_number(r) or not math.isfinite(r) or r < 0:
+        if key == "objects":
+            out[key] = jitter.check(r)
+        elif key == "colors":
+            out[key] = jitter.check_colors(r)
+        elif not is_number(r) or not math.isfinite(r) or r < 0:
             raise SceneError(f"jitter.{key}", f"must be a radius >= 0, got {shorten(r)}")
-        if r > MAX_MAGNITUDE:
-            raise SceneError(f"jitter.{key}", f"a radius of {r:g} would move the {key} beyond "
-                                              f"the float32 range the renderers use (|x| <= "
-                                              f"{MAX_MAGNITUDE:g})")
-    return {k: float(v) for k, v in value.items()}
+        else:
+            if r > MAX_MAGNITUDE:
+                raise SceneError(f"jitter.{key}", f"a radius of {r:g} would move the {key} "
+                                                  f"beyond the float32 range the renderers use "
+                                                  f"(|x| <= {MAX_MAGNITUDE:g})")
+            out[key] = float(r)
+    return out

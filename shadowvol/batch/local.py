@@ -27,8 +27,9 @@ from collections import OrderedDict, deque
 from collections.abc import Iterable, Iterator
 from multiprocessing.connection import wait
 
-from shadowvol import memory
+from shadowvol import memory, signals
 from shadowvol.batch.worker import MAX_RENDERERS, Worker, thread_settings
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.errors import RENDER_FAILED
 from shadowvol.scene import Scene
 from shadowvol.scenefile import load_scene
@@ -39,7 +40,7 @@ SHUTDOWN_WAIT_S = 30   # for a worker to release its context after its last task
 PARENT_CHECK_S = 1.0   # how often an idle worker looks whether its parent is still there
 
 
-def in_process(tasks: Iterable[list[dict]], scenes: dict, egl_device=None,
+def in_process(tasks: Iterable[list[FrameSpec]], scenes: dict, egl_device=None,
                budget: int | str | None = None) -> Iterator[dict]:
     """Render every frame of `tasks` here, in order, on one worker (this thread)."""
     worker = Worker(scenes, egl_device, label="in-process worker", budget=budget)
@@ -90,7 +91,7 @@ class _Child:
             args=(self.tasks, sender, egl_device, environment, f"pool worker {index}"))
         self.process.start()
         sender.close()
-        self.flying: deque[list[dict]] = deque()
+        self.flying: deque[list[FrameSpec]] = deque()
         self.scenes: set[str] = set()
 
     def stop(self, wait_s: float) -> None:
@@ -128,13 +129,13 @@ class _Scenes:
         return self.kept[key]
 
 
-def lanes(tasks: list[list[dict]], workers: int) -> list[deque]:
+def lanes(tasks: list[list[FrameSpec]], workers: int) -> list[deque]:
     """Each worker's contiguous run of tasks (nearly equal in number)."""
     n = len(tasks)
     return [deque(tasks[n * w // workers:n * (w + 1) // workers]) for w in range(workers)]
 
 
-def next_task(runs: list[deque], index: int) -> list[dict] | None:
+def next_task(runs: list[deque], index: int) -> list[FrameSpec] | None:
     """The next task of worker `index`: the front of its own lane, else the far end of the
     longest lane (the frames farthest from where that lane's worker is); None when all are
     done."""
@@ -146,12 +147,12 @@ def next_task(runs: list[deque], index: int) -> list[dict] | None:
 
 def _died(child: _Child) -> list[dict]:
     code = child.process.exitcode
-    return [{"id": spec["id"], "status": RENDER_FAILED,
+    return [{"id": spec.id, "status": RENDER_FAILED,
              "error": f"a worker process died (exit code {code}) while it held this frame"}
             for task in child.flying for spec in task]
 
 
-def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
+def pool(tasks: list[list[FrameSpec]], scenes: dict, workers: int, egl_device=None,
          start_method: str = "spawn", budget: int | str | None = None) -> Iterator[dict]:
     """Render `tasks` on `workers` processes; yields each frame's result as its task ends.
     A worker that dies fails the frames it held (the next run makes them); the others take
@@ -165,7 +166,7 @@ def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
     environment = thread_settings(workers)
     # the workers render at once: each gets its share of the memory budget
     environment[memory.ENV] = str(memory.budget(budget) // count)
-    children = [_Child(context, i, egl_device, environment) for i in range(count)]
+    children: list[_Child] = []
     source = _Scenes(scenes)
     finished = False
 
@@ -174,13 +175,18 @@ def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
             task = next_task(runs, child.index)
             if task is None:
                 return
-            key = task[0]["scene"]
+            key = task[0].scene
             sent = {} if key in child.scenes else {key: source.get(key)}
             child.scenes.add(key)
             child.tasks.put((sent, task))
             child.flying.append(task)
 
     try:
+        for i in range(count):
+            # a child cut while it is started would be left behind; once in `children` the
+            # `finally` below ends it
+            with signals.deferred():
+                children.append(_Child(context, i, egl_device, environment))
         for child in children:  # they import and start up meanwhile
             feed(child)
         alive = list(children)
@@ -205,7 +211,7 @@ def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
                     for other in alive:  # they share what is left of its lane
                         feed(other)
         # every worker died: what was never sent fails too
-        yield from ({"id": spec["id"], "status": RENDER_FAILED,
+        yield from ({"id": spec.id, "status": RENDER_FAILED,
                      "error": "every worker process died"}
                     for run in runs for task in run for spec in task)
         finished = True
@@ -214,13 +220,14 @@ def pool(tasks: list[list[dict]], scenes: dict, workers: int, egl_device=None,
             child.stop(SHUTDOWN_WAIT_S if finished else 0)
 
 
-def chunks(specs: list[dict], workers: int, most: int = 8) -> list[list[dict]]:
+def chunks(specs: list[FrameSpec], workers: int, most: int = 8
+           ) -> list[list[FrameSpec]]:
     """Tasks for `workers`: runs of consecutive frames of one scene, at most `most` long and
     short enough that every worker gets several (load balance)."""
     size = max(1, min(most, -(-len(specs) // max(1, workers * 4))))
-    tasks: list[list[dict]] = []
+    tasks: list[list[FrameSpec]] = []
     for spec in specs:
-        if tasks and len(tasks[-1]) < size and tasks[-1][-1]["scene"] == spec["scene"]:
+        if tasks and len(tasks[-1]) < size and tasks[-1][-1].scene == spec.scene:
             tasks[-1].append(spec)
         else:
             tasks.append([spec])

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shadowvol.io import GROUND_TRUTH, encode_srgb, masks_bytes, npy_bytes, png_bytes
+from shadowvol.frame import GROUND_TRUTH, masks_bytes
+from shadowvol.io import encode_srgb, npy_bytes, png_bytes
 
 
 @dataclass(frozen=True)

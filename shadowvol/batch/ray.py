@@ -28,6 +28,7 @@ from collections.abc import Iterator
 from shadowvol import memory
 from shadowvol.batch.local import lanes, next_task
 from shadowvol.batch.worker import MAX_RENDERERS, Worker, thread_settings
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.errors import RENDER_FAILED, require
 from shadowvol.scene import Scene
 from shadowvol.scenefile import load_scene
@@ -44,7 +45,7 @@ class FrameActor:
         self.args = (scenes, egl_device, label)
         self.workers: dict[int, Worker] = {}
 
-    def render(self, task: list[dict], scene=None) -> list[dict]:
+    def render(self, task: list[FrameSpec], scene=None) -> list[dict]:
         """The frames of `task`; `scene` (a Scene or a path, or None when sent before) is the
         scene of its frames."""
         thread = threading.get_ident()
@@ -53,14 +54,14 @@ class FrameActor:
             self.workers[thread] = Worker(dict(scenes), egl_device, label=label)
         worker = self.workers[thread]
         if scene is not None:
-            worker.scenes[task[0]["scene"]] = scene
+            worker.scenes[task[0].scene] = scene
         return [worker.render(spec) for spec in task]
 
     def pid(self) -> int:
         return os.getpid()
 
 
-def results(tasks: list[list[dict]], scenes: dict, actors: int, address: str | None = None,
+def results(tasks: list[list[FrameSpec]], scenes: dict, actors: int, address: str | None = None,
             egl_device=None, num_gpus: float = 0, budget: int | str | None = None
             ) -> Iterator[dict]:
     """Render `tasks` on `actors` Ray actors; yields each frame's result as its task ends.
@@ -132,7 +133,7 @@ class _Pool:
                 task = next_task(self.lanes, slot)
                 if task is None:
                     return
-                key = task[0]["scene"]
+                key = task[0].scene
                 sent = self.sent.setdefault(slot, set())
                 scene = None if key in sent else self._scene(key)
                 sent.add(key)
@@ -158,7 +159,7 @@ class _Pool:
                     for lane in self.lanes:
                         while lane:
                             for spec in lane.popleft():
-                                yield {"id": spec["id"], "status": RENDER_FAILED,
+                                yield {"id": spec.id, "status": RENDER_FAILED,
                                        "error": f"every Ray actor died ({type(exc).__name__})"}
                 done = []
             yield from done

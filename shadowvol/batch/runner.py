@@ -21,9 +21,12 @@ from pathlib import Path
 import numpy as np
 
 from shadowvol import memory
-from shadowvol.batch import egl, formats, frames, local, manifest
+from shadowvol.batch import egl, frames, layouts, local, manifest
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
-from shadowvol.batch.store import FORMATS, FileStore, TarStore
+from shadowvol.batch.layouts import LAYOUTS
+from shadowvol.batch.sources import SOURCES
+from shadowvol.batch.store import Unit
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.errors import BAD_INPUT, OK, require
 from shadowvol.scene import Scene, SceneError
 
@@ -129,8 +132,9 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     shard        : (I, N) or "I/N": make only this shard's share
     ray          : None (local), True (ray.init() with no address) or a cluster address
     egl_device   : None, "auto" or an EGL device index (`batch.egl`)
-    format       : "files" (OUT/<job>/<frame>.<suffix>), "webdataset" (OUT/shard-*.tar), or a
-                   dataset layout, "nerfstudio", "bop" or "coco" (`batch.formats`)
+    format       : a layout of `batch.layouts`: "files" (OUT/<job>/<frame>.<suffix>),
+                   "webdataset" (OUT/shard-*.tar), or a dataset, "nerfstudio", "bop" or "coco"
+                   (`batch.formats`)
     progress     : a tqdm bar on stderr; None: only when stderr is a terminal
     start_method : "spawn" or "forkserver" ("fork" is allowed, and fails clearly in a process
                    that has made a GL context)
@@ -147,39 +151,37 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise SceneError("-o", f"{str(out)!r} is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
+    layout = LAYOUTS[format]
     entries = _jobs(jobs)
-    plan = _Plan(entries, 1 if format != "webdataset" else samples_per_tar, shard, format)
+    plan = _Plan(entries, layout, samples_per_tar, shard)
     own = manifest.manifest_name(shard)
-    store = TarStore(out) if format == "webdataset" else \
-        FileStore(out) if format == "files" else formats.DatasetStore(out, format)
-    kept, todo = _already_made(plan, manifest.read(out, own), store, format)
-    # temporary files a killed run left, for any file of this share (made or not)
-    if format != "webdataset":
-        store.clean([s for u in plan.mine for s in plan.units[u]])
-    else:
-        store.clean(list(plan.mine))
-    manifest.remove_stale_parts(out, {own})
-    units, mine = plan.units, plan.mine
-    summary = Summary(frames=sum(len(units[u]) for u in mine),
-                      skipped=sum(len(units[u]) for u in mine) - sum(len(units[u]) for u in todo),
-                      manifest=out / own)
+    out.mkdir(parents=True, exist_ok=True)
+    # the lock first: a run refused here has touched nothing of the one that holds it
     journal = manifest.Journal(out / own)
-    done: dict[str, dict | manifest.Line] = dict(kept)
     try:
+        store = layout.make_store(out, plan.scenes)
+        done: dict[str, dict | manifest.Line]
+        done, unit_lines, todo = _already_made(plan, manifest.read(out, own), store)
+        # temporary files a killed run left, for any file of this share (made or not)
+        store.clean([plan.units[u] for u in plan.mine])
+        manifest.remove_stale_parts(out, {own})
+        summary = Summary(frames=plan.frames(plan.mine),
+                          skipped=plan.frames(plan.mine) - plan.frames(todo),
+                          manifest=out / own)
         _record_bad_jobs(entries, journal, done, summary)
-        specs = [s for u in todo for s in units[u]]
+        specs = [s for u in todo for s in plan.units[u].frames]
         bar = _bar(len(specs), progress)
         results = _results(specs, plan.scenes, workers, ray, egl_device, start_method,
                            gpus_per_worker, memory_budget)
-        _make(plan, todo, results, journal, done, summary, store, format, bar)
-        # the final manifest: one line per frame of this share, in job-file order, then the tars
+        _make(plan, todo, results, journal, done, unit_lines, summary, store, bar)
+        # the final manifest: one line per frame of this share, in job-file order, then the
+        # units' own lines (the tars)
         ordered = [done[f"job/{job.name}"] for job in entries if isinstance(job, JobError)]
-        ordered += [done[s["id"]] for u in mine for s in units[u] if s["id"] in done]
-        ordered += [done[TarStore.tar_id(u)] for u in mine if TarStore.tar_id(u) in done]
+        ordered += [done[s.id] for u in plan.mine for s in plan.units[u].frames
+                    if s.id in done]
+        ordered += [r for u in plan.mine for r in unit_lines.get(u, ())]
         journal.finish(ordered)
-        if format in formats.NAMES:  # the index files, from every manifest in OUT
-            formats.write_index(out, format, plan.specs, plan.hashes)
+        store.finish(plan.specs, plan.hashes)   # the index files, from every manifest in OUT
     finally:
         journal.close()
     summary.seconds = time.perf_counter() - began
@@ -193,8 +195,8 @@ def _checked(workers, shard, format, samples_per_tar, memory_budget, egl_device,
         shard = parse_shard(shard)
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise SceneError("--workers", f"must be a whole number >= 1, got {workers!r}")
-    if format not in FORMATS:
-        raise SceneError("--format", f"must be one of {', '.join(FORMATS)}, got {format!r}")
+    if format not in LAYOUTS:
+        raise SceneError("--format", f"must be one of {', '.join(LAYOUTS)}, got {format!r}")
     if isinstance(samples_per_tar, bool) or not isinstance(samples_per_tar, int) or \
             samples_per_tar < 1:
         raise SceneError("--samples-per-tar", f"must be a whole number >= 1, got "
@@ -218,29 +220,27 @@ def _record_bad_jobs(entries, journal, done, summary) -> None:
             summary.errors.append(f"{job.source}: {job.error}")
 
 
-def _make(plan, todo, results, journal, done, summary, store, format, bar) -> None:
-    """Record the frames as their results come (in any order); a webdataset tar is written
-    once all of its frames are in."""
-    units, hashes = plan.units, plan.hashes
-    by_id = {s["id"]: s for u in todo for s in units[u]}
-    unit_of = {s["id"]: u for u in todo for s in units[u]}
-    waiting = {u: {} for u in todo}  # webdataset: unit -> id -> result, until complete
+def _make(plan, todo, results, journal, done, unit_lines, summary, store, bar) -> None:
+    """Record the frames as their results come (in any order, in `done` by frame id); a unit
+    is written once all of its frames are in (a frame's at once; a tar's when its last frame
+    comes), and its own lines kept in `unit_lines`."""
+    unit_of = {s.id: u for u in todo for s in plan.units[u].frames}
+    waiting: dict[int, dict[str, dict]] = {u: {} for u in todo}  # unit -> id -> result
     for result in results:
-        spec = by_id[result["id"]]
-        if format != "webdataset":
-            _record(journal, done, summary, spec, result, hashes, store)
-        else:
-            u = unit_of[spec["id"]]
-            waiting[u][spec["id"]] = result
-            if len(waiting[u]) == len(units[u]):
-                got = waiting.pop(u)
-                pairs = [(s, got[s["id"]]) for s in units[u]]
-                tar_record, files = store.write(u, pairs)
-                for s, r in pairs:
-                    _record(journal, done, summary, s, r, hashes, None,
-                            files=files.get(s["id"]))
-                journal.add(tar_record)
-                done[tar_record["id"]] = tar_record
+        u = unit_of[result["id"]]
+        waiting[u][result["id"]] = result
+        unit = plan.units[u]
+        if len(waiting[u]) == len(unit.frames):
+            got = waiting.pop(u)
+            made = [got[s.id] for s in unit.frames]
+            start = time.perf_counter()
+            written = store.write(unit, made)
+            seconds = round(time.perf_counter() - start, 6)
+            for spec, made_one in zip(unit.frames, made):
+                _record(journal, done, summary, spec, made_one, plan.hashes,
+                        written.files.get(spec.id), store.layout.name, seconds)
+            # a tar's own lines, kept as where they are (`manifest.Line`), as a frame's are
+            unit_lines[u] = tuple(journal.add(record) for record in written.records)
         if bar is not None:
             bar.update()
     if bar is not None:
@@ -251,75 +251,68 @@ class _Plan:
     """Every frame of the job file in order (`specs`), their spec hashes, the scenes they need
     (key -> path or Scene), the units (a frame, or a tar's frames) and this shard's share."""
 
-    def __init__(self, entries, per_unit: int, shard: tuple[int, int], format: str = "files"):
+    def __init__(self, entries, layout, samples_per_tar: int, shard: tuple[int, int]):
         self.scenes: dict[str, str | Scene] = {}
         digests: dict[str, str] = {}
-        self.specs: list[dict] = []
-        for job in entries:
+        self.specs: list[FrameSpec] = []
+        for place, job in enumerate(entries):
             if isinstance(job, Job):
                 key = job.scene if isinstance(job.scene, str) else f"<Scene {id(job.scene)}>"
                 if key not in self.scenes:
                     self.scenes[key], digests[key] = job.scene, scene_digest(job.scene)
-                self.specs.extend(formats.tag(frames.specs(job, key), format))
-        self.hashes = {s["id"]: frames.spec_hash(s, digests[s["scene"]]) for s in self.specs}
-        self.units = [self.specs[i:i + per_unit] for i in range(0, len(self.specs), per_unit)]
+                self.specs.extend(layouts.tag(frames.specs(job, key), layout, place))
+        self.hashes = {s.id: frames.spec_hash(s, digests[s.scene]) for s in self.specs}
+        per_unit = layout.frames_per_unit(samples_per_tar)
+        self.units = [Unit(k, tuple(part), tuple(self.hashes[s.id] for s in part))
+                      for k, part in enumerate(self.specs[i:i + per_unit]
+                                               for i in range(0, len(self.specs), per_unit))]
         self.mine = share(len(self.units), shard)
 
+    def frames(self, units) -> int:
+        return sum(len(self.units[u].frames) for u in units)
 
-def _already_made(plan: _Plan, old: dict[str, dict], store, format: str
-                  ) -> tuple[dict[str, dict], list[int]]:
-    """(the records of this share's units that are made and check out, the units to make)."""
 
-    def made(spec) -> dict | None:
-        record = old.get(spec["id"])
-        ok = record is not None and "error" not in record and \
-            record.get("spec") == plan.hashes[spec["id"]] and \
-            record.get("format", "files") == format
-        return record if ok else None
-
+def _already_made(plan: _Plan, old: dict[str, dict], store
+                  ) -> tuple[dict[str, dict], dict[int, tuple], list[int]]:
+    """(the frame records of this share's units that are made and check out, by id; those
+    units' own lines (a tar's), by unit; the units to make)."""
     kept: dict[str, dict] = {}
+    unit_lines: dict[int, tuple] = {}
     todo: list[int] = []
     for u in plan.mine:
-        records = [made(spec) for spec in plan.units[u]]
-        if format != "webdataset":
-            fine = records[0] is not None and store.verify(plan.units[u][0], records[0])
-        else:
-            tar = old.get(TarStore.tar_id(u))
-            fine = all(records) and store.verify(u, tar, [s["id"] for s in plan.units[u]])
-            if fine:
-                kept[TarStore.tar_id(u)] = tar
-        if fine:
-            kept.update((r["id"], r) for r in records)
-        else:
+        records = store.verify(plan.units[u], old)
+        if records is None:
             todo.append(u)
-    return kept, todo
+            continue
+        frame_ids = {s.id for s in plan.units[u].frames}
+        kept.update((r["id"], r) for r in records if r["id"] in frame_ids)
+        unit_lines[u] = tuple(r for r in records if r["id"] not in frame_ids)
+    return kept, unit_lines, todo
 
 
-def _record(journal, done, summary, spec, result, hashes, store, files=None) -> None:
-    """Write a frame's files (files format) and append its manifest line."""
-    base = {"id": spec["id"], "job": spec["job"], "frame": spec["index"],
-            "spec": hashes[spec["id"]], "renderer": spec["renderer"]}
+def _record(journal, done, summary, spec, result, hashes, files, layout: str,
+            write_seconds: float) -> None:
+    """Append a frame's manifest line: its files, or its error."""
+    base = {"id": spec.id, "job": spec.job, "frame": spec.index,
+            "spec": hashes[spec.id], "renderer": spec.renderer}
     if "error" in result:
         record = {**base, "error": result["error"], "status": result["status"]}
         summary.failed += 1
         summary.status = max(summary.status, result["status"])
-        summary.errors.append(f"{spec['id']}: {result['error']}")
+        summary.errors.append(f"{spec.id}: {result['error']}")
     else:
-        start = time.perf_counter()
-        if store is not None:
-            files = store.write(spec, result["outputs"])
-        seconds = dict(result["seconds"], write=round(time.perf_counter() - start, 6))
-        record = {**base, "format": getattr(store, "format", "files") if store else "webdataset",
+        seconds = dict(result["seconds"], write=write_seconds)
+        record = {**base, "format": layout,
                   "files": files, "camera": result["camera"], "lights": result["lights"],
-                  "size": result["size"], "seed": spec["seed"],
-                  **({"method": spec["method"]} if spec["renderer"] == "shadowvol" else
-                     {"max_depth": spec["max_depth"]}),
+                  "size": result["size"], "seed": spec.seed,
+                  **SOURCES[spec.renderer].options(spec),
                   "versions": result["versions"], "device": result["device"],
                   "worker": result["worker"],
+                  **({"objects": result["objects"]} if "objects" in result else {}),
                   "seconds": seconds, **({"dataset": result["dataset"]} if "dataset" in result
                                          else {})}
         summary.rendered += 1
-    done[spec["id"]] = journal.add(record)  # where its line is: memory stays flat, however long
+    done[spec.id] = journal.add(record)  # where its line is: memory stays flat, however long
 
 
 def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_worker, budget):

@@ -11,6 +11,7 @@ counts first).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import platform
@@ -18,22 +19,19 @@ import sys
 import threading
 import time
 from collections import OrderedDict
-from importlib import metadata
 
 import numpy as np
 
 from shadowvol import __version__, memory, signals
-from shadowvol.batch import egl, formats, frames
-from shadowvol.batch.outputs import OUTPUTS, fields_of
+from shadowvol.batch import egl, frames, jitter, layouts
+from shadowvol.batch.outputs import fields_of
+from shadowvol.batch.sources import SOURCES
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.cameras import calibration
 from shadowvol.errors import RENDER_FAILED, message, status_of
-from shadowvol.io import GROUND_TRUTH, soft_arrays
-from shadowvol.scene import Camera, Scene, SceneError, hard_lights, light_samples
+from shadowvol.frame import GROUND_TRUTH
+from shadowvol.scene import Camera, Scene, SceneError, light_samples
 from shadowvol.scenefile import light_from_dict, load_scene
-
-# what a batch frame asks `Renderer.render(outputs=...)` for (its OUTPUTS; named here, since
-# the worker imports GL only when it first renders)
-RASTER_OUTPUTS = ("image", "lit", "coverage", *GROUND_TRUTH)
 
 # Renderers kept alive per worker (least recently used released first): a job file that cycles
 # through many scenes holds at most this many scenes' geometry on the GPU at once.
@@ -56,13 +54,6 @@ def thread_settings(workers: int, cores: int | None = None) -> dict[str, str]:
     return {name: value for name, value in values.items() if name not in os.environ}
 
 
-def _version(package: str) -> str | None:
-    try:
-        return metadata.version(package)
-    except metadata.PackageNotFoundError:
-        return None
-
-
 def light_dict(light) -> dict:
     """A light as plain data in the scene-file schema (for the manifest): its type and fields."""
     kind = type(light).__name__.removesuffix("Light").lower()
@@ -74,8 +65,23 @@ def light_dict(light) -> dict:
 
 
 def camera_dict(camera: Camera) -> dict:
-    return {"eye": camera.eye.tolist(), "target": camera.target.tolist(),
-            "up": camera.up.tolist(), "fov_y": camera.fov_y, "near": camera.near}
+    """A frame's camera for the manifest: eye, target, up, fov_y, near, and a matrix camera's
+    intrinsics and pose as given (fov_y None)."""
+    out = {"eye": camera.eye.tolist(), "target": camera.target.tolist(),
+           "up": camera.up.tolist(), "fov_y": camera.fov_y, "near": camera.near}
+    if camera.matrix_form:
+        out.update(fx=camera.fx, fy=camera.fy, cx=camera.cx, cy=camera.cy,
+                   camera_to_world=camera.camera_to_world.tolist())
+    return out
+
+
+def objects_dict(scene: Scene, jitter_spec: dict) -> list[dict]:
+    """A jittered frame's objects for the manifest: name, category, pose (model to world, None
+    for the identity) and, with colour jitter, the diffuse colour."""
+    return [{"name": obj.name, "category": obj.label,
+             "pose": None if obj.pose is None else obj.pose.tolist(),
+             **({"diffuse": obj.material.diffuse.tolist()} if "colors" in jitter_spec else {})}
+            for obj in scene.objects]
 
 
 class Worker:
@@ -115,7 +121,7 @@ class Worker:
             raise found
         return found
 
-    def _context(self):
+    def context(self):
         from shadowvol.raster.context import check_not_forked, create_context
 
         if self._ctx is None:
@@ -137,137 +143,109 @@ class Worker:
 
         slot = (key, scene.width, scene.height)
         if slot in self._renderers:
-            self._renderers.move_to_end(slot)
-            return self._renderers[slot]
-        ctx = self._context()
+            if self._renderers[slot].scene.objects is scene.objects:
+                self._renderers.move_to_end(slot)
+                return self._renderers[slot]
+            self._renderers.pop(slot).release()   # a frame's jittered objects: new geometry
+        ctx = self.context()
         while len(self._renderers) >= MAX_RENDERERS:
             self._renderers.popitem(last=False)[1].release()
-        try:
+        with self.naming(key):
             self._renderers[slot] = Renderer(scene, ctx)
-        except SceneError as exc:  # the GL's limits (`image`, `objects`): name the scene file
-            source = self.scenes.get(key)
-            raise (exc.in_file(source) if isinstance(source, str) else exc) from None
         return self._renderers[slot]
 
+    @contextlib.contextmanager
+    def naming(self, key: str):
+        """A Renderer(scene) refused inside (the GL's limits, `image` or `objects`) names the
+        scene file of `key`, as a scene's other bad input does."""
+        try:
+            yield
+        except SceneError as exc:
+            source = self.scenes.get(key)
+            raise (exc.in_file(source) if isinstance(source, str) else exc) from None
+
     # -- frames ----------------------------------------------------------------------------
-    def render(self, spec: dict) -> dict:
+    def render(self, spec: FrameSpec) -> dict:
         """One frame: {"id", "outputs": {name: bytes}, "camera", "lights", "size", "seconds",
         "versions", "device"} or, when it fails, {"id", "error", "status"}."""
         start = time.perf_counter()
         try:
             scene, camera, lights = self._frame_scene(spec)
             loaded = time.perf_counter()
-            dataset = None
-            if "format" in spec:  # a dataset layout's files and index record (batch.formats)
-                encoded, dataset = formats.frame(self, spec, scene, camera, lights)
-            else:
-                arrays = self._arrays(spec, scene, camera, lights)
+            layout = layouts.of_spec(spec)   # the job's outputs, or a dataset's files
+            arrays = layout.arrays(self, spec, scene, camera, lights)
             rendered = time.perf_counter()
-            if dataset is None:
-                encoded = {name: OUTPUTS[name].encode(arrays) for name in spec["outputs"]}
+            encoded, dataset = layout.encode(spec, arrays,
+                                             scene.replace(camera=camera, lights=lights))
             done = time.perf_counter()
         except (KeyboardInterrupt, signals.Terminated):
             raise
         except Exception as exc:  # noqa: BLE001 - a bad frame is recorded, the others go on
             code = status_of(exc)
             text = message(exc) if code is not None else f"{type(exc).__name__}: {exc}"
-            return {"id": spec["id"], "error": text,
+            return {"id": spec.id, "error": text,
                     "status": code if code is not None else RENDER_FAILED}
-        return {"id": spec["id"], "outputs": encoded, "camera": camera_dict(camera),
+        return {"id": spec.id, "outputs": encoded, "camera": camera_dict(camera),
                 "lights": [light_dict(x) for x in lights], "size": [scene.width, scene.height],
                 "seconds": {"scene": round(loaded - start, 6),
                             "render": round(rendered - loaded, 6),
                             "encode": round(done - rendered, 6)},
-                "versions": self.versions(spec["renderer"]), "device": self.device,
+                "versions": self.versions(spec.renderer), "device": self.device,
                 "worker": f"{self.label} (pid {os.getpid()})",
+                **({"objects": objects_dict(scene, spec.jitter)}
+                   if jitter.applies(spec.jitter) else {}),
                 **({"dataset": dataset} if dataset is not None else {})}
 
-    def _frame_scene(self, spec: dict):
-        scene = self.scene(spec["scene"])
-        if spec["size"] is not None:
-            scene = scene.replace(width=spec["size"][0], height=spec["size"][1])
+    def _frame_scene(self, spec: FrameSpec):
+        scene = self.scene(spec.scene)
+        if spec.size is not None:
+            scene = scene.replace(width=spec.size[0], height=spec.size[1])
         base = scene.camera
-        camera = Camera(**{"up": base.up, "fov_y": base.fov_y, "near": base.near,
-                           **spec["camera"]})
-        lights = scene.lights if spec["lights"] is None else tuple(
-            light_from_dict(x, f"lights[{i}]") for i, x in enumerate(spec["lights"]))
-        camera, lights = frames.jittered(camera, lights, spec["jitter"], spec["seed"],
-                                         spec["index"])
+        if "camera_to_world" in spec.camera:   # intrinsics and pose: the job's own
+            camera = Camera(**{"near": base.near, **spec.camera})
+        else:
+            camera = Camera(**{"up": base.up, "fov_y": base.fov_y, "near": base.near,
+                               **spec.camera})
+        lights = scene.lights if spec.lights is None else tuple(
+            light_from_dict(x, f"lights[{i}]") for i, x in enumerate(spec.lights))
+        camera, lights = frames.jittered(camera, lights, spec.jitter, spec.seed,
+                                         spec.index)
+        scene = jitter.jittered_scene(scene, spec.jitter, spec.seed, spec.index)
         return scene, camera, lights
 
-    def _check_memory(self, spec, frame_scene: Scene, wanted, truth) -> None:
+    def _check_memory(self, spec, source, frame_scene: Scene, wanted, truth) -> None:
         """Refuse the frame (a SceneError naming its scene file and `image`, status 2) when
         its `memory` estimate exceeds this worker's budget: the one given, else `memory.ENV`,
         which a pool or Ray sets to the run's budget divided by its workers."""
         written = tuple(name for name, asks in (("png", "image" in wanted),
                                                 ("masks", bool({"lit", "coverage"} & wanted)))
                         if asks)
-        if spec["renderer"] == "raytrace":
-            parts = [memory.whitted(frame_scene, written=())] if "image" in wanted else []
-            if truth or {"lit", "coverage"} & wanted:
-                parts.append(memory.ray_masks(frame_scene, truth, picture=False))
-            estimate = memory.Estimate("the ray tracer", frame_scene.width, frame_scene.height,
-                                       tuple(t for part in parts for t in part.terms))
-        else:
-            asked = tuple(name for name in wanted if name in RASTER_OUTPUTS)
-            estimate = memory.raster(frame_scene, asked, written=written, gl_in_host=(
-                self.gl_renderer is None or memory.gl_in_host(self.gl_renderer)))
-        source = self.scenes.get(spec["scene"])
-        memory.check(estimate, self.budget, source if isinstance(source, (str, os.PathLike))
-                     else spec["scene"])
+        estimate = source.estimate(self, frame_scene, wanted, truth, written)
+        where = self.scenes.get(spec.scene)
+        memory.check(estimate, self.budget, where if isinstance(where, (str, os.PathLike))
+                     else spec.scene)
 
-    def _arrays(self, spec, scene: Scene, camera: Camera, lights) -> dict[str, np.ndarray]:
-        wanted = fields_of(spec["outputs"])
+    def arrays(self, spec, scene: Scene, camera: Camera, lights) -> dict[str, np.ndarray]:
+        """The frame arrays its outputs need (`outputs.fields_of`), by its renderer's
+        `sources.FrameSource`."""
+        wanted = fields_of(spec.outputs)
         truth = [name for name in GROUND_TRUTH if name in wanted]
-        self._check_memory(spec, scene.replace(camera=camera, lights=lights), set(wanted),
-                           truth)
-        if spec["renderer"] == "raytrace":
-            import raytrace
-
-            frame_scene = scene.replace(camera=camera, lights=lights)
-            arrays = {}
-            if "image" in wanted:
-                arrays["image"] = raytrace.render(frame_scene, max_depth=spec["max_depth"],
-                                                  progress=False)
-            soft = any(len(hard_lights(lt)) > 1 for lt in lights)
-            if truth or (soft and {"lit", "coverage", "counts"} & set(wanted)):
-                # the masks and an area light's counts come with it, on the same rays
-                gt = raytrace.ground_truth(frame_scene, outputs=truth)
-                arrays.update({name: getattr(gt, name) for name in truth},
-                              lit=gt.lit, coverage=gt.coverage,
-                              counts=soft_arrays(gt.lit_count, gt.samples))
-            elif {"lit", "coverage", "counts"} & set(wanted):
-                arrays["lit"], arrays["coverage"] = raytrace.shadow_masks(frame_scene)
-                arrays["counts"] = {}
-        else:
-            renderer = self.renderer(spec["scene"], scene)
-            asked = tuple(name for name in wanted if name in RASTER_OUTPUTS)
-            if "counts" in wanted and "lit" not in asked:
-                asked += ("lit",)
-            result = renderer.render(spec["method"], camera=camera, lights=lights,
-                                     outputs=asked)
-            arrays = {name: getattr(result, name) for name in asked}
-            if "counts" in wanted:   # what a mask file holds of an area light
-                arrays["counts"] = soft_arrays(result.lit_count, result.samples)
+        source = SOURCES[spec.renderer]
         frame_scene = scene.replace(camera=camera, lights=lights)
+        self._check_memory(spec, source, frame_scene, set(wanted), truth)
+        arrays = source.arrays(self, spec, scene, camera, lights, wanted, truth)
         if "camera" in wanted:  # what every mask file holds beside the masks
             arrays["camera"] = calibration(frame_scene).arrays()
         if "light_samples" in wanted:
             arrays["light_samples"] = [light_samples(lt) for lt in lights]
         missing = [name for name in wanted if name not in arrays]
         if missing:
-            raise ValueError(f"the {spec['renderer']} renderer does not make {missing[0]!r}")
+            raise ValueError(f"the {spec.renderer} renderer does not make {missing[0]!r}")
         return arrays
 
     def versions(self, renderer: str) -> dict:
-        out = {"shadowvol": __version__, "python": platform.python_version(),
-               "numpy": np.__version__}
-        if renderer == "raytrace":
-            out["embreex"] = _version("embreex")
-        else:
-            out["moderngl"] = _version("moderngl")
-            out["gl_renderer"] = self.gl_renderer
-        return out
+        return {"shadowvol": __version__, "python": platform.python_version(),
+                "numpy": np.__version__, **SOURCES[renderer].versions(self)}
 
     def close(self) -> None:
         while self._renderers:

@@ -11,7 +11,7 @@ import argparse
 
 from shadowvol import memory
 from shadowvol.cli import status
-from shadowvol.io import GROUND_TRUTH
+from shadowvol.frame import GROUND_TRUTH
 
 SCENE_HELP = "scene file (.toml or .json)"
 BACKEND_HELP = ("triangle intersection: 'embree' (fast, float32) or 'numpy' (the float64 "
@@ -78,7 +78,8 @@ def seed(p: argparse.ArgumentParser, help: str) -> None:
 
 
 def photon(p: argparse.ArgumentParser, kernels: tuple[str, ...]) -> None:
-    """The photon map's options on `raytrace render` (kernels: `raytrace.photonmap.KERNELS`)."""
+    """The photon map's options on `raytrace render` (kernels:
+    `raytrace.outlook.photonmap.KERNELS`)."""
     p.add_argument("--photons", type=int, default=200_000, metavar="N",
                    help="photon mapping: photons shot from the lights (default 200000); its "
                         "eye rays per pixel are --spp's")

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from shadowvol.batch.runner import DEFAULT_SAMPLES_PER_TAR, parse_shard, run
-from shadowvol.batch.store import FORMATS
+from shadowvol.batch.layouts import FORMATS
 from shadowvol.cli import args as blocks
 from shadowvol.cli import status
 
@@ -54,7 +54,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--format", choices=FORMATS, default="files",
                    help="files: OUT/<job>/<frame>.<suffix> (default); webdataset: tar shards "
                         "of --samples-per-tar frames, keys <job>/<frame>; nerfstudio, bop, "
-                        "coco: OUT/<job>/ in that dataset layout (docs/formats.md)")
+                        "coco, istd (shadow-removal triplets), soba, soba-lights (instance "
+                        "shadows): OUT/<job>/ in that dataset layout (docs/formats.md)")
     p.add_argument("--samples-per-tar", type=int, default=DEFAULT_SAMPLES_PER_TAR, metavar="N",
                    help=f"frames per webdataset tar (default {DEFAULT_SAMPLES_PER_TAR})")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,

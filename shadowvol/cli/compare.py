@@ -11,7 +11,7 @@ from pathlib import Path
 from shadowvol import memory
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
-from shadowvol.compare import pyrender_peer
+from shadowvol.compare import estimate, pyrender_peer
 from shadowvol.compare.comparison import compare
 from shadowvol.io import atomic_write, save_png
 from shadowvol.scene import SceneError
@@ -85,7 +85,7 @@ def command(args) -> int:
         except SceneError as exc:
             raise SceneError("--size", exc.problem) from None
     # the GL frame is counted as this process's memory: the context is made later
-    memory.check(memory.compare(scene), args.memory_budget, args.scene)
+    memory.check(estimate.compare(scene), args.memory_budget, args.scene)
     with status.naming(args.scene):
         result = compare(scene, method=args.method, pyrender=args.pyrender)
     print(result.table())

@@ -7,6 +7,8 @@
     shadowvol view SCENE                      (a window: orbit, drag the light, probe a pixel)
     shadowvol shadow2d --example -o shadow2d.png
     shadowvol batch JOBS.jsonl -o OUT [--workers N] [--shard I/N] [--ray [ADDRESS]]
+    shadowvol shadowmap SCENE -o pic.png [--resolution N] [--bias B] [--pcf K] [--json F]
+    shadowvol course new|solutions DIR,  shadowvol course grade DIR [--json F]
 
 Exit statuses: `shadowvol.cli.status` (one table for both tools).
 """
@@ -18,9 +20,20 @@ import sys
 
 from shadowvol import __version__
 from shadowvol.cli import args as blocks
-from shadowvol.cli import batch, compare, demo, planar, render, shadow2d, status, view
+from shadowvol.cli import (
+    batch,
+    compare,
+    course,
+    demo,
+    planar,
+    render,
+    shadow2d,
+    shadowmap,
+    status,
+    view,
+)
 
-COMMANDS = (render, planar, shadow2d, compare, demo, view, batch)
+COMMANDS = (render, planar, shadow2d, compare, shadowmap, demo, view, batch, course)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from shadowvol.io import GROUND_TRUTH
+from shadowvol.frame import GROUND_TRUTH, check_outputs
 from shadowvol.scene import SceneError, shorten
 
 SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".png",
@@ -21,18 +21,17 @@ SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".pn
 
 def ground_truth(text: str | None, flag: str = "--outputs") -> tuple[str, ...]:
     """The ground-truth outputs named by a command line's comma-separated list (or `all`),
-    in `shadowvol.io.GROUND_TRUTH`'s order; () for None.  SceneError (exit 2) for an unknown
-    name."""
+    in `shadowvol.frame.GROUND_TRUTH`'s order; () for None.  SceneError (exit 2) naming
+    `flag` for an unknown name (`shadowvol.frame.check_outputs`)."""
     if text is None:
         return ()
     names = [n.strip() for n in text.split(",") if n.strip()]
     if names == ["all"]:
         return GROUND_TRUTH
-    unknown = [n for n in names if n not in GROUND_TRUTH]
-    if unknown or not names:
-        raise SceneError(flag, f"unknown output {shorten(unknown[0] if unknown else text)} "
-                               f"(a comma-separated list of: {', '.join(GROUND_TRUTH)}; or all)")
-    return tuple(n for n in GROUND_TRUTH if n in names)
+    if not names:
+        raise SceneError(flag, f"unknown output {shorten(text)} (a comma-separated list of: "
+                               f"{', '.join(GROUND_TRUTH)}; or all)")
+    return check_outputs(names, GROUND_TRUTH, key=flag)
 
 
 def check(outputs: dict[str, Path], flags: dict[str, str] | None = None,

@@ -10,7 +10,9 @@ from shadowvol import memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
-from shadowvol.io import save_masks, save_png
+from shadowvol.frame import save_masks
+from shadowvol.io import save_png
+from shadowvol.raster import estimate
 from shadowvol.raster.planar_pass import ReceiverError, render_planar
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
@@ -43,8 +45,8 @@ def command(args) -> int:
         paths["masks"] = Path(args.masks)
     outputs.check(paths, {"image": "-o", "masks": "--masks"})
     scene = load_scene(args.scene)
-    memory.check(memory.raster(scene, written=tuple(k for k in ("png", "masks")
-                                                    if k in paths or k == "png")),
+    memory.check(estimate.render(scene, written=tuple(k for k in ("png", "masks")
+                                                      if k in paths or k == "png")),
                  args.memory_budget, args.scene)
     try:
         with status.naming(args.scene):

@@ -13,8 +13,10 @@ from shadowvol import memory
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
 from shadowvol.errors import OutOfMemory, RenderError
-from shadowvol.io import GROUND_TRUTH, encode_srgb, save_exr, save_masks, save_png, save_png16
+from shadowvol.frame import GROUND_TRUTH, save_masks
+from shadowvol.io import encode_srgb, save_exr, save_png, save_png16
 from shadowvol.pictures import ROLE_COLOURS, captioned, heat_maps
+from shadowvol.raster import estimate
 from shadowvol.raster.context import create_context
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight, SceneError, light_samples
@@ -220,10 +222,10 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
             _stencil_lights(scene, scene_path)
         written = tuple(k for k in ("png", "masks", "exr", "png16", "stencil", "volumes")
                         if k in out or k == "png")
-        memory.check(memory.raster(scene, ("image", "lit", "coverage") + args.truth,
-                                   gl_in_host=memory.gl_in_host(ctx.info["GL_RENDERER"]),
-                                   written=written, stencil="stencil" in out,
-                                   volumes="volumes" in out),
+        memory.check(estimate.render(scene, ("image", "lit", "coverage") + args.truth,
+                                     gl_in_host=memory.gl_in_host(ctx.info["GL_RENDERER"]),
+                                     written=written, stencil="stencil" in out,
+                                     volumes="volumes" in out),
                      args.memory_budget, scene_path)
         with Renderer(scene, ctx) as renderer:
             result = renderer.render(args.method, args.silhouettes,

@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import contextlib
 import sys
+import warnings
 
 from shadowvol import signals
+from shadowvol.errors import one_line_warning
 from shadowvol.errors import (  # noqa: F401 - the statuses, named here for the commands
     BAD_INPUT,
     INTERRUPTED,
@@ -24,7 +26,9 @@ from shadowvol.errors import (  # noqa: F401 - the statuses, named here for the 
 
 TABLE = (
     (OK, "success"),
-    (OVER_BUDGET, "a comparison over its budget (compare --max-interior)"),
+    (OVER_BUDGET, "a comparison over its budget (compare --max-interior), a grade short of "
+                  "full marks (course grade), a student's image not the reference's (course "
+                  "render)"),
     (BAD_INPUT, "bad input: a scene file, a mesh, an argument, an output path, a scene beyond "
                 "the documented limits or an image over the memory budget, or a missing "
                 "optional extra (named with the pip command that installs it)"),
@@ -53,7 +57,8 @@ def run(command, args) -> int:
     """Call `command(args)` with Ctrl-C and SIGTERM handled (`shadowvol.signals`) and turn what
     it raises into a status (see `report`); an interrupt that something swallowed on the way
     still ends in its status."""
-    with signals.handled():
+    with signals.handled(), warnings.catch_warnings():
+        warnings.showwarning = one_line_warning   # "warning: ...", one line each
         try:
             code = command(args)
             if code not in (INTERRUPTED, TERMINATED):  # else the command reported it already

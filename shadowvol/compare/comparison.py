@@ -195,23 +195,22 @@ class Comparison:
                     l = self.lights[i]
                     panels.append((f"pyrender: {l.pyrender_mismatched} px wrong "
                                    f"({l.pyrender_interior} interior)", image))
-            rows.append(pictures.labelled_row(panels))
+            rows.append(panels)
             if self.lights and self.lights[i].counts_differ is not None:
                 rows.append(self._count_row(i))
-        body = pictures.column(rows)
-        return pictures.column([body, pictures.legend(body.shape[1], maskdiff.LEGEND)])
+        return pictures.legible_rows(rows, maskdiff.LEGEND)
 
-    def _count_row(self, i: int) -> np.ndarray:
+    def _count_row(self, i: int) -> list[tuple[str, np.ndarray]]:
         """An area light's visibility in both renderers and the difference of their counts."""
         l, got, ref = self.lights[i], self.raster_counts[i], self.ref_counts[i]
-        return pictures.labelled_row([
+        return [
             (f"light {i}: raster visibility ({l.samples} samples)",
              maskdiff.visibility_panel(got, l.samples, self.raster_coverage)),
             ("ray traced visibility", maskdiff.visibility_panel(ref, l.samples,
                                                                 self.ref_coverage)),
             (f"counts differ: {l.counts_differ} px, {l.counts_interior} off sample edges, "
              f"largest {l.counts_largest}",
-             maskdiff.count_diff_panel(got, ref, self.raster_coverage | self.ref_coverage))])
+             maskdiff.count_diff_panel(got, ref, self.raster_coverage | self.ref_coverage))]
 
 
 def compare(scene: Scene, method: str = "auto", pyrender: bool = False, *,

@@ -25,7 +25,8 @@ surface wound away from a light casts no shadow in pyrender.  Closed meshes are 
 What the conversion keeps and what it approximates:
 - geometry: exact (world-space triangles; pyrender gets one mesh node per object, identity pose,
   flat face normals, double-sided);
-- camera: exact (pose = inverse view, yfov, znear, aspect; no far plane in either);
+- camera: exact (pose = inverse view, yfov, znear, aspect; a camera given by matrices as
+  pyrender's IntrinsicsCamera, whose projection is ours; no far plane in either);
 - lights: type, pose, colour and cone exact (spot: outer cone = inner cone = `cone_angle`, the
   hardest edge pyrender allows).  Intensity is approximate: our lights have no distance fall-off,
   pyrender's point and spot lights fall off as 1/d^2, so pyrender's intensity is ours times
@@ -97,7 +98,9 @@ def _offscreen(width: int, height: int):
 
 def camera_pose(camera: Camera) -> np.ndarray:
     """(4, 4) float64 camera-to-world matrix (the inverse of the view matrix): columns right, up,
-    back (the camera looks down its -z), eye."""
+    back (the camera looks down its -z), eye; a camera given by matrices: its own."""
+    if camera.matrix_form:
+        return camera.camera_to_world.copy()
     f = camera.target - camera.eye
     f = f / np.linalg.norm(f)
     s = np.cross(f, camera.up)
@@ -105,6 +108,22 @@ def camera_pose(camera: Camera) -> np.ndarray:
     pose = np.eye(4)
     pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = s, np.cross(s, f), -f, camera.eye
     return pose
+
+
+def _pr_camera(scene: Scene):
+    """pyrender's camera for ours, without a far plane: an IntrinsicsCamera for a camera given
+    by matrices (pyrender's projection from fx, fy, cx, cy is ours, `raster.projection`), else
+    a PerspectiveCamera of fov_y and the image's aspect ratio."""
+    pyrender = import_pyrender()
+    cam = scene.camera
+    if cam.matrix_form:
+        camera = pyrender.IntrinsicsCamera(cam.fx, cam.fy, cam.cx, cam.cy, znear=cam.near)
+        # pyrender 0.1.45's Camera.zfar setter refuses None, though IntrinsicsCamera's
+        # projection takes None as the infinite far plane (as PerspectiveCamera's does)
+        camera._zfar = None
+        return camera
+    return pyrender.PerspectiveCamera(yfov=math.radians(cam.fov_y), znear=cam.near, zfar=None,
+                                      aspectRatio=scene.aspect)
 
 
 def _pointing_pose(position: np.ndarray, direction: np.ndarray) -> np.ndarray:
@@ -202,10 +221,7 @@ def to_pyrender(scene: Scene):
         mesh = pyrender.Mesh.from_trimesh(
             tm, material=_pr_material(obj.material, scene.ambient, obj.name), smooth=False)
         pr.add(mesh, name=obj.name)
-    cam = scene.camera
-    pr.add(pyrender.PerspectiveCamera(yfov=math.radians(cam.fov_y), znear=cam.near,
-                                      zfar=None, aspectRatio=scene.aspect),
-           pose=camera_pose(cam), name="camera")
+    pr.add(_pr_camera(scene), pose=camera_pose(scene.camera), name="camera")
     vertices, faces, _ = scene.triangles()
     for i, light in enumerate(scene.lights):
         pr_light, pose = _pr_light(light, vertices[faces])
@@ -247,8 +263,10 @@ def from_pyrender(pr_scene, width: int, height: int, name: str | None = None) ->
       included) and each instance pose, become one Object per primitive, named after the node
       (suffixed ".k" when the mesh has several primitives).  Points and lines have no area, cast
       and receive no shadow, and are left out.
-    - The main camera node must hold a PerspectiveCamera; its aspect ratio, if set, must equal
-      width / height.  zfar is dropped (we have no far plane).
+    - The main camera node must hold a PerspectiveCamera, whose aspect ratio, if set, must
+      equal width / height, or an IntrinsicsCamera, which becomes a camera given by matrices
+      (fx, fy, cx, cy and the node's pose as camera_to_world, used as they are).  zfar is
+      dropped (we have no far plane).
     - Directional, spot and point lights, sorted by node name ("light2" before "light10",
       unnamed last; equal names by pose).  Mesh nodes are sorted the same way.  Spot: cone_angle = the OUTER cone angle (the inner one's falloff is lost).
     - Materials and intensities: see the module docstring.  The scene's ambient light goes into
@@ -279,16 +297,21 @@ def from_pyrender(pr_scene, width: int, height: int, name: str | None = None) ->
     if cam_node is None:
         raise ValueError("the pyrender scene has no camera")
     cam = cam_node.camera
-    if not isinstance(cam, pyrender.PerspectiveCamera):
-        raise ValueError(f"only perspective cameras convert, got {type(cam).__name__}")
-    if cam.aspectRatio is not None and not math.isclose(cam.aspectRatio, width / height,
-                                                        rel_tol=1e-6):
-        raise ValueError(f"the camera's aspect ratio {cam.aspectRatio} differs from "
-                         f"width / height = {width}/{height}")
     pose = pr_scene.get_pose(cam_node)
-    eye = pose[:3, 3]
-    camera = Camera(eye=eye, target=eye - pose[:3, 2], up=pose[:3, 1],
-                    fov_y=math.degrees(cam.yfov), near=cam.znear)
+    if isinstance(cam, pyrender.IntrinsicsCamera):
+        camera = Camera(fx=cam.fx, fy=cam.fy, cx=cam.cx, cy=cam.cy, camera_to_world=pose,
+                        near=cam.znear)
+    else:
+        if not isinstance(cam, pyrender.PerspectiveCamera):
+            raise ValueError(f"only perspective and intrinsics cameras convert, got "
+                             f"{type(cam).__name__}")
+        if cam.aspectRatio is not None and not math.isclose(cam.aspectRatio, width / height,
+                                                            rel_tol=1e-6):
+            raise ValueError(f"the camera's aspect ratio {cam.aspectRatio} differs from "
+                             f"width / height = {width}/{height}")
+        eye = pose[:3, 3]
+        camera = Camera(eye=eye, target=eye - pose[:3, 2], up=pose[:3, 1],
+                        fov_y=math.degrees(cam.yfov), near=cam.znear)
 
     triangles = (np.concatenate([o.triangles for o in objects]) if objects
                  else np.zeros((0, 3, 3)))
@@ -386,9 +409,7 @@ def pyrender_shadow_masks(scene: Scene, lights=None) -> tuple[np.ndarray, np.nda
         return pyrender.Mesh([prim])
 
     pr = pyrender.Scene(bg_color=[0.0, 0.0, 0.0, 1.0], ambient_light=np.zeros(3))
-    cam = scene.camera
-    pr.add(pyrender.PerspectiveCamera(yfov=math.radians(cam.fov_y), znear=cam.near, zfar=None,
-                                      aspectRatio=scene.aspect), pose=camera_pose(cam))
+    pr.add(_pr_camera(scene), pose=camera_pose(scene.camera))
     facing_mesh, away_mesh = mesh(1.0), mesh(-1.0)
     geometry = pr.add(facing_mesh)
     lit = np.zeros((len(chosen), scene.height, scene.width), bool)

@@ -17,7 +17,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from raytrace import pathtrace, photon, whitted
+from raytrace.outlook import photon, whitted
+from raytrace.outlook.path import pathtrace
 from shadowvol.course import ladder as ladder_rungs
 from shadowvol.course import slides
 from shadowvol.course.demos_tracing import ZOOM_FRACTION, crop_window, zoom
@@ -157,7 +158,7 @@ def aliasing(g) -> Picture:
         f"the cage ray traced at one sample per pixel and at {ALIASING_SPP} (box filter); "
         f"below, the boxed part of each enlarged x{ZOOM_FRACTION}, one square per pixel",
         f"raytrace render {g.path('cage')} --spp {ALIASING_SPP} -o aliasing.png "
-        "(raytrace.whitted.aliasing_pair)",
+        "(raytrace.outlook.whitted.aliasing_pair)",
         L.compose(title, [[("1 sample per pixel (the centre)", _framed(one, x, y, cw, ch, px)),
                            (f"{ALIASING_SPP} samples per pixel",
                             _framed(many, x, y, cw, ch, px))],

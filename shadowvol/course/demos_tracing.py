@@ -8,7 +8,7 @@ import numpy as np
 
 import raytrace
 from raytrace import exercise
-from raytrace.raytree import format_tree, ray_tree
+from raytrace.outlook.raytree import format_tree, ray_tree
 from shadowvol.compare import maskdiff
 from shadowvol.compare.comparison import compare
 from shadowvol.course import exercise_picture, raytree_diagram, raytree_slide, slides
@@ -52,7 +52,7 @@ def ray_tree_pixel(scene, obj_name: str, offset=(-0.35, 0.45)) -> tuple[int, int
     view = view_matrix(scene.camera)
     right, up = view[0, :3], view[1, :3]
     c = obj.analytic.center + obj.analytic.radius * (offset[0] * right + offset[1] * up)
-    clip = view_projection(scene.camera, scene.aspect) @ np.append(c, 1.0)
+    clip = view_projection(scene.camera, scene.size) @ np.append(c, 1.0)
     ndc = clip[:2] / clip[3]
     return (int((ndc[0] + 1) / 2 * scene.width), int((1 - ndc[1]) / 2 * scene.height))
 

@@ -18,7 +18,14 @@ import time
 from pathlib import Path
 
 from shadowvol import memory
-from shadowvol.course import demos_outlook, demos_tracing, demos_volumes, soft_gallery
+from shadowvol.compare import estimate
+from shadowvol.course import (
+    demos_outlook,
+    demos_tracing,
+    demos_volumes,
+    shadowmap_plot,
+    soft_gallery,
+)
 from shadowvol.course.picture import Picture
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE, SUPERSAMPLE, Layout
 from shadowvol.errors import MissingExtra
@@ -50,7 +57,8 @@ DEMOS = (demos_volumes.cage, soft_gallery.umbra_penumbra, soft_gallery.hard_sum,
          demos_volumes.stack_stencil, demos_volumes.counting_side_view,
          demos_volumes.zpass_zfail, demos_tracing.whitted_best, demos_tracing.raytree,
          demos_tracing.tir, demos_tracing.shadow2d, demos_tracing.ray_plane,
-         demos_tracing.compare_picture, demos_tracing.shadow_mapping) + demos_outlook.DEMOS
+         demos_tracing.compare_picture, demos_tracing.shadow_mapping,
+         shadowmap_plot.slide) + demos_outlook.DEMOS
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -108,8 +116,8 @@ class Gallery:
                 scene = self.scene(path.stem)
             except SceneError:
                 continue
-            memory.check(memory.compare(scene.replace(width=self.size[0],
-                                                      height=self.size[1])), budget, str(path))
+            memory.check(estimate.compare(scene.replace(width=self.size[0],
+                                                        height=self.size[1])), budget, str(path))
 
     def path(self, name: str) -> str:
         """How a command names the scene file: scenes/<name>.toml in a checkout."""

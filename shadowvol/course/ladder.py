@@ -35,11 +35,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raytrace import pathtrace, photon, radiosity, whitted
 from raytrace.backends import make_backend
 from raytrace.camera import primary_rays
-from raytrace.direct import emitter_points
 from raytrace.intersect import dot
+from raytrace.outlook import photon, radiosity, whitted
+from raytrace.outlook.direct import emitter_points
+from raytrace.outlook.path import pathtrace
 from shadowvol.errors import require
 from shadowvol.io import encode_srgb
 from shadowvol.scene import PointLight, Scene

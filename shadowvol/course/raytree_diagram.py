@@ -4,12 +4,12 @@
     diagram = draw_diagram(scene, tree, 1000, 900, 28)    # (H, W, 3) uint8, left to right
     image = draw_rays(image, scene, tree, 28)             # the same rays over the render
 
-The root (the eye ray) is at the left, its children in the next column and so on; each box
-says the ray's number (as `raytrace.raytree.format_tree` prints it), its kind and what it meets,
-and each edge is labelled with Whitted's letters: S a shadow ray, R the reflected ray, T the
-transmitted (refracted) one.  Box colours are the rays' colours over the image
-(`COLOURS`), so the diagram and the picture read together.  Pillow only.  The slide that
-puts the two side by side is `raytree_slide`.
+The root (the eye ray) is at the left, its children in the next column and so on; each box says the
+ray's number (as `raytrace.outlook.raytree.format_tree` prints it), its kind and what it meets, and
+each edge is labelled with Whitted's letters: S a shadow ray, R the reflected ray, T the transmitted
+(refracted) one.  Box colours are the rays' colours over the image (`COLOURS`), so the diagram and
+the picture read together.  Pillow only.  The slide that puts the two side by side is
+`raytree_slide`.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image, ImageDraw
 
-from raytrace.camera import camera_basis
-from raytrace.raytree import (
+from raytrace.camera import camera_basis, pixel_focal
+from raytrace.outlook.raytree import (
     BLOCKED,
     FACES_AWAY,
     LIT,
@@ -48,13 +48,10 @@ def project(scene: Scene, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     right, up, back = camera_basis(scene.camera)
     rel = points - scene.camera.eye
     depth = -(rel @ back)
-    half_h = np.tan(np.radians(scene.camera.fov_y) / 2.0)
-    half_w = half_h * scene.aspect
+    fx, fy, cx, cy = pixel_focal(scene.camera, scene.width, scene.height)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ndc_x = (rel @ right) / (depth * half_w)
-        ndc_y = (rel @ up) / (depth * half_h)
-    px = (ndc_x + 1.0) / 2.0 * scene.width
-    py = (1.0 - ndc_y) / 2.0 * scene.height
+        px = fx * (rel @ right) / depth + cx
+        py = cy - fy * (rel @ up) / depth
     return np.stack([px, py], axis=1), depth
 
 

@@ -12,7 +12,7 @@ deep tree (`text_size`), never below `MIN_TEXT_PX`.
 from __future__ import annotations
 
 import numpy as np
-from raytrace.raytree import (
+from raytrace.outlook.raytree import (
     BLOCKED,
     FACES_AWAY,
     LIT,

@@ -191,10 +191,24 @@ def fit(scene, width: int, height: int, samples: int = 1, cover: bool = False):
     (`cover`: kept, so the sides are cut instead and the scene fills the height)."""
     camera = scene.camera
     aspect = width / height
+    if camera.matrix_form:
+        return _fit_matrices(scene, width * samples, height * samples,
+                             aspect < scene.aspect and not cover)
     if aspect < scene.aspect and not cover:
         half = np.tan(np.radians(camera.fov_y) / 2) * scene.aspect / aspect
         camera = replace(camera, fov_y=float(np.degrees(2 * np.arctan(half))))
     return scene.replace(width=width * samples, height=height * samples, camera=camera)
+
+
+def _fit_matrices(scene, width: int, height: int, by_width: bool):
+    """`fit` of a camera given by matrices: its image scaled by one factor (the pixels keep
+    their shape), the scene's width onto the panel's when `by_width`, else its height (as a
+    look-at camera keeps fov_y), and centred on the panel."""
+    c = scene.camera
+    s = width / scene.width if by_width else height / scene.height
+    camera = replace(c, fx=c.fx * s, fy=c.fy * s, cx=c.cx * s + (width - scene.width * s) / 2,
+                     cy=c.cy * s + (height - scene.height * s) / 2)
+    return scene.replace(width=width, height=height, camera=camera)
 
 
 def downsample(linear: np.ndarray, samples: int) -> np.ndarray:
@@ -220,7 +234,7 @@ def supersampled(render, scene, width: int, height: int, samples: int,
 def project(scene, points4: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(n, 4) homogeneous world points -> (n, 2) pixel coordinates of `scene`'s image (x right,
     y down) and (n,) clip w (> 0: in front of the eye)."""
-    clip = np.asarray(points4, np.float64) @ view_projection(scene.camera, scene.aspect).T
+    clip = np.asarray(points4, np.float64) @ view_projection(scene.camera, scene.size).T
     w = clip[:, 3]
     safe = np.where(np.abs(w) < 1e-12, 1e-12, w)
     ndc = clip[:, :2] / safe[:, None]
@@ -334,7 +348,7 @@ def clip_near(points4: np.ndarray, w_min: float = 1e-6) -> np.ndarray:
 def polygon_pixels(scene, corners4: np.ndarray) -> np.ndarray:
     """(n, 4) homogeneous world corners (w = 0: at infinity) of a convex polygon -> (k, 2)
     pixel coordinates of its part in front of the eye (k = 0 when none is)."""
-    clip = np.asarray(corners4, np.float64) @ view_projection(scene.camera, scene.aspect).T
+    clip = np.asarray(corners4, np.float64) @ view_projection(scene.camera, scene.size).T
     clip = clip_near(clip)
     if len(clip) == 0:
         return np.zeros((0, 2))

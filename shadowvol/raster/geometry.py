@@ -38,6 +38,7 @@ from shadowvol.cameras import frame_origin
 from shadowvol.errors import RenderError
 from shadowvol.raster import guard
 from shadowvol.raster.projection import to_frame
+from shadowvol.raster.textures import SceneTextures, texture_index
 from shadowvol.raster.topology import Topology
 from shadowvol.scene import Scene, SceneError
 
@@ -58,7 +59,10 @@ class ObjectRange:
 _FRAMED = ("in_position", "in_corner", "triangle_data")
 # bytes per triangle of each soup buffer (three vertices each, but the per-triangle data)
 _BYTES = {"in_position": 36, "in_corner": 36, "in_normal": 36, "in_object": 12,
-          "triangle_data": 32}
+          "triangle_data": 32, "in_uv": 24, "in_colour": 36}
+# the soup's per-vertex surface attributes (textures and vertex colours), interpolated by the
+# geometry pass into the G-buffer: each object's own, (n, C) per vertex, C of each
+_SURFACE = {"in_uv": 2, "in_colour": 3}
 # triangles built at a time when a soup buffer is written: no array of the whole soup but the
 # per-triangle normals and objects is made on the host (on a software GL a buffer is host
 # memory too, so a kept copy would be a second one)
@@ -116,6 +120,9 @@ class SceneGeometry:
         self.bounds = np.array([[o.vertices.min(axis=0), o.vertices.max(axis=0)]
                                 for o in scene.objects])
         self.extent = scene.extent  # a property of the scene that walks every vertex: once
+        # the shadow switches (`Object.cast_shadows`, `receive_shadows`): (n_objects,) bool
+        self.casts = np.array([o.cast_shadows for o in scene.objects], bool)
+        self.receives = np.array([o.receive_shadows for o in scene.objects], bool)
         self._reach: dict[int, np.ndarray] = {}     # per far object, its triangles' reach
         self._far_corners: dict[int, np.ndarray] = {}   # and its frame corners (`set_view`)
         self._corners64: np.ndarray | None = None   # `soup_corners_f64`, made on first use
@@ -138,7 +145,19 @@ class SceneGeometry:
             m = o.material
             materials[i, 0, :3], materials[i, 1, :3] = m.ambient, m.diffuse
             materials[i, 2, :3], materials[i, 2, 3] = m.specular, m.shininess
-        self.materials = ctx.texture((3, len(scene.objects)), 4, materials.tobytes(), dtype="f4")
+        # textures and vertex colours: `surface` says the scene has some (the G-buffer then
+        # holds UVs and colours, `target.Target`); texel 3 of a material row holds its
+        # texture's index (-1: none)
+        self._surface = {"in_uv": tuple(o.uv for o in scene.objects),
+                         "in_colour": tuple(o.colors for o in scene.objects)}
+        self.surface = any(o.material.texture is not None or o.colors is not None
+                           for o in scene.objects)
+        textures, index = texture_index(scene)
+        materials = np.concatenate([materials, np.zeros((len(scene.objects), 1, 4),
+                                                        np.float32)], axis=1)
+        materials[:, 3, 0] = index
+        self.textures = SceneTextures(ctx, textures) if self.surface else None
+        self.materials = ctx.texture((4, len(scene.objects)), 4, materials.tobytes(), dtype="f4")
         self.materials.filter = (moderngl.NEAREST, moderngl.NEAREST)
 
     def _new_buffer(self, name: str) -> moderngl.Buffer:
@@ -170,7 +189,33 @@ class SceneGeometry:
                 t = slice(rng.first + a, rng.first + a + len(faces))
                 corners = np.take(vertices, faces, axis=0) if framed else None
                 for name, buf in targets:
-                    buf.write(self._data(name, t, corners), offset=t.start * _BYTES[name])
+                    data = self._vertex_data(name, rng.index, faces) if name in _SURFACE \
+                        else self._data(name, t, corners)
+                    buf.write(data, offset=t.start * _BYTES[name])
+
+    def _vertex_data(self, name: str, i: int, faces: np.ndarray) -> np.ndarray:
+        """(3 k, C) float32: the surface attribute `name` of object i at the corners of its
+        triangles `faces` (k, 3) (UVs 0 and colours 1 where the object has none)."""
+        values = self._surface[name][i]
+        if values is None:
+            fill = 0.0 if name == "in_uv" else 1.0
+            return np.full((3 * len(faces), _SURFACE[name]), fill, np.float32)
+        return np.take(values, faces.reshape(-1), axis=0).astype(np.float32)
+
+    def _piece_attribute(self, name: str) -> np.ndarray:
+        """(3 P, C) float32: the surface attribute `name` at the pieces' corners, interpolated
+        in float64 with their barycentrics in their triangle (`set_view`)."""
+        out = np.empty((len(self.piece_of), 3, _SURFACE[name]), np.float32)
+        objects = self.triangle_objects[self.piece_of]
+        tri = self.frame_corners(self.piece_of).astype(np.float64)
+        for i in np.unique(objects):
+            mine = np.flatnonzero(objects == i)
+            faces = self._objects[i][1][self.piece_of[mine] - self.ranges[i].first]
+            corner = self._vertex_data(name, int(i), faces).reshape(-1, 3, _SURFACE[name])
+            for c in range(3):
+                w = _barycentrics(tri[mine], self.pieces[mine, c].astype(np.float64))
+                out[mine, c] = np.einsum("kc,kcd->kd", w, corner.astype(np.float64))
+        return out.reshape(-1, _SURFACE[name])
 
     def _data(self, name: str, t, corners: np.ndarray | None) -> np.ndarray:
         """The data `name` of triangles `t` (a slice or (k,) soup indices) whose frame corners
@@ -222,6 +267,8 @@ class SceneGeometry:
         own positions, the rest their triangle's."""
         if name == "in_position":
             return self.pieces.reshape(-1, 3)
+        if name in _SURFACE:
+            return self._piece_attribute(name)
         t = self.piece_of
         return self._data(name, t, self.frame_corners(t) if name in _FRAMED else None)
 
@@ -356,7 +403,8 @@ class SceneGeometry:
 
     def soup_bindings(self, program: moderngl.Program) -> list[tuple]:
         """The (buffer, format, name) triples of the soup's attributes that `program` uses."""
-        formats = {"in_position": "3f", "in_normal": "3f", "in_corner": "3f", "in_object": "1i"}
+        formats = {"in_position": "3f", "in_normal": "3f", "in_corner": "3f", "in_object": "1i",
+                   "in_uv": "2f", "in_colour": "3f"}
         return [(self._soup_buffer(name), fmt, name) for name, fmt in formats.items()
                 if name in program]
 
@@ -365,6 +413,8 @@ class SceneGeometry:
             buf.release()
         self._buffers.clear()
         self.materials.release()
+        if self.textures is not None:
+            self.textures.release()
 
 
 def merged_runs(first: np.ndarray, end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -377,6 +427,18 @@ def merged_runs(first: np.ndarray, end: np.ndarray) -> tuple[np.ndarray, np.ndar
     cut = np.flatnonzero(first[1:] != end[:-1]) + 1
     return (first[np.concatenate([[0], cut])],
             end[np.concatenate([cut - 1, [len(end) - 1]])])
+
+
+def _barycentrics(corners: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """(k, 3) float64 barycentric weights of points p (k, 3) in triangles corners (k, 3, 3)."""
+    a = corners[:, 0]
+    e1, e2, q = corners[:, 1] - a, corners[:, 2] - a, p - a
+    d11, d12, d22 = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
+    dq1, dq2 = (q * e1).sum(1), (q * e2).sum(1)
+    den = d11 * d22 - d12 * d12
+    den = np.where(den == 0.0, 1.0, den)
+    b1, b2 = (d22 * dq1 - d12 * dq2) / den, (d11 * dq2 - d12 * dq1) / den
+    return np.stack([1.0 - b1 - b2, b1, b2], axis=1)
 
 
 def _unit_normals(corners: np.ndarray) -> np.ndarray:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from shadowvol.cameras import look_at_basis
 from shadowvol.raster.projection import cross3, near_rectangle
 from shadowvol.scene import Camera
 
@@ -35,13 +36,13 @@ FAR_APEX_EXTENTS = 1e6
 ZPASS_BOX_MARGIN = 1e-3
 
 
-def near_clip_planes(camera: Camera, aspect: float, light4: np.ndarray) -> np.ndarray | None:
+def near_clip_planes(camera: Camera, size: tuple[float, float], light4: np.ndarray
+                     ) -> np.ndarray | None:
     """(5, 4) float64 planes (n, d) of the near-clip volume, n . x + d <= 0 inside, or None
     when the light lies in the near plane (degenerate hull)."""
-    rect = near_rectangle(camera, aspect)                                 # (4, 3)
+    rect = near_rectangle(camera, size)                                 # (4, 3)
     centre = rect.mean(axis=0)
-    forward = camera.target - camera.eye
-    forward = forward / np.linalg.norm(forward)
+    forward = -look_at_basis(camera)[2]   # target - eye, normalised, for a look-at camera
     toward_light = light4[:3] - light4[3] * centre                        # centre -> light
     scale = np.linalg.norm(toward_light)
     side = float(forward @ toward_light)
@@ -62,13 +63,13 @@ def near_clip_planes(camera: Camera, aspect: float, light4: np.ndarray) -> np.nd
 CULL_NEAR_MARGIN = 1e-6  # of the scene's extent: a box touching the near plane is not culled
 
 
-def needs_zfail(bounds: np.ndarray, camera: Camera, aspect: float, light4: np.ndarray,
+def needs_zfail(bounds: np.ndarray, camera: Camera, size: tuple[float, float], light4: np.ndarray,
                 extent: float) -> np.ndarray:
     """(n,) bool: True for every caster whose volume the near plane may cut.
 
     bounds : (n, 2, 3) float64 axis-aligned boxes (min, max) of the casters.
     """
-    planes = near_clip_planes(camera, aspect, light4)
+    planes = near_clip_planes(camera, size, light4)
     if planes is None:
         return np.ones(len(bounds), bool)
     # the 8 corners of each box: (n, 8, 3)
@@ -80,7 +81,7 @@ def needs_zfail(bounds: np.ndarray, camera: Camera, aspect: float, light4: np.nd
     outside_a_hull_plane = (dist > margin).all(axis=1).any(axis=1)
     # and the box's own faces against the hull's corners (a separating-axis test on the box's
     # three axes too): a flat floor below the hull is separated only this way.
-    rect = near_rectangle(camera, aspect)
+    rect = near_rectangle(camera, size)
     apex = (light4[:3] if light4[3]
             else rect.mean(axis=0) + light4[:3] * (FAR_APEX_EXTENTS * extent))
     hull = np.concatenate([rect, apex[None]])                             # (5, 3)
@@ -91,7 +92,7 @@ def needs_zfail(bounds: np.ndarray, camera: Camera, aspect: float, light4: np.nd
     return ~(outside_a_hull_plane | below | above)
 
 
-def choose(method: str, bounds: np.ndarray, camera: Camera, aspect: float,
+def choose(method: str, bounds: np.ndarray, camera: Camera, size: tuple[float, float],
            light4: np.ndarray, extent: float) -> np.ndarray:
     """(n,) bool: which casters use z-fail under `method` ("auto", "zpass" or "zfail")."""
     if method == "zpass":
@@ -99,11 +100,11 @@ def choose(method: str, bounds: np.ndarray, camera: Camera, aspect: float,
     if method == "zfail":
         return np.ones(len(bounds), bool)
     if method == "auto":
-        return needs_zfail(bounds, camera, aspect, light4, extent)
+        return needs_zfail(bounds, camera, size, light4, extent)
     raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
 
 
-def zpass_clip_planes(bounds: np.ndarray, camera: Camera, aspect: float,
+def zpass_clip_planes(bounds: np.ndarray, camera: Camera, size: tuple[float, float],
                       extent: float) -> np.ndarray:
     """(6, 4) float64 planes (n, d) of a box, n . x + d w >= 0 inside (x homogeneous, so a
     point at infinity (x, 0) is inside when its direction does not leave through the plane),
@@ -117,7 +118,7 @@ def zpass_clip_planes(bounds: np.ndarray, camera: Camera, aspect: float,
     the volumes beyond the receivers, out to infinity.  Uncovered pixels (nothing visible)
     count differently, so the stencil read-back must not use it.
     """
-    rect = near_rectangle(camera, aspect)
+    rect = near_rectangle(camera, size)
     margin = ZPASS_BOX_MARGIN * extent
     lo = np.minimum(bounds[:, 0].min(axis=0), rect.min(axis=0)) - margin
     hi = np.maximum(bounds[:, 1].max(axis=0), rect.max(axis=0)) + margin
@@ -142,8 +143,7 @@ def cullable(bounds: np.ndarray, outward_convex: np.ndarray, camera: Camera,
     default.
 
     bounds : (n, 2, 3) float64 boxes; outward_convex : (n,) bool."""
-    forward = camera.target - camera.eye
-    forward = forward / np.linalg.norm(forward)
+    forward = -look_at_basis(camera)[2]   # target - eye, normalised, for a look-at camera
     pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
     corners = np.stack([bounds[:, pick[:, 0], 0], bounds[:, pick[:, 1], 1],
                         bounds[:, pick[:, 2], 2]], axis=-1)                  # (n, 8, 3)

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from shadowvol.cameras import pinhole
 from shadowvol.errors import RenderError
 from shadowvol.raster import methods, stencil
 from shadowvol.raster.passes import count_volumes
@@ -148,7 +149,7 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
     only = None if only is None else set(only)
     camera = renderer.scene.camera if camera is None else camera
     vols = renderer.volumes(silhouettes)
-    clip = methods.zpass_clip_planes(renderer.geometry.bounds, camera, renderer.scene.aspect,
+    clip = methods.zpass_clip_planes(renderer.geometry.bounds, camera, renderer.scene.size,
                                      renderer.geometry.extent)
     lights = renderer.scene.lights if lights is None else lights
     # an area light's samples are checked one by one against every pixel any sample lit (a
@@ -156,8 +157,8 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
     # way); the casters its samples counted with z-fail stay z-fail (valid)
     for i, k, light in ((i, k, hard) for i, lt in enumerate(lights)
                         for k, hard in enumerate(hard_lights(lt))):
-        if only is not None and (i, k) not in only:
-            continue   # its `light_bound` is below STENCIL_LIMIT
+        if only is not None and (i, k) not in only or not light.shadows:
+            continue   # its `light_bound` is below STENCIL_LIMIT, or it is never counted
         light4 = light.homogeneous
         if vols.light4 is None or not np.array_equal(vols.light4, light4):
             vols.prepare(light4)  # (the frame's last light is still prepared)
@@ -167,7 +168,7 @@ def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
                                drawn, clip, halve)
         # a pixel is cleared by any valid counting whose entering faces stay below 255
         zpass_valid = not methods.needs_zfail(renderer.geometry.bounds, camera,
-                                              renderer.scene.aspect, light4,
+                                              renderer.scene.size, light4,
                                               renderer.geometry.extent).any()
         others = [np.ones_like(choice)] + ([np.zeros_like(choice)] if zpass_valid else [])
         for other in others:
@@ -202,7 +203,7 @@ def world_slack(camera, height: int, corners: np.ndarray,
     far = np.linalg.norm(corners - camera.eye, axis=-1).max(axis=1)
     if largest is None:
         largest = float(np.abs(corners).max())
-    return _pixel_slack(camera, height) * far + FLOAT32_SLACK * largest
+    return pixel_slack(camera, height) * far + FLOAT32_SLACK * largest
 
 
 def object_slack(camera, height: int, bounds: np.ndarray, largest: float) -> np.ndarray:
@@ -215,12 +216,14 @@ def object_slack(camera, height: int, bounds: np.ndarray, largest: float) -> np.
     corners = np.stack([bounds[:, pick[:, 0], 0], bounds[:, pick[:, 1], 1],
                         bounds[:, pick[:, 2], 2]], axis=-1)             # (n, 8, 3)
     far = np.linalg.norm(corners - camera.eye, axis=-1).max(axis=1) * (1.0 + 1e-12)
-    return _pixel_slack(camera, height) * far + FLOAT32_SLACK * largest
+    return pixel_slack(camera, height) * far + FLOAT32_SLACK * largest
 
 
-def _pixel_slack(camera, height: int) -> float:
-    """PIXEL_SLACK camera pixels at unit distance from the eye, in world units."""
-    return PIXEL_SLACK * 2.0 * np.tan(np.radians(camera.fov_y) / 2.0) / height
+def pixel_slack(camera, height: int) -> float:
+    """PIXEL_SLACK camera pixels at unit distance from the eye, in world units (the larger
+    side of a pixel: 1 / min(fx, fy))."""
+    fx, fy, _, _ = pinhole(camera, 1, height)   # fx, fy of any width
+    return PIXEL_SLACK / min(fx, fy)
 
 
 def _binned_max(lo: np.ndarray, hi: np.ndarray, weight: np.ndarray, grid: int) -> np.ndarray:

@@ -45,7 +45,7 @@ class LightBounds:
         by_object = overflow.object_slack(camera, height, geometry.bounds, self._largest)
 
         def needed() -> np.ndarray:
-            key = (camera.eye.tobytes(), float(camera.fov_y))
+            key = (camera.eye.tobytes(), overflow.pixel_slack(camera, height))
             if self._slack is None or self._slack[0] != key:   # once per camera
                 self._slack = (key, overflow.world_slack(camera, height, corners,
                                                          self._largest))

@@ -30,8 +30,9 @@ def draw_volume_overlay(ctx: moderngl.Context, gl: RawGL, target, volumes,
     ctx.enable_only(moderngl.DEPTH_TEST | moderngl.BLEND)
     ctx.depth_func = NEARER_OR_EQUAL
     ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
-    all_objects = list(range(len(zfail)))
-    capped = [int(i) for i in np.flatnonzero(zfail)]
+    casts = volumes.geometry.casts   # the objects that cast shadows (`Object.cast_shadows`)
+    all_objects = [int(i) for i in np.flatnonzero(casts)]
+    capped = [int(i) for i in np.flatnonzero(zfail & casts)]
     draws = [("side", lambda: volumes.draw_sides(all_objects))]
     if capped:
         draws += [("near cap", lambda: volumes.draw_caps(capped, near=True)),

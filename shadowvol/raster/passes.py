@@ -59,7 +59,9 @@ class ScenePrograms:
 
     def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
         self.ctx, self.geometry = ctx, geometry
-        self.gbuffer = glsl.program(ctx, "scene.vert", "gbuffer.frag")
+        # textures or vertex colours: UVs and colours in the G-buffer (SURFACE)
+        self.surface = {"SURFACE": 1} if geometry.surface else {}
+        self.gbuffer = glsl.program(ctx, "scene.vert", "gbuffer.frag", defines=self.surface)
         self.gbuffer_vao = ctx.vertex_array(self.gbuffer, geometry.soup_bindings(self.gbuffer))
         self.mark = glsl.program(ctx, "fullscreen.vert", "mark.frag")
         self.mark_vao = ctx.vertex_array(self.mark, [])
@@ -70,6 +72,12 @@ class ScenePrograms:
         self.srgb = glsl.program(ctx, "fullscreen.vert", "srgb.frag")
         self.srgb_vao = ctx.vertex_array(self.srgb, [])
         self._forward = None
+        # the objects that receive no shadow, drawn again after each count (`count_volumes`)
+        self.unreceiving = np.flatnonzero(~geometry.receives)
+        self.receivers = glsl.program(ctx, "scene.vert", "volume.frag") \
+            if len(self.unreceiving) else None
+        self.receivers_vao = None if self.receivers is None else ctx.vertex_array(
+            self.receivers, geometry.soup_bindings(self.receivers))
 
     def shading(self, lights: int, colour: bool, srgb: bool = False, spots: int = 0,
                 emitters: int = 0) -> tuple:
@@ -82,7 +90,7 @@ class ScenePrograms:
         if key not in self._shade:
             defines = ({"LIGHTS": lights, "SPOT_LIGHTS": spots, "EMITTER_LIGHTS": emitters} |
                        ({} if colour else {"MASKS_ONLY": 1}) |
-                       ({"SRGB_OUT": 1} if srgb else {}))
+                       ({"SRGB_OUT": 1} if srgb else {}) | (self.surface if colour else {}))
             program = glsl.program(self.ctx, "fullscreen.vert", "shade.frag", defines=defines)
             self._shade[key] = (program, self.ctx.vertex_array(program, []))
         return self._shade[key]
@@ -125,8 +133,14 @@ class ScenePrograms:
     def phong_vao(self) -> moderngl.VertexArray:
         return self._forward_programs()[3]
 
+    @property
+    def framed(self) -> tuple[moderngl.Program, ...]:
+        """The programs that take the frame's camera (`set_camera`) with the volumes'."""
+        return (self.gbuffer,) + (() if self.receivers is None else (self.receivers,))
+
     def release(self) -> None:
         for obj in (self.gbuffer_vao, self.mark_vao, self.srgb_vao, self.gbuffer, self.mark,
+                    *((self.receivers_vao, self.receivers) if self.receivers else ()),
                     self.srgb, *(x for pv in self._shade.values() for x in pv[::-1]),
                     *(x for pv in self._masks.values() for x in pv[::-1]),
                     *(self._forward or ())):
@@ -181,6 +195,21 @@ def _draw_soup(ctx: moderngl.Context, geometry: SceneGeometry, vao: moderngl.Ver
         for first, count in geometry.spans(range(a, b)):
             vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
     ctx.enable_only(moderngl.DEPTH_TEST)
+
+
+def zero_unreceiving(ctx: moderngl.Context, gl: RawGL, progs: ScenePrograms | None,
+                     count_mask: int = 0xFF) -> None:
+    """After a light's count (`count_volumes`, its framebuffer bound, colour and depth writes
+    off): the objects that receive no shadow (`Object.receive_shadows`) drawn again over the
+    geometry pass's depths (the same shader and vertices: depth test EQUAL holds), their
+    visible pixels' counts set to 0 (`stencil.zeroed_counts`).  Nothing when all receive."""
+    if progs is None or progs.receivers is None:
+        return
+    ctx.depth_func = "=="
+    with stencil.zeroed_counts(gl, count_mask):
+        for first, count in progs.geometry.spans(progs.unreceiving):
+            progs.receivers_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
+    ctx.depth_func = NEARER
 
 
 def mask_pass(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
@@ -312,6 +341,8 @@ def shade(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms
     for name, unit in (("u_materials", 0), ("u_position", 1), ("u_unshadowed", 2)):
         set_uniform(prog, name, unit)
     progs.geometry.triangle_data.bind_to_storage_buffer(0)
+    if colour and progs.geometry.surface:
+        progs.geometry.textures.bind(prog, target)
     if not lights:
         set_uniform(prog, "u_last_unshadowed", False)
         vao.render(moderngl.TRIANGLES, vertices=3)
@@ -382,7 +413,7 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
                   zfail: np.ndarray, halve: bool = False,
                   clip_planes: np.ndarray | None = None, counting=None,
                   objects=None, each=None, fbo=None, clear: bool = True,
-                  count_mask: int = 0xFF) -> None:
+                  count_mask: int = 0xFF, receivers: ScenePrograms | None = None) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
     `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
 
@@ -415,7 +446,8 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
     zeroing mark), and is not cleared again.
 
     `count_mask`: the default counting keeps the count in these low bits of the stencil only
-    (`stencil.mask_layout`: the mask-only frame's bits are above them)."""
+    (`stencil.mask_layout`: the mask-only frame's bits are above them).  Only casting objects
+    count; `receivers`: then `zero_unreceiving` (the shadow switches)."""
     if counting is None:
         def counting(zfail_group: bool, depth_clamp: bool):
             return (stencil.zfail_counting(gl, depth_clamp=depth_clamp, count_mask=count_mask)
@@ -434,6 +466,7 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
     ctx.depth_func = NEARER
     chosen = np.ones(len(zfail), bool) if objects is None else np.isin(
         np.arange(len(zfail)), list(objects))
+    chosen &= volumes.geometry.casts
     # index arrays, not lists: the volumes draw them in numpy (no Python per object)
     by_zpass = np.flatnonzero(~zfail & chosen)
     by_zfail = np.flatnonzero(zfail & chosen)
@@ -453,5 +486,6 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
             volumes.draw_caps(by_zfail, near=False, each=each)
         with counting(True, False):
             volumes.draw_caps(by_zfail, near=True, each=each)
+    zero_unreceiving(ctx, gl, receivers, count_mask)
     if fbo is None:
         target.use()

@@ -168,7 +168,7 @@ class PlanarShadows:
         r = self.renderer
         camera = scene.camera if camera is None else camera
         lights = scene.lights if lights is None else tuple(lights)
-        view_proj, origin = frame_view_projection(camera, scene.aspect)
+        view_proj, origin = frame_view_projection(camera, scene.size)
         r.geometry.move_to(origin)
         passes.set_camera((r.programs.ambient, r.programs.phong), view_proj, camera, origin)
         forward.depth_ambient(r.ctx, r.target, r.programs, scene)

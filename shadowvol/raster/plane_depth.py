@@ -11,11 +11,9 @@ e meets the plane n . p = n . a of the triangle's float32 frame corners (a, b, c
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from shadowvol.cameras import look_at_basis
+from shadowvol.cameras import look_at_basis, pinhole
 from shadowvol.raster.projection import frame_camera
 from shadowvol.scene import Camera
 
@@ -24,11 +22,10 @@ def direction_grid(camera: Camera, width: int, height: int) -> tuple[np.ndarray,
     """col (3, W) and row (3, H) float64: pixel (x, y)'s direction of eye-space depth 1 is
     row[:, y] + col[:, x], summed as `raytrace.camera.RayGrid` sums it."""
     right, up, back = look_at_basis(camera)
-    half_h = math.tan(math.radians(camera.fov_y) / 2.0)
-    half_w = half_h * (width / height)
-    x = (np.arange(width) + 0.5) / width * 2.0 - 1.0
-    y = 1.0 - (np.arange(height) + 0.5) / height * 2.0
-    return right[:, None] * (x * half_w) - back[:, None], up[:, None] * (y * half_h)
+    fx, fy, cx, cy = pinhole(camera, width, height)
+    x = (np.arange(width) + 0.5 - cx) / fx
+    y = (cy - (np.arange(height) + 0.5)) / fy
+    return right[:, None] * x - back[:, None], up[:, None] * y
 
 
 def plane_depths(geometry, camera: Camera, triangle: np.ndarray, fallback: np.ndarray

@@ -21,12 +21,9 @@ the eye, clip planes -- is float64 world minus the origin, rounded once (`to_fra
 
 from __future__ import annotations
 
-import dataclasses
-import math
-
 import numpy as np
 
-from shadowvol.cameras import frame_origin
+from shadowvol.cameras import frame_origin, look_at_basis, pinhole
 from shadowvol.scene import Camera
 
 NEARER = ">"              # depth test passing a fragment nearer than what is stored
@@ -42,48 +39,55 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def view_matrix(camera: Camera) -> np.ndarray:
-    """(4, 4) float64 world -> eye space; right-handed, the camera looks down -z."""
-    forward = camera.target - camera.eye
-    forward = forward / np.linalg.norm(forward)
-    side = cross3(forward, camera.up)
-    side = side / np.linalg.norm(side)
-    up = cross3(side, forward)
+    """(4, 4) float64 world -> eye space; right-handed, the camera looks down -z.  Rows the
+    camera's basis (`cameras.look_at_basis`: the columns of the camera_to_world every frame
+    carries), so a frame's camera_to_world read back as its camera gives this matrix again."""
     m = np.eye(4)
-    m[0, :3], m[1, :3], m[2, :3] = side, up, -forward
+    m[0, :3], m[1, :3], m[2, :3] = look_at_basis(camera)
     m[:3, 3] = -m[:3, :3] @ camera.eye
     return m
 
 
-def infinite_projection(fov_y: float, aspect: float, near: float) -> np.ndarray:
-    """(4, 4) float64 perspective with the far plane at infinity and reversed depth, for the
-    zero-to-one clip depth range.
+def infinite_projection(camera: Camera, size: tuple[float, float]) -> np.ndarray:
+    """(4, 4) float64 perspective of `camera` for an image of size (W, H) pixels, with the far
+    plane at infinity and reversed depth, for the zero-to-one clip depth range.
 
+    From the camera's K (`cameras.pinhole`): ndc x = (2 fx / W) X + 2 cx / W - 1 and
+    ndc y = (2 fy / H) Y + 1 - 2 cy / H of the eye-space point's X = x / -z, Y = y / -z, so GL's
+    pixel centre (x + 0.5, y + 0.5), rows from the top, is where K puts it; a look-at camera's
+    fx = fy = (H / 2) / tan(fov_y / 2), cx = W / 2, cy = H / 2 give the usual symmetric one.
     clip z = near * w, clip w = -z_eye: depth = near / -z_eye, in (0, 1] for z_eye <= -near
     (nearer is clipped: z > w), and exactly 0 for a point at infinity (w = 0).
     """
-    f = 1.0 / math.tan(math.radians(fov_y) / 2.0)
+    width, height = size
+    fx, fy, cx, cy = pinhole(camera, width, height)
     m = np.zeros((4, 4))
-    m[0, 0] = f / aspect
-    m[1, 1] = f
-    m[2, 3] = near
+    m[0, 0] = 2.0 * fx / width
+    m[0, 2] = 1.0 - 2.0 * cx / width
+    m[1, 1] = 2.0 * fy / height
+    m[1, 2] = 2.0 * cy / height - 1.0
+    m[2, 3] = camera.near
     m[3, 2] = -1.0
     return m
 
 
-def view_projection(camera: Camera, aspect: float) -> np.ndarray:
-    """(4, 4) float64 world -> clip space."""
-    return infinite_projection(camera.fov_y, aspect, camera.near) @ view_matrix(camera)
+def view_projection(camera: Camera, size: tuple[float, float]) -> np.ndarray:
+    """(4, 4) float64 world -> clip space of an image of size (W, H)."""
+    return infinite_projection(camera, size) @ view_matrix(camera)
 
 
 def frame_camera(camera: Camera, origin: np.ndarray) -> Camera:
-    """`camera` with its eye and target expressed in the frame of `origin` (3,) float64."""
-    return dataclasses.replace(camera, eye=camera.eye - origin, target=camera.target - origin)
+    """`camera` with its eye and target (or its matrix's translation) expressed in the frame
+    of `origin` (3,) float64."""
+    return camera.translated(-origin)
 
 
-def frame_view_projection(camera: Camera, aspect: float) -> tuple[np.ndarray, np.ndarray]:
-    """(4, 4) float64 frame -> clip space for `camera`, and its frame origin (3,) float64."""
+def frame_view_projection(camera: Camera, size: tuple[float, float]
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """(4, 4) float64 frame -> clip space for `camera` and an image of size (W, H), and its
+    frame origin (3,) float64."""
     origin = frame_origin(camera)
-    return view_projection(frame_camera(camera, origin), aspect), origin
+    return view_projection(frame_camera(camera, origin), size), origin
 
 
 def in_frame(points4: np.ndarray, origin: np.ndarray) -> np.ndarray:
@@ -129,16 +133,19 @@ def gl_matrix(m: np.ndarray) -> bytes:
     return np.ascontiguousarray(m.T, dtype=np.float32).tobytes()
 
 
-def near_rectangle(camera: Camera, aspect: float) -> np.ndarray:
+def near_rectangle(camera: Camera, size: tuple[float, float]) -> np.ndarray:
     """(4, 3) float64: the corners of the near-plane rectangle in world space (the view
-    frustum's cross-section at distance `near`), counter-clockwise seen from the eye."""
-    view = view_matrix(camera)
-    side, up, back = view[0, :3], view[1, :3], view[2, :3]
-    h = camera.near * math.tan(math.radians(camera.fov_y) / 2.0)
-    w = h * aspect
-    centre = camera.eye - back * camera.near
-    return np.array([centre - side * w - up * h, centre + side * w - up * h,
-                     centre + side * w + up * h, centre - side * w + up * h])
+    frustum's cross-section at distance `near`) of an image of size (W, H), counter-clockwise
+    seen from the eye."""
+    width, height = size
+    fx, fy, cx, cy = pinhole(camera, width, height)
+    side, up, back = look_at_basis(camera)
+    n = camera.near
+    x0, x1 = (0.0 - cx) / fx * n, (width - cx) / fx * n          # right of the axis
+    y0, y1 = (cy - height) / fy * n, cy / fy * n                  # above the axis
+    centre = camera.eye - back * n
+    return np.array([centre + side * x0 + up * y0, centre + side * x1 + up * y0,
+                     centre + side * x1 + up * y1, centre + side * x0 + up * y1])
 
 
 def top_row_first(pixels: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.cameras import calibration
+from shadowvol.frame import check_light_kinds, check_outputs
 from shadowvol.raster import bits, methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import (
@@ -33,17 +34,19 @@ from shadowvol.raster.context import (
 )
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.gl import RawGL
+from shadowvol.raster.object_facts import ObjectFacts
 from shadowvol.raster.overflow_policy import LightBounds
 from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.recycle import ArrayPool
-from shadowvol.raster.result import SILHOUETTES, RenderResult, check_lights, check_outputs
+from shadowvol.raster.result import (DEFAULT_OUTPUTS, OUTPUTS, SILHOUETTES, RenderResult,
+                                     check_lights)
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target, check_frame_size
 from shadowvol.raster.truth_frame import frame_truth
 from shadowvol.raster.volumes import VolumeBuilder
 from shadowvol.raster.volumes_cpu import CpuVolumes
 from shadowvol.raster.volumes_gpu import GpuVolumes
-from shadowvol.scene import AreaLight, Camera, Light, Scene, hard_lights
+from shadowvol.scene import Camera, Light, Scene, hard_lights
 
 class Renderer:
     """Renders `scene` (its geometry and materials; camera and lights may change per frame).
@@ -61,11 +64,7 @@ class Renderer:
         self.ctx = create_context() if ctx is None else ctx
         self._owned = []
         self._volumes: dict[str, VolumeBuilder] = {}
-        self._count_bound: int | None = None
-        self._object_bounds: np.ndarray | None = None
         self._truth: truth.TruthPass | None = None
-        self._outward_convex: np.ndarray | None = None
-        self._convex: np.ndarray | None = None
         self._bounds = LightBounds()   # the overflow check's kept light bounds
         self._srgb_code: tuple[int, int, int] | None = None   # `_srgb_background`
         # the arrays frames return (`recycle`), and the frames' own scratch (`_scratch`)
@@ -92,7 +91,9 @@ class Renderer:
             check_frame_size(self.ctx, scene.width, scene.height)  # bad input, not a GL error
             self.gl = RawGL()
             self.geometry = self._own(SceneGeometry(self.ctx, scene))
-            self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height))
+            self._facts = ObjectFacts(self.geometry)
+            self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height,
+                                           surface=self.geometry.surface))
             self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
         except BaseException:
             ctx = self.ctx
@@ -121,15 +122,17 @@ class Renderer:
                outputs: tuple[str, ...] | None = None) -> RenderResult:
         """One frame.  `method`: "auto" (z-fail only for casters the near plane may cut),
         "zpass" or "zfail".  `camera`/`lights` override the scene's for this frame.
-        `outputs`: the arrays to read back (names in `result.OUTPUTS`; default image, lit and
-        coverage); the others are None in the result.  `stencil=True` adds "stencil": the
+        `outputs`: exactly the arrays to read back (names in `result.OUTPUTS`; default image,
+        lit and coverage), for lean frames; the others are None in the result (the function
+        `render` adds `outputs` to the defaults instead).  `stencil=True` adds "stencil": the
         per-light stencil counts (one extra read-back each).  `shadows=False` skips the volume
         passes (every count stays 0): the same frame without shadows, the benchmark's
         baseline."""
         if method not in methods.METHODS:
             raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
                              f"got {method!r}")
-        outputs = check_outputs(outputs, stencil)
+        outputs = set(check_outputs(outputs, OUTPUTS, DEFAULT_OUTPUTS)) | (
+            {"stencil"} if stencil else set())
         lights = check_lights(lights)
         make_current(self.ctx)
         to_check = self._lights_to_check(camera, lights) if shadows else []
@@ -161,39 +164,15 @@ class Renderer:
         """`overflow_policy.LightBounds.kept`: the light bounds kept."""
         return self._bounds.kept
 
-    @property
-    def convex(self) -> np.ndarray:
-        """(n_objects,) bool: closed convex meshes (`overflow.is_closed_convex`)."""
-        if self._convex is None:
-            self._convex = np.array([overflow.is_closed_convex(t)
-                                     for t in self.geometry.topologies], bool)
-        return self._convex
-
-    @property
-    def outward_convex(self) -> np.ndarray:
-        """(n_objects,) bool: closed convex meshes wound outward (`overflow.
-        convex_orientation`), whose back faces `methods.cullable` may cull."""
-        if self._outward_convex is None:
-            self._outward_convex = np.array(
-                [overflow.convex_orientation(t) == 1 for t in self.geometry.topologies], bool)
-        return self._outward_convex
-
-    @property
-    def object_bounds(self) -> np.ndarray:
-        """(n_objects,) int64: `overflow.topology_bound` of each object, at most how many of
-        its triangles one segment can cross (a bound on its own count)."""
-        if self._object_bounds is None:
-            self._object_bounds = np.array(
-                [2 if convex else len(t.faces)
-                 for convex, t in zip(self.convex, self.geometry.topologies)], np.int64)
-        return self._object_bounds
-
-    @property
-    def count_bound(self) -> int:
-        """`overflow.count_bound` of the scene: below 256 no stencil count can wrap."""
-        if self._count_bound is None:
-            self._count_bound = overflow.count_bound(self.geometry.topologies)
-        return self._count_bound
+    # the objects' facts (`object_facts.ObjectFacts`), each computed once, when first asked
+    convex = property(lambda self: self._facts.convex,
+                      doc="(n_objects,) bool: closed convex meshes")
+    outward_convex = property(lambda self: self._facts.outward_convex,
+                              doc="(n_objects,) bool: closed convex meshes wound outward")
+    object_bounds = property(lambda self: self._facts.object_bounds,
+                             doc="(n_objects,) int64: a bound on each object's own count")
+    count_bound = property(lambda self: self._facts.count_bound,
+                           doc="the casting objects' count bound: below 256 none can wrap")
 
     def _srgb_background(self) -> tuple[int, int, int]:
         """The background's 8-bit sRGB code as the sRGB pass encodes it (once per renderer)."""
@@ -234,8 +213,7 @@ class Renderer:
         srgb_direct = ("image_srgb" in outputs and "image" not in outputs
                        and len(hard) <= LIGHTS_PER_PAGE)
         h, w = self.scene.height, self.scene.width
-        if plan.want_stencil and any(isinstance(light, AreaLight) for light in lights):
-            raise ValueError("stencil counts are per hard light: not for area lights")
+        check_light_kinds(plan.outputs, lights)
         zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
         truth_pages: list = []
         counts: list[np.ndarray] = []
@@ -287,16 +265,16 @@ class Renderer:
         clip planes or None, the back faces to cull or None)."""
         # the GPU draws in the float32 frame of this camera's eye (`projection`), the ray
         # tracer's frame for the same camera: the geometry is re-expressed when the eye moves
-        view_proj, origin = frame_view_projection(camera, self.scene.aspect)
+        view_proj, origin = frame_view_projection(camera, self.scene.size)
         self.geometry.move_to(origin)
         self.geometry.set_view(view_proj, camera.near)   # huge triangles cut (`guard`)
-        passes.set_camera((self.programs.gbuffer, *vols.programs), view_proj, camera, origin)
+        passes.set_camera((*self.programs.framed, *vols.programs), view_proj, camera, origin)
         cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
                                 self.geometry.extent) if self.cull_back_faces else None
         # z-pass faces clipped to the box of the near rectangle and the casters: the same
         # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
         clip = None if want_stencil else methods.zpass_clip_planes(
-            self.geometry.bounds, camera, self.scene.aspect, self.geometry.extent)
+            self.geometry.bounds, camera, self.scene.size, self.geometry.extent)
         return view_proj, clip, cull
 
     def _read_masks(self, outputs, hard, samples, in_stencil, pages) -> tuple:
@@ -354,13 +332,13 @@ class Renderer:
         for k, (i, light) in enumerate(hard):
             light4 = light.homogeneous
             choice = methods.choose(plan.method, self.geometry.bounds, camera,
-                                    self.scene.aspect, light4, self.geometry.extent)
-            if shadows:
+                                    self.scene.size, light4, self.geometry.extent)
+            if shadows and light.shadows:   # a light switched off: its bit stays facing
                 vols.prepare(light4)
                 # the counts are 0: the mask pass cleared them, and each light's clear but the
                 # last zeroes them again (`stencil.where_shadowed`)
                 passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                     halve=plan.halve, clip_planes=clip,
+                                     halve=plan.halve, clip_planes=clip, receivers=progs,
                                      fbo=target.mark_fbo, clear=False, count_mask=count_mask)
                 if not in_stencil:
                     passes.clear_shadowed(self.ctx, self.gl, target, progs, k,
@@ -406,13 +384,13 @@ class Renderer:
             for bit, light in enumerate(page_lights):
                 light4 = light.homogeneous
                 choice = methods.choose(plan.method, self.geometry.bounds, camera,
-                                        self.scene.aspect, light4, self.geometry.extent)
-                if shadows:
+                                        self.scene.size, light4, self.geometry.extent)
+                if shadows and light.shadows:
                     vols.prepare(light4)
                     # halving is safe only for casters `auto` chose z-pass for, and only when
                     # the counts themselves are not returned (see passes.count_volumes)
                     passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                         halve=plan.halve,
+                                         halve=plan.halve, receivers=progs,
                                          clip_planes=clip,
                                          # counted where it is marked: no framebuffer
                                          # change between the page's lights (llvmpipe
@@ -461,7 +439,7 @@ class Renderer:
         with stencil_gl.zero_to_one_depth(self.gl):
             for i, light in ((i, hard) for i, lt in enumerate(self.scene.lights if lights is None
                                                               else lights)
-                             for hard in hard_lights(lt)):  # an area light: every sample's
+                             for hard in hard_lights(lt) if hard.shadows):  # every sample
                 vols.prepare(light.homogeneous)
                 overlay.draw_volume_overlay(self.ctx, self.gl, self.target, vols,
                                             result.zfail[i])
@@ -489,7 +467,10 @@ class Renderer:
 def render(scene: Scene, method: str = "auto", silhouettes: str = "cpu", *,
            stencil: bool = False, ctx: moderngl.Context | None = None,
            outputs: tuple[str, ...] | None = None) -> RenderResult:
-    """Render one frame of `scene` (a fresh context unless `ctx` is given); `outputs` as in
-    `Renderer.render`."""
+    """Render one frame of `scene` (a fresh context unless `ctx` is given).  `outputs` adds to
+    the default image, lit and coverage, as the command line's --outputs does (names as in
+    `Renderer.render`, whose `outputs=` names exactly the arrays made, for lean frames)."""
+    wanted = None if outputs is None else DEFAULT_OUTPUTS + tuple(
+        o for o in check_outputs(outputs, OUTPUTS) if o not in DEFAULT_OUTPUTS)
     with Renderer(scene, ctx) as renderer:
-        return renderer.render(method, silhouettes, stencil=stencil, outputs=outputs)
+        return renderer.render(method, silhouettes, stencil=stencil, outputs=wanted)

@@ -358,6 +358,18 @@ def where_shadowed(gl: RawGL, zero: bool = False, count_mask: int = 0xFF,
         yield
 
 
+@contextlib.contextmanager
+def zeroed_counts(gl: RawGL, count_mask: int = 0xFF) -> Iterator[None]:
+    """After a light's count, the objects that receive no shadow (`Object.receive_shadows`)
+    drawn again with the depth test EQUAL: where one is the visible surface, its count (the
+    bits of `count_mask`) := 0, unshadowed, either face."""
+    put = (GL_KEEP, GL_KEEP, GL_ZERO)
+    with _saved_stencil_state(gl):
+        _set(gl, func=GL_ALWAYS, ref=0, front_ops=put, back_ops=put, write_mask=count_mask,
+             depth_clamp=False)
+        yield
+
+
 # A mask-only frame of a few hard lights keeps its bits in the stencil itself, beside the
 # counts, where the scene's counts fit (`Renderer._masks_fit_stencil`): no colour target, no
 # clear pass after the last light, one byte a pixel read back.

@@ -4,6 +4,10 @@
   in w +-(triangle index + 1), negative where its back face is seen, 0 where nothing is drawn:
   the key of the per-triangle data (normal, first corner, object; a float, exact below 2^24).
   Further per-pixel outputs (depth, object id) fit beside it as attachments of the same pass.
+- uv (RG32F) and tint (RGBA32F), only in a scene with textures or vertex colours (`surface`),
+  written by the geometry pass beside position: the visible surface's interpolated UVs and
+  vertex colour, which the shading pass turns into its base colour (docs/CONVENTIONS.md,
+  "Textures").
 - unshadowed (R32UI): bit i set where light i's stencil count was 0 (the mark pass ORs it in:
   a colour logic op).  A mask-only frame uses it for its lit bits instead (bits as in `bits`,
   set by its geometry pass and cleared per light by the logic op AND-NOT: `passes.mask_pass`),
@@ -46,10 +50,12 @@ LIGHTS_PER_PAGE = 23  # lit bits 1..23 and the coverage bit of a float32: exact
 # GPU memory of one pixel of the frame: colour RGBA32F, lit bits R32F, G-buffer RGBA32F,
 # unshadowed marks R32UI, sRGB RGBA8, depth32F + stencil8 (8 with padding)
 BYTES_PER_PIXEL = 16 + 4 + 16 + 4 + 4 + 8
+# and the G-buffer's uv RG32F and tint RGBA32F of a scene with textures or vertex colours
+SURFACE_BYTES_PER_PIXEL = 8 + 16
 
 
 # the attributes a Target owns (what `release` frees, also after a failed allocation)
-_TEXTURES = ("colour", "bits", "position", "unshadowed", "srgb")
+_TEXTURES = ("colour", "bits", "position", "unshadowed", "srgb", "uv", "tint")
 _FRAMEBUFFERS = ("gbuffer_fbo", "mark_fbo", "fbo", "lit_fbo", "srgb_fbo", "srgb_shade_fbo")
 
 
@@ -87,14 +93,16 @@ class FrameAllocationError(RenderError):
 class Target:
     """Owns its textures, framebuffers and renderbuffer: call `release()`."""
 
-    def __init__(self, ctx: moderngl.Context, gl: RawGL, width: int, height: int):
+    def __init__(self, ctx: moderngl.Context, gl: RawGL, width: int, height: int,
+                 surface: bool = False):
         self.ctx, self.gl = ctx, gl
         self._textures, self._fbos, self.depth_stencil = (), (), None
+        self.surface = surface   # the G-buffer holds uv and tint too
         try:
             self._allocate(ctx, gl, width, height)
         except (moderngl.Error, RawGLError) as exc:
             self.release()
-            mib = width * height * BYTES_PER_PIXEL / 2**20
+            mib = width * height * (BYTES_PER_PIXEL + surface * SURFACE_BYTES_PER_PIXEL) / 2**20
             raise FrameAllocationError(
                 f"the GL could not allocate a {width}x{height} frame (about {mib:,.0f} MiB of "
                 f"GPU memory at {BYTES_PER_PIXEL} bytes a pixel; {exc}); try a smaller "
@@ -110,9 +118,15 @@ class Target:
         self.unshadowed = ctx.texture((width, height), 1, dtype="u4")
         self.srgb = ctx.texture((width, height), 4, dtype="f1")
         self._textures = (self.colour, self.bits, self.position, self.unshadowed, self.srgb)
+        gbuffer = [self.position]
+        if self.surface:
+            self.uv = ctx.texture((width, height), 2, dtype="f4")
+            self.tint = ctx.texture((width, height), 4, dtype="f4")
+            self._textures += (self.uv, self.tint)
+            gbuffer += [self.uv, self.tint]
         for t in self._textures:
             t.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        self.gbuffer_fbo = ctx.framebuffer(color_attachments=[self.position])
+        self.gbuffer_fbo = ctx.framebuffer(color_attachments=gbuffer)
         self.mark_fbo = ctx.framebuffer(color_attachments=[self.unshadowed])
         self.fbo = ctx.framebuffer(color_attachments=[self.colour, self.bits])
         self.lit_fbo = ctx.framebuffer(color_attachments=[self.bits])
@@ -146,7 +160,7 @@ class Target:
     def use_gbuffer(self) -> None:
         """Bind the geometry pass's framebuffer: position (and surface) and depth written."""
         self.gbuffer_fbo.depth_mask = True
-        self.gbuffer_fbo.color_mask = (True,) * 4
+        self.gbuffer_fbo.color_mask = [(True,) * 4] * 3 if self.surface else (True,) * 4
         self.gbuffer_fbo.use()
 
     def clear(self, background: np.ndarray) -> None:

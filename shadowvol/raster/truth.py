@@ -35,7 +35,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.cameras import intrinsics, look_at_basis
-from shadowvol.fields import CASTER_WORD_BITS, caster_words
+from shadowvol.frame import CASTER_WORD_BITS, caster_words
 from shadowvol.raster import glsl, passes
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.glsl import set_uniform

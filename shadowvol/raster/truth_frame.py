@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shadowvol import fields
+from shadowvol import frame
 from shadowvol.raster import methods, truth
 from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.plane_depth import plane_depths
@@ -22,7 +22,7 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_p
     (light index, hard light) pairs, in the pages' order; truth_pages : the facing pass's
     (lit, facing) bits per page."""
     out: dict[str, np.ndarray] = {}
-    want = set(plan.outputs) & set(fields.GROUND_TRUTH)
+    want = set(plan.outputs) & set(frame.GROUND_TRUTH)
     if not want:
         return out
     target, geometry = renderer.target, renderer.geometry
@@ -49,16 +49,20 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_p
                            np.int64)
         lit_count = np.zeros((len(lights), h, w), np.uint16)
         facing_count = np.zeros((len(lights), h, w), np.uint16)
-        casters = (np.zeros(fields.shape("casters", len(lights), h, w,
+        casters = (np.zeros(frame.shape("casters", len(lights), h, w,
                                          objects=len(renderer.scene.objects)), np.uint64)
                    if "casters" in want else None)
+        receiving = covered   # casters are named where the visible object receives shadows
+        if casters is not None and not geometry.receives.all():
+            seen = np.maximum(geometry.triangle_of_key(truth.read_surface(target, covered)[0]), 0)
+            receiving = covered & geometry.receives[geometry.triangle_objects[seen]]
         for k, (i, light) in enumerate(hard):
             lit, facing = _sample_bits(truth_pages, k, covered)
             lit_count[i] += lit
             facing_count[i] += facing
             if casters is not None:
-                _sample_casters(renderer, plan, camera, stored, light, lit, facing, vols, clip,
-                                casters[i])
+                _sample_casters(renderer, plan, camera, stored, light, lit, facing & receiving,
+                                vols, clip, casters[i])
         out["lit_count"], out["lit"] = lit_count, lit_count == samples[:, None, None]
         out["facing_count"], out["facing"] = facing_count, facing_count > 0
         if casters is not None:
@@ -75,10 +79,10 @@ def _sample_casters(renderer, plan: FramePlan, camera: Camera, stored: np.ndarra
         return
     geometry = renderer.geometry
     light4 = light.homogeneous
-    choice = methods.choose(plan.method, geometry.bounds, camera, renderer.scene.aspect,
+    choice = methods.choose(plan.method, geometry.bounds, camera, renderer.scene.size,
                             light4, geometry.extent)
-    candidates = truth.caster_candidates(geometry.bounds,
-                                         truth.cast_points(camera, stored, cast), light4)
+    candidates = [j for j in truth.caster_candidates(
+        geometry.bounds, truth.cast_points(camera, stored, cast), light4) if geometry.casts[j]]
     vols.prepare(light4)
     bits = truth.count_casters(renderer.target, renderer._truth_pass().casters, vols, choice,
                                candidates, renderer.object_bounds, facing, halve=plan.halve,

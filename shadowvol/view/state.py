@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from shadowvol.cameras import camera_to_world, pinhole
 from shadowvol.scene import AreaLight, Camera, DirectionalLight, Scene
 
 MODES = ("shaded", "roles", "silhouettes", "stencil", "planar", "raytraced")
@@ -45,6 +46,22 @@ class ViewState:
         return cls(camera=scene.camera, lights=shown, scene_lights=lights)
 
 
+def _moved(cam: Camera, eye, target) -> Camera:
+    """`cam` looking from `eye` at `target`.  A camera given by matrices keeps its intrinsics
+    and gets the look-at pose (its own up axis as up); its target is one unit ahead of it."""
+    if not cam.matrix_form:
+        return replace(cam, eye=eye, target=target)
+    pose = camera_to_world(Camera(eye=eye, target=target, up=cam.up))
+    return replace(cam, camera_to_world=pose, eye=None, target=None, up=None)
+
+
+def _pixel(cam: Camera, height: int) -> np.ndarray:
+    """(2,) the width and height of a pixel at unit depth: 1 / fx, 1 / fy (both
+    2 tan(fov_y / 2) / height for a look-at camera)."""
+    fx, fy, _, _ = pinhole(cam, 1, height)
+    return np.array([1.0 / fx, 1.0 / fy])
+
+
 def _basis(camera: Camera):
     fwd = camera.target - camera.eye
     fwd = fwd / np.linalg.norm(fwd)
@@ -70,7 +87,7 @@ def orbit(state: ViewState, dx: float, dy: float) -> ViewState:
     flat = offset - (offset @ up) * up
     flat = flat / np.linalg.norm(flat)
     offset = r * (np.sin(pitch) * flat + np.cos(pitch) * up)
-    return replace(state, camera=replace(cam, eye=cam.target + offset))
+    return replace(state, camera=_moved(cam, cam.target + offset, cam.target))
 
 
 def pan(state: ViewState, dx: float, dy: float, height: int) -> ViewState:
@@ -78,16 +95,16 @@ def pan(state: ViewState, dx: float, dy: float, height: int) -> ViewState:
     cam = state.camera
     _, right, up = _basis(cam)
     dist = np.linalg.norm(cam.target - cam.eye)
-    per_pixel = 2 * dist * np.tan(np.radians(cam.fov_y) / 2) / height
-    move = (-dx * right - dy * up) * per_pixel
-    return replace(state, camera=replace(cam, eye=cam.eye + move, target=cam.target + move))
+    px, py = dist * _pixel(cam, height)
+    move = -dx * px * right - dy * py * up
+    return replace(state, camera=_moved(cam, cam.eye + move, cam.target + move))
 
 
 def zoom(state: ViewState, steps: float) -> ViewState:
     """Move the eye toward the target (steps > 0) or away."""
     cam = state.camera
     offset = (cam.eye - cam.target) * ZOOM_PER_STEP ** steps
-    return replace(state, camera=replace(cam, eye=cam.target + offset))
+    return replace(state, camera=_moved(cam, cam.target + offset, cam.target))
 
 
 def drag_light(state: ViewState, dx: float, dy: float, height: int) -> ViewState:
@@ -103,12 +120,12 @@ def drag_light(state: ViewState, dx: float, dy: float, height: int) -> ViewState
         new = replace(light, direction=d / np.linalg.norm(d))
     elif isinstance(light, AreaLight):  # its centre moves; its samples are made anew
         depth = max((light.center - cam.eye) @ fwd, cam.near)
-        per_pixel = 2 * depth * np.tan(np.radians(cam.fov_y) / 2) / height
-        new = replace(light, center=light.center + (dx * right - dy * up) * per_pixel)
+        px, py = depth * _pixel(cam, height)
+        new = replace(light, center=light.center + dx * px * right - dy * py * up)
     else:
         depth = max((light.position - cam.eye) @ fwd, cam.near)
-        per_pixel = 2 * depth * np.tan(np.radians(cam.fov_y) / 2) / height
-        new = replace(light, position=light.position + (dx * right - dy * up) * per_pixel)
+        px, py = depth * _pixel(cam, height)
+        new = replace(light, position=light.position + dx * px * right - dy * py * up)
     # the cached homogeneous form belongs to the old position: a fresh light is made
     lights = list(state.lights)
     lights[i] = new

@@ -11,6 +11,7 @@ from builders import SCENES, job_lines, output_files, write_jobs
 from shadowvol import batch, memory
 from shadowvol.cli import status
 from shadowvol.cli.main import main
+from shadowvol.raster import estimate
 from shadowvol.scenefile import load_scene
 
 pytestmark = pytest.mark.gl
@@ -109,7 +110,7 @@ def test_a_frame_over_the_memory_budget_is_refused_and_the_others_go_on(tmp_path
     big = dict(small, name="big", size=[2000, 1500])
     jobs = write_jobs(tmp_path / "jobs.jsonl", [small, big])
     scene = load_scene(small["scene"]).replace(width=2000, height=1500)
-    need = memory.raster(scene, written=("png", "masks")).total + memory.BASE
+    need = estimate.render(scene, written=("png", "masks")).total + memory.BASE
     out = tmp_path / "out"
     summary = batch.run(jobs, out, progress=False, memory_budget=need // 2)
     assert (summary.rendered, summary.failed, summary.status) == (1, 1, status.BAD_INPUT)

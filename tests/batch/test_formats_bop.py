@@ -1,7 +1,8 @@
 """`--format bop` against the BOP format's definitions (bop_toolkit docs/bop_datasets_format.md):
 mask_visib is the object_id output, mask is the object drawn alone and holds it,
 scene_gt_info counts those masks, and each model posed by cam_R_m2c, cam_t_m2c carries the
-points the depth PNG (times depth_scale, mm) unprojects to with cam_K."""
+points the depth PNG (times depth_scale, mm) unprojects to with cam_K.  Both jobs are one
+dataset, a scene folder each; the floor and walls (planes: the background) are no model."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import json
 
 import numpy as np
 import pytest
-from builders import job_lines, write_jobs
+from builders import SCENES, job_lines, write_jobs
 from PIL import Image
 
 from shadowvol import batch
@@ -20,6 +21,7 @@ pytestmark = pytest.mark.gl
 # at most half of one along the pixel's ray, plus float32 rendering
 ON_SURFACE_MM = 1.0
 JOBS = {"cage-turntable": 2, "cage-traced": 2}
+FOLDER = {"cage-turntable": "000000", "cage-traced": "000001"}   # the jobs' places
 
 
 def _read(path) -> np.ndarray:
@@ -70,16 +72,18 @@ def _on_triangles(points, tris):
 @pytest.mark.parametrize("job", JOBS)
 def test_masks_are_the_object_id_output_and_the_objects_drawn_alone(made, job):
     bop, files = made
-    scene = bop / job / "train" / "000000"
+    scene = bop / "train" / FOLDER[job]
     gt = json.loads((scene / "scene_gt.json").read_text())
     info = json.loads((scene / "scene_gt_info.json").read_text())
     assert list(gt) == [str(i) for i in range(JOBS[job])] == list(info)
     for im in range(JOBS[job]):
         ids = np.load(files / job / f"{im:06d}.object_id.npy")
+        assert [pose["obj_id"] for pose in gt[str(im)]] == [1]   # the cage, the one model
+        assert (ids == 4).any()
         for g, (pose, stats) in enumerate(zip(gt[str(im)], info[str(im)])):
             visib = _read(scene / "mask_visib" / f"{im:06d}_{g:06d}.png") == 255
             full = _read(scene / "mask" / f"{im:06d}_{g:06d}.png") == 255
-            assert np.array_equal(visib, ids == pose["obj_id"])
+            assert np.array_equal(visib, ids == 4)   # the cage's object_id
             assert not (visib & ~full).any()   # what is seen of it is part of it alone
             assert (stats["px_count_visib"], stats["px_count_all"]) == (visib.sum(), full.sum())
             if full.any():
@@ -92,7 +96,7 @@ def test_masks_are_the_object_id_output_and_the_objects_drawn_alone(made, job):
 @pytest.mark.parametrize("job", JOBS)
 def test_posed_models_carry_the_depth(made, job):
     bop, files = made
-    scene = bop / job / "train" / "000000"
+    scene = bop / "train" / FOLDER[job]
     cameras = json.loads((scene / "scene_camera.json").read_text())
     gt = json.loads((scene / "scene_gt.json").read_text())
     for im in range(JOBS[job]):
@@ -109,7 +113,7 @@ def test_posed_models_carry_the_depth(made, job):
             visib = _read(scene / "mask_visib" / f"{im:06d}_{g:06d}.png") == 255
             if not visib.any():
                 continue
-            model, faces = _ply(bop / job / "models" / f"obj_{pose['obj_id']:06d}.ply")
+            model, faces = _ply(bop / "models" / f"obj_{pose['obj_id']:06d}.ply")
             R = np.array(pose["cam_R_m2c"]).reshape(3, 3)
             posed = model @ R.T + np.array(pose["cam_t_m2c"])
             far = _on_triangles(points[visib], posed[faces])
@@ -117,10 +121,28 @@ def test_posed_models_carry_the_depth(made, job):
 
 
 def test_camera_and_models_info(made):
+    """The cage's model is its mesh file in the file's own frame at the scene's scale (1.4), in
+    mm; its pose turns it by the scene's 20 degrees about y, which BOP's cam_R_m2c carries."""
+    import trimesh
+
     bop, _ = made
-    info = json.loads((bop / "cage-turntable" / "models" / "models_info.json").read_text())
-    model, _ = _ply(bop / "cage-turntable" / "models" / "obj_000004.ply")
-    assert info["4"]["size_x"] == pytest.approx(np.ptp(model[:, 0]))
-    assert np.allclose((model.min(axis=0) + model.max(axis=0)) / 2, 0)   # centred
-    camera = json.loads((bop / "cage-turntable" / "camera.json").read_text())
+    info = json.loads((bop / "models" / "models_info.json").read_text())
+    assert list(info) == ["1"] and sorted(p.name for p in (bop / "models").iterdir()) == \
+        ["models_info.json", "obj_000001.ply"]
+    model, faces = _ply(bop / "models" / "obj_000001.ply")
+    mesh = trimesh.load(str(SCENES / "meshes" / "cage.obj"), process=False)
+    assert np.allclose(model, np.asarray(mesh.vertices) * 1.4 * 1000, rtol=0, atol=1e-9)
+    assert np.array_equal(faces, np.asarray(mesh.faces))
+    assert info["1"]["size_x"] == pytest.approx(np.ptp(model[:, 0]))
+    camera = json.loads((bop / "camera.json").read_text())
     assert (camera["width"], camera["height"]) == (64, 48) and camera["cx"] == 31.5
+    for folder in FOLDER.values():
+        scene = bop / "train" / folder
+        cameras = json.loads((scene / "scene_camera.json").read_text())
+        gt = json.loads((scene / "scene_gt.json").read_text())
+        for im, poses in gt.items():
+            w2c = np.array(cameras[im]["cam_R_w2c"]).reshape(3, 3)
+            m2w = w2c.T @ np.array(poses[0]["cam_R_m2c"]).reshape(3, 3)   # model to world
+            a = np.radians(20.0)
+            turn = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+            assert np.allclose(m2w, turn, atol=1e-9)

@@ -1,4 +1,4 @@
-"""The dataset layouts (`--format nerfstudio|bop|coco`) are made like the other formats: a run
+"""The dataset layouts (`--format nerfstudio|bop|coco|istd|soba|soba-lights`) are made like the other formats: a run
 killed with SIGKILL and rerun, N shards, a process pool and Ray all end with the bytes of one
 uninterrupted run, index files included."""
 
@@ -15,7 +15,7 @@ import pytest
 from builders import ROOT, job_lines, output_files, write_jobs
 
 from shadowvol import batch
-from shadowvol.batch.formats import NAMES
+from shadowvol.batch.layouts import DATASETS as NAMES
 
 pytestmark = pytest.mark.gl
 
@@ -123,10 +123,16 @@ def test_a_failed_frame_is_left_out_of_the_index(tmp_path, format):
     jobs = write_jobs(tmp_path / "jobs.jsonl", lines)
     summary = batch.run(jobs, tmp_path / "out", format=format, progress=False)
     assert (summary.status, summary.rendered, summary.failed) == (2, 2, 1)
-    index = {"nerfstudio": "transforms.json", "bop": "train/000000/scene_gt.json",
-             "coco": "annotations.json"}[format]
-    made = json.loads((tmp_path / "out" / "cage-turntable" / index).read_text())
-    lost = json.loads((tmp_path / "out" / "lost" / index).read_text())
+    # the index of each job: nerfstudio's and COCO's in its folder, BOP's in its scene folder
+    # (the job's place in the job file)
+    made, lost = ({"nerfstudio": f"{job}/transforms.json", "bop": f"train/{place}/scene_gt.json",
+                   "coco": f"{job}/annotations.json", "istd": f"{job}/istd.json",
+                   "soba": f"{job}/annotations.json",
+                   "soba-lights": f"{job}/annotations.json"}[format]
+                  for job, place in (("cage-turntable", "000000"), ("lost", "000001")))
+    made = json.loads((tmp_path / "out" / made).read_text())
+    lost = json.loads((tmp_path / "out" / lost).read_text())
     count = {"nerfstudio": lambda d: len(d["frames"]), "bop": len,
-             "coco": lambda d: len(d["images"])}[format]
+             "coco": lambda d: len(d["images"]), "istd": lambda d: len(d["frames"]),
+             "soba": lambda d: len(d["images"]), "soba-lights": lambda d: len(d["images"])}[format]
     assert (count(made), count(lost)) == (2, 0)

@@ -72,3 +72,16 @@ def test_jitter_past_float32_names_jitter(tmp_path):
     for error in failed:
         assert error.startswith("jitter.eye: a radius of 5e+17 moved the eye out of range: "
                                 "eye: [") and "array(" not in error, error
+
+
+def test_object_jitter_past_float32_names_jitter(tmp_path):
+    """The objects' translation radius past the renderers' float32 range is a bad job naming
+    `jitter.objects.translation` (was: each frame failing on `pose: [[...]]`, no word of
+    jitter)."""
+    huge = dict(GOOD, name="huge", jitter={"objects": {"translation": 1e39}})
+    path = tmp_path / "jobs.jsonl"
+    path.write_text(f"{json.dumps(huge)}\n")
+    (job,) = read_jobs(path)
+    assert isinstance(job, JobError) and job.error == (
+        "jitter.objects.translation: a radius of 1e+39 would move the objects beyond the "
+        "float32 range the renderers use (|x| <= 1e+18)")

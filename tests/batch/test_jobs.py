@@ -65,7 +65,7 @@ def test_jobs_are_checked_with_messages_that_name_the_key(tmp_path):
 def test_ids_and_spec_hashes_are_stable():
     job = check_jobs([job_lines(frames=3, raytrace=False)[0]])[0]
     specs = frames.specs(job, "key")
-    assert [s["id"] for s in specs] == [f"cage-turntable/{i:06d}" for i in range(3)]
+    assert [s.id for s in specs] == [f"cage-turntable/{i:06d}" for i in range(3)]
     again = frames.specs(check_jobs([job_lines(frames=3, raytrace=False)[0]])[0], "other key")
     assert [frames.spec_hash(s, "d") for s in specs] == [frames.spec_hash(s, "d") for s in again]
     assert frames.spec_hash(specs[0], "d") != frames.spec_hash(specs[0], "e")

@@ -65,7 +65,8 @@ def test_the_ground_truth_flows_through_from_both_renderers(tmp_path, ctx):
     """Every ground-truth output is a file of the frame, equal to what the renderer gives for
     the same frame; the mask file holds the camera, as every mask file does."""
     import raytrace
-    from shadowvol.io import GROUND_TRUTH, load_mask_arrays
+    from shadowvol.frame import GROUND_TRUTH
+    from shadowvol.io import load_mask_arrays
     from shadowvol.raster.renderer import Renderer
     from shadowvol.scene import Camera
     from shadowvol.scenefile import load_scene

@@ -66,7 +66,7 @@ def test_a_killed_worker_fails_only_the_frames_it_held():
         if victim is None and "error" not in result:
             victim = int(re.search(r"pid (\d+)", result["worker"]).group(1))
             os.kill(victim, signal.SIGKILL)
-    assert sorted(r["id"] for r in results) == [s["id"] for s in specs]
+    assert sorted(r["id"] for r in results) == [s.id for s in specs]
     failed = [r for r in results if "error" in r]
     assert 1 <= len(failed) <= local.IN_FLIGHT, failed
     assert all(r["status"] == status.RENDER_FAILED and "worker process died" in r["error"]
@@ -124,3 +124,38 @@ def test_workers_end_when_their_parent_is_killed(tmp_path):
     while any(_alive(pid) for pid in pids):
         assert time.monotonic() < deadline, f"workers {pids} outlived their parent by 60 s"
         time.sleep(0.05)
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("signum, raised", [(signal.SIGINT, KeyboardInterrupt),
+                                            (signal.SIGTERM, "Terminated")])
+def test_a_signal_while_the_workers_start_leaves_none_behind(monkeypatch, capfd, signum, raised):
+    """A signal that lands while the pool starts its second worker: both started workers are
+    ended, and neither prints a traceback (one left behind died reading its start-up data from
+    the parent's closed pipe: 'EOFError: Ran out of input', seen under the signal stress of
+    benchmarks/stress_signals.py)."""
+    from multiprocessing.context import SpawnProcess
+
+    from shadowvol import signals
+
+    started = []
+    real_start = SpawnProcess.start
+
+    def start(self):
+        real_start(self)
+        started.append(self)
+        if len(started) == 2:
+            os.kill(os.getpid(), signum)  # mid-start: the child exists, the parent is cut
+
+    monkeypatch.setattr(SpawnProcess, "start", start)
+    tasks = [[{"id": f"j/{i:06d}", "scene": "s"}] for i in range(4)]
+    expected = signals.Terminated if raised == "Terminated" else raised
+    with signals.handled():
+        with pytest.raises(expected):
+            next(local.pool(tasks, {"s": str(ROOT / "scenes" / "cage.toml")}, workers=2))
+    assert len(started) == 2
+    for process in started:
+        process.join(10)
+        assert not process.is_alive(), "a worker was left behind"
+    time.sleep(0.5)
+    assert "Traceback" not in capfd.readouterr().err

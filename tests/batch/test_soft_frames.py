@@ -11,7 +11,7 @@ import pytest
 from builders import SCENES, output_files
 
 from shadowvol import batch
-from shadowvol.io import GROUND_TRUTH
+from shadowvol.frame import GROUND_TRUTH
 
 AREA = {"type": "disk", "center": [0.0, 3.0, 0.5], "normal": [0.0, -1.0, 0.0],
         "radius": 0.4, "samples": 9}

@@ -25,16 +25,14 @@ def full_disk(*args, **kwargs):
     raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
 
-class _FullFile:
-    """The journal's file on a disk that has just filled up."""
-
-    def __init__(self, file):
-        self._file = file
+class _FullDiskOs:
+    """The manifest module's `os` on a disk that has just filled up: the journal's writes
+    (`os.write` on its locked descriptor) fail, everything else is the real `os`."""
 
     write = staticmethod(full_disk)
 
     def __getattr__(self, name):
-        return getattr(self._file, name)
+        return getattr(os, name)
 
 
 @pytest.mark.parametrize("which", ["frame", "manifest"])
@@ -46,12 +44,7 @@ def test_a_full_disk_names_the_file(tmp_path, capsys, monkeypatch, which):
         monkeypatch.setattr(io.os, "fsync", full_disk)
         wanted = out / "good" / "000000.masks.npz"
     else:
-        opened = manifest.Journal.__init__
-
-        def journal(self, path):
-            opened(self, path)
-            self._file = _FullFile(self._file)
-        monkeypatch.setattr(manifest.Journal, "__init__", journal)
+        monkeypatch.setattr(manifest, "os", _FullDiskOs())
         wanted = out / "manifest.jsonl"
     code = main(["batch", str(jobs), "-o", str(out), "--format", "files", "--no-progress"])
     err = capsys.readouterr().err

@@ -16,16 +16,21 @@ import numpy as np
 import pytest
 from builders import ROOT, SCENES
 
+import raytrace.estimate
+import raytrace.exercise
 import raytrace.masks
-import raytrace.pathtrace
-import raytrace.radiosity
-import raytrace.whitted
+import raytrace.outlook.estimate
+import raytrace.outlook.path.pathtrace
+import raytrace.outlook.radiosity
+import raytrace.outlook.whitted
 import shadowvol.cli.compare
 import shadowvol.cli.demo
 import shadowvol.cli.planar
 import shadowvol.cli.raytrace
 import shadowvol.cli.render
+import shadowvol.compare.estimate
 import shadowvol.io
+import shadowvol.raster.estimate
 import shadowvol.raster.renderer
 import shadowvol.scenefile
 from shadowvol import memory
@@ -88,12 +93,23 @@ def test_the_default_budget_is_three_quarters_of_the_machine(monkeypatch):
     assert memory.budget(123456789) == 123456789
 
 
-def test_the_model_agrees_with_the_code_it_counts():
-    assert memory.GL_FRAME_BYTES_PER_PIXEL == target.BYTES_PER_PIXEL
-    assert memory.MASK_TILE_RAYS == raytrace.masks.MASK_TILE_RAYS
-    assert memory.WHITTED_TILE_RAYS == raytrace.whitted.TILE_RAYS
-    assert memory.PATH_TILE_PATHS == raytrace.pathtrace.TILE_PATHS
-    assert target.LIGHTS_PER_PAGE == 23  # memory.raster's pages
+def test_each_renderer_estimates_from_its_own_numbers(monkeypatch):
+    """The estimates read the numbers of the code they count (no copies): the GL frame's bytes
+    and the lit bits' pages of `target`, the tiles of the masks, Whitted and the path tracer."""
+    monkeypatch.setattr(memory, "threads", lambda: 3)
+    scene = load_scene(SCENES / "cage.toml").replace(width=100, height=10)
+    lights = (scene.lights[0],) * (target.LIGHTS_PER_PAGE + 1)   # two pages of lit bits
+    terms = dict(shadowvol.raster.estimate.render(scene.replace(lights=lights)).terms)
+    assert terms["GL frame"] == target.BYTES_PER_PIXEL * 1000
+    assert terms["lit bits (uint32 per page)"] == 4 * 2 * 1000
+    tiles = dict(raytrace.estimate.masks(scene).terms)["tiles in flight"]
+    assert tiles == 3 * raytrace.masks.MASK_TILE_RAYS * raytrace.estimate.MASK_RAY_BYTES
+    tiles = dict(raytrace.outlook.estimate.whitted(scene).terms)["tiles in flight"]
+    assert tiles == (3 * raytrace.outlook.whitted.TILE_RAYS
+                     * raytrace.outlook.estimate.WHITTED_RAY_BYTES)
+    tiles = dict(raytrace.outlook.estimate.path_traced(scene, 1).terms)["tiles in flight"]
+    assert tiles == (3 * raytrace.outlook.path.pathtrace.TILE_PATHS
+                     * raytrace.outlook.estimate.PATH_RAY_BYTES)
 
 
 def test_reasonable_images_fit_a_small_machine():
@@ -103,13 +119,14 @@ def test_reasonable_images_fit_a_small_machine():
     scene = load_scene(SCENES / "stack.toml").replace(width=3840, height=2160)
     every = ("image", "lit", "coverage", "depth", "distance", "normal", "object_id", "facing",
              "casters")
-    assert memory.raster(scene, every, written=("png", "masks")).total < 3 * GIB
-    assert memory.ray_masks(scene, every[3:]).total < 3 * GIB
-    assert memory.whitted(scene, ("png", "exr")).total < 2 * GIB
-    assert memory.compare(scene).total < 4 * GIB
+    assert shadowvol.raster.estimate.render(scene, every, written=("png", "masks")).total \
+        < 3 * GIB
+    assert raytrace.estimate.masks(scene, every[3:]).total < 3 * GIB
+    assert raytrace.outlook.estimate.whitted(scene, ("png", "exr")).total < 2 * GIB
+    assert shadowvol.compare.estimate.compare(scene).total < 4 * GIB
     big = scene.replace(width=8192, height=8192)
-    memory.check(memory.raster(big), "12GiB")
-    memory.check(memory.whitted(big), "12GiB")
+    memory.check(shadowvol.raster.estimate.render(big), "12GiB")
+    memory.check(raytrace.outlook.estimate.whitted(big), "12GiB")
 
 
 def test_the_cap_stays_above_any_budget_here():
@@ -129,15 +146,17 @@ OVER_BUDGET = {  # command -> (argv, what must not run)
     "shadowvol planar": (["planar", "P", "-o", "O/x.png"],
                          (shadowvol.cli.planar, "render_planar")),
     "raytrace render": (["render", "S", "-o", "O/x.png", "--no-progress"],
-                        (shadowvol.cli.raytrace, "render")),
-    "raytrace masks": (["masks", "S", "-o", "O/x.npz"], (shadowvol.cli.raytrace, "shadow_masks")),
+                        (shadowvol.cli.raytrace.render, "render")),
+    "raytrace masks": (["masks", "S", "-o", "O/x.npz"],
+                       (shadowvol.cli.raytrace.masks, "shadow_masks")),
     "raytrace masks --outputs": (["masks", "S", "-o", "O/x.npz", "--outputs", "all"],
-                                 (shadowvol.cli.raytrace, "ground_truth")),
+                                 (shadowvol.cli.raytrace.masks, "ground_truth")),
     "raytrace path": (["render", "S", "-o", "O/x.png", "--integrator", "path", "--spp", "4"],
-                      (raytrace.pathtrace, "render")),
-    "raytrace radiosity": (["radiosity", "S", "-o", "O/x.png"], (raytrace.radiosity, "solve")),
+                      (raytrace.outlook.path.pathtrace, "render")),
+    "raytrace radiosity": (["radiosity", "S", "-o", "O/x.png"],
+                           (raytrace.outlook.radiosity, "solve")),
     "raytrace tree": (["tree", "S", "--pixel", "3", "3", "-o", "O/x.png"],
-                      (shadowvol.cli.raytrace, "ray_tree")),
+                      (shadowvol.cli.raytrace.tree, "ray_tree")),
 }
 
 
@@ -183,8 +202,9 @@ def test_the_tree_slide_is_judged_by_the_image_it_traces(tmp_path, monkeypatch):
     """A 4000x3000 scene's Whitted image is over 512 MiB, the slide's panel is not: the tree
     command goes on to trace (and is stopped there), it is not refused for the scene's size."""
     scene = _scene(tmp_path, width=4000, height=3000)
-    assert memory.whitted(load_scene(scene)).total + memory.BASE > 512 * 2**20
-    monkeypatch.setattr(shadowvol.cli.raytrace, "ray_tree", _boom)
+    assert raytrace.outlook.estimate.whitted(load_scene(scene)).total + memory.BASE \
+        > 512 * 2**20
+    monkeypatch.setattr(shadowvol.cli.raytrace.tree, "ray_tree", _boom)
     with pytest.raises(AssertionError, match="the render was started"):
         raytrace_main(["tree", str(scene), "--pixel", "3", "3", "-o", str(tmp_path / "x.png"),
                        "--memory-budget", "512MiB"])
@@ -250,24 +270,25 @@ OUT_OF_MEMORY = {  # command -> (tool, argv, [(module, name)] to fail, "while ..
               "while rendering ("),  # the frame is named first: cage/000000
     "view": ("shadowvol", ["view", "S"], [], "while rendering ("),
     "raytrace render": ("raytrace", ["render", "S", "-o", "O/x.png", "--no-progress"],
-                        [(raytrace.whitted, "trace")], "while rendering ("),
+                        [(raytrace.outlook.whitted, "trace")], "while rendering ("),
     "raytrace render, writing": ("raytrace", ["render", "S", "-o", "O/x.png", "--exr", "O/x.exr",
                                               "--no-progress"],
                                  [(shadowvol.io, "exr_bytes")], "while writing O/x.exr ("),
     "raytrace masks": ("raytrace", ["masks", "S", "-o", "O/x.npz"],
                        [(raytrace.masks, "_tile_masks")], "while rendering ("),
     "raytrace masks --outputs": ("raytrace", ["masks", "S", "-o", "O/x.npz", "--outputs", "all"],
-                                 [(shadowvol.cli.raytrace, "ground_truth")], "while rendering ("),
+                                 [(shadowvol.cli.raytrace.masks, "ground_truth")],
+                                 "while rendering ("),
     "raytrace tree": ("raytrace", ["tree", "S", "--pixel", "3", "3", "-o", "O/x.png"],
-                      [(shadowvol.cli.raytrace, "ray_tree")], "while rendering ("),
+                      [(shadowvol.cli.raytrace.tree, "ray_tree")], "while rendering ("),
     "raytrace exercise": ("raytrace", ["exercise", "plane", "-o", "O/x.png"],
-                          [(shadowvol.cli.raytrace.exercise, "solve_plane")], "while rendering ("),
+                          [(raytrace.exercise, "solve_plane")], "while rendering ("),
     "raytrace path": ("raytrace", ["render", "R", "-o", "O/x.png", "--integrator", "path",
                                    "--spp", "1", "--no-progress"],
-                      [(raytrace.pathtrace, "trace_rows")], "while rendering ("),
+                      [(raytrace.outlook.path.pathtrace, "trace_rows")], "while rendering ("),
     "raytrace radiosity": ("raytrace", ["radiosity", "R", "-o", "O/x.png", "--level", "0",
                                         "--rays", "8"],
-                           [(raytrace.radiosity, "display")], "while rendering ("),
+                           [(raytrace.outlook.radiosity, "display")], "while rendering ("),
 }
 
 

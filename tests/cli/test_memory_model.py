@@ -21,6 +21,10 @@ import textwrap
 import pytest
 from builders import ROOT, SCENES
 
+import raytrace.estimate
+import raytrace.outlook.estimate
+import shadowvol.compare.estimate
+import shadowvol.raster.estimate
 from shadowvol import memory
 from shadowvol.scenefile import load_scene
 
@@ -59,37 +63,38 @@ CHILD = textwrap.dedent("""
 EVERY = ("depth", "distance", "normal", "object_id", "facing", "casters")
 CASES = {  # name -> (tool, scene, argv, the model of it)
     "shadowvol render": ("shadowvol", "cage.toml", ["render", "SCENE", "-o", "OUT.png"],
-                         lambda s: memory.raster(s)),
+                         lambda s: shadowvol.raster.estimate.render(s)),
     "shadowvol render --outputs all": (
         "shadowvol", "stack.toml", ["render", "SCENE", "-o", "OUT.png", "--outputs", "all"],
-        lambda s: memory.raster(s, ("image", "lit", "coverage") + EVERY,
-                                written=("png", "masks"))),
+        lambda s: shadowvol.raster.estimate.render(s, ("image", "lit", "coverage") + EVERY,
+                                                   written=("png", "masks"))),
     "shadowvol render, every file": (
         "shadowvol", "stack.toml",
         ["render", "SCENE", "-o", "OUT.png", "--stencil", "--volumes", "--exr", "--png16"],
-        lambda s: memory.raster(s, written=("png", "stencil", "volumes", "exr", "png16"),
-                                stencil=True, volumes=True)),
+        lambda s: shadowvol.raster.estimate.render(
+            s, written=("png", "stencil", "volumes", "exr", "png16"), stencil=True,
+            volumes=True)),
     "shadowvol compare": ("shadowvol", "stack.toml", ["compare", "SCENE", "-o", "OUT.png"],
-                          lambda s: memory.compare(s)),
+                          lambda s: shadowvol.compare.estimate.compare(s)),
     "raytrace masks": ("raytrace", "cage.toml", ["masks", "SCENE", "-o", "OUT.npz"],
-                       lambda s: memory.ray_masks(s)),
+                       lambda s: raytrace.estimate.masks(s)),
     "raytrace masks --outputs all": (
         "raytrace", "stack.toml", ["masks", "SCENE", "-o", "OUT.npz", "--outputs", "all"],
-        lambda s: memory.ray_masks(s, EVERY)),
+        lambda s: raytrace.estimate.masks(s, EVERY)),
     "raytrace render (Whitted)": ("raytrace", "whitted.toml",
                                   ["render", "SCENE", "-o", "OUT.png", "--no-progress"],
-                                  lambda s: memory.whitted(s)),
+                                  lambda s: raytrace.outlook.estimate.whitted(s)),
     "raytrace render (Whitted), every file": (
         "raytrace", "stack.toml", ["render", "SCENE", "-o", "OUT.png", "--exr", "OUT.exr",
                                    "--png16", "OUT-16.png", "--no-progress"],
-        lambda s: memory.whitted(s, ("png", "exr", "png16"))),
+        lambda s: raytrace.outlook.estimate.whitted(s, ("png", "exr", "png16"))),
     "raytrace render (path)": ("raytrace", "cornell.toml",
                                ["render", "SCENE", "-o", "OUT.png", "--integrator", "path",
                                 "--spp", "1", "--no-progress"],
-                               lambda s: memory.path_traced(s, 1)),
+                               lambda s: raytrace.outlook.estimate.path_traced(s, 1)),
     "raytrace radiosity": ("raytrace", "cornell.toml",
                            ["radiosity", "SCENE", "-o", "OUT.png", "--level", "0", "--rays", "8"],
-                           lambda s: memory.radiosity_display(s)),
+                           lambda s: raytrace.outlook.estimate.radiosity_display(s)),
 }
 SIZES = ((1024, 512), (1024, 1024))
 

@@ -19,7 +19,8 @@ import pytest
 
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.cli.render import safe_name
-from shadowvol.io import atomic_write, save_masks, save_png
+from shadowvol.frame import save_masks
+from shadowvol.io import atomic_write, save_png
 from shadowvol.primitives import box, plane
 from shadowvol.scene import Camera, PointLight, Scene
 from shadowvol.scenefile import save_scene
@@ -146,7 +147,7 @@ def test_an_image_too_big_is_bad_input(tmp_path, capsys):
     assert "wide.json: image: 40000x8 is larger than this GL allows" in err
 
 
-@pytest.mark.parametrize("command", ["compare", "planar"])
+@pytest.mark.parametrize("command", ["compare", "planar", "shadowmap"])
 def test_every_command_names_the_scene_of_an_image_too_wide(tmp_path, capsys, command):
     """The GL's size limit is the Renderer's check now, for every command that renders: the
     line names the scene file, the key and the limit, exit 2, nothing written."""

@@ -161,3 +161,42 @@ def test_a_signal_inside_an_ignoring_callback_comes_again():
         with pytest.raises(KeyboardInterrupt):
             time.sleep(5)  # the signal again, within REDELIVER_S
         assert signals.pending() is not None
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_deferred_holds_a_signal_until_the_block_ends(signum):
+    """signals.deferred: the block runs to its end, then the signal is raised through the
+    handlers of `handled` (KeyboardInterrupt, Terminated); without them SIGINT is Python's
+    KeyboardInterrupt."""
+    from shadowvol import signals
+
+    expected = KeyboardInterrupt if signum == signal.SIGINT else signals.Terminated
+    reached = []
+    with signals.handled(), pytest.raises(expected):
+        with signals.deferred():
+            os.kill(os.getpid(), signum)
+            time.sleep(0.05)
+            reached.append("end of the block")
+    assert reached == ["end of the block"]
+    if signum == signal.SIGINT:
+        with pytest.raises(KeyboardInterrupt):
+            with signals.deferred():
+                os.kill(os.getpid(), signum)
+                time.sleep(0.05)
+                reached.append("again")
+        assert reached[-1] == "again"
+
+
+def test_a_signal_answered_inside_handled_is_not_pending_after_it(tmp_path):
+    """In one process (a notebook calling the CLI's main, say): a SIGTERM that `handled`
+    turned into Terminated is answered when the block ends; later writes go through."""
+    from shadowvol import signals
+    from shadowvol.io import write_bytes
+
+    with pytest.raises(signals.Terminated):
+        with signals.handled():
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)
+    assert signals.pending() is None
+    write_bytes(tmp_path / "after.bin", b"written")
+    assert (tmp_path / "after.bin").read_bytes() == b"written"

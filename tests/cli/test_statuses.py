@@ -12,7 +12,6 @@ from builders import ROOT, SCENES
 
 import shadowvol.cli.compare
 import shadowvol.cli.raytrace
-import shadowvol.cli.raytrace_outlook
 import shadowvol.cli.render
 import shadowvol.course.gallery
 import shadowvol.raster.renderer
@@ -74,7 +73,7 @@ def test_raytrace_ok_bad_input_and_failure(command, small, tmp_path, capsys, mon
     bad = [a.replace(str(small), str(tmp_path / "missing.toml")) for a in
            RAYTRACE_OK[command](small, tmp_path)]
     assert raytrace_main(bad) == status.BAD_INPUT
-    monkeypatch.setattr(shadowvol.cli.raytrace, "load_scene", _no_memory)
+    monkeypatch.setattr(getattr(shadowvol.cli.raytrace, command), "load_scene", _no_memory)
     assert raytrace_main(RAYTRACE_OK[command](small, tmp_path)) == status.RENDER_FAILED
     err = capsys.readouterr().err
     assert "Traceback" not in err and "error: out of memory" in err
@@ -211,7 +210,7 @@ def test_raytrace_radiosity_and_path_tracing(tmp_path, monkeypatch, capsys):
                           "--no-progress", "-o", str(tmp_path / "p.png")]) == status.OK
     assert raytrace_main(["render", str(box), "--integrator", "path", "--spp", "0",
                           "-o", str(tmp_path / "p.png")]) == status.BAD_INPUT
-    monkeypatch.setattr(shadowvol.cli.raytrace_outlook, "load_scene", _no_memory)
+    monkeypatch.setattr(shadowvol.cli.raytrace.radiosity, "load_scene", _no_memory)
     assert raytrace_main(["radiosity", str(box), "-o", str(tmp_path / "r.png")]) == \
         status.RENDER_FAILED
     assert "Traceback" not in capsys.readouterr().err

@@ -29,7 +29,7 @@ pytestmark = pytest.mark.gl
 
 EXPECTED = ["cage", "umbra_penumbra", "hard_sum", "planar", "one_caster", "stack_stencil", "counting", "zpass_zfail",
             "whitted_best", "raytree", "tir", "shadow2d", "ray_plane", "compare",
-            "shadow_mapping", "rendering_equation", "ladder", "caustic", "aliasing",
+            "shadow_mapping", "shadow_map_error", "rendering_equation", "ladder", "caustic", "aliasing",
             "glossy_dof"]   # the course's order
 
 

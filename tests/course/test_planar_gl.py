@@ -181,7 +181,7 @@ def test_no_shadow_off_the_receivers_edge(ctx):
     flat = project_points(m, corners)
     assert flat[:, 0].max() > 1.3
     beyond = flat[flat[:, 0] > 1.0]
-    clip = np.c_[beyond, np.ones(len(beyond))] @ view_projection(scene.camera, scene.aspect).T
+    clip = np.c_[beyond, np.ones(len(beyond))] @ view_projection(scene.camera, scene.size).T
     assert (np.abs(clip[:, :2] / clip[:, 3:]) < 1).all()
     with Renderer(scene, ctx) as r, PlanarShadows(r) as planar:
         got = planar.render("table", stencil=True)

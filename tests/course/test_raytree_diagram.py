@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from builders import SCENES
 
-from raytrace.raytree import PRIMARY, SHADOW, ray_tree
+from raytrace.outlook.raytree import PRIMARY, SHADOW, ray_tree
 from shadowvol.course import raytree_diagram
 from shadowvol.course.demos_tracing import RAY_TREE_DEPTH, ray_tree_pixel
 from shadowvol.scenefile import load_scene

@@ -47,8 +47,8 @@ def test_the_cli_says_so_with_status_3(tmp_path, monkeypatch, capsys):
     save_scene(load_scene(SCENES / "cage.toml").replace(width=64, height=48), path)
     real = target_module.Target.__init__
 
-    def refusing(self, ctx, gl, width, height):
-        real(self, _RefusingContext(ctx, 2), gl, width, height)
+    def refusing(self, ctx, gl, width, height, **kwargs):
+        real(self, _RefusingContext(ctx, 2), gl, width, height, **kwargs)
     monkeypatch.setattr(target_module.Target, "__init__", refusing)
     assert shadowvol_main(["render", str(path), "-o", str(tmp_path / "x.png")]) == 3
     err = capsys.readouterr().err

@@ -31,7 +31,7 @@ from strategies import scenes as random_scenes
 
 from raytrace.groundtruth import ground_truth
 from shadowvol.compare.maskdiff import edge_pixels
-from shadowvol.fields import decode_casters
+from shadowvol.frame import decode_casters
 from shadowvol.io import save_png
 from shadowvol.pictures import ground_truth_picture
 from shadowvol.primitives import box, mesh, plane, sphere

@@ -171,7 +171,7 @@ def test_the_guard_band_cuts_only_huge_triangles(ctx):
         ground = geo.ranges[0]
         assert len(geo.holes) and all(ground.first <= h < ground.first + ground.count
                                       for h in geo.holes)
-        view_proj, _ = frame_view_projection(scene.camera, scene.aspect)
+        view_proj, _ = frame_view_projection(scene.camera, scene.size)
         planes = guard.guard_planes(view_proj, scene.camera.near)
         corners = geo.pieces.astype(np.float64)
         assert ((np.einsum("pkj,qj->pkq", corners, planes[:, :3]) + planes[:, 3])

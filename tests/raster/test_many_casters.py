@@ -13,7 +13,7 @@ from exact import exact_casters
 
 import raytrace
 from shadowvol.compare.maskdiff import edge_pixels
-from shadowvol.fields import caster_words, decode_casters
+from shadowvol.frame import caster_words, decode_casters
 from shadowvol.primitives import box, plane
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight, Camera, PointLight, Scene

@@ -14,8 +14,8 @@ from builders import check_counts, check_facing_counts
 
 import raytrace
 from shadowvol.compare.maskdiff import edge_pixels
-from shadowvol.fields import decode_casters
-from shadowvol.io import GROUND_TRUTH
+from shadowvol.frame import decode_casters
+from shadowvol.frame import GROUND_TRUTH
 from shadowvol.primitives import box, plane, sphere
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight, Camera, PointLight, Scene, SpotLight

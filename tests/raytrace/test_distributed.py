@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from builders import SCENES, square_light, square_over_floor
 
-import raytrace.whitted as whitted
+import raytrace.outlook.whitted as whitted
 from raytrace.camera import primary_rays
-from raytrace.sampling import glossy, phong_exponent, pixel_offsets, stratified
+from raytrace.outlook.sampling import glossy, phong_exponent, pixel_offsets, stratified
 from shadowvol.cameras import calibration, project
 from shadowvol.cli.raytrace import main
 from shadowvol.primitives import plane, sphere

@@ -1,9 +1,9 @@
-"""Multiple importance sampling in the path tracer (`raytrace.mis`): the two strategies' weights
-of one path sum to one (on random densities, and on paths of the Cornell box where both
-strategies find the same emitter point), so an image with MIS equals the next-event-only image
-in expectation (per object of the Cornell box, every heuristic, both shadings); a wrong density
-on one side (dropping next-event estimation's d^2 / cos conversion) is caught by both checks;
-and the variance at equal samples is lower with the default (power heuristic, Sobol samples)
+"""Multiple importance sampling in the path tracer (`raytrace.outlook.path.mis`): the two
+strategies' weights of one path sum to one (on random densities, and on paths of the Cornell box
+where both strategies find the same emitter point), so an image with MIS equals the next-event-only
+image in expectation (per object of the Cornell box, every heuristic, both shadings); a wrong
+density on one side (dropping next-event estimation's d^2 / cos conversion) is caught by both
+checks; and the variance at equal samples is lower with the default (power heuristic, Sobol samples)
 than before (balance heuristic, independent samples)."""
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from builders import cornell, z_limit
 
-from raytrace import mis, pathtrace
 from raytrace.groundtruth import ground_truth
-from raytrace.pathstate import STATE, PathWorld
-from raytrace.pathtrace import render
+from raytrace.outlook.path import mis, pathtrace
+from raytrace.outlook.path.pathstate import STATE, PathWorld
+from raytrace.outlook.path.pathtrace import render
 
 BOTH_SIDES = 1e-6  # float32: the two weights are each rounded (a few ulps of 1)
 SAME_POINT = 2e-3  # NEE measures from the hit, the BSDF ray from one surface offset out
@@ -59,7 +59,7 @@ def test_an_unknown_heuristic_is_refused():
 
 def test_the_compiled_weight_is_the_numpy_weight():
     pytest.importorskip("numba", reason="the numba shading needs numba")
-    from raytrace import pathstages
+    from raytrace.outlook.path import pathstages
 
     a, b = random_densities(np.random.default_rng(1), 3000)
     for heuristic in ("power", "balance"):

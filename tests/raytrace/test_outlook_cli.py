@@ -146,8 +146,9 @@ def test_the_outlook_modules_import_no_gl():
     import subprocess
     import sys
 
-    code = ("import sys, raytrace.pathtrace, raytrace.radiosity, raytrace.direct, "
-            "shadowvol.cli.raytrace_outlook, shadowvol.course.ladder, raytrace.photon; "
+    code = ("import sys, raytrace.outlook.path.pathtrace, raytrace.outlook.radiosity, "
+            "raytrace.outlook.direct, "
+            "shadowvol.cli.raytrace.radiosity, shadowvol.course.ladder, raytrace.outlook.photon; "
             "bad = [m for m in sys.modules if m.split('.')[0] in ('moderngl', 'OpenGL', 'glcontext')]; "
             "print(bad); sys.exit(1 if bad else 0)")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

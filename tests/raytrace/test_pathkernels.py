@@ -1,5 +1,6 @@
-"""The numba shading of the path tracer (`raytrace.pathkernels`) against the numpy reference:
-the same random numbers and the same arithmetic, so the same samples; and how one is chosen.
+"""The numba shading of the path tracer (`raytrace.outlook.path.pathkernels`) against the numpy
+reference: the same random numbers and the same arithmetic, so the same samples; and how one is
+chosen.
 
 Bit-identical wherever no power is taken (Lambertian, mirror and glass materials, every kind
 of light, the background).  With a glossy lobe, cos^s is computed by libm's powf in the kernel
@@ -18,9 +19,9 @@ from builders import ROOT, TEST_OUTPUT, cornell
 pytest.importorskip("numba", reason="the numba shading needs numba: "
                     "pip install 'shadowvol[fast]'")
 
-from raytrace import pathtrace  # noqa: E402
-from raytrace.pathstate import PathWorld  # noqa: E402
-from raytrace.pathtrace import render, shading, trace_paths  # noqa: E402
+from raytrace.outlook.path import pathtrace  # noqa: E402
+from raytrace.outlook.path.pathstate import PathWorld  # noqa: E402
+from raytrace.outlook.path.pathtrace import render, shading, trace_paths  # noqa: E402
 from shadowvol.errors import MissingExtra  # noqa: E402
 from shadowvol.io import save_png  # noqa: E402
 from shadowvol.primitives import box, plane, sphere  # noqa: E402

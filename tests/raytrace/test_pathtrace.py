@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 from builders import QUADRATURE_ALLOWANCE, block_means, cornell, furnace, z_limit
 
-from raytrace import brdf, pathtrace
-from raytrace.direct import direct_lighting
-from raytrace.pathtrace import render
-from raytrace.whitted import render as whitted_render
+from raytrace.outlook import brdf
+from raytrace.outlook.direct import direct_lighting
+from raytrace.outlook.path import pathtrace
+from raytrace.outlook.path.pathtrace import render
+from raytrace.outlook.whitted import render as whitted_render
 from shadowvol.primitives import box, plane
 from shadowvol.scene import AreaLight, Camera, Material, Scene
 

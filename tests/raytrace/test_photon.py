@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 from builders import MATTE, SCENES, cornell, furnace, z_limit
 
-from raytrace import ground_truth, pathtrace, photon
-from raytrace.pathstate import PathWorld
-from raytrace.photonmap import KERNELS, PhotonMap
+from raytrace import ground_truth
+from raytrace.outlook import photon
+from raytrace.outlook.path import pathtrace
+from raytrace.outlook.path.pathstate import PathWorld
+from raytrace.outlook.photonmap import KERNELS, PhotonMap
 from shadowvol.cli import raytrace as cli
 from shadowvol.primitives import plane
 from shadowvol.scene import (

@@ -17,9 +17,9 @@ from builders import (
     z_limit,
 )
 
-from raytrace import radiosity
-from raytrace.brdf import normalised_phong
-from raytrace.pathtrace import PathWorld, radiance_leaving
+from raytrace.outlook import radiosity
+from raytrace.outlook.brdf import normalised_phong
+from raytrace.outlook.path.pathtrace import PathWorld, radiance_leaving
 from shadowvol.primitives import plane
 from shadowvol.scene import Camera, Material, Scene
 
@@ -256,7 +256,7 @@ def test_contact_cuts_leave_no_patch_under_a_block_edge():
 def test_aimed_rays_keep_a_closed_box_s_rows_at_one():
     """A closed white box with a small light card inside: the rays aimed at the card are
     weighted, and still every inner face's row sums to exactly one; the windows are used."""
-    from raytrace import formrays
+    from raytrace.outlook import formrays
     from shadowvol.primitives import box
 
     white = Material(diffuse=[0.5] * 3, specular=[0, 0, 0])
@@ -282,7 +282,7 @@ def test_aimed_rays_keep_a_closed_box_s_rows_at_one():
 def test_form_factor_ray_weights_are_unbiased_and_sum_to_one():
     """A window of the square gets a quarter of the rays; every patch's weights sum to one and
     the weighted points integrate a test function to its exact value."""
-    from raytrace import formrays
+    from raytrace.outlook import formrays
 
     rng = np.random.default_rng(3)
     window = np.repeat([[0.2, 0.5, 0.6, 0.9], [0.0, 0.0, 0.0, 0.0]], 400, axis=0)

@@ -12,8 +12,7 @@ from builders import SCENES
 from PIL import Image
 
 import raytrace
-from shadowvol.cli import raytrace as cli
-from raytrace.raytree import (
+from raytrace.outlook.raytree import (
     BLOCKED,
     FACES_AWAY,
     LIT,
@@ -28,6 +27,7 @@ from raytrace.raytree import (
     tree_colour,
 )
 from raytrace.tolerances import surface_offset
+from shadowvol.cli import raytrace as cli
 from shadowvol.course import raytree_slide
 from shadowvol.course.slides import Layout
 from shadowvol.primitives import mesh, plane

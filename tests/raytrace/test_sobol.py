@@ -1,7 +1,7 @@
-"""The path tracer's low-discrepancy samples (`raytrace.sobol`): the Sobol points, each pixel's
-samples stratified (a (0, m, 2)-net in a chunk's first two dimensions), every coordinate
-uniform over pixels and seeds, chunks unrelated to one another, the compiled numbers the numpy
-ones, and the image with them unbiased."""
+"""The path tracer's low-discrepancy samples (`raytrace.outlook.path.sobol`): the Sobol points, each
+pixel's samples stratified (a (0, m, 2)-net in a chunk's first two dimensions), every coordinate
+uniform over pixels and seeds, chunks unrelated to one another, the compiled numbers the numpy ones,
+and the image with them unbiased."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from builders import cornell, z_limit
 
-from raytrace import sobol
-from raytrace.pathtrace import render
-from raytrace.sobol import TileSamples
+from raytrace.outlook.path import sobol
+from raytrace.outlook.path.pathtrace import render
+from raytrace.outlook.path.sobol import TileSamples
 
 
 def test_the_unscrambled_points_are_sobol_s():

@@ -9,7 +9,7 @@ import pytest
 from builders import SCENES
 
 import raytrace
-from raytrace.progress import Progress
+from raytrace.outlook.progress import Progress
 from shadowvol.primitives import plane, sphere
 from shadowvol.scene import Camera, Material, PointLight, Scene, SpotLight
 from shadowvol.scenefile import load_scene

@@ -1,6 +1,7 @@
-"""The writers of a frame's ground truth (shadowvol.io): the mask file's extra arrays, checked by
-name, dtype and shape; linear OpenEXR read back by the OpenEXR package; 16-bit PNG read back by
-Pillow; and the camera matrices (shadowvol.cameras) against their definitions."""
+"""The writers of a frame's ground truth (shadowvol.frame, shadowvol.io): the mask file's extra
+arrays, checked by name, dtype and shape; linear OpenEXR read back by the OpenEXR package;
+16-bit PNG read back by Pillow; and the camera matrices (shadowvol.cameras) against their
+definitions."""
 
 from __future__ import annotations
 
@@ -14,12 +15,12 @@ import pytest
 from PIL import Image
 
 from shadowvol.cameras import GL_TO_CV, calibration, project, unproject
+from shadowvol.frame import save_masks
 from shadowvol.io import (
     encode_srgb,
     load_mask_arrays,
     load_masks,
     save_exr,
-    save_masks,
     save_png16,
 )
 from shadowvol.primitives import plane

@@ -287,7 +287,11 @@ def test_the_documented_example_loads():
     assert [type(o).__name__ for o in scene.lights] == ["PointLight", "DirectionalLight",
                                                         "SpotLight"]
     assert [o.name for o in scene.objects][:1] == ["floor"]
-    assert len(scene.objects) == 4 and scene.objects[3].faces.shape == (984, 3)
+    assert len(scene.objects) == 5 and scene.objects[3].faces.shape == (984, 3)
+    cage, turned = scene.objects[3:]   # two instances of one model (its scale differs: not)
+    assert [cage.label, turned.label] == ["cage", "cage"]
+    assert turned.pose.tolist() == [[0, 0, 1, 2], [0, 1, 0, 0], [-1, 0, 0, 0], [0, 0, 0, 1]]
+    assert cage.model_key != turned.model_key   # the first is at scale 0.5
 
 
 def test_save_scene_round_trip(tmp_path):

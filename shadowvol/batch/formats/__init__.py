@@ -1,84 +1,121 @@
-"""The dataset layouts training code loads: `shadowvol batch --format nerfstudio|bop|coco`
-(docs/formats.md).  Each job is one dataset folder `OUT/<job>/`.
+"""The dataset layouts training code loads: `shadowvol batch --format
+nerfstudio|bop|coco|istd|soba|soba-lights` (docs/formats.md).  Each job is one dataset folder `OUT/<job>/`.
 
-A layout module has `frame(spec, arrays, scene) -> ({path: bytes}, record)`, the frame's files
-(paths relative to OUT) and the JSON its index entries are made from, kept in the frame's
+A layout's module has `frame(spec, arrays, scene) -> ({path: bytes}, record)`, the frame's
+files (paths relative to OUT) and the JSON its index entries are made from, kept in the frame's
 manifest line (`dataset`); and `index(job, entries) -> {path: bytes}`, the index files
-(transforms.json, scene_*.json, annotations.json) of a job from its (spec, record) pairs in
-frame order; and CASTERS, ALONE (what its frames need beside the image, masks, depth and ids:
-`arrays.frame_arrays`), FOLDERS, INDEX (where its files go, for cleaning up after a kill).
-The index is rebuilt at the end of every run from every manifest in OUT, never
-appended to, so a killed and resumed run, or N shards, end with the bytes of one run.
+(transforms.json, scene_*.json, annotations.json, istd.json) of a job from its (spec, record) pairs in
+frame order; what its frames need beside the image, masks, depth and ids (`arrays.frame_arrays`)
+and where its files go are fields of its row in `batch.layouts`.  The index is rebuilt at the
+end of every run from every manifest in OUT, never appended to, so a killed and resumed run, or
+N shards, end with the bytes of one run.
 """
 
 from __future__ import annotations
 
-import importlib
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 from shadowvol.batch import manifest
-from shadowvol.batch.formats import arrays, encoding
-from shadowvol.io import write_bytes
-
-NAMES = ("nerfstudio", "bop", "coco")
-
-
-def layout(name: str):
-    return importlib.import_module(f"shadowvol.batch.formats.{name}")
-
-
-def tag(specs: list[dict], format: str) -> list[dict]:
-    """Mark a layout's frame specs (so their spec hash, and the worker, know the layout)."""
-    if format in NAMES:
-        for spec in specs:
-            spec["format"] = format
-    return specs
-
-
-def frame(worker, spec: dict, scene, camera, lights) -> tuple[dict[str, bytes], dict]:
-    """A frame of `spec["format"]` rendered by `worker` (`batch.worker.Worker`)."""
-    mod = layout(spec["format"])
-    made = arrays.frame_arrays(worker, spec, scene, camera, lights, casters=mod.CASTERS,
-                               alone=mod.ALONE)
-    return mod.frame(spec, made, scene.replace(camera=camera, lights=lights))
+from shadowvol.batch.formats import encoding
+from shadowvol.batch.store import Unit, Written, made, put
+from shadowvol.batch.spec import FrameSpec
+from shadowvol.scene import Scene, SceneError
+from shadowvol.scenefile import load_scene
 
 
 class DatasetStore:
     """A layout's per-frame files under `out`, as the frame made them (their paths are in the
-    frame's record: how many files a frame has depends on its scene)."""
+    frame's record: how many files a frame has depends on its scene); units of one frame.
+    `scenes` (key -> path or Scene): the run's, for a layout whose index is of the whole
+    dataset (`Layout.dataset_index`)."""
 
-    def __init__(self, out: Path, format: str):
-        self.out, self.format = Path(out), format
+    def __init__(self, out: Path, layout, scenes: dict | None = None):
+        self.out, self.layout = Path(out), layout
+        self.scenes = scenes or {}
+        self._loaded: dict[str, Scene | None] = {}
 
-    def write(self, spec: dict, encoded: dict[str, bytes]) -> dict[str, dict]:
-        files = {}
-        for rel, data in encoded.items():
-            write_bytes(self.out / rel, data)
-            files[rel] = {"path": rel, "sha256": manifest.sha256(data), "bytes": len(data)}
-        return files
+    def scene_of(self, key: str) -> Scene | None:
+        """The run's scene of `key`, loaded once here; None when it cannot be (its frames
+        failed for that reason and are in no index)."""
+        if key not in self._loaded:
+            source = self.scenes.get(key, key)
+            try:
+                self._loaded[key] = source if isinstance(source, Scene) else load_scene(source)
+            except (SceneError, OSError):
+                self._loaded[key] = None
+        return self._loaded[key]
 
-    def verify(self, spec: dict, record: dict) -> bool:
-        files = record.get("files") or {}
-        return bool(files) and "dataset" in record and all(
-            manifest.file_sha256(self.out / e.get("path", "")) == e.get("sha256")
-            for e in files.values())
+    def _root(self, spec: FrameSpec) -> Path:
+        return self.out / (spec.job if self.layout.root is None else self.layout.root(spec))
 
-    def clean(self, specs: list[dict]) -> int:
+    def write(self, unit: Unit, results: Sequence[dict]) -> Written:
+        return Written({spec.id: {rel: put(self.out, rel, data)
+                                  for rel, data in result["outputs"].items()}
+                        for spec, result in zip(unit.frames, results) if "error" not in result})
+
+    def verify(self, unit: Unit, old: dict[str, dict]) -> list[dict] | None:
+        records = made(unit, old, self.layout.name)
+        for record in records:
+            files = (record or {}).get("files") or {}
+            if not files or "dataset" not in record or not all(
+                    manifest.file_sha256(self.out / e.get("path", "")) == e.get("sha256")
+                    for e in files.values()):
+                return None
+        return records
+
+    def clean(self, units: Sequence[Unit]) -> int:
         """Remove temporary files a killed run left for these frames' files and the index."""
-        mod = layout(self.format)
+        layout = self.layout
         folders: dict[Path, set[str] | None] = {}
-        for spec in specs:
-            job = self.out / spec["job"]
-            for sub in mod.FOLDERS:
+        for spec in (spec for unit in units for spec in unit.frames):
+            job = self._root(spec)
+            for sub in layout.folders:
                 folders.setdefault(job / sub, set()).add(encoding.frame_stem(spec))
-            for rel in mod.INDEX:
+            for rel in layout.index_files:
                 names = folders.setdefault((job / rel).parent, set())
                 if names is not None:
                     names.add(Path(rel).name)
-            if spec["index"] == 0:
-                folders.update({job / sub: None for sub in getattr(mod, "FIRST", ())})
-        return sum(_remove_parts(folder, stems) for folder, stems in folders.items())
+            if spec.index == 0 and layout.dataset_index is None:
+                folders.update({job / sub: None for sub in layout.first})
+        if units and layout.dataset_index is not None:   # what the dataset's index writes
+            for rel in layout.first:
+                if Path(rel).suffix:
+                    names = folders.setdefault((self.out / rel).parent, set())
+                    if names is not None:
+                        names.add(Path(rel).name)
+                else:
+                    folders[self.out / rel] = None
+        return sum(_remove_parts(folder, stems) for folder, stems in folders.items()
+                   if not manifest.outside(self.out, folder))
+
+    def finish(self, specs: list[FrameSpec], hashes: dict[str, str]) -> None:
+        """Rebuild every job's index files (or the dataset's, `Layout.dataset_index`) from the
+        made frames that every manifest in OUT records for `specs` (made from the same spec, in
+        this layout), in frame order."""
+        records = manifest.read(self.out)
+        if self.layout.dataset_index is not None:
+            done = {spec.id: records[spec.id]["dataset"] for spec in specs
+                    if _made(records.get(spec.id), hashes[spec.id], self.layout.name)}
+            for rel, data in self.layout.dataset_index(specs, done, self.scene_of).items():
+                put(self.out, rel, data)
+            return
+        jobs: dict[str, list] = {}
+        for spec in specs:
+            record = records.get(spec.id)
+            jobs.setdefault(spec.job, [])
+            if _made(record, hashes[spec.id], self.layout.name):
+                jobs[spec.job].append((spec, record["dataset"]))
+        for job, entries in jobs.items():
+            for rel, data in self.layout.index(job, entries).items():
+                put(self.out, rel, data)
+
+
+def _made(record: dict | None, spec_hash: str, layout: str) -> bool:
+    """The record says its frame was made from this spec in this layout."""
+    return (record is not None and record.get("spec") == spec_hash
+            and record.get("format") == layout and "dataset" in record)
 
 
 def _remove_parts(folder: Path, stems: set[str] | None) -> int:
@@ -100,21 +137,3 @@ def _remove_parts(folder: Path, stems: set[str] | None) -> int:
                 except FileNotFoundError:
                     pass
     return removed
-
-
-def write_index(out: Path, format: str, specs: list[dict], hashes: dict[str, str]) -> None:
-    """Rebuild every job's index files from the made frames that every manifest in `out`
-    records for `specs` (made from the same spec, in this layout), in frame order."""
-    records = manifest.read(out)
-    jobs: dict[str, list] = {}
-    for spec in specs:
-        record = records.get(spec["id"])
-        ok = (record is not None and record.get("spec") == hashes[spec["id"]]
-              and record.get("format") == format and "dataset" in record)
-        jobs.setdefault(spec["job"], [])
-        if ok:
-            jobs[spec["job"]].append((spec, record["dataset"]))
-    mod = layout(format)
-    for job, entries in jobs.items():
-        for rel, data in mod.index(job, entries).items():
-            write_bytes(Path(out) / rel, data)

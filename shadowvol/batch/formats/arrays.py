@@ -3,37 +3,36 @@ light's `casters` and each object's unoccluded silhouette where a layout asks fo
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
-from shadowvol.scene import Scene
+from shadowvol.batch.sources import SOURCES
+from shadowvol.batch.spec import FrameSpec
+from shadowvol.scene import BACKGROUND, Scene
 
-# the frame arrays every layout reads: what `Worker._arrays` makes for these outputs
+# the frame arrays every layout reads: what `Worker.arrays` makes for these outputs
 BASE_OUTPUTS = ["image", "masks", "depth", "object_id"]
 
 
-def frame_arrays(worker, spec: dict, scene: Scene, camera, lights, *, casters: bool = False,
+def frame_arrays(worker, spec: FrameSpec, scene: Scene, camera, lights, *, casters: bool = False,
                  alone: bool = False) -> dict:
     """The worker's arrays of BASE_OUTPUTS, plus `casters` (L, H, W, K) uint64 of every light
     (`casters_lights`: their indices, every light's) and `alone` (n, H, W) bool: each object's
-    coverage drawn without the others."""
+    coverage drawn without the others (nothing for the background's)."""
     outputs = BASE_OUTPUTS + (["casters"] if casters else [])
-    arrays = worker._arrays(dict(spec, outputs=outputs), scene, camera, lights)
+    arrays = worker.arrays(dataclasses.replace(spec, outputs=tuple(outputs)), scene, camera,
+                           lights)
     arrays["casters_lights"] = list(range(len(lights))) if casters else []
-    if alone:
-        arrays["alone"] = np.stack([_alone(worker, spec, scene, camera, obj)
+    if alone:   # the stage (category background) is in no dataset's ground truth
+        empty = np.zeros((scene.height, scene.width), bool)
+        arrays["alone"] = np.stack([empty if obj.label == BACKGROUND else
+                                    _alone(worker, spec, scene, camera, obj)
                                     for obj in scene.objects])
     return arrays
 
 
-def _alone(worker, spec: dict, scene: Scene, camera, obj) -> np.ndarray:
+def _alone(worker, spec: FrameSpec, scene: Scene, camera, obj) -> np.ndarray:
     """(H, W) bool: where `obj` covers a pixel in a scene of it alone, by the frame's renderer."""
     single = scene.replace(objects=(obj,), lights=(), camera=camera)
-    if spec["renderer"] == "raytrace":
-        import raytrace
-
-        return raytrace.shadow_masks(single)[1]
-    from shadowvol.raster.renderer import Renderer
-
-    with Renderer(single, worker._context()) as renderer:
-        return renderer.render(spec["method"], camera=camera, lights=(),
-                               outputs=("coverage",)).coverage
+    return SOURCES[spec.renderer].alone(worker, spec, single)

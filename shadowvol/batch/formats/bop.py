@@ -1,10 +1,15 @@
-"""`--format bop`: each job a BOP-scenewise dataset (bop_toolkit: bop_datasets_format.md)
-of one scene, OUT/<job>/train/000000/ (scene_camera.json, scene_gt.json, scene_gt_info.json,
-rgb/, depth/, mask/, mask_visib/ and our shadow/), image id = frame index, with OUT/<job>/models/
-(PLY, mm, and models_info.json) and camera.json written with frame 0 (docs/formats.md).
+"""`--format bop`: OUT is one BOP-scenewise dataset (bop_toolkit: bop_datasets_format.md) of
+every job: job j (its place in the job file) is the scene OUT/train/{j:06d}/ (scene_camera.json,
+scene_gt.json, scene_gt_info.json, rgb/, depth/, mask/, mask_visib/ and our shadow/), image id =
+frame index; OUT/models/ holds one PLY (mm) per model and models_info.json, OUT/camera.json the
+first frame's intrinsics (docs/formats.md).
 
-An object's model frame is world axes with its origin at the centre of the object's box, so
-cam_R_m2c is cam_R_w2c and cam_t_m2c = R_w2c c + t_w2c; `mask` is the object drawn alone.
+A model is a distinct mesh (`Object.model_key`: a mesh file at one scale, or an object's own
+triangles), written in its own frame (`Object.model_vertices`: the mesh file's coordinates
+times its scale); its obj_id is its place in the order models are first met, job by job in the
+job file, objects in scene order, so it is the same in every job and every shard.  An object's
+pose (rigid, after any jitter) is in cam_R_m2c, cam_t_m2c.  Objects of category `background`
+are no model and have no ground truth.
 """
 
 from __future__ import annotations
@@ -12,51 +17,70 @@ from __future__ import annotations
 import numpy as np
 
 from shadowvol.batch.formats import encoding
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.io import encode_srgb, png_bytes
+from shadowvol.scene import BACKGROUND, SceneError
 
-CASTERS = False
-ALONE = True
-SCENE = "train/000000"
-FOLDERS = tuple(f"{SCENE}/{sub}" for sub in ("rgb", "depth", "mask", "mask_visib", "shadow"))
-INDEX = tuple(f"{SCENE}/{name}" for name in
-              ("scene_camera.json", "scene_gt.json", "scene_gt_info.json"))
-FIRST = ("models", "")   # folders of what frame 0 adds: the models, camera.json
+FOLDERS = ("rgb", "depth", "mask", "mask_visib", "shadow")
+INDEX = ("scene_camera.json", "scene_gt.json", "scene_gt_info.json")
+FIRST = ("models", "camera.json")   # what the dataset's index writes under OUT
 DEPTH_SCALE = 1.0   # depth PNG value * DEPTH_SCALE = millimetres
+RIGID = 1e-9        # |scale - 1| of a pose BOP takes as rigid (rounding of the jitter's turns)
 
 
-def _centre(obj) -> np.ndarray:
-    v = np.asarray(obj.vertices, np.float64)
-    return (v.min(axis=0) + v.max(axis=0)) / 2
+def root(spec: FrameSpec) -> str:
+    """The scene folder of a frame: its job's place in the job file."""
+    return f"train/{spec.job_index:06d}"
 
 
-def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
-    stem, root = encoding.frame_stem(spec), f"{spec['job']}/{SCENE}"
+def shown(scene) -> list[int]:
+    """The indices of the objects that are models (not of category background)."""
+    return [k for k, obj in enumerate(scene.objects) if obj.label != BACKGROUND]
+
+
+def _rigid(obj) -> np.ndarray:
+    """(4, 4): the object's pose, which must not scale (BOP's poses are rigid)."""
+    pose = np.eye(4) if obj.pose is None else obj.pose
+    scale = float(np.cbrt(np.linalg.det(pose[:3, :3])))
+    if abs(scale - 1.0) > RIGID:
+        raise SceneError("jitter.objects.scale", f"object {obj.name!r} is scaled by {scale:.6g} "
+                                                 "from its model (by the jitter, or a pose "
+                                                 "given in Python): a BOP pose (cam_R_m2c, "
+                                                 "cam_t_m2c) cannot scale; leave out the scale "
+                                                 "jitter for --format bop")
+    return pose
+
+
+def frame(spec: FrameSpec, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
+    stem, folder = encoding.frame_stem(spec), root(spec)
     cam = arrays["camera"]
     K = np.array(cam["K"], np.float64)
     K[:2, 2] -= 0.5  # BOP projects with OpenCV's pixel centres
     R, t = cam["world_to_camera"][:3, :3], cam["world_to_camera"][:3, 3]
     depth = encoding.depth_mm(arrays["depth"], DEPTH_SCALE)
-    files = {f"{root}/rgb/{stem}.png": png_bytes(encode_srgb(arrays["image"])),
-             f"{root}/depth/{stem}.png": encoding.png16(depth)}
+    files = {f"{folder}/rgb/{stem}.png": png_bytes(encode_srgb(arrays["image"])),
+             f"{folder}/depth/{stem}.png": encoding.png16(depth)}
     gt, info = [], []
-    for k, obj in enumerate(scene.objects):
+    for g, k in enumerate(shown(scene)):
+        obj = scene.objects[k]
+        pose = _rigid(obj)
         full, visib = arrays["alone"][k], arrays["object_id"] == k + 1
-        files[f"{root}/mask/{stem}_{k:06d}.png"] = encoding.mask_png(full)
-        files[f"{root}/mask_visib/{stem}_{k:06d}.png"] = encoding.mask_png(visib)
+        files[f"{folder}/mask/{stem}_{g:06d}.png"] = encoding.mask_png(full)
+        files[f"{folder}/mask_visib/{stem}_{g:06d}.png"] = encoding.mask_png(visib)
         all_, seen = int(full.sum()), int(visib.sum())
-        gt.append({"cam_R_m2c": R.reshape(-1).tolist(),
-                   "cam_t_m2c": ((R @ _centre(obj) + t) * encoding.MM_PER_UNIT).tolist(),
-                   "obj_id": k + 1})
+        gt.append({"cam_R_m2c": (R @ pose[:3, :3]).reshape(-1).tolist(),
+                   "cam_t_m2c": ((R @ pose[:3, 3] + t) * encoding.MM_PER_UNIT).tolist(),
+                   "model": obj.model_key})
         info.append({"bbox_obj": encoding.bbox(full), "bbox_visib": encoding.bbox(visib),
                      "px_count_all": all_, "px_count_valid": int((full & (depth > 0)).sum()),
                      "px_count_visib": seen, "visib_fract": seen / all_ if all_ else 0.0})
     for i, lit in enumerate(arrays["lit"]):
-        files[f"{root}/shadow/{stem}_{i:06d}.png"] = encoding.mask_png(arrays["coverage"] & ~lit)
-    if spec["index"] == 0:
-        files.update(_models(spec["job"], scene, K))
+        files[f"{folder}/shadow/{stem}_{i:06d}.png"] = encoding.mask_png(
+            arrays["coverage"] & ~lit)
     camera = {"cam_K": K.reshape(-1).tolist(), "cam_R_w2c": R.reshape(-1).tolist(),
               "cam_t_w2c": (t * encoding.MM_PER_UNIT).tolist(), "depth_scale": DEPTH_SCALE}
-    return files, {"camera": camera, "gt": gt, "gt_info": info}
+    return files, {"camera": camera, "gt": gt, "gt_info": info,
+                   "size": [scene.width, scene.height]}
 
 
 def _ply(vertices: np.ndarray, faces: np.ndarray) -> bytes:
@@ -79,30 +103,61 @@ def _diameter(v: np.ndarray, rows: int = 256) -> float:
     return best
 
 
-def _models(job: str, scene, K: np.ndarray) -> dict[str, bytes]:
-    """Each object's mesh in its model frame (mm), models_info.json and camera.json."""
+def models(specs: list[FrameSpec], scene_of) -> dict[str, object]:
+    """model key -> the first object met of that model, in obj_id order (job-file order of
+    the specs' scenes, objects in scene order)."""
+    found: dict[str, object] = {}
+    seen: set[str] = set()
+    for spec in specs:
+        if spec.scene in seen:
+            continue
+        seen.add(spec.scene)
+        scene = scene_of(spec.scene)
+        for k in shown(scene) if scene is not None else ():
+            found.setdefault(scene.objects[k].model_key, scene.objects[k])
+    return found
+
+
+def _model_files(found: dict) -> dict[str, bytes]:
     files, info = {}, {}
-    for k, obj in enumerate(scene.objects):
-        v = (np.asarray(obj.vertices, np.float64) - _centre(obj)) * encoding.MM_PER_UNIT
-        files[f"{job}/models/obj_{k + 1:06d}.ply"] = _ply(v, np.asarray(obj.faces))
+    for obj_id, obj in enumerate(found.values(), start=1):
+        v = obj.model_vertices() * encoding.MM_PER_UNIT
+        files[f"models/obj_{obj_id:06d}.ply"] = _ply(v, np.asarray(obj.faces))
         low, high = v.min(axis=0), v.max(axis=0)
-        diameter = _diameter(v)
-        info[str(k + 1)] = {"diameter": diameter, "min_x": float(low[0]),
-                            "min_y": float(low[1]), "min_z": float(low[2]),
-                            "size_x": float(high[0] - low[0]), "size_y": float(high[1] - low[1]),
-                            "size_z": float(high[2] - low[2])}
-    files[f"{job}/models/models_info.json"] = encoding.json_bytes(info)
-    files[f"{job}/camera.json"] = encoding.json_bytes(
-        {"cx": float(K[0, 2]), "cy": float(K[1, 2]), "depth_scale": DEPTH_SCALE,
-         "fx": float(K[0, 0]), "fy": float(K[1, 1]), "height": scene.height,
-         "width": scene.width})
+        info[str(obj_id)] = {"diameter": _diameter(v), "min_x": float(low[0]),
+                             "min_y": float(low[1]), "min_z": float(low[2]),
+                             "size_x": float(high[0] - low[0]),
+                             "size_y": float(high[1] - low[1]),
+                             "size_z": float(high[2] - low[2])}
+    files["models/models_info.json"] = encoding.json_bytes(info)
     return files
 
 
-def index(job: str, entries: list[tuple[dict, dict]]) -> dict[str, bytes]:
-    """scene_camera.json, scene_gt.json, scene_gt_info.json: keyed by image id, frame order."""
-    tables = ({}, {}, {})
-    for spec, record in entries:
-        for table, part in zip(tables, ("camera", "gt", "gt_info")):
-            table[str(spec["index"])] = record[part]
-    return {f"{job}/{rel}": encoding.json_bytes(table) for rel, table in zip(INDEX, tables)}
+def dataset_index(specs: list[FrameSpec], made: dict[str, dict], scene_of) -> dict[str, bytes]:
+    """models/, camera.json (the first made frame's intrinsics and size) and every job's
+    scene_camera.json, scene_gt.json, scene_gt_info.json, keyed by image id, frame order."""
+    found = models(specs, scene_of)
+    ids = {key: obj_id for obj_id, key in enumerate(found, start=1)}
+    files = _model_files(found)
+    scenes: dict[str, tuple] = {}
+    first = None
+    for spec in specs:
+        tables = scenes.setdefault(root(spec), ({}, {}, {}))
+        record = made.get(spec.id)
+        if record is None or any(g["model"] not in ids for g in record["gt"]):
+            continue   # not made, or its scene could not be read again here
+        first = first or record
+        tables[0][str(spec.index)] = record["camera"]
+        tables[1][str(spec.index)] = [{"cam_R_m2c": g["cam_R_m2c"], "cam_t_m2c": g["cam_t_m2c"],
+                                       "obj_id": ids[g["model"]]} for g in record["gt"]]
+        tables[2][str(spec.index)] = record["gt_info"]
+    for folder, tables in scenes.items():
+        files.update({f"{folder}/{rel}": encoding.json_bytes(table)
+                      for rel, table in zip(INDEX, tables)})
+    if first is not None:
+        K = np.array(first["camera"]["cam_K"]).reshape(3, 3)
+        files["camera.json"] = encoding.json_bytes(
+            {"cx": float(K[0, 2]), "cy": float(K[1, 2]), "depth_scale": DEPTH_SCALE,
+             "fx": float(K[0, 0]), "fy": float(K[1, 1]), "height": first["size"][1],
+             "width": first["size"][0]})
+    return files

@@ -15,6 +15,8 @@ import json
 import numpy as np
 from PIL import Image
 
+from shadowvol.batch.spec import FrameSpec
+
 MM_PER_UNIT = 1000.0      # scene units are read as metres; depth files hold millimetres
 UINT16_MAX = 65535
 
@@ -82,6 +84,6 @@ def _rle_text(counts: list[int]) -> str:
     return "".join(out)
 
 
-def frame_stem(spec: dict) -> str:
+def frame_stem(spec: FrameSpec) -> str:
     """The stem of a frame's files in a layout: its index, six digits (BOP's image id)."""
-    return f"{spec['index']:06d}"
+    return f"{spec.index:06d}"

@@ -15,17 +15,16 @@
 from __future__ import annotations
 
 from shadowvol.batch.formats import encoding
+from shadowvol.batch.spec import FrameSpec
 from shadowvol.io import encode_srgb, png_bytes
 
-CASTERS = False
-ALONE = False
 FOLDERS = ("images", "depth", "masks", "object_id", "shadow")
 INDEX = ("transforms.json",)
 INTRINSICS = ("fl_x", "fl_y", "cx", "cy", "w", "h")
 
 
-def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
-    stem, job = encoding.frame_stem(spec), spec["job"]
+def frame(spec: FrameSpec, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
+    stem, job = encoding.frame_stem(spec), spec.job
     cam = arrays["camera"]
     K = cam["K"]
     paths = {"file_path": f"images/{stem}.png", "depth_file_path": f"depth/{stem}.png",
@@ -45,7 +44,7 @@ def frame(spec: dict, arrays: dict, scene) -> tuple[dict[str, bytes], dict]:
     return {f"{job}/{rel}": data for rel, data in files.items()}, record
 
 
-def index(job: str, entries: list[tuple[dict, dict]]) -> dict[str, bytes]:
+def index(job: str, entries: list[tuple[FrameSpec, dict]]) -> dict[str, bytes]:
     """transforms.json: the first frame's intrinsics on top, a frame's own where they differ
     (a path of key poses can change fov_y)."""
     top = {name: entries[0][1][name] for name in INTRINSICS} if entries else {}

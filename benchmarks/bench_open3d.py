@@ -1,0 +1,163 @@
+"""Benchmark (not a test): our exact masks against Open3D's `RaycastingScene`, in one run.
+
+    python -m benchmarks.bench_open3d [--runs 5] [--json FILE]
+
+The peer is the script a user would write for shadow masks with Open3D (`open3d-cpu`, the
+bench extra: Embree 4 on all cores): the same pixel-centre primary rays (`raytrace.camera`)
+cast with `cast_rays`, each hit offset 1e-4 of the scene's size along its camera-facing
+normal, one `test_occlusions` ray per light (a segment ending 1e-4 short of a point light).
+Ours: `raytrace.shadow_masks` on a backend built before the clock (and, apart, with the
+build), the rasterizer's mask-only frame is `bench_mitsuba`'s.  The variants take turns round
+by round in one process; medians of wall and CPU time (all threads).  Open3D's masks are not
+exact (the offsets): the pixels where they differ from ours are counted, not judged.
+
+Scenes: the Stanford bunny on a floor at 1280x720 (`bench_masks.bunny_scene`) under a point
+and a directional light, and the turntable's first view at 640x480 under a point, a
+directional and a spot light (both need ../shared/models beside the checkout; without it, the
+100k procedural scene stands in and the output says so).  Without Open3D the script says so
+and exits 0.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import time
+
+import numpy as np
+
+from . import scenes
+from .bench_masks import BUNNY, bunny_scene
+
+
+def _lights():
+    from shadowvol import DirectionalLight, PointLight, SpotLight
+    return (PointLight([-3.0, 5.0, 2.0]), DirectionalLight([0.4, -1.0, -0.3]),
+            SpotLight([3.0, 4.0, 3.0], [-3.0, -4.0, -3.0], cone_angle=35.0))
+
+
+def bench_scenes() -> list:
+    point, directional, _ = _lights()
+    if scenes.models_dir() is None or not BUNNY.is_file():
+        base = scenes.occluder_scene("100k", 1, 1280, 720)
+        return [base.replace(lights=(point, directional), name="occluders 100k (no shared "
+                                                                "meshes)")]
+    bunny = bunny_scene(1280, 720)
+    turntable = scenes.turntable_scene(640, 480)
+    return [bunny.replace(lights=(bunny.lights[0], directional)),
+            turntable.replace(lights=_lights())]
+
+
+class Open3DMasks:
+    """The naive Open3D masks of a scene (see the module's docstring)."""
+
+    def __init__(self, scene):
+        import open3d as o3d
+        vertices, faces, _ = scene.triangles()
+        self.o3d, self.scene_def = o3d, scene
+        self.scene = o3d.t.geometry.RaycastingScene()
+        self.scene.add_triangles(o3d.core.Tensor(vertices.astype(np.float32)),
+                                 o3d.core.Tensor(faces.astype(np.uint32)))
+        from raytrace.camera import RayGrid
+        grid = RayGrid(scene.camera, scene.width, scene.height, np.float32)
+        d = grid.directions()
+        self.rays = np.ascontiguousarray(np.concatenate([grid.origins(d), d]).T)
+        self.offset = 1e-4 * scene.extent
+
+    def __call__(self):
+        o3d, scene = self.o3d, self.scene_def
+        hit = self.scene.cast_rays(o3d.core.Tensor(self.rays))
+        t = hit["t_hit"].numpy()
+        covered = np.isfinite(t)
+        o, d = self.rays[covered, :3], self.rays[covered, 3:]
+        p = o + t[covered, None] * d
+        n = hit["primitive_normals"].numpy()[covered]
+        n *= np.where((n * d).sum(axis=1) > 0, -1.0, 1.0)[:, None].astype(np.float32)
+        start = p + self.offset * n
+        lit = np.zeros((len(scene.lights), covered.size), bool)
+        for i, light in enumerate(scene.lights):
+            if hasattr(light, "position"):
+                to = light.position.astype(np.float32) - start
+                far = 1.0 - self.offset / np.linalg.norm(to, axis=1)
+            else:
+                to = np.broadcast_to(-light.direction.astype(np.float32), start.shape)
+                far = np.inf
+            facing = (n * to).sum(axis=1) > 0
+            if hasattr(light, "cos_cutoff"):
+                cos = -(to @ light.direction) / np.linalg.norm(to, axis=1)
+                facing &= cos >= light.cos_cutoff
+            rays = o3d.core.Tensor(np.ascontiguousarray(np.concatenate([start, to], axis=1)))
+            if np.isscalar(far):
+                blocked = self.scene.test_occlusions(rays).numpy()
+            else:  # tfar is one number: unit segments, cut short by the largest margin
+                blocked = self.scene.test_occlusions(rays, tfar=float(far.min())).numpy()
+            lit[i, np.flatnonzero(covered)] = facing & ~blocked
+        return lit.reshape(len(scene.lights), scene.height, scene.width), \
+            covered.reshape(scene.height, scene.width)
+
+
+def _timed(fns: dict, runs: int) -> dict:
+    """Wall and CPU ms of each function, taking turns, after one warm-up round."""
+    out = {k: {"wall": [], "cpu": []} for k in fns}
+    for r in range(runs + 1):
+        for k, fn in fns.items():
+            w, c = time.perf_counter(), time.process_time()
+            fn()
+            if r:
+                out[k]["wall"].append((time.perf_counter() - w) * 1e3)
+                out[k]["cpu"].append((time.process_time() - c) * 1e3)
+    return {k: {m: statistics.median(v[m]) for m in ("wall", "cpu")} for k, v in out.items()}
+
+
+def measure(scene, runs: int) -> dict:
+    from raytrace import shadow_masks
+    from raytrace.masks import scene_backend
+    peer = Open3DMasks(scene)
+    backend = scene_backend(scene)
+    ours_lit, ours_cov = shadow_masks(scene, backend)
+    lit, cov = peer()
+    times = _timed({"raytrace.shadow_masks (built backend)": lambda: shadow_masks(scene, backend),
+                    "raytrace.shadow_masks (with its build)": lambda: shadow_masks(scene),
+                    "Open3D (built scene)": peer,
+                    "Open3D (with its build)": lambda: Open3DMasks(scene)()}, runs)
+    return {"scene": scene.name, "triangles": sum(len(o.faces) for o in scene.objects),
+            "size": [scene.width, scene.height], "lights": len(scene.lights), "ms": times,
+            "pixels_differing": int((lit != ours_lit).sum() + (cov != ours_cov).sum())}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_open3d",
+                                 description=__doc__.split("\n\n")[0])
+    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--json", type=str, default=None)
+    args = ap.parse_args(argv)
+    try:
+        import open3d  # noqa: F401
+    except ImportError as exc:
+        print(f"skipped: Open3D is not installed or does not load ({exc}); "
+              "pip install open3d-cpu (the bench extra)")
+        return 0
+    load = os.getloadavg()
+    rows = [measure(s, args.runs) for s in bench_scenes()]
+    result = {"load": [load, os.getloadavg()], "runs": args.runs, "scenes": rows,
+              "open3d": open3d.__version__}
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(result, f, indent=1)
+    print(f"Open3D {open3d.__version__}, {args.runs} rounds; load {load[0]:.1f} -> "
+          f"{os.getloadavg()[0]:.1f}; ms median wall / CPU (all threads)")
+    print("| scene | triangles | size | lights | " +
+          " | ".join(rows[0]["ms"]) + " | pixels differing |")
+    print("|---|---:|---|---:|" + "---:|" * (len(rows[0]["ms"]) + 1))
+    for r in rows:
+        cells = " | ".join(f"{v['wall']:.0f} / {v['cpu']:.0f}" for v in r["ms"].values())
+        print(f"| {r['scene']} | {r['triangles']:,} | {r['size'][0]}x{r['size'][1]} | "
+              f"{r['lights']} | {cells} | {r['pixels_differing']:,} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,70 @@
+"""`raytrace masks`: the reference shadow masks of a scene file (and, asked for, the ground
+truth), as a mask file and a picture."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from raytrace import estimate, shadow_masks  # (area lights: lit where every sample reaches)
+from raytrace.backends import BACKENDS
+from raytrace.groundtruth import ground_truth
+from shadowvol import memory
+from shadowvol.cameras import calibration
+from shadowvol.cli import args as blocks
+from shadowvol.cli import outputs, status
+from shadowvol.frame import save_masks
+from shadowvol.io import save_png
+from shadowvol.pictures import ground_truth_picture, masks_image
+from shadowvol.scene import hard_lights, light_samples
+from shadowvol.scenefile import load_scene
+
+
+def add_parser(sub) -> None:
+    m = blocks.command(sub, "masks", help="reference shadow masks (lit per light, coverage)",
+                       description="Trace the reference shadow masks of SCENE on its triangles "
+                                   "and write them as a .npz (lit, coverage, the camera "
+                                   "matrices K, world_to_camera, camera_to_world and the light "
+                                   "arrays; with --outputs, the ground truth too) and a "
+                                   "picture.")
+    blocks.scene(m)
+    blocks.output(m, "NPZ",
+                  "where to write the masks (.npz with lit (L, H, W) and coverage (H, W); "
+                  "with an area light also lit_count (L, H, W) and samples (L,))")
+    m.add_argument("--png", metavar="PNG", default=None,
+                   help="where to write a picture of the masks, one panel per light (white lit, "
+                        "grey shadowed, black empty), with --outputs also of the outputs side by "
+                        "side (default: beside the .npz, same name, .png)")
+    m.add_argument("--no-png", action="store_true", help="write the .npz only")
+    blocks.ground_truth(m, "ground truth to add to the .npz, comma-separated: "
+                           f"{blocks.GROUND_TRUTH_LIST} (or all); see docs/CONVENTIONS.md")
+    blocks.backend(m, BACKENDS)
+    blocks.memory_budget(m)
+    m.set_defaults(func=command)
+
+
+def command(args) -> int:
+    wanted = outputs.ground_truth(args.outputs)
+    paths = {"masks": Path(args.output)}
+    if not args.no_png:
+        paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
+    outputs.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
+    scene = load_scene(args.scene)
+    memory.check(estimate.masks(scene, wanted, picture="picture" in paths),
+                 args.memory_budget, args.scene)
+    if wanted or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
+        # the counts of an area light (lit_count, samples) come with the ground truth's rays
+        truth = ground_truth(scene, wanted, backend=args.backend)
+        lit, coverage, arrays = truth.lit, truth.coverage, truth.arrays()
+        picture = (ground_truth_picture(truth, [o.name for o in scene.objects]) if wanted
+                   else masks_image(lit, coverage))
+    else:
+        lit, coverage = shadow_masks(scene, backend=args.backend)
+        arrays = calibration(scene).arrays()
+        picture = masks_image(lit, coverage)
+    save_masks(paths["masks"], lit, coverage,
+               light_samples=[light_samples(lt) for lt in scene.lights], arrays=arrays)
+    if "picture" in paths:
+        save_png(paths["picture"], picture)
+    print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)
+    return status.OK
