@@ -65,6 +65,10 @@ EXTRAS = (
     ("bench_batch.py", [],
      "shadowvol batch on the 36-view turntable of the shared meshes: 1 worker, 2 workers, 2 "
      "shards, Ray with 2 actors, and the machinery's overhead (issue: datasets at scale)"),
+    ("bench_batch_memory.py", ["--json", "{json}"],
+     "RSS through a 10,000-frame batch with a jittered eye and light (the cage at 16x12, "
+     "image + masks): the second half's growth, goal <= 5 MB (issue: as shipped, nothing "
+     "lost)"),
     ("bench_soba.py", ["--json", "{json}"],
      "36,000 exact instance-shadow pairs (--format soba-lights) from the shared meshes at random "
      "poses, with the batch's eye and light jitter: pairs/s and peak RSS on one worker "

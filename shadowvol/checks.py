@@ -31,8 +31,9 @@ RIGID_TOLERANCE = 1e-6
 
 
 def shorten(value, limit: int = MAX_QUOTE) -> str:
-    """repr(value), cut to about `limit` characters ("… (N items)" for a long list)."""
-    text = repr(value)
+    """repr(value), cut to about `limit` characters ("… (N items)" for a long list); a numpy
+    array or number as the list or number a file would hold, never "array([...])"."""
+    text = repr(value.tolist() if isinstance(value, (np.ndarray, np.generic)) else value)
     if len(text) <= limit:
         return text
     more = f" ({len(value)} items)" if isinstance(value, (list, tuple, np.ndarray)) else ""

@@ -9,6 +9,7 @@ one `MeshPart` per node instance, in the file's node order.
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
 import os
 import re
@@ -20,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from shadowvol.scene import Material, SceneError, shorten
+from shadowvol.scenefile_gltf import check_layout, check_node_tree, gltf_document
 from shadowvol.scenefile_texture import (
     Surface,
     gltf_surfaces,
@@ -47,6 +49,19 @@ def read_regular_file(path: Path, max_bytes: int, key: str = "", what: str | Non
     if len(data) > max_bytes:
         raise SceneError(key, f"{what} grew past {max_bytes} bytes while being read")
     return data
+
+
+def check_regular_file(path: Path, key: str = "", what: str | None = None) -> None:
+    """SceneError under `key` when `path` exists and is not a regular file (a FIFO, a device, a
+    directory, a socket), found by stat alone: nothing is opened, so nothing can block.  A
+    missing file passes (the reader says so when it opens it)."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return
+    if not stat.S_ISREG(mode):
+        raise SceneError(key, f"{what or path} is {_file_kind(mode)}, not a regular file: "
+                              "not read")
 
 
 def _open_regular(path: Path, max_bytes: int, key: str, what: str) -> int:
@@ -135,12 +150,18 @@ def read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYTE
     data = read_regular_file(path, max_bytes, key)
     check_mesh_bytes(path, data, key)
     try:
-        loaded = trimesh.load(str(path), process=False)
+        # parsed from the bytes checked above (the path is not opened again), and the files a
+        # glTF names (buffers, images) read by `_Resolver`: regular files, bounded
+        loaded = trimesh.load(io.BytesIO(data), file_type=path.suffix.lower()[1:],
+                              resolver=_resolver(path, max_bytes, key), process=False)
+    except SceneError:
+        raise
     except ImportError as exc:  # an optional package of trimesh's, for this format
         raise SceneError(key, f"reading {path} needs the Python package {exc.name!r}, which is "
                               f"not installed (pip install {exc.name})") from None
     except Exception as exc:  # trimesh raises many types for malformed files
-        raise SceneError(key, f"cannot parse mesh {path}: {type(exc).__name__}: {exc}") from None
+        raise SceneError(key, f"cannot parse mesh {path}: {type(exc).__name__}: "
+                              f"{str(exc) or _failed_check(exc)}") from None
     surfaces = _surfaces(path, data, loaded, key)
     if isinstance(loaded, trimesh.Scene):
         if not loaded.geometry:
@@ -160,6 +181,43 @@ def read_mesh(rel, key: str, base_dir: Path, max_bytes: int = MAX_MESH_FILE_BYTE
     return parts
 
 
+def _resolver(path: Path, max_bytes: int, key: str):
+    """trimesh's resolver of the files a mesh file names (a glTF's buffers and images), beside
+    `path`, each read as `read_regular_file` reads (a FIFO or a device is refused, unread)."""
+    from trimesh.resolvers import FilePathResolver
+
+    class _Resolver(FilePathResolver):
+        def get(self, name: str) -> bytes:
+            for candidate in (name.strip(), name.strip().lstrip("/"), os.path.split(name)[-1]):
+                try:
+                    found = self.absolute(candidate)
+                except ValueError:
+                    continue
+                if os.path.lexists(found):
+                    return read_regular_file(found, max_bytes, key,
+                                             f"{path}: the file it names {shorten(name)}")
+            self.absolute(name)  # the error trimesh gives for a name outside the folder
+            raise FileNotFoundError(name)
+
+        def namespaced(self, namespace: str):
+            return _resolver(Path(self.parent) / namespace / path.name, max_bytes, key)
+
+    return _Resolver(str(path))
+
+
+def _failed_check(exc: BaseException) -> str:
+    """What a message-less exception (trimesh's bare `assert`s) was raised by: the failed
+    statement and where it is, e.g. "assert 0 <= start (trimesh/exchange/gltf.py:1562)"."""
+    import traceback
+
+    frames = traceback.extract_tb(exc.__traceback__)
+    if not frames:
+        return "no message"
+    last = frames[-1]
+    where = "/".join(Path(last.filename).parts[-3:])
+    return f"{(last.line or '').strip() or 'no message'} ({where}:{last.lineno})"
+
+
 def _surfaces(path: Path, data: bytes, loaded, key: str) -> dict:
     """geometry name (None: a lone mesh) -> its `Surface`, by the file's format."""
     import trimesh
@@ -167,7 +225,8 @@ def _surfaces(path: Path, data: bytes, loaded, key: str) -> dict:
     suffix = path.suffix.lower()
     geometry = loaded.geometry if isinstance(loaded, trimesh.Scene) else {None: loaded}
     if suffix in (".glb", ".gltf") and isinstance(loaded, trimesh.Scene):
-        return gltf_surfaces(path, _gltf_document(path, data), loaded, key, read_regular_file)
+        return gltf_surfaces(path, gltf_document(path, data) or {}, loaded, key,
+                             read_regular_file)
     named, ignored = obj_materials(path, data, key, read_regular_file) if suffix == ".obj" \
         else ({}, [])
     out = {}
@@ -183,16 +242,6 @@ def _surfaces(path: Path, data: bytes, loaded, key: str) -> dict:
         out[name] = own._replace(uv=uv, colors=vertex_colours(mesh, linear=False))
     warn_ignored(path, ignored)
     return out
-
-
-def _gltf_document(path: Path, data: bytes) -> dict:
-    """The JSON of a glTF/GLB file ({} when it cannot be read: trimesh has read it)."""
-    try:
-        if path.suffix.lower() == ".glb":
-            return json.loads(data[20:20 + struct.unpack_from("<I", data, 12)[0]])
-        return json.loads(data)
-    except (ValueError, struct.error, RecursionError):
-        return {}
 
 
 def _part(node: str | None, mesh, matrix: np.ndarray | None,
@@ -298,3 +347,7 @@ def check_mesh_bytes(path: Path, data: bytes, key: str) -> None:
             raise SceneError(key, f"{path} is not valid glTF JSON (truncated?): {exc}") from None
         except RecursionError:
             raise SceneError(key, f"{path}: glTF JSON nested too deeply") from None
+    if suffix in (".gltf", ".glb"):
+        document = gltf_document(path, data)
+        check_node_tree(path, document, key)
+        check_layout(path, document, data, key)

@@ -28,6 +28,7 @@ FLOORS = {
     "raytrace": (4, "raytrace"),
     "shadowvol.scenefile": (3, "model"),
     "shadowvol.scenefile_mesh": (3, "model"),
+    "shadowvol.scenefile_gltf": (3, "model"),
     "shadowvol.scenefile_texture": (3, "model"),
     "shadowvol.scenefile_write": (3, "model"),
     "shadowvol.trimesh_scene": (3, "model"),

@@ -233,7 +233,7 @@ def shoot(F: sp.csr_matrix, area: np.ndarray, rho: np.ndarray, emission: np.ndar
     if emitted == 0.0:
         return L, 0, 0.0
     power = area * unshot.sum(axis=1)
-    shots = max(1, int(shots))
+    shots = min(max(1, int(shots)), len(area))  # more than every patch at once: every patch
     limit = max_iterations if max_iterations is not None else 1000 * len(area) // shots + 1000
     columns = _sparse().csc_matrix(F)  # column i: F_ji for every receiver j
     indptr, indices, data = columns.indptr, columns.indices, columns.data
@@ -275,7 +275,8 @@ def solve(scene: Scene, level: int = DEFAULT_LEVEL, rays_per_patch: int = DEFAUL
     obj = mesh.patch_object()
     L, iterations, left = shoot(F, mesh.patch_area(), kd[obj], emission[obj], tol, shots)
     t2 = time.perf_counter()
-    return Solution(mesh, L, iterations, iterations * max(1, int(shots)), left, t1 - t0,
+    shots = min(max(1, int(shots)), mesh.patches)  # as `shoot` shoots them
+    return Solution(mesh, L, iterations, iterations * shots, left, t1 - t0,
                     t2 - t1, rays)
 
 

@@ -9,6 +9,7 @@ and jitter.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
@@ -197,21 +198,35 @@ def jittered(camera: Camera, lights: tuple, jitter: dict, seed: int, index: int)
 
     rng = frame_rng(seed, index)
     offset = _in_ball(rng, jitter.get("eye", 0.0))
-    if camera.matrix_form:   # the whole pose moves: a matrix camera has no target to keep
-        camera = camera.translated(offset)
-    else:
-        camera = dataclasses.replace(camera, eye=camera.eye + offset)
-    moved = []
-    for light in lights:
-        if isinstance(light, DirectionalLight):
-            moved.append(light)
-        elif isinstance(light, AreaLight):
-            moved.append(dataclasses.replace(
-                light, center=light.center + _in_ball(rng, jitter.get("lights", 0.0))))
+    with _jitter_named("eye", jitter, "the eye"):
+        if camera.matrix_form:   # the whole pose moves: a matrix camera has no target to keep
+            camera = camera.translated(offset)
         else:
-            moved.append(dataclasses.replace(
-                light, position=light.position + _in_ball(rng, jitter.get("lights", 0.0))))
+            camera = dataclasses.replace(camera, eye=camera.eye + offset)
+    moved = []
+    for i, light in enumerate(lights):
+        with _jitter_named("lights", jitter, f"lights[{i}]"):
+            if isinstance(light, DirectionalLight):
+                moved.append(light)
+            elif isinstance(light, AreaLight):
+                moved.append(dataclasses.replace(
+                    light, center=light.center + _in_ball(rng, jitter.get("lights", 0.0))))
+            else:
+                moved.append(dataclasses.replace(
+                    light, position=light.position + _in_ball(rng, jitter.get("lights", 0.0))))
     return camera, tuple(moved)
+
+
+@contextlib.contextmanager
+def _jitter_named(key: str, jitter: dict, what: str):
+    """A jittered eye or light the model refuses (past float32) is the job's `jitter.<key>`'s
+    fault: the SceneError names that key and what it moved, not the model's own key."""
+    try:
+        yield
+    except SceneError as exc:
+        radius = jitter.get(key, 0.0)
+        raise SceneError(f"jitter.{key}", f"a radius of {radius:g} moved {what} out of range: "
+                                          f"{exc.key}: {exc.problem}") from None
 
 
 def specs(job, scene_key: str) -> list[FrameSpec]:

@@ -33,8 +33,8 @@ import math
 
 import numpy as np
 
-from shadowvol.scene import (BACKGROUND, Object, Parallelogram, Scene, SceneError, Sphere,
-                             is_number, reject_unknown_keys, shorten)
+from shadowvol.scene import (BACKGROUND, MAX_MAGNITUDE, Object, Parallelogram, Scene,
+                             SceneError, Sphere, is_number, reject_unknown_keys, shorten)
 
 OBJECT_KEYS = {"translation", "rotation", "scale", "axis"}
 AXES = ("up", "any")
@@ -60,6 +60,10 @@ def check(value) -> dict:
                 limit = {"translation": ">= 0", "rotation": "from 0 to 180 degrees",
                          "scale": "from 0 to below 1"}[name]
                 raise SceneError(f"{key}.{name}", f"must be a number {limit}, got {shorten(x)}")
+            if name == "translation" and x > MAX_MAGNITUDE:
+                raise SceneError(f"{key}.{name}", f"a radius of {x:g} would move the objects "
+                                                  f"beyond the float32 range the renderers use "
+                                                  f"(|x| <= {MAX_MAGNITUDE:g})")
             out[name] = float(x)
     if "axis" in value:
         if value["axis"] not in AXES:
@@ -88,8 +92,16 @@ def jittered_scene(scene: Scene, jitter: dict, seed: int, index: int) -> Scene:
         return scene
     objects = list(scene.objects)
     if "objects" in jitter:
-        objects = _placed(objects, jitter["objects"], np.random.default_rng([seed, index, 1]),
-                          scene.extent * GAP)
+        try:
+            objects = _placed(objects, jitter["objects"],
+                              np.random.default_rng([seed, index, 1]), scene.extent * GAP)
+        except SceneError as exc:   # the job's jitter moved them, not the scene's own pose
+            if exc.key.startswith("jitter."):
+                raise   # already the jitter's (no place found in its draws)
+            radius = jitter["objects"].get("translation", 0.0)
+            raise SceneError("jitter.objects.translation", f"a radius of {radius:g} moved the "
+                                                           f"objects out of range: {exc.key}: "
+                                                           f"{exc.problem}") from None
     if "colors" in jitter:
         rng = np.random.default_rng([seed, index, 2])
         objects = [_recoloured(obj, 1 + jitter["colors"] * rng.uniform(-1, 1, 3))

@@ -38,8 +38,16 @@ from pathlib import Path
 from shadowvol.batch import frames as camera_paths
 from shadowvol.batch import jitter
 from shadowvol.batch.outputs import DEFAULT, OUTPUTS
-from shadowvol.scene import Scene, SceneError, is_number, reject_unknown_keys, shorten
-from shadowvol.scenefile import light_from_dict
+from shadowvol.scene import (
+    MAX_MAGNITUDE,
+    Scene,
+    SceneError,
+    is_number,
+    reject_unknown_keys,
+    shorten,
+)
+from shadowvol.scenefile import MAX_NESTING, check_shape, light_from_dict
+from shadowvol.scenefile_mesh import check_regular_file, read_regular_file
 
 KEYS = {"name", "scene", "cameras", "lights", "size", "outputs", "renderer", "method",
         "max_depth", "seed", "jitter"}
@@ -82,16 +90,12 @@ def read_jobs(path: str | Path) -> list[Job | JobError]:
     """The jobs of a JSONL file, in file order; blank lines and lines starting with `#` are
     skipped.  A file that cannot be read is a SceneError; a bad line is a JobError."""
     path = Path(path)
-    try:
-        if path.stat().st_size > MAX_JOB_FILE_BYTES:
-            raise SceneError("", f"the job file is larger than {MAX_JOB_FILE_BYTES >> 20} MiB",
-                             str(path))
-        text = path.read_text(encoding="utf-8")
+    try:  # a regular file only (a FIFO or a device is refused unread), at most the cap
+        text = read_regular_file(path, MAX_JOB_FILE_BYTES, what="the job file").decode("utf-8")
     except UnicodeDecodeError as exc:
         raise SceneError("", f"not UTF-8 text: {exc}", str(path)) from None
-    except OSError as exc:
-        raise SceneError("", f"cannot read the job file: {exc.strerror or exc}", str(path)) \
-            from None
+    except SceneError as exc:
+        raise exc.in_file(str(path)) from None
     entries = []
     for number, line in enumerate(text.splitlines(), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
@@ -101,6 +105,10 @@ def read_jobs(path: str | Path) -> list[Job | JobError]:
             data = json.loads(line)
         except json.JSONDecodeError as exc:
             entries.append(JobError(f"line-{number}", source, f"not valid JSON: {exc}"))
+            continue
+        except RecursionError:  # json's parser recurses once a level
+            entries.append(JobError(f"line-{number}", source,
+                                    f"nested more than {MAX_NESTING} levels deep"))
             continue
         if not isinstance(data, dict):
             entries.append(JobError(f"line-{number}", source, "a job must be a JSON object"))
@@ -134,13 +142,17 @@ def check_jobs(entries, base_dir: str | Path = ".") -> list[Job | JobError]:
 def _job(data: dict, source: str, base_dir: Path, position: int) -> Job | JobError:
     fallback = data.get("name") if isinstance(data.get("name"), str) else f"job-{position}"
     try:
+        check_shape(data)  # nesting and list lengths, iteratively: never a RecursionError
         reject_unknown_keys(data, KEYS)
         scene = data.get("scene")
         if isinstance(scene, Scene):
             default_name = scene.name
         elif isinstance(scene, (str, Path)) and str(scene):
-            scene = str((base_dir / scene).resolve())
+            given_path = base_dir / scene
+            scene = str(given_path.resolve())
             default_name = Path(scene).stem
+            # refused now, by stat alone: its digest and its loader must never wait on a FIFO
+            check_regular_file(Path(scene), "scene", f"the scene file {given_path}")
         else:
             raise SceneError("scene", f"expected a scene file name, got {shorten(scene)}")
         name = data.get("name", re.sub(r"[^A-Za-z0-9_-]+", "_", default_name)[:64] or "job")
@@ -231,5 +243,9 @@ def _jitter(value) -> dict:
         elif not is_number(r) or not math.isfinite(r) or r < 0:
             raise SceneError(f"jitter.{key}", f"must be a radius >= 0, got {shorten(r)}")
         else:
+            if r > MAX_MAGNITUDE:
+                raise SceneError(f"jitter.{key}", f"a radius of {r:g} would move the {key} "
+                                                  f"beyond the float32 range the renderers use "
+                                                  f"(|x| <= {MAX_MAGNITUDE:g})")
             out[key] = float(r)
     return out

@@ -20,9 +20,10 @@ import json
 import os
 import stat
 from pathlib import Path
+from typing import NamedTuple
 
 from shadowvol.errors import out_of_memory_while, short_path
-from shadowvol.io import atomic_write, linked_folder, write_bytes
+from shadowvol.io import WriteError, atomic_write, linked_folder, write_bytes
 from shadowvol.scene import SceneError
 
 MANIFEST = "manifest.jsonl"
@@ -38,14 +39,19 @@ def sha256(data: bytes) -> str:
 
 
 def file_sha256(path: Path) -> str | None:
-    """The sha256 of a regular file's bytes, or None when it is not there."""
+    """The sha256 of a regular file's bytes; None when it is not there or not a regular file
+    (a FIFO, a device: never read)."""
     digest = hashlib.sha256()
-    try:
-        with open(path, "rb") as f:
-            while chunk := f.read(1 << 20):
-                digest.update(chunk)
+    try:  # opened without blocking: a FIFO (or a device) is no regular file, and is not read
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
     except (FileNotFoundError, IsADirectoryError, NotADirectoryError):
         return None
+    with open(fd, "rb") as f:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            return None
+        os.set_blocking(fd, True)
+        while chunk := f.read(1 << 20):
+            digest.update(chunk)
     return digest.hexdigest()
 
 
@@ -77,6 +83,13 @@ def read(out: str | Path, own: str = MANIFEST) -> dict[str, dict]:
     return records
 
 
+class Line(NamedTuple):
+    """Where `Journal.add` wrote a record: its line's offset and length in the journal."""
+
+    offset: int
+    length: int
+
+
 class Journal:
     """Appends records to a manifest, one line each, written as they come.  Made before the run
     touches anything in OUT: it holds an exclusive lock on the manifest from then until
@@ -98,18 +111,33 @@ class Journal:
         if data and not data.endswith(b"\n"):
             os.ftruncate(self._fd, data.rfind(b"\n") + 1)
 
-    def add(self, record: dict) -> None:
-        data = memoryview(encode(record))
-        while data:   # O_APPEND: each write lands at the end
-            data = data[os.write(self._fd, data):]
+    def add(self, record: dict) -> "Line":
+        """Append `record`; returns where its line is, which `finish` takes in its place (a
+        run that keeps the Line, not the record, keeps a few bytes a frame in memory)."""
+        line = encode(record)
+        data = memoryview(line)
+        try:
+            # the lock is held: nothing else writes, so the line lands at the present end
+            offset = os.lseek(self._fd, 0, os.SEEK_END)
+            while data:   # O_APPEND: each write lands at the end
+                data = data[os.write(self._fd, data):]
+        except OSError as exc:  # a full disk: name the manifest, not only "[Errno 28]"
+            raise WriteError(exc.errno, f"{short_path(self.path)}: cannot write: "
+                                        f"{exc.strerror or exc}") from None
+        return Line(offset, len(line))
 
-    def finish(self, records: list[dict]) -> None:
-        """Replace the manifest with `records` atomically.  The new file is locked before it
-        takes the manifest's name, so a second run never finds the manifest unlocked while
-        this one runs; both locks are held until `close`."""
+    def finish(self, records: list) -> None:
+        """Replace the manifest with `records` (dicts, or the Lines `add` returned: read back
+        from the journal one at a time, never all at once) atomically.  The new file is locked
+        before it takes the manifest's name, so a second run never finds the manifest
+        unlocked while this one runs; both locks are held until `close`."""
         with out_of_memory_while(f"writing {self.path}"), \
                 atomic_write(self.path, follow_links=False) as f:
-            f.write(b"".join(encode(r) for r in records))
+            for record in records:
+                if isinstance(record, Line):   # the journal's own descriptor: the old file
+                    f.write(os.pread(self._fd, record.length, record.offset))
+                else:
+                    f.write(encode(record))
             kept = os.dup(f.fileno())
             self._held.append(kept)
             fcntl.flock(kept, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -160,7 +188,10 @@ def _open_locked(path: Path) -> int:
                          "for it")
 
 
-def encode(record: dict) -> bytes:
+def encode(record: dict | bytes) -> bytes:
+    """A record as its manifest line (a line already encoded, as it is)."""
+    if isinstance(record, bytes):
+        return record
     return (json.dumps(record, separators=(",", ":"), allow_nan=False) + "\n").encode()
 
 

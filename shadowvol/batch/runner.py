@@ -160,6 +160,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     journal = manifest.Journal(out / own)
     try:
         store = layout.make_store(out, plan.scenes)
+        done: dict[str, dict | manifest.Line]
         done, unit_lines, todo = _already_made(plan, manifest.read(out, own), store)
         # temporary files a killed run left, for any file of this share (made or not)
         store.clean([plan.units[u] for u in plan.mine])
@@ -238,9 +239,8 @@ def _make(plan, todo, results, journal, done, unit_lines, summary, store, bar) -
             for spec, made_one in zip(unit.frames, made):
                 _record(journal, done, summary, spec, made_one, plan.hashes,
                         written.files.get(spec.id), store.layout.name, seconds)
-            for record in written.records:
-                journal.add(record)
-            unit_lines[u] = written.records
+            # a tar's own lines, kept as where they are (`manifest.Line`), as a frame's are
+            unit_lines[u] = tuple(journal.add(record) for record in written.records)
         if bar is not None:
             bar.update()
     if bar is not None:
@@ -312,8 +312,7 @@ def _record(journal, done, summary, spec, result, hashes, files, layout: str,
                   "seconds": seconds, **({"dataset": result["dataset"]} if "dataset" in result
                                          else {})}
         summary.rendered += 1
-    journal.add(record)
-    done[spec.id] = record
+    done[spec.id] = journal.add(record)  # where its line is: memory stays flat, however long
 
 
 def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_worker, budget):

@@ -83,7 +83,7 @@ class Raster:
     def alone(self, worker, spec, single) -> np.ndarray:
         from shadowvol.raster.renderer import Renderer
 
-        with Renderer(single, worker.context()) as renderer:
+        with worker.naming(spec.scene), Renderer(single, worker.context()) as renderer:
             return renderer.render(spec.method, camera=single.camera, lights=(),
                                    outputs=("coverage",)).coverage
 

@@ -11,6 +11,7 @@ counts first).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import platform
@@ -29,7 +30,7 @@ from shadowvol.batch.spec import FrameSpec
 from shadowvol.cameras import calibration
 from shadowvol.errors import RENDER_FAILED, message, status_of
 from shadowvol.frame import GROUND_TRUTH
-from shadowvol.scene import Camera, Scene, light_samples
+from shadowvol.scene import Camera, Scene, SceneError, light_samples
 from shadowvol.scenefile import light_from_dict, load_scene
 
 # Renderers kept alive per worker (least recently used released first): a job file that cycles
@@ -149,8 +150,19 @@ class Worker:
         ctx = self.context()
         while len(self._renderers) >= MAX_RENDERERS:
             self._renderers.popitem(last=False)[1].release()
-        self._renderers[slot] = Renderer(scene, ctx)
+        with self.naming(key):
+            self._renderers[slot] = Renderer(scene, ctx)
         return self._renderers[slot]
+
+    @contextlib.contextmanager
+    def naming(self, key: str):
+        """A Renderer(scene) refused inside (the GL's limits, `image` or `objects`) names the
+        scene file of `key`, as a scene's other bad input does."""
+        try:
+            yield
+        except SceneError as exc:
+            source = self.scenes.get(key)
+            raise (exc.in_file(source) if isinstance(source, str) else exc) from None
 
     # -- frames ----------------------------------------------------------------------------
     def render(self, spec: FrameSpec) -> dict:

@@ -86,7 +86,8 @@ def command(args) -> int:
             raise SceneError("--size", exc.problem) from None
     # the GL frame is counted as this process's memory: the context is made later
     memory.check(estimate.compare(scene), args.memory_budget, args.scene)
-    result = compare(scene, method=args.method, pyrender=args.pyrender)
+    with status.naming(args.scene):
+        result = compare(scene, method=args.method, pyrender=args.pyrender)
     print(result.table())
     save_png(args.output, result.picture())
     written = [args.output]

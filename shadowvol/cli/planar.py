@@ -49,7 +49,8 @@ def command(args) -> int:
                                                       if k in paths or k == "png")),
                  args.memory_budget, args.scene)
     try:
-        result = render_planar(scene, args.receiver)
+        with status.naming(args.scene):
+            result = render_planar(scene, args.receiver)
     except ReceiverError as exc:
         raise SceneError("--receiver", str(exc)) from None
     save_png(paths["image"], result.image)

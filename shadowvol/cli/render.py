@@ -218,10 +218,6 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
         scene = load_scene(scene_path)
         if ctx is None:
             ctx = create_context()
-        limit = min(ctx.info["GL_MAX_RENDERBUFFER_SIZE"], ctx.info["GL_MAX_TEXTURE_SIZE"])
-        if max(scene.width, scene.height) > limit:
-            raise SceneError("image", f"{scene.width}x{scene.height} is larger than this GL "
-                                      f"allows ({limit} pixels per side)", scene_path)
         if "stencil" in out:
             _stencil_lights(scene, scene_path)
         written = tuple(k for k in ("png", "masks", "exr", "png16", "stencil", "volumes")
@@ -255,6 +251,8 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # noqa: BLE001 - report() re-raises what has no status
+        if isinstance(exc, SceneError) and exc.file is None:  # the Renderer's (`image`)
+            exc = exc.in_file(scene_path)
         where = f"{scene_path}: " if prefix and not str(exc).startswith(scene_path) else ""
         return status.report(exc, where), ctx
     print(f"wrote {', '.join(str(p) for p in out.values())}", file=sys.stderr)

@@ -70,7 +70,10 @@ def command(args) -> int:
     scene = load_scene(args.scene)
     memory.check(estimate.render(scene, written=("png",)), args.memory_budget, args.scene)
     try:
-        mapper = ShadowMapper(scene, args.light)
+        with status.naming(args.scene):   # the Renderer's refusals name the scene file
+            mapper = ShadowMapper(scene, args.light)
+    except SceneError:
+        raise   # the scene's (`image`, `objects`), not the light's
     except ValueError as exc:
         raise SceneError("--light", str(exc)) from None
     with mapper:

@@ -7,6 +7,7 @@ command prints a traceback for an error it can name.  GL-free.
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import warnings
 
@@ -75,3 +76,16 @@ def main(build_parser, argv) -> int:
     except KeyboardInterrupt as exc:
         return report(exc)
     return run(args.func, args)
+
+
+@contextlib.contextmanager
+def naming(scene_path):
+    """A SceneError raised inside without a file (the Renderer's refusals: `image`, `objects`,
+    which it knows only as a Scene) names `scene_path`."""
+    try:
+        yield
+    except ValueError as exc:
+        scene = sys.modules.get("shadowvol.scene")
+        if scene is not None and isinstance(exc, scene.SceneError) and exc.file is None:
+            raise exc.in_file(str(scene_path)) from None
+        raise

@@ -6,6 +6,7 @@ rasterizer) is enough; a GPU vendor's EGL driver works unchanged.
 
 from __future__ import annotations
 
+import contextlib
 import os
 
 import moderngl
@@ -97,3 +98,30 @@ def make_current(ctx: moderngl.Context) -> None:
     """
     _check_not_forked()
     ctx.__enter__()
+
+
+# glGetError returns one flag a call, and a driver keeps a few: this many calls clear them all
+MAX_ERROR_FLAGS = 16
+
+
+def clear_errors(ctx: moderngl.Context) -> list[str]:
+    """Read and so clear the context's GL error flags; returns what was set (["GL_OUT_OF_..."]),
+    [] when none was.  A failed frame calls it so that its errors never reach the next one,
+    which would read them as its own."""
+    found = []
+    for _ in range(MAX_ERROR_FLAGS):
+        error = ctx.error
+        if error == "GL_NO_ERROR":
+            break
+        found.append(error)
+    return found
+
+
+@contextlib.contextmanager
+def errors_cleared_on_failure(ctx: moderngl.Context):
+    """Whatever raises inside leaves the context's GL error flags clear (`clear_errors`)."""
+    try:
+        yield
+    except BaseException:
+        clear_errors(ctx)
+        raise

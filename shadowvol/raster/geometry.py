@@ -40,7 +40,7 @@ from shadowvol.raster import guard
 from shadowvol.raster.projection import to_frame
 from shadowvol.raster.textures import SceneTextures, texture_index
 from shadowvol.raster.topology import Topology
-from shadowvol.scene import Scene
+from shadowvol.scene import Scene, SceneError
 
 MAX_TRIANGLES = 2 ** 24  # the G-buffer's surface key is a float32 integer (target.py)
 
@@ -86,6 +86,11 @@ class SceneGeometry:
 
     def __init__(self, ctx: moderngl.Context, scene: Scene):
         self.ctx = ctx
+        limit = ctx.info["GL_MAX_TEXTURE_SIZE"]
+        if len(scene.objects) > limit:  # the materials are a texture of a row per object
+            raise SceneError("objects", f"{len(scene.objects):,} objects, more than this GL "
+                                        f"allows ({limit:,}: the rasterizer keeps each object's "
+                                        "material in one row of a texture); merge objects")
         self.origin = frame_origin(scene.camera)
         self.moves = 0   # how many times `move_to` rewrote the buffers (their version)
         # the huge triangles cut for the current view (`set_view`): holes (h,) int64 sorted,

@@ -23,6 +23,10 @@ class LightBounds:
     """kept : light (`homogeneous` bytes) -> None (used once) or (the slack (M,) it was
     computed with, the bound, the least of that slack in each object (n_objects,))."""
 
+    # the lights kept, the least recently used dropped past it (but never one of this frame):
+    # a jittered light is new in every frame, and a batch of 10,000 such frames kept them all
+    MAX_LIGHTS = 4096
+
     def __init__(self):
         self.kept: dict[bytes, tuple | None] = {}
         self._slack: tuple | None = None   # (camera key, `overflow.world_slack`)
@@ -51,16 +55,17 @@ class LightBounds:
             return bool((by_object <= kept[2]).all() or (needed() <= kept[0]).all())
 
         doubled = None   # one (M,) array shared by the bounds computed in this frame
-        computed = 0
+        computed = used = 0
         out = []
         for i, light in enumerate(lights):
             for k, hard in enumerate(hard_lights(light)):
                 key = hard.homogeneous.tobytes()
+                used += 1
                 if key not in self.kept:
                     self.kept[key] = None      # seen once: re-check this frame
                     out.append((i, k))
                     continue
-                kept = self.kept[key]
+                kept = self.kept[key] = self.kept.pop(key)   # now the most recently used
                 if kept is None or not covers(kept):
                     if computed == per_frame:   # later: re-check it meanwhile
                         out.append((i, k))
@@ -76,4 +81,7 @@ class LightBounds:
                     self.kept[key] = kept
                 if kept[1] >= overflow.STENCIL_LIMIT:
                     out.append((i, k))
+        if len(self.kept) > max(self.MAX_LIGHTS, used):
+            for key in list(self.kept)[:len(self.kept) - max(self.MAX_LIGHTS, used)]:
+                del self.kept[key]   # the least recently used first
         return out

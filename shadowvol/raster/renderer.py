@@ -26,16 +26,22 @@ from shadowvol.cameras import calibration
 from shadowvol.frame import check_light_kinds, check_outputs
 from shadowvol.raster import bits, methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
-from shadowvol.raster.context import create_context, make_current
+from shadowvol.raster.context import (
+    clear_errors,
+    create_context,
+    errors_cleared_on_failure,
+    make_current,
+)
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.gl import RawGL
+from shadowvol.raster.object_facts import ObjectFacts
 from shadowvol.raster.overflow_policy import LightBounds
 from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.recycle import ArrayPool
 from shadowvol.raster.result import (DEFAULT_OUTPUTS, OUTPUTS, SILHOUETTES, RenderResult,
                                      check_lights)
-from shadowvol.raster.target import LIGHTS_PER_PAGE, Target
+from shadowvol.raster.target import LIGHTS_PER_PAGE, Target, check_frame_size
 from shadowvol.raster.truth_frame import frame_truth
 from shadowvol.raster.volumes import VolumeBuilder
 from shadowvol.raster.volumes_cpu import CpuVolumes
@@ -58,11 +64,7 @@ class Renderer:
         self.ctx = create_context() if ctx is None else ctx
         self._owned = []
         self._volumes: dict[str, VolumeBuilder] = {}
-        self._count_bound: int | None = None
-        self._object_bounds: np.ndarray | None = None
         self._truth: truth.TruthPass | None = None
-        self._outward_convex: np.ndarray | None = None
-        self._convex: np.ndarray | None = None
         self._bounds = LightBounds()   # the overflow check's kept light bounds
         self._srgb_code: tuple[int, int, int] | None = None   # `_srgb_background`
         # the arrays frames return (`recycle`), and the frames' own scratch (`_scratch`)
@@ -86,13 +88,18 @@ class Renderer:
             # (gl.RawGL) go to whichever context is current, e.g. after another renderer
             # with its own context has run
             make_current(self.ctx)
+            check_frame_size(self.ctx, scene.width, scene.height)  # bad input, not a GL error
             self.gl = RawGL()
             self.geometry = self._own(SceneGeometry(self.ctx, scene))
+            self._facts = ObjectFacts(self.geometry)
             self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height,
                                            surface=self.geometry.surface))
             self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
         except BaseException:
+            ctx = self.ctx
             self.release()
+            if not self._own_ctx:  # the caller's context keeps no GL error of this failure
+                clear_errors(ctx)
             raise
 
     def _own(self, obj):
@@ -131,7 +138,7 @@ class Renderer:
         to_check = self._lights_to_check(camera, lights) if shadows else []
         # the overflow check needs the lit masks, asked for or not
         plan = FramePlan.of(method, outputs | ({"lit"} if to_check else set()))
-        with stencil_gl.zero_to_one_depth(self.gl):
+        with errors_cleared_on_failure(self.ctx), stencil_gl.zero_to_one_depth(self.gl):
             result = self._render(plan, silhouettes, camera, lights, shadows)
             if to_check:
                 overflow.check_frame(self, result, silhouettes, camera, lights,
@@ -157,40 +164,15 @@ class Renderer:
         """`overflow_policy.LightBounds.kept`: the light bounds kept."""
         return self._bounds.kept
 
-    @property
-    def convex(self) -> np.ndarray:
-        """(n_objects,) bool: closed convex meshes (`overflow.is_closed_convex`)."""
-        if self._convex is None:
-            self._convex = np.array([overflow.is_closed_convex(t)
-                                     for t in self.geometry.topologies], bool)
-        return self._convex
-
-    @property
-    def outward_convex(self) -> np.ndarray:
-        """(n_objects,) bool: closed convex meshes wound outward (`overflow.
-        convex_orientation`), whose back faces `methods.cullable` may cull."""
-        if self._outward_convex is None:
-            self._outward_convex = np.array(
-                [overflow.convex_orientation(t) == 1 for t in self.geometry.topologies], bool)
-        return self._outward_convex
-
-    @property
-    def object_bounds(self) -> np.ndarray:
-        """(n_objects,) int64: `overflow.topology_bound` of each object, at most how many of
-        its triangles one segment can cross (a bound on its own count)."""
-        if self._object_bounds is None:
-            self._object_bounds = np.array(
-                [2 if convex else len(t.faces)
-                 for convex, t in zip(self.convex, self.geometry.topologies)], np.int64)
-        return self._object_bounds
-
-    @property
-    def count_bound(self) -> int:
-        """`overflow.count_bound` of the casting objects: below 256 no count can wrap."""
-        if self._count_bound is None:
-            self._count_bound = overflow.count_bound(
-                t for t, casts in zip(self.geometry.topologies, self.geometry.casts) if casts)
-        return self._count_bound
+    # the objects' facts (`object_facts.ObjectFacts`), each computed once, when first asked
+    convex = property(lambda self: self._facts.convex,
+                      doc="(n_objects,) bool: closed convex meshes")
+    outward_convex = property(lambda self: self._facts.outward_convex,
+                              doc="(n_objects,) bool: closed convex meshes wound outward")
+    object_bounds = property(lambda self: self._facts.object_bounds,
+                             doc="(n_objects,) int64: a bound on each object's own count")
+    count_bound = property(lambda self: self._facts.count_bound,
+                           doc="the casting objects' count bound: below 256 none can wrap")
 
     def _srgb_background(self) -> tuple[int, int, int]:
         """The background's 8-bit sRGB code as the sRGB pass encodes it (once per renderer)."""

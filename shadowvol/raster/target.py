@@ -42,6 +42,7 @@ from shadowvol.errors import RenderError
 from shadowvol.raster import stencil
 from shadowvol.raster.gl import RawGL, RawGLError
 from shadowvol.raster.projection import FAR_DEPTH
+from shadowvol.scene import SceneError
 
 LIGHTS_PER_PAGE = 23  # lit bits 1..23 and the coverage bit of a float32: exact
 
@@ -65,6 +66,23 @@ def _flipped(staging: np.ndarray, out: np.ndarray | None, dtype=None) -> np.ndar
         out = np.empty(staging.shape, staging.dtype if dtype is None else dtype)
     np.copyto(out, staging[::-1], casting="unsafe")
     return out
+
+
+def max_side(ctx: moderngl.Context) -> int:
+    """The widest or tallest frame this GL can make: its textures', renderbuffers' and
+    viewport's limits, the least of them."""
+    info = ctx.info
+    return min(info["GL_MAX_RENDERBUFFER_SIZE"], info["GL_MAX_TEXTURE_SIZE"],
+               *info.get("GL_MAX_VIEWPORT_DIMS", ()))
+
+
+def check_frame_size(ctx: moderngl.Context, width: int, height: int) -> None:
+    """SceneError (`image`, bad input) for a frame wider or taller than this GL allows (a
+    limit of the input, not a failure of the GL), before anything is allocated."""
+    limit = max_side(ctx)
+    if max(width, height) > limit:
+        raise SceneError("image", f"{width}x{height} is larger than this GL allows ({limit} "
+                                  "pixels per side)")
 
 
 class FrameAllocationError(RenderError):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from builders import SCENES, job_lines, write_jobs
+from builders import SCENES, job_lines, output_files, write_jobs
 
 from shadowvol import batch, memory
 from shadowvol.cli import status
@@ -50,11 +50,45 @@ def test_bad_jobs_among_good_ones(tmp_path, capsys):
     assert (summary.rendered, summary.skipped, summary.status) == (2, 4, status.OK)
 
 
-def test_a_frame_that_fails_to_render_is_status_3(tmp_path):
-    # more than the GL allows per side: the frame fails in the renderer, not in the job
-    job = dict(job_lines(frames=1, raytrace=False)[0], size=[1 << 16, 2])
-    summary = batch.run([job], tmp_path / "out", progress=False)
-    assert summary.failed == 1 and summary.status == status.RENDER_FAILED, summary.errors
+def _wide_then_ordinary(tmp_path, name: str):
+    """A batch (one in-process worker, one GL context) of a 40000x8 frame, then an ordinary
+    40x30 one; returns (its summary, its records by id, the ordinary frame's files as a
+    batch of that frame alone makes them)."""
+    good = job_lines(frames=1, size=(40, 30), raytrace=False)[0]
+    jobs = [dict(good, name="wide", size=[40000, 8]), dict(good, name="after")]
+    out = tmp_path / name
+    summary = batch.run(jobs, out, progress=False)
+    records = {r["id"]: r for r in map(json.loads, (out / "manifest.jsonl").read_text()
+                                       .splitlines())}
+    alone = tmp_path / f"{name}-alone"
+    assert batch.run([jobs[1]], alone, progress=False).status == status.OK
+    want = {k: v for k, v in output_files(alone).items() if k.startswith("after/")}
+    got = {k: v for k, v in output_files(out).items() if k.startswith("after/")}
+    assert want and got == want, "the frame after the failed one differs from one made alone"
+    return summary, records
+
+
+def test_a_frame_wider_than_the_gl_is_bad_input_and_the_next_frame_is_made(tmp_path):
+    """The renderer refuses a frame wider than this GL allows (status 2, naming the scene file
+    and `image`) before allocating anything, in batch as in `shadowvol render`."""
+    summary, records = _wide_then_ordinary(tmp_path, "out")
+    wide = records["wide/000000"]
+    assert wide["status"] == status.BAD_INPUT and summary.status == status.BAD_INPUT
+    assert wide["error"].startswith(f"{SCENES / 'cage.toml'}: image: 40000x8 is larger than "
+                                    "this GL allows ("), wide["error"]
+    assert "error" not in records["after/000000"]
+
+
+def test_a_frame_the_gl_fails_to_allocate_never_poisons_the_next(tmp_path, monkeypatch):
+    """A driver that claims a size it then cannot allocate (the size check passed): that
+    frame fails to render (status 3) and leaves no GL error for the next frame to read."""
+    monkeypatch.setattr("shadowvol.raster.renderer.check_frame_size",
+                        lambda ctx, width, height: None, raising=False)
+    summary, records = _wide_then_ordinary(tmp_path, "out")
+    wide = records["wide/000000"]
+    assert wide["status"] == status.RENDER_FAILED, wide
+    assert "could not allocate a 40000x8 frame" in wide["error"]
+    assert "error" not in records["after/000000"], records["after/000000"]
 
 
 def test_arguments_are_checked_before_any_work(tmp_path, capsys):

@@ -171,3 +171,34 @@ def test_the_cli_names_the_job_line_and_the_key_of_a_bad_jitter(tmp_path):
              if "jitter.objects.rotation" in line]
     assert len(lines) == 1 and f"{jobs}:1" in lines[0] and "from 0 to 180" in lines[0], \
         done.stderr
+
+
+def test_objects_jittered_past_float32_name_the_jitter(tmp_path):
+    """A translation radius within the float32 range that moves an object near its edge out
+    of it fails that frame naming `jitter.objects.translation` (was: the model's own
+    `vertices`, no word of jitter)."""
+    import json
+
+    from builders import tiny_scene
+
+    from shadowvol.scenefile import load_scene
+    from shadowvol.scenefile_write import save_scene
+
+    path = tmp_path / "far.json"
+    save_scene(tiny_scene(), path)
+    data = json.loads(path.read_text())
+    data["objects"] = [o for o in data["objects"] if o["name"] == "A"]
+    data["objects"][0]["vertices"] = [[x + 9.9e17, y, z]
+                                      for x, y, z in data["objects"][0]["vertices"]]
+    path.write_text(json.dumps(data))
+    scene = load_scene(path)
+    errors = []
+    for index in range(8):
+        try:
+            jitter.jittered_scene(scene, {"objects": {"translation": 5e17}}, 0, index)
+        except SceneError as exc:
+            errors.append(str(exc))
+    assert errors, "no frame left the float32 range: the test needs another seed"
+    for error in errors:
+        assert error.startswith("jitter.objects.translation: a radius of 5e+17 moved the "
+                                "objects out of range: "), error

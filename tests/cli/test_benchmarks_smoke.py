@@ -108,3 +108,22 @@ def test_time_to_rmse_runs_with_or_without_mitsuba(tmp_path):
         assert v["rmse"][1] < v["rmse"][0] / 2, v["rmse"]
         assert v["rmse_unlit"][1] < v["rmse_unlit"][0] / 2, v["rmse_unlit"]
         assert min(v["cpu_s"]) > 0
+
+
+def test_the_batch_memory_benchmark_runs(tmp_path):
+    """benchmarks.bench_batch_memory --quick: a short jittered batch, every frame made, RSS
+    sampled through the run and the second half's growth reported (not judged here: the
+    quick run is still filling the renderer's bounded caches)."""
+    out = tmp_path / "memory.json"
+    done = subprocess.run([sys.executable, "-m", "benchmarks.bench_batch_memory", "--quick",
+                           "--json", str(out)], cwd=ROOT, capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "300 of 300 jittered frames at 8x6" in done.stdout
+    assert "second half's growth" in done.stdout and "goal <= 5 MB" in done.stdout
+    result = json.loads(out.read_text())
+    assert result["made"] == result["frames"] == 300 and result["samples"] >= 5
+    rss = result["rss_mb"]
+    assert 0 < rss["start"] <= rss["middle"] and rss["end"] > 0
+    growth = result["second_half_growth_mb"]
+    assert growth == pytest.approx(rss["end"] - rss["middle"], abs=0.1)

@@ -147,6 +147,22 @@ def test_an_image_too_big_is_bad_input(tmp_path, capsys):
     assert "wide.json: image: 40000x8 is larger than this GL allows" in err
 
 
+@pytest.mark.parametrize("command", ["compare", "planar", "shadowmap"])
+def test_every_command_names_the_scene_of_an_image_too_wide(tmp_path, capsys, command):
+    """The GL's size limit is the Renderer's check now, for every command that renders: the
+    line names the scene file, the key and the limit, exit 2, nothing written."""
+    data = json.loads((lambda p: (save_scene(small_scene(), p), p.read_text())[1])(
+        tmp_path / "s.json"))
+    data["image"].update(width=40000, height=8)
+    (tmp_path / "wide.json").write_text(json.dumps(data))
+    out = tmp_path / "out.png"
+    assert shadowvol_main([command, str(tmp_path / "wide.json"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {tmp_path / 'wide.json'}: image: 40000x8 is larger than this "
+                          "GL allows (") and err.count("\n") == 1, err
+    assert not out.exists()
+
+
 # ---- atomic outputs ----------------------------------------------------------------------------
 
 @pytest.mark.parametrize("interrupt", [RuntimeError("disk on fire"), KeyboardInterrupt()])

@@ -265,6 +265,29 @@ def test_an_area_lights_samples_keep_their_light_bounds(ctx, monkeypatch):
         np.testing.assert_array_equal(frame.lit_count, first.lit_count)
 
 
+def test_a_moving_light_leaves_at_most_max_lights_bounds_behind(ctx, monkeypatch):
+    """A jittered light is a new light in every frame: the bounds kept for lights are capped
+    (`LightBounds.MAX_LIGHTS`, least recently used dropped, never one of this frame), where a
+    10,000-frame jittered batch kept one entry a frame; a light that comes back stays kept."""
+    from shadowvol.raster.overflow_policy import LightBounds
+
+    monkeypatch.setattr(LightBounds, "MAX_LIGHTS", 8, raising=False)
+    scene = strip_stack()
+    steady = scene.lights[0]
+    rng = np.random.default_rng(0)
+    with Renderer(scene.replace(width=16, height=12), ctx) as r:
+        assert r.count_bound >= 256
+        for _ in range(30):
+            moved = PointLight(position=steady.position + rng.uniform(-0.05, 0.05, 3))
+            r.render(outputs=("lit",), lights=(steady, moved))
+        assert len(r._light_bounds) == 8
+        assert steady.homogeneous.tobytes() in r._light_bounds
+        assert r._light_bounds[steady.homogeneous.tobytes()] is not None  # its bound, kept
+        many = tuple(PointLight(position=steady.position + [0.01 * i, 0, 0]) for i in range(12))
+        r.render(outputs=("lit",), lights=many)   # more lights in one frame than the cap
+        assert len(r._light_bounds) == 12
+
+
 def test_an_area_light_over_256_sheets_raises_in_every_frame(ctx):
     """256 sheets under a 4-sample rect light: every sample's bound reaches 256, so the
     per-sample bounds (one more each frame from the second on) still leave every sample

@@ -315,3 +315,15 @@ def test_max_edge_meshes_to_a_size():
     assert 3 * coarse.triangles < fine.triangles
     with pytest.raises(ValueError, match="max_edge"):
         radiosity.mesh_patches(scene, max_edge=0.0)
+
+
+def test_more_shots_than_patches_shoots_every_patch():
+    """`--shots` past the number of patches shoots them all each iteration, as shots = P does
+    (was: numpy's "kth(=...) out of bounds", reported as a --level error)."""
+    scene = furnace([0.6] * 3, [0.5] * 3)
+    mesh = radiosity.mesh_patches(scene, 1)
+    every = radiosity.solve(scene, rays_per_patch=16, shots=mesh.patches, mesh=mesh)
+    beyond = radiosity.solve(scene, rays_per_patch=16, shots=10**12, mesh=mesh)
+    np.testing.assert_array_equal(beyond.radiance, every.radiance)
+    assert (beyond.iterations, beyond.shots) == (every.iterations, every.shots)
+    assert every.shots == every.iterations * mesh.patches

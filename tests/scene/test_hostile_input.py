@@ -5,6 +5,7 @@ harm, with one line `FILE: KEY: problem` naming the real problem, exit status 2 
 
 from __future__ import annotations
 
+import base64
 import json
 import os
 import struct
@@ -15,6 +16,7 @@ import pytest
 
 from shadowvol import scenefile
 from shadowvol.cli.main import main as shadowvol_main
+from shadowvol.cli.raytrace import main as raytrace_main
 from shadowvol.primitives import Transform, mesh
 from shadowvol.scene import MAX_MAGNITUDE, Camera, PointLight, SceneError
 from shadowvol.scenefile import load_scene
@@ -236,6 +238,87 @@ def test_a_truncated_gltf_is_named(tmp_path):
     text = json.dumps({"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}]})
     refused(with_mesh(tmp_path, "t.gltf", text[:25].encode()),
             r"t\.gltf is not valid glTF JSON \(truncated\?\)")
+
+
+def tiny_gltf(nodes: list, **extra) -> bytes:
+    """A glTF of one triangle (its buffer inline, base64) with these `nodes`, the scene's
+    root node 0."""
+    data = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
+    document = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+                "nodes": nodes, "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+                "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3,
+                               "type": "VEC3", "max": [1, 1, 0], "min": [0, 0, 0]}],
+                "bufferViews": [{"buffer": 0, "byteLength": 36}],
+                "buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,"
+                             + base64.b64encode(data).decode()}], **extra}
+    return json.dumps(document).encode()
+
+
+@pytest.mark.parametrize("nodes, chain", [
+    ([{"mesh": 0, "children": [0]}], "0 -> 0"),
+    ([{"mesh": 0, "children": [1]}, {"children": [0]}], "0 -> 1 -> 0"),
+    ([{"children": [1]}, {"mesh": 0, "children": [2]}, {"children": [0]}], "0 -> 1 -> 2 -> 0"),
+])
+def test_a_gltf_node_cycle_is_refused(tmp_path, nodes, chain):
+    """trimesh walks a cycle until "Iteration limit exceeded!" (a bare ValueError) or drops
+    it unsaid; glTF's nodes must form trees."""
+    assert len(load_scene(with_mesh(tmp_path, "ok.gltf", tiny_gltf([{"mesh": 0}]))).objects) == 1
+    refused(with_mesh(tmp_path, "c.gltf", tiny_gltf(nodes)),
+            rf"objects\[0\]\.path: .*c\.gltf: nodes\[0\]: node 0 is its own ancestor \(the "
+            rf"node graph has a cycle: {chain}\)$")
+
+
+@pytest.mark.parametrize("nodes, problem", [
+    ([{"mesh": 0, "children": [1]}, {}, {"children": [1]}], r"nodes\[2\]\.children: node 1 "
+     r"is also a child of node 0 \(glTF nodes form trees\)"),
+    ([{"mesh": 0, "children": [7]}], r"nodes\[0\]\.children: 7 is not a node index \(0\.\.0\)"),
+])
+def test_gltf_nodes_that_are_no_tree_are_refused(tmp_path, nodes, problem):
+    refused(with_mesh(tmp_path, "c.gltf", tiny_gltf(nodes)), problem)
+
+
+@pytest.mark.parametrize("change, problem", [
+    ({"bufferViews": [{"buffer": 0, "byteLength": 48}]},
+     r"bufferViews\[0\]: bytes 0\.\.48 reach past the end of buffers\[0\] \(36 bytes\)"),
+    ({"bufferViews": [{"buffer": 0, "byteLength": 48}],
+      "buffers": [{"byteLength": 48, "uri": "data:application/octet-stream;base64,"
+                   + base64.b64encode(bytes(36)).decode()}]},
+     r"bufferViews\[0\]: bytes 0\.\.48 reach past the end of buffers\[0\] \(36 bytes\)"),
+    ({"bufferViews": [{"buffer": 0, "byteLength": 36, "byteStride": 24}]},
+     r"accessors\[0\]: 3 VEC3 items of 12 bytes from byte 0 \(stride 24\) need 60 bytes, "
+     r"bufferViews\[0\] has 36"),
+    ({"bufferViews": [{"buffer": 0, "byteLength": 36, "byteStride": 0}]},
+     r"bufferViews\[0\]\.byteStride: must be 4\.\.252 \(glTF\), got 0"),
+    ({"bufferViews": [{"buffer": 3, "byteLength": 36}]},
+     r"bufferViews\[0\]\.buffer: 3 is not a buffer index \(the file has 1 buffers\)"),
+])
+def test_a_gltf_buffer_view_or_accessor_past_its_data_is_named(tmp_path, change, problem):
+    """trimesh checks these with bare asserts: the message was `AssertionError: ` alone."""
+    refused(with_mesh(tmp_path, "b.gltf", tiny_gltf([{"mesh": 0}], **change)),
+            rf"objects\[0\]\.path: .*b\.gltf: {problem}$")
+
+
+def test_a_bare_assert_in_the_mesh_reader_is_named(tmp_path, monkeypatch):
+    """Any other message-less failure of trimesh's names the statement that failed and where."""
+    import trimesh
+
+    def broken(*args, **kwargs):  # as a bare `assert` (pytest would rewrite one here)
+        raise AssertionError()
+    monkeypatch.setattr(trimesh, "load", broken)
+    refused(with_mesh(tmp_path, "ok.gltf", tiny_gltf([{"mesh": 0}])),
+            r"cannot parse mesh .*ok\.gltf: AssertionError: raise AssertionError\(\) "
+            r"\(tests/scene/test_hostile_input\.py:\d+\)$")
+
+
+def test_the_cli_refuses_a_gltf_cycle_in_one_line(tmp_path, capsys):
+    path = with_mesh(tmp_path, "c.gltf", tiny_gltf([{"mesh": 0, "children": [1]},
+                                                    {"children": [0]}]))
+    for tool in (shadowvol_main, raytrace_main):
+        args = ["render", str(path), "-o", str(tmp_path / "x.png")] if tool is shadowvol_main \
+            else ["masks", str(path), "-o", str(tmp_path / "m.npz")]
+        assert tool(args) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "has a cycle: 0 -> 1 -> 0" in err, err
 
 
 def test_a_missing_optional_package_is_named(tmp_path, monkeypatch):

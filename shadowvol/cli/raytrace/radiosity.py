@@ -58,20 +58,23 @@ def command(args) -> int:
     outputs.check(paths, {"image": "-o", "flat": "--flat", "exr": "--exr"}, "raytrace")
     for flag, value, ok, rule in (("--level", args.level, args.level >= 0, ">= 0"),
                                   ("--rays", args.rays, args.rays >= 1, ">= 1"),
+                                  ("--rays", args.rays, args.rays < 1 << 31, "< 2^31 a patch"),
                                   ("--tol", args.tol, args.tol > 0.0, "> 0"),
-                                  ("--shots", args.shots, args.shots >= 1, ">= 1")):
+                                  ("--shots", args.shots, args.shots >= 1, ">= 1"),
+                                  ("--seed", args.seed, args.seed >= 0, ">= 0")):
         if not ok:
             raise SceneError(flag, f"must be {rule}, got {value}")
     scene = load_scene(args.scene)
     memory.check(estimate.radiosity_display(scene, ("exr",) if args.exr else ("png",),
                                             flat=bool(args.flat)),
                  args.memory_budget, args.scene)
-    try:
-        solution = radiosity.solve(scene, level=args.level, rays_per_patch=args.rays,
-                                   tol=args.tol, shots=args.shots, seed=args.seed,
-                                   backend=args.backend)
+    try:  # only the meshing depends on --level alone
+        mesh = radiosity.mesh_patches(scene, args.level)
     except ValueError as exc:  # e.g. a level that would split a triangle absurdly
-        raise SceneError("--level", str(exc)) from None
+        raise SceneError("--level", str(exc), args.scene) from None
+    solution = radiosity.solve(scene, level=args.level, rays_per_patch=args.rays, tol=args.tol,
+                               shots=args.shots, seed=args.seed, backend=args.backend,
+                               mesh=mesh)
     print(radiosity.summary(solution), file=sys.stderr)
     smooth = radiosity.display(scene, solution, interpolate=True, backend=args.backend)
     save_png(args.output, smooth)
