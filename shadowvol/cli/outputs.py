@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from shadowvol.frame import GROUND_TRUTH, check_outputs
+from shadowvol.frame import GROUND_TRUTH, LAYERS, check_outputs
 from shadowvol.scene import SceneError, shorten
 
 SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".png",
@@ -20,8 +20,9 @@ SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".pn
 
 
 def ground_truth(text: str | None, flag: str = "--outputs") -> tuple[str, ...]:
-    """The ground-truth outputs named by a command line's comma-separated list (or `all`),
-    in `shadowvol.frame.GROUND_TRUTH`'s order; () for None.  SceneError (exit 2) naming
+    """The ground-truth outputs and intrinsic layers named by a command line's comma-separated
+    list (`all`: the ground truth, `shadowvol.frame.GROUND_TRUTH`; the layers, each a frame or
+    more, by name), in GROUND_TRUTH's then `shadowvol.frame.LAYERS`' order; () for None.  SceneError (exit 2) naming
     `flag` for an unknown name (`shadowvol.frame.check_outputs`)."""
     if text is None:
         return ()
@@ -30,8 +31,8 @@ def ground_truth(text: str | None, flag: str = "--outputs") -> tuple[str, ...]:
         return GROUND_TRUTH
     if not names:
         raise SceneError(flag, f"unknown output {shorten(text)} (a comma-separated list of: "
-                               f"{', '.join(GROUND_TRUTH)}; or all)")
-    return check_outputs(names, GROUND_TRUTH, key=flag)
+                               f"{', '.join(GROUND_TRUTH + LAYERS)}; or all)")
+    return check_outputs(names, GROUND_TRUTH + LAYERS, key=flag)
 
 
 def check(outputs: dict[str, Path], flags: dict[str, str] | None = None,

@@ -9,11 +9,12 @@ from pathlib import Path
 from raytrace import estimate, shadow_masks  # (area lights: lit where every sample reaches)
 from raytrace.backends import BACKENDS
 from raytrace.groundtruth import ground_truth
+from raytrace.outlook.layers import layers
 from shadowvol import memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
-from shadowvol.frame import save_masks
+from shadowvol.frame import LAYERS, save_masks
 from shadowvol.io import save_png
 from shadowvol.pictures import ground_truth_picture, masks_image
 from shadowvol.scene import hard_lights, light_samples
@@ -52,10 +53,14 @@ def command(args) -> int:
     scene = load_scene(args.scene)
     memory.check(estimate.masks(scene, wanted, picture="picture" in paths),
                  args.memory_budget, args.scene)
-    if wanted or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
+    wanted, layer_names = (tuple(n for n in wanted if n not in LAYERS),
+                           tuple(n for n in wanted if n in LAYERS))
+    if wanted or layer_names or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
         # the counts of an area light (lit_count, samples) come with the ground truth's rays
         truth = ground_truth(scene, wanted, backend=args.backend)
         lit, coverage, arrays = truth.lit, truth.coverage, truth.arrays()
+        if layer_names:   # Whitted's depth-0 direct light (raytrace.outlook.layers)
+            arrays |= layers(scene, layer_names, backend=args.backend)
         picture = (ground_truth_picture(truth, [o.name for o in scene.objects]) if wanted
                    else masks_image(lit, coverage))
     else:
