@@ -19,12 +19,12 @@ import numpy as np
 
 from shadowvol.batch.spec import FrameSpec
 from shadowvol import memory
-from shadowvol.frame import GROUND_TRUTH, soft_arrays
+from shadowvol.frame import GROUND_TRUTH, LAYERS, soft_arrays
 from shadowvol.scene import hard_lights
 
 # what a batch frame asks `Renderer.render(outputs=...)` for (its OUTPUTS; named here, since
 # the worker imports GL only when it first renders)
-RASTER_OUTPUTS = ("image", "lit", "coverage", *GROUND_TRUTH)
+RASTER_OUTPUTS = ("image", "lit", "coverage", *GROUND_TRUTH, *LAYERS)
 
 
 def _version(package: str) -> str | None:
@@ -124,6 +124,10 @@ class Rays:
         elif {"lit", "coverage", "counts"} & set(wanted):
             arrays["lit"], arrays["coverage"] = raytrace.shadow_masks(frame_scene)
             arrays["counts"] = {}
+        names = tuple(name for name in LAYERS if name in wanted)
+        if names:   # Whitted's depth-0 direct light (`raytrace.outlook.layers`)
+            from raytrace.outlook.layers import layers
+            arrays.update(layers(frame_scene, names))
         return arrays
 
     def alone(self, worker, spec, single) -> np.ndarray:
