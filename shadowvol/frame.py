@@ -21,9 +21,8 @@ from shadowvol.errors import out_of_memory_while
 from shadowvol.scene import AreaLight, SceneError, shorten
 
 __all__ = ["CASTER_WORD_BITS", "FIELDS", "Field", "Frame", "GROUND_TRUTH", "LAYERS",
-           "MASK_ARRAYS",
-           "MAX_OBJECT_IDS", "blank", "caster_words", "check_light_kinds", "check_object_ids",
-           "check_outputs", "decode_casters", "mask_file", "masks_bytes", "save_masks",
+           "MASK_ARRAYS", "MAX_OBJECT_IDS", "blank", "caster_words", "check_light_kinds",
+           "check_object_ids", "check_outputs", "decode_casters", "layer_exrs", "mask_file", "masks_bytes", "save_masks",
            "shape", "soft_arrays"]
 
 CASTER_WORD_BITS = 64     # objects per uint64 word of `casters`
@@ -244,6 +243,26 @@ def decode_casters(casters: np.ndarray, objects: int) -> np.ndarray:
     bits = np.unpackbits(np.ascontiguousarray(casters, "<u8").view(np.uint8), axis=-1,
                          bitorder="little")
     return bits[..., :objects].astype(bool)
+
+
+def layer_exrs(image_path: str | Path, frame: "Frame") -> dict[Path, np.ndarray]:
+    """The EXR files of the intrinsic layers `frame` holds, beside the image's EXR
+    `image_path` (X.exr): X-albedo.exr, X-ambient.exr, X-shadow_free.exr, and per light i
+    X-direct-i.exr and X-direct_shadowed-i.exr, each (H, W, 3) float32; none when the image
+    goes to standard output ("-")."""
+    path = Path(image_path)
+    out = {}
+    if str(image_path) == "-":
+        return out
+    for name in LAYERS:
+        value = getattr(frame, name)
+        if value is None:
+            continue
+        if FIELDS[name].dims[0] == "L":
+            out |= {path.with_name(f"{path.stem}-{name}-{i}.exr"): v for i, v in enumerate(value)}
+        else:
+            out[path.with_name(f"{path.stem}-{name}.exr")] = value
+    return out
 
 
 # ---- the mask file ---------------------------------------------------------------------------

@@ -50,6 +50,14 @@ def test_render_writes_the_layers(tmp_path):
     with OpenEXR.File(str(tmp_path / "r.exr")) as f:   # the image, float32 exactly
         image = f.channels()["RGB"].pixels
     check_identities(got, image, got["shadow_free"])
+    # and each layer as an EXR beside the image's, the mask file's arrays exactly
+    names = [f"r-{n}.exr" for n in ("albedo", "ambient", "shadow_free")] + [
+        f"r-{n}-{i}.exr" for n in ("direct", "direct_shadowed") for i in range(len(scene.lights))]
+    for name in names:
+        layer, _, light = name[2:-4].partition("-")
+        want = got[layer][int(light)] if light else got[layer]
+        with OpenEXR.File(str(tmp_path / name)) as f:
+            np.testing.assert_array_equal(f.channels()["RGB"].pixels, want, err_msg=name)
 
 
 def test_raytrace_masks_writes_the_layers(tmp_path):
