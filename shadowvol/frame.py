@@ -22,8 +22,8 @@ from shadowvol.scene import AreaLight, SceneError, shorten
 
 __all__ = ["CASTER_WORD_BITS", "FIELDS", "Field", "Frame", "GROUND_TRUTH", "LAYERS",
            "MASK_ARRAYS", "MAX_OBJECT_IDS", "blank", "caster_words", "check_light_kinds",
-           "check_object_ids", "check_outputs", "decode_casters", "layer_exrs", "mask_file", "masks_bytes", "save_masks",
-           "shape", "soft_arrays"]
+           "check_object_ids", "check_outputs", "decode_casters", "layer_exrs", "mask_file",
+           "masks_bytes", "save_masks", "shape", "soft_arrays"]
 
 CASTER_WORD_BITS = 64     # objects per uint64 word of `casters`
 MAX_OBJECT_IDS = 65535    # objects `object_id` can name: uint16, 0 is the background
