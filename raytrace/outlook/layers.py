@@ -19,57 +19,67 @@ from __future__ import annotations
 
 import numpy as np
 
-from shadowvol.frame import LAYERS, check_outputs
+from shadowvol.frame import LAYERS, check_outputs, shape
 from shadowvol.scene import Scene, emission_cosine, hard_lights
 
 from raytrace.camera import primary_rays
 from raytrace.intersect import dot, reflect
 
-from .whitted import World, shadow_rays, surface_frame
+from .whitted import TILE_RAYS, World, shadow_rays, surface_frame
 
 
 def layers(scene: Scene, outputs=LAYERS, backend: str = "embree") -> dict[str, np.ndarray]:
     """The intrinsic layers `outputs` (names from `shadowvol.frame.LAYERS`; default all) of
     `scene`, by name, float32: albedo, ambient, shadow_free (H, W, 3); direct,
-    direct_shadowed (L, H, W, 3).  backend : "embree" or "numpy"."""
+    direct_shadowed (L, H, W, 3).  backend : "embree" or "numpy".  Traced in tiles of rows
+    (`whitted.TILE_RAYS` rays), as `whitted.render` is."""
     outputs = check_outputs(outputs, LAYERS)
     H, W, L = scene.height, scene.width, len(scene.lights)
     world = World(scene, backend)
-    o, d = primary_rays(scene.camera, W, H, slice(0, H))
+    out = {name: np.zeros(shape(name, L, H, W, flat=True), np.float32) for name in outputs}
+    for name in {"ambient", "shadow_free"} & set(outputs):
+        out[name][:] = scene.background   # what the image holds where nothing is hit
+    rows_per_tile = max(1, TILE_RAYS // W)
+    for y in range(0, H, rows_per_tile):
+        _tile(world, scene, slice(y, min(y + rows_per_tile, H)), out)
+    return {name: out[name].reshape(shape(name, L, H, W)) for name in outputs}
+
+
+def _tile(world: World, scene: Scene, rows: slice, out: dict[str, np.ndarray]) -> None:
+    """The layers `out` asks for (flat pixels, float32) at the image rows `rows`: float64
+    sums, rounded once."""
+    W, L = scene.width, len(scene.lights)
+    o, d = primary_rays(scene.camera, W, scene.height, rows)
     t, obj, geo_n, tri = world.hits(o, d)
     h = np.flatnonzero(obj >= 0)
+    pixel = rows.start * W + h
     o, d, t, obj, geo_n, tri = o[h], d[h], t[h], obj[h], geo_n[h], tri[h]
     p, _, n = surface_frame(o, d, t, geo_n)
     base = world.base_colour(obj, tri, p)
     ka, kd = world.ka[obj], world.kd[obj]
     if base is not None:
         ka, kd = ka * base, kd * base
-    out = {}
-    if "albedo" in outputs:
-        out["albedo"] = _pixels(H, W, h, kd)
-    if "ambient" in outputs:
-        out["ambient"] = _pixels(H, W, h, ka * scene.ambient, background=scene.background)
-    wants_light = {"direct", "direct_shadowed", "shadow_free"} & set(outputs)
-    if not wants_light:
-        return out
+    if "albedo" in out:
+        out["albedo"][pixel] = kd
+    if "ambient" in out:
+        out["ambient"][pixel] = ka * scene.ambient
+    if not {"direct", "direct_shadowed", "shadow_free"} & set(out):
+        return
     direct = np.zeros((L, len(h), 3))
     shadowed = np.zeros((L, len(h), 3))
-    view = -d
     for i, light in enumerate(scene.lights):
         for sample in hard_lights(light):
-            term, visible = _sample_term(world, sample, p, n, view, obj, kd)
+            term, visible = _sample_term(world, sample, p, n, -d, obj, kd)
             direct[i] += term
             shadowed[i] += term * visible[:, None]
-    if "direct" in outputs:
-        out["direct"] = np.stack([_pixels(H, W, h, direct[i]) for i in range(L)])
-    if "direct_shadowed" in outputs:
-        out["direct_shadowed"] = np.stack([_pixels(H, W, h, shadowed[i]) for i in range(L)])
-    if "shadow_free" in outputs:
-        # the image with every light's shadows off: ambient + Σ direct, summed in float64 in
-        # the order local_colour sums them, rounded once
-        out["shadow_free"] = _pixels(H, W, h, ka * scene.ambient + direct.sum(axis=0),
-                                     background=scene.background)
-    return {name: out[name] for name in outputs}
+    if "direct" in out:
+        out["direct"][:, pixel] = direct
+    if "direct_shadowed" in out:
+        out["direct_shadowed"][:, pixel] = shadowed
+    if "shadow_free" in out:
+        # the image with every light's shadows off: ambient + Σ direct, summed in float64,
+        # rounded once
+        out["shadow_free"][pixel] = ka * scene.ambient + direct.sum(axis=0)
 
 
 def _sample_term(world: World, light, p, n, view, obj, kd) -> tuple[np.ndarray, np.ndarray]:
@@ -87,13 +97,3 @@ def _sample_term(world: World, light, p, n, view, obj, kd) -> tuple[np.ndarray, 
     term[c] = ((kd[c] * n_dot_l[c, None] + world.ks[o] * (r_dot_v ** world.shininess[o])[:, None])
                * light.radiance * np.reshape(emission_cosine(light, l[c]), (-1, 1)))
     return term, rays.visible
-
-
-def _pixels(H: int, W: int, h: np.ndarray, values: np.ndarray, background=None) -> np.ndarray:
-    """(H, W, 3) float32: `values` (k, 3) float64 at the flat pixels h, 0 (or `background`)
-    elsewhere."""
-    out = np.zeros((H * W, 3))
-    if background is not None:
-        out[:] = background
-    out[h] = values
-    return out.reshape(H, W, 3).astype(np.float32)

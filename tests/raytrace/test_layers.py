@@ -85,3 +85,15 @@ def test_the_layers_go_in_the_mask_file(tmp_path):
     with pytest.raises(ValueError, match="direct must be float32"):
         save_masks(tmp_path / "bad.npz", gt.lit, gt.coverage,
                    arrays={"direct": got["direct"][:1]})
+
+
+def test_tiles_give_the_same_layers(monkeypatch):
+    """Rows traced in many tiles (a tile of 2 rows and a ragged last one): the same layers,
+    bit for bit, as in one tile."""
+    import raytrace.outlook.layers as module
+
+    scene = overlapping_shadows(30, 25)
+    whole = layers(scene)
+    monkeypatch.setattr(module, "TILE_RAYS", 60)
+    for name, value in layers(scene).items():
+        assert np.array_equal(value, whole[name]), name
