@@ -103,6 +103,9 @@ class Rays:
                  if "image" in wanted else [])
         if truth or {"lit", "coverage"} & wanted:
             parts.append(raytrace.estimate.masks(frame_scene, truth, picture=False))
+        if set(LAYERS) & wanted:   # its float32 arrays and its tile
+            parts.append(raytrace.estimate.masks(frame_scene, LAYERS, picture=False))
+            parts.append(raytrace.outlook.estimate.layers(frame_scene))
         return memory.Estimate("the ray tracer", frame_scene.width, frame_scene.height,
                                tuple(t for part in parts for t in part.terms))
 

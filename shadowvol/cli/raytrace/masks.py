@@ -3,12 +3,14 @@ truth), as a mask file and a picture."""
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 
 from raytrace import estimate, shadow_masks  # (area lights: lit where every sample reaches)
 from raytrace.backends import BACKENDS
 from raytrace.groundtruth import ground_truth
+from raytrace.outlook.estimate import layers as layers_estimate
 from raytrace.outlook.layers import layers
 from shadowvol import memory
 from shadowvol.cameras import calibration
@@ -51,8 +53,10 @@ def command(args) -> int:
         paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
     outputs.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
     scene = load_scene(args.scene)
-    memory.check(estimate.masks(scene, wanted, picture="picture" in paths),
-                 args.memory_budget, args.scene)
+    need = estimate.masks(scene, wanted, picture="picture" in paths)
+    if set(wanted) & set(LAYERS):
+        need = dataclasses.replace(need, terms=need.terms + layers_estimate(scene).terms)
+    memory.check(need, args.memory_budget, args.scene)
     wanted, layer_names = (tuple(n for n in wanted if n not in LAYERS),
                            tuple(n for n in wanted if n in LAYERS))
     if wanted or layer_names or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
