@@ -7,7 +7,8 @@ Everything is `raytrace.outlook.whitted`'s depth-0 shading (`render(scene, max_d
 direct light the rasterizer draws): the same pixel-centre primary rays, the same hit points,
 base colours (`World.base_colour`: textures and vertex colours) and shadow rays
 (`whitted.shadow_rays`), the same Phong term per hard light sample (`whitted.local_colour`),
-summed in float64 and rounded once to float32.  An area light is its samples: its `direct` is
+summed in float64 and rounded once to float32 (`shadow_free` in local_colour's own order:
+the `max_depth=0` render with every light's shadows off, bit for bit).  An area light is its samples: its `direct` is
 the sum of its samples' terms, its `direct_shadowed` the sum over the samples that reach the
 point.  Where nothing is hit, `ambient` holds `scene.background` (the image's value there) and
 the other layers 0, so that at every pixel, up to float32 rounding,
@@ -67,19 +68,22 @@ def _tile(world: World, scene: Scene, rows: slice, out: dict[str, np.ndarray]) -
         return
     direct = np.zeros((L, len(h), 3))
     shadowed = np.zeros((L, len(h), 3))
+    # the image with every light's shadows off, summed as `whitted.local_colour` sums it
+    # (ambient, then each sample in turn; adding 0 where a sample does not face is exact):
+    # the shadow-free render's pixels bit for bit
+    free = ka * scene.ambient
     for i, light in enumerate(scene.lights):
         for sample in hard_lights(light):
             term, visible = _sample_term(world, sample, p, n, -d, obj, kd)
             direct[i] += term
             shadowed[i] += term * visible[:, None]
+            free += term
     if "direct" in out:
         out["direct"][:, pixel] = direct
     if "direct_shadowed" in out:
         out["direct_shadowed"][:, pixel] = shadowed
     if "shadow_free" in out:
-        # the image with every light's shadows off: ambient + Σ direct, summed in float64,
-        # rounded once
-        out["shadow_free"][pixel] = ka * scene.ambient + direct.sum(axis=0)
+        out["shadow_free"][pixel] = free
 
 
 def _sample_term(world: World, light, p, n, view, obj, kd) -> tuple[np.ndarray, np.ndarray]:

@@ -30,6 +30,8 @@ def test_identities(name):
     free = raytrace.render(switched(scene, lights=range(L)), max_depth=0,
                            progress=False).astype(np.float32)
     check_identities(got, image, free)
+    # the shadow-free layer is the image rendered with every light's shadows off, bit for bit
+    assert np.array_equal(got["shadow_free"], free)
     check_shadowed(scene, got)
     # shadows there to see: some light is blocked somewhere, and it shows
     assert (got["direct_shadowed"] < got["direct"]).any()
