@@ -21,9 +21,9 @@ from shadowvol.errors import out_of_memory_while
 from shadowvol.scene import AreaLight, SceneError, shorten
 
 __all__ = ["CASTER_WORD_BITS", "EXACT_OUTPUTS", "FIELDS", "Field", "Frame", "GROUND_TRUTH",
-           "MASK_ARRAYS", "MAX_OBJECT_IDS", "blank", "caster_words", "check_light_kinds", "check_object_ids",
-           "check_outputs", "decode_casters", "mask_file", "masks_bytes", "save_masks",
-           "shape", "soft_arrays"]
+           "LAYERS", "MASK_ARRAYS", "MAX_OBJECT_IDS", "blank", "caster_words", "check_light_kinds",
+           "check_object_ids", "check_outputs", "decode_casters", "layer_exrs", "mask_file",
+           "masks_bytes", "save_masks", "shape", "soft_arrays"]
 
 CASTER_WORD_BITS = 64     # objects per uint64 word of `casters`
 MAX_OBJECT_IDS = 65535    # objects `object_id` can name: uint16, 0 is the background
@@ -42,9 +42,10 @@ class Field:
         words K = max(1, ceil(n_objects / 64)); a number is that many
     lights : the light kinds that have it (EVERY or HARD)
     stored : when a mask file holds it: "always", "asked" (a ground-truth output, when asked
-        for), "soft" (when some light has more than one sample), "exact" (the ray tracer's
-        exact visibility of area lights, `raytrace.exact_soft`: when named, never in `all`,
-        and no ground truth the rasterizer must produce), or "" (never: images)
+        for), "layer" (an intrinsic layer, when asked for), "soft" (when some light has more
+        than one sample), "exact" (the ray tracer's exact visibility of area lights,
+        `raytrace.exact_soft`: when named, never in `all`, and no ground truth the rasterizer
+        must produce), or "" (never: images)
     nothing : what it holds where nothing is hit
     """
 
@@ -80,12 +81,20 @@ FIELDS = {
     "camera_to_world": Field(np.float64, (4, 4)),
     "light_position": Field(np.float64, ("L", 4)),
     "light_direction": Field(np.float64, ("L", 3)),
+    # the intrinsic layers (docs/CONVENTIONS.md, "Intrinsic layers"): when asked for
+    "albedo": Field(np.float32, ("H", "W", 3), stored="layer"),
+    "ambient": Field(np.float32, ("H", "W", 3), stored="layer"),
+    "direct": Field(np.float32, ("L", "H", "W", 3), stored="layer"),
+    "direct_shadowed": Field(np.float32, ("L", "H", "W", 3), stored="layer"),
+    "shadow_free": Field(np.float32, ("H", "W", 3), stored="layer"),
 }
 
 # The ground-truth outputs a frame may carry, by name, in this order (docs/CONVENTIONS.md).
 GROUND_TRUTH = tuple(name for name, f in FIELDS.items() if f.stored == "asked")
 # The ray tracer's exact outputs (`raytrace masks --outputs`): named only, never in `all`.
 EXACT_OUTPUTS = tuple(name for name, f in FIELDS.items() if f.stored == "exact")
+# The intrinsic layers a frame may carry, by name, in this order (docs/CONVENTIONS.md).
+LAYERS = tuple(name for name, f in FIELDS.items() if f.stored == "layer")
 # The arrays a mask file may hold beside `lit` and `coverage`: name -> (dtype, dims).
 MASK_ARRAYS = {name: (f.dtype, f.dims) for name, f in FIELDS.items()
                if f.stored and name not in ("lit", "coverage")}
@@ -103,6 +112,8 @@ class Frame:
     samples : (L,) int64, N per light (1 for a point, spot or directional light)
     depth, distance, normal, object_id, facing, facing_count, casters : the ground truth of
         docs/CONVENTIONS.md, as `FIELDS` declares them
+    albedo, ambient, direct, direct_shadowed, shadow_free : the intrinsic layers of
+        docs/CONVENTIONS.md, float32, as `FIELDS` declares them
     calibration : the camera matrices and light arrays (`shadowvol.cameras.Calibration`)
     """
 
@@ -117,6 +128,11 @@ class Frame:
     facing: np.ndarray | None = None
     facing_count: np.ndarray | None = None
     casters: np.ndarray | None = None
+    albedo: np.ndarray | None = None
+    ambient: np.ndarray | None = None
+    direct: np.ndarray | None = None
+    direct_shadowed: np.ndarray | None = None
+    shadow_free: np.ndarray | None = None
     calibration: Calibration | None = None
 
     @property
@@ -149,9 +165,9 @@ class Frame:
         return (self.lit_count / self.samples[:, None, None]).astype(np.float32)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """The ground truth computed, the counts when some light has more than one sample,
+        """The ground truth and intrinsic layers computed, the counts when some light has more than one sample,
         and the calibration, by their mask-file names (`save_masks`)."""
-        out = {name: getattr(self, name) for name in GROUND_TRUTH
+        out = {name: getattr(self, name) for name in GROUND_TRUTH + LAYERS
                if getattr(self, name) is not None}
         return out | soft_arrays(self.lit_count, self.samples) | self.calibration.arrays()
 
@@ -235,6 +251,26 @@ def decode_casters(casters: np.ndarray, objects: int) -> np.ndarray:
     bits = np.unpackbits(np.ascontiguousarray(casters, "<u8").view(np.uint8), axis=-1,
                          bitorder="little")
     return bits[..., :objects].astype(bool)
+
+
+def layer_exrs(image_path: str | Path, frame: "Frame") -> dict[Path, np.ndarray]:
+    """The EXR files of the intrinsic layers `frame` holds, beside the image's EXR
+    `image_path` (X.exr): X-albedo.exr, X-ambient.exr, X-shadow_free.exr, and per light i
+    X-direct-i.exr and X-direct_shadowed-i.exr, each (H, W, 3) float32; none when the image
+    goes to standard output ("-")."""
+    path = Path(image_path)
+    out = {}
+    if str(image_path) == "-":
+        return out
+    for name in LAYERS:
+        value = getattr(frame, name)
+        if value is None:
+            continue
+        if FIELDS[name].dims[0] == "L":
+            out |= {path.with_name(f"{path.stem}-{name}-{i}.exr"): v for i, v in enumerate(value)}
+        else:
+            out[path.with_name(f"{path.stem}-{name}.exr")] = value
+    return out
 
 
 # ---- the mask file ---------------------------------------------------------------------------

@@ -32,6 +32,19 @@ def whitted(scene: Scene, written=("png",)) -> memory.Estimate:
                            memory.terms(scene.width * scene.height, per, fixed))
 
 
+def layers(scene: Scene) -> memory.Estimate:
+    """`raytrace.outlook.layers.layers` beyond its float32 outputs (which the masks' estimate
+    counts, `shadowvol.memory.field_bytes`): one tile of `TILE_RAYS` rays at a time, Whitted's
+    tile arrays and the per-light float64 sums (direct and shadowed, 48 B a light), and the
+    textures' float64 copy."""
+    rays = min(TILE_RAYS, max(scene.width, 1) * max(scene.height, 1))
+    rays = max(rays, scene.width)
+    fixed = {"a tile": rays * (WHITTED_RAY_BYTES + 48 * len(scene.lights)),
+             "textures": memory.texels(scene) * (3 + 24)}
+    return memory.Estimate("the ray tracer's layers", scene.width, scene.height,
+                           memory.terms(scene.width * scene.height, {}, fixed))
+
+
 def path_traced(scene: Scene, spp: int, written=("png",)) -> memory.Estimate:
     """`raytrace.outlook.path.pathtrace.render`: the float64 sums and squares, then the mean,
     the variance and their temporaries (6 x 24 B/px at the end; one more as the margin

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shadowvol.frame import GROUND_TRUTH, masks_bytes
+from shadowvol.frame import GROUND_TRUTH, LAYERS, masks_bytes
 from shadowvol.io import encode_srgb, npy_bytes, png_bytes
 
 
@@ -42,6 +42,10 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
     *(Output(name, f"{name}.npy", (name,), lambda f, name=name: npy_bytes(f[name]),
              f"the ground truth's {name} (docs/CONVENTIONS.md), a .npy of its array")
       for name in GROUND_TRUTH),
+    # the intrinsic layers (docs/CONVENTIONS.md): one float32 .npy each, from either renderer
+    *(Output(name, f"{name}.npy", (name,), lambda f, name=name: npy_bytes(f[name]),
+             f"the intrinsic layer {name} (docs/CONVENTIONS.md), a float32 .npy")
+      for name in LAYERS),
 )}
 
 DEFAULT = ("image", "masks")

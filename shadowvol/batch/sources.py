@@ -19,12 +19,12 @@ import numpy as np
 
 from shadowvol.batch.spec import FrameSpec
 from shadowvol import memory
-from shadowvol.frame import GROUND_TRUTH, soft_arrays
+from shadowvol.frame import GROUND_TRUTH, LAYERS, soft_arrays
 from shadowvol.scene import hard_lights
 
 # what a batch frame asks `Renderer.render(outputs=...)` for (its OUTPUTS; named here, since
 # the worker imports GL only when it first renders)
-RASTER_OUTPUTS = ("image", "lit", "coverage", *GROUND_TRUTH)
+RASTER_OUTPUTS = ("image", "lit", "coverage", *GROUND_TRUTH, *LAYERS)
 
 
 def _version(package: str) -> str | None:
@@ -103,6 +103,9 @@ class Rays:
                  if "image" in wanted else [])
         if truth or {"lit", "coverage"} & wanted:
             parts.append(raytrace.estimate.masks(frame_scene, truth, picture=False))
+        if set(LAYERS) & wanted:   # its float32 arrays and its tile
+            parts.append(raytrace.estimate.masks(frame_scene, LAYERS, picture=False))
+            parts.append(raytrace.outlook.estimate.layers(frame_scene))
         return memory.Estimate("the ray tracer", frame_scene.width, frame_scene.height,
                                tuple(t for part in parts for t in part.terms))
 
@@ -124,6 +127,10 @@ class Rays:
         elif {"lit", "coverage", "counts"} & set(wanted):
             arrays["lit"], arrays["coverage"] = raytrace.shadow_masks(frame_scene)
             arrays["counts"] = {}
+        names = tuple(name for name in LAYERS if name in wanted)
+        if names:   # Whitted's depth-0 direct light (`raytrace.outlook.layers`)
+            from raytrace.outlook.layers import layers
+            arrays.update(layers(frame_scene, names))
         return arrays
 
     def alone(self, worker, spec, single) -> np.ndarray:

@@ -11,7 +11,7 @@ import argparse
 
 from shadowvol import memory
 from shadowvol.cli import status
-from shadowvol.frame import GROUND_TRUTH
+from shadowvol.frame import GROUND_TRUTH, LAYERS
 
 SCENE_HELP = "scene file (.toml or .json)"
 BACKEND_HELP = ("triangle intersection: 'embree' (fast, float32) or 'numpy' (the float64 "
@@ -64,7 +64,7 @@ def ground_truth(p: argparse.ArgumentParser, help: str) -> None:
     p.add_argument("--outputs", metavar="LIST", default=None, help=help)
 
 
-GROUND_TRUTH_LIST = ",".join(GROUND_TRUTH)
+GROUND_TRUTH_LIST = ",".join(GROUND_TRUTH + LAYERS)
 
 
 def exr(p: argparse.ArgumentParser, help: str, **kwargs) -> None:

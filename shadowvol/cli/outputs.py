@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from shadowvol.frame import GROUND_TRUTH, check_outputs
+from shadowvol.frame import GROUND_TRUTH, LAYERS, check_outputs
 from shadowvol.scene import SceneError, shorten
 
 SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".png",
@@ -21,16 +21,18 @@ SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".pn
 
 def ground_truth(text: str | None, flag: str = "--outputs", extra: tuple[str, ...] = ()
                  ) -> tuple[str, ...]:
-    """The ground-truth outputs named by a command line's comma-separated list (or `all`),
-    in `shadowvol.frame.GROUND_TRUTH`'s order, then those of `extra` (outputs one command has
-    besides, e.g. `shadowvol.frame.EXACT_OUTPUTS`; named only, never in `all`); () for None.
-    SceneError (exit 2) naming `flag` for an unknown name (`shadowvol.frame.check_outputs`)."""
+    """The ground-truth outputs and intrinsic layers named by a command line's comma-separated
+    list (`all`: the ground truth, `shadowvol.frame.GROUND_TRUTH`; the layers, each a frame or
+    more, by name), in GROUND_TRUTH's then `shadowvol.frame.LAYERS`' order, then those of
+    `extra` (outputs one command has besides, e.g. `shadowvol.frame.EXACT_OUTPUTS`; named only,
+    never in `all`); () for None.  SceneError (exit 2) naming `flag` for an unknown name
+    (`shadowvol.frame.check_outputs`)."""
     if text is None:
         return ()
     names = [n.strip() for n in text.split(",") if n.strip()]
     if names == ["all"]:
         return GROUND_TRUTH
-    known = GROUND_TRUTH + tuple(extra)
+    known = GROUND_TRUTH + LAYERS + tuple(extra)
     if not names:
         raise SceneError(flag, f"unknown output {shorten(text)} (a comma-separated list of: "
                                f"{', '.join(known)}; or all)")

@@ -13,7 +13,7 @@ from shadowvol import memory
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
 from shadowvol.errors import OutOfMemory, RenderError
-from shadowvol.frame import GROUND_TRUTH, save_masks
+from shadowvol.frame import GROUND_TRUTH, LAYERS, layer_exrs, save_masks
 from shadowvol.io import encode_srgb, save_exr, save_png, save_png16
 from shadowvol.pictures import ROLE_COLOURS, captioned, heat_maps
 from shadowvol.raster import estimate
@@ -77,10 +77,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "violet; negative: blue).  Every triangle casts, so a closed object "
                         "counts 2 behind it (its front and its back)")
     blocks.ground_truth(p, "ground truth to add to the mask file, comma-separated: "
-                           f"{', '.join(GROUND_TRUTH)} (or all); see docs/CONVENTIONS.md.  "
+                           f"{', '.join(GROUND_TRUTH)} (or all); and the intrinsic layers "
+                           f"{', '.join(LAYERS)}; see docs/CONVENTIONS.md.  "
                            "Implies --masks (beside the image unless named)")
-    blocks.exr(p, "also write the image as linear OpenEXR (32-bit float RGB); without a name, "
-                  "beside the image", nargs="?", const=True)
+    blocks.exr(p, "also write the image as linear OpenEXR (32-bit float RGB), and each "
+                  "intrinsic layer asked for beside it (X-albedo.exr, X-direct-0.exr, ...); "
+                  "without a name, beside the image", nargs="?", const=True)
     p.add_argument("--png16", metavar="PNG", nargs="?", const=True,
                    help="also write the image as a 16-bit sRGB PNG; without a name, beside the "
                         "image (NAME-16bit.png)")
@@ -241,6 +243,8 @@ def _render_one(args, scene_path: str, out: dict, ctx, prefix: bool):
                        arrays=result.arrays())
         if "exr" in out:
             save_exr(out["exr"], result.image)
+            for path, layer in layer_exrs(out["exr"], result).items():
+                save_exr(path, layer)
         if "png16" in out:
             save_png16(out["png16"], result.image)
         if volumes is not None:

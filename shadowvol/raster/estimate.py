@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from shadowvol import memory
-from shadowvol.frame import GROUND_TRUTH, caster_words
+from shadowvol.frame import FIELDS, GROUND_TRUTH, LAYERS, caster_words
 from shadowvol.raster.target import BYTES_PER_PIXEL, LIGHTS_PER_PAGE, SURFACE_BYTES_PER_PIXEL
 from shadowvol.scene import Scene, hard_lights
 
@@ -55,6 +55,13 @@ def render(scene: Scene, outputs=("image", "lit", "coverage"), *, gl_in_host: bo
         # its frame's image, the RGBA read (a copy of the staging), its RGB copy
         t["volume view"] = 12 + 16 + 12
     t |= memory.written(written, L, truth, float64=False, stencil=stencil, words=K)
+    asked_layers = outputs & set(LAYERS)
+    if asked_layers:   # `layers`: the arrays, their float32 copies and the mask file's bytes,
+        # a frame's image, and a twin renderer's frame (one twin at a time)
+        each = sum(12 * (L if FIELDS[n].dims[0] == "L" else 1) for n in asked_layers)
+        t["intrinsic layers"] = each * (3 if "masks" in written else 2) + 12
+        if asked_layers & {"direct", "direct_shadowed", "albedo"}:
+            t["twin renderer's frame"] = BYTES_PER_PIXEL * gl_in_host
     if memory.surfaced(scene):
         t["G-buffer UVs and colours"] = SURFACE_BYTES_PER_PIXEL * gl_in_host
     # the texels: the model's sRGB codes (3 B), the upload's RGBA copy of one texture at a

@@ -23,8 +23,8 @@ import moderngl
 import numpy as np
 
 from shadowvol.cameras import calibration
-from shadowvol.frame import check_light_kinds, check_outputs
-from shadowvol.raster import bits, methods, overflow, overlay, passes, truth
+from shadowvol.frame import LAYERS, check_light_kinds, check_outputs
+from shadowvol.raster import bits, layers, methods, overflow, overlay, passes, truth
 from shadowvol.raster import stencil as stencil_gl
 from shadowvol.raster.context import (
     clear_errors,
@@ -133,6 +133,7 @@ class Renderer:
                              f"got {method!r}")
         outputs = set(check_outputs(outputs, OUTPUTS, DEFAULT_OUTPUTS)) | (
             {"stencil"} if stencil else set())
+        wanted_layers, outputs = outputs & set(LAYERS), outputs - set(LAYERS)
         lights = check_lights(lights)
         make_current(self.ctx)
         to_check = self._lights_to_check(camera, lights) if shadows else []
@@ -145,7 +146,10 @@ class Renderer:
                                      halve=plan.halve, only=to_check)
             if "lit" not in outputs:
                 result = replace(result, lit=None, lit_count=None)
-            return result
+        if wanted_layers:   # the intrinsic layers: more frames (`layers`)
+            result = replace(result, **layers.render_layers(
+                self, method, silhouettes, camera, lights, shadows, wanted_layers))
+        return result
 
     def _lights_to_check(self, camera, lights) -> list[tuple[int, int]]:
         """(light, sample) indices of the hard lights whose stencil count might reach 256 in

@@ -12,7 +12,8 @@ from shadowvol.scene import AreaLight, DirectionalLight, Light, PointLight, Spot
 
 SILHOUETTES = ("cpu", "gpu")
 # what `render(outputs=...)` can return; the default is what the frame always returned
-OUTPUTS = ("image", "image_srgb", "lit", "coverage", "stencil") + frame.GROUND_TRUTH
+OUTPUTS = ("image", "image_srgb", "lit", "coverage", "stencil") + frame.GROUND_TRUTH + \
+    frame.LAYERS
 DEFAULT_OUTPUTS = ("image", "lit", "coverage")
 
 

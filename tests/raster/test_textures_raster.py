@@ -173,14 +173,17 @@ def test_a_huge_textured_ground_cut_to_the_guard_band(ctx, tmp_path):
 
 def test_textures_change_the_image_and_nothing_else(ctx, tmp_path):
     """Every ground-truth output of a textured scene is the untextured scene's, bit for bit;
-    the 8-bit image the shading pass encodes itself is the float image's, within one code."""
+    the 8-bit image the shading pass encodes itself is the float image's, within one code.
+    (The intrinsic layers are shading, like the image: the texture is in them, and its
+    albedo is checked texel by texel in tests/raster/test_layers_raster.py.)"""
+    from shadowvol.frame import LAYERS
     from shadowvol.io import encode_srgb
     from shadowvol.raster.result import OUTPUTS
 
     textured_glb(tmp_path / "quad.glb", texels(8), wrap=GL_MIRROR, filt=GL_LINEAR)
     scene = load_scene(textured_scene_file(tmp_path, "quad.glb"))
     plain = scene.replace(objects=(untextured(scene.objects[0]),))
-    truth = tuple(o for o in OUTPUTS if o not in ("image", "image_srgb", "stencil"))
+    truth = tuple(o for o in OUTPUTS if o not in ("image", "image_srgb", "stencil") + LAYERS)
     with Renderer(scene, ctx) as r:
         got = r.render(outputs=truth + ("image_srgb",))
         image = r.render().image

@@ -18,12 +18,15 @@ def test_the_table_gives_the_ground_truth_and_the_mask_file_in_conventions_order
     assert list(frame.MASK_ARRAYS) == [*frame.GROUND_TRUTH, "lit_count", "samples",
                                        "visibility_exact", "irradiance_exact", "K",
                                        "world_to_camera", "camera_to_world", "light_position",
-                                       "light_direction"]
+                                       "light_direction", *frame.LAYERS]
     # the ray tracer's exact outputs: in a mask file when named, never ground truth the
     # rasterizer must produce
     assert frame.EXACT_OUTPUTS == ("visibility_exact", "irradiance_exact")
     assert not set(frame.EXACT_OUTPUTS) & set(frame.GROUND_TRUTH)
     assert frame.MASK_ARRAYS["visibility_exact"] == (np.float64, ("L", "H", "W"))
+    assert frame.LAYERS == ("albedo", "ambient", "direct", "direct_shadowed", "shadow_free")
+    assert frame.MASK_ARRAYS["direct"] == (np.float32, ("L", "H", "W", 3))
+    assert frame.MASK_ARRAYS["albedo"] == (np.float32, ("H", "W", 3))
     assert frame.MASK_ARRAYS["casters"] == (np.uint64, ("L", "H", "W", "K"))
     assert frame.shape("casters", 2, 3, 4, objects=65) == (2, 3, 4, 2)
     assert frame.shape("normal", 2, 3, 4, flat=True) == (12, 3)

@@ -209,7 +209,7 @@ def example_scene(installed, name: str) -> str:
 
 def test_batch_in_every_format(installed):
     formats = batch_formats(installed)
-    assert {"files", "webdataset", "nerfstudio", "bop", "coco"} <= set(formats)
+    assert {"files", "webdataset", "nerfstudio", "bop", "coco", "istd", "soba"} <= set(formats)
     job = {"name": "cage", "scene": example_scene(installed, "cage"), "size": [40, 30],
            "cameras": {"orbit": {"center": [-0.6, 1.0, -0.8], "radius": 7.5,
                                  "elevation": 28.0, "start": 10.0, "sweep": 80.0,
@@ -232,8 +232,10 @@ def test_batch_in_every_format(installed):
                 else:
                     data = (out / entry["path"]).read_bytes()
                 assert hashlib.sha256(data).hexdigest() == entry["sha256"], (fmt, entry)
-        index = {"nerfstudio": "cage/transforms.json", "coco": "cage/annotations.json",
-                 "bop": "cage/train/000000/scene_gt.json"}.get(fmt)
+        index = {"nerfstudio": "cage/transforms.json", "coco": "annotations.json",
+                 "bop": "train/000000/scene_gt.json", "istd": "cage/istd.json",
+                 "soba": "cage/annotations.json",
+                 "soba-lights": "cage/annotations.json"}.get(fmt)
         if index:
             assert json.loads((out / index).read_text()), (fmt, index)
         if fmt == "webdataset":

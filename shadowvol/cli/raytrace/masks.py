@@ -3,6 +3,7 @@ truth), as a mask file and a picture."""
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -10,11 +11,13 @@ from raytrace import estimate, shadow_masks  # (area lights: lit where every sam
 from raytrace.backends import BACKENDS
 from raytrace.exact_soft import check_exact, exact_visibility
 from raytrace.groundtruth import ground_truth
+from raytrace.outlook.estimate import layers as layers_estimate
+from raytrace.outlook.layers import layers
 from shadowvol import memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import args as blocks
 from shadowvol.cli import outputs, status
-from shadowvol.frame import EXACT_OUTPUTS, save_masks
+from shadowvol.frame import EXACT_OUTPUTS, LAYERS, save_masks
 from shadowvol.io import save_png
 from shadowvol.pictures import ground_truth_picture, masks_image
 from shadowvol.scene import SceneError, hard_lights, light_samples
@@ -55,17 +58,23 @@ def command(args) -> int:
         paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
     outputs.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
     scene = load_scene(args.scene)
-    memory.check(estimate.masks(scene, wanted, picture="picture" in paths, exact=len(exact)),
-                 args.memory_budget, args.scene)
+    need = estimate.masks(scene, wanted, picture="picture" in paths, exact=len(exact))
+    if set(wanted) & set(LAYERS):
+        need = dataclasses.replace(need, terms=need.terms + layers_estimate(scene).terms)
+    memory.check(need, args.memory_budget, args.scene)
     if exact:
         try:
             check_exact(scene)
         except SceneError as exc:
             raise exc.in_file(args.scene) from None
-    if wanted or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
+    wanted, layer_names = (tuple(n for n in wanted if n not in LAYERS),
+                           tuple(n for n in wanted if n in LAYERS))
+    if wanted or layer_names or any(len(hard_lights(lt)) > 1 for lt in scene.lights):
         # the counts of an area light (lit_count, samples) come with the ground truth's rays
         truth = ground_truth(scene, wanted, backend=args.backend)
         lit, coverage, arrays = truth.lit, truth.coverage, truth.arrays()
+        if layer_names:   # Whitted's depth-0 direct light (raytrace.outlook.layers)
+            arrays |= layers(scene, layer_names, backend=args.backend)
         picture = (ground_truth_picture(truth, [o.name for o in scene.objects]) if wanted
                    else masks_image(lit, coverage))
     else:
