@@ -178,3 +178,45 @@ def test_the_cli_writes_both_layouts_and_a_rerun_changes_nothing(made, tmp_path)
             want, got = output_files(folder / name), output_files(out)
             assert sorted(got) == sorted(want)
             assert [k for k in want if got[k] != want[k]] == []
+
+
+def _sobas_loader():
+    """SOBA's own `pysobatools.soba.SOBA` (tests/batch/pysobatools_soba.py, vendored)."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "pysobatools_soba", Path(__file__).with_name("pysobatools_soba.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.SOBA
+
+
+@pytest.mark.parametrize("layout", ["soba", "soba-lights"])
+def test_sobas_own_loader_reads_what_the_checked_reader_reads(made, layout):
+    """SOBA's own loader indexes the files as the reader `_check` verified against the casters
+    bits: the same images, categories, association categories, annotations and association
+    annotations per image, and the same mask for each (its annToMask)."""
+    jobs, folder = made
+    SOBA = _sobas_loader()
+    for path in sorted((folder / layout).glob("*/annotations.json")):
+        theirs, ours = SOBA(str(path)), Soba(path)
+        assert theirs.getCatIds() == [1, 2] and theirs.getAssoIds() == [1]
+        assert [c["name"] for c in theirs.loadAsso([1])] == ["Object-Shadow"]
+        assert sorted(theirs.getImgIds()) == sorted(ours.instances.getImgIds())
+        pairs = 0
+        for im in theirs.getImgIds():
+            anns = theirs.loadAnns(theirs.getAnnIds(imgIds=[im]))
+            assert sorted(a["id"] for a in anns) == sorted(ours.instances.getAnnIds(imgIds=[im]))
+            assocs = theirs.loadAssoAnns(theirs.getAssoAnnIds(imgIds=[im]))
+            assert sorted(a["id"] for a in assocs) == \
+                sorted(ours.associations.getAnnIds(imgIds=[im]))
+            for ann in anns:
+                assert np.array_equal(theirs.annToMask(ann), ours.instances.annToMask(ann))
+            for assoc in assocs:
+                members = [a for a in anns if a["association"] == assoc["association"]]
+                assert sorted(a["category_id"] for a in members) == [1, 2]
+                union = np.logical_or(*(theirs.annToMask(a) for a in members))
+                assert np.array_equal(theirs.annToMask(assoc).astype(bool), union)
+            pairs += len(assocs)
+        assert pairs >= 1
