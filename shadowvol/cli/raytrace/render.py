@@ -85,7 +85,12 @@ def command(args) -> int:
     image = render(scene, max_depth=args.max_depth, backend=args.backend,
                    progress=False if args.no_progress else None, spp=spp, seed=args.seed,
                    pixel_filter=args.filter)
-    save_png(args.output, image)
+    return _written(paths, image)
+
+
+def _written(paths: dict[str, Path], image) -> int:
+    """Write `image` to `paths` (the PNG, and the EXR and 16-bit PNG asked for) and say so."""
+    save_png(paths["image"], image)
     if "exr" in paths:
         save_exr(paths["exr"], image)
     if "png16" in paths:
@@ -114,13 +119,7 @@ def analytic_rendered(args) -> int:
         image = analytic.render(scene, backend=args.backend)
     except SceneError as exc:
         raise exc.in_file(args.scene) from None
-    save_png(args.output, image)
-    if "exr" in paths:
-        save_exr(paths["exr"], image)
-    if "png16" in paths:
-        save_png16(paths["png16"], image)
-    print(f"wrote {', '.join(str(p) for p in paths.values())}", file=sys.stderr)
-    return status.OK
+    return _written(paths, image)
 
 
 def path_traced(args) -> int:
