@@ -78,16 +78,15 @@ def textured_quad(folder):
     return load_scene(path), tex
 
 
-def check_albedo(scene, tex, albedo: np.ndarray, atol: float) -> int:
-    """albedo at pixels of the quad = material diffuse × the texel under the pixel's UV
-    (sRGB-decoded), in float64; pixels whose UV lies within 1e-3 texel of a texel edge are
-    skipped.  Returns how many pixels were checked."""
-    cam, m = scene.camera, scene.objects[0].material
-    half = math.tan(math.radians(cam.fov_y) / 2) * 3.0
+def quad_texels(scene, tex):
+    """Of `textured_quad`'s frame, seen straight down (an affine map from pixels to UVs): every
+    fifth pixel (x, y), its point p (3,) on the quad in float64 and the sRGB-decoded texel
+    under it (3,); pixels whose UV lies within 1e-3 texel of a texel edge are left out."""
+    half = math.tan(math.radians(scene.camera.fov_y) / 2) * 3.0   # half the view on the ground
     uv = scene.objects[0].uv
-    checked = 0
     for y in range(2, 62, 5):
         for x in range(2, 62, 5):
+            # up = -z: image rows go toward +z, columns toward +x
             px = ((x + 0.5) / 64 * 2 - 1) * half
             pz = ((y + 0.5) / 64 * 2 - 1) * half
             u = uv[0, 0] + (px + 1) / 2 * (uv[2, 0] - uv[0, 0])
@@ -97,7 +96,16 @@ def check_albedo(scene, tex, albedo: np.ndarray, atol: float) -> int:
                 continue
             base = np.array([decode(int(c)) for c in tex[math.floor(ty) % 8,
                                                          math.floor(tx) % 8]])
-            np.testing.assert_allclose(albedo[y, x], np.asarray(m.diffuse) * base, rtol=0,
-                                       atol=atol, err_msg=f"pixel ({x}, {y})")
-            checked += 1
+            yield x, y, np.array([px, 0.0, pz]), base
+
+
+def check_albedo(scene, tex, albedo: np.ndarray, atol: float) -> int:
+    """albedo at pixels of the quad = material diffuse × the texel under the pixel's UV
+    (sRGB-decoded), in float64 (`quad_texels`).  Returns how many pixels were checked."""
+    m = scene.objects[0].material
+    checked = 0
+    for x, y, _, base in quad_texels(scene, tex):
+        np.testing.assert_allclose(albedo[y, x], np.asarray(m.diffuse) * base, rtol=0,
+                                   atol=atol, err_msg=f"pixel ({x}, {y})")
+        checked += 1
     return checked

@@ -7,7 +7,6 @@ pass from the G-buffer's UVs in one frame with untextured objects beside it."""
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 import pytest
@@ -22,6 +21,7 @@ from builders import (
     textured_glb,
     textured_scene_file,
 )
+from layers import quad_texels, textured_quad
 
 import raytrace
 from shadowvol.io import save_png
@@ -54,11 +54,6 @@ def check_images(raster, ray, out_dir, label: str) -> None:
                     f"{IMAGE_BUDGET * error.size:.0f}); images in {out_dir}")
 
 
-def decode(code: int) -> float:
-    c = code / 255.0
-    return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
-
-
 @pytest.mark.parametrize("filt,wrap", SAMPLERS)
 def test_textured_gltf_renders_as_the_ray_tracer_sees_it(ctx, tmp_path, filt, wrap):
     textured_glb(tmp_path / "quad.glb", texels(), wrap=wrap, filt=filt,
@@ -86,40 +81,21 @@ def untextured(obj):
 def test_a_pixel_is_the_texel_under_its_uv(ctx, tmp_path):
     """Nearest, repeat, a camera straight down on the quad: pixel centres map to UVs by an
     affine map, so the texel under a pixel is known in float64 without any renderer."""
-    tex = texels(3)
-    textured_glb(tmp_path / "quad.glb", tex, wrap=GL_REPEAT, filt=GL_NEAREST)
-    path = textured_scene_file(tmp_path, "quad.glb", width=64, height=64)
-    path.write_text(path.read_text().replace("eye = [0.3, 2.2, 1.9]", "eye = [0, 3, 0]")
-                    .replace("fov_y = 50", "fov_y = 30\nup = [0, 0, -1]"))
-    scene = load_scene(path)
+    scene, tex = textured_quad(tmp_path)
     with Renderer(scene, ctx) as r:
         image = r.render().image
     cam, m, light = scene.camera, scene.objects[0].material, scene.lights[0]
-    half = math.tan(math.radians(cam.fov_y) / 2) * 3.0   # half the view's width on the ground
-    uv = scene.objects[0].uv
     checked = 0
-    for y in range(2, 62, 5):
-        for x in range(2, 62, 5):
-            # up = -z: image rows go toward +z, columns toward +x
-            px = ((x + 0.5) / 64 * 2 - 1) * half
-            pz = ((y + 0.5) / 64 * 2 - 1) * half
-            u = uv[0, 0] + (px + 1) / 2 * (uv[2, 0] - uv[0, 0])
-            v = uv[0, 1] + (pz + 1) / 2 * (uv[2, 1] - uv[0, 1])
-            tx, ty = u * 8, v * 8
-            if min(abs(tx - round(tx)), abs(ty - round(ty))) < 1e-3:
-                continue
-            base = np.array([decode(int(c)) for c in tex[math.floor(ty) % 8,
-                                                         math.floor(tx) % 8]])
-            p = np.array([px, 0.0, pz])
-            l = (light.position - p) / np.linalg.norm(light.position - p)
-            view = (cam.eye - p) / np.linalg.norm(cam.eye - p)
-            r = 2 * l[1] * np.array([0, 1.0, 0]) - l
-            want = m.ambient * base * scene.ambient + (
-                m.diffuse * base * l[1] + m.specular * max(r.dot(view), 0) ** m.shininess
-            ) * light.radiance
-            np.testing.assert_allclose(image[y, x], want, rtol=0, atol=IMAGE_TOL,
-                                       err_msg=f"pixel ({x}, {y})")
-            checked += 1
+    for x, y, p, base in quad_texels(scene, tex):
+        l = (light.position - p) / np.linalg.norm(light.position - p)
+        view = (cam.eye - p) / np.linalg.norm(cam.eye - p)
+        r = 2 * l[1] * np.array([0, 1.0, 0]) - l
+        want = m.ambient * base * scene.ambient + (
+            m.diffuse * base * l[1] + m.specular * max(r.dot(view), 0) ** m.shininess
+        ) * light.radiance
+        np.testing.assert_allclose(image[y, x], want, rtol=0, atol=IMAGE_TOL,
+                                   err_msg=f"pixel ({x}, {y})")
+        checked += 1
     assert checked > 100
 
 
