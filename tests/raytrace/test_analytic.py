@@ -21,7 +21,7 @@ from raytrace import polygons
 from raytrace.outlook import analytic, whitted
 from shadowvol.scenefile import load_scene
 
-pytest.importorskip("shapely")
+pytest.importorskip("shapely", reason="exact soft shadows need shapely: pip install 'shadowvol[exact]' (the test extra has it)")
 
 
 def _floor_error(samples: int) -> float:
