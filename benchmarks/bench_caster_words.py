@@ -102,7 +102,7 @@ def main(argv=None) -> int:
     ap.add_argument("--width", type=int, default=640)
     ap.add_argument("--height", type=int, default=480)
     args = ap.parse_args(argv)
-    from shadowvol.raster.context import create_context
+    from shadowvol.raster.platform.context import create_context
 
     ctx = create_context()
     try:

@@ -23,7 +23,7 @@ import numpy as np
 
 from shadowvol import Renderer
 from shadowvol.raster import projection
-from shadowvol.raster.context import create_context
+from shadowvol.raster.platform.context import create_context
 from shadowvol.raster.geometry import SceneGeometry
 
 from . import scenes

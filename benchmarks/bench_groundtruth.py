@@ -161,7 +161,7 @@ def main(argv=None) -> int:
                          "benchmarks.run results.json (then `python -m benchmarks.run "
                          "--report-only` rewrites the report)")
     args = ap.parse_args(argv)
-    from shadowvol.raster.context import create_context
+    from shadowvol.raster.platform.context import create_context
 
     ctx = create_context()
     try:

@@ -132,7 +132,7 @@ def measure(names, width: int, height: int, runs: int) -> dict:
     from raytrace import shadow_masks
     from raytrace.masks import scene_backend
     from shadowvol import Renderer
-    from shadowvol.raster.context import make_current
+    from shadowvol.raster.platform.context import make_current
 
     out = {"variant": VARIANT, "size": [width, height], "runs": runs, "scenes": [],
            "load_before": os.getloadavg()}

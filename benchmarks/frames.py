@@ -26,7 +26,7 @@ import numpy as np
 
 from shadowvol import Renderer
 from shadowvol.raster import passes
-from shadowvol.raster.silhouettes import (
+from shadowvol.raster.volumes.silhouettes import (
     edge_multiplicity,
     quads_to_triangles,
     side_quads,
@@ -191,7 +191,7 @@ def gpu_silhouette_times(renderer: Renderer, repeat: int, lights=None) -> dict:
     edge records of all casters drawn with rasterizer discard, glFinish-bracketed."""
     ctx = renderer.ctx
     vols = renderer.volumes("gpu")
-    from shadowvol.raster.context import make_current
+    from shadowvol.raster.platform.context import make_current
     from shadowvol.raster.projection import frame_view_projection
     make_current(ctx)
     scene = renderer.scene

@@ -137,17 +137,10 @@ def main(argv=None) -> int:
         steps.print()
         return 0
 
-    from shadowvol.raster import (
-        context,
-        geometry,
-        overflow,
-        passes,
-        renderer,
-        silhouettes,
-        target,
-        topology,
-        volumes_cpu,
-    )
+    from shadowvol.raster import geometry, passes, renderer, target
+    from shadowvol.raster.overflow import detect
+    from shadowvol.raster.platform import context
+    from shadowvol.raster.volumes import cpu, silhouettes, topology
 
     steps.wrap(context, "create_context")
     renderer.create_context = context.create_context
@@ -157,13 +150,13 @@ def main(argv=None) -> int:
     steps.wrap(geometry.SceneGeometry, "_frame_corners", "frame corners (float32, kept)")
     steps.wrap(target.Target, "__init__", "Target (G-buffer)")
     steps.wrap(passes.ScenePrograms, "__init__", "ScenePrograms")
-    steps.wrap(volumes_cpu.CpuVolumes, "__init__", "CpuVolumes")
-    steps.wrap(volumes_cpu.CpuVolumes, "_build", "silhouettes + side quads + upload")
+    steps.wrap(cpu.CpuVolumes, "__init__", "CpuVolumes")
+    steps.wrap(cpu.CpuVolumes, "_build", "silhouettes + side quads + upload")
     for name in ("topology_signs", "edge_multiplicity", "side_quads", "quads_to_triangles"):
         steps.wrap(silhouettes, name)
-        setattr(volumes_cpu, name, getattr(silhouettes, name))
-    steps.wrap(volumes_cpu.CpuVolumes, "_framed", "side triangles to the frame")
-    steps.wrap(overflow, "count_bound", "overflow bound (count_bound)")
+        setattr(cpu, name, getattr(silhouettes, name))
+    steps.wrap(cpu.CpuVolumes, "_framed", "side triangles to the frame")
+    steps.wrap(detect, "count_bound", "overflow bound (count_bound)")
     steps.wrap(geometry.SceneGeometry, "move_to")
     steps.wrap(geometry.SceneGeometry, "set_view")
     for name in ("geometry_pass", "count_volumes", "mark_unshadowed", "shade"):

@@ -127,7 +127,7 @@ def _paths(args) -> dict[str, Path]:
 
 def _measure(args, cfg: dict) -> dict:
     """Every section of the run, in order; the results as results.json holds them."""
-    from shadowvol.raster.context import create_context
+    from shadowvol.raster.platform.context import create_context
 
     command = "python -m benchmarks.run" + (" --quick" if args.quick else "") + \
               (" --no-pyrender" if args.no_pyrender else "")

@@ -4,7 +4,7 @@ Every size has the same layout (a 14 x 14 floor, spheres scattered over it by a 
 the same camera), only the number and subdivision of the spheres change, so that frame times
 across sizes differ by triangle count, not by what is on screen.  Closed spheres are the common
 case for shadow volumes (each silhouette edge has multiplicity 2, see
-`shadowvol.raster.silhouettes`).
+`shadowvol.raster.volumes.silhouettes`).
 """
 
 from __future__ import annotations

@@ -146,7 +146,7 @@ def turntable_section(ctx, cfg) -> dict:
     changes) against `raytrace.shadow_masks` of the same view, view by view in turn."""
     from raytrace import shadow_masks
     from shadowvol import Renderer
-    from shadowvol.raster.context import make_current
+    from shadowvol.raster.platform.context import make_current
 
     if scenes.models_dir() is None:
         log("turntable: the shared meshes are missing; skipped")
@@ -195,7 +195,7 @@ def turntable_section(ctx, cfg) -> dict:
 
 def pyrender_section(ctx, cfg) -> list:
     from shadowvol import Renderer
-    from shadowvol.raster.context import make_current
+    from shadowvol.raster.platform.context import make_current
 
     width, height = cfg["size"]
     out = []

@@ -64,7 +64,7 @@ def path_shading(request, monkeypatch):
 
 @pytest.fixture(scope="session")
 def gl_session():
-    from shadowvol.raster.context import create_context
+    from shadowvol.raster.platform.context import create_context
 
     ctx = create_context()  # raises ContextError (the test errors) when EGL/GL 4.5 is missing
     yield ctx
@@ -73,7 +73,7 @@ def gl_session():
 
 @pytest.fixture
 def ctx(gl_session):
-    from shadowvol.raster.context import make_current
+    from shadowvol.raster.platform.context import make_current
 
     make_current(gl_session)  # a test that made its own context may have left that one current
     before = gl_session.error

@@ -25,6 +25,12 @@ FLOORS = {
     "shadowvol.course": (6, "course"),
     "shadowvol.compare": (5, "compare"),
     "shadowvol.raster": (4, "raster"),
+    # the raster wing's families, one folder each (raw GL and ctypes allowed in all: CONFINED)
+    "shadowvol.raster.platform": (4, "raster"),
+    "shadowvol.raster.volumes": (4, "raster"),
+    "shadowvol.raster.truth": (4, "raster"),
+    "shadowvol.raster.overflow": (4, "raster"),
+    "shadowvol.raster.planar": (4, "raster"),
     "raytrace": (4, "raytrace"),
     "shadowvol.scenefile": (3, "model"),
     "shadowvol.scenefile_mesh": (3, "model"),

@@ -2,7 +2,7 @@
 started with `spawn` or `forkserver`.
 
 Never `fork` by default: a process forked after its parent made a GL context cannot use EGL
-(it would hang; `shadowvol.raster.context` refuses with ForkedContextError), and a batch is
+(it would hang; `shadowvol.raster.platform.context` refuses with ForkedContextError), and a batch is
 often run from a program that has rendered before.  Each pool process holds one `Worker` (one
 context, one Renderer per scene) for its whole life, with llvmpipe's and the BLAS thread counts
 set to its share of the cores before GL is loaded.

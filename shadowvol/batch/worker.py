@@ -122,7 +122,7 @@ class Worker:
         return found
 
     def context(self):
-        from shadowvol.raster.context import check_not_forked, create_context
+        from shadowvol.raster.platform.context import check_not_forked, create_context
 
         if self._ctx is None:
             check_not_forked()

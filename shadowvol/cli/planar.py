@@ -13,7 +13,7 @@ from shadowvol.cli import outputs, status
 from shadowvol.frame import save_masks
 from shadowvol.io import save_png
 from shadowvol.raster import estimate
-from shadowvol.raster.planar_pass import ReceiverError, render_planar
+from shadowvol.raster.planar.draw import ReceiverError, render_planar
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 

@@ -17,7 +17,7 @@ from shadowvol.frame import GROUND_TRUTH, LAYERS, layer_exrs, save_masks
 from shadowvol.io import encode_srgb, save_exr, save_png, save_png16
 from shadowvol.pictures import ROLE_COLOURS, captioned, heat_maps
 from shadowvol.raster import estimate
-from shadowvol.raster.context import create_context
+from shadowvol.raster.platform.context import create_context
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight, SceneError, light_samples
 from shadowvol.scenefile import load_scene

@@ -35,7 +35,7 @@ from shadowvol.compare.pyrender_peer import (
     render_pyrender,
 )
 from shadowvol.io import encode_srgb
-from shadowvol.raster.context import create_context
+from shadowvol.raster.platform.context import create_context
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight, DirectionalLight, PointLight, Scene, SpotLight
 

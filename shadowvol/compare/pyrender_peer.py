@@ -11,7 +11,7 @@ that touches two compatibility problems of pyrender 0.1.45 (pinned in pyproject'
   here and nowhere else;
 - headless rendering needs `PYOPENGL_PLATFORM=egl` before PyOpenGL is first imported: we set it if
   it is not set already (an explicit `osmesa` is respected).
-A third one is handled by `shadowvol.raster.pyrender_context.offscreen`: pyrender's `OffscreenRenderer.delete()` calls
+A third one is handled by `shadowvol.raster.platform.pyrender_context.offscreen`: pyrender's `OffscreenRenderer.delete()` calls
 `eglTerminate` on the EGL display, which is shared by every EGL user in the process (pyrender
 issue #223, "re-create OffscreenRenderer": EGL_BAD_DISPLAY), so it would kill a moderngl context
 living beside it, and pyrender leaves its own context current.  We tear the renderer down
@@ -50,7 +50,7 @@ import re
 import numpy as np
 
 from shadowvol.errors import require
-from shadowvol.raster import pyrender_context
+from shadowvol.raster.platform import pyrender_context
 from shadowvol.scene import (
     AreaLight,
     Camera,

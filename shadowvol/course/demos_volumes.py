@@ -14,7 +14,7 @@ from shadowvol.course import counting, slides, volume_roles
 from shadowvol.course.picture import Picture
 from shadowvol.io import encode_srgb
 from shadowvol.pictures import figure_pixels, tint
-from shadowvol.raster.planar_pass import PlanarShadows
+from shadowvol.raster.planar.draw import PlanarShadows
 from shadowvol.raster.renderer import Renderer
 
 CAGE_EXPOSURE = 1.6   # the cage is lit by one dim yellow light: shown brighter on a projector

@@ -29,7 +29,7 @@ from shadowvol.course import (
 from shadowvol.course.picture import Picture
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE, SUPERSAMPLE, Layout
 from shadowvol.errors import MissingExtra
-from shadowvol.raster.context import create_context
+from shadowvol.raster.platform.context import create_context
 from shadowvol.resources import data_dir
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene

@@ -15,7 +15,7 @@ renderer read back for the same pixel, and the ray tracer's shadow ray (every tr
 the visible point and the light: every triangle casts), say the same, or `explain` says why not.
 
 Everything is float64 world-space geometry, computed from the same silhouettes
-(`raster.silhouettes`) the stencil pass extrudes; no GL here except the read-back the caller
+(`raster.volumes.silhouettes`) the stencil pass extrudes; no GL here except the read-back the caller
 passes in (`Renderer.render(stencil=True)`).
 """
 
@@ -27,8 +27,8 @@ import numpy as np
 
 from raytrace.camera import primary_rays
 from raytrace.intersect import ray_triangle
-from shadowvol.raster.silhouettes import edge_multiplicity, side_quads, topology_signs
-from shadowvol.raster.topology import Topology
+from shadowvol.raster.volumes.silhouettes import edge_multiplicity, side_quads, topology_signs
+from shadowvol.raster.volumes.topology import Topology
 
 PARALLEL = 1e-12     # |n . d| / (|n| |d|) below which a ray runs inside a face's plane: no crossing
 

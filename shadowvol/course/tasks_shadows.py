@@ -1,7 +1,7 @@
 """The shadow tasks' hidden cases, their answers computed by the project's own code: the 2D
 exercise (`shadowvol.course.shadow2d`), the rasterizer's silhouettes by the multiplicity rule
-(`shadowvol.raster.topology`, `shadowvol.raster.silhouettes`), counting along an eye ray
-(`shadowvol.course.counting`) and the planar shadow matrix (`shadowvol.raster.planar`).
+(`shadowvol.raster.volumes.topology`, `shadowvol.raster.volumes.silhouettes`), counting along an eye ray
+(`shadowvol.course.counting`) and the planar shadow matrix (`shadowvol.raster.planar.matrix`).
 
 Every case list is built from fixed numbers and a seeded generator, the same on every run.
 """
@@ -23,9 +23,9 @@ from shadowvol.course.task import (
     show_value,
     vec,
 )
-from shadowvol.raster.planar import projection_matrix
-from shadowvol.raster.silhouettes import edge_multiplicity, triangle_signs
-from shadowvol.raster.topology import Topology
+from shadowvol.raster.planar.matrix import projection_matrix
+from shadowvol.raster.volumes.silhouettes import edge_multiplicity, triangle_signs
+from shadowvol.raster.volumes.topology import Topology
 
 
 def _floats(v) -> list:

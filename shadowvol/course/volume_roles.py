@@ -1,5 +1,5 @@
 """The shadow-volume polygons of a caster by role, computed on the CPU exactly as the stencil pass
-builds them (`raster.silhouettes`), projected and drawn over a frame for the course.
+builds them (`raster.volumes.silhouettes`), projected and drawn over a frame for the course.
 
 Roles, for one light: silhouette edges (multiplicity m != 0), side quads (each silhouette edge
 extruded to infinity, |m| copies), near caps (every triangle, facing the light: surfaces are
@@ -17,13 +17,13 @@ from PIL import Image, ImageDraw
 
 from shadowvol.course import slides
 from shadowvol.primitives import Transform, box
-from shadowvol.raster.silhouettes import (
+from shadowvol.raster.volumes.silhouettes import (
     edge_multiplicity,
     extrude,
     side_quads,
     topology_signs,
 )
-from shadowvol.raster.topology import Topology
+from shadowvol.raster.volumes.topology import Topology
 from shadowvol.scene import Camera, Material, PointLight, Scene
 
 

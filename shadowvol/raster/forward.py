@@ -8,7 +8,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.raster import stencil
-from shadowvol.raster.gl import RawGL
+from shadowvol.raster.platform.gl import RawGL
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.passes import NO_CONE, ScenePrograms
 from shadowvol.raster.projection import NEARER, in_frame

@@ -39,7 +39,7 @@ from shadowvol.errors import RenderError
 from shadowvol.raster import guard
 from shadowvol.raster.projection import to_frame
 from shadowvol.raster.textures import SceneTextures, texture_index
-from shadowvol.raster.topology import Topology
+from shadowvol.raster.volumes.topology import Topology
 from shadowvol.scene import Scene, SceneError
 
 MAX_TRIANGLES = 2 ** 24  # the G-buffer's surface key is a float32 integer (target.py)

@@ -12,7 +12,7 @@ import numpy as np
 
 from shadowvol.pictures import ROLE_COLOURS
 from shadowvol.raster import stencil
-from shadowvol.raster.gl import RawGL
+from shadowvol.raster.platform.gl import RawGL
 from shadowvol.raster.passes import set_uniform
 from shadowvol.raster.projection import NEARER, NEARER_OR_EQUAL
 

@@ -34,7 +34,7 @@ import numpy as np
 
 from shadowvol.raster import glsl, stencil
 from shadowvol.raster.geometry import SceneGeometry
-from shadowvol.raster.gl import GL_AND_INVERTED, GL_OR, RawGL
+from shadowvol.raster.platform.gl import GL_AND_INVERTED, GL_OR, RawGL
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.projection import (
     FAR_DEPTH,

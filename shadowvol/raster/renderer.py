@@ -10,9 +10,9 @@ Limit: the stencil is 8 bits and counts wrap (INCR_WRAP / DECR_WRAP).  Every tri
 a pixel behind k closed meshes counts 2k; 256 layers over one pixel would read 0, i.e. lit.  That
 needs about 128 closed objects (or 256 open sheets) lined up between one point and one light.
 It is detected (`overflow`): when conservative bounds (the scene's, then the light's:
-`overflow.light_bound`) say a count could reach 256, one more saturating volume pass for that
+`detect.light_bound`) say a count could reach 256, one more saturating volume pass for that
 light finds the pixels that may have wrapped, and render() raises
-overflow.StencilOverflowError instead of returning a wrong shadow.
+detect.StencilOverflowError instead of returning a wrong shadow.
 """
 
 from __future__ import annotations
@@ -24,28 +24,30 @@ import numpy as np
 
 from shadowvol.cameras import calibration
 from shadowvol.frame import LAYERS, check_light_kinds, check_outputs
-from shadowvol.raster import bits, layers, methods, overflow, overlay, passes, truth
+from shadowvol.raster import bits, layers, methods, overlay, passes
+from shadowvol.raster.overflow import detect
+from shadowvol.raster.truth import truth_pass
 from shadowvol.raster import stencil as stencil_gl
-from shadowvol.raster.context import (
+from shadowvol.raster.platform.context import (
     clear_errors,
     create_context,
     errors_cleared_on_failure,
     make_current,
 )
 from shadowvol.raster.geometry import SceneGeometry
-from shadowvol.raster.gl import RawGL
+from shadowvol.raster.platform.gl import RawGL
 from shadowvol.raster.object_facts import ObjectFacts
-from shadowvol.raster.overflow_policy import LightBounds
+from shadowvol.raster.overflow.policy import LightBounds
 from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.projection import frame_view_projection
 from shadowvol.raster.recycle import ArrayPool
 from shadowvol.raster.result import (DEFAULT_OUTPUTS, OUTPUTS, SILHOUETTES, RenderResult,
                                      check_lights)
 from shadowvol.raster.target import LIGHTS_PER_PAGE, Target, check_frame_size
-from shadowvol.raster.truth_frame import frame_truth
-from shadowvol.raster.volumes import VolumeBuilder
-from shadowvol.raster.volumes_cpu import CpuVolumes
-from shadowvol.raster.volumes_gpu import GpuVolumes
+from shadowvol.raster.truth.assemble import frame_truth
+from shadowvol.raster.volumes.builder import VolumeBuilder
+from shadowvol.raster.volumes.cpu import CpuVolumes
+from shadowvol.raster.volumes.gpu import GpuVolumes
 from shadowvol.scene import Camera, Light, Scene, hard_lights
 
 class Renderer:
@@ -55,7 +57,7 @@ class Renderer:
     context too if the renderer created it.
     """
 
-    # stencil-overflow bounds (`overflow.light_bound`, 0.1-0.6 s each) computed in one frame
+    # stencil-overflow bounds (`detect.light_bound`, 0.1-0.6 s each) computed in one frame
     BOUNDS_PER_FRAME = 1
 
     def __init__(self, scene: Scene, ctx: moderngl.Context | None = None):
@@ -64,7 +66,7 @@ class Renderer:
         self.ctx = create_context() if ctx is None else ctx
         self._owned = []
         self._volumes: dict[str, VolumeBuilder] = {}
-        self._truth: truth.TruthPass | None = None
+        self._truth: truth_pass.TruthPass | None = None
         self._bounds = LightBounds()   # the overflow check's kept light bounds
         self._srgb_code: tuple[int, int, int] | None = None   # `_srgb_background`
         # the arrays frames return (`recycle`), and the frames' own scratch (`_scratch`)
@@ -142,7 +144,7 @@ class Renderer:
         with errors_cleared_on_failure(self.ctx), stencil_gl.zero_to_one_depth(self.gl):
             result = self._render(plan, silhouettes, camera, lights, shadows)
             if to_check:
-                overflow.check_frame(self, result, silhouettes, camera, lights,
+                detect.check_frame(self, result, silhouettes, camera, lights,
                                      halve=plan.halve, only=to_check)
             if "lit" not in outputs:
                 result = replace(result, lit=None, lit_count=None)
@@ -154,9 +156,9 @@ class Renderer:
     def _lights_to_check(self, camera, lights) -> list[tuple[int, int]]:
         """(light, sample) indices of the hard lights whose stencil count might reach 256 in
         this frame: none when the scene's bound is below it, else those whose
-        `overflow.light_bound` is not (`overflow_policy`: at most `BOUNDS_PER_FRAME` bounds
+        `detect.light_bound` is not (`overflow_policy`: at most `BOUNDS_PER_FRAME` bounds
         computed in one frame, so a frame costs at most one bound more than its re-checks)."""
-        if not self.check_overflow or self.count_bound < overflow.STENCIL_LIMIT:
+        if not self.check_overflow or self.count_bound < detect.STENCIL_LIMIT:
             return []
         camera = self.scene.camera if camera is None else camera
         lights = self.scene.lights if lights is None else lights
@@ -196,9 +198,9 @@ class Renderer:
         h, w = self.scene.height, self.scene.width
         return self._scratch(k).reshape(-1).view(np.uint8)[:h * w].reshape(h, w)
 
-    def _truth_pass(self) -> truth.TruthPass:
+    def _truth_pass(self) -> truth_pass.TruthPass:
         if self._truth is None:
-            self._truth = self._own(truth.TruthPass(self.ctx, self.target))
+            self._truth = self._own(truth_pass.TruthPass(self.ctx, self.target))
         return self._truth
 
     def _render(self, plan: FramePlan, silhouettes, camera, lights, shadows) -> RenderResult:

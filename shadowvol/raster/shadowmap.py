@@ -23,7 +23,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.raster import glsl
-from shadowvol.raster.context import make_current
+from shadowvol.raster.platform.context import make_current
 from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 
 # A point or spot light's frustum may open up to this half-angle (degrees) around the visible

@@ -20,7 +20,7 @@ from typing import Iterator
 
 import numpy as np
 
-from shadowvol.raster.gl import (
+from shadowvol.raster.platform.gl import (
     BACK_STENCIL_STATE,
     FRONT_STENCIL_STATE,
     GL_ALWAYS,
@@ -309,7 +309,7 @@ def zfail_counting(gl: RawGL, depth_clamp: bool, count_mask: int = 0xFF) -> Iter
 
 @contextlib.contextmanager
 def entering_faces_counting(gl: RawGL, zfail: bool, depth_clamp: bool) -> Iterator[None]:
-    """The stencil-overflow check (`shadowvol.raster.overflow`): count, SATURATING at 255, only the
+    """The stencil-overflow check (`shadowvol.raster.overflow.detect`): count, SATURATING at 255, only the
     volume faces by which the view ray ENTERS a volume where the count pass counts them: front
     faces in front of the surface (z-pass), back faces behind it (z-fail).  The signed count is
     at most that number, so where it stays below 255 the 8-bit signed count cannot have
@@ -427,7 +427,7 @@ def depth_clamped(gl: RawGL) -> Iterator[None]:
 
 
 # ---------------------------------------------------------------------------------------------
-# Planar projected shadows (shadowvol.raster.planar_pass): mark the receiver, shadow each pixel once,
+# Planar projected shadows (shadowvol.raster.planar.draw): mark the receiver, shadow each pixel once,
 # light where not shadowed
 # ---------------------------------------------------------------------------------------------
 

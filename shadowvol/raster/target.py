@@ -40,7 +40,7 @@ import numpy as np
 
 from shadowvol.errors import RenderError
 from shadowvol.raster import stencil
-from shadowvol.raster.gl import RawGL, RawGLError
+from shadowvol.raster.platform.gl import RawGL, RawGLError
 from shadowvol.raster.projection import FAR_DEPTH
 from shadowvol.scene import SceneError
 

@@ -28,8 +28,8 @@ from PIL import Image, ImageDraw
 
 from shadowvol.course.probe import probe
 from shadowvol.errors import require
-from shadowvol.raster import window as gl_window
-from shadowvol.raster.planar_pass import PlanarShadows, ReceiverError, receiver_index
+from shadowvol.raster.platform import window as gl_window
+from shadowvol.raster.planar.draw import PlanarShadows, ReceiverError, receiver_index
 from shadowvol.raster.renderer import Renderer
 from shadowvol.view import frames
 from shadowvol.view.state import (

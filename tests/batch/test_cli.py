@@ -19,7 +19,7 @@ from builders import ROOT, job_lines, write_jobs
 from shadowvol import batch
 from shadowvol.cli import status
 from shadowvol.cli.main import main
-from shadowvol.raster.egl import devices
+from shadowvol.raster.platform.egl import devices
 
 
 def test_help_prints_the_exit_status_table(capsys):

@@ -14,7 +14,7 @@ from shadowvol.batch import egl, frames
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.runner import parse_shard, share
 from shadowvol.io import npz_bytes, tar_bytes
-from shadowvol.raster.egl import Device, devices
+from shadowvol.raster.platform.egl import Device, devices
 from shadowvol.scene import Camera, PointLight, SceneError
 
 

@@ -37,7 +37,7 @@ def test_runtime_needs_no_test_only_package():
                 shadowvol.cli.raytrace.main(argv)
             except SystemExit as e:
                 assert e.code == 0, (argv, e.code)
-        import raytrace, shadowvol, shadowvol.compare.comparison, shadowvol.raster.overflow
+        import raytrace, shadowvol, shadowvol.compare.comparison, shadowvol.raster.overflow.detect
         from shadowvol.scenefile import load_scene
         # run, not only import: the libraries import some of their dependencies lazily
         # (trimesh's convexity test needs scipy, which once broke `shadowvol render`)
@@ -46,7 +46,7 @@ def test_runtime_needs_no_test_only_package():
         lit, coverage = raytrace.shadow_masks(scene)
         raytrace.render(scene.replace(max_depth=1))
         shadowvol.compare.comparison.compare(scene)
-        assert shadowvol.raster.overflow.count_bound([]) == 0
+        assert shadowvol.raster.overflow.detect.count_bound([]) == 0
         assert frame.lit.shape == lit.shape
         print("ok")
     """)

@@ -10,7 +10,7 @@ from PIL import Image
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.io import load_masks
 from shadowvol.pictures import HEAT_PALETTE, NEGATIVE_COLOUR, caption_px, heat_map
-from shadowvol.raster.context import ContextError
+from shadowvol.raster.platform.context import ContextError
 from shadowvol.raster.overlay import ROLE_COLOURS
 from shadowvol.raster.renderer import Renderer
 

@@ -18,7 +18,7 @@ import shadowvol.raster.renderer
 from shadowvol.cli import status
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.cli.raytrace import main as raytrace_main
-from shadowvol.raster.context import ContextError
+from shadowvol.raster.platform.context import ContextError
 from shadowvol.scenefile import load_scene, save_scene
 
 pytestmark = pytest.mark.gl  # the OK cases render

@@ -350,7 +350,7 @@ def test_pyrender_leaves_a_moderngl_context_usable():
     # pyrender's own teardown eglTerminates the shared EGL display (pyrender#223) and leaves its
     # context current; the bridge must leave the caller's moderngl context current and alive,
     # render after render.
-    from shadowvol.raster.context import create_context
+    from shadowvol.raster.platform.context import create_context
     ctx = create_context()
     try:
         fbo = ctx.simple_framebuffer((4, 4))

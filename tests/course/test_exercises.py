@@ -13,7 +13,7 @@ from raytrace import exercise
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.cli.raytrace import main as raytrace_main
 from shadowvol.io import load_masks
-from shadowvol.raster.planar_pass import render_planar
+from shadowvol.raster.planar.draw import render_planar
 from shadowvol.scenefile import load_scene
 
 

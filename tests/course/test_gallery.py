@@ -22,8 +22,8 @@ from shadowvol.course import (
 )
 from shadowvol.course import gallery as demo
 from shadowvol.raster.renderer import Renderer
-from shadowvol.raster.silhouettes import edge_multiplicity, side_quads, topology_signs
-from shadowvol.raster.topology import Topology
+from shadowvol.raster.volumes.silhouettes import edge_multiplicity, side_quads, topology_signs
+from shadowvol.raster.volumes.topology import Topology
 
 pytestmark = pytest.mark.gl
 

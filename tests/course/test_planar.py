@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shadowvol.raster.planar import (
+from shadowvol.raster.planar.matrix import (
     casts_shadow,
     homogeneous_light,
     plane_equation,

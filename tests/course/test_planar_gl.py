@@ -1,4 +1,4 @@
-"""Planar projected shadows in GL (shadowvol.raster.planar_pass): right where the answer is known, and
+"""Planar projected shadows in GL (shadowvol.raster.planar.draw): right where the answer is known, and
 wrong exactly where the method is known to be wrong."""
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ import raytrace
 from raytrace.backends import make_backend
 from raytrace.camera import primary_rays
 from shadowvol.compare.maskdiff import edge_pixels
-from shadowvol.raster.planar import project_points, projection_matrix
+from shadowvol.raster.planar.matrix import project_points, projection_matrix
 from shadowvol.primitives import Transform, box, plane, sphere
 from shadowvol.raster import stencil as stencil_gl
-from shadowvol.raster.planar_pass import (
+from shadowvol.raster.planar.draw import (
     PlanarShadows,
     ReceiverError,
     receiver_index,

@@ -22,7 +22,7 @@ from builders import ROOT, SCENES, system_program
 from PIL import Image
 
 from shadowvol.io import encode_srgb
-from shadowvol.raster.planar_pass import PlanarShadows
+from shadowvol.raster.planar.draw import PlanarShadows
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import Camera, DirectionalLight
 from shadowvol.scenefile import load_scene
@@ -358,7 +358,7 @@ def test_every_mode_draws_an_area_light_scene(ctx, mode):
     """The counting views take an area light by its centre sample; the shaded view by all."""
     from dataclasses import replace
 
-    from shadowvol.raster.planar_pass import PlanarShadows
+    from shadowvol.raster.planar.draw import PlanarShadows
     from shadowvol.raster.renderer import Renderer
     from shadowvol.view.frames import frame
     from shadowvol.view.state import hard_view

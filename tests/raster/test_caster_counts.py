@@ -1,4 +1,4 @@
-"""The per-caster counts behind `casters` (shadowvol.raster.truth.CasterCounts), exactly: each
+"""The per-caster counts behind `casters` (shadowvol.raster.truth.truth_pass.CasterCounts), exactly: each
 caster's counter after the one counting pass (z-fail under the complementary depth test)
 equals that caster's own stencil count (its volumes alone through the stencil pass) at every
 pixel, negative counts too (z-pass forced where the near plane cuts a volume), the counters
@@ -14,7 +14,8 @@ from builders import SCENES, cards_scene
 from worlds import lamp_room
 
 from shadowvol.primitives import box, plane, sphere
-from shadowvol.raster import passes, truth
+from shadowvol.raster import passes
+from shadowvol.raster.truth import truth_pass
 from shadowvol.raster.renderer import Renderer
 from shadowvol.raster.stencil import zero_to_one_depth
 from shadowvol.scene import (
@@ -66,7 +67,7 @@ def test_per_caster_counts_are_each_casters_stencil_count(ctx, gl_session, name,
                                                           silhouettes):
     scene = CASES[name]
     n = len(scene.objects)
-    assert n <= truth.CASTERS_PER_GROUP
+    assert n <= truth_pass.CASTERS_PER_GROUP
     objects = list(range(n))
     with Renderer(scene, gl_session) as r:
         frame = r.render(method, silhouettes, stencil=True,
@@ -74,7 +75,7 @@ def test_per_caster_counts_are_each_casters_stencil_count(ctx, gl_session, name,
         covered = frame.coverage
         vols = r.volumes(silhouettes)
         counter = r._truth_pass().casters
-        layout = truth.counter_layout(r.object_bounds[objects])
+        layout = truth_pass.counter_layout(r.object_bounds[objects])
         whole = (0, 0, scene.width, scene.height)
         checked = negative = 0
         for i, light in enumerate(scene.lights):
@@ -108,9 +109,9 @@ def test_per_caster_counts_are_each_casters_stencil_count(ctx, gl_session, name,
 
 def test_counter_layout_packs_by_width():
     # bounds: convex (2), a soup of 300 triangles, one of 70,000
-    layout = truth.counter_layout(np.array([2, 300, 2, 70_000, 2, 2, 2]))
+    layout = truth_pass.counter_layout(np.array([2, 300, 2, 70_000, 2, 2, 2]))
     assert layout == [(0, 0, 8), (2, 0, 16), (0, 8, 8), (3, 0, 32), (0, 16, 8), (0, 24, 8),
                       (1, 0, 8)]
     # a biased field of w bits holds counts below 2^(w - 1)
-    assert truth.counter_layout(np.array([127, 128, 32_767, 32_768])) == [
+    assert truth_pass.counter_layout(np.array([127, 128, 32_767, 32_768])) == [
         (0, 0, 8), (1, 0, 16), (1, 16, 16), (2, 0, 32)]

@@ -6,8 +6,8 @@ import moderngl
 import pytest
 from builders import tiny_scene
 
-from shadowvol.raster import context
-from shadowvol.raster.gl import GL_CLIP_DEPTH_MODE, GL_DEPTH_CLAMP, GL_STENCIL_TEST, RawGL
+from shadowvol.raster.platform import context
+from shadowvol.raster.platform.gl import GL_CLIP_DEPTH_MODE, GL_DEPTH_CLAMP, GL_STENCIL_TEST, RawGL
 from shadowvol.raster.renderer import Renderer
 
 

@@ -26,7 +26,7 @@ from shadowvol.raster import methods
 from shadowvol.raster.renderer import Renderer
 from shadowvol.raster.result import OUTPUTS
 from shadowvol.raster.target import LIGHTS_PER_PAGE
-from shadowvol.raster.volumes_cpu import CpuVolumes
+from shadowvol.raster.volumes.cpu import CpuVolumes
 from shadowvol.scene import AreaLight, Camera
 
 

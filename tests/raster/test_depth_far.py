@@ -4,7 +4,7 @@ pixel's depth against the analytic depth of the ground's plane, out to thousands
 The depth buffer's float32 1/d, interpolated across a triangle whose corners lie 5e5 away, was
 off by up to 3.1e-4 relative at ~6,700 units (4e-5 in this test); the depth is now the
 pixel-centre ray met with the G-buffer triangle's plane in float64
-(`shadowvol.raster.plane_depth`), as the ray tracer does.
+(`shadowvol.raster.truth.plane_depth`), as the ray tracer does.
 """
 
 from __future__ import annotations

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from shadowvol.primitives import plane, sphere
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.renderer import Renderer
-from shadowvol.raster.volumes import runs_of
+from shadowvol.raster.volumes.builder import runs_of
 from shadowvol.scene import Camera, Material, PointLight, Scene
 
 

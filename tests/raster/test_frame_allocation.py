@@ -8,7 +8,7 @@ from builders import SCENES
 
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.raster import target as target_module
-from shadowvol.raster.gl import RawGL
+from shadowvol.raster.platform.gl import RawGL
 from shadowvol.scenefile import load_scene, save_scene
 
 

@@ -1,4 +1,4 @@
-"""The rasterizer's ground truth (`Renderer.render(outputs=...)`, shadowvol.raster.truth)
+"""The rasterizer's ground truth (`Renderer.render(outputs=...)`, shadowvol.raster.truth.truth_pass)
 against the ray tracer's (raytrace.ground_truth), pixel by pixel, on every scene file and on
 built cases.
 
@@ -35,7 +35,7 @@ from shadowvol.frame import decode_casters
 from shadowvol.io import save_png
 from shadowvol.pictures import ground_truth_picture
 from shadowvol.primitives import box, mesh, plane, sphere
-from shadowvol.raster import truth
+from shadowvol.raster.truth import truth_pass
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import (
     AreaLight,
@@ -244,14 +244,14 @@ def test_casters_count_only_objects_near_the_shadow(ctx, gl_session, monkeypatch
                   objects=[plane("floor", size=[6, 6]), sphere("ball", [0, 0.8, 0], 0.4)] + far,
                   lights=[PointLight([0.5, 4.0, 0.5])], width=64, height=48)
     counted = []
-    original = truth.passes.count_volumes
+    original = truth_pass.passes.count_volumes
 
     def spy(*args, objects=None, **kwargs):
         if objects is not None:
             counted.append(tuple(objects))
         return original(*args, objects=objects, **kwargs)
 
-    monkeypatch.setattr(truth.passes, "count_volumes", spy)
+    monkeypatch.setattr(truth_pass.passes, "count_volumes", spy)
     with Renderer(scene, gl_session) as r:
         frame = r.render(outputs=("casters",))
     assert counted == [(0, 1)]
@@ -262,10 +262,10 @@ def test_candidates_are_conservative_and_few():
     bounds = np.array([[[-1, 0, -1], [1, 1, 1]], [[5, 0, 5], [6, 1, 6]],
                        [[-1, 2, -1], [1, 3, 1]]], float)
     points = np.array([[0.0, 0.0, 0.0], [0.5, 0.0, 0.5]])
-    assert truth.caster_candidates(bounds, points, np.array([0, 5.0, 0, 1])) == [0, 2]
+    assert truth_pass.caster_candidates(bounds, points, np.array([0, 5.0, 0, 1])) == [0, 2]
     # a directional light from +x: only what lies toward +x of the points
-    assert truth.caster_candidates(bounds, points, np.array([1.0, 0.0, 0.0, 0.0])) == [0]
-    assert truth.caster_candidates(bounds, points, np.array([1.0, 0.0, 1.0, 0.0])) == [0, 1]
+    assert truth_pass.caster_candidates(bounds, points, np.array([1.0, 0.0, 0.0, 0.0])) == [0]
+    assert truth_pass.caster_candidates(bounds, points, np.array([1.0, 0.0, 1.0, 0.0])) == [0, 1]
 
 
 @settings(profile(), max_examples=25, deadline=None)
@@ -302,19 +302,19 @@ def test_casters_past_the_first_16_bits(ctx, gl_session, request):
 
 def test_more_candidates_than_one_counting_pass(ctx, gl_session, request):
     """40 boxes casting on the floor and on each other: more candidates than one counting
-    pass holds (truth.CASTERS_PER_GROUP), so two groups add their bits to the same mask."""
+    pass holds (truth_pass.CASTERS_PER_GROUP), so two groups add their bits to the same mask."""
     boxes = [box(f"b{k}", [0.55 * (k % 8) - 1.9, 0.3 + 0.25 * (k // 8), 0.5 * (k // 8) - 1.0],
                  [0.3, 0.12, 0.3]) for k in range(40)]
     scene = Scene(camera=Camera(eye=[0.0, 4.0, 4.5], target=[0.0, 0.3, 0.0], fov_y=50.0),
                   objects=[plane("floor", size=[8, 8])] + boxes,
                   lights=[PointLight([0.4, 5.0, 1.0])], **SIZE)
-    assert len(scene.objects) > truth.CASTERS_PER_GROUP
+    assert len(scene.objects) > truth_pass.CASTERS_PER_GROUP
     with Renderer(scene, gl_session) as r:
         raster = r.render(outputs=ALL)
     ref = ground_truth(scene)
     assert not compare(request, scene, raster, ref)
     seen = np.bitwise_or.reduce(raster.casters[0, ..., 0].reshape(-1))
-    assert bin(int(seen)).count("1") > truth.CASTERS_PER_GROUP
+    assert bin(int(seen)).count("1") > truth_pass.CASTERS_PER_GROUP
 
 
 def test_a_second_frame_keeps_nothing_of_the_first(ctx, gl_session):

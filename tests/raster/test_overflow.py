@@ -1,4 +1,4 @@
-"""The 8-bit stencil meets 256 layers (shadowvol.raster.overflow): a count that wraps to 0 is never
+"""The 8-bit stencil meets 256 layers (shadowvol.raster.overflow.detect): a count that wraps to 0 is never
 returned as lit; it raises StencilOverflowError (exit status 3 from the command line).
 Counts that reach 256 but do not land on a multiple of it stay right."""
 
@@ -11,7 +11,7 @@ import raytrace
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.compare.maskdiff import mask_report
 from shadowvol.primitives import box, mesh, plane
-from shadowvol.raster import overflow
+from shadowvol.raster.overflow import detect
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight, Camera, Material, PointLight, Scene
 from shadowvol.scenefile import save_scene
@@ -47,7 +47,7 @@ def test_a_count_that_wraps_to_zero_raises(ctx, layers, closed):
     assert shadow.sum() > 100  # the reference has the stack's shadow
     with Renderer(scene, ctx) as r:
         for method in ("auto", "zfail"):
-            with pytest.raises(overflow.StencilOverflowError, match="light 0") as exc:
+            with pytest.raises(detect.StencilOverflowError, match="light 0") as exc:
                 r.render(method)
             assert exc.value.light == 0
             # the flagged pixels are wrapped ones: in the stack's shadow, drawn lit
@@ -65,7 +65,7 @@ def test_never_a_wrong_shadow_behind_128_closed_slabs(ctx, method):
     with Renderer(scene, ctx) as r:
         try:
             res = r.render(method)
-        except overflow.StencilOverflowError as exc:
+        except detect.StencilOverflowError as exc:
             assert not (exc.pixels & ~(cov & ~lit[0])).any()
             return
     rows = mask_report(res.lit, res.coverage, lit, cov)
@@ -81,7 +81,7 @@ def test_counts_past_the_limit_that_do_not_wrap_to_zero_stay_right(ctx, assert_m
     scene = stack(layers)
     lit, cov = raytrace.shadow_masks(scene)
     with Renderer(scene, ctx) as r:
-        assert r.count_bound >= overflow.STENCIL_LIMIT
+        assert r.count_bound >= detect.STENCIL_LIMIT
         for method in ("auto", "zfail"):
             res = r.render(method)
             rows = mask_report(res.lit, res.coverage, lit, cov)
@@ -94,12 +94,12 @@ def test_scenes_that_cannot_overflow_take_no_extra_pass(ctx, monkeypatch):
     def must_not_run(*args, **kwargs):
         raise AssertionError("the overflow check ran")
 
-    monkeypatch.setattr(overflow, "find_wrapped", must_not_run)
+    monkeypatch.setattr(detect, "find_wrapped", must_not_run)
     scene = stack(100, closed=True)  # 100 boxes: bound 2 + 200
     with Renderer(scene, ctx) as r:
         assert r.count_bound == 202
         r.render()
-    assert overflow.object_bound(*_icosphere()) == 2
+    assert detect.object_bound(*_icosphere()) == 2
 
 
 def _icosphere():
@@ -121,25 +121,25 @@ def test_closed_convex_classification():
     """The overflow bound's convexity test (numpy, on the welded topology): 2 only for one
     closed, consistently wound, locally convex body, whichever way it is wound."""
     from shadowvol import primitives
-    from shadowvol.raster.topology import Topology
+    from shadowvol.raster.volumes.topology import Topology
 
     box = primitives.box("b", size=[1, 2, 3], transform=primitives.Transform(rotation=[10, 33, 71]))
     v, f = box.vertices, box.faces
-    assert overflow.is_closed_convex(Topology.build(v, f))
-    assert overflow.is_closed_convex(Topology.build(v, f[:, ::-1]))        # wound inward
-    assert not overflow.is_closed_convex(Topology.build(v, f[:-1]))        # open: a face missing
+    assert detect.is_closed_convex(Topology.build(v, f))
+    assert detect.is_closed_convex(Topology.build(v, f[:, ::-1]))        # wound inward
+    assert not detect.is_closed_convex(Topology.build(v, f[:-1]))        # open: a face missing
     flipped = f.copy()
     flipped[0] = flipped[0, ::-1]
-    assert not overflow.is_closed_convex(Topology.build(v, flipped))       # inconsistent winding
+    assert not detect.is_closed_convex(Topology.build(v, flipped))       # inconsistent winding
     two = np.concatenate([v, v + 10.0])
-    assert not overflow.is_closed_convex(Topology.build(two, np.concatenate([f, f + len(v)])))
+    assert not detect.is_closed_convex(Topology.build(two, np.concatenate([f, f + len(v)])))
     dented = v.copy()
     top = int(np.argmax(v[:, 1]))
     dented[top] -= 0.6 * (v[top] - v.mean(axis=0))                       # push a corner inward
-    assert not overflow.is_closed_convex(Topology.build(dented, f))
+    assert not detect.is_closed_convex(Topology.build(dented, f))
     # seam duplicates weld: an unwelded icosphere is still one convex body
     vi, fi = _icosphere()
-    assert overflow.is_closed_convex(Topology.build(vi[fi].reshape(-1, 3),
+    assert detect.is_closed_convex(Topology.build(vi[fi].reshape(-1, 3),
                                                     np.arange(3 * len(fi)).reshape(-1, 3)))
 
 
@@ -150,8 +150,8 @@ def test_the_light_bound_bounds_the_counts(ctx, layers):
     scene = stack(layers)
     with Renderer(scene, ctx) as r:
         g = r.geometry
-        slack = overflow.world_slack(scene.camera, scene.height, g.soup_corners_f64)
-        bound = overflow.light_bound(g.soup_corners_f64, g.object_of, r.convex,
+        slack = detect.world_slack(scene.camera, scene.height, g.soup_corners_f64)
+        bound = detect.light_bound(g.soup_corners_f64, g.object_of, r.convex,
                                      scene.lights[0].homogeneous, slack)
         assert bound >= layers
         if layers < 256:
@@ -159,7 +159,7 @@ def test_the_light_bound_bounds_the_counts(ctx, layers):
             assert counts.max() <= bound
         else:
             for _ in range(2):   # the first frame re-checks, the second uses the light bound
-                with pytest.raises(overflow.StencilOverflowError):
+                with pytest.raises(detect.StencilOverflowError):
                     r.render()
 
 
@@ -182,8 +182,8 @@ def test_the_light_bound_skips_the_recheck_of_shallow_stacks(ctx, monkeypatch):
     frames do not; the masks are the same either way."""
     scene = strip_stack()
     calls = []
-    original = overflow.find_wrapped
-    monkeypatch.setattr(overflow, "find_wrapped",
+    original = detect.find_wrapped
+    monkeypatch.setattr(detect, "find_wrapped",
                         lambda *a, **k: calls.append(1) or original(*a, **k))
     with Renderer(scene, ctx) as r:
         assert r.count_bound >= 256
@@ -201,8 +201,8 @@ def test_the_light_bound_of_a_directional_light(ctx):
     scene = stack(30).replace(lights=[DirectionalLight([0.05, -1.0, 0.02])])
     with Renderer(scene, ctx) as r:
         g = r.geometry
-        slack = overflow.world_slack(scene.camera, scene.height, g.soup_corners_f64)
-        bound = overflow.light_bound(g.soup_corners_f64, g.object_of, r.convex,
+        slack = detect.world_slack(scene.camera, scene.height, g.soup_corners_f64)
+        bound = detect.light_bound(g.soup_corners_f64, g.object_of, r.convex,
                                      scene.lights[0].homogeneous, slack)
         counts = r.render("zfail", stencil=True).stencil
     assert 30 <= bound < 256 and 0 <= counts.min() and counts.max() <= bound
@@ -226,8 +226,8 @@ def test_the_light_bound_bounds_random_counts(ctx, seed):
                   objects=objects, lights=[PointLight(light)], **SIZE)
     with Renderer(scene, ctx) as r:
         g = r.geometry
-        slack = overflow.world_slack(scene.camera, scene.height, g.soup_corners_f64)
-        bound = overflow.light_bound(g.soup_corners_f64, g.object_of, r.convex,
+        slack = detect.world_slack(scene.camera, scene.height, g.soup_corners_f64)
+        bound = detect.light_bound(g.soup_corners_f64, g.object_of, r.convex,
                                      scene.lights[0].homogeneous, slack)
         counts = r.render("zfail", stencil=True).stencil
     assert counts.min() >= 0 and counts.max() <= bound < 256
@@ -245,8 +245,8 @@ def test_an_area_lights_samples_keep_their_light_bounds(ctx, monkeypatch):
     frames re-check 4, 3, 2, 1, then none; the counts are the same every time."""
     scene = strip_stack().replace(lights=[_area()])
     calls = []
-    original = overflow.find_wrapped
-    monkeypatch.setattr(overflow, "find_wrapped",
+    original = detect.find_wrapped
+    monkeypatch.setattr(detect, "find_wrapped",
                         lambda *a, **k: calls.append(1) or original(*a, **k))
     rechecked = []
     with Renderer(scene, ctx) as r:
@@ -269,7 +269,7 @@ def test_a_moving_light_leaves_at_most_max_lights_bounds_behind(ctx, monkeypatch
     """A jittered light is a new light in every frame: the bounds kept for lights are capped
     (`LightBounds.MAX_LIGHTS`, least recently used dropped, never one of this frame), where a
     10,000-frame jittered batch kept one entry a frame; a light that comes back stays kept."""
-    from shadowvol.raster.overflow_policy import LightBounds
+    from shadowvol.raster.overflow.policy import LightBounds
 
     monkeypatch.setattr(LightBounds, "MAX_LIGHTS", 8, raising=False)
     scene = strip_stack()
@@ -295,7 +295,7 @@ def test_an_area_light_over_256_sheets_raises_in_every_frame(ctx):
     scene = stack(256).replace(lights=[_area()])
     with Renderer(scene, ctx) as r:
         for _ in range(1 + 4 * r.BOUNDS_PER_FRAME):
-            with pytest.raises(overflow.StencilOverflowError, match="light 0"):
+            with pytest.raises(detect.StencilOverflowError, match="light 0"):
                 r.render()
         assert len(r._light_bounds) == 4
         assert all(kept is not None and kept[1] >= 256 for kept in r._light_bounds.values())
@@ -316,10 +316,10 @@ def test_the_slack_of_an_object_covers_each_of_its_triangles(seed):
     for eye in [*rng.uniform(-6, 6, (20, 3)), objects[0].vertices.mean(axis=0), [1e4, 0, 0]]:
         camera = Camera(eye=eye, target=np.asarray(eye) + [0.0, 0.0, -1.0],
                         fov_y=float(rng.uniform(20, 90)))
-        exact = overflow.world_slack(camera, 240, corners)
-        coarse = overflow.object_slack(camera, 240, bounds, largest)
+        exact = detect.world_slack(camera, 240, corners)
+        coarse = detect.object_slack(camera, 240, bounds, largest)
         assert (coarse[object_of] >= exact).all()
-        np.testing.assert_array_equal(exact, overflow.world_slack(camera, 240, corners, largest))
+        np.testing.assert_array_equal(exact, detect.world_slack(camera, 240, corners, largest))
 
 
 def test_an_orbiting_camera_keeps_the_light_bound_without_a_pass_over_every_corner(
@@ -330,10 +330,10 @@ def test_an_orbiting_camera_keeps_the_light_bound_without_a_pass_over_every_corn
     the per-triangle slack again."""
     scene = strip_stack()
     passes_over_corners, rechecks = [], []
-    slack, find = overflow.world_slack, overflow.find_wrapped
-    monkeypatch.setattr(overflow, "world_slack",
+    slack, find = detect.world_slack, detect.find_wrapped
+    monkeypatch.setattr(detect, "world_slack",
                         lambda *a, **k: passes_over_corners.append(1) or slack(*a, **k))
-    monkeypatch.setattr(overflow, "find_wrapped",
+    monkeypatch.setattr(detect, "find_wrapped",
                         lambda *a, **k: rechecks.append(1) or find(*a, **k))
     cameras = [Camera(eye=[3.0 * np.sin(a), 2.0, 3.0 * np.cos(a)], target=[0, 1.2, 0],
                       fov_y=50) for a in np.linspace(0, 2 * np.pi, 8, endpoint=False)]

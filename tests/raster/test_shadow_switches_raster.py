@@ -115,7 +115,7 @@ def test_objects_that_cast_nothing_count_nothing(ctx, monkeypatch, assert_masks_
     """256 stacked sheets (one mesh) over a floor would wrap the stencil; switched off they
     add nothing to the counts' bound (`Renderer.count_bound`), so the overflow check never
     runs, and the floor under them is lit as the ray tracer says, by both methods."""
-    from shadowvol.raster import overflow
+    from shadowvol.raster.overflow import detect
 
     def must_not_run(*args, **kwargs):
         raise AssertionError("the overflow check ran")
@@ -131,7 +131,7 @@ def test_objects_that_cast_nothing_count_nothing(ctx, monkeypatch, assert_masks_
     scene = switched(scene, cast=[1])
     ref = ground_truth(scene, ("object_id",))
     assert (ref.lit[0] & (ref.object_id == 1)).sum() > 100   # the floor under them is lit
-    monkeypatch.setattr(overflow, "find_wrapped", must_not_run)
+    monkeypatch.setattr(detect, "find_wrapped", must_not_run)
     with Renderer(scene, ctx) as r:
         assert r.count_bound == 2
         for method in ("auto", "zfail"):

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shadowvol.raster.silhouettes import topology_signs, triangle_signs
-from shadowvol.raster.topology import Topology
+from shadowvol.raster.volumes.silhouettes import topology_signs, triangle_signs
+from shadowvol.raster.volumes.topology import Topology
 
 
 @pytest.mark.parametrize("seed", range(5))

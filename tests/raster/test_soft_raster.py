@@ -122,7 +122,7 @@ def test_a_sample_whose_count_wraps_raises(ctx):
     256, which the 8-bit stencil reads as 0; the overflow check runs per sample and raises
     instead of calling those pixels lit."""
     from shadowvol.primitives import mesh, plane
-    from shadowvol.raster import overflow
+    from shadowvol.raster.overflow import detect
     from shadowvol.scene import Camera, Scene
 
     z = np.linspace(1.0, 2.0, 256)
@@ -137,7 +137,7 @@ def test_a_sample_whose_count_wraps_raises(ctx):
     ref = raytrace.soft_masks(scene)
     assert ref.umbra.sum() > 100
     with Renderer(scene, ctx) as r:
-        with pytest.raises(overflow.StencilOverflowError, match="light 0"):
+        with pytest.raises(detect.StencilOverflowError, match="light 0"):
             r.render()
         r.check_overflow = False
         wrapped = r.render()

@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 
 from shadowvol.primitives import box, sphere
-from shadowvol.raster.silhouettes import (
+from shadowvol.raster.volumes.silhouettes import (
     edge_multiplicity,
     extrude,
     side_quads,
     triangle_signs,
 )
-from shadowvol.raster.topology import Topology
-from shadowvol.raster.volumes import MAX_OPPOSITE
-from shadowvol.raster.volumes_gpu import edge_records
+from shadowvol.raster.volumes.topology import Topology
+from shadowvol.raster.volumes.builder import MAX_OPPOSITE
+from shadowvol.raster.volumes.gpu import edge_records
 from shadowvol.scene import DirectionalLight, PointLight
 
 

@@ -11,14 +11,14 @@ import numpy as np
 from shadowvol.raster import glsl, guard
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.projection import in_frame, in_frame32
-from shadowvol.raster.silhouettes import (
+from shadowvol.raster.volumes.silhouettes import (
     edge_multiplicity,
     extrude_rows,
     quads_to_triangles,
     side_quads,
     topology_signs,
 )
-from shadowvol.raster.volumes import FRONT_FACE, far_cap_pieces, runs, runs_of, set_light
+from shadowvol.raster.volumes.builder import FRONT_FACE, far_cap_pieces, runs, runs_of, set_light
 
 
 class _LightVolumes:

@@ -35,10 +35,10 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from shadowvol.raster.planar import plane_equation, projection_matrix
+from shadowvol.raster.planar.matrix import plane_equation, projection_matrix
 from shadowvol.raster import forward, glsl, passes
 from shadowvol.raster import stencil as stencil_gl
-from shadowvol.raster.context import make_current
+from shadowvol.raster.platform.context import make_current
 from shadowvol.raster.projection import (
     NEARER,
     NEARER_OR_EQUAL,

@@ -9,9 +9,10 @@ from __future__ import annotations
 import numpy as np
 
 from shadowvol import frame
-from shadowvol.raster import methods, truth
+from shadowvol.raster import methods
+from shadowvol.raster.truth import truth_pass
 from shadowvol.raster.plan import FramePlan
-from shadowvol.raster.plane_depth import plane_depths
+from shadowvol.raster.truth.plane_depth import plane_depths
 from shadowvol.scene import Camera
 
 
@@ -29,21 +30,21 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_p
     h, w = renderer.scene.height, renderer.scene.width
     # the depth buffer is cleared every frame: it says where geometry is (the G-buffer and
     # the facing pass's targets are written only there)
-    stored = truth.read_depth(target)
+    stored = truth_pass.read_depth(target)
     covered = stored > 0
     if want & {"depth", "distance", "normal", "object_id"}:
-        triangle, front, _ = truth.read_surface(target, covered)
+        triangle, front, _ = truth_pass.read_surface(target, covered)
         triangle = geometry.triangle_of_key(triangle)   # a piece's key: its triangle
     if want & {"depth", "distance"}:
         # exact: the pixel's ray met with its triangle's plane (`plane_depth`), the depth
         # buffer's near / d only where that plane gives none
-        depth = plane_depths(geometry, camera, triangle, truth.eye_depth(stored, camera))
+        depth = plane_depths(geometry, camera, triangle, truth_pass.eye_depth(stored, camera))
         if "depth" in want:
             out["depth"] = depth
         if "distance" in want:
-            out["distance"] = (depth * truth.ray_lengths(camera, w, h)).astype(np.float32)
+            out["distance"] = (depth * truth_pass.ray_lengths(camera, w, h)).astype(np.float32)
     if want & {"normal", "object_id"}:
-        out |= truth.surface_outputs(geometry, triangle, front, want)
+        out |= truth_pass.surface_outputs(geometry, triangle, front, want)
     if "facing" in want:
         samples = np.array([sum(1 for i, _ in hard if i == k) for k in range(len(lights))],
                            np.int64)
@@ -54,7 +55,7 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_p
                    if "casters" in want else None)
         receiving = covered   # casters are named where the visible object receives shadows
         if casters is not None and not geometry.receives.all():
-            seen = np.maximum(geometry.triangle_of_key(truth.read_surface(target, covered)[0]), 0)
+            seen = np.maximum(geometry.triangle_of_key(truth_pass.read_surface(target, covered)[0]), 0)
             receiving = covered & geometry.receives[geometry.triangle_objects[seen]]
         for k, (i, light) in enumerate(hard):
             lit, facing = _sample_bits(truth_pages, k, covered)
@@ -81,10 +82,10 @@ def _sample_casters(renderer, plan: FramePlan, camera: Camera, stored: np.ndarra
     light4 = light.homogeneous
     choice = methods.choose(plan.method, geometry.bounds, camera, renderer.scene.size,
                             light4, geometry.extent)
-    candidates = [j for j in truth.caster_candidates(
-        geometry.bounds, truth.cast_points(camera, stored, cast), light4) if geometry.casts[j]]
+    candidates = [j for j in truth_pass.caster_candidates(
+        geometry.bounds, truth_pass.cast_points(camera, stored, cast), light4) if geometry.casts[j]]
     vols.prepare(light4)
-    bits = truth.count_casters(renderer.target, renderer._truth_pass().casters, vols, choice,
+    bits = truth_pass.count_casters(renderer.target, renderer._truth_pass().casters, vols, choice,
                                candidates, renderer.object_bounds, facing, halve=plan.halve,
                                clip_planes=clip)
     np.bitwise_or(into, bits, out=into)
@@ -93,7 +94,7 @@ def _sample_casters(renderer, plan: FramePlan, camera: Camera, stored: np.ndarra
 def _sample_bits(truth_pages, k: int, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """lit, facing (H, W) bool of the frame's hard light k from the facing pass's bits,
     covered pixels only."""
-    page, bit = divmod(k, truth.LIGHTS_PER_PASS)
+    page, bit = divmod(k, truth_pass.LIGHTS_PER_PASS)
     lit_bits, facing_bits = truth_pages[page]
     lit = (lit_bits & np.uint32(1 << bit)) != 0
     facing = (facing_bits & np.uint32(1 << bit)) != 0

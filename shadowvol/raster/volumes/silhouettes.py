@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shadowvol.raster.topology import Topology
+from shadowvol.raster.volumes.topology import Topology
 
 
 def triangle_signs(vertices: np.ndarray, faces: np.ndarray, light4: np.ndarray) -> np.ndarray:

@@ -1,7 +1,7 @@
 """The EGL devices of this machine, by libEGL's device queries (ctypes, no context made).
 
 glcontext's EGL backend takes a `device_index` into eglQueryDevicesEXT's list
-(`shadowvol.raster.context.create_context(device=)`), and the NVIDIA driver's
+(`shadowvol.raster.platform.context.create_context(device=)`), and the NVIDIA driver's
 EGL_NV_device_cuda extension tells which CUDA device an EGL device is; `shadowvol.batch.egl`
 chooses among them.  No GL is loaded here.
 """

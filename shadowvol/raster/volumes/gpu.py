@@ -11,8 +11,8 @@ import numpy as np
 from shadowvol.raster import glsl
 from shadowvol.raster.geometry import SceneGeometry
 from shadowvol.raster.projection import to_frame
-from shadowvol.raster.silhouettes import topology_signs
-from shadowvol.raster.volumes import (
+from shadowvol.raster.volumes.silhouettes import topology_signs
+from shadowvol.raster.volumes.builder import (
     FRONT_FACE,
     MAX_OPPOSITE,
     far_cap_pieces,

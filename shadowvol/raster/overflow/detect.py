@@ -34,7 +34,7 @@ from shadowvol.cameras import pinhole
 from shadowvol.errors import RenderError
 from shadowvol.raster import methods, stencil
 from shadowvol.raster.passes import count_volumes
-from shadowvol.raster.topology import Topology
+from shadowvol.raster.volumes.topology import Topology
 from shadowvol.scene import hard_lights
 
 STENCIL_LIMIT = 256  # counts are taken modulo this

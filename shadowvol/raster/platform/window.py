@@ -18,7 +18,7 @@ import moderngl
 import numpy as np
 
 from shadowvol.raster import glsl
-from shadowvol.raster.context import REQUIRED_GL_VERSION, ContextError
+from shadowvol.raster.platform.context import REQUIRED_GL_VERSION, ContextError
 
 
 class _EglLoader:

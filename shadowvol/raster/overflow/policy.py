@@ -1,7 +1,7 @@
 """Which hard lights a frame re-checks for stencil overflow (`overflow`), and the light bounds
 kept to spare the others.
 
-A light's bound (`overflow.light_bound`) costs more than one re-check, so it is computed the
+A light's bound (`detect.light_bound`) costs more than one re-check, so it is computed the
 second time the light is used, with twice the slack the camera needs, and kept while later
 cameras need no more slack.  An area light's samples are lights of their own here: a sample's
 position never changes, so its bound is kept like a point light's.  At most `per_frame` bounds
@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from shadowvol.raster import overflow
+from shadowvol.raster.overflow import detect
 from shadowvol.scene import Camera, hard_lights
 
 
@@ -29,7 +29,7 @@ class LightBounds:
 
     def __init__(self):
         self.kept: dict[bytes, tuple | None] = {}
-        self._slack: tuple | None = None   # (camera key, `overflow.world_slack`)
+        self._slack: tuple | None = None   # (camera key, `detect.world_slack`)
         self._largest: float | None = None  # max |world corner|: the float32 part of the slack
 
     def to_check(self, geometry, height: int, convex: Callable[[], np.ndarray],
@@ -42,12 +42,12 @@ class LightBounds:
             self._largest = float(np.abs(corners).max())
         # the slack this camera needs: per object from the boxes (8 points each), and per
         # triangle (a pass over every corner) only where that does not settle it
-        by_object = overflow.object_slack(camera, height, geometry.bounds, self._largest)
+        by_object = detect.object_slack(camera, height, geometry.bounds, self._largest)
 
         def needed() -> np.ndarray:
-            key = (camera.eye.tobytes(), overflow.pixel_slack(camera, height))
+            key = (camera.eye.tobytes(), detect.pixel_slack(camera, height))
             if self._slack is None or self._slack[0] != key:   # once per camera
-                self._slack = (key, overflow.world_slack(camera, height, corners,
+                self._slack = (key, detect.world_slack(camera, height, corners,
                                                          self._largest))
             return self._slack[1]
 
@@ -75,11 +75,11 @@ class LightBounds:
                         doubled = 2.0 * needed()
                         least = np.full(len(geometry.ranges), np.inf)
                         np.minimum.at(least, geometry.object_of, doubled)
-                    kept = (doubled, overflow.light_bound(corners, geometry.object_of,
+                    kept = (doubled, detect.light_bound(corners, geometry.object_of,
                                                           convex(), hard.homogeneous,
                                                           doubled), least)
                     self.kept[key] = kept
-                if kept[1] >= overflow.STENCIL_LIMIT:
+                if kept[1] >= detect.STENCIL_LIMIT:
                     out.append((i, k))
         if len(self.kept) > max(self.MAX_LIGHTS, used):
             for key in list(self.kept)[:len(self.kept) - max(self.MAX_LIGHTS, used)]:
