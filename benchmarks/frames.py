@@ -95,7 +95,7 @@ def _phase_clock(renderer: Renderer, sink: dict):
 
     wrap(passes, "geometry_pass", "geometry pass")
     wrap(passes, "mask_pass", "geometry pass")          # a mask-only frame's geometry pass
-    wrap(passes, "count_volumes", "volume pass")
+    wrap(passes, "count_signed", "volume pass")
     wrap(passes, "mark_unshadowed", "mark unshadowed")
     wrap(passes, "clear_shadowed", "mark unshadowed")   # a mask-only frame's per-light bits
     wrap(passes, "clear_shadowed_in_stencil", "mark unshadowed")   # ... kept in the stencil

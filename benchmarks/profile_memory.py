@@ -137,7 +137,7 @@ def main(argv=None) -> int:
         steps.print()
         return 0
 
-    from shadowvol.raster import geometry, passes, renderer, target
+    from shadowvol.raster import geometry, passes, programs, renderer, target
     from shadowvol.raster.overflow import detect
     from shadowvol.raster.platform import context
     from shadowvol.raster.volumes import cpu, silhouettes, topology
@@ -149,7 +149,7 @@ def main(argv=None) -> int:
     steps.wrap(geometry.SceneGeometry, "_soup_buffer", "soup buffer upload")
     steps.wrap(geometry.SceneGeometry, "_frame_corners", "frame corners (float32, kept)")
     steps.wrap(target.Target, "__init__", "Target (G-buffer)")
-    steps.wrap(passes.ScenePrograms, "__init__", "ScenePrograms")
+    steps.wrap(programs.ScenePrograms, "__init__", "ScenePrograms")
     steps.wrap(cpu.CpuVolumes, "__init__", "CpuVolumes")
     steps.wrap(cpu.CpuVolumes, "_build", "silhouettes + side quads + upload")
     for name in ("topology_signs", "edge_multiplicity", "side_quads", "quads_to_triangles"):
@@ -159,7 +159,7 @@ def main(argv=None) -> int:
     steps.wrap(detect, "count_bound", "overflow bound (count_bound)")
     steps.wrap(geometry.SceneGeometry, "move_to")
     steps.wrap(geometry.SceneGeometry, "set_view")
-    for name in ("geometry_pass", "count_volumes", "mark_unshadowed", "shade"):
+    for name in ("geometry_pass", "count_signed", "mark_unshadowed", "shade"):
         steps.wrap(passes, name)
     for name in ("read_bits", "read_image"):
         steps.wrap(target.Target, name)

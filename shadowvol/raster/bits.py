@@ -39,11 +39,12 @@ def coverage(in_stencil: np.ndarray | None, pages: list[np.ndarray], masked: np.
 def lit_from_stencil(in_stencil: np.ndarray, hard, lit: np.ndarray, lit_count: np.ndarray,
                      byte: np.ndarray) -> None:
     """`lit`, `lit_count` (L, H, W) of a mask-only frame whose bits stayed in the stencil
-    (`in_stencil` (H, W) uint8; `hard`: the (light, hard light) pairs, hard lights only;
+    (`in_stencil` (H, W) uint8; `hard`: the frame's `pipeline.HardLight`s, hard lights only;
     `byte`: (H, W) uint8 scratch).  The lights before the last were cleared where counted;
     the last one's count is still in the low bits (0 without shadows: nothing counted)."""
     count_mask, light_bits = stencil.mask_layout(len(hard))
-    for k, ((i, _), bit) in enumerate(zip(hard, light_bits)):   # i == k: hard lights
+    for k, (h, bit) in enumerate(zip(hard, light_bits)):   # h.index == k: hard lights
+        i = h.index
         last = k == len(light_bits) - 1
         np.bitwise_and(in_stencil, bit | (count_mask if last else 0), out=byte)
         np.equal(byte, bit, out=lit[i])
@@ -53,16 +54,16 @@ def lit_from_stencil(in_stencil: np.ndarray, hard, lit: np.ndarray, lit_count: n
 def lit_from_pages(pages: list[np.ndarray], hard, samples: np.ndarray, lit: np.ndarray,
                    lit_count: np.ndarray, masked: np.ndarray) -> None:
     """`lit`, `lit_count` (L, H, W) from the pages' bits (LIGHTS_PER_PAGE hard lights each;
-    `hard`: the (light, hard light) pairs; `samples` (L,) int64: N per light; `masked`:
+    `hard`: the frame's `pipeline.HardLight`s; `samples` (L,) int64: N per light; `masked`:
     uint32 scratch).  An area light's counts add up over its pages."""
     soft = samples > 1
     lit_count[soft] = 0
     # each light's samples in a page are neighbouring bits: one count of the set bits
     # per light and page, not one pass per sample
     masks: dict[tuple[int, int], int] = {}
-    for k, (i, _) in enumerate(hard):
+    for k, h in enumerate(hard):
         page, bit = divmod(k, LIGHTS_PER_PAGE)
-        masks[i, page] = masks.get((i, page), 0) | 1 << (bit + 1)
+        masks[h.index, page] = masks.get((h.index, page), 0) | 1 << (bit + 1)
     for (i, page), mask in masks.items():
         np.bitwise_and(pages[page], np.uint32(mask), out=masked)
         if samples[i] == 1:   # a hard light: its one bit is lit, its count lit too

@@ -10,7 +10,8 @@ import numpy as np
 from shadowvol.raster import stencil
 from shadowvol.raster.platform.gl import RawGL
 from shadowvol.raster.glsl import set_uniform
-from shadowvol.raster.passes import NO_CONE, ScenePrograms
+from shadowvol.raster.passes import NO_CONE
+from shadowvol.raster.programs import ScenePrograms
 from shadowvol.raster.projection import NEARER, in_frame
 from shadowvol.raster.target import Target
 from shadowvol.scene import AreaSample, Light, Scene, SpotLight

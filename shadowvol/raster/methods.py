@@ -17,9 +17,10 @@ import numpy as np
 
 from shadowvol.cameras import look_at_basis
 from shadowvol.raster.projection import cross3, near_rectangle
+from shadowvol.raster.volumes.cpu import CpuVolumes
+from shadowvol.raster.volumes.gpu import GpuVolumes
 from shadowvol.scene import Camera
 
-METHODS = ("auto", "zpass", "zfail")
 # A box counts as outside a plane of the near-clip volume only if all its corners are farther
 # than this fraction of the scene's extent: rounding must never make the test unsafe.
 NEAR_CLIP_MARGIN = 1e-6
@@ -92,16 +93,38 @@ def needs_zfail(bounds: np.ndarray, camera: Camera, size: tuple[float, float], l
     return ~(outside_a_hull_plane | below | above)
 
 
+def _none(bounds: np.ndarray, *_) -> np.ndarray:
+    return np.zeros(len(bounds), bool)
+
+
+def _every(bounds: np.ndarray, *_) -> np.ndarray:
+    return np.ones(len(bounds), bool)
+
+
+# The choices a frame is drawn with, each name mapped to what it means (the one table: the
+# renderer checks its arguments against it and draws with what it names).
+# method -> which casters count with z-fail: f(bounds, camera, size, light4, extent) (n,) bool
+METHOD_CHOICES = {"auto": needs_zfail, "zpass": _none, "zfail": _every}
+# silhouettes -> the volume builder (`volumes.builder.VolumeBuilder`) that finds them
+SILHOUETTE_CHOICES = {"cpu": CpuVolumes, "gpu": GpuVolumes}
+METHODS = tuple(METHOD_CHOICES)
+SILHOUETTES = tuple(SILHOUETTE_CHOICES)
+
+
+def check_choices(method: str, silhouettes: str) -> None:
+    """ValueError unless `method` and `silhouettes` are names of the tables above."""
+    if method not in METHOD_CHOICES:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if silhouettes not in SILHOUETTE_CHOICES:
+        raise ValueError(f"silhouettes must be 'cpu' or 'gpu', got {silhouettes!r}")
+
+
 def choose(method: str, bounds: np.ndarray, camera: Camera, size: tuple[float, float],
            light4: np.ndarray, extent: float) -> np.ndarray:
     """(n,) bool: which casters use z-fail under `method` ("auto", "zpass" or "zfail")."""
-    if method == "zpass":
-        return np.zeros(len(bounds), bool)
-    if method == "zfail":
-        return np.ones(len(bounds), bool)
-    if method == "auto":
-        return needs_zfail(bounds, camera, size, light4, extent)
-    raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if method not in METHOD_CHOICES:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    return METHOD_CHOICES[method](bounds, camera, size, light4, extent)
 
 
 def zpass_clip_planes(bounds: np.ndarray, camera: Camera, size: tuple[float, float],

@@ -12,18 +12,18 @@ import numpy as np
 
 from shadowvol.pictures import ROLE_COLOURS
 from shadowvol.raster import stencil
-from shadowvol.raster.platform.gl import RawGL
 from shadowvol.raster.passes import set_uniform
 from shadowvol.raster.projection import NEARER, NEARER_OR_EQUAL
+from shadowvol.scene import hard_lights
 
 FILL_ALPHA = 0.22
 LINE_ALPHA = 0.85
 
 
-def draw_volume_overlay(ctx: moderngl.Context, gl: RawGL, target, volumes,
-                        zfail: np.ndarray) -> None:
-    """Draw the volume polygons of the light `volumes` is prepared for over `target`'s
+def draw_volume_overlay(pipe, zfail: np.ndarray) -> None:
+    """Draw the volume polygons of the light `pipe.volumes` is prepared for over the target's
     colour, leaving its alpha (coverage) and the lit attachment alone."""
+    ctx, gl, target, volumes = pipe.ctx, pipe.gl, pipe.target, pipe.volumes
     target.fbo.depth_mask = False
     target.fbo.color_mask = [(True, True, True, False), (False,) * 4]
     target.fbo.use()
@@ -48,3 +48,13 @@ def draw_volume_overlay(ctx: moderngl.Context, gl: RawGL, target, volumes,
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
     target.use()
+
+
+def draw_volume_overlays(pipe, lights, zfail: np.ndarray) -> None:
+    """`draw_volume_overlay` for every hard light of `lights` (an area light: every sample)
+    that casts shadows; zfail (L, n_objects) bool, the frame's method per light."""
+    for i, light in enumerate(lights):
+        for hard in hard_lights(light):
+            if hard.shadows:
+                pipe.volumes.prepare(hard.homogeneous)
+                draw_volume_overlay(pipe, zfail[i])

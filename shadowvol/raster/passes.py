@@ -2,9 +2,10 @@
 
 1. `geometry_pass`: one draw of every triangle (the soup): depth (test NEARER, writes on) and
    the G-buffer (world position, triangle).
-2. per light (an area light: per sample, as a point light): `count_volumes` — the stencil cleared, then the shadow volumes drawn with colour
-   and depth writes off and two-sided stencil counting, z-pass or z-fail per caster;
-   `mark_unshadowed` — a full-screen pass adding the light's bit where the count is 0.
+2. per light (an area light: per sample, as a point light): `count_signed` — the stencil
+   cleared, then the shadow volumes drawn with colour and depth writes off and two-sided
+   stencil counting, z-pass or z-fail per caster; `mark_unshadowed` — a full-screen pass
+   adding the light's bit where the count is 0.
 3. `shade`: one full-screen pass (two draws split by the last light's stencil, which is not
    marked): ambient plus every unshadowed light's Phong term where n . l > 0 (and inside a
    spot's cone), the lit bits and coverage (up to LIGHTS_PER_PAGE lights a pass).
@@ -20,6 +21,11 @@ EQUAL) remain for the planar shadows.  Both compute the same numbers: the same d
 invariant vertex shader on the same vertices in the same order) and the same lighting
 expressions on the same float32 inputs (shade.frag repeats phong.frag's and scene.vert's).
 
+Every pass takes the `pipeline.Pipeline` it draws with (and, where it needs the frame's
+camera or lights, the `pipeline.FrameState`).  The volume count has three intents over one
+draw sequence (`_counted`): `count_signed` (the shadow test), `count_entering` (the overflow
+check's saturating bound) and `count_each_caster` (the ground truth's per-caster counters).
+
 Depth is reversed (camera.NEARER is ">").  The depth test of the volume passes is "strictly
 nearer", so that a volume face exactly at the surface's depth counts as behind it (z-fail near
 caps tie with their own triangle; see `volumes`).
@@ -32,9 +38,9 @@ import contextlib
 import moderngl
 import numpy as np
 
-from shadowvol.raster import glsl, stencil
+from shadowvol.raster import stencil
 from shadowvol.raster.geometry import SceneGeometry
-from shadowvol.raster.platform.gl import GL_AND_INVERTED, GL_OR, RawGL
+from shadowvol.raster.platform.gl import GL_AND_INVERTED, GL_OR
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.projection import (
     FAR_DEPTH,
@@ -43,108 +49,12 @@ from shadowvol.raster.projection import (
     in_frame,
     planes_in_frame,
 )
-from shadowvol.raster.target import Target
-from shadowvol.scene import AreaSample, Camera, Scene, SpotLight
+from shadowvol.scene import AreaSample, Camera, SpotLight
 
 NO_CONE = -2.0  # u_spot_cos for lights without a cone (below any cosine)
 # reversed depth: FAR_DEPTH (0) is the clear value and drawn surfaces lie above it, so a
 # fragment at FAR_DEPTH passes "<" exactly where something was drawn
 FARTHER_THAN_NOTHING = "<"
-
-
-class ScenePrograms:
-    """The programs that draw the scene's own triangles: the geometry pass and the deferred
-    lighting and sRGB passes; the forward ambient and Phong passes over the soup (planar
-    shadows) on first use.  Call `release()`."""
-
-    def __init__(self, ctx: moderngl.Context, geometry: SceneGeometry):
-        self.ctx, self.geometry = ctx, geometry
-        # textures or vertex colours: UVs and colours in the G-buffer (SURFACE)
-        self.surface = {"SURFACE": 1} if geometry.surface else {}
-        self.gbuffer = glsl.program(ctx, "scene.vert", "gbuffer.frag", defines=self.surface)
-        self.gbuffer_vao = ctx.vertex_array(self.gbuffer, geometry.soup_bindings(self.gbuffer))
-        self.mark = glsl.program(ctx, "fullscreen.vert", "mark.frag")
-        self.mark_vao = ctx.vertex_array(self.mark, [])
-        # (lights, colour, sRGB out, spot lights, emitter lights) -> program, vao
-        self._shade: dict[tuple[int, bool, bool, int, int], tuple] = {}
-        # (lights, spot lights, bits in the stencil) -> program, vao of the mask pass
-        self._masks: dict[tuple[int, int, bool], tuple] = {}
-        self.srgb = glsl.program(ctx, "fullscreen.vert", "srgb.frag")
-        self.srgb_vao = ctx.vertex_array(self.srgb, [])
-        self._forward = None
-        # the objects that receive no shadow, drawn again after each count (`count_volumes`)
-        self.unreceiving = np.flatnonzero(~geometry.receives)
-        self.receivers = glsl.program(ctx, "scene.vert", "volume.frag") \
-            if len(self.unreceiving) else None
-        self.receivers_vao = None if self.receivers is None else ctx.vertex_array(
-            self.receivers, geometry.soup_bindings(self.receivers))
-
-    def shading(self, lights: int, colour: bool, srgb: bool = False, spots: int = 0,
-                emitters: int = 0) -> tuple:
-        """(program, vao) of the shading pass for a page of `lights` lights (a constant in the
-        shader: its loop unrolls), with colour or the lit bits only, the colour as linear
-        float or (`srgb`) encoded to 8-bit sRGB; `spots`, `emitters`: bit i set where light i
-        is a spot light, an area light's sample (constants too: see shade.frag); made on first
-        use."""
-        key = (lights, colour, srgb, spots, emitters)
-        if key not in self._shade:
-            defines = ({"LIGHTS": lights, "SPOT_LIGHTS": spots, "EMITTER_LIGHTS": emitters} |
-                       ({} if colour else {"MASKS_ONLY": 1}) |
-                       ({"SRGB_OUT": 1} if srgb else {}) | (self.surface if colour else {}))
-            program = glsl.program(self.ctx, "fullscreen.vert", "shade.frag", defines=defines)
-            self._shade[key] = (program, self.ctx.vertex_array(program, []))
-        return self._shade[key]
-
-    def mask_pass(self, lights: int, spots: int, in_stencil: bool = False) -> tuple:
-        """(program, vao) of a mask-only frame's geometry pass for a page of `lights` lights,
-        bit i of `spots` set where light i is a spot (shade.frag's MASK_PASS), writing its
-        bits into the stencil if `in_stencil` (STENCIL_BITS); made on first use."""
-        key = (lights, spots, in_stencil)
-        if key not in self._masks:
-            program = glsl.program(self.ctx, "scene.vert", "shade.frag", defines={
-                "LIGHTS": lights, "SPOT_LIGHTS": spots, "MASKS_ONLY": 1, "MASK_PASS": 1} |
-                ({"STENCIL_BITS": 1} if in_stencil else {}))
-            self._masks[key] = (program, self.ctx.vertex_array(
-                program, self.geometry.soup_bindings(program)))
-        return self._masks[key]
-
-    def _forward_programs(self):
-        if self._forward is None:
-            ambient = glsl.program(self.ctx, "scene.vert", "ambient.frag")
-            phong = glsl.program(self.ctx, "scene.vert", "phong.frag")
-            self._forward = (ambient, phong,
-                             self.ctx.vertex_array(ambient, self.geometry.soup_bindings(ambient)),
-                             self.ctx.vertex_array(phong, self.geometry.soup_bindings(phong)))
-        return self._forward
-
-    @property
-    def ambient(self) -> moderngl.Program:
-        return self._forward_programs()[0]
-
-    @property
-    def phong(self) -> moderngl.Program:
-        return self._forward_programs()[1]
-
-    @property
-    def ambient_vao(self) -> moderngl.VertexArray:
-        return self._forward_programs()[2]
-
-    @property
-    def phong_vao(self) -> moderngl.VertexArray:
-        return self._forward_programs()[3]
-
-    @property
-    def framed(self) -> tuple[moderngl.Program, ...]:
-        """The programs that take the frame's camera (`set_camera`) with the volumes'."""
-        return (self.gbuffer,) + (() if self.receivers is None else (self.receivers,))
-
-    def release(self) -> None:
-        for obj in (self.gbuffer_vao, self.mark_vao, self.srgb_vao, self.gbuffer, self.mark,
-                    *((self.receivers_vao, self.receivers) if self.receivers else ()),
-                    self.srgb, *(x for pv in self._shade.values() for x in pv[::-1]),
-                    *(x for pv in self._masks.values() for x in pv[::-1]),
-                    *(self._forward or ())):
-            obj.release()
 
 
 def set_camera(programs, view_proj: np.ndarray, camera: Camera, origin: np.ndarray) -> None:
@@ -155,19 +65,34 @@ def set_camera(programs, view_proj: np.ndarray, camera: Camera, origin: np.ndarr
         set_uniform(p, "u_eye", tuple(float(x) for x in camera.eye - origin))
 
 
-def geometry_pass(ctx: moderngl.Context, target: Target, progs: ScenePrograms, scene: Scene,
-                  cull: np.ndarray | None = None, marks: bool = True,
+def set_frame(pipe, frame) -> None:
+    """The frame's camera set on the geometry and on the programs of `pipe` (its volumes'
+    too): the GPU draws in the float32 frame of this camera's eye (`projection`), the ray
+    tracer's frame for the same camera, so the geometry is re-expressed when the eye moves,
+    and huge triangles are cut to the view (`guard`)."""
+    vols = pipe.volumes
+    if "casters" in frame.plan.outputs:
+        vols.counting_programs()   # before set_camera: it sets their camera too
+    vols.new_frame()
+    pipe.geometry.move_to(frame.origin)
+    pipe.geometry.set_view(frame.view_proj, frame.camera.near)
+    set_camera((*pipe.programs.framed, *vols.programs), frame.view_proj, frame.camera,
+               frame.origin)
+
+
+def geometry_pass(pipe, cull: np.ndarray | None = None, marks: bool = True,
                   srgb_background: tuple[int, int, int] | None = None) -> None:
     """Clear the G-buffer, depth and stencil, then every triangle of the soup: one draw per run
     of objects with the same `cull` (n_objects,) bool, back faces culled where it is True (one
     draw for all when None or all alike).  `marks`: some light will be marked (more than one
     light in a page).  `srgb_background`: the shading pass will write 8-bit sRGB; its target
     is cleared to this code (`srgb_code` of the background)."""
-    target.clear_gbuffer(scene.background, marks)
+    target = pipe.target
+    target.clear_gbuffer(pipe.scene.background, marks)
     if srgb_background is not None:
         target.clear_srgb(srgb_background)
     target.use_gbuffer()
-    _draw_soup(ctx, progs.geometry, progs.gbuffer_vao, cull)
+    _draw_soup(pipe.ctx, pipe.geometry, pipe.programs.gbuffer_vao, cull)
     target.use()
 
 
@@ -197,26 +122,24 @@ def _draw_soup(ctx: moderngl.Context, geometry: SceneGeometry, vao: moderngl.Ver
     ctx.enable_only(moderngl.DEPTH_TEST)
 
 
-def zero_unreceiving(ctx: moderngl.Context, gl: RawGL, progs: ScenePrograms | None,
-                     count_mask: int = 0xFF) -> None:
-    """After a light's count (`count_volumes`, its framebuffer bound, colour and depth writes
+def zero_unreceiving(pipe, count_mask: int = 0xFF) -> None:
+    """After a light's count (`count_signed`, its framebuffer bound, colour and depth writes
     off): the objects that receive no shadow (`Object.receive_shadows`) drawn again over the
     geometry pass's depths (the same shader and vertices: depth test EQUAL holds), their
     visible pixels' counts set to 0 (`stencil.zeroed_counts`).  Nothing when all receive."""
-    if progs is None or progs.receivers is None:
+    progs, ctx = pipe.programs, pipe.ctx
+    if progs.receivers is None:
         return
     ctx.depth_func = "=="
-    with stencil.zeroed_counts(gl, count_mask):
+    with stencil.zeroed_counts(pipe.gl, count_mask):
         for first, count in progs.geometry.spans(progs.unreceiving):
             progs.receivers_vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)
     ctx.depth_func = NEARER
 
 
-def mask_pass(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
-              view_proj: np.ndarray, camera: Camera, lights,
-              cull: np.ndarray | None = None, in_stencil: bool = False) -> None:
-    """The geometry pass of a mask-only frame for `lights` (one page) seen by `camera`
-    (`view_proj` as `set_camera` takes it): depth and stencil cleared, then every triangle of
+def mask_pass(pipe, frame, in_stencil: bool = False) -> None:
+    """The geometry pass of a mask-only frame for its hard lights (one page) seen by its
+    camera: depth and stencil cleared, then every triangle of
     the soup as `geometry_pass` draws it (the same vertex shader and vertices: the same
     depths), writing into `target.unshadowed` bit 0 (covered) and bit i + 1 where the visible
     side faces light i (n . l > 0, inside a spot's cone) by shade.frag's own tests
@@ -224,10 +147,11 @@ def mask_pass(ctx: moderngl.Context, gl: RawGL, target: Target, progs: SceneProg
     cone per pixel); pixels no triangle covers keep 0.  `in_stencil` (at most 6 lights): the
     same bits into the stencil instead, laid out as `stencil.mask_layout` says, and no colour
     written.  `target.mark_fbo` is left bound, for the counts and `clear_shadowed`."""
+    lights, progs, gl = frame.hard_lights, pipe.programs, pipe.gl
     prog, vao = progs.mask_pass(
         len(lights), spots=sum(1 << i for i, l in enumerate(lights)
                                if isinstance(l, SpotLight)), in_stencil=in_stencil)
-    fbo = target.mark_fbo
+    fbo = pipe.target.mark_fbo
     fbo.depth_mask = True
     fbo.color_mask = (not in_stencil,) * 4
     stencil.clear_depth_stencil(gl, fbo.glo, FAR_DEPTH)
@@ -235,61 +159,55 @@ def mask_pass(ctx: moderngl.Context, gl: RawGL, target: Target, progs: SceneProg
         stencil.clear_uint_attachment(gl, fbo.glo, 0, 0)
     fbo.use()
     origin = progs.geometry.origin
-    set_camera((prog,), view_proj, camera, origin)
+    set_camera((prog,), frame.view_proj, frame.camera, origin)
     set_uniform(prog, "u_first_page", True)
     _light_arrays(prog, lights, origin)
     with stencil.exported_bits(gl) if in_stencil else contextlib.nullcontext():
-        _draw_soup(ctx, progs.geometry, vao, cull)
+        _draw_soup(pipe.ctx, progs.geometry, vao, frame.cull)
 
 
-def clear_shadowed(ctx: moderngl.Context, gl: RawGL, target: Target,
-                   progs: ScenePrograms, bit: int, zero: bool = False) -> None:
+def clear_shadowed(pipe, bit: int, zero: bool = False) -> None:
     """After light `bit`'s count in a mask-only frame (`mask_pass`): its lit bit (2^(bit + 1)
     of `target.unshadowed`) cleared at every covered pixel whose count is not 0 (the logic op
     AND-NOT).  `zero`: every count is left 0, as a clear would (`stencil.where_shadowed`),
     for the next light's count.  `target.mark_fbo` stays bound."""
-    _bits_pass(ctx, gl, target, progs, 2 << bit, stencil.where_shadowed(gl, zero=zero),
-               GL_AND_INVERTED)
+    _bits_pass(pipe, 2 << bit, stencil.where_shadowed(pipe.gl, zero=zero), GL_AND_INVERTED)
 
 
-def clear_shadowed_in_stencil(ctx: moderngl.Context, gl: RawGL, target: Target,
-                              progs: ScenePrograms, count_mask: int, light_bit: int) -> None:
+def clear_shadowed_in_stencil(pipe, count_mask: int, light_bit: int) -> None:
     """`clear_shadowed` for a mask-only frame whose bits are in the stencil (`mask_pass`
     `in_stencil`): after a light's count (in the bits of `count_mask`), its `light_bit`
     cleared wherever the count is not 0, and every count left 0 for the next light
     (`stencil.where_shadowed` zeroing both); no colour written.  `target.mark_fbo` stays
     bound."""
-    _bits_pass(ctx, gl, target, progs, 0, stencil.where_shadowed(
-        gl, zero=True, count_mask=count_mask, also_zero=light_bit), None)
+    _bits_pass(pipe, 0, stencil.where_shadowed(
+        pipe.gl, zero=True, count_mask=count_mask, also_zero=light_bit), None)
 
 
-def mark_unshadowed(ctx: moderngl.Context, gl: RawGL, target: Target,
-                    progs: ScenePrograms, bit: int, restore: bool = True,
-                    zero: bool = False) -> None:
+def mark_unshadowed(pipe, bit: int, restore: bool = True, zero: bool = False) -> None:
     """Set bit `bit` of the unshadowed bits where the stencil count is 0 (the logic op OR);
     `restore`: bind the target's main framebuffer after (else `target.mark_fbo` stays bound).
     `zero`: also set every other count to 0 (`stencil.where_unshadowed`), so that the next
-    light's count needs no clear (`count_volumes(clear=False)`)."""
-    _bits_pass(ctx, gl, target, progs, 1 << bit, stencil.where_unshadowed(gl, zero=zero),
-               GL_OR)
+    light's count needs no clear (`count_signed(clear=False)`)."""
+    _bits_pass(pipe, 1 << bit, stencil.where_unshadowed(pipe.gl, zero=zero), GL_OR)
     if restore:
-        target.use()
+        pipe.target.use()
 
 
-def _bits_pass(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
-               value: int, where, op: int | None) -> None:
+def _bits_pass(pipe, value: int, where, op: int | None) -> None:
     """One full-screen pass of mark.frag over the covered pixels into `target.unshadowed`
     (`mark_fbo`, left bound): `value` combined with the stored bits by the logic op `op`
     wherever the stencil test `where` (a context manager of `stencil`) passes; `op` None: no
     colour written, the stencil operations of `where` alone."""
-    fbo = target.mark_fbo
+    ctx, progs = pipe.ctx, pipe.programs
+    fbo = pipe.target.mark_fbo
     fbo.depth_mask = False
     fbo.color_mask = (op is not None,) * 4
     fbo.use()
     ctx.enable_only(moderngl.NOTHING)
     set_uniform(progs.mark, "u_bit", value)
     _only_where_covered(ctx)
-    with where, (contextlib.nullcontext() if op is None else stencil.logic_op(gl, op)):
+    with where, (contextlib.nullcontext() if op is None else stencil.logic_op(pipe.gl, op)):
         progs.mark_vao.render(moderngl.TRIANGLES, vertices=3)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
@@ -304,10 +222,10 @@ def _only_where_covered(ctx: moderngl.Context) -> None:
     ctx.depth_func = FARTHER_THAN_NOTHING
 
 
-def shade(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
-          scene: Scene, camera: Camera, lights, first_page: bool, colour: bool = True,
+def shade(pipe, camera: Camera, lights, first_page: bool, colour: bool = True,
           srgb: bool = False) -> None:
-    """The one shading pass for `lights` (at most LIGHTS_PER_PAGE): colour and bits of every
+    """The one shading pass for `lights` (at most LIGHTS_PER_PAGE) seen by `camera`: colour
+    and bits of every
     pixel.  The unshadowed target holds bits 0.. of all but the last light; the stencil holds
     the last light's count, and the pass is drawn where it is 0 and where it is not (each
     pixel once), which spares the last light its marking pass and, for one light, the
@@ -315,6 +233,7 @@ def shade(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms
     ambient, no coverage) and its bits must be cleared before.  `colour=False`: the lit bits
     only.  `srgb`: the colour encoded to 8-bit sRGB into `target.srgb` instead (one page only:
     pages add up in float), exactly as `encode_srgb` would encode it."""
+    ctx, gl, target, progs = pipe.ctx, pipe.gl, pipe.target, pipe.programs
     prog, vao = progs.shading(
         len(lights), colour, srgb,
         spots=sum(1 << i for i, l in enumerate(lights) if isinstance(l, SpotLight)),
@@ -334,7 +253,7 @@ def shade(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms
     set_uniform(prog, "u_eye", tuple(float(x) for x in camera.eye - origin))
     set_uniform(prog, "u_first_page", first_page)
     _light_arrays(prog, lights, origin)
-    set_uniform(prog, "u_ambient", tuple(float(x) for x in scene.ambient))
+    set_uniform(prog, "u_ambient", tuple(float(x) for x in pipe.scene.ambient))
     progs.geometry.materials.use(0)
     target.position.use(1)
     target.unshadowed.use(2)
@@ -378,9 +297,10 @@ def _light_arrays(prog: moderngl.Program, lights, origin: np.ndarray) -> None:
                                          np.float32).tobytes())
 
 
-def srgb_code(ctx: moderngl.Context, progs: ScenePrograms, rgb) -> tuple[int, int, int]:
+def srgb_code(pipe, rgb) -> tuple[int, int, int]:
     """The 8-bit sRGB code of the linear colour `rgb` (3,) as srgb.frag encodes it (on the GPU,
     so that a pixel cleared to it is the pixel the sRGB pass would have written)."""
+    ctx, progs = pipe.ctx, pipe.programs
     src = ctx.texture((1, 1), 4, np.array([*rgb, 0.0], np.float32).tobytes(), dtype="f4")
     out = ctx.texture((1, 1), 4, dtype="f1")
     fbo = ctx.framebuffer(color_attachments=[out])
@@ -398,8 +318,9 @@ def srgb_code(ctx: moderngl.Context, progs: ScenePrograms, rgb) -> tuple[int, in
     return tuple(int(c) for c in code)
 
 
-def encode_srgb(ctx: moderngl.Context, target: Target, progs: ScenePrograms) -> None:
+def encode_srgb(pipe) -> None:
     """The colour attachment encoded to 8-bit sRGB into `target.srgb`, rows flipped."""
+    ctx, target, progs = pipe.ctx, pipe.target, pipe.programs
     target.srgb_fbo.use()
     ctx.enable_only(moderngl.NOTHING)
     target.colour.use(0)
@@ -409,13 +330,12 @@ def encode_srgb(ctx: moderngl.Context, target: Target, progs: ScenePrograms) -> 
     target.use()
 
 
-def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
-                  zfail: np.ndarray, halve: bool = False,
-                  clip_planes: np.ndarray | None = None, counting=None,
-                  objects=None, each=None, fbo=None, clear: bool = True,
-                  count_mask: int = 0xFF, receivers: ScenePrograms | None = None) -> None:
+def count_signed(pipe, zfail: np.ndarray, *, halve: bool = False,
+                 clip_planes: np.ndarray | None = None, objects=None, fbo=None,
+                 clear: bool = True, count_mask: int = 0xFF, receivers: bool = False) -> None:
     """Stencil := the signed count of shadow volumes around each visible point, for the light
-    `volumes` was prepared for.  zfail : (n_objects,) bool, the method per caster.
+    `pipe.volumes` was prepared for (`stencil.zpass_counting`, `stencil.zfail_counting`).
+    zfail : (n_objects,) bool, the method per caster.
 
     `halve`: z-pass casters whose multiplicities are all even count half (see
     `CpuVolumes.draw_sides`): the stencil is then 0 exactly where it would have been 0, but
@@ -424,17 +344,7 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
     `clip_planes` : (6, 4) float64 or None, the box of `methods.zpass_clip_planes`: z-pass
     side quads are clipped to it (counts at covered pixels unchanged, uncovered ones not).
 
-    `counting(zfail, depth_clamp)` : the stencil state (a context manager from `stencil`) under
-    which each group of volume faces is drawn; default: the signed count
-    (`stencil.zpass_counting`, `stencil.zfail_counting`).  The stencil-overflow check draws the
-    same faces under `stencil.entering_faces_counting`.
-
-    `objects` : the casters to count (default all).
-
-    `each(program, i)` : count with the volumes' counting programs instead (caster_count.frag:
-    the ground truth's per-caster counts, `truth.CasterCounts`), each object drawn alone after
-    `each` is called with its program and index; the same faces in the same groups, under
-    `counting`, which must then be given.  The stencil is neither cleared nor written.
+    `objects` : the casters to count (default all; only casting objects count).
 
     `fbo` : count in this framebuffer of the target (one sharing its depth-stencil buffer,
     e.g. `target.mark_fbo`) with colour writes off, and leave it bound, instead of the
@@ -445,23 +355,71 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
     `clear=False`: the stencil is known to be 0 already (the geometry pass's clear, or a
     zeroing mark), and is not cleared again.
 
-    `count_mask`: the default counting keeps the count in these low bits of the stencil only
-    (`stencil.mask_layout`: the mask-only frame's bits are above them).  Only casting objects
-    count; `receivers`: then `zero_unreceiving` (the shadow switches)."""
-    if counting is None:
-        def counting(zfail_group: bool, depth_clamp: bool):
-            return (stencil.zfail_counting(gl, depth_clamp=depth_clamp, count_mask=count_mask)
-                    if zfail_group else stencil.zpass_counting(gl, count_mask=count_mask))
+    `count_mask`: the count is kept in these low bits of the stencil only
+    (`stencil.mask_layout`: the mask-only frame's bits are above them).  `receivers`: then
+    `zero_unreceiving` (the shadow switches)."""
+    gl = pipe.gl
+
+    def counting(zfail_group: bool, depth_clamp: bool):
+        return (stencil.zfail_counting(gl, depth_clamp=depth_clamp, count_mask=count_mask)
+                if zfail_group else stencil.zpass_counting(gl, count_mask=count_mask))
+    _bind_for_count(pipe, fbo, clear)
+    _counted(pipe, zfail, objects, counting, halve, clip_planes)
+    if receivers:
+        zero_unreceiving(pipe, count_mask)
+    if fbo is None:
+        pipe.target.use()
+
+
+def count_entering(pipe, zfail: np.ndarray, *, halve: bool = False,
+                   clip_planes: np.ndarray | None = None) -> None:
+    """The stencil-overflow check's count (`overflow.detect.find_wrapped`): the same faces in
+    the same groups as `count_signed`, under `stencil.entering_faces_counting` (only the
+    faces by which a view ray enters a volume, saturating at 255), the stencil cleared
+    first."""
+    gl = pipe.gl
+
+    def counting(zfail_group: bool, depth_clamp: bool):
+        return stencil.entering_faces_counting(gl, zfail=zfail_group, depth_clamp=depth_clamp)
+    _bind_for_count(pipe, None, True)
+    _counted(pipe, zfail, None, counting, halve, clip_planes)
+    pipe.target.use()
+
+
+def count_each_caster(pipe, zfail: np.ndarray, objects, *, each, counting,
+                      halve: bool = False, clip_planes: np.ndarray | None = None) -> None:
+    """The ground truth's per-caster counts (`truth.truth_pass.CasterCounts`): the same faces
+    in the same groups as `count_signed`, drawn with the volumes' counting programs
+    (caster_count.frag), each object of `objects` alone after `each(program, i)` is called
+    with its program and index, under the stencil state `counting(zfail, depth_clamp)` (a
+    context manager).  The stencil is not cleared first."""
+    _bind_for_count(pipe, None, False)
+    _counted(pipe, zfail, objects, counting, halve, clip_planes, each)
+    pipe.target.use()
+
+
+def _bind_for_count(pipe, fbo, clear: bool) -> None:
+    """The count's framebuffer bound, colour and depth writes off; its stencil cleared if
+    `clear`."""
     if fbo is not None:
         fbo.depth_mask = False
         fbo.color_mask = (False,) * 4
         fbo.use()
-        if each is None and clear:
-            stencil.clear_stencil(gl, fbo.glo)
+        if clear:
+            stencil.clear_stencil(pipe.gl, fbo.glo)
     else:
-        if each is None and clear:
-            target.clear_stencil()
-        target.use(colour=False, depth=False)
+        if clear:
+            pipe.target.clear_stencil()
+        pipe.target.use(colour=False, depth=False)
+
+
+def _counted(pipe, zfail: np.ndarray, objects, counting, halve: bool,
+             clip_planes: np.ndarray | None, each=None) -> None:
+    """The one draw sequence of every volume count: the casting objects of `objects` (all
+    when None), z-pass casters' sides (clipped to `clip_planes` when given), then z-fail
+    casters' sides, far caps (depth clamped) and near caps, each group under its
+    `counting(zfail, depth_clamp)` stencil state."""
+    ctx, gl, volumes = pipe.ctx, pipe.gl, pipe.volumes
     ctx.enable_only(moderngl.DEPTH_TEST)  # no culling: both faces count
     ctx.depth_func = NEARER
     chosen = np.ones(len(zfail), bool) if objects is None else np.isin(
@@ -486,6 +444,3 @@ def count_volumes(ctx: moderngl.Context, gl: RawGL, target: Target, volumes,
             volumes.draw_caps(by_zfail, near=False, each=each)
         with counting(True, False):
             volumes.draw_caps(by_zfail, near=True, each=each)
-    zero_unreceiving(ctx, gl, receivers, count_mask)
-    if fbo is None:
-        target.use()

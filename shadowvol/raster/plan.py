@@ -11,7 +11,7 @@ class FramePlan:
     when the overflow check needs it); outputs : those and what they need ("facing" for
     casters and facing_count).  halve : `auto`'s z-pass casters may be drawn m / 2 times,
     which is safe only when the counts themselves are not returned
-    (`passes.count_volumes`)."""
+    (`passes.count_signed`)."""
 
     method: str
     asked: frozenset[str]

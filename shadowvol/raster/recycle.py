@@ -53,3 +53,26 @@ class ArrayPool:
     def clear(self) -> None:
         """Let go of every kept array."""
         self._kept.clear()
+
+
+class Scratch:
+    """A renderer's own (H, W) uint32 scratch arrays, for work within one frame (0: masked
+    bits, 1..: a page's bits); never returned, so reused every frame."""
+
+    def __init__(self, height: int, width: int):
+        self.height, self.width = height, width
+        self._arrays: list[np.ndarray] = []
+
+    def words(self, k: int) -> np.ndarray:
+        """(H, W) uint32 scratch k."""
+        while len(self._arrays) <= k:
+            self._arrays.append(np.empty((self.height, self.width), np.uint32))
+        return self._arrays[k]
+
+    def bytes(self, k: int) -> np.ndarray:
+        """(H, W) uint8 in the first quarter of `words(k)`'s memory."""
+        h, w = self.height, self.width
+        return self.words(k).reshape(-1).view(np.uint8)[:h * w].reshape(h, w)
+
+    def clear(self) -> None:
+        self._arrays.clear()

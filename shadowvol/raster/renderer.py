@@ -6,49 +6,46 @@ stencil count of its shadow volumes and a full-screen pass adding its Phong term
 count is 0 (see `passes`).  It returns arrays only, and only those asked for (`outputs=`);
 files are the CLI's business.
 
-Limit: the stencil is 8 bits and counts wrap (INCR_WRAP / DECR_WRAP).  Every triangle casts, so
-a pixel behind k closed meshes counts 2k; 256 layers over one pixel would read 0, i.e. lit.  That
-needs about 128 closed objects (or 256 open sheets) lined up between one point and one light.
-It is detected (`overflow`): when conservative bounds (the scene's, then the light's:
-`detect.light_bound`) say a count could reach 256, one more saturating volume pass for that
-light finds the pixels that may have wrapped, and render() raises
-detect.StencilOverflowError instead of returning a wrong shadow.
+The walk of a frame: `render` checks its arguments and resolves the frame once
+(`pipeline.FrameState`: camera, lights, each hard light's position and method); the passes
+(`drawing`, `passes`), the ground truth (`truth.assemble`) and the overflow check
+(`overflow.detect`) each take the renderer's `pipeline.Pipeline` and that frame.
+
+Limit: the stencil is 8 bits and counts wrap (INCR_WRAP / DECR_WRAP): 256 layers over one
+pixel (about 128 closed objects, or 256 open sheets, lined up between one point and one light)
+would read 0, lit.  Where conservative bounds (the scene's, then the light's) say a count could
+reach 256, one more saturating volume pass finds the pixels that may have wrapped, and render()
+raises overflow.detect.StencilOverflowError instead of returning a wrong shadow.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import cached_property
 
 import moderngl
 import numpy as np
 
-from shadowvol.cameras import calibration
 from shadowvol.frame import LAYERS, check_light_kinds, check_outputs
-from shadowvol.raster import bits, layers, methods, overlay, passes
-from shadowvol.raster.overflow import detect
-from shadowvol.raster.truth import truth_pass
-from shadowvol.raster import stencil as stencil_gl
-from shadowvol.raster.platform.context import (
-    clear_errors,
-    create_context,
-    errors_cleared_on_failure,
-    make_current,
-)
+from shadowvol.raster import drawing, layers, methods, overlay, passes
 from shadowvol.raster.geometry import SceneGeometry
-from shadowvol.raster.platform.gl import RawGL
 from shadowvol.raster.object_facts import ObjectFacts
+from shadowvol.raster.overflow.detect import STENCIL_LIMIT, check_frame
 from shadowvol.raster.overflow.policy import LightBounds
+from shadowvol.raster.pipeline import FrameState, Pipeline
 from shadowvol.raster.plan import FramePlan
-from shadowvol.raster.projection import frame_view_projection
-from shadowvol.raster.recycle import ArrayPool
-from shadowvol.raster.result import (DEFAULT_OUTPUTS, OUTPUTS, SILHOUETTES, RenderResult,
-                                     check_lights)
-from shadowvol.raster.target import LIGHTS_PER_PAGE, Target, check_frame_size
-from shadowvol.raster.truth.assemble import frame_truth
+from shadowvol.raster.platform.context import (clear_errors, create_context,
+                                               errors_cleared_on_failure, make_current)
+from shadowvol.raster.platform.gl import RawGL
+from shadowvol.raster.programs import ScenePrograms
+from shadowvol.raster.recycle import ArrayPool, Scratch
+from shadowvol.raster.stencil import zero_to_one_depth
+from shadowvol.raster.result import DEFAULT_OUTPUTS, OUTPUTS, RenderResult, check_lights
+from shadowvol.raster.target import Target, check_frame_size
+from shadowvol.raster.truth.truth_pass import TruthPass
 from shadowvol.raster.volumes.builder import VolumeBuilder
-from shadowvol.raster.volumes.cpu import CpuVolumes
-from shadowvol.raster.volumes.gpu import GpuVolumes
-from shadowvol.scene import Camera, Light, Scene, hard_lights
+from shadowvol.scene import Camera, Light, Scene
+
 
 class Renderer:
     """Renders `scene` (its geometry and materials; camera and lights may change per frame).
@@ -57,7 +54,7 @@ class Renderer:
     context too if the renderer created it.
     """
 
-    # stencil-overflow bounds (`detect.light_bound`, 0.1-0.6 s each) computed in one frame
+    # overflow bounds (`overflow.detect.light_bound`, 0.1-0.6 s each) computed in one frame
     BOUNDS_PER_FRAME = 1
 
     def __init__(self, scene: Scene, ctx: moderngl.Context | None = None):
@@ -66,12 +63,11 @@ class Renderer:
         self.ctx = create_context() if ctx is None else ctx
         self._owned = []
         self._volumes: dict[str, VolumeBuilder] = {}
-        self._truth: truth_pass.TruthPass | None = None
+        self._truth: TruthPass | None = None
         self._bounds = LightBounds()   # the overflow check's kept light bounds
-        self._srgb_code: tuple[int, int, int] | None = None   # `_srgb_background`
-        # the arrays frames return (`recycle`), and the frames' own scratch (`_scratch`)
+        # the arrays frames return (`recycle`), and the frames' own scratch
         self._pool = ArrayPool()
-        self._scratches: list[np.ndarray] = []
+        self._scratch = Scratch(scene.height, scene.width)
         # back-face culling in the geometry pass for closed convex casters beyond the near
         # plane (`methods.cullable`): 14-22% of a frame here, but OFF by default because it is
         # not exact at float32 depth ties: where a silhouette's back face won the depth test by
@@ -81,10 +77,9 @@ class Renderer:
         # pass per light, and only in scenes whose bound allows a count of 256
         self.check_overflow = True
         # a mask-only frame of up to 6 hard lights keeps its bits in the stencil where the
-        # counts leave room (`_masks_fit_stencil`); off: always in a colour target (the same
+        # counts leave room (`drawing.masks_fit_stencil`); off: always in a colour target (the same
         # masks bit for bit: tests compare the two)
         self.masks_in_stencil = True
-        self._stencil_export: bool | None = None   # ARB_shader_stencil_export, looked up once
         try:
             # every public method first makes the context current: raw GL calls
             # (gl.RawGL) go to whichever context is current, e.g. after another renderer
@@ -96,7 +91,10 @@ class Renderer:
             self._facts = ObjectFacts(self.geometry)
             self.target = self._own(Target(self.ctx, self.gl, scene.width, scene.height,
                                            surface=self.geometry.surface))
-            self.programs = self._own(passes.ScenePrograms(self.ctx, self.geometry))
+            self.programs = self._own(ScenePrograms(self.ctx, self.geometry))
+            # what every pass is handed (with a frame's volume builder: `with_volumes`)
+            self.pipeline = Pipeline(scene, self.ctx, self.gl, self.target, self.programs,
+                                     self.geometry)
         except BaseException:
             ctx = self.ctx
             self.release()
@@ -110,12 +108,11 @@ class Renderer:
 
     def volumes(self, silhouettes: str) -> VolumeBuilder:
         """The volume builder for "cpu" or "gpu" silhouettes (made on first use)."""
-        if silhouettes not in SILHOUETTES:
-            raise ValueError(f"silhouettes must be 'cpu' or 'gpu', got {silhouettes!r}")
+        methods.check_choices("auto", silhouettes)
         if silhouettes not in self._volumes:
-            cls = CpuVolumes if silhouettes == "cpu" else GpuVolumes
             make_current(self.ctx)
-            self._volumes[silhouettes] = self._own(cls(self.ctx, self.geometry))
+            self._volumes[silhouettes] = self._own(
+                methods.SILHOUETTE_CHOICES[silhouettes](self.ctx, self.geometry))
         return self._volumes[silhouettes]
 
     def render(self, method: str = "auto", silhouettes: str = "cpu", *,
@@ -130,46 +127,50 @@ class Renderer:
         per-light stencil counts (one extra read-back each).  `shadows=False` skips the volume
         passes (every count stays 0): the same frame without shadows, the benchmark's
         baseline."""
-        if method not in methods.METHODS:
-            raise ValueError(f"method must be one of {', '.join(methods.METHODS)}, "
-                             f"got {method!r}")
+        methods.check_choices(method, silhouettes)
         outputs = set(check_outputs(outputs, OUTPUTS, DEFAULT_OUTPUTS)) | (
             {"stencil"} if stencil else set())
         wanted_layers, outputs = outputs & set(LAYERS), outputs - set(LAYERS)
-        lights = check_lights(lights)
+        given = check_lights(lights)
+        seen_by = self.scene.camera if camera is None else camera
+        lit_by = self.scene.lights if given is None else given
         make_current(self.ctx)
-        to_check = self._lights_to_check(camera, lights) if shadows else []
+        to_check = self._lights_to_check(seen_by, lit_by) if shadows else []
         # the overflow check needs the lit masks, asked for or not
         plan = FramePlan.of(method, outputs | ({"lit"} if to_check else set()))
-        with errors_cleared_on_failure(self.ctx), stencil_gl.zero_to_one_depth(self.gl):
-            result = self._render(plan, silhouettes, camera, lights, shadows)
+        check_light_kinds(plan.outputs, lit_by)
+        # the frame resolved once: every stop after this reads it (`pipeline`)
+        frame = FrameState.of(plan, seen_by, lit_by, shadows, self.geometry, self.scene.size,
+                              self.outward_convex if self.cull_back_faces else None)
+        with errors_cleared_on_failure(self.ctx), zero_to_one_depth(self.gl):
+            pipe = self.pipeline.with_volumes(self.volumes(silhouettes))
+            result = drawing.draw(pipe, frame, self._pool, self._scratch,
+                                  masks_in_stencil=self._masks_fit_stencil,
+                                  srgb_background=lambda: self._srgb_background,
+                                  truth=self._truth_pass,
+                                  object_bounds=lambda: self.object_bounds)
             if to_check:
-                detect.check_frame(self, result, silhouettes, camera, lights,
-                                     halve=plan.halve, only=to_check)
+                check_frame(pipe, frame, result, only=to_check)
             if "lit" not in outputs:
                 result = replace(result, lit=None, lit_count=None)
         if wanted_layers:   # the intrinsic layers: more frames (`layers`)
             result = replace(result, **layers.render_layers(
-                self, method, silhouettes, camera, lights, shadows, wanted_layers))
+                self, method, silhouettes, camera, given, shadows, wanted_layers))
         return result
 
-    def _lights_to_check(self, camera, lights) -> list[tuple[int, int]]:
+    def _lights_to_check(self, camera: Camera, lights) -> list[tuple[int, int]]:
         """(light, sample) indices of the hard lights whose stencil count might reach 256 in
         this frame: none when the scene's bound is below it, else those whose
-        `detect.light_bound` is not (`overflow_policy`: at most `BOUNDS_PER_FRAME` bounds
-        computed in one frame, so a frame costs at most one bound more than its re-checks)."""
-        if not self.check_overflow or self.count_bound < detect.STENCIL_LIMIT:
+        `overflow.detect.light_bound` is not (`overflow.policy`: at most `BOUNDS_PER_FRAME`
+        bounds computed in one frame, so a frame costs at most one bound more than its
+        re-checks)."""
+        if not self.check_overflow or self.count_bound < STENCIL_LIMIT:
             return []
-        camera = self.scene.camera if camera is None else camera
-        lights = self.scene.lights if lights is None else lights
         return self._bounds.to_check(self.geometry, self.scene.height, lambda: self.convex,
                                      camera, lights, self.BOUNDS_PER_FRAME)
 
-    @property
-    def _light_bounds(self) -> dict[bytes, tuple | None]:
-        """`overflow_policy.LightBounds.kept`: the light bounds kept."""
-        return self._bounds.kept
-
+    _light_bounds = property(lambda self: self._bounds.kept,
+                             doc="`overflow.policy.LightBounds.kept`: the light bounds kept")
     # the objects' facts (`object_facts.ObjectFacts`), each computed once, when first asked
     convex = property(lambda self: self._facts.convex,
                       doc="(n_objects,) bool: closed convex meshes")
@@ -180,250 +181,20 @@ class Renderer:
     count_bound = property(lambda self: self._facts.count_bound,
                            doc="the casting objects' count bound: below 256 none can wrap")
 
+    @cached_property
     def _srgb_background(self) -> tuple[int, int, int]:
         """The background's 8-bit sRGB code as the sRGB pass encodes it (once per renderer)."""
-        if self._srgb_code is None:
-            self._srgb_code = passes.srgb_code(self.ctx, self.programs, self.scene.background)
-        return self._srgb_code
+        return passes.srgb_code(self.pipeline, self.scene.background)
 
-    def _scratch(self, k: int) -> np.ndarray:
-        """(H, W) uint32 scratch k of this renderer (0: masked bits, 1..: a page's bits), for
-        work within one frame; never returned."""
-        while len(self._scratches) <= k:
-            self._scratches.append(np.empty((self.scene.height, self.scene.width), np.uint32))
-        return self._scratches[k]
-
-    def _scratch_bytes(self, k: int) -> np.ndarray:
-        """(H, W) uint8 in the first quarter of `_scratch(k)`'s memory."""
-        h, w = self.scene.height, self.scene.width
-        return self._scratch(k).reshape(-1).view(np.uint8)[:h * w].reshape(h, w)
-
-    def _truth_pass(self) -> truth_pass.TruthPass:
+    def _truth_pass(self) -> TruthPass:
         if self._truth is None:
-            self._truth = self._own(truth_pass.TruthPass(self.ctx, self.target))
+            self._truth = self._own(TruthPass(self.ctx, self.target))
         return self._truth
 
-    def _render(self, plan: FramePlan, silhouettes, camera, lights, shadows) -> RenderResult:
-        camera = self.scene.camera if camera is None else camera
-        lights = self.scene.lights if lights is None else tuple(lights)
-        outputs = plan.outputs
-        vols = self.volumes(silhouettes)
-        if "casters" in outputs:
-            vols.counting_programs()   # before set_camera: it sets their camera too
-        vols.new_frame()
-        view_proj, clip, cull = self._set_frame(camera, vols, plan.want_stencil)
-        # an area light is its samples, each counted and shaded as a point light
-        hard = [(i, sample) for i, lt in enumerate(lights) for sample in hard_lights(lt)]
-        # the 8-bit image straight from the shading pass when the float one is not asked for
-        # and one page holds every light (pages add up in float)
-        srgb_direct = ("image_srgb" in outputs and "image" not in outputs
-                       and len(hard) <= LIGHTS_PER_PAGE)
-        h, w = self.scene.height, self.scene.width
-        check_light_kinds(plan.outputs, lights)
-        zfail = np.zeros((len(lights), len(self.scene.objects)), bool)
-        truth_pages: list = []
-        counts: list[np.ndarray] = []
-        in_stencil = None   # the mask-only frame's stencil bytes, when it keeps its bits there
-        pages: list[np.ndarray] = []
-        if outputs <= {"lit", "coverage"} and len(hard) <= LIGHTS_PER_PAGE:
-            # the masks alone, one page: no G-buffer and no shading pass
-            if self._masks_fit_stencil(hard, lights, shadows):
-                in_stencil = self._mask_frame(plan, camera, view_proj, hard, shadows, vols,
-                                              clip, cull, zfail, in_stencil=True)
-            else:
-                pages = [self._mask_frame(plan, camera, view_proj, hard, shadows, vols, clip,
-                                          cull, zfail)]
-        else:
-            pages = self._deferred_frame(plan, camera, hard, shadows, vols, clip, cull,
-                                         zfail, srgb_direct, truth_pages, counts)
-        # what the caller gets comes from the pool (`recycle`); numpy's temporaries go to
-        # the scratch (3 MB of new memory costs a millisecond here)
-        pool = self._pool
-        image = (self.target.read_image(out=pool.empty((h, w, 3), np.float32))
-                 if "image" in outputs else None)
-        samples = np.array([len(hard_lights(lt)) for lt in lights], np.int64)
-        coverage, lit, lit_count = self._read_masks(outputs, hard, samples, in_stencil, pages)
-        extra = frame_truth(self, plan, camera, lights, hard, truth_pages, vols, clip)
-        if plan.facing_pass:
-            # the facing pass's lit: facing & unshadowed, bit for bit, summed over samples
-            lit, counted = extra.pop("lit"), extra.pop("lit_count")
-            if lit_count is not None:
-                lit_count = counted
-            for name in ("facing", "facing_count"):
-                if name not in plan.asked:  # computed for casters only
-                    extra.pop(name)
-        srgb = None
-        if "image_srgb" in outputs:
-            if not srgb_direct:   # encoded from the float image, by its own pass
-                passes.encode_srgb(self.ctx, self.target, self.programs)
-            srgb = self.target.read_srgb(flipped=not srgb_direct,
-                                         out=pool.empty((h, w, 3), np.uint8))
-        return RenderResult(
-            image=image, lit=lit, coverage=coverage,
-            stencil=np.array(counts, np.int16).reshape(len(lights), h, w)
-            if plan.want_stencil else None,
-            zfail=zfail, lit_count=lit_count, samples=samples, image_srgb=srgb,
-            calibration=calibration(self.scene.replace(camera=camera, lights=lights)),
-            **extra)
-
-    def _set_frame(self, camera, vols, want_stencil: bool) -> tuple:
-        """The frame's camera set on the geometry and the programs: (view_proj, the z-pass
-        clip planes or None, the back faces to cull or None)."""
-        # the GPU draws in the float32 frame of this camera's eye (`projection`), the ray
-        # tracer's frame for the same camera: the geometry is re-expressed when the eye moves
-        view_proj, origin = frame_view_projection(camera, self.scene.size)
-        self.geometry.move_to(origin)
-        self.geometry.set_view(view_proj, camera.near)   # huge triangles cut (`guard`)
-        passes.set_camera((*self.programs.framed, *vols.programs), view_proj, camera, origin)
-        cull = methods.cullable(self.geometry.bounds, self.outward_convex, camera,
-                                self.geometry.extent) if self.cull_back_faces else None
-        # z-pass faces clipped to the box of the near rectangle and the casters: the same
-        # counts at covered pixels, not at uncovered ones (see methods.zpass_clip_planes)
-        clip = None if want_stencil else methods.zpass_clip_planes(
-            self.geometry.bounds, camera, self.scene.size, self.geometry.extent)
-        return view_proj, clip, cull
-
-    def _read_masks(self, outputs, hard, samples, in_stencil, pages) -> tuple:
-        """(coverage, lit, lit_count), each None unless asked for, in the pool's memory
-        (`bits` decodes them)."""
-        h, w, pool = self.scene.height, self.scene.width, self._pool
-        masked = self._scratch(0)
-        coverage = lit = lit_count = None
-        if "coverage" in outputs:
-            coverage = pool.empty((h, w), bool)
-            bits.coverage(in_stencil, pages, masked, coverage)
-        if "lit" in outputs:
-            lit_count = pool.empty((len(samples), h, w), np.uint16)
-            lit = pool.empty((len(samples), h, w), bool)
-            if in_stencil is not None:
-                bits.lit_from_stencil(in_stencil, hard, lit, lit_count, self._scratch_bytes(0))
-            else:
-                bits.lit_from_pages(pages, hard, samples, lit, lit_count, masked)
-        return coverage, lit, lit_count
-
-    def _masks_fit_stencil(self, hard, lights, shadows: bool) -> bool:
-        """Whether a mask-only frame of `hard` (its hard lights, one page) keeps its bits in
-        the stencil beside the counts (`stencil.mask_layout`): at most 6 lights, none an area
-        light (whose samples' counts add up in lit_count), no count of the scene able to
-        reach 2^(7 - lights) in magnitude (`count_bound`), and a GL that lets a fragment
-        shader write the stencil (ARB_shader_stencil_export; without it, and when
-        `masks_in_stencil` is off, the bits go to a colour target)."""
-        if (not self.masks_in_stencil or len(hard) != len(lights)
-                or not 1 <= len(hard) <= stencil_gl.MASK_LAYOUT_LIGHTS):
-            return False
-        if self._stencil_export is None:
-            self._stencil_export = "GL_ARB_shader_stencil_export" in self.ctx.extensions
-        return self._stencil_export and (not shadows or
-                                         self.count_bound < 1 << (7 - len(hard)))
-
-    def _mask_frame(self, plan: FramePlan, camera, view_proj, hard, shadows, vols, clip, cull,
-                    zfail, in_stencil: bool = False) -> np.ndarray:
-        """The lit bits of a mask-only frame of the hard lights `hard` ((light index, hard
-        light) pairs, one page): (H, W) uint32 in this renderer's scratch, bit 0 covered, bit
-        k + 1 lit by hard[k], as the deferred frame's.  No G-buffer and no shading pass
-        (`passes.mask_pass`); every light counted and its bit cleared where its count is not
-        0 in one framebuffer, so that llvmpipe bins all of them in one scene.  Fills
-        `zfail`.
-
-        `in_stencil` (`_masks_fit_stencil`): the bits are kept in the stencil's high bits and
-        each count in its low bits (`stencil.mask_layout`); the lights but the last are
-        cleared where counted, the last light's count is left in place, and the stencil is
-        returned as stored, (H, W) uint8 in this renderer's scratch: no colour target, no
-        pass after the last count, one byte a pixel read."""
-        progs, target = self.programs, self.target
-        passes.mask_pass(self.ctx, self.gl, target, progs, view_proj, camera,
-                         [sample for _, sample in hard], cull, in_stencil=in_stencil)
-        count_mask, light_bits = (stencil_gl.mask_layout(len(hard)) if in_stencil
-                                  else (0xFF, ()))
-        for k, (i, light) in enumerate(hard):
-            light4 = light.homogeneous
-            choice = methods.choose(plan.method, self.geometry.bounds, camera,
-                                    self.scene.size, light4, self.geometry.extent)
-            if shadows and light.shadows:   # a light switched off: its bit stays facing
-                vols.prepare(light4)
-                # the counts are 0: the mask pass cleared them, and each light's clear but the
-                # last zeroes them again (`stencil.where_shadowed`)
-                passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                     halve=plan.halve, clip_planes=clip, receivers=progs,
-                                     fbo=target.mark_fbo, clear=False, count_mask=count_mask)
-                if not in_stencil:
-                    passes.clear_shadowed(self.ctx, self.gl, target, progs, k,
-                                          zero=k < len(hard) - 1)
-                elif k < len(hard) - 1:
-                    passes.clear_shadowed_in_stencil(self.ctx, self.gl, target, progs,
-                                                     count_mask, light_bits[k])
-            zfail[i] |= choice
-        if in_stencil:
-            bits = target.read_stencil_bits(out=self._scratch_bytes(1))
-        else:
-            bits = target.read_unshadowed(out=self._scratch(1))
-        target.use()
-        return bits
-
-    def _deferred_frame(self, plan: FramePlan, camera, hard, shadows, vols, clip, cull, zfail,
-                        srgb_direct, truth_pages, counts) -> list[np.ndarray]:
-        """The deferred frame (`passes`): the lit bits of each page of LIGHTS_PER_PAGE hard
-        lights (as `_mask_frame`'s; none when neither masks nor coverage are asked for and
-        the colour is).  Fills `zfail`, `truth_pages` (the facing pass's, for the ground
-        truth) and `counts` (each hard light's stencil counts, when asked for)."""
-        progs, target = self.programs, self.target
-        outputs, want_stencil, facing_pass = plan.outputs, plan.want_stencil, plan.facing_pass
-        colour = bool({"image", "image_srgb"} & outputs)
-        need_bits = "lit" in outputs or "coverage" in outputs or not colour
-        # the unshadowed bits are cleared when some light of the first page is marked
-        # (and always for the facing pass, which marks every light)
-        passes.geometry_pass(self.ctx, target, progs, self.scene, cull,
-                             marks=len(hard) > 1 or facing_pass,
-                             srgb_background=self._srgb_background() if srgb_direct else None)
-        pages = []
-        # hard lights go in pages of LIGHTS_PER_PAGE: each one's volume count marks its
-        # unshadowed bit, then one shading pass per page (one for any usual frame)
-        # the stencil is all 0: the geometry pass cleared it, and each mark but a page's last
-        # zeroes it again (no clear, each one a flush of llvmpipe's scene, before a count); a
-        # page's last count stays for `shade`, so the next page clears it
-        stencil_zero = True
-        for first in range(0, max(len(hard), 1), LIGHTS_PER_PAGE):
-            page_lights = [sample for _, sample in hard[first:first + LIGHTS_PER_PAGE]]
-            if first:
-                target.clear_unshadowed()
-                target.clear_lit()
-            for bit, light in enumerate(page_lights):
-                light4 = light.homogeneous
-                choice = methods.choose(plan.method, self.geometry.bounds, camera,
-                                        self.scene.size, light4, self.geometry.extent)
-                if shadows and light.shadows:
-                    vols.prepare(light4)
-                    # halving is safe only for casters `auto` chose z-pass for, and only when
-                    # the counts themselves are not returned (see passes.count_volumes)
-                    passes.count_volumes(self.ctx, self.gl, target, vols, choice,
-                                         halve=plan.halve, receivers=progs,
-                                         clip_planes=clip,
-                                         # counted where it is marked: no framebuffer
-                                         # change between the page's lights (llvmpipe
-                                         # flushes at each)
-                                         fbo=None if want_stencil else target.mark_fbo,
-                                         clear=not stencil_zero)
-                    stencil_zero = False
-                elif not stencil_zero:
-                    target.clear_stencil()
-                    stencil_zero = True
-                if want_stencil:
-                    counts.append(target.read_stencil())
-                if bit < len(page_lights) - 1:   # the last light's stencil is read by `shade`
-                    passes.mark_unshadowed(self.ctx, self.gl, target, progs, bit,
-                                           restore=False, zero=True)
-                    stencil_zero = True
-                zfail[hard[first + bit][0]] |= choice
-            passes.shade(self.ctx, self.gl, target, progs, self.scene, camera, page_lights,
-                         first_page=not first, colour=colour, srgb=srgb_direct)
-            if need_bits:   # the frame's own scratch: read, used and dropped in this frame
-                pages.append(target.read_bits(out=self._scratch(len(pages) + 1)))
-            if facing_pass and page_lights:
-                # the facing pass reads every light's unshadowed bit: mark the last one's too
-                # (the stencil still holds its count)
-                passes.mark_unshadowed(self.ctx, self.gl, target, progs, len(page_lights) - 1)
-                truth_pages.append(self._truth_pass().run(target, self.geometry, page_lights))
-        return pages
+    def _masks_fit_stencil(self, frame: FrameState) -> bool:
+        """`drawing.masks_fit_stencil`, never when `masks_in_stencil` is off."""
+        return self.masks_in_stencil and drawing.masks_fit_stencil(
+            frame, self.count_bound, self.pipeline.stencil_export)
 
     def facing(self, *, camera: Camera | None = None,
                lights: tuple[Light, ...] | None = None) -> np.ndarray:
@@ -441,14 +212,10 @@ class Renderer:
         `overlay`).  The polygons are exactly those the stencil pass drew under `method`."""
         lights = check_lights(lights)
         result = self.render(method, silhouettes, camera=camera, lights=lights)
-        vols = self.volumes(silhouettes)  # the frame is left in the target
-        with stencil_gl.zero_to_one_depth(self.gl):
-            for i, light in ((i, hard) for i, lt in enumerate(self.scene.lights if lights is None
-                                                              else lights)
-                             for hard in hard_lights(lt) if hard.shadows):  # every sample
-                vols.prepare(light.homogeneous)
-                overlay.draw_volume_overlay(self.ctx, self.gl, self.target, vols,
-                                            result.zfail[i])
+        pipe = self.pipeline.with_volumes(self.volumes(silhouettes))  # the frame is left
+        with zero_to_one_depth(self.gl):
+            overlay.draw_volume_overlays(pipe, self.scene.lights if lights is None else lights,
+                                         result.zfail)
         return np.ascontiguousarray(self.target.read_colour()[..., :3])
 
     def release(self) -> None:
@@ -458,7 +225,7 @@ class Renderer:
         while self._owned:
             self._owned.pop().release()
         self._pool.clear()
-        self._scratches.clear()
+        self._scratch.clear()
         if self._own_ctx:
             self.ctx.release()
         self.ctx = None

@@ -84,13 +84,14 @@ def test_per_caster_counts_are_each_casters_stencil_count(ctx, gl_session, name,
             zfail = frame.zfail[i]
             vols.prepare(light.homogeneous)
             with zero_to_one_depth(r.gl):
-                counter.count(r.target, vols, zfail, objects, layout, halve=False,
-                              clip_planes=None, box=whole)
+                pipe = r.pipeline.with_volumes(vols)
+                counter.count(pipe, zfail, objects, layout, halve=False, clip_planes=None,
+                              box=whole)
                 together = r.target.read_stencil()
                 counts = counter.read_counts(layout)
                 alone = []
                 for j in objects:
-                    passes.count_volumes(r.ctx, r.gl, r.target, vols, zfail, objects=[j])
+                    passes.count_signed(pipe, zfail, objects=[j])
                     alone.append(r.target.read_stencil())
             assert counts.min() >= -128 and counts.max() < 128   # the int8 stencil's range
             for j in objects:

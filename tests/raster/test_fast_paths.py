@@ -65,13 +65,13 @@ def test_closed_meshes_are_halvable_open_ones_are_not(ctx):
 def test_halved_sides_give_identical_masks(ctx, seed, monkeypatch, assert_masks_match):
     scene = random_scene(seed)
     calls = []
-    original = passes.count_volumes
+    original = passes.count_signed
 
     def spy(*args, halve=False, **kw):
         calls.append(halve)
         return original(*args, halve=halve, **kw)
 
-    monkeypatch.setattr(passes, "count_volumes", spy)
+    monkeypatch.setattr(passes, "count_signed", spy)
     with Renderer(scene, ctx) as r:
         halved = r.render("auto", "cpu")
         full = r.render("auto", "cpu", stencil=True)   # counts asked for: never halved
@@ -89,7 +89,7 @@ def test_zpass_clip_box_gives_identical_masks(ctx, seed, method, silhouettes, mo
     scene = random_scene(seed)
     if seed % 2:   # the eye among the casters, looking across the floor
         scene = scene.replace(camera=Camera(eye=[0.5, 1.0, 1.0], target=[-2, 0.5, -3]))
-    original = passes.count_volumes
+    original = passes.count_signed
     boxes = []
 
     def spy(*args, clip_planes=None, **kw):
@@ -100,9 +100,9 @@ def test_zpass_clip_box_gives_identical_masks(ctx, seed, method, silhouettes, mo
         return original(*args, clip_planes=None, **kw)
 
     with Renderer(scene, ctx) as r:
-        monkeypatch.setattr(passes, "count_volumes", spy)
+        monkeypatch.setattr(passes, "count_signed", spy)
         clipped = r.render(method, silhouettes)
-        monkeypatch.setattr(passes, "count_volumes", unclipped)
+        monkeypatch.setattr(passes, "count_signed", unclipped)
         full = r.render(method, silhouettes)
     assert all(b is not None and b.shape == (6, 4) for b in boxes) and len(boxes) == 3
     np.testing.assert_array_equal(clipped.lit, full.lit)
@@ -111,13 +111,13 @@ def test_zpass_clip_box_gives_identical_masks(ctx, seed, method, silhouettes, mo
 
 def test_the_clip_box_is_off_when_counts_are_returned(ctx, monkeypatch):
     boxes = []
-    original = passes.count_volumes
+    original = passes.count_signed
 
     def spy(*args, clip_planes=None, **kw):
         boxes.append(clip_planes)
         return original(*args, clip_planes=clip_planes, **kw)
 
-    monkeypatch.setattr(passes, "count_volumes", spy)
+    monkeypatch.setattr(passes, "count_signed", spy)
     with Renderer(random_scene(0), ctx) as r:
         r.render("zpass", stencil=True)
     assert boxes == [None] * 3

@@ -244,14 +244,14 @@ def test_casters_count_only_objects_near_the_shadow(ctx, gl_session, monkeypatch
                   objects=[plane("floor", size=[6, 6]), sphere("ball", [0, 0.8, 0], 0.4)] + far,
                   lights=[PointLight([0.5, 4.0, 0.5])], width=64, height=48)
     counted = []
-    original = truth_pass.passes.count_volumes
+    original = truth_pass.passes.count_each_caster
 
     def spy(*args, objects=None, **kwargs):
         if objects is not None:
             counted.append(tuple(objects))
         return original(*args, objects=objects, **kwargs)
 
-    monkeypatch.setattr(truth_pass.passes, "count_volumes", spy)
+    monkeypatch.setattr(truth_pass.passes, "count_each_caster", spy)
     with Renderer(scene, gl_session) as r:
         frame = r.render(outputs=("casters",))
     assert counted == [(0, 1)]

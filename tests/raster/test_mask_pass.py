@@ -266,7 +266,8 @@ def test_the_stencil_layout():
 def test_without_stencil_export_the_bits_go_to_a_colour_target(ctx, passes_taken):
     """A GL without ARB_shader_stencil_export (some GPU drivers): the colour target."""
     with Renderer(mixed_scene(0), ctx) as r:
-        r._stencil_export = False
+        # the GL's answer (`Pipeline.stencil_export`, looked up once and kept) taken as no
+        r.pipeline.__dict__["stencil_export"] = False
         masks = r.render(outputs=MASKS)
         full = r.render()
     assert passes_taken.in_stencil == [False]

@@ -32,10 +32,8 @@ import numpy as np
 
 from shadowvol.cameras import pinhole
 from shadowvol.errors import RenderError
-from shadowvol.raster import methods, stencil
-from shadowvol.raster.passes import count_volumes
+from shadowvol.raster import methods, passes
 from shadowvol.raster.volumes.topology import Topology
-from shadowvol.scene import hard_lights
 
 STENCIL_LIMIT = 256  # counts are taken modulo this
 SATURATED = 255
@@ -120,63 +118,51 @@ def count_bound(topologies) -> int:
     return sum(topology_bound(t) for t in topologies)
 
 
-def find_wrapped(ctx, gl, target, volumes, zfail: np.ndarray, lit: np.ndarray,
+def find_wrapped(pipe, zfail: np.ndarray, lit: np.ndarray,
                  clip_planes: np.ndarray | None = None, halve: bool = False) -> np.ndarray:
-    """(H, W) bool: pixels where the count of the light `volumes` was prepared for may have
-    wrapped although the frame drew them lit (`lit` (H, W) bool, row 0 at the top).
+    """(H, W) bool: pixels where the count of the light `pipe.volumes` was prepared for may
+    have wrapped although the frame drew them lit (`lit` (H, W) bool, row 0 at the top).
     zfail : (n_objects,) bool, the method per caster, as in the count pass.  clip_planes : the
     z-pass clip box (`methods.zpass_clip_planes`), as the count pass uses it: the counts at
     covered pixels, the only ones read here, are the same, at a fraction of the fill.  halve:
     as the count pass did (`CpuVolumes.draw_sides`): the frame's count is then half as large
     for those casters, and so is the entering count that bounds it.  Leaves the stencil
     holding the saturated entering counts."""
-
-    count_volumes(ctx, gl, target, volumes, zfail, halve=halve, clip_planes=clip_planes,
-                  counting=lambda zfail_group, depth_clamp: stencil.entering_faces_counting(
-                      gl, zfail=zfail_group, depth_clamp=depth_clamp))
-    entering = target.read_stencil().astype(np.int16) & 0xFF  # read as signed; want 0..255
+    passes.count_entering(pipe, zfail, halve=halve, clip_planes=clip_planes)
+    entering = pipe.target.read_stencil().astype(np.int16) & 0xFF  # read as signed; 0..255
     return (entering >= SATURATED) & lit
 
 
-def check_frame(renderer, result, silhouettes: str, camera, lights, halve: bool,
-                only=None) -> None:
-    """Raise StencilOverflowError where a light's count may have wrapped to 0 at a pixel
-    `renderer`'s frame `result` drew lit: a saturating pass per light counts the faces by
-    which view rays enter volumes (`find_wrapped`), and a pixel found there is cleared by any
-    other valid counting (z-fail; z-pass where the near plane cuts no volume) that stays below
-    255.  `only`: the (light, sample) indices to check (a hard light is its own sample 0);
-    None: all."""
+def check_frame(pipe, frame, result, only=None) -> None:
+    """Raise StencilOverflowError where a light's count may have wrapped to 0 at a pixel the
+    frame `frame` (a `pipeline.FrameState`, drawn with `pipe`) drew lit in `result`: a
+    saturating pass per light counts the faces by which view rays enter volumes
+    (`find_wrapped`), and a pixel found there is cleared by any other valid counting (z-fail;
+    z-pass where the near plane cuts no volume) that stays below 255.  `only`: the (light,
+    sample) indices to check (a hard light is its own sample 0); None: all."""
     only = None if only is None else set(only)
-    camera = renderer.scene.camera if camera is None else camera
-    vols = renderer.volumes(silhouettes)
-    clip = methods.zpass_clip_planes(renderer.geometry.bounds, camera, renderer.scene.size,
-                                     renderer.geometry.extent)
-    lights = renderer.scene.lights if lights is None else lights
+    vols, geometry, clip = pipe.volumes, pipe.geometry, frame.zpass_box
     # an area light's samples are checked one by one against every pixel any sample lit (a
     # superset of the sample's own lit pixels: it may raise where it need not, never the other
     # way); the casters its samples counted with z-fail stay z-fail (valid)
-    for i, k, light in ((i, k, hard) for i, lt in enumerate(lights)
-                        for k, hard in enumerate(hard_lights(lt))):
-        if only is not None and (i, k) not in only or not light.shadows:
+    for hard in frame.hard:
+        i, light4 = hard.index, hard.light4
+        if only is not None and (i, hard.sample) not in only or not hard.light.shadows:
             continue   # its `light_bound` is below STENCIL_LIMIT, or it is never counted
-        light4 = light.homogeneous
         if vols.light4 is None or not np.array_equal(vols.light4, light4):
             vols.prepare(light4)  # (the frame's last light is still prepared)
         choice = result.zfail[i]
         drawn = result.lit_count[i] > 0
-        wrapped = find_wrapped(renderer.ctx, renderer.gl, renderer.target, vols, choice,
-                               drawn, clip, halve)
+        wrapped = find_wrapped(pipe, choice, drawn, clip, frame.plan.halve)
         # a pixel is cleared by any valid counting whose entering faces stay below 255
-        zpass_valid = not methods.needs_zfail(renderer.geometry.bounds, camera,
-                                              renderer.scene.size, light4,
-                                              renderer.geometry.extent).any()
+        zpass_valid = not methods.needs_zfail(geometry.bounds, frame.camera, frame.size, light4,
+                                              geometry.extent).any()
         others = [np.ones_like(choice)] + ([np.zeros_like(choice)] if zpass_valid else [])
         for other in others:
             if not wrapped.any():
                 break
             if not np.array_equal(other, choice):
-                wrapped &= find_wrapped(renderer.ctx, renderer.gl, renderer.target, vols,
-                                        other, drawn, clip)
+                wrapped &= find_wrapped(pipe, other, drawn, clip)
         if wrapped.any():
             raise StencilOverflowError(i, wrapped)
 

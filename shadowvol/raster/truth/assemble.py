@@ -9,25 +9,22 @@ from __future__ import annotations
 import numpy as np
 
 from shadowvol import frame
-from shadowvol.raster import methods
 from shadowvol.raster.truth import truth_pass
-from shadowvol.raster.plan import FramePlan
 from shadowvol.raster.truth.plane_depth import plane_depths
-from shadowvol.scene import Camera
 
 
-def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_pages, vols,
-                clip) -> dict[str, np.ndarray]:
-    """The ground-truth outputs of `plan` (and the facing pass's lit and lit_count, as "lit"
-    and "lit_count"), read from the frame `renderer` left in its target.  hard : the frame's
-    (light index, hard light) pairs, in the pages' order; truth_pages : the facing pass's
-    (lit, facing) bits per page."""
+def frame_truth(pipe, state, truth_pages, counters, object_bounds) -> dict[str, np.ndarray]:
+    """The ground-truth outputs of the frame `state` (a `pipeline.FrameState`; with the facing
+    pass's lit and lit_count, as "lit" and "lit_count"), read from what its passes left in
+    `pipe.target`.  truth_pages : the facing pass's (lit, facing) bits per page; counters :
+    a callable giving the per-caster counters (`truth_pass.CasterCounts`, made on first use);
+    object_bounds : a callable giving each object's count bound (for the counters' fields)."""
     out: dict[str, np.ndarray] = {}
-    want = set(plan.outputs) & set(frame.GROUND_TRUTH)
+    want = set(state.plan.outputs) & set(frame.GROUND_TRUTH)
     if not want:
         return out
-    target, geometry = renderer.target, renderer.geometry
-    h, w = renderer.scene.height, renderer.scene.width
+    target, geometry, camera = pipe.target, pipe.geometry, state.camera
+    h, w = target.height, target.width
     # the depth buffer is cleared every frame: it says where geometry is (the G-buffer and
     # the facing pass's targets are written only there)
     stored = truth_pass.read_depth(target)
@@ -46,24 +43,23 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_p
     if want & {"normal", "object_id"}:
         out |= truth_pass.surface_outputs(geometry, triangle, front, want)
     if "facing" in want:
-        samples = np.array([sum(1 for i, _ in hard if i == k) for k in range(len(lights))],
-                           np.int64)
+        samples, lights = state.samples, state.lights
         lit_count = np.zeros((len(lights), h, w), np.uint16)
         facing_count = np.zeros((len(lights), h, w), np.uint16)
         casters = (np.zeros(frame.shape("casters", len(lights), h, w,
-                                         objects=len(renderer.scene.objects)), np.uint64)
+                                         objects=len(pipe.scene.objects)), np.uint64)
                    if "casters" in want else None)
         receiving = covered   # casters are named where the visible object receives shadows
         if casters is not None and not geometry.receives.all():
             seen = np.maximum(geometry.triangle_of_key(truth_pass.read_surface(target, covered)[0]), 0)
             receiving = covered & geometry.receives[geometry.triangle_objects[seen]]
-        for k, (i, light) in enumerate(hard):
+        for k, hard in enumerate(state.hard):
             lit, facing = _sample_bits(truth_pages, k, covered)
-            lit_count[i] += lit
-            facing_count[i] += facing
+            lit_count[hard.index] += lit
+            facing_count[hard.index] += facing
             if casters is not None:
-                _sample_casters(renderer, plan, camera, stored, light, lit, facing & receiving,
-                                vols, clip, casters[i])
+                _sample_casters(pipe, state, hard, stored, lit, facing & receiving, counters,
+                                object_bounds, casters[hard.index])
         out["lit_count"], out["lit"] = lit_count, lit_count == samples[:, None, None]
         out["facing_count"], out["facing"] = facing_count, facing_count > 0
         if casters is not None:
@@ -71,23 +67,20 @@ def frame_truth(renderer, plan: FramePlan, camera: Camera, lights, hard, truth_p
     return out
 
 
-def _sample_casters(renderer, plan: FramePlan, camera: Camera, stored: np.ndarray, light,
-                    lit: np.ndarray, facing: np.ndarray, vols, clip, into: np.ndarray) -> None:
-    """ORs hard light `light`'s casters into `into` (H, W, K) uint64 where it faces the
-    pixel and is blocked: its own counts, under the method the frame counted it with."""
+def _sample_casters(pipe, state, hard, stored: np.ndarray, lit: np.ndarray,
+                    facing: np.ndarray, counters, object_bounds, into: np.ndarray) -> None:
+    """ORs hard light `hard`'s casters into `into` (H, W, K) uint64 where it faces the pixel
+    and is blocked: its own counts, under the method the frame counted it with."""
     cast = facing & ~lit
     if not cast.any():
         return
-    geometry = renderer.geometry
-    light4 = light.homogeneous
-    choice = methods.choose(plan.method, geometry.bounds, camera, renderer.scene.size,
-                            light4, geometry.extent)
+    geometry = pipe.geometry
     candidates = [j for j in truth_pass.caster_candidates(
-        geometry.bounds, truth_pass.cast_points(camera, stored, cast), light4) if geometry.casts[j]]
-    vols.prepare(light4)
-    bits = truth_pass.count_casters(renderer.target, renderer._truth_pass().casters, vols, choice,
-                               candidates, renderer.object_bounds, facing, halve=plan.halve,
-                               clip_planes=clip)
+        geometry.bounds, truth_pass.cast_points(state.camera, stored, cast), hard.light4)
+        if geometry.casts[j]]
+    pipe.volumes.prepare(hard.light4)
+    bits = truth_pass.count_casters(pipe, counters(), hard.zfail, candidates, object_bounds(),
+                                    facing, halve=state.plan.halve, clip_planes=state.clip)
     np.bitwise_or(into, bits, out=into)
 
 

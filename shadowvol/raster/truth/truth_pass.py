@@ -195,19 +195,19 @@ class CasterCounts:
             stencil_gl.clear_uint_texture(self.gl, self.counts.glo, box,
                                           value=FIELD_BIAS[bits], layer=word)
 
-    def count(self, target, volumes, choice: np.ndarray, group: list[int],
+    def count(self, pipe, choice: np.ndarray, group: list[int],
               layout: list[tuple[int, int, int]], halve: bool, clip_planes,
               box: tuple[int, int, int, int]) -> None:
         """Counter k := object group[k]'s own count, in its field of `layout`
         (`counter_layout`; at most CASTERS_PER_GROUP objects), and the stencil := 1 where any
         counted fragment lands, else 0, in `box` (the scissor must be set to it): the light's
         volume count
-        (`passes.count_volumes`, the same `choice`, `halve` and `clip_planes`) with the
-        counting programs, z-fail groups under the complementary depth test.  `volumes`
-        must be prepared for the light and its `counting_programs` made before the frame's
-        `passes.set_camera`."""
+        (`passes.count_each_caster`, the same `choice`, `halve` and `clip_planes` as
+        `passes.count_signed`) with the counting programs, z-fail groups under the
+        complementary depth test.  `pipe.volumes` must be prepared for the light and its
+        `counting_programs` made before the frame's `passes.set_camera`."""
         ctx, gl = self.ctx, self.gl
-        programs = volumes.counting_programs()
+        programs = pipe.volumes.counting_programs()
         field = dict(zip(group, layout))
 
         def each(program, j):
@@ -228,11 +228,10 @@ class CasterCounts:
 
         self._layers(1 + max(word for word, _, _ in layout))
         self._clear_counts(layout, box)
-        target.clear_stencil()   # within the scissor
+        pipe.target.clear_stencil()   # within the scissor
         self.counts.bind_to_image(0, read=True, write=True)
-        passes.count_volumes(ctx, gl, target, volumes, choice, halve=halve,
-                             clip_planes=clip_planes, counting=counting, objects=group,
-                             each=each)
+        passes.count_each_caster(pipe, choice, objects=group, each=each, counting=counting,
+                                 halve=halve, clip_planes=clip_planes)
         ctx.memory_barrier()   # the counts, before anything reads them
 
     def add_bits(self, target, group: list[int], layout: list[tuple[int, int, int]]) -> None:
@@ -414,14 +413,14 @@ def caster_candidates(bounds: np.ndarray, points: np.ndarray, light4: np.ndarray
     return [int(j) for j in np.flatnonzero(meets)]
 
 
-def count_casters(target, counter: CasterCounts, volumes, choice: np.ndarray,
-                  candidates: list[int], bounds: np.ndarray, where: np.ndarray, halve: bool,
+def count_casters(pipe, counter: CasterCounts, choice: np.ndarray, candidates: list[int],
+                  bounds: np.ndarray, where: np.ndarray, halve: bool,
                   clip_planes) -> np.ndarray:
     """(H, W, K) uint64, K = `caster_words(n_objects)`: bit j mod 64 of word j div 64
     where candidate object j's own shadow volumes count non-zero and `where` (H, W) bool (the
     pixels facing the light).  bounds (n_objects,) int: each object's
-    `overflow.topology_bound`.  `volumes`, `choice`, `halve` and `clip_planes` as
-    `CasterCounts.count` takes them.
+    `overflow.detect.topology_bound`.  `pipe` (its volumes prepared for the light),
+    `choice`, `halve` and `clip_planes` as `CasterCounts.count` takes them.
 
     The candidates go word by word (objects 64k .. 64k + 63), each word's in groups of
     CASTERS_PER_GROUP: one counting pass and one bits pass a group, one read a word (a word
@@ -429,6 +428,7 @@ def count_casters(target, counter: CasterCounts, volumes, choice: np.ndarray,
     in the box of the cast pixels (`cast_box`).  Leaves the stencil holding the last group's
     count."""
     bits = np.zeros(where.shape + (caster_words(len(bounds)),), np.uint64)
+    target = pipe.target
     if not candidates:
         return bits
     rows, cols = cast_box(where)
@@ -447,7 +447,7 @@ def count_casters(target, counter: CasterCounts, volumes, choice: np.ndarray,
             for first in range(0, len(in_word), CASTERS_PER_GROUP):
                 group = in_word[first:first + CASTERS_PER_GROUP]
                 layout = counter_layout(bounds[group])
-                counter.count(target, volumes, choice, group, layout, halve, clip_planes, box)
+                counter.count(pipe, choice, group, layout, halve, clip_planes, box)
                 counter.add_bits(target, group, layout)
             combined = counter.read_casters(box, 1 + max(in_word) % CASTER_WORD_BITS)
             bits[rows, cols, word] = np.where(where[rows, cols], combined, np.uint64(0))
