@@ -37,7 +37,8 @@ import numpy as np
 
 from shadowvol.raster.planar.matrix import plane_equation, projection_matrix
 from shadowvol.raster import forward, glsl, passes
-from shadowvol.raster import stencil as stencil_gl
+from shadowvol.raster.stencil import (
+    planar_receiver_mark, planar_shadow_once, where_not_planar_shadow, zero_to_one_depth)
 from shadowvol.raster.platform.context import make_current
 from shadowvol.raster.projection import (
     NEARER,
@@ -161,7 +162,7 @@ class PlanarShadows:
         index = receiver_index(scene, receiver)
         plane = receiver_plane(scene, index)
         make_current(r.ctx)
-        with stencil_gl.zero_to_one_depth(r.gl):
+        with zero_to_one_depth(r.gl):
             return self._render(scene, index, plane, camera, lights, stencil, shadows)
 
     def _render(self, scene, index, plane, camera, lights, stencil, shadows) -> PlanarResult:
@@ -181,7 +182,7 @@ class PlanarShadows:
             if stencil:
                 counts.append(r.target.read_stencil().astype(np.uint8))
             forward.add_light(r.ctx, r.gl, r.target, r.programs, light,
-                             stencil_gl.where_not_planar_shadow)
+                             where_not_planar_shadow)
             lit.append(r.target.read_lit())
         rgba = r.target.read_colour()
         h, w = scene.height, scene.width
@@ -197,7 +198,7 @@ class PlanarShadows:
         r.target.use(colour=False, depth=False)
         r.ctx.enable_only(moderngl.DEPTH_TEST)
         r.ctx.depth_func = "=="
-        with stencil_gl.planar_receiver_mark(r.gl):
+        with planar_receiver_mark(r.gl):
             r.programs.ambient_vao.render(moderngl.TRIANGLES, vertices=3 * rng.count,
                                           first=3 * rng.first)
         r.ctx.depth_func = NEARER
@@ -222,7 +223,7 @@ class PlanarShadows:
         r.ctx.depth_func = NEARER_OR_EQUAL
         r.ctx.polygon_offset = POLYGON_OFFSET
         try:
-            with stencil_gl.planar_shadow_once(r.gl):
+            with planar_shadow_once(r.gl):
                 for rng in r.geometry.ranges:
                     if rng.index != index:
                         self.vao.render(moderngl.TRIANGLES, vertices=3 * rng.count,

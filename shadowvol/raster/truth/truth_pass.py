@@ -36,8 +36,7 @@ import numpy as np
 
 from shadowvol.cameras import intrinsics, look_at_basis
 from shadowvol.frame import CASTER_WORD_BITS, caster_words
-from shadowvol.raster import glsl, passes
-from shadowvol.raster import stencil as stencil_gl
+from shadowvol.raster import glsl, passes, stencil
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.passes import FARTHER_THAN_NOTHING, NO_CONE
 from shadowvol.raster.projection import NEARER, in_frame, top_row_first
@@ -108,7 +107,7 @@ class TruthPass:
         # shading pass), so facing.frag has no branch for them
         self.fbo.depth_mask = False
         self.fbo.color_mask = (True,) * 4
-        stencil_gl.clear_colour_attachment(self.gl, self.fbo.glo, 0, 0.0)
+        stencil.clear_colour_attachment(self.gl, self.fbo.glo, 0, 0.0)
         self.fbo.use()
         self.ctx.enable_only(moderngl.DEPTH_TEST)
         self.ctx.depth_func = FARTHER_THAN_NOTHING
@@ -186,13 +185,13 @@ class CasterCounts:
 
     def clear_casters(self, box: tuple[int, int, int, int]) -> None:
         """The casters' words to 0 in `box` (x, y, w, h, GL's rows)."""
-        stencil_gl.clear_uint_texture(self.gl, self.casters.glo, box, components=2)
+        stencil.clear_uint_texture(self.gl, self.casters.glo, box, components=2)
 
     def _clear_counts(self, layout, box: tuple[int, int, int, int]) -> None:
         """Each counter word of `layout` to its FIELD_BIAS in `box`."""
         width = {word: bits for word, _, bits in layout}
         for word, bits in width.items():
-            stencil_gl.clear_uint_texture(self.gl, self.counts.glo, box,
+            stencil.clear_uint_texture(self.gl, self.counts.glo, box,
                                           value=FIELD_BIAS[bits], layer=word)
 
     def count(self, pipe, choice: np.ndarray, group: list[int],
@@ -221,7 +220,7 @@ class CasterCounts:
                 set_uniform(p, "u_front_step", -1 if zfail_group else 1)
             ctx.depth_func = NOT_NEARER if zfail_group else NEARER
             try:
-                with stencil_gl.caster_touching(gl, depth_clamp):
+                with stencil.caster_touching(gl, depth_clamp):
                     yield
             finally:
                 ctx.depth_func = NEARER
@@ -263,7 +262,7 @@ class CasterCounts:
         self.casters.bind_to_image(1, read=True, write=True)
         target.use(colour=False, depth=False)
         ctx.enable_only(moderngl.NOTHING)
-        with stencil_gl.where_shadowed(self.gl):
+        with stencil.where_shadowed(self.gl):
             vao.render(moderngl.TRIANGLES, vertices=3)
         ctx.enable_only(moderngl.DEPTH_TEST)
         ctx.memory_barrier()   # the casters' words, before they are read or added to
@@ -317,7 +316,7 @@ def read_surface(target, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
 def read_depth(target) -> np.ndarray:
     """(H, W) float32: the depth buffer as stored (near / eye-space depth; 0, the clear value,
     where nothing is drawn), row 0 at the top."""
-    return top_row_first(stencil_gl.read_depth(target.gl, target.gbuffer_fbo.glo,
+    return top_row_first(stencil.read_depth(target.gl, target.gbuffer_fbo.glo,
                                                target.width, target.height))
 
 
