@@ -125,7 +125,8 @@ class FrameState:
         return cls(plan=plan, shadows=shadows, camera=camera, size=size, view_proj=view_proj,
                    origin=origin, zpass_box=box, clip=None if plan.want_stencil else box,
                    cull=cull, lights=lights, hard=hard,
-                   samples=np.array([len(hard_lights(lt)) for lt in lights], np.int64),
+                   samples=np.bincount([h.index for h in hard], minlength=len(lights)
+                                       ).astype(np.int64),
                    zfail=zfail)
 
     @property
