@@ -1,6 +1,7 @@
-"""The forward passes, kept for the planar shadows (`planar_pass`): depth and ambient for every
+"""The forward passes, kept for the planar shadows (`planar.draw`): depth and ambient for every
 triangle, then per light its Phong term over the soup with depth test EQUAL, where a stencil
-test passes.  They compute the deferred frame's numbers (see `passes`)."""
+test passes, each handed the renderer's `pipeline.Pipeline`.  They compute the deferred
+frame's numbers (see `passes`)."""
 
 from __future__ import annotations
 
@@ -8,18 +9,15 @@ import moderngl
 import numpy as np
 
 from shadowvol.raster import stencil
-from shadowvol.raster.platform.gl import RawGL
 from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.passes import NO_CONE
-from shadowvol.raster.programs import ScenePrograms
 from shadowvol.raster.projection import NEARER, in_frame
-from shadowvol.raster.target import Target
-from shadowvol.scene import AreaSample, Light, Scene, SpotLight
+from shadowvol.scene import AreaSample, Light, SpotLight
 
 
-def depth_ambient(ctx: moderngl.Context, target: Target, progs: ScenePrograms,
-                  scene: Scene) -> None:
+def depth_ambient(pipe) -> None:
     """Clear everything, then depth and ambient for all triangles."""
+    ctx, target, progs, scene = pipe.ctx, pipe.target, pipe.programs, pipe.scene
     target.clear(scene.background)
     ctx.enable_only(moderngl.DEPTH_TEST)
     ctx.depth_func = NEARER
@@ -45,10 +43,10 @@ def light_uniforms(program: moderngl.Program, light: Light, origin: np.ndarray) 
         set_uniform(program, "u_spot_cos", NO_CONE)
 
 
-def add_light(ctx: moderngl.Context, gl: RawGL, target: Target, progs: ScenePrograms,
-              light: Light, stencil_test=stencil.where_unshadowed) -> None:
+def add_light(pipe, light: Light, stencil_test=stencil.where_unshadowed) -> None:
     """Add `light`'s Phong term where `stencil_test` passes (the shadow volumes' count is 0;
     planar shadows pass their own test); its lit mask goes to `target.lit`."""
+    ctx, gl, target, progs = pipe.ctx, pipe.gl, pipe.target, pipe.programs
     target.clear_lit()
     target.use(colour=True, depth=False)
     ctx.enable_only(moderngl.DEPTH_TEST | moderngl.BLEND)

@@ -172,7 +172,7 @@ class PlanarShadows:
         view_proj, origin = frame_view_projection(camera, scene.size)
         r.geometry.move_to(origin)
         passes.set_camera((r.programs.ambient, r.programs.phong), view_proj, camera, origin)
-        forward.depth_ambient(r.ctx, r.target, r.programs, scene)
+        forward.depth_ambient(r.pipeline)
         lit, counts = [], []
         for light in lights:
             r.target.clear_stencil()
@@ -181,8 +181,7 @@ class PlanarShadows:
                 self._project_shadows(index, plane, light, view_proj)
             if stencil:
                 counts.append(r.target.read_stencil().astype(np.uint8))
-            forward.add_light(r.ctx, r.gl, r.target, r.programs, light,
-                             where_not_planar_shadow)
+            forward.add_light(r.pipeline, light, where_not_planar_shadow)
             lit.append(r.target.read_lit())
         rgba = r.target.read_colour()
         h, w = scene.height, scene.width
