@@ -21,7 +21,7 @@ def overflow(results: dict) -> list[str]:
         "saturating volume "
         "pass per light and a stencil read) runs when the scene's bound reaches 256 and, "
         "from a light's second frame on, only when that light's bound "
-        "(`overflow.light_bound`) does too.")
+        "(`overflow.detect.light_bound`) does too.")
     add("")
     add("| mesh | triangles | scene bound | light bound | re-check after the first frame | "
         "plain | checked | unchecked | ratio of the medians − 1 | cost of the check "

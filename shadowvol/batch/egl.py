@@ -1,12 +1,13 @@
 """Which EGL device a batch worker renders on: choose one of the devices, say why.
 
 CUDA_VISIBLE_DEVICES does not select an EGL device (moderngl#732, mujoco#461): EGL lists every
-GPU (and Mesa's software device) whatever CUDA sees.  `shadowvol.raster.platform.egl.devices` lists them
-with the CUDA device each one is, where EGL_NV_device_cuda says it.
+GPU (and Mesa's software device) whatever CUDA sees.  `shadowvol.raster.platform.egl.devices` lists
+them with the CUDA device each one is, where EGL_NV_device_cuda says it.
 `choose("auto")` takes the EGL device of this process's first visible CUDA device (CUDA device 0,
 which CUDA_VISIBLE_DEVICES, Slurm and Ray's `num_gpus` decide), else device 0.
 
-The device queries are `shadowvol.raster.platform.egl.devices` (no context is made, and no GL is loaded).
+The device queries are `shadowvol.raster.platform.egl.devices` (no context is made, and no GL is
+loaded).
 """
 
 from __future__ import annotations

@@ -11,11 +11,12 @@ that touches two compatibility problems of pyrender 0.1.45 (pinned in pyproject'
   here and nowhere else;
 - headless rendering needs `PYOPENGL_PLATFORM=egl` before PyOpenGL is first imported: we set it if
   it is not set already (an explicit `osmesa` is respected).
-A third one is handled by `shadowvol.raster.platform.pyrender_context.offscreen`: pyrender's `OffscreenRenderer.delete()` calls
-`eglTerminate` on the EGL display, which is shared by every EGL user in the process (pyrender
-issue #223, "re-create OffscreenRenderer": EGL_BAD_DISPLAY), so it would kill a moderngl context
-living beside it, and pyrender leaves its own context current.  We tear the renderer down
-without terminating the display and make the caller's context current again.
+A third one is handled by `shadowvol.raster.platform.pyrender_context.offscreen`: pyrender's
+`OffscreenRenderer.delete()` calls `eglTerminate` on the EGL display, which is shared by every EGL
+user in the process (pyrender issue #223, "re-create OffscreenRenderer": EGL_BAD_DISPLAY), so it
+would kill a moderngl context living beside it, and pyrender leaves its own context current.  We
+tear the renderer down without terminating the display and make the caller's context current
+again.
 
 One more pyrender behaviour shows in its images and masks and is left as it is, because it is
 part of what the comparison measures: its shadow pass culls back faces (by winding) even for

@@ -1,7 +1,8 @@
 """The shadow tasks' hidden cases, their answers computed by the project's own code: the 2D
 exercise (`shadowvol.course.shadow2d`), the rasterizer's silhouettes by the multiplicity rule
-(`shadowvol.raster.volumes.topology`, `shadowvol.raster.volumes.silhouettes`), counting along an eye ray
-(`shadowvol.course.counting`) and the planar shadow matrix (`shadowvol.raster.planar.matrix`).
+(`shadowvol.raster.volumes.topology`, `shadowvol.raster.volumes.silhouettes`), counting along an
+eye ray (`shadowvol.course.counting`) and the planar shadow matrix
+(`shadowvol.raster.planar.matrix`).
 
 Every case list is built from fixed numbers and a seeded generator, the same on every run.
 """

@@ -129,7 +129,7 @@ class SceneGeometry:
         self._buffers = []
         # per triangle: its world-space unit normal, in float64 then rounded once, and its
         # object: the lighting's (the per-triangle data, `in_normal`) and the ground truth's
-        # (`truth.surface_outputs`)
+        # (`truth.truth_pass.surface_outputs`)
         self.face_normals32 = np.empty((self.triangle_count, 3), np.float32)
         for rng, (v, f) in zip(self.ranges, self._objects):
             for a in range(0, rng.count, CHUNK):

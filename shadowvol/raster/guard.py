@@ -9,7 +9,7 @@ the size of its far corners, too coarse for them: the clipped polygon's edges la
 view.  (Not the world-space upload: the loss stays in the eye's frame; cut here first, in
 float64, to within GUARD of the view's edges and beyond half the near distance, every loss
 seen is gone.)  The same cut is applied to the volumes in homogeneous coordinates
-(`volumes_cpu.CpuVolumes._guard_sides`, `volumes.far_cap_pieces`).
+(`volumes.cpu.CpuVolumes._guard_sides`, `volumes.builder.far_cap_pieces`).
 
 Why it changes nothing that is seen: every pixel's view ray runs from the eye inside the view
 pyramid, which lies inside the guard pyramid; the part of a triangle outside the guard pyramid

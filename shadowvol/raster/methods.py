@@ -155,8 +155,8 @@ def zpass_clip_planes(bounds: np.ndarray, camera: Camera, size: tuple[float, flo
 def cullable(bounds: np.ndarray, outward_convex: np.ndarray, camera: Camera,
              extent: float) -> np.ndarray:
     """(n,) bool: objects whose back faces the geometry pass may cull without changing what is
-    visible: closed convex meshes wound outward (`overflow.convex_orientation` +1) whose whole
-    box lies beyond the near plane (by CULL_NEAR_MARGIN * extent), so the eye is outside the
+    visible: closed convex meshes wound outward (`overflow.detect.convex_orientation` +1) whose
+    whole box lies beyond the near plane (by CULL_NEAR_MARGIN * extent), so the eye is outside the
     body and no view ray starts inside it.  A view ray from outside a convex body meets it
     first through a front face; the back faces it meets later lie behind that front face, so
     in exact arithmetic the depth test rejects them.  In float32 it is not exact: near a

@@ -309,10 +309,10 @@ def zfail_counting(gl: RawGL, depth_clamp: bool, count_mask: int = 0xFF) -> Iter
 
 @contextlib.contextmanager
 def entering_faces_counting(gl: RawGL, zfail: bool, depth_clamp: bool) -> Iterator[None]:
-    """The stencil-overflow check (`shadowvol.raster.overflow.detect`): count, SATURATING at 255, only the
-    volume faces by which the view ray ENTERS a volume where the count pass counts them: front
-    faces in front of the surface (z-pass), back faces behind it (z-fail).  The signed count is
-    at most that number, so where it stays below 255 the 8-bit signed count cannot have
+    """The stencil-overflow check (`shadowvol.raster.overflow.detect`): count, SATURATING at 255,
+    only the volume faces by which the view ray ENTERS a volume where the count pass counts them:
+    front faces in front of the surface (z-pass), back faces behind it (z-fail).  The signed count
+    is at most that number, so where it stays below 255 the 8-bit signed count cannot have
     wrapped.  `depth_clamp` as in `zfail_counting`."""
     counting = (GL_KEEP, GL_INCR, GL_KEEP) if zfail else (GL_KEEP, GL_KEEP, GL_INCR)
     ignored = (GL_KEEP, GL_KEEP, GL_KEEP)
@@ -408,8 +408,8 @@ def exported_bits(gl: RawGL) -> contextlib.AbstractContextManager[None]:
 
 
 def caster_touching(gl: RawGL, depth_clamp: bool) -> contextlib.AbstractContextManager[None]:
-    """The ground truth's per-caster counts (`truth.CasterCounts`), which go to an image:
-    the stencil := 1 wherever a counted fragment lands (either face; the image counts the
+    """The ground truth's per-caster counts (`truth.truth_pass.CasterCounts`), which go to an
+    image: the stencil := 1 wherever a counted fragment lands (either face; the image counts the
     fragments that pass the depth test, z-fail's under the complementary test), so a pixel
     whose counters are not all 0 has stencil 1.  `depth_clamp` as `zpass_counting` (off)
     and `zfail_counting` take it for the same faces."""
@@ -427,8 +427,8 @@ def depth_clamped(gl: RawGL) -> Iterator[None]:
 
 
 # ---------------------------------------------------------------------------------------------
-# Planar projected shadows (shadowvol.raster.planar.draw): mark the receiver, shadow each pixel once,
-# light where not shadowed
+# Planar projected shadows (shadowvol.raster.planar.draw): mark the receiver, shadow each pixel
+# once, light where not shadowed
 # ---------------------------------------------------------------------------------------------
 
 PLANAR_RECEIVER = 1   # stencil value of a pixel where the receiving plane is the visible surface

@@ -1,5 +1,5 @@
-"""Planar projected shadows in GL (shadowvol.raster.planar.draw): right where the answer is known, and
-wrong exactly where the method is known to be wrong."""
+"""Planar projected shadows in GL (shadowvol.raster.planar.draw): right where the answer is known,
+and wrong exactly where the method is known to be wrong."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""The per-caster counts behind `casters` (shadowvol.raster.truth.truth_pass.CasterCounts), exactly: each
-caster's counter after the one counting pass (z-fail under the complementary depth test)
-equals that caster's own stencil count (its volumes alone through the stencil pass) at every
+"""The per-caster counts behind `casters` (shadowvol.raster.truth.truth_pass.CasterCounts),
+exactly: each caster's counter after the one counting pass (z-fail under the complementary depth
+test) equals that caster's own stencil count (its volumes alone through the stencil pass) at every
 pixel, negative counts too (z-pass forced where the near plane cuts a volume), the counters
 sum to the frame's stencil count, and the stencil the counting pass leaves marks every pixel
 where a counter is not 0.  On every scene file with hard lights and on built cases, z-pass,

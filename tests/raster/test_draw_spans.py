@@ -1,5 +1,5 @@
 """A frame's draws are runs of triangles, not objects: the soup's spans
-(`SceneGeometry.spans`) and the volumes' runs (`volumes.runs_of`) are computed in numpy, and
+(`SceneGeometry.spans`) and the volumes' runs (`volumes.builder.runs_of`) are computed in numpy, and
 the number of draw calls of a frame does not grow with the number of objects.
 
 Witnesses: the spans against the set of triangle keys a draw must cover, built triangle by

@@ -1,5 +1,5 @@
-"""The 8-bit stencil meets 256 layers (shadowvol.raster.overflow.detect): a count that wraps to 0 is never
-returned as lit; it raises StencilOverflowError (exit status 3 from the command line).
+"""The 8-bit stencil meets 256 layers (shadowvol.raster.overflow.detect): a count that wraps to 0
+is never returned as lit; it raises StencilOverflowError (exit status 3 from the command line).
 Counts that reach 256 but do not land on a multiple of it stay right."""
 
 from __future__ import annotations

@@ -56,8 +56,8 @@ def create_context(device: int | None = None) -> moderngl.Context:
     """A new standalone OpenGL >= 4.5 core context on EGL.
 
     `device`: the index of the EGL device to render on (in eglQueryDevicesEXT's order; see
-    `shadowvol.raster.platform.egl` for listing them, `shadowvol.batch.egl` for choosing one), or None
-    for glcontext's default (device 0, or $GLCONTEXT_DEVICE_INDEX).  CUDA_VISIBLE_DEVICES does
+    `shadowvol.raster.platform.egl` for listing them, `shadowvol.batch.egl` for choosing one), or
+    None for glcontext's default (device 0, or $GLCONTEXT_DEVICE_INDEX).  CUDA_VISIBLE_DEVICES does
     not select an EGL device.  The caller owns the context and must `release()` it.  Raises ContextError naming what to
     install when libEGL, a driver, or GL 4.5 is missing, and one saying how many devices there
     are when `device` is not one of them.

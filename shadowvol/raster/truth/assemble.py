@@ -51,7 +51,8 @@ def frame_truth(pipe, state, truth_pages, counters, object_bounds) -> dict[str, 
                    if "casters" in want else None)
         receiving = covered   # casters are named where the visible object receives shadows
         if casters is not None and not geometry.receives.all():
-            seen = np.maximum(geometry.triangle_of_key(truth_pass.read_surface(target, covered)[0]), 0)
+            seen = np.maximum(geometry.triangle_of_key(
+                truth_pass.read_surface(target, covered)[0]), 0)
             receiving = covered & geometry.receives[geometry.triangle_objects[seen]]
         for k, hard in enumerate(state.hard):
             lit, facing = _sample_bits(truth_pages, k, covered)

@@ -137,7 +137,7 @@ class TruthPass:
 
 def counter_layout(bounds) -> list[tuple[int, int, int]]:
     """(word, shift, width) of each caster's counter, for casters whose counts are at most
-    `bounds` (k,) int (`overflow.topology_bound`: 2 for a closed convex mesh, else its
+    `bounds` (k,) int (`overflow.detect.topology_bound`: 2 for a closed convex mesh, else its
     triangles): the narrowest of 8, 16 or 32 bits whose biased field (`FIELD_BIAS`) holds the
     bound, packed into 32-bit words in that order, one width a word (four 8-bit counters, two
     16-bit or one 32-bit)."""

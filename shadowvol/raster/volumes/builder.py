@@ -3,9 +3,9 @@
 Two builders with one interface (`VolumeBuilder`: `prepare(light4)`, `draw_sides(objects)`,
 `draw_caps(objects, near)`), each in its own module:
 
-- `volumes_cpu.CpuVolumes`: silhouettes by the multiplicity rule in numpy (`silhouettes`), side
+- `volumes.cpu.CpuVolumes`: silhouettes by the multiplicity rule in numpy (`silhouettes`), side
   quads uploaded per light, caps drawn from the scene soup through index lists split by sign.
-- `volumes_gpu.GpuVolumes`: a static edge buffer (Pečiva et al. 2013) and a geometry shader
+- `volumes.gpu.GpuVolumes`: a static edge buffer (Pečiva et al. 2013) and a geometry shader
   computing each edge's multiplicity, and a vertex shader choosing each triangle's caps, all on
   the GPU; nothing per light but uniforms.
 

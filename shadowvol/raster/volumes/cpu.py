@@ -71,9 +71,9 @@ class CpuVolumes:
     frame, a light in the next camera of a turntable) reuses its side quads and cap lists as
     they were uploaded.  Kept: every light of this frame and the last (`new_frame()` starts a
     frame) and the most recent others within `KEPT_OLDER_BYTES` and `KEPT_OLDER_LIGHTS` (what a
-    moving light leaves behind), all within `KEPT_BYTES` of signs, side corners, side-quad and cap buffers.  Over
-    the bytes the least recently used go first, but never one this frame has used: a frame
-    whose lights need more (many samples of a large scene) keeps those it prepared first and
+    moving light leaves behind), all within `KEPT_BYTES` of signs, side corners, side-quad and cap
+    buffers.  Over the bytes the least recently used go first, but never one this frame has used: a
+    frame whose lights need more (many samples of a large scene) keeps those it prepared first and
     rebuilds only the others in every frame, where plain LRU over a cycle longer than the
     cache rebuilds all.  The side corners are kept in float64 world space; when the frame
     moves (`SceneGeometry.move_to`) a kept buffer is rewritten in the new frame on its next
@@ -119,8 +119,8 @@ class CpuVolumes:
 
     def counting_programs(self) -> tuple[moderngl.Program, ...]:
         """The same vertex stages with caster_count.frag (the ground truth's per-caster counts,
-        `truth.CasterCounts`), made on first use, with the prepared light; the camera is set
-        by the next `passes.set_camera`, which sees them in `programs`."""
+        `truth.truth_pass.CasterCounts`), made on first use, with the prepared light; the camera is
+        set by the next `passes.set_camera`, which sees them in `programs`."""
         if not self._counting:
             self._counting = self._programs("caster_count.frag")
             if self.light4 is not None:
