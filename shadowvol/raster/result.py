@@ -10,7 +10,6 @@ import numpy as np
 from shadowvol import frame
 from shadowvol.scene import AreaLight, DirectionalLight, Light, PointLight, SpotLight
 
-SILHOUETTES = ("cpu", "gpu")
 # what `render(outputs=...)` can return; the default is what the frame always returned
 OUTPUTS = ("image", "image_srgb", "lit", "coverage", "stencil") + frame.GROUND_TRUTH + \
     frame.LAYERS
