@@ -51,8 +51,9 @@ NEAR_MAX_PARTS = 1 << 14
 # A cell key packs the level (LEVEL_BITS) and three cell coordinates (AXIS_BITS each).
 LEVEL_BITS, AXIS_BITS = 6, 19
 # The table finding a key's cell has at least NEAR_TABLE_SLOTS slots per occupied cell (a
-# power of two; a key is looked for in the sorted keys only where its slot is shared).
-NEAR_TABLE_SLOTS = 8
+# power of two, int32: at most 32 bytes a cell; a key is looked for in the sorted keys only
+# where its slot is shared).
+NEAR_TABLE_SLOTS = 4
 _HASH = np.uint64(0x9E3779B97F4A7C15)  # Fibonacci hashing: the top bits of key · 2**64/φ
 
 
@@ -116,7 +117,7 @@ class NearGrid:
         self.levels, self.keys, self.members = (np.zeros(0, np.int64),) * 3
         self.boxes = np.zeros((6, 0))
         self.starts = np.zeros(1, np.int64)
-        self._bits, self._table = 10, np.full(1 << 10, -1, np.int64)
+        self._bits, self._table = 10, np.full(1 << 10, -1, np.int32)
         if m == 0:
             return
         size = hi - lo
@@ -140,12 +141,17 @@ class NearGrid:
         new = np.flatnonzero(np.diff(keys, prepend=-1))
         self.keys, self.starts = keys[new], np.append(new, len(keys))
         self.levels = np.flatnonzero(np.bincount(level))
-        # the table: slot -> the cell whose key alone lands there, -2 where several do, -1 none
-        self._bits = max(10, (NEAR_TABLE_SLOTS * len(new) - 1).bit_length())
-        slot = self._slot(self.keys)
-        shared = np.bincount(slot, minlength=1 << self._bits)[slot] > 1
-        self._table = np.full(1 << self._bits, -1, np.int64)
-        self._table[slot] = np.where(shared, -2, np.arange(len(new)))
+        self._index(max(10, (NEAR_TABLE_SLOTS * len(new) - 1).bit_length()))
+
+    def _index(self, bits: int) -> None:
+        """The table of 2**bits slots: slot -> the cell whose key alone lands there, -2 where
+        several do, -1 none (a slot that several keys share keeps one, and each other marks
+        it)."""
+        self._bits = bits
+        slot, cell = self._slot(self.keys), np.arange(len(self.keys), dtype=np.int32)
+        self._table = np.full(1 << bits, -1, np.int32)
+        self._table[slot] = cell
+        self._table[slot[self._table[slot] != cell]] = -2
 
     def _slot(self, keys: np.ndarray) -> np.ndarray:
         """The table's slot (n,) of each key (n,) int64."""
@@ -154,7 +160,7 @@ class NearGrid:
     def _find(self, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(found, at): the keys (n,) that are occupied cells' (their indices into keys) and
         those cells' indices into self.keys."""
-        at = self._table[self._slot(keys)]
+        at = self._table[self._slot(keys)].astype(np.int64)
         shared = np.flatnonzero(at == -2)
         at[shared] = np.minimum(np.searchsorted(self.keys, keys[shared]), len(self.keys) - 1)
         found = np.flatnonzero(at >= 0)
