@@ -87,7 +87,10 @@ class MitsubaMasks:
         framed = replace(camera, eye=camera.eye - origin, target=camera.target - origin)
         o, d = primary_rays(framed, scene.width, scene.height, dtype=np.float32)
         self.origins, self.directions = np.ascontiguousarray(o.T), np.ascontiguousarray(d.T)
-        self.light = np.asarray(scene.lights[0].position, np.float64) - origin
+        first = scene.lights[0] if scene.lights else None
+        self.light = (np.asarray(first.position, np.float64) - origin
+                      if hasattr(first, "position") else None)
+        self.lights, self.origin = scene.lights, origin
         self.shape = (scene.height, scene.width)
 
     def __call__(self) -> tuple[np.ndarray, np.ndarray]:
@@ -103,6 +106,34 @@ class MitsubaMasks:
         lit = facing & ~blocked
         dr.eval(lit, hit)
         return (np.array(lit, bool).reshape(self.shape),
+                np.array(hit, bool).reshape(self.shape))
+
+
+    def all_lights(self) -> tuple[np.ndarray, np.ndarray]:
+        """The masks of every light (point, spot or directional): lit (L, H, W) bool and
+        coverage (H, W) bool, the way `()` makes the first's (a spot light's cone: the angle
+        between its axis and the point; a directional light: `spawn_ray` along −direction)."""
+        dr, mi = self.dr, self.mi
+        ray = mi.Ray3f(mi.Point3f(*self.origins), mi.Vector3f(*self.directions))
+        si = self.scene.ray_intersect(ray, ray_flags=mi.RayFlags.Minimal, coherent=True)
+        hit = si.is_valid()
+        side = dr.sign(dr.dot(si.n, -ray.d))
+        lit = []
+        for light in self.lights:
+            if hasattr(light, "position"):
+                at = mi.Point3f(*[float(x) for x in np.asarray(light.position) - self.origin])
+                toward = at - si.p
+                shadow = si.spawn_ray_to(at)
+            else:
+                toward = mi.Vector3f(*[float(-x) for x in light.direction])
+                shadow = si.spawn_ray(toward)
+            facing = hit & (dr.dot(si.n, toward) * side > 0)
+            if hasattr(light, "cos_cutoff"):
+                axis = mi.Vector3f(*[float(x) for x in light.direction])
+                facing &= -dr.dot(axis, dr.normalize(toward)) >= light.cos_cutoff
+            lit.append(facing & ~self.scene.ray_test(shadow, active=facing))
+        dr.eval(hit, *lit)
+        return (np.stack([np.array(m, bool).reshape(self.shape) for m in lit]),
                 np.array(hit, bool).reshape(self.shape))
 
 

@@ -87,6 +87,11 @@ EXTRAS = (
     ("bench_open3d.py", ["--json", "{json}"],
      "raytrace.shadow_masks against the naive masks of Open3D's RaycastingScene (an optional "
      "peer: the bench extra), bunny and turntable (issue: rays at full speed)"),
+    ("bench_peers.py", ["--json", "{json}"],
+     "exact masks, the ray tracer's and the raster mask-only frame's, against Open3D's "
+     "RaycastingScene and Mitsuba 3 llvm_ad_rgb (optional peers: the bench extra) on 100k, 1M, "
+     "two bunnies and 4 turntable views; the ground truth against the masks, ns per ray, "
+     "1 -> 2 threads (issue: rays at full speed)"),
     ("bench_exact_soft.py", [],
      "exact soft shadows (raytrace.exact_soft) against counting 64, 256 and 1,024 samples on "
      "scenes/soft.toml and on a closed non-convex mesh of 5,120 triangles (issue 41)"),

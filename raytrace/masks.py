@@ -334,16 +334,17 @@ def _segments(local: _LocalLight, hit: _Hits, reach: float) -> _Segments:
 
 
 def _long_lifts(rays: np.ndarray, near: np.ndarray, lift: np.ndarray, end, hit: _Hits,
-                direction) -> _NearPieces:
+                position: np.ndarray | None, toward: np.ndarray | None = None) -> _NearPieces:
     """The `_NearPieces` of the rays (r,) (hit indices) whose lift (r,) (world units) is
-    longer than LIFT_HEIGHTS heights: from p to min(near, end) (in units of `direction`,
-    (3, r) float64 or (3, 1))."""
+    longer than LIFT_HEIGHTS heights: from p to min(near, end) (in units of the direction,
+    position − p toward a point light at position (3,), toward (3,) if position is None);
+    the directions of these rays only are computed."""
     long = np.flatnonzero(lift > LIFT_HEIGHTS * hit.height[rays])
-    if direction.shape[1] != 1:
-        direction = direction[:, long]
     tmax = np.minimum(near[long], end if np.ndim(end) == 0 else end[long])
     k = rays[long]
-    return _NearPieces(k, hit.point64[:, k], direction, tmax)
+    origin = hit.point64[:, k]
+    direction = toward[:, None] if position is None else position[:, None] - origin
+    return _NearPieces(k, origin, direction, tmax)
 
 
 def _directional_segments(light: DirectionalLight, hit: _Hits, reach: float) -> _Segments:
@@ -359,7 +360,8 @@ def _directional_segments(light: DirectionalLight, hit: _Hits, reach: float) -> 
     start = hit.point.compress(cast, axis=1)
     start += near[cast].astype(f32) * toward32[:, None]
     c = np.flatnonzero(facing)
-    pieces = _long_lifts(c, near[c], near[c], reach, hit, toward[:, None])
+    near_c = near[c]
+    pieces = _long_lifts(c, near_c, near_c, reach, hit, None, toward)
     # Unbounded: anything anywhere along the ray toward a directional light blocks it.
     return _Segments(facing, np.flatnonzero(cast), start, toward32[:, None], None, pieces)
 
@@ -383,8 +385,7 @@ def _point_segments(local: _LocalLight, hit: _Hits) -> _Segments:
     near = hit.height[c] / n_dot_l[c]                      # fractions of the segment
     length = length.astype(np.float64)
     end = 1.0 - light_margin(position, length, local.through) / length
-    pieces = _long_lifts(c, near, near * length, end, hit,
-                         position[:, None] - hit.point64[:, c])
+    pieces = _long_lifts(c, near, near * length, end, hit, position)
     gap = end - near
     # Where the margins meet (gap <= 0: the light within `height` of the surface's plane)
     # nothing is strictly between the lift and the light's margin: only the near piece.

@@ -50,6 +50,11 @@ NEAR_PART_CELLS = 2.0
 NEAR_MAX_PARTS = 1 << 14
 # A cell key packs the level (LEVEL_BITS) and three cell coordinates (AXIS_BITS each).
 LEVEL_BITS, AXIS_BITS = 6, 19
+# The table finding a key's cell has at least NEAR_TABLE_SLOTS slots per occupied cell (a
+# power of two, int32: at most 32 bytes a cell; a key is looked for in the sorted keys only
+# where its slot is shared).
+NEAR_TABLE_SLOTS = 4
+_HASH = np.uint64(0x9E3779B97F4A7C15)  # Fibonacci hashing: the top bits of key · 2**64/φ
 
 
 def _expand(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -105,13 +110,14 @@ class NearGrid:
 
     def _grid(self, lo: np.ndarray, hi: np.ndarray) -> None:
         """Each boxed triangle's level and cell (its box lo, hi (3, m)): keys (k,) the occupied
-        cells' keys, sorted; members, the triangles by cell, boxes (m, 6) their boxes (lo, hi);
+        cells' keys, sorted; members, the triangles by cell, boxes (6, m) their boxes (lo, hi);
         starts (k + 1,) where each cell's begin; levels, the levels in use."""
         m = lo.shape[1]
         self.origin, self.cell = np.zeros(3), 1.0
         self.levels, self.keys, self.members = (np.zeros(0, np.int64),) * 3
-        self.boxes = self.cellboxes = np.zeros((0, 6))
+        self.boxes = np.zeros((6, 0))
         self.starts = np.zeros(1, np.int64)
+        self._bits, self._table = 10, np.full(1 << 10, -1, np.int32)
         if m == 0:
             return
         size = hi - lo
@@ -130,23 +136,36 @@ class NearGrid:
         keys = self._key(level, np.floor((lo - self.origin[:, None]) / width).astype(np.int64))
         order = np.argsort(keys)
         keys, self.members = keys[order], self.boxed[order]
-        # the boxes in cell order, one row (lo, hi) each: a cell's boxes are read in one run
-        self.boxes = np.empty((m, 6))
-        for i in range(3):
-            self.boxes[:, i], self.boxes[:, 3 + i] = lo[i, order], hi[i, order]
+        # the boxes in cell order, component-major (lo, hi): a cell's boxes are read in one run
+        self.boxes = np.take(np.concatenate([lo, hi]), order, axis=1)
         new = np.flatnonzero(np.diff(keys, prepend=-1))
         self.keys, self.starts = keys[new], np.append(new, len(keys))
-        # each cell's box around its boxes: a piece that misses it reads none of them
-        self.cellboxes = np.concatenate([np.minimum.reduceat(self.boxes[:, :3], new),
-                                         np.maximum.reduceat(self.boxes[:, 3:], new)], axis=1)
         self.levels = np.flatnonzero(np.bincount(level))
+        self._index(max(10, (NEAR_TABLE_SLOTS * len(new) - 1).bit_length()))
 
-    @staticmethod
-    def _block(c0: np.ndarray, n: np.ndarray, rank: np.ndarray) -> np.ndarray:
-        """(3, k) cell number rank (k,) of the block of n (3, k) cells from c0 (3, k)."""
-        z = rank % n[2]
-        rank = rank // n[2]
-        return np.stack([c0[0] + rank // n[1], c0[1] + rank % n[1], c0[2] + z])
+    def _index(self, bits: int) -> None:
+        """The table of 2**bits slots: slot -> the cell whose key alone lands there, -2 where
+        several do, -1 none (a slot that several keys share keeps one, and each other marks
+        it)."""
+        self._bits = bits
+        slot, cell = self._slot(self.keys), np.arange(len(self.keys), dtype=np.int32)
+        self._table = np.full(1 << bits, -1, np.int32)
+        self._table[slot] = cell
+        self._table[slot[self._table[slot] != cell]] = -2
+
+    def _slot(self, keys: np.ndarray) -> np.ndarray:
+        """The table's slot (n,) of each key (n,) int64."""
+        return ((keys.view(np.uint64) * _HASH) >> np.uint64(64 - self._bits)).astype(np.int64)
+
+    def _find(self, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(found, at): the keys (n,) that are occupied cells' (their indices into keys) and
+        those cells' indices into self.keys."""
+        at = self._table[self._slot(keys)].astype(np.int64)
+        shared = np.flatnonzero(at == -2)
+        at[shared] = np.minimum(np.searchsorted(self.keys, keys[shared]), len(self.keys) - 1)
+        found = np.flatnonzero(at >= 0)
+        found = found[self.keys[at[found]] == keys[found]]
+        return found, at[found]
 
     @staticmethod
     def _key(level: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -191,28 +210,32 @@ class NearGrid:
         count[wide] = 0
         found = [self._level_pairs(pieces, lo, hi, level[w], which[w])
                  for w in np.flatnonzero(wide)]
-        owner, rank = _expand(count)
-        keys = self._key(level[owner], self._block(c0[:, owner], n[:, owner], rank))
-        at = np.minimum(np.searchsorted(self.keys, keys), len(self.keys) - 1)
-        hit = self.keys[at] == keys
-        owner, at = owner[hit], at[hit]
-        part = np.concatenate([lo, hi]).T  # (p, 6): one row (lo, hi) a piece
-        keep = _touch(self.cellboxes[at], part[which[owner]])
-        owner, at = owner[keep], at[keep]
+        # the keys of each block: its first cell's plus the offsets, one axis at a time (no
+        # carries: every coordinate of the block is below 2**AXIS_BITS)
+        owner = np.flatnonzero(count)
+        keys = self._key(level[owner], c0[:, owner])
+        for axis in (2, 1, 0):
+            at, rank = _expand(n[axis, owner])
+            owner, keys = owner[at], keys[at] + (rank << (2 - axis) * AXIS_BITS)
+        hit, at = self._find(keys)
+        owner = owner[hit]
         start = self.starts[at]
         cell, rank = _expand(self.starts[at + 1] - start)
-        row = start[cell] + rank
-        j = which[owner[cell]]
-        touch = _touch(self.boxes[row], part[j])
-        found.append((pieces[j[touch]], self.members[row[touch]]))
+        row, j = start[cell] + rank, which[owner[cell]]
+        # the boxes overlap: axis by axis, each test on the pairs the last one kept
+        for i in range(3):
+            keep = np.flatnonzero((self.boxes[i, row] <= hi[i, j]) &
+                                  (self.boxes[3 + i, row] >= lo[i, j]))
+            row, j = row[keep], j[keep]
+        found.append((pieces[j], self.members[row]))
         return np.concatenate([p for p, _ in found]), np.concatenate([t for _, t in found])
 
     def _level_pairs(self, pieces, lo, hi, level: int, j: int):
         """The pairs of piece j and every triangle of `level` whose box touches its box."""
         first, last = np.searchsorted(self.keys, [level << 3 * AXIS_BITS,
                                                   (level + 1) << 3 * AXIS_BITS])
-        box = self.boxes[self.starts[first]:self.starts[last]]
-        touch = ((box[:, :3] <= hi[:, j]) & (box[:, 3:] >= lo[:, j])).all(axis=1)
+        box = self.boxes[:, self.starts[first]:self.starts[last]]
+        touch = ((box[:3] <= hi[:, j, None]) & (box[3:] >= lo[:, j, None])).all(axis=0)
         return (np.full(int(touch.sum()), pieces[j]),
                 self.members[self.starts[first]:self.starts[last]][touch])
 
@@ -268,12 +291,6 @@ class NearGrid:
             hit = _pair_hits(triangles, self, o[p], d[p], tmax[p], k, own[p])
             blocked[p[hit]] = True
         return blocked
-
-
-def _touch(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(n,) bool: do the boxes a, b (n, 6) (lo, hi, rows) overlap?"""
-    return ((a[:, 0] <= b[:, 3]) & (a[:, 3] >= b[:, 0]) & (a[:, 1] <= b[:, 4]) &
-            (a[:, 4] >= b[:, 1]) & (a[:, 2] <= b[:, 5]) & (a[:, 5] >= b[:, 2]))
 
 
 def _pair_hits(triangles, grid: NearGrid, o, d, tmax, k, own) -> np.ndarray:

@@ -104,3 +104,30 @@ def test_the_query_is_empty_away_from_the_geometry_and_full_beside_it():
     assert 0 not in piece and {0, 1} <= set(tri[piece == 1].tolist())
     assert grid.occluded_leaving(NumpyBackend(vertices, faces), o, d, tmax,
                                  np.full(3, -1)).tolist() == [False, True, False]
+
+
+def test_cells_are_found_whether_or_not_their_table_slot_is_shared():
+    """The grid finds a cell's key through a hash table, and in the sorted keys where several
+    keys share a slot: with a table of 2**b slots for b = 1 (every slot shared) up to the
+    default, every occupied cell's key is found at its own index, no other key is, and the
+    candidates of a scene's pieces are the same pairs."""
+    rng = np.random.default_rng(7)
+    centres = rng.uniform(-5, 5, (3000, 1, 3)) * [1.0, 0.2, 1.0]
+    sizes = rng.uniform(0.1, 20, (3000, 1, 1))
+    corners = centres + rng.normal(scale=0.05, size=(3000, 3, 3)) * sizes
+    vertices, faces = corners.reshape(-1, 3), np.arange(9000).reshape(-1, 3)
+    grid = NearGrid(vertices, faces, is_sliver(corners))
+    o = corners[:, 0] * 0.9 + corners[:, 1] * 0.1
+    d = rng.normal(size=o.shape)
+    tmax = 10 ** rng.uniform(-3, 0, len(o))
+    expected = set(zip(*(x.tolist() for x in grid.candidates(o, d, tmax))))
+    others = np.setdiff1d(grid.keys + 1, grid.keys)
+    queries = rng.permutation(np.concatenate([grid.keys, others]))
+    for bits in (1, 4, 8, grid._bits):
+        grid._index(bits)
+        if bits == 1:
+            assert (grid._table == -2).all()  # every key looked for in the sorted keys
+        found, at = grid._find(queries)
+        assert np.array_equal(queries[found], grid.keys[at])
+        assert len(found) == len(grid.keys)
+        assert set(zip(*(x.tolist() for x in grid.candidates(o, d, tmax)))) == expected
