@@ -159,7 +159,7 @@ def variants(views: list, ctx, renderer, peers: dict) -> tuple[dict, dict]:
     """The timed functions of a scene's views, and the backends and peers built for them."""
     from raytrace import ground_truth, shadow_masks
     from raytrace.masks import scene_backend
-    from shadowvol.raster.context import make_current
+    from shadowvol.raster.platform.context import make_current
 
     backends = [scene_backend(v) for v in views]
     built = {"backends": backends}
@@ -195,7 +195,7 @@ def agreement(views: list, ctx, renderer, built: dict) -> dict:
     """Pixels (lit of every light, and coverage) where each variant differs from the ray
     tracer's masks, summed over the views; and the rays the ray tracer casts."""
     from raytrace import ground_truth
-    from shadowvol.raster.context import make_current
+    from shadowvol.raster.platform.context import make_current
 
     differ = {k: 0 for k in ("raster masks", "Open3D", "Mitsuba 3") if k in built or
               k == "raster masks"}
@@ -241,7 +241,7 @@ def thread_scaling(views: list, built: dict, runs: int) -> dict:
 
 def measure(quick: bool, runs: int) -> dict:
     from shadowvol import Renderer
-    from shadowvol.raster.context import create_context
+    from shadowvol.raster.platform.context import create_context
 
     peers = {"Open3D": open3d_reason(), "Mitsuba 3": mitsuba_reason()}
     todo, note = bench_scenes(quick)
