@@ -35,7 +35,7 @@ import numpy as np
 from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
-from . import polygons
+from . import polygons, pyramid
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
 from .regions import minus_convex as _minus_convex
@@ -246,12 +246,6 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     return out_v, out_e, out_d
 
 
-
-
-
-
-
-
 def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
     """(n,) object array of shapely polygons from corners flat (n, k, 2), count (n,) (an empty
     polygon where fewer than 3)."""
@@ -282,7 +276,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     clear = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
     np.minimum.at(clear, objects.object, height)
     pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
-    flat, count, pix, tri = _cut(light, corners, p, pix, tri, base)
+    flat, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base)
     # a convex object seen from outside: one hull per (pixel, object)
     obj = objects.object[tri]
     hullable = objects.convex[tri] & _outside(objects, corners, p, pix, tri)
@@ -396,24 +390,6 @@ def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np
     return pix[keep], tri[keep]
 
 
-def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.ndarray,
-         base: np.ndarray):
-    """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (the light's plane, then
-    each side plane through p) and carried onto the light's plane: (flat (q', k, 2), count
-    (q',), pix, tri) of those with something left."""
-    poly = corners[tri].copy()
-    count = np.full(len(tri), 3)
-    planes = [lambda q, pp: (q - light.center) @ light.normal]
-    for j in range(len(base)):
-        a, b = base[j], base[(j + 1) % len(base)]
-        planes.append(lambda q, pp, a=a, b=b: _side(q, pp, a, b, light.center))
-    for plane in planes:
-        poly, count = polygons.clip(poly, count, plane(poly, p[pix][:, None]))
-        keep = count >= 3
-        poly, count, pix, tri = poly[keep], count[keep], pix[keep], tri[keep]
-    return polygons.project(poly, p[pix], light.center, light.normal, light.axes), count, pix, tri
-
-
 def _polygonal(shapely, geoms: np.ndarray) -> np.ndarray:
     """geoms (n,) with the parts of no area of any geometry collection among them dropped (an
     overlay that snaps a sliver to its grid may return the collapsed sliver as a line)."""
@@ -457,15 +433,6 @@ def _unite(shapely, shapes: list, owner: list, n: int, grid: float
     out[owner[starts]] = acc
     single[owner[starts[sizes == 1]]] = True
     return out, single
-
-
-def _side(q: np.ndarray, p: np.ndarray, a: np.ndarray, b: np.ndarray, inner: np.ndarray
-          ) -> np.ndarray:
-    """Signed distance-like value of points q (m, k, 3) from the plane through p (m, 1, 3), a
-    and b, positive on the side of `inner`."""
-    m = np.cross(a - p[:, 0], b - p[:, 0])                         # (m, 3)
-    sign = np.sign(((inner - p[:, 0]) * m).sum(axis=1))
-    return np.einsum("mkj,mj->mk", q - p, m * sign[:, None])
 
 
 def _outside(objects: Objects, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
