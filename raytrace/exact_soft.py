@@ -35,7 +35,7 @@ import numpy as np
 from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
-from . import polygons, pyramid
+from . import fans, polygons, pyramid
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
 from .regions import minus_convex as _minus_convex
@@ -289,10 +289,20 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         shapes.append(shapely.convex_hull(points))
         owner.append(group // (objects.object.max() + 1))
     rest = np.flatnonzero(~hullable)
+    bent = np.zeros(0, np.int64)
+    if len(rest) and objects.fans is not None:
+        # fans of triangles as one (not convex) polygon each
+        polys, bent, single = fans.merge(shapely, objects.fans, flat[rest], pix[rest],
+                                         tri[rest], whole[rest])
+        shapes.append(polys)
+        owner.append(bent)
+        rest = rest[single]
     if len(rest):
         shapes.append(_polygons(shapely, flat[rest], count[rest]))
         owner.append(pix[rest])
-    return _unite(shapely, shapes, owner, len(p), light.grid)
+    union, single = _unite(shapely, shapes, owner, len(p), light.grid)
+    single[bent] = False
+    return union, single
 
 
 def _whole_bodies(shapely, light: FramedLight, objects: Objects, p: np.ndarray, normal: np.ndarray,

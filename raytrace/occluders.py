@@ -10,6 +10,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .fans import fans
+
 # An object is convex when no corner lies farther than this (of its largest coordinate) outside
 # any of its face planes: its corners are float64 (the frame: world less the eye), each a few
 # roundings (~1e-16 of its coordinate) off, so a flat face's two triangles can look ~1e-15
@@ -21,6 +23,9 @@ CONVEX_RELATIVE = 2.0 ** -40
 CONVEX_TEST_FACES = 4096
 # Triangles per cluster of the candidate query.
 CLUSTER = 16
+# The shadows of a fan of triangles united as one polygon where that is the same region
+# (`raytrace.fans`); off: every triangle's shadow united one by one (the reference).
+MERGE_FANS = True
 
 
 class Objects(NamedTuple):
@@ -31,7 +36,8 @@ class Objects(NamedTuple):
     bodies: per object its `Convex`, or None; per triangle its box tri_lo, tri_hi (M, 3), unit
     normal (M, 3) (0 if degenerate), offset (M,) normal . corner and scale (M,) its largest
     corner coordinate; shell (M, 3): for a closed, consistently wound object (convex or not)
-    its triangles' outward unit normals, 0 for the others."""
+    its triangles' outward unit normals, 0 for the others; fans: the casters' `fans.Fans`
+    (None where MERGE_FANS is off)."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -49,6 +55,7 @@ class Objects(NamedTuple):
     offset: np.ndarray
     scale: np.ndarray
     shell: np.ndarray
+    fans: object = None
 
 
 class Convex(NamedTuple):
@@ -125,7 +132,7 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, corners.min(axis=1), corners.max(axis=1), normals,
                    (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)),
-                   shell)
+                   shell, fans(corners, ids, casts) if MERGE_FANS else None)
 
 
 def _topology(corners: np.ndarray):
