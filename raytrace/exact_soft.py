@@ -35,7 +35,7 @@ import numpy as np
 from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
-from . import fans, polygons, pyramid
+from . import arrange, fans, polygons, pyramid
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
 from .regions import minus_convex as _minus_convex
@@ -61,6 +61,9 @@ COPLANAR_RELATIVE = 2.0 ** -40
 # Pieces of shadow per pixel that are united pairwise over all pixels at once (more: one
 # cascaded union per pixel).
 FEW_PIECES = 8
+# Pieces of shadow of one pixel above which their union is taken from its outline
+# (`raytrace.arrange`) rather than by GEOS's cascaded union.
+MANY_PIECES = 64
 # Pixels per chunk (each chunk's candidate arrays are pixels x clusters).
 CHUNK_PIXELS = 2048
 
@@ -289,19 +292,38 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         shapes.append(shapely.convex_hull(points))
         owner.append(group // (objects.object.max() + 1))
     rest = np.flatnonzero(~hullable)
-    bent = np.zeros(0, np.int64)
+    bent = [np.zeros(0, np.int64)]
+    crowd = np.bincount(pix[rest], minlength=len(p)) > MANY_PIECES
+    heavy = rest[crowd[pix[rest]]]
+    if len(heavy):
+        # many pieces: their union from its outline (`raytrace.arrange`)
+        rest = rest[~crowd[pix[rest]]]
+        heavy = heavy[np.argsort(pix[heavy], kind="stable")]
+        polys = _polygons(shapely, flat[heavy], count[heavy])
+        starts = np.flatnonzero(np.r_[True, pix[heavy][1:] != pix[heavy][:-1]])
+        ends = np.r_[starts[1:], len(heavy)]
+        united = np.full(len(starts), None, object)
+        for k, (a, b) in enumerate(zip(starts, ends)):
+            q = heavy[a:b]
+            united[k] = _polygonal(shapely, np.array([arrange.union(
+                shapely, polys[a:b], flat[q], count[q], whole[q],
+                objects.corner_ids[tri[q]], light.grid)], object))[0]
+        shapes.append(united)
+        owner.append(pix[heavy[starts]])
+        bent.append(owner[-1])
     if len(rest) and objects.fans is not None:
         # fans of triangles as one (not convex) polygon each
-        polys, bent, single = fans.merge(shapely, objects.fans, flat[rest], pix[rest],
-                                         tri[rest], whole[rest])
+        polys, fanned, single = fans.merge(shapely, objects.fans, flat[rest], pix[rest],
+                                           tri[rest], whole[rest])
         shapes.append(polys)
-        owner.append(bent)
+        owner.append(fanned)
+        bent.append(fanned)
         rest = rest[single]
     if len(rest):
         shapes.append(_polygons(shapely, flat[rest], count[rest]))
         owner.append(pix[rest])
     union, single = _unite(shapely, shapes, owner, len(p), light.grid)
-    single[bent] = False
+    single[np.concatenate(bent)] = False
     return union, single
 
 

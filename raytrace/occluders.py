@@ -37,7 +37,8 @@ class Objects(NamedTuple):
     normal (M, 3) (0 if degenerate), offset (M,) normal . corner and scale (M,) its largest
     corner coordinate; shell (M, 3): for a closed, consistently wound object (convex or not)
     its triangles' outward unit normals, 0 for the others; fans: the casters' `fans.Fans`
-    (None where MERGE_FANS is off)."""
+    (None where MERGE_FANS is off); corner_ids (M, 3): each corner's index among the
+    scene's distinct corners (welded by their coordinates)."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -56,6 +57,7 @@ class Objects(NamedTuple):
     scale: np.ndarray
     shell: np.ndarray
     fans: object = None
+    corner_ids: np.ndarray | None = None
 
 
 class Convex(NamedTuple):
@@ -114,9 +116,9 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
                 convex[tris] = True
                 outward[tris] = n
                 bodies[-1] = Convex(points, n, offset, *topology[1:])
-        # clusters of consecutive triangles along the object's longest axis
-        centroid = corners[tris].mean(axis=1)
-        order = tris[np.argsort(centroid[:, np.ptp(centroid, axis=0).argmax()], kind="stable")]
+        # clusters of consecutive triangles along a Morton (Z-order) curve of their centres:
+        # compact clusters, whose boxes the pyramid's box misses more often
+        order = tris[np.argsort(_morton(corners[tris].mean(axis=1)), kind="stable")]
         pad = -len(order) % CLUSTER
         members.append(np.concatenate([order, np.full(pad, -1)]).reshape(-1, CLUSTER))
         owner.append(np.full(len(members[-1]), j))
@@ -132,7 +134,20 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, corners.min(axis=1), corners.max(axis=1), normals,
                    (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)),
-                   shell, fans(corners, ids, casts) if MERGE_FANS else None)
+                   shell, fans(corners, ids, casts) if MERGE_FANS else None,
+                   np.unique(corners.reshape(-1, 3), axis=0,
+                             return_inverse=True)[1].reshape(-1, 3))
+
+
+def _morton(points: np.ndarray) -> np.ndarray:
+    """(n,) int64 Morton codes of points (n, 3) on a 1024^3 grid over their box."""
+    lo, span = points.min(axis=0), np.ptp(points, axis=0)
+    cell = np.floor((points - lo) / np.where(span > 0, span, 1) * 1023.999).astype(np.int64)
+    code = np.zeros(len(points), np.int64)
+    for bit in range(10):
+        for axis in range(3):
+            code |= ((cell[:, axis] >> bit) & 1) << (3 * bit + axis)
+    return code
 
 
 def _topology(corners: np.ndarray):
