@@ -1,16 +1,19 @@
 """The union of many small shadows of one pixel by its outline alone (`raytrace.exact_soft`).
 
-Where two uncut triangle shadows share an edge (the same two welded corners) and lie on its
-two sides (each ring turned counter-clockwise, they run it in opposite directions), every
-point near that edge's inside is covered: the edge is not on the union's boundary.  What is
-left (the other edges of uncut shadows, and every edge of a cut shadow or of any other
-piece) holds the whole boundary of the union: GEOS nodes it, snap-rounded to the light's
-grid (`lightshapes.OVERLAY_GRID`, as every other boolean here), and polygonizes it into faces
-that the boundary does not cross, so each face is wholly inside the union or wholly outside:
-the faces whose interior point meets a piece (closed: a point on an edge left out is inside
-both of its shadows) are the union, which GEOS's coverage union joins.  The same region as
-the pieces' union (up to the snapping and to slivers of a rounding between shadows of one
-corner), from a few hundred edges instead of a cascade of thousands of overlays.
+A triangle wholly between the light's plane and p's parallel plane is taken whole, its shadow
+not cut to the pyramid (`pyramid.uncut`): inside the light's convex outline that is the same
+region, and the union is only ever taken away from the light.  Where two such shadows share
+an edge (the same two welded corners) and lie on its two sides (each ring turned counter-
+clockwise, they run it in opposite directions), every point near that edge's inside is
+covered: the edge is not on the union's boundary.  What is left (the other edges of those
+shadows, and every edge of a cut shadow) holds the whole boundary of the union: GEOS nodes
+it, snap-rounded to the light's grid (`lightshapes.OVERLAY_GRID`, as every other boolean
+here), and polygonizes it into faces that the boundary does not cross, so each face is
+wholly inside the union or wholly outside: the faces whose interior point meets a piece of
+some area (closed: a point on an edge left out is inside both of its shadows) are the union,
+which GEOS's coverage union joins.  The same region as the pieces' union (up to the snapping
+and to slivers of a rounding between shadows of one corner), from a few hundred edges
+instead of a cascade of thousands of overlays.
 """
 
 from __future__ import annotations
@@ -18,11 +21,20 @@ from __future__ import annotations
 import numpy as np
 
 
-def union(shapely, polys: np.ndarray, flat: np.ndarray, count: np.ndarray,
-          whole: np.ndarray, ids: np.ndarray, grid: float):
-    """The union (a shapely geometry) of the shadows polys (q,) of one pixel: corners flat
-    (q, k, 2), count (q,); whole (q,) bool: an uncut triangle (flat[:, :3] its corners'
-    shadows, ids (q, 3) its welded corners' indices); snap-rounded to `grid`."""
+def union(shapely, flat: np.ndarray, count: np.ndarray, uncut: np.ndarray, free: np.ndarray,
+          ids: np.ndarray, grid: float):
+    """The union (a shapely geometry) of the shadows of one pixel's triangles: cut to the
+    pyramid, corners flat (q, k, 2), count (q,); where free (q,) their whole shadows uncut
+    (q, 3, 2) instead (`pyramid.uncut`: the same inside the light's outline, and only that
+    part is ever used), ids (q, 3) their welded corners' indices; snap-rounded to `grid`."""
+    polys = np.empty(len(flat), object)
+    polys[free] = shapely.polygons(uncut[free])
+    cut = np.flatnonzero(~free)
+    if len(cut):
+        mask = np.arange(flat.shape[1])[None] < count[cut, None]
+        polys[cut] = shapely.polygons(shapely.linearrings(
+            flat[cut][mask], indices=np.repeat(np.arange(len(cut)), count[cut])))
+    flat, whole = uncut, free
     tri = flat[:, :3]
     signed = (tri[:, 1, 0] - tri[:, 0, 0]) * (tri[:, 2, 1] - tri[:, 0, 1]) - \
         (tri[:, 1, 1] - tri[:, 0, 1]) * (tri[:, 2, 0] - tri[:, 0, 0])
@@ -48,6 +60,6 @@ def union(shapely, polys: np.ndarray, flat: np.ndarray, count: np.ndarray,
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
     if len(faces) == 0:
         return shapely.Polygon()
-    tree = shapely.STRtree(polys)
+    tree = shapely.STRtree(polys[shapely.area(polys) > 0])   # no area: no cover
     inside = np.unique(tree.query(shapely.point_on_surface(faces), predicate="intersects")[0])
     return shapely.coverage_union_all(faces[inside])

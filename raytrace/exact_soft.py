@@ -120,7 +120,9 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     unatt = np.zeros((L, H * W)) if direct else None
     corners = tracer.vertices[tracer.faces].astype(np.float64)
     ids = scene.triangles()[2]
-    objects = _objects(corners, ids, casting(scene)) if any(lights) else None
+    # corners welded by their coordinates: the distinct vertices' indices
+    welded = np.unique(tracer.vertices, axis=0, return_inverse=True)[1].reshape(-1)[tracer.faces]
+    objects = _objects(corners, ids, casting(scene), welded) if any(lights) else None
     # per triangle: its object receives shadows (docs/CONVENTIONS.md, "Shadow switches")
     receives = receiving_objects(scene)[ids] if len(ids) else np.zeros(0, bool)
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
@@ -299,14 +301,14 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         # many pieces: their union from its outline (`raytrace.arrange`)
         rest = rest[~crowd[pix[rest]]]
         heavy = heavy[np.argsort(pix[heavy], kind="stable")]
-        polys = _polygons(shapely, flat[heavy], count[heavy])
+        loose, free = pyramid.uncut(light, corners, p, pix[heavy], tri[heavy])
         starts = np.flatnonzero(np.r_[True, pix[heavy][1:] != pix[heavy][:-1]])
         ends = np.r_[starts[1:], len(heavy)]
         united = np.full(len(starts), None, object)
         for k, (a, b) in enumerate(zip(starts, ends)):
             q = heavy[a:b]
             united[k] = _polygonal(shapely, np.array([arrange.union(
-                shapely, polys[a:b], flat[q], count[q], whole[q],
+                shapely, flat[q], count[q], loose[a:b], free[a:b],
                 objects.corner_ids[tri[q]], light.grid)], object))[0]
         shapes.append(united)
         owner.append(pix[heavy[starts]])

@@ -41,18 +41,18 @@ class Fans(NamedTuple):
     closed: np.ndarray
 
 
-def fans(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = None) -> Fans:
-    """The `Fans` of triangles corners (M, 3, 3) of objects ids (M,); `casts` (n_objects,)
-    bool: only the objects that cast shadows get fans."""
-    M = len(corners)
+def fans(ids: np.ndarray, welded: np.ndarray, casts: np.ndarray | None = None) -> Fans:
+    """The `Fans` of triangles of objects ids (M,) with welded corners (M, 3) (each corner's
+    index among the distinct corners); `casts` (n_objects,) bool: only the objects that cast
+    shadows get fans."""
+    M = len(ids)
     fan, pos, apex = np.full(M, -1), np.zeros(M, np.int64), np.zeros(M, np.int64)
     size, closed = [], []
     for j in range(int(ids.max(initial=-1)) + 1):
         tris = np.flatnonzero(ids == j)
         if len(tris) < 2 or (casts is not None and not casts[j]):
             continue
-        _, vid = np.unique(corners[tris].reshape(-1, 3), axis=0, return_inverse=True)
-        vid = vid.reshape(-1, 3)
+        vid = np.unique(welded[tris].reshape(-1), return_inverse=True)[1].reshape(-1, 3)
         for v, chain, ring in _object_fans(vid):
             fan[tris[chain]] = len(size)
             pos[tris[chain]] = np.arange(len(chain))

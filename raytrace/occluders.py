@@ -83,11 +83,16 @@ class Convex(NamedTuple):
         return out
 
 
-def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = None) -> Objects:
+def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = None,
+            welded: np.ndarray | None = None) -> Objects:
     """The `Objects` of triangles corners (M, 3, 3) of objects ids (M,); `casts` (n_objects,)
     bool: the objects that cast shadows (`cast_shadows`; default all): only theirs are in the
-    clusters and bodies (the others are met by no query)."""
+    clusters and bodies (the others are met by no query); welded (M, 3): each corner's index
+    among the distinct corners (by their coordinates; default: welded here)."""
     M = len(corners)
+    if welded is None:
+        welded = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)[1]
+    welded = welded.reshape(-1, 3)
     convex = np.zeros(M, bool)
     outward = np.zeros((M, 3))
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
@@ -100,7 +105,7 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         bodies.append(None)
         if len(tris) == 0 or (casts is not None and not casts[j]):
             continue
-        topology = _topology(corners[tris])
+        topology = _topology(corners[tris], welded[tris])
         if topology is not None and (length[tris] > 0).all():
             c = corners[tris]
             sign = 1.0 if np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])).sum() > 0 \
@@ -134,9 +139,7 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, corners.min(axis=1), corners.max(axis=1), normals,
                    (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)),
-                   shell, fans(corners, ids, casts) if MERGE_FANS else None,
-                   np.unique(corners.reshape(-1, 3), axis=0,
-                             return_inverse=True)[1].reshape(-1, 3))
+                   shell, fans(ids, welded, casts) if MERGE_FANS else None, welded)
 
 
 def _morton(points: np.ndarray) -> np.ndarray:
@@ -150,11 +153,12 @@ def _morton(points: np.ndarray) -> np.ndarray:
     return code
 
 
-def _topology(corners: np.ndarray):
-    """For triangles (F, 3, 3) that make a closed, consistently wound surface (every edge met
-    exactly once each way, corners welded by their coordinates): (points (V, 3), edges (E, 2)
-    corner indices, sides (E, 2) the two faces of each); None for any other."""
-    points, vid = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+def _topology(corners: np.ndarray, welded: np.ndarray):
+    """For triangles (F, 3, 3) with welded corners (F, 3) (`objects`) that make a closed,
+    consistently wound surface (every edge met exactly once each way): (points (V, 3), edges
+    (E, 2) corner indices, sides (E, 2) the two faces of each); None for any other."""
+    _, first, vid = np.unique(welded.reshape(-1), return_index=True, return_inverse=True)
+    points = corners.reshape(-1, 3)[first]
     vid = vid.reshape(-1, 3)
     V = len(points)
     a = np.concatenate([vid[:, 0], vid[:, 1], vid[:, 2]])

@@ -71,3 +71,29 @@ def sides(light: FramedLight, p: np.ndarray, base: np.ndarray) -> list:
         sign = np.sign(((light.center - p) * m).sum(axis=1))
         out.append(m * sign[:, None])
     return out
+
+
+# An uncut shadow is used where its corners lie within this many times the light's extent of
+# its centre: the snap-rounding grid (`lightshapes.OVERLAY_GRID`, 2^-44 of the extent) then
+# still leaves 2^3 spare bits of a float64's 53.
+UNCUT_REACH = 2.0 ** 6
+
+
+def uncut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
+          tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The whole shadows of triangles tri (q,) from p[pix] on the light's plane, not cut to
+    the pyramid: (flat (q, 3, 2), free (q,) bool).  free where every corner lies on or beyond
+    the light's plane's emitting side and strictly nearer to it than p (so the carrying from
+    p is a projective map of the slab between: straight edges stay straight, the triangle's
+    shadow is the triangle of its corners' shadows, and its part in the pyramid is its shadow
+    cut to the light's convex outline) and within UNCUT_REACH of the light."""
+    poly = corners[tri]
+    height = (poly - light.center) @ light.normal                         # (q, 3)
+    top = ((p - light.center) @ light.normal)[pix]
+    free = (height >= 0).all(axis=1) & (height < top[:, None]).all(axis=1)
+    flat = np.zeros((len(tri), 3, 2))
+    flat[free] = polygons.project(poly[free], p[pix[free]], light.center, light.normal,
+                                  light.axes)
+    reach = UNCUT_REACH * np.abs(light.hull).max()
+    free &= (np.abs(flat) <= reach).all(axis=(1, 2))
+    return flat, free
