@@ -22,11 +22,12 @@ import numpy as np
 
 
 def union(shapely, flat: np.ndarray, count: np.ndarray, uncut: np.ndarray, free: np.ndarray,
-          ids: np.ndarray, grid: float):
+          ids: np.ndarray, grid: float, box: np.ndarray):
     """The union (a shapely geometry) of the shadows of one pixel's triangles: cut to the
     pyramid, corners flat (q, k, 2), count (q,); where free (q,) their whole shadows uncut
     (q, 3, 2) instead (`pyramid.uncut`: the same inside the light's outline, and only that
-    part is ever used), ids (q, 3) their welded corners' indices; snap-rounded to `grid`."""
+    part is ever used), ids (q, 3) their welded corners' indices; snap-rounded to `grid`; box (2, 2): the corners of a
+    rectangle that holds the light (the union's part there is exact; outside, it is cut to it)."""
     polys = np.empty(len(flat), object)
     polys[free] = shapely.polygons(uncut[free])
     cut = np.flatnonzero(~free)
@@ -56,7 +57,12 @@ def union(shapely, flat: np.ndarray, count: np.ndarray, uncut: np.ndarray, free:
     other = np.flatnonzero(~whole)
     if len(other):
         lines.append(shapely.boundary(polys[other]))
-    noded = shapely.union_all(np.concatenate(lines), grid_size=grid)
+    # only the union's part in the light's box is ever used: the edges cut to it, its outline
+    # added (so the faces inside close)
+    frame = shapely.box(*box[0], *box[1])
+    lines = shapely.clip_by_rect(shapely.multilinestrings(
+        shapely.get_parts(np.concatenate(lines))), *box[0], *box[1])
+    noded = shapely.union_all([lines, shapely.boundary(frame)], grid_size=grid)
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
     if len(faces) == 0:
         return shapely.Polygon()

@@ -302,6 +302,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         rest = rest[~crowd[pix[rest]]]
         heavy = heavy[np.argsort(pix[heavy], kind="stable")]
         loose, free = pyramid.uncut(light, corners, p, pix[heavy], tri[heavy])
+        box = np.stack([light.hull.min(axis=0), light.hull.max(axis=0)])
         starts = np.flatnonzero(np.r_[True, pix[heavy][1:] != pix[heavy][:-1]])
         ends = np.r_[starts[1:], len(heavy)]
         united = np.full(len(starts), None, object)
@@ -309,7 +310,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
             q = heavy[a:b]
             united[k] = _polygonal(shapely, np.array([arrange.union(
                 shapely, flat[q], count[q], loose[a:b], free[a:b],
-                objects.corner_ids[tri[q]], light.grid)], object))[0]
+                objects.corner_ids[tri[q]], light.grid, box)], object))[0]
         shapes.append(united)
         owner.append(pix[heavy[starts]])
         bent.append(owner[-1])
