@@ -18,7 +18,44 @@ instead of a cascade of thousands of overlays.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
+
+from . import pyramid
+from .backends import cpu_threads
+from .lightshapes import FramedLight
+
+# Threads for the crowded pixels' unions (None: one per core; GEOS, through shapely, releases
+# the GIL).
+THREADS = None
+
+
+def unions(shapely, light: FramedLight, corners: np.ndarray, p: np.ndarray, flat: np.ndarray,
+           count: np.ndarray, pix: np.ndarray, tri: np.ndarray, heavy: np.ndarray,
+           welded: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The union (`union`) of the shadows of each pixel among the pairs `heavy` of triangles
+    tri seen from p[pix], cut (flat, count: `pyramid.cut`), welded (M, 3) the scene's corner
+    indices: (unions (g,) object, their pixels (g,))."""
+    heavy = heavy[np.argsort(pix[heavy], kind="stable")]
+    loose, free = pyramid.uncut(light, corners, p, pix[heavy], tri[heavy])
+    box = np.stack([light.hull.min(axis=0), light.hull.max(axis=0)])
+    starts = np.flatnonzero(np.r_[True, pix[heavy][1:] != pix[heavy][:-1]])
+    ends = np.r_[starts[1:], len(heavy)]
+
+    def one(k: int):
+        q, at = heavy[starts[k]:ends[k]], slice(starts[k], ends[k])
+        return union(shapely, flat[q], count[q], loose[at], free[at], welded[tri[q]],
+                     light.grid, box)
+
+    threads = min(THREADS or cpu_threads(), len(starts))
+    united = np.empty(len(starts), object)
+    if threads <= 1:
+        united[:] = [one(k) for k in range(len(starts))]
+    else:
+        with ThreadPoolExecutor(threads) as pool:
+            united[:] = list(pool.map(one, range(len(starts))))
+    return polygonal(shapely, united), pix[heavy[starts]]
 
 
 def union(shapely, flat: np.ndarray, count: np.ndarray, uncut: np.ndarray, free: np.ndarray,
@@ -69,3 +106,13 @@ def union(shapely, flat: np.ndarray, count: np.ndarray, uncut: np.ndarray, free:
     tree = shapely.STRtree(polys[shapely.area(polys) > 0])   # no area: no cover
     inside = np.unique(tree.query(shapely.point_on_surface(faces), predicate="intersects")[0])
     return shapely.coverage_union_all(faces[inside])
+
+
+def polygonal(shapely, geoms: np.ndarray) -> np.ndarray:
+    """geoms (n,) with the parts of no area of any geometry collection among them dropped (an
+    overlay that snaps a sliver to its grid may return the collapsed sliver as a line)."""
+    mixed = np.flatnonzero(shapely.get_type_id(geoms) == 7)
+    for k in mixed:
+        parts = shapely.get_parts(shapely.get_parts(geoms[k]))   # multipolygons in it too
+        geoms[k] = shapely.multipolygons(parts[shapely.get_type_id(parts) == 3])
+    return geoms

@@ -36,6 +36,7 @@ from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
 from . import arrange, fans, polygons, pyramid
+from .arrange import polygonal as _polygonal
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
 from .regions import minus_convex as _minus_convex
@@ -300,19 +301,10 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     if len(heavy):
         # many pieces: their union from its outline (`raytrace.arrange`)
         rest = rest[~crowd[pix[rest]]]
-        heavy = heavy[np.argsort(pix[heavy], kind="stable")]
-        loose, free = pyramid.uncut(light, corners, p, pix[heavy], tri[heavy])
-        box = np.stack([light.hull.min(axis=0), light.hull.max(axis=0)])
-        starts = np.flatnonzero(np.r_[True, pix[heavy][1:] != pix[heavy][:-1]])
-        ends = np.r_[starts[1:], len(heavy)]
-        united = np.full(len(starts), None, object)
-        for k, (a, b) in enumerate(zip(starts, ends)):
-            q = heavy[a:b]
-            united[k] = _polygonal(shapely, np.array([arrange.union(
-                shapely, flat[q], count[q], loose[a:b], free[a:b],
-                objects.corner_ids[tri[q]], light.grid, box)], object))[0]
+        united, at = arrange.unions(shapely, light, corners, p, flat, count, pix, tri, heavy,
+                                    objects.corner_ids)
         shapes.append(united)
-        owner.append(pix[heavy[starts]])
+        owner.append(at)
         bent.append(owner[-1])
     if len(rest) and objects.fans is not None:
         # fans of triangles as one (not convex) polygon each
@@ -423,16 +415,6 @@ def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np
         toward = (shell[at] * (corners[tri[at], 0] - p[pix[at]])).sum(axis=1) <= 0
         keep[at[toward]] = False
     return pix[keep], tri[keep]
-
-
-def _polygonal(shapely, geoms: np.ndarray) -> np.ndarray:
-    """geoms (n,) with the parts of no area of any geometry collection among them dropped (an
-    overlay that snaps a sliver to its grid may return the collapsed sliver as a line)."""
-    mixed = np.flatnonzero(shapely.get_type_id(geoms) == 7)
-    for k in mixed:
-        parts = shapely.get_parts(shapely.get_parts(geoms[k]))   # multipolygons in it too
-        geoms[k] = shapely.multipolygons(parts[shapely.get_type_id(parts) == 3])
-    return geoms
 
 
 def _unite(shapely, shapes: list, owner: list, n: int, grid: float
