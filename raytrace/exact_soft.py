@@ -19,7 +19,8 @@ triangles whose boxes do, then the cut itself.  A closed, convex, consistently w
 box, a sphere's tessellation) shadows p from outside as one convex polygon (the shadow of a
 convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
 where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
-not at all from its own outside.  Every other object's triangles are united one by one.  One
+not at all from its own outside.  Every other object's triangles are united, a pixel's union of
+more than MANY_PIECES from its outline alone (`raytrace.arrange`).  One
 convex shadow on a rect or disk is taken away in numpy (clipped edge by edge); several are
 united, and taken away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
 (`lightshapes.OVERLAY_GRID`); the measures are `raytrace.polygons`'.
@@ -35,7 +36,7 @@ import numpy as np
 from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
-from . import arrange, fans, polygons, pyramid
+from . import arrange, polygons, pyramid
 from .arrange import polygonal as _polygonal
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
@@ -64,7 +65,7 @@ COPLANAR_RELATIVE = 2.0 ** -40
 FEW_PIECES = 8
 # Pieces of shadow of one pixel above which their union is taken from its outline
 # (`raytrace.arrange`) rather than by GEOS's cascaded union.
-MANY_PIECES = 64
+MANY_PIECES = 16
 # Pixels per chunk (each chunk's candidate arrays are pixels x clusters).
 CHUNK_PIXELS = 2048
 
@@ -306,14 +307,6 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         shapes.append(united)
         owner.append(at)
         bent.append(owner[-1])
-    if len(rest) and objects.fans is not None:
-        # fans of triangles as one (not convex) polygon each
-        polys, fanned, single = fans.merge(shapely, objects.fans, flat[rest], pix[rest],
-                                           tri[rest], whole[rest])
-        shapes.append(polys)
-        owner.append(fanned)
-        bent.append(fanned)
-        rest = rest[single]
     if len(rest):
         shapes.append(_polygons(shapely, flat[rest], count[rest]))
         owner.append(pix[rest])

@@ -10,8 +10,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .fans import fans
-
 # An object is convex when no corner lies farther than this (of its largest coordinate) outside
 # any of its face planes: its corners are float64 (the frame: world less the eye), each a few
 # roundings (~1e-16 of its coordinate) off, so a flat face's two triangles can look ~1e-15
@@ -23,9 +21,6 @@ CONVEX_RELATIVE = 2.0 ** -40
 CONVEX_TEST_FACES = 4096
 # Triangles per cluster of the candidate query.
 CLUSTER = 16
-# The shadows of a fan of triangles united as one polygon where that is the same region
-# (`raytrace.fans`); off: every triangle's shadow united one by one (the reference).
-MERGE_FANS = True
 
 
 class Objects(NamedTuple):
@@ -36,8 +31,7 @@ class Objects(NamedTuple):
     bodies: per object its `Convex`, or None; per triangle its box tri_lo, tri_hi (M, 3), unit
     normal (M, 3) (0 if degenerate), offset (M,) normal . corner and scale (M,) its largest
     corner coordinate; shell (M, 3): for a closed, consistently wound object (convex or not)
-    its triangles' outward unit normals, 0 for the others; fans: the casters' `fans.Fans`
-    (None where MERGE_FANS is off); corner_ids (M, 3): each corner's index among the
+    its triangles' outward unit normals, 0 for the others; corner_ids (M, 3): each corner's index among the
     scene's distinct corners (welded by their coordinates)."""
 
     object: np.ndarray
@@ -56,7 +50,6 @@ class Objects(NamedTuple):
     offset: np.ndarray
     scale: np.ndarray
     shell: np.ndarray
-    fans: object = None
     corner_ids: np.ndarray | None = None
 
 
@@ -139,7 +132,7 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, corners.min(axis=1), corners.max(axis=1), normals,
                    (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)),
-                   shell, fans(ids, welded, casts) if MERGE_FANS else None, welded)
+                   shell, welded)
 
 
 def _morton(points: np.ndarray) -> np.ndarray:
