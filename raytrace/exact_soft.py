@@ -283,7 +283,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     clear = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
     np.minimum.at(clear, objects.object, height)
     pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
-    flat, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base)
+    flat, count, pix, tri = pyramid.cut(light, corners, p, pix, tri, base)
     # a convex object seen from outside: one hull per (pixel, object)
     obj = objects.object[tri]
     hullable = objects.convex[tri] & _outside(objects, corners, p, pix, tri)
@@ -296,22 +296,21 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         shapes.append(shapely.convex_hull(points))
         owner.append(group // (objects.object.max() + 1))
     rest = np.flatnonzero(~hullable)
-    bent = [np.zeros(0, np.int64)]
+    arranged = np.zeros(0, np.int64)
     crowd = np.bincount(pix[rest], minlength=len(p)) > MANY_PIECES
     heavy = rest[crowd[pix[rest]]]
     if len(heavy):
         # many pieces: their union from its outline (`raytrace.arrange`)
         rest = rest[~crowd[pix[rest]]]
-        united, at = arrange.unions(shapely, light, corners, p, flat, count, pix, tri, heavy,
-                                    objects.corner_ids)
+        united, arranged = arrange.unions(shapely, light, corners, p, flat, count, pix, tri,
+                                          heavy, objects.corner_ids)
         shapes.append(united)
-        owner.append(at)
-        bent.append(owner[-1])
+        owner.append(arranged)
     if len(rest):
         shapes.append(_polygons(shapely, flat[rest], count[rest]))
         owner.append(pix[rest])
     union, single = _unite(shapely, shapes, owner, len(p), light.grid)
-    single[np.concatenate(bent)] = False
+    single[arranged] = False       # an outline's union is not one convex polygon
     return union, single
 
 

@@ -5,7 +5,8 @@ Most candidates lie wholly inside the pyramid or wholly beyond one of its planes
 decided from their three corners' signed distances (the same values the clip computes) and
 only the triangles that cross a plane are clipped (`polygons.clip`).  A triangle wholly inside
 comes out as its own three corners, as the clip would return them; one wholly outside a plane
-as nothing, as the clip would leave it.
+as nothing, as the clip would leave it.  `uncut`: the whole shadows of triangles between the
+light's plane and the point's, for the outline unions of `raytrace.arrange`.
 """
 
 from __future__ import annotations
@@ -20,8 +21,7 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
         tri: np.ndarray, base: np.ndarray):
     """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (k, 3) (the light's
     plane, then each side plane through p) and carried onto the light's plane: (flat (q', k',
-    2), count (q',), pix, tri, whole (q',) bool: left uncut) of those with something left, in
-    the order given."""
+    2), count (q',), pix, tri) of those with something left, in the order given."""
     poly = corners[tri]
     dist = [(poly - light.center) @ light.normal]
     for m in sides(light, p, base):
@@ -46,7 +46,7 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     count, at = np.concatenate(count), np.concatenate(at)
     order = np.argsort(at, kind="stable")
     at = at[order]
-    return flat[order], count[order], pix[at], tri[at], whole[at]
+    return flat[order], count[order], pix[at], tri[at]
 
 
 def _clip(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
