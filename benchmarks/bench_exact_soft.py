@@ -1,12 +1,15 @@
 """Exact soft shadows against counted samples (BENCHMARKS.md, "Exact soft shadows"): one run,
-wall-clock seconds.
+milliseconds per frame, wall clock and CPU.
 
     python -m benchmarks.bench_exact_soft [WIDTH]
 
-scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96): `exact_visibility` (both outputs) against
-`soft_masks` with the light's 64, 256 and 1024 stratified samples; and a closed non-convex
-mesh (a noisy icosphere, 5,120 triangles) over a floor under a rect light at 48 x 48, with and
-without the back-face cull of closed objects (`exact_soft._candidates`' `clear`)."""
+Three frames under one rect light each: scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96;
+closed convex bodies), a closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a
+floor at 48 x 48, and the shared bunny (69,451 triangles, open at its base) on a floor at
+32 x 32.  Each: `exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on a thread per core
+and on one thread (`arrange.THREADS`), with the fast path off (every triangle's shadow
+united one by one: the reference of `tests/raytrace/test_exact_fast.py`), and `soft_masks`
+counting the light's 64, 256 and 1024 stratified samples."""
 
 from __future__ import annotations
 
@@ -18,17 +21,21 @@ import time
 import numpy as np
 import trimesh
 
+import raytrace.arrange as arrange
 import raytrace.exact_soft as exact_soft
+from benchmarks.bench_masks import BUNNY, bunny_scene
 from raytrace.soft import soft_masks
 from shadowvol.primitives import mesh, plane
 from shadowvol.scene import AreaLight, Camera, Material, Scene
 from shadowvol.scenefile import load_scene
 
 
-def timed(f):
-    t = time.perf_counter()
+def timed(f) -> str:
+    """Milliseconds of one call: wall clock, and the CPU time of this process's threads
+    (what the call costs a core of its own, when others share the machine)."""
+    t, c = time.perf_counter(), time.process_time()
     f()
-    return time.perf_counter() - t
+    return f"{(time.perf_counter() - t) * 1e3:.0f} ({(time.process_time() - c) * 1e3:.0f} cpu)"
 
 
 def blob_scene(size: int) -> Scene:
@@ -43,28 +50,52 @@ def blob_scene(size: int) -> Scene:
                  lights=[light], width=size, height=size, ambient=[0, 0, 0])
 
 
+def bunny_rect_scene(size: int) -> Scene:
+    """`bench_masks.bunny_scene` (1.5 units tall) under a 1 x 1 rect light, tilted."""
+    light = AreaLight("rect", [-1.0, 3.0, 1.0], normal=[0.3, -1, -0.3], size=[1.0, 1.0],
+                      samples=4)
+    return bunny_scene(size, size).replace(lights=(light,))
+
+
+def reference(scene: Scene) -> None:
+    """`exact_visibility` with its fast path off: no outline unions."""
+    many, exact_soft.MANY_PIECES = exact_soft.MANY_PIECES, 1 << 62
+    try:
+        exact_soft.exact_visibility(scene)
+    finally:
+        exact_soft.MANY_PIECES = many
+
+
+def one_thread(scene: Scene) -> None:
+    threads, arrange.THREADS = arrange.THREADS, 1
+    try:
+        exact_soft.exact_visibility(scene)
+    finally:
+        arrange.THREADS = threads
+
+
+def frame(name: str, scene: Scene) -> None:
+    triangles = len(scene.triangles()[1])
+    print(f"{name} ({triangles} triangles) {scene.width}x{scene.height}, ms per frame:")
+    print(f"  exact: {timed(lambda: exact_soft.exact_visibility(scene))}", flush=True)
+    print(f"  exact, one thread: {timed(lambda: one_thread(scene))}", flush=True)
+    print(f"  exact, fast path off: {timed(lambda: reference(scene))}", flush=True)
+    for n in (64, 256, 1024):
+        counted = scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=n)])
+        print(f"  counting {n}: {timed(lambda: soft_masks(counted))}", flush=True)
+
+
 def main() -> None:
     width = int(sys.argv[1]) if len(sys.argv) > 1 else 96
     print(f"load {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
-    scene = load_scene("scenes/soft.toml").replace(width=width, height=width * 3 // 4)
-    print(f"soft.toml {scene.width}x{scene.height}: exact "
-          f"{timed(lambda: exact_soft.exact_visibility(scene)):.2f} s")
-    light = scene.lights[0]
-    for n in (64, 256, 1024):
-        counted = scene.replace(lights=[dataclasses.replace(light, samples=n)])
-        print(f"  counting {n}: {timed(lambda: soft_masks(counted)):.2f} s")
-    blob = blob_scene(48)
-    print(f"blob ({len(blob.triangles()[1]) - 2} triangles) 48x48: exact "
-          f"{timed(lambda: exact_soft.exact_visibility(blob)):.2f} s with the cull")
-    plain = exact_soft._candidates
-    exact_soft._candidates = lambda *a, **k: plain(*a[:8])
-    try:
-        print(f"  without it {timed(lambda: exact_soft.exact_visibility(blob)):.2f} s")
-    finally:
-        exact_soft._candidates = plain
-    for n in (64, 256, 1024):
-        counted = blob.replace(lights=[dataclasses.replace(blob.lights[0], samples=n)])
-        print(f"  counting {n}: {timed(lambda: soft_masks(counted)):.2f} s")
+    frame("soft.toml", load_scene("scenes/soft.toml").replace(width=width,
+                                                              height=width * 3 // 4))
+    frame("blob", blob_scene(48))
+    if BUNNY.is_file():
+        frame("bunny", bunny_rect_scene(32))
+    else:
+        print(f"bunny: {BUNNY} missing")
+    print(f"load {os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":

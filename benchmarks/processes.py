@@ -94,7 +94,8 @@ EXTRAS = (
      "1 -> 2 threads (issue: rays at full speed)"),
     ("bench_exact_soft.py", [],
      "exact soft shadows (raytrace.exact_soft) against counting 64, 256 and 1,024 samples on "
-     "scenes/soft.toml and on a closed non-convex mesh of 5,120 triangles (issue 41)"),
+     "scenes/soft.toml, a closed non-convex mesh of 5,120 triangles and the bunny under a rect "
+     "light, ms per frame (issue 41)"),
     ("bench_viewer.py", ["--frames", "15"],
      "the viewer's frame rate on the shipped scenes, under its own Xvfb (issue: the course)"),
 )

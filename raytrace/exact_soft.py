@@ -19,7 +19,8 @@ triangles whose boxes do, then the cut itself.  A closed, convex, consistently w
 box, a sphere's tessellation) shadows p from outside as one convex polygon (the shadow of a
 convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
 where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
-not at all from its own outside.  Every other object's triangles are united one by one.  One
+not at all from its own outside.  Every other object's triangles are united, a pixel's union of
+more than MANY_PIECES from its outline alone (`raytrace.arrange`).  One
 convex shadow on a rect or disk is taken away in numpy (clipped edge by edge); several are
 united, and taken away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
 (`lightshapes.OVERLAY_GRID`); the measures are `raytrace.polygons`'.
@@ -35,7 +36,8 @@ import numpy as np
 from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
-from . import polygons
+from . import arrange, polygons, pyramid
+from .arrange import polygonal as _polygonal
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
 from .regions import minus_convex as _minus_convex
@@ -61,6 +63,9 @@ COPLANAR_RELATIVE = 2.0 ** -40
 # Pieces of shadow per pixel that are united pairwise over all pixels at once (more: one
 # cascaded union per pixel).
 FEW_PIECES = 8
+# Pieces of shadow of one pixel above which their union is taken from its outline
+# (`raytrace.arrange`) rather than by GEOS's cascaded union.
+MANY_PIECES = 16
 # Pixels per chunk (each chunk's candidate arrays are pixels x clusters).
 CHUNK_PIXELS = 2048
 
@@ -117,7 +122,9 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     unatt = np.zeros((L, H * W)) if direct else None
     corners = tracer.vertices[tracer.faces].astype(np.float64)
     ids = scene.triangles()[2]
-    objects = _objects(corners, ids, casting(scene)) if any(lights) else None
+    # corners welded by their coordinates: the distinct vertices' indices
+    welded = np.unique(tracer.vertices, axis=0, return_inverse=True)[1].reshape(-1)[tracer.faces]
+    objects = _objects(corners, ids, casting(scene), welded) if any(lights) else None
     # per triangle: its object receives shadows (docs/CONVENTIONS.md, "Shadow switches")
     receives = receiving_objects(scene)[ids] if len(ids) else np.zeros(0, bool)
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
@@ -246,12 +253,6 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     return out_v, out_e, out_d
 
 
-
-
-
-
-
-
 def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
     """(n,) object array of shapely polygons from corners flat (n, k, 2), count (n,) (an empty
     polygon where fewer than 3)."""
@@ -282,7 +283,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     clear = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
     np.minimum.at(clear, objects.object, height)
     pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
-    flat, count, pix, tri = _cut(light, corners, p, pix, tri, base)
+    flat, count, pix, tri = pyramid.cut(light, corners, p, pix, tri, base)
     # a convex object seen from outside: one hull per (pixel, object)
     obj = objects.object[tri]
     hullable = objects.convex[tri] & _outside(objects, corners, p, pix, tri)
@@ -295,10 +296,22 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         shapes.append(shapely.convex_hull(points))
         owner.append(group // (objects.object.max() + 1))
     rest = np.flatnonzero(~hullable)
+    arranged = np.zeros(0, np.int64)
+    crowd = np.bincount(pix[rest], minlength=len(p)) > MANY_PIECES
+    heavy = rest[crowd[pix[rest]]]
+    if len(heavy):
+        # many pieces: their union from its outline (`raytrace.arrange`)
+        rest = rest[~crowd[pix[rest]]]
+        united, arranged = arrange.unions(shapely, light, corners, p, flat, count, pix, tri,
+                                          heavy, objects.corner_ids)
+        shapes.append(united)
+        owner.append(arranged)
     if len(rest):
         shapes.append(_polygons(shapely, flat[rest], count[rest]))
         owner.append(pix[rest])
-    return _unite(shapely, shapes, owner, len(p), light.grid)
+    union, single = _unite(shapely, shapes, owner, len(p), light.grid)
+    single[arranged] = False       # an outline's union is not one convex polygon
+    return union, single
 
 
 def _whole_bodies(shapely, light: FramedLight, objects: Objects, p: np.ndarray, normal: np.ndarray,
@@ -396,34 +409,6 @@ def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np
     return pix[keep], tri[keep]
 
 
-def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.ndarray,
-         base: np.ndarray):
-    """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (the light's plane, then
-    each side plane through p) and carried onto the light's plane: (flat (q', k, 2), count
-    (q',), pix, tri) of those with something left."""
-    poly = corners[tri].copy()
-    count = np.full(len(tri), 3)
-    planes = [lambda q, pp: (q - light.center) @ light.normal]
-    for j in range(len(base)):
-        a, b = base[j], base[(j + 1) % len(base)]
-        planes.append(lambda q, pp, a=a, b=b: _side(q, pp, a, b, light.center))
-    for plane in planes:
-        poly, count = polygons.clip(poly, count, plane(poly, p[pix][:, None]))
-        keep = count >= 3
-        poly, count, pix, tri = poly[keep], count[keep], pix[keep], tri[keep]
-    return polygons.project(poly, p[pix], light.center, light.normal, light.axes), count, pix, tri
-
-
-def _polygonal(shapely, geoms: np.ndarray) -> np.ndarray:
-    """geoms (n,) with the parts of no area of any geometry collection among them dropped (an
-    overlay that snaps a sliver to its grid may return the collapsed sliver as a line)."""
-    mixed = np.flatnonzero(shapely.get_type_id(geoms) == 7)
-    for k in mixed:
-        parts = shapely.get_parts(shapely.get_parts(geoms[k]))   # multipolygons in it too
-        geoms[k] = shapely.multipolygons(parts[shapely.get_type_id(parts) == 3])
-    return geoms
-
-
 def _unite(shapely, shapes: list, owner: list, n: int, grid: float
            ) -> tuple[np.ndarray, np.ndarray]:
     """(n,) object array: per pixel the union of the shapes (arrays) whose owners (arrays of
@@ -457,15 +442,6 @@ def _unite(shapely, shapes: list, owner: list, n: int, grid: float
     out[owner[starts]] = acc
     single[owner[starts[sizes == 1]]] = True
     return out, single
-
-
-def _side(q: np.ndarray, p: np.ndarray, a: np.ndarray, b: np.ndarray, inner: np.ndarray
-          ) -> np.ndarray:
-    """Signed distance-like value of points q (m, k, 3) from the plane through p (m, 1, 3), a
-    and b, positive on the side of `inner`."""
-    m = np.cross(a - p[:, 0], b - p[:, 0])                         # (m, 3)
-    sign = np.sign(((inner - p[:, 0]) * m).sum(axis=1))
-    return np.einsum("mkj,mj->mk", q - p, m * sign[:, None])
 
 
 def _outside(objects: Objects, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,

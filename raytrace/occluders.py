@@ -31,7 +31,8 @@ class Objects(NamedTuple):
     bodies: per object its `Convex`, or None; per triangle its box tri_lo, tri_hi (M, 3), unit
     normal (M, 3) (0 if degenerate), offset (M,) normal . corner and scale (M,) its largest
     corner coordinate; shell (M, 3): for a closed, consistently wound object (convex or not)
-    its triangles' outward unit normals, 0 for the others."""
+    its triangles' outward unit normals, 0 for the others; corner_ids (M, 3): each corner's index among the
+    scene's distinct corners (welded by their coordinates)."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -49,6 +50,7 @@ class Objects(NamedTuple):
     offset: np.ndarray
     scale: np.ndarray
     shell: np.ndarray
+    corner_ids: np.ndarray | None = None
 
 
 class Convex(NamedTuple):
@@ -74,11 +76,16 @@ class Convex(NamedTuple):
         return out
 
 
-def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = None) -> Objects:
+def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = None,
+            welded: np.ndarray | None = None) -> Objects:
     """The `Objects` of triangles corners (M, 3, 3) of objects ids (M,); `casts` (n_objects,)
     bool: the objects that cast shadows (`cast_shadows`; default all): only theirs are in the
-    clusters and bodies (the others are met by no query)."""
+    clusters and bodies (the others are met by no query); welded (M, 3): each corner's index
+    among the distinct corners (by their coordinates; default: welded here)."""
     M = len(corners)
+    if welded is None:
+        welded = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)[1]
+    welded = welded.reshape(-1, 3)
     convex = np.zeros(M, bool)
     outward = np.zeros((M, 3))
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
@@ -91,7 +98,7 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         bodies.append(None)
         if len(tris) == 0 or (casts is not None and not casts[j]):
             continue
-        topology = _topology(corners[tris])
+        topology = _topology(corners[tris], welded[tris])
         if topology is not None and (length[tris] > 0).all():
             c = corners[tris]
             sign = 1.0 if np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])).sum() > 0 \
@@ -107,9 +114,9 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
                 convex[tris] = True
                 outward[tris] = n
                 bodies[-1] = Convex(points, n, offset, *topology[1:])
-        # clusters of consecutive triangles along the object's longest axis
-        centroid = corners[tris].mean(axis=1)
-        order = tris[np.argsort(centroid[:, np.ptp(centroid, axis=0).argmax()], kind="stable")]
+        # clusters of consecutive triangles along a Morton (Z-order) curve of their centres:
+        # compact clusters, whose boxes the pyramid's box misses more often
+        order = tris[np.argsort(_morton(corners[tris].mean(axis=1)), kind="stable")]
         pad = -len(order) % CLUSTER
         members.append(np.concatenate([order, np.full(pad, -1)]).reshape(-1, CLUSTER))
         owner.append(np.full(len(members[-1]), j))
@@ -125,14 +132,26 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, corners.min(axis=1), corners.max(axis=1), normals,
                    (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)),
-                   shell)
+                   shell, welded)
 
 
-def _topology(corners: np.ndarray):
-    """For triangles (F, 3, 3) that make a closed, consistently wound surface (every edge met
-    exactly once each way, corners welded by their coordinates): (points (V, 3), edges (E, 2)
-    corner indices, sides (E, 2) the two faces of each); None for any other."""
-    points, vid = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+def _morton(points: np.ndarray) -> np.ndarray:
+    """(n,) int64 Morton codes of points (n, 3) on a 1024^3 grid over their box."""
+    lo, span = points.min(axis=0), np.ptp(points, axis=0)
+    cell = np.floor((points - lo) / np.where(span > 0, span, 1) * 1023.999).astype(np.int64)
+    code = np.zeros(len(points), np.int64)
+    for bit in range(10):
+        for axis in range(3):
+            code |= ((cell[:, axis] >> bit) & 1) << (3 * bit + axis)
+    return code
+
+
+def _topology(corners: np.ndarray, welded: np.ndarray):
+    """For triangles (F, 3, 3) with welded corners (F, 3) (`objects`) that make a closed,
+    consistently wound surface (every edge met exactly once each way): (points (V, 3), edges
+    (E, 2) corner indices, sides (E, 2) the two faces of each); None for any other."""
+    _, first, vid = np.unique(welded.reshape(-1), return_index=True, return_inverse=True)
+    points = corners.reshape(-1, 3)[first]
     vid = vid.reshape(-1, 3)
     V = len(points)
     a = np.concatenate([vid[:, 0], vid[:, 1], vid[:, 2]])

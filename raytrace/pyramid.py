@@ -1,0 +1,99 @@
+"""Triangles cut to the pyramid from a point over an area light and carried onto the light's
+plane (`raytrace.exact_soft`), float64, vectorised over (pixel, triangle) pairs.
+
+Most candidates lie wholly inside the pyramid or wholly beyond one of its planes: those are
+decided from their three corners' signed distances (the same values the clip computes) and
+only the triangles that cross a plane are clipped (`polygons.clip`).  A triangle wholly inside
+comes out as its own three corners, as the clip would return them; one wholly outside a plane
+as nothing, as the clip would leave it.  `uncut`: the whole shadows of triangles between the
+light's plane and the point's, for the outline unions of `raytrace.arrange`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import polygons
+from .lightshapes import FramedLight
+
+
+def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
+        tri: np.ndarray, base: np.ndarray):
+    """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (k, 3) (the light's
+    plane, then each side plane through p) and carried onto the light's plane: (flat (q', k',
+    2), count (q',), pix, tri) of those with something left, in the order given."""
+    poly = corners[tri]
+    dist = [(poly - light.center) @ light.normal]
+    for m in sides(light, p, base):
+        dist.append(np.einsum("mkj,mj->mk", poly - p[pix][:, None], m[pix]))
+    dist = np.stack(dist)                                            # (planes, q, 3)
+    out = (dist < 0).all(axis=2).any(axis=0)
+    whole = (dist >= 0).all(axis=(0, 2))
+    crossing = np.flatnonzero(~out & ~whole)
+    flat = [polygons.project(poly[whole], p[pix[whole]], light.center, light.normal,
+                             light.axes)]
+    count = [np.full(int(whole.sum()), 3)]
+    at = [np.flatnonzero(whole)]
+    if len(crossing):
+        piece, n, pc, tc = _clip(light, corners, p, pix[crossing], tri[crossing], base)
+        keep = n >= 3
+        flat.append(polygons.project(piece[keep], p[pc[keep]], light.center, light.normal,
+                                     light.axes))
+        count.append(n[keep])
+        at.append(crossing[keep])
+    width = max(f.shape[1] for f in flat)
+    flat = np.concatenate([np.pad(f, ((0, 0), (0, width - f.shape[1]), (0, 0))) for f in flat])
+    count, at = np.concatenate(count), np.concatenate(at)
+    order = np.argsort(at, kind="stable")
+    at = at[order]
+    return flat[order], count[order], pix[at], tri[at]
+
+
+def _clip(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
+          tri: np.ndarray, base: np.ndarray):
+    """The clip of `cut`, plane by plane: (poly (q, k, 3), count (q,), pix, tri), every row
+    kept (count 0 where nothing is left)."""
+    poly = corners[tri].copy()
+    count = np.full(len(tri), 3)
+    poly, count = polygons.clip(poly, count, (poly - light.center) @ light.normal)
+    for m in sides(light, p, base):
+        poly, count = polygons.clip(poly, count,
+                                    np.einsum("mkj,mj->mk", poly - p[pix][:, None], m[pix]))
+    return poly, count, pix, tri
+
+
+def sides(light: FramedLight, p: np.ndarray, base: np.ndarray) -> list:
+    """Per side plane of the pyramid from each p (n, 3) over `base` (k, 3): its normal (n, 3)
+    (not unit), pointing inward (toward the light's centre)."""
+    out = []
+    for j in range(len(base)):
+        m = np.cross(base[j] - p, base[(j + 1) % len(base)] - p)      # (n, 3)
+        sign = np.sign(((light.center - p) * m).sum(axis=1))
+        out.append(m * sign[:, None])
+    return out
+
+
+# An uncut shadow is used where its corners lie within this many times the light's extent of
+# its centre: the snap-rounding grid (`lightshapes.OVERLAY_GRID`, 2^-44 of the extent) then
+# still leaves 2^3 spare bits of a float64's 53.
+UNCUT_REACH = 2.0 ** 6
+
+
+def uncut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
+          tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The whole shadows of triangles tri (q,) from p[pix] on the light's plane, not cut to
+    the pyramid: (flat (q, 3, 2), free (q,) bool).  free where every corner lies on or beyond
+    the light's plane's emitting side and strictly nearer to it than p (so the carrying from
+    p is a projective map of the slab between: straight edges stay straight, the triangle's
+    shadow is the triangle of its corners' shadows, and its part in the pyramid is its shadow
+    cut to the light's convex outline) and within UNCUT_REACH of the light."""
+    poly = corners[tri]
+    height = (poly - light.center) @ light.normal                         # (q, 3)
+    top = ((p - light.center) @ light.normal)[pix]
+    free = (height >= 0).all(axis=1) & (height < top[:, None]).all(axis=1)
+    flat = np.zeros((len(tri), 3, 2))
+    flat[free] = polygons.project(poly[free], p[pix[free]], light.center, light.normal,
+                                  light.axes)
+    reach = UNCUT_REACH * np.abs(light.hull).max()
+    free &= (np.abs(flat) <= reach).all(axis=(1, 2))
+    return flat, free
