@@ -96,6 +96,10 @@ EXTRAS = (
      "exact soft shadows (raytrace.exact_soft) against counting 64, 256 and 1,024 samples on "
      "scenes/soft.toml, a closed non-convex mesh of 5,120 triangles and the bunny under a rect "
      "light, ms per frame (issue 41)"),
+    ("bench_mitsuba_soft.py", ["--json", "{json}"],
+     "Mitsuba 3's direct integrator under a rectangle emitter (scalar_rgb; an optional peer: "
+     "the bench extra) against the exact irradiance on scenes/soft.toml: a t-test of the "
+     "penumbra's mean (issue 41)"),
     ("bench_viewer.py", ["--frames", "15"],
      "the viewer's frame rate on the shipped scenes, under its own Xvfb (issue: the course)"),
 )

@@ -90,8 +90,9 @@ def sphere_points(uv: np.ndarray, center: np.ndarray, radius: float) -> np.ndarr
 def polygon_frame(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     """A plane polygon's unit normal by Newell's method (its vertices (m, 3) run
     counter-clockwise seen from the side it points to), its area centroid (3,) and area."""
-    nxt = np.roll(vertices, -1, axis=0)
-    newell = 0.5 * np.cross(vertices, nxt).sum(axis=0)
+    local = vertices - vertices[0]  # far from the origin the cross products of the corners
+    nxt = np.roll(local, -1, axis=0)  # themselves would lose the normal to rounding
+    newell = 0.5 * np.cross(local, nxt).sum(axis=0)
     area = float(np.linalg.norm(newell))
     normal = newell / area if area > 0 else newell
     fan = np.cross(vertices[1:-1] - vertices[0], vertices[2:] - vertices[0]) @ normal / 2

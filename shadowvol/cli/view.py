@@ -15,7 +15,7 @@ mouse: left drag orbit, shift+left or middle drag pan, wheel zoom, right drag mo
 left click probes the pixel (every shadow-volume face its eye ray crosses, with +1/-1, the
 z-pass and z-fail sums, the stencil read back and the ray-traced shadow ray).
 keys: A auto, Z z-pass, F z-fail; N shaded, V volumes by role, S silhouettes, C stencil counts,
-P planar shadows, T ray traced; L next light, [ and ] shrink and grow an area light,
+P planar shadows, T ray traced, E sampled | exact area light; L next light, [ and ] shrink and grow an area light,
 , and . halve and double its samples (shown with at most 16 at first), M light marker,
 H help, Esc quit.
 

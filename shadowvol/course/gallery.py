@@ -52,7 +52,8 @@ SECTIONS = (
     ("gi", "9. Global illumination: the rendering equation and its solutions"),
 )
 
-DEMOS = (demos_volumes.cage, soft_gallery.umbra_penumbra, soft_gallery.hard_sum,
+DEMOS = (demos_volumes.cage, soft_gallery.umbra_penumbra, soft_gallery.exact_penumbra,
+         soft_gallery.hard_sum,
          demos_volumes.planar, demos_volumes.one_caster,
          demos_volumes.stack_stencil, demos_volumes.counting_side_view,
          demos_volumes.zpass_zfail, demos_tracing.whitted_best, demos_tracing.raytree,

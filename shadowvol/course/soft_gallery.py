@@ -3,6 +3,10 @@
 * `umbra_penumbra`: the ball of scenes/soft.toml under a point light, then under square area
   lights of growing side: a hard shadow, then an umbra (no sample reaches the floor) inside a
   penumbra (some do), both tinted and counted.
+* `exact_penumbra`: the penumbra of the middle light computed (the ray tracer's exact visible
+  fraction V and its noise-free image, `raytrace.outlook.analytic`) beside the rasterizer's
+  sampled ones at N = 16, 64, 256, with each one's error |lit_count / N - V| mapped and its
+  mean and largest over the penumbra on the slide.
 * `hard_sum`: the four hard shadows an area light of N = 4 samples is made of (samples one in
   each quarter of the light, far apart, so the four shadows visibly part), their sum, the soft
   shadow, and how many of the four samples reach each point (0: the umbra).
@@ -33,6 +37,11 @@ PENUMBRA_TINT = np.array([255, 150, 0], np.uint8)  # orange
 TINT_WEIGHT = 0.45
 LIGHT_SIDES = (0.5, 1.2, 2.4)  # the area lights' side lengths, growing
 LIGHT_SAMPLES = 64
+EXACT_SAMPLES = (16, 64, 256)  # exact_penumbra's sampled panels
+ERROR_FULL = 0.1  # exact_penumbra's error maps: |lit_count / N - V| at full red
+# V's rounding: the exact area of a wholly hidden light comes out ~1e-16 of the light's, not 0;
+# the penumbra is where V is further than this from 0 and 1
+V_ROUNDING = 1e-9
 # hard_sum's light: 4 jittered samples, one per quarter; seed 32 puts each near its quarter's
 # outer corner (the four at least 1.2 apart), so the four hard shadows part by about half the
 # ball's width
@@ -109,6 +118,90 @@ def umbra_penumbra(g) -> Picture:
         L.compose(title, [cells[:2], cells[2:]],
                   legend=[("umbra: no sample reaches", tuple(UMBRA_TINT)),
                           ("penumbra: some samples reach", tuple(PENUMBRA_TINT)),
+                          ("light (a dot per sample)", slides.SCHEME["light"])]),
+        numbers=numbers)
+
+
+def _visibility_map(v: np.ndarray, seen: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8: the visible fraction v in grey (black 0, white 1) where `seen`, the
+    background pale blue."""
+    grey = np.round(255 * np.clip(v, 0, 1)).astype(np.uint8)
+    out = np.repeat(grey[..., None], 3, axis=2)
+    out[~seen] = (205, 215, 235)
+    return out
+
+
+def _error_map(error: np.ndarray, seen: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8: |error| from white (0) to red (ERROR_FULL or more) where `seen`."""
+    f = np.clip(error / ERROR_FULL, 0, 1)
+    out = np.stack([np.full_like(f, 255), 255 * (1 - f), 255 * (1 - f)], axis=-1)
+    out = np.round(out).astype(np.uint8)
+    out[~seen] = (205, 215, 235)
+    return out
+
+
+def _written(image: np.ndarray, L, lines: list[str]) -> np.ndarray:
+    """`image` with `lines` written in its top left corner (the error maps' numbers, legible
+    at every slide size)."""
+    img = Image.fromarray(image)
+    draw = ImageDraw.Draw(img)
+    size = max(9, L.px(34))
+    for k, line in enumerate(lines):
+        draw.text((L.px(12), L.px(10) + k * int(1.2 * size)), line, fill=slides.SCHEME["ink"],
+                  font=slides.font(size, bold=True))
+    return np.asarray(img, np.uint8)
+
+
+def exact_penumbra(g) -> Picture:
+    """The middle light's penumbra exact and sampled (see the module).  MissingExtra without
+    shapely (the exact visible region)."""
+    from raytrace.exact_soft import exact_visibility
+    from raytrace.groundtruth import ground_truth
+    from raytrace.outlook import analytic
+
+    L = g.layout
+    scene = _ball_scene(g)
+    side = LIGHT_SIDES[1]
+    exact_light = _rect(scene.lights[0].center, side, EXACT_SAMPLES[-1])
+    w, h = L.cell(4, 2, legend=True)
+    s = slides.fit(scene.replace(lights=(exact_light,)), w, h)
+    v = exact_visibility(s).visibility[0]
+    seen = ground_truth(s, outputs=("object_id",)).object_id > 0
+    penumbra = seen & (v > V_ROUNDING) & (v < 1 - V_ROUNDING)
+    image = slides.mark_lights(slides.encode_srgb(analytic.render(s)), s, L)
+    top = [("exact (computed)", image)]
+    bottom = [("exact V", _written(_visibility_map(v, seen), L,
+                                   [f"penumbra {int(penumbra.sum())} px"]))]
+    numbers = {"penumbra": int(penumbra.sum()),
+               "levels": {"exact": len(np.unique(np.round(v[penumbra] * 255)))}}
+    with Renderer(s, g.ctx) as r:
+        for n in EXACT_SAMPLES:
+            light = _rect(scene.lights[0].center, side, n)
+            frame = r.render(lights=(light,))
+            error = np.abs(frame.lit_count[0] / n - v)
+            mean, worst = float(error[penumbra].mean()), float(error[penumbra].max())
+            numbers[f"N = {n}"] = {"mean": mean, "max": worst}
+            numbers["levels"][f"N = {n}"] = len(np.unique(frame.lit_count[0][penumbra]))
+            top.append((f"N = {n} samples", _image(g, scene, w, h, (light,))))
+            bottom.append((f"N = {n}: |error|",
+                           _written(_error_map(error, seen), L,
+                                    [f"mean {mean:.3f}", f"max {worst:.3f}"])))
+    title = "Umbra and penumbra, exact and sampled"
+    return Picture(
+        "exact_penumbra", title, "shadows",
+        "The visible part of a polygonal light seen from a point can be computed: the light "
+        "less the union of the occluders' shadows on it (back-projection).  Its area over the "
+        "light's is the exact visible fraction V, the limit of the sampled count lit_count / N; "
+        "the samples' staircase of N levels approaches it, their error falling with N.",
+        f"the ball of soft.toml under the {side:g} x {side:g} light: its exact image (the ray "
+        "tracer's noise-free direct light) and V, then the rasterizer's frames with 16, 64 and "
+        "256 stratified samples, each with its error |lit_count / N - V| (white 0, red "
+        f"{ERROR_FULL:g} or more), the mean and largest over the penumbra in its label",
+        "shadowvol demo (shadowvol.course.soft_gallery.exact_penumbra)",
+        L.compose(title, [top, bottom],
+                  legend=[("V = 0: the umbra", (0, 0, 0)),
+                          ("0 < V < 1: the penumbra", (128, 128, 128)),
+                          (f"error {ERROR_FULL:g} or more", (255, 0, 0)),
                           ("light (a dot per sample)", slides.SCHEME["light"])]),
         numbers=numbers)
 

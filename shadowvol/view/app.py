@@ -27,10 +27,11 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from shadowvol.course.probe import probe
-from shadowvol.errors import require
+from shadowvol.errors import MissingExtra, require
 from shadowvol.raster.platform import window as gl_window
 from shadowvol.raster.planar.draw import PlanarShadows, ReceiverError, receiver_index
 from shadowvol.raster.renderer import Renderer
+from shadowvol.scene import SceneError
 from shadowvol.view import frames
 from shadowvol.view.state import (
     ViewState,
@@ -61,6 +62,7 @@ keys
   C              stencil counts (heat map)
   P              planar projected shadows
   T              raster | ray traced, split (slow)
+  E              sampled | exact area light, split
   L              next light
   [ / ]          shrink / grow an area light
   , / .          halve / double its samples
@@ -69,7 +71,7 @@ keys
   Esc            quit"""
 
 MODE_KEYS = {"N": "shaded", "V": "roles", "S": "silhouettes", "C": "stencil", "P": "planar",
-             "T": "raytraced"}
+             "T": "raytraced", "E": "exact"}
 METHOD_KEYS = {"A": "auto", "Z": "zpass", "F": "zfail"}
 SIZE_KEYS = {"BRACKETLEFT": -1, "BRACKETRIGHT": 1}  # area light: shrink, grow
 SAMPLE_KEYS = {"COMMA": 0.5, "PERIOD": 2.0}          # area light: halve, double its samples
@@ -196,6 +198,8 @@ class Viewer:
             mode = MODE_KEYS[name]
             if mode == "planar" and self.planar is None:
                 self.message = "no plane object: no planar shadows"
+            elif mode == "exact" and self.no_exact():
+                self.message = self.no_exact()
             else:
                 self.set_state(replace(s, mode=mode))
         elif name == "M":
@@ -211,6 +215,16 @@ class Viewer:
         elif symbol == key.ESCAPE:
             return False                                     # pyglet's default: close
         return True
+
+    def no_exact(self) -> str:
+        """Why the exact mode cannot draw this scene ("" when it can): a sphere light, or no
+        shapely."""
+        from raytrace.exact_soft import check_exact
+        try:
+            check_exact(self.scene)
+        except (SceneError, MissingExtra) as exc:
+            return f"no exact view: {exc}"
+        return ""
 
     def on_mouse_press(self, x, y, button, modifiers):
         self._press = (x, y)

@@ -35,11 +35,12 @@ def frame(renderer, state: ViewState, planar=None) -> np.ndarray:
         # right half, so a shadow edge crossing the divider shows both renderers at once
         import raytrace
         image = encode_srgb(renderer.render(method, camera=cam, lights=lights).image)
-        traced = encode_srgb(raytrace.render(scene, progress=False))
-        half = scene.width // 2
-        image[:, half:] = traced[:, half:]
-        image[:, half - 1:half + 1] = (255, 255, 255)
-        image = _label(_label(image, "raster", 6), "ray traced", half + 6)
+        image = _split(encode_srgb(renderer.render(method, camera=cam, lights=lights).image),
+                       encode_srgb(raytrace.render(scene, progress=False)), "raster",
+                       "ray traced")
+    elif state.mode == "exact":
+        image = _split(encode_srgb(renderer.render(method, camera=cam, lights=lights).image),
+                       exact_image(scene), f"sampled, N = {_samples(lights)}", "exact")
     else:
         image = encode_srgb(renderer.render(method, camera=cam, lights=lights).image)
         if state.mode == "silhouettes" and lights:
@@ -49,6 +50,30 @@ def frame(renderer, state: ViewState, planar=None) -> np.ndarray:
     if state.marker:
         image = slides.mark_lights(image, scene, _layout(scene))
     return image
+
+
+def exact_image(scene) -> np.ndarray:
+    """(H, W, 3) uint8: `scene` by the ray tracer's analytic integrator: each area light's
+    diffuse light from its exact visible region, no sample noise (`raytrace.outlook.analytic`;
+    MissingExtra without shapely, SceneError for a sphere light)."""
+    from raytrace.outlook import analytic
+    return encode_srgb(analytic.render(scene))
+
+
+def _samples(lights) -> str:
+    """The samples shown of the area lights, e.g. "16" or "16, 4"."""
+    return ", ".join(str(lt.samples) for lt in lights if hasattr(lt, "positions")) or "-"
+
+
+def _split(left: np.ndarray, right: np.ndarray, left_label: str, right_label: str
+           ) -> np.ndarray:
+    """Split screen: `left`'s left half beside `right`'s right half, so an edge crossing the
+    divider shows both at once, each half labelled."""
+    half = left.shape[1] // 2
+    image = left.copy()
+    image[:, half:] = right[:, half:]
+    image[:, half - 1:half + 1] = (255, 255, 255)
+    return _label(_label(image, left_label, 6), right_label, half + 6)
 
 
 def _label(image: np.ndarray, text: str, x: int) -> np.ndarray:

@@ -27,7 +27,7 @@ from shadowvol.raster.volumes.topology import Topology
 
 pytestmark = pytest.mark.gl
 
-EXPECTED = ["cage", "umbra_penumbra", "hard_sum", "planar", "one_caster", "stack_stencil", "counting", "zpass_zfail",
+EXPECTED = ["cage", "umbra_penumbra", "exact_penumbra", "hard_sum", "planar", "one_caster", "stack_stencil", "counting", "zpass_zfail",
             "whitted_best", "raytree", "tir", "shadow2d", "ray_plane", "compare",
             "shadow_mapping", "shadow_map_error", "rendering_equation", "ladder", "caustic", "aliasing",
             "glossy_dof"]   # the course's order

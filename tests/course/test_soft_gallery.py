@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 
 from shadowvol.course.gallery import Gallery
-from shadowvol.course.soft_gallery import hard_sum, umbra_penumbra
+from shadowvol.course.soft_gallery import exact_penumbra, hard_sum, umbra_penumbra
 
 
 @pytest.fixture(scope="module")
 def pictures(gl_session):
     g = Gallery(small=True, ctx=gl_session)
     try:
-        yield umbra_penumbra(g), hard_sum(g)
+        yield umbra_penumbra(g), hard_sum(g), exact_penumbra(g)
     finally:
         g.release()
 
@@ -61,3 +61,17 @@ def test_the_soft_slides_see_the_light_and_every_sample(gl_session):
         xy, w = slides.project(s, np.c_[pts, np.ones(len(pts))])
         assert (w > 0).all()
         assert (xy >= 0).all() and (xy[:, 0] < s.width).all() and (xy[:, 1] < s.height).all()
+
+
+def test_the_exact_penumbra_beside_the_sampled_ones(pictures):
+    """The exact slide: a penumbra computed, and each sampled one's error over it (on the slide)
+    falling with N, the largest within what the stratified grid allows (about 4/n for an
+    n x n grid: 1, 0.5, 0.25) and not zero (the samples are a staircase)."""
+    numbers = pictures[2].numbers
+    assert numbers["penumbra"] > 200
+    errors = [numbers[f"N = {n}"] for n in (16, 64, 256)]
+    means = [e["mean"] for e in errors]
+    assert all(b < a for a, b in zip(means, means[1:])), means
+    assert all(0 < e["max"] <= 4 / n for e, n in zip(errors, (4, 8, 16))), errors
+    # the exact penumbra is smooth: more distinct levels than 64 samples' staircase can have
+    assert numbers["levels"]["exact"] > 65 and numbers["levels"]["N = 16"] <= 17, numbers

@@ -353,7 +353,8 @@ def test_an_area_light_is_dragged_and_resized():
 
 
 @pytest.mark.gl
-@pytest.mark.parametrize("mode", ["shaded", "roles", "silhouettes", "stencil", "planar"])
+@pytest.mark.parametrize("mode", ["shaded", "roles", "silhouettes", "stencil", "planar",
+                                  "exact"])
 def test_every_mode_draws_an_area_light_scene(ctx, mode):
     """The counting views take an area light by its centre sample; the shaded view by all."""
     from dataclasses import replace

@@ -156,6 +156,20 @@ def test_polygon_samples_lie_in_the_polygon_evenly(pattern):
         assert np.abs(np.array(counts) - 768 * np.array(shares)).max() <= 2 * 24
 
 
+def test_a_polygon_light_far_from_the_origin_is_the_same_light():
+    """A polygon light moved 1e4 (a corner's coordinates ~1e4): accepted as planar, with the
+    same normal, area and samples (moved) up to the rounding of coordinates of 1e4.  The
+    Newell normal summed the corners' own cross products (~1e8 each) and refused it as 3e-9
+    off its plane."""
+    flat = np.array([[0, 0], [1.3, 0.2], [0.9, 1.1], [0.1, 0.8]], float)
+    tilt = np.array([[0.8, 0.3, 0.5], [-0.2, 0.4, 0.9]])
+    near = AreaLight("polygon", None, vertices=flat @ tilt, samples=16, seed=1)
+    shift = np.array([1e4, -3e3, 1e4])
+    far = AreaLight("polygon", None, vertices=flat @ tilt + shift, samples=16, seed=1)
+    assert np.abs(far.normal - near.normal).max() < 1e-10
+    assert np.abs(far.positions - shift - near.positions).max() < 1e-9
+
+
 def test_stratified_puts_one_sample_per_cell():
     rect = _rect(samples=32)  # 8 x 4: more cells along u, the longer side
     u, v = planes.default_plane_axes(rect.normal)
