@@ -5,7 +5,7 @@ The frames of a job file are numbered in file order; they are cut into units (a 
 webdataset format the frames of one tar), and `--shard I/N` takes the I-th of N contiguous runs
 of units, so N shards together make exactly the files of one unsharded run, with no
 coordination.  A unit is skipped when the manifests in OUT say it was made from the same spec
-(`frames.spec_hash`) and its files are there with the recorded sha256; everything else is made
+(`job_frames.spec_hash`) and its files are there with the recorded sha256; everything else is made
 again, and written atomically.
 """
 
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from shadowvol import memory
-from shadowvol.batch import egl, frames, layouts, local, manifest
+from shadowvol.batch import egl, job_frames, layouts, local, manifest
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.layouts import LAYOUTS
 from shadowvol.batch.sources import SOURCES
@@ -260,8 +260,8 @@ class _Plan:
                 key = job.scene if isinstance(job.scene, str) else f"<Scene {id(job.scene)}>"
                 if key not in self.scenes:
                     self.scenes[key], digests[key] = job.scene, scene_digest(job.scene)
-                self.specs.extend(layouts.tag(frames.specs(job, key), layout, place))
-        self.hashes = {s.id: frames.spec_hash(s, digests[s.scene]) for s in self.specs}
+                self.specs.extend(layouts.tag(job_frames.specs(job, key), layout, place))
+        self.hashes = {s.id: job_frames.spec_hash(s, digests[s.scene]) for s in self.specs}
         per_unit = layout.frames_per_unit(samples_per_tar)
         self.units = [Unit(k, tuple(part), tuple(self.hashes[s.id] for s in part))
                       for k, part in enumerate(self.specs[i:i + per_unit]

@@ -1,9 +1,9 @@
 """A frame spec: everything that decides one frame of a batch, typed and frozen.
 
-Made in the parent from a checked job alone (`frames.specs`), so that every process given it
+Made in the parent from a checked job alone (`job_frames.specs`), so that every process given it
 renders the same frame; it travels to pool processes and Ray actors by pickle.  Its fields are
 JSON data (the camera and light tables as the job gave them, checked), and `as_dict` is what
-its spec hash is taken of (`frames.spec_hash`): the same keys and values as the plain dict a
+its spec hash is taken of (`job_frames.spec_hash`): the same keys and values as the plain dict a
 spec was before it had a type, so the hashes in existing manifests still match.
 """
 
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 class FrameSpec:
     """One frame of a job.
 
-    id        : `<job>/<index:06d>`, also its file stem (`frames.frame_id`)
+    id        : `<job>/<index:06d>`, also its file stem (`job_frames.frame_id`)
     index     : its place in the job, from 0
     job       : the job's name
     scene     : the key of its scene among the run's (a path, or `<Scene id>` for a Scene)
@@ -27,7 +27,7 @@ class FrameSpec:
     outputs   : the output names (`outputs.OUTPUTS`) it makes, in order
     renderer  : "shadowvol" or "raytrace" (a row of `sources.SOURCES`)
     method    : the rasterizer's method; max_depth: the ray tracer's recursion depth
-    seed, jitter : the job's seed and jitter (`frames.jittered`)
+    seed, jitter : the job's seed and jitter (`job_frames.jittered`)
     format    : the dataset layout its files are made as (`layouts.tag`), or None for the job's
                 outputs as they are (the files and webdataset layouts)
     job_index : its job's place in the job file, from 0, for the layouts whose index is of the

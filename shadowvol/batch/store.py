@@ -32,7 +32,7 @@ from shadowvol.io import tar_bytes, write_bytes
 @dataclass(frozen=True)
 class Unit:
     """A frame, or the frames of one tar: `index` (its place among the run's units), its frame
-    specs in frame order and their spec hashes (`frames.spec_hash`)."""
+    specs in frame order and their spec hashes (`job_frames.spec_hash`)."""
 
     index: int
     frames: tuple[FrameSpec, ...]

@@ -23,7 +23,7 @@ from collections import OrderedDict
 import numpy as np
 
 from shadowvol import __version__, memory, signals
-from shadowvol.batch import egl, frames, jitter, layouts
+from shadowvol.batch import egl, jitter, job_frames, layouts
 from shadowvol.batch.outputs import fields_of
 from shadowvol.batch.sources import SOURCES
 from shadowvol.batch.spec import FrameSpec
@@ -208,7 +208,7 @@ class Worker:
                                **spec.camera})
         lights = scene.lights if spec.lights is None else tuple(
             light_from_dict(x, f"lights[{i}]") for i, x in enumerate(spec.lights))
-        camera, lights = frames.jittered(camera, lights, spec.jitter, spec.seed,
+        camera, lights = job_frames.jittered(camera, lights, spec.jitter, spec.seed,
                                          spec.index)
         scene = jitter.jittered_scene(scene, spec.jitter, spec.seed, spec.index)
         return scene, camera, lights
