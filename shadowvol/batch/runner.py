@@ -319,12 +319,12 @@ def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_wor
     if not specs:
         return iter(())
     if ray:
-        from shadowvol.batch import ray as ray_backend
+        import shadowvol.batch.ray
 
         address = None if ray is True else ray
-        return ray_backend.results(local.chunks(specs, workers), scenes, actors=workers,
-                                   address=address, egl_device=egl_device,
-                                   num_gpus=gpus_per_worker, budget=budget)
+        return shadowvol.batch.ray.results(local.chunks(specs, workers), scenes, actors=workers,
+                                          address=address, egl_device=egl_device,
+                                          num_gpus=gpus_per_worker, budget=budget)
     if workers == 1 and start_method == "spawn":
         return local.in_process(local.chunks(specs, 1), scenes, egl_device, budget)
     return local.pool(local.chunks(specs, workers), scenes, workers, egl_device, start_method,

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from shadowvol import memory
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.compare import estimate, pyrender_peer
 from shadowvol.compare.comparison import compare
@@ -45,15 +45,15 @@ def _count(text: str) -> int:
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "compare", help="raster against ray-traced shadows: picture, table, numbers",
         description="Render SCENE with shadow volumes and with the reference ray tracer; print "
                     "per light the mismatched pixels, those away from mask edges, the IoU of "
                     "the shadow regions and each renderer's time; draw both side by side with "
                     "the masks' difference.",
         epilog=EPILOG)
-    blocks.scene(p)
-    blocks.output(p, "PNG", "the picture")
+    options.scene(p)
+    options.output(p, "PNG", "the picture")
     p.add_argument("--method", choices=("auto", "zpass", "zfail"), default="auto",
                    help="how the rasterizer counts shadow volumes (default: auto)")
     p.add_argument("--json", metavar="FILE", help="also write the numbers as JSON")
@@ -66,7 +66,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "point-light shadows; needs the [peer] extra)")
     p.add_argument("--size", type=_size, metavar="WxH",
                    help="render at this size instead of the scene's image size")
-    blocks.memory_budget(p)
+    options.memory_budget(p)
     p.set_defaults(func=command)
     return p
 

@@ -15,7 +15,7 @@ import math
 import sys
 from pathlib import Path
 
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.course import grader, student_render, workspace
 from shadowvol.io import save_png, write_bytes
@@ -31,22 +31,22 @@ crash costs that task only.  The cases and their answers come from the project's
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(subparsers, "course", help="the course's exercises: hand out, grade",
+    p = options.command(subparsers, "course", help="the course's exercises: hand out, grade",
                        description="The lecture's exercises as assignments, graded against "
                                    "the project's own implementation.",
                        epilog=EPILOG + "\n" + status.EPILOG)
     sub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    new = blocks.command(sub, "new", help="write a student's workspace (stubs)",
+    new = options.command(sub, "new", help="write a student's workspace (stubs)",
                          description="One Python module per task: the function to write, its "
                                      "docstring and an example.  DIR must be new or empty.")
     new.add_argument("folder", metavar="DIR", type=Path, help="the workspace to create")
     new.set_defaults(func=command_new, solved=False)
-    sol = blocks.command(sub, "solutions", help="write the reference solutions",
+    sol = options.command(sub, "solutions", help="write the reference solutions",
                          description="The same modules, every function filled: the "
                                      "teacher's copy.  DIR must be new or empty.")
     sol.add_argument("folder", metavar="DIR", type=Path, help="the folder to create")
     sol.set_defaults(func=command_new, solved=True)
-    grade = blocks.command(sub, "grade", help="grade a workspace",
+    grade = options.command(sub, "grade", help="grade a workspace",
                            description="Grade every task of a workspace on hidden cases.",
                            epilog="exit status: 0 full marks; 1 short of them; 2 bad input "
                                   "(no such folder, not a workspace, a bad --json path).")
@@ -56,15 +56,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     grade.add_argument("--timeout", metavar="S", type=float, default=grader.DEFAULT_TIMEOUT,
                        help=f"seconds each task may run (default {grader.DEFAULT_TIMEOUT:g})")
     grade.set_defaults(func=command_grade)
-    ren = blocks.command(sub, "render", help="render with the student's ray-sphere and shadow "
+    ren = options.command(sub, "render", help="render with the student's ray-sphere and shadow "
                                              "test",
                          description="The Whitted tracer with the workspace's "
                                      "ray_sphere.intersect and shadow_ray.in_shadow for the "
                                      "spheres, beside the tracer's own image, the pixels that "
                                      "differ marked.")
     ren.add_argument("folder", metavar="DIR", type=Path, help="the student's workspace")
-    blocks.scene(ren)
-    blocks.output(ren, "PNG", "the picture: yours | the reference | where they differ")
+    options.scene(ren)
+    options.output(ren, "PNG", "the picture: yours | the reference | where they differ")
     ren.add_argument("--size", metavar="WxH", default=None,
                      help="the image size (default: the scene's, scaled to 240 pixels wide)")
     ren.add_argument("--timeout", metavar="S", type=float,

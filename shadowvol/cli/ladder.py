@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import status
 from shadowvol.course.gallery import parse_size
 from shadowvol.course.ladder import FULL, SMALL, ladder_slide
@@ -21,7 +21,7 @@ from shadowvol.scenefile import load_scene
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = blocks.Parser(prog="python -m shadowvol.cli.ladder",
+    ap = options.Parser(prog="python -m shadowvol.cli.ladder",
                        description="Render the ladder slide (local -> Whitted -> direct -> "
                                    "path traced -> photon map -> radiosity), as the gallery "
                                    "of `shadowvol demo` has it.")

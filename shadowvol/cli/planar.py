@@ -8,7 +8,7 @@ from pathlib import Path
 
 from shadowvol import memory
 from shadowvol.cameras import calibration
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.frame import save_masks
 from shadowvol.io import save_png
@@ -19,22 +19,22 @@ from shadowvol.scenefile import load_scene
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "planar", help="render planar projected shadows (Blinn 1988) onto one plane",
         description="Render SCENE with planar projected shadows: every object squashed from "
                     "each light onto the receiving plane by a 4x4 matrix and drawn there as "
                     "shadow (the stencil keeps it on the receiver, once per pixel).  Only the "
                     "receiver is ever shadowed: no shadows on other objects, no self-shadows "
                     "(`shadowvol render` draws those, with shadow volumes).")
-    blocks.scene(p)
-    blocks.output(p, "PNG", "where to write the image (8-bit sRGB PNG, row 0 at the top)")
+    options.scene(p)
+    options.output(p, "PNG", "where to write the image (8-bit sRGB PNG, row 0 at the top)")
     p.add_argument("--receiver", metavar="NAME", default=None,
                    help="the object that receives the shadows: a plane or a flat mesh, by "
                         "name (default: the largest plane object)")
     p.add_argument("--masks", metavar="NPZ", default=None,
                    help="also write the masks (.npz: lit (L, H, W), coverage (H, W)); lit is "
                         "False only in the projected shadows on the receiver")
-    blocks.memory_budget(p)
+    options.memory_budget(p)
     p.set_defaults(func=command)
     return p
 

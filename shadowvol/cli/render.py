@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from shadowvol import memory
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.errors import OutOfMemory, RenderError
 from shadowvol.frame import GROUND_TRUTH, LAYERS, layer_exrs, save_masks
@@ -43,13 +43,13 @@ SCENE_SUFFIXES = (".toml", ".json")
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "render", help="render scenes with stencil shadow volumes",
         description="Render SCENE with exact hard shadows counted in the stencil buffer "
                     "(direct Phong lighting: ambient + each light where unshadowed).",
         epilog=EPILOG)
-    blocks.scene(p, blocks.SCENE_HELP + "; several: -o is a directory", nargs="*")
-    blocks.output(p, "PNG|DIR", "where to write the image (one scene: a .png) or the images "
+    options.scene(p, options.SCENE_HELP + "; several: -o is a directory", nargs="*")
+    options.output(p, "PNG|DIR", "where to write the image (one scene: a .png) or the images "
                                 "(several scenes: a directory)")
     p.add_argument("--method", choices=("auto", "zpass", "zfail"), default="auto",
                    help="how volumes are counted: zpass (from the near plane to the surface; "
@@ -76,17 +76,17 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "under its name, with a legend (0: lit, the image darkened; 1, 2, ... yellow to red to "
                         "violet; negative: blue).  Every triangle casts, so a closed object "
                         "counts 2 behind it (its front and its back)")
-    blocks.ground_truth(p, "ground truth to add to the mask file, comma-separated: "
+    options.ground_truth(p, "ground truth to add to the mask file, comma-separated: "
                            f"{', '.join(GROUND_TRUTH)} (or all); and the intrinsic layers "
                            f"{', '.join(LAYERS)}; see docs/CONVENTIONS.md.  "
                            "Implies --masks (beside the image unless named)")
-    blocks.exr(p, "also write the image as linear OpenEXR (32-bit float RGB), and each "
+    options.exr(p, "also write the image as linear OpenEXR (32-bit float RGB), and each "
                   "intrinsic layer asked for beside it (X-albedo.exr, X-direct-0.exr, ...); "
                   "without a name, beside the image", nargs="?", const=True)
     p.add_argument("--png16", metavar="PNG", nargs="?", const=True,
                    help="also write the image as a 16-bit sRGB PNG; without a name, beside the "
                         "image (NAME-16bit.png)")
-    blocks.memory_budget(p)
+    options.memory_budget(p)
     p.set_defaults(func=command)
     return p
 

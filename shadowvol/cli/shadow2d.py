@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.course.shadow2d import (
     as_light,
@@ -43,7 +43,7 @@ shadow polygons.  Without any input, --example draws the course's example.
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "shadow2d",
         help="the 2D shadow-polygon exercise: list and draw shadow polygons",
         description="Shadow polygons of segments lit by a point light in the unit square.",

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from shadowvol import memory
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.compare.shadowmaps import ShadowMapper
 from shadowvol.course.shadowmap_plot import plot, sweep
@@ -23,15 +23,15 @@ MAX_PCF = 15
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "shadowmap", help="a shadow map against the exact shadow: acne and "
                                       "peter-panning counted",
         description="Shadow-map one light of SCENE (its depth map in GL, a bias, PCF) and "
                     "count the pixels it gets wrong against the exact shadow of shadow "
                     "volumes: acne (lit surfaces called shadowed) and peter-panning (shadowed "
                     "surfaces called lit), among the visible pixels that face the light.")
-    blocks.scene(p)
-    blocks.output(p, "PNG", "the picture: the map's shadow | the exact shadow | the difference")
+    options.scene(p)
+    options.output(p, "PNG", "the picture: the map's shadow | the exact shadow | the difference")
     p.add_argument("--resolution", type=int, default=1024, metavar="N",
                    help="the map's texels a side (default 1024)")
     p.add_argument("--bias", type=float, default=0.002, metavar="B",
@@ -45,7 +45,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="also write the counts as JSON (misclassified, acne, peter_panning)")
     p.add_argument("--plot", metavar="PNG", default=None,
                    help="also write the error against resolution (256-4096) and bias")
-    blocks.memory_budget(p)
+    options.memory_budget(p)
     p.set_defaults(func=command)
     return p
 

@@ -28,7 +28,7 @@ from PIL import Image, ImageDraw
 
 from shadowvol.course.probe import probe
 from shadowvol.errors import require
-from shadowvol.raster import window as gl_window
+from shadowvol.raster import window
 from shadowvol.raster.planar_pass import PlanarShadows, ReceiverError, receiver_index
 from shadowvol.raster.renderer import Renderer
 from shadowvol.view import picture
@@ -102,14 +102,14 @@ class Viewer:
                                            caption=f"shadowvol view: {scene.name}",
                                            config=config, visible=visible, resizable=False)
         self.window.switch_to()
-        self.ctx = gl_window.attach(egl=bool(pyglet.options["headless"]))
+        self.ctx = window.attach(egl=bool(pyglet.options["headless"]))
         self.renderer = Renderer(scene, self.ctx)
         try:
             receiver_index(scene)
             self.planar = PlanarShadows(self.renderer)
         except ReceiverError:
             self.planar = None      # no plane to project onto: the P key says so
-        self.blit = gl_window.Blit(self.ctx)
+        self.blit = window.Blit(self.ctx)
         self.state = ViewState.of(scene)
         self.message = ""
         self.probe_text = "left click a pixel to probe it"

@@ -12,7 +12,7 @@ from pathlib import Path
 from raytrace.backends import BACKENDS
 from raytrace.outlook import estimate, radiosity
 from shadowvol import memory
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.io import save_exr, save_png
 from shadowvol.scene import SceneError
@@ -20,17 +20,17 @@ from shadowvol.scenefile import load_scene
 
 
 def add_parser(sub) -> None:
-    r = blocks.command(sub, "radiosity", help="radiosity of the diffuse scene (patches, "
+    r = options.command(sub, "radiosity", help="radiosity of the diffuse scene (patches, "
                                               "ray-cast form factors, progressive refinement)",
                        description="Mesh SCENE into patches, compute form factors by casting "
                                    "rays through Embree, solve by progressive refinement and "
                                    "show the solution from the camera.  Prints the number of "
                                    "patches, iterations and time.")
-    blocks.scene(r)
-    blocks.output(r, "PNG", "the interpolated (Gouraud) display, sRGB PNG")
+    options.scene(r)
+    options.output(r, "PNG", "the interpolated (Gouraud) display, sRGB PNG")
     r.add_argument("--flat", metavar="PNG", default=None,
                    help="also write the flat display (one colour per patch)")
-    blocks.exr(r, "also write the interpolated display as linear OpenEXR")
+    options.exr(r, "also write the interpolated display as linear OpenEXR")
     r.add_argument("--level", type=int, default=radiosity.DEFAULT_LEVEL, metavar="L",
                    help="subdivision level: patches no longer than the longest triangle edge "
                         f"/ 2^L (default {radiosity.DEFAULT_LEVEL})")
@@ -43,9 +43,9 @@ def add_parser(sub) -> None:
                         f"{radiosity.DEFAULT_TOL:g})")
     r.add_argument("--shots", type=int, default=1, metavar="N",
                    help="patches shot per iteration (default 1: Cohen et al.'s one at a time)")
-    blocks.seed(r, "random seed (default 0)")
-    blocks.backend(r, BACKENDS, "triangle intersection (default: embree)")
-    blocks.memory_budget(r)
+    options.seed(r, "random seed (default 0)")
+    options.backend(r, BACKENDS, "triangle intersection (default: embree)")
+    options.memory_budget(r)
     r.set_defaults(func=command)
 
 

@@ -13,7 +13,7 @@ from raytrace.outlook.photonmap import KERNELS
 from raytrace.outlook.sampling import FILTERS
 from raytrace.outlook.whitted import render
 from shadowvol import memory
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.io import save_exr, save_png, save_png16
 from shadowvol.scene import SceneError
@@ -23,18 +23,18 @@ PATH_SPP = 16  # the path tracer's paths per pixel when --spp is not given
 
 
 def add_parser(sub) -> None:
-    r = blocks.command(sub, "render", help="ray-trace an image (Whitted: shadows, reflection, "
+    r = options.command(sub, "render", help="ray-trace an image (Whitted: shadows, reflection, "
                                            "refraction, Phong)",
                        description="Ray-trace SCENE into an 8-bit sRGB PNG.")
-    blocks.scene(r)
-    blocks.output(r, "PNG", "where to write the image (PNG, sRGB, row 0 at the top)")
+    options.scene(r)
+    options.output(r, "PNG", "where to write the image (PNG, sRGB, row 0 at the top)")
     r.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="reflection/refraction generations; 0 = direct lighting only, as the "
                         "rasterizer draws it (default: the scene's render.max_depth)")
     r.add_argument("--png16", metavar="PNG", default=None,
                    help="also write the image as a 16-bit sRGB PNG")
-    blocks.backend(r, BACKENDS)
-    blocks.memory_budget(r)
+    options.backend(r, BACKENDS)
+    options.memory_budget(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
     r.add_argument("--filter", choices=FILTERS, default="box",
@@ -52,12 +52,12 @@ def add_parser(sub) -> None:
                    help="samples per pixel: path tracing's paths and the photon map's eye "
                         f"rays (default {PATH_SPP}); Whitted's stratified jittered samples, "
                         "see --filter (default 1: the pixel centre, no jitter)")
-    blocks.seed(r, "random seed of the path tracer, the photon map and Whitted's "
+    options.seed(r, "random seed of the path tracer, the photon map and Whitted's "
                    "distributed samples (--spp, roughness, aperture); the same seed gives "
                    "the same image "
                    "(default 0)")
-    blocks.exr(r, "also write the linear image as OpenEXR")
-    blocks.photon(r, KERNELS)
+    options.exr(r, "also write the linear image as OpenEXR")
+    options.photon(r, KERNELS)
     r.set_defaults(func=command)
 
 

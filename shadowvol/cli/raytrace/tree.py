@@ -12,7 +12,7 @@ from raytrace.outlook.estimate import whitted
 from raytrace.outlook.raytree import format_tree, ray_tree
 from raytrace.outlook.whitted import render
 from shadowvol import memory
-from shadowvol.cli import args as blocks
+from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.course import raytree_slide
 from shadowvol.course.slides import Layout
@@ -22,23 +22,23 @@ from shadowvol.scenefile import load_scene
 
 
 def add_parser(sub) -> None:
-    t = blocks.command(sub, "tree", help="the ray tree of one pixel (the course's exercise)",
+    t = options.command(sub, "tree", help="the ray tree of one pixel (the course's exercise)",
                        description="Print every ray the Whitted tracer follows for pixel "
                                    "(X, Y) — primary, shadow rays with their verdicts, "
                                    "reflected, refracted, total internal reflection — as an "
                                    "indented tree, and optionally draw the gallery's slide of "
                                    "it: the rays over the render, the tree as boxes beside "
                                    "it.")
-    blocks.scene(t)
+    options.scene(t)
     t.add_argument("--pixel", nargs=2, type=int, required=True, metavar=("X", "Y"),
                    help="column X from the left, row Y from the top")
     t.add_argument("--depth", type=int, default=None, metavar="N",
                    help="reflection/refraction generations (default: the scene's "
                         "render.max_depth)")
-    blocks.output(t, "PNG", "also draw the tree (a 1920x1080 slide): the rays over the "
+    options.output(t, "PNG", "also draw the tree (a 1920x1080 slide): the rays over the "
                             "ray-traced image and one box per ray", required=False)
-    blocks.backend(t, BACKENDS)
-    blocks.memory_budget(t)
+    options.backend(t, BACKENDS)
+    options.memory_budget(t)
     t.set_defaults(func=command)
 
 
