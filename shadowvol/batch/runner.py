@@ -27,8 +27,8 @@ from shadowvol.batch.layouts import LAYOUTS
 from shadowvol.batch.sources import SOURCES
 from shadowvol.batch.store import Unit
 from shadowvol.batch.spec import FrameSpec
-from shadowvol.errors import BAD_INPUT, OK, require
-from shadowvol.scene import Scene, SceneError
+from shadowvol.errors import BAD_INPUT, InputError, OK, require
+from shadowvol.scene import Scene
 
 DEFAULT_SAMPLES_PER_TAR = 1000
 
@@ -64,9 +64,9 @@ def parse_shard(text: str) -> tuple[int, int]:
     try:
         index, count = (int(x) for x in str(text).split("/"))
     except ValueError:
-        raise SceneError("--shard", f"expected I/N (e.g. 0/4), got {text!r}") from None
+        raise InputError("--shard", f"expected I/N (e.g. 0/4), got {text!r}") from None
     if not 0 <= index < count:
-        raise SceneError("--shard", f"I/N needs 0 <= I < N, got {text!r}")
+        raise InputError("--shard", f"I/N needs 0 <= I < N, got {text!r}")
     return index, count
 
 
@@ -150,7 +150,7 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     shard = _checked(workers, shard, format, samples_per_tar, memory_budget, egl_device, ray)
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise SceneError("-o", f"{str(out)!r} is not a folder")
+        raise InputError("-o", f"{str(out)!r} is not a folder")
     layout = LAYOUTS[format]
     entries = _jobs(jobs)
     plan = _Plan(entries, layout, samples_per_tar, shard)
@@ -190,16 +190,16 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
 
 def _checked(workers, shard, format, samples_per_tar, memory_budget, egl_device, ray
              ) -> tuple[int, int]:
-    """The shard as (I, N); SceneError for an argument that cannot run, before any work."""
+    """The shard as (I, N); InputError for an argument that cannot run, before any work."""
     if isinstance(shard, str):
         shard = parse_shard(shard)
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise SceneError("--workers", f"must be a whole number >= 1, got {workers!r}")
+        raise InputError("--workers", f"must be a whole number >= 1, got {workers!r}")
     if format not in LAYOUTS:
-        raise SceneError("--format", f"must be one of {', '.join(LAYOUTS)}, got {format!r}")
+        raise InputError("--format", f"must be one of {', '.join(LAYOUTS)}, got {format!r}")
     if isinstance(samples_per_tar, bool) or not isinstance(samples_per_tar, int) or \
             samples_per_tar < 1:
-        raise SceneError("--samples-per-tar", f"must be a whole number >= 1, got "
+        raise InputError("--samples-per-tar", f"must be a whole number >= 1, got "
                                               f"{samples_per_tar!r}")
     memory.budget(memory_budget)  # a bad budget is an error now, not one per frame
     if egl.parse(egl_device) is not None and not ray:

@@ -13,6 +13,7 @@ from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.compare import estimate, pyrender_peer
 from shadowvol.compare.comparison import compare
+from shadowvol.errors import InputError
 from shadowvol.io import atomic_write, save_png
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
@@ -83,7 +84,7 @@ def command(args) -> int:
         try:
             scene = scene.replace(width=args.size[0], height=args.size[1])
         except SceneError as exc:
-            raise SceneError("--size", exc.problem) from None
+            raise InputError("--size", exc.problem) from None
     # the GL frame is counted as this process's memory: the context is made later
     memory.check(estimate.compare(scene), args.memory_budget, args.scene)
     with status.naming(args.scene):

@@ -18,8 +18,8 @@ from pathlib import Path
 from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.course import grader, student_render, workspace
+from shadowvol.errors import InputError
 from shadowvol.io import save_png, write_bytes
-from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 EPILOG = """\
@@ -113,21 +113,21 @@ def _size(text: str | None, scene) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise SceneError("--size", f"expected WxH, e.g. 240x180, got {text!r}") from None
+        raise InputError("--size", f"expected WxH, e.g. 240x180, got {text!r}") from None
     if not (1 <= w <= 4096 and 1 <= h <= 4096):
-        raise SceneError("--size", f"must be 1..4096 a side, got {text!r}")
+        raise InputError("--size", f"must be 1..4096 a side, got {text!r}")
     return w, h
 
 
 def command_render(args) -> int:
     outputs.check({"image": Path(args.output)}, {"image": "-o"})
     if not (math.isfinite(args.timeout) and args.timeout > 0):
-        raise SceneError("--timeout", f"must be a positive number of seconds, got "
+        raise InputError("--timeout", f"must be a positive number of seconds, got "
                                       f"{args.timeout:g}")
     try:
         grader.check_workspace(args.folder)
     except ValueError as exc:
-        raise SceneError("DIR", str(exc)) from None
+        raise InputError("DIR", str(exc)) from None
     scene = load_scene(args.scene)
     w, h = _size(args.size, scene)
     pair = student_render.render_pair(args.folder, args.scene, scene.replace(width=w, height=h),

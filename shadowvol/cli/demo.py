@@ -10,8 +10,8 @@ from shadowvol.cli import options
 from shadowvol.cli import status
 from shadowvol.course.gallery import SCENES, build_gallery, index_html, parse_size
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE
+from shadowvol.errors import InputError
 from shadowvol.io import atomic_write, save_png
-from shadowvol.scene import SceneError
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -43,7 +43,7 @@ def command(args) -> int:
         print(f"  {name}: {seconds:.1f} s", file=sys.stderr)
 
     if args.size and args.small:
-        raise SceneError("--size", "give --size or --small, not both")
+        raise InputError("--size", "give --size or --small, not both")
     size = parse_size(args.size) if args.size else None
     skipped = []
     pictures = build_gallery(args.small, args.scenes, progress=progress, size=size,

@@ -10,11 +10,11 @@ from shadowvol import memory
 from shadowvol.cameras import calibration
 from shadowvol.cli import options
 from shadowvol.cli import outputs, status
+from shadowvol.errors import InputError
 from shadowvol.frame import save_masks
 from shadowvol.io import save_png
 from shadowvol.raster import estimate
 from shadowvol.raster.planar_pass import ReceiverError, render_planar
-from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 
@@ -52,7 +52,7 @@ def command(args) -> int:
         with status.naming(args.scene):
             result = render_planar(scene, args.receiver)
     except ReceiverError as exc:
-        raise SceneError("--receiver", str(exc)) from None
+        raise InputError("--receiver", str(exc)) from None
     save_png(paths["image"], result.image)
     if "masks" in paths:
         save_masks(paths["masks"], result.lit, result.coverage,

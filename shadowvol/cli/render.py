@@ -12,7 +12,7 @@ import numpy as np
 from shadowvol import memory
 from shadowvol.cli import options
 from shadowvol.cli import outputs, status
-from shadowvol.errors import OutOfMemory, RenderError
+from shadowvol.errors import InputError, OutOfMemory, RenderError
 from shadowvol.frame import GROUND_TRUTH, LAYERS, layer_exrs, save_masks
 from shadowvol.io import encode_srgb, save_exr, save_png, save_png16
 from shadowvol.pictures import ROLE_COLOURS, captioned, heat_maps
@@ -107,12 +107,12 @@ def _take_back_scenes(args) -> None:
             args.scene.insert(0, value)
             setattr(args, key, True)
     if not args.scene:
-        raise SceneError("SCENE", "no scene file given")
+        raise InputError("SCENE", "no scene file given")
 
 
 def plan(args) -> list[dict[str, Path]]:
     """Per scene, where each output goes: {"image": Path, "masks": Path, ...}.  Raises
-    SceneError (exit 2) for arguments that do not fit the number of scenes."""
+    InputError (exit 2) for arguments that do not fit the number of scenes."""
     _take_back_scenes(args)
     args.truth = outputs.ground_truth(getattr(args, "outputs", None))
     if args.truth and not args.masks:
@@ -130,11 +130,11 @@ def plan(args) -> list[dict[str, Path]]:
         return [out]
     directory = Path(args.output)
     if directory.suffix.lower() in (".png", ".npz") or directory.is_file():
-        raise SceneError("-o", f"with {len(args.scene)} scenes, -o must name a directory, "
+        raise InputError("-o", f"with {len(args.scene)} scenes, -o must name a directory, "
                                f"got {args.output!r}")
     for key, _ in EXTRAS:
         if getattr(args, key) not in (None, True):
-            raise SceneError(f"--{key}", f"with several scenes, --{key} takes no file name "
+            raise InputError(f"--{key}", f"with several scenes, --{key} takes no file name "
                                          f"(each scene writes OUTDIR/NAME{dict(EXTRAS)[key]})")
     plans, taken = [], set()
     for scene in args.scene:
@@ -149,7 +149,7 @@ def plan(args) -> list[dict[str, Path]]:
                 out[key] = directory / f"{unique}{suffix}"
         for path in out.values():  # belt and braces: nothing may land outside `directory`
             if path.resolve().parent != directory.resolve():
-                raise SceneError("-o", f"refusing to write {path} outside {directory}")
+                raise InputError("-o", f"refusing to write {path} outside {directory}")
         plans.append(out)
     return plans
 
@@ -157,7 +157,7 @@ def plan(args) -> list[dict[str, Path]]:
 def command(args) -> int:
     try:
         plans = plan(args)
-    except SceneError as exc:
+    except (InputError, SceneError) as exc:
         return status.report(exc)
     code, ctx = status.OK, None
     try:

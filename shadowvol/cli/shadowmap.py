@@ -13,6 +13,7 @@ from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.compare.shadowmaps import ShadowMapper
 from shadowvol.course.shadowmap_plot import plot, sweep
+from shadowvol.errors import InputError
 from shadowvol.io import save_png, write_bytes
 from shadowvol.raster import estimate
 from shadowvol.scene import SceneError
@@ -52,11 +53,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def _check(args) -> None:
     if not 16 <= args.resolution <= MAX_RESOLUTION:
-        raise SceneError("--resolution", f"must be 16..{MAX_RESOLUTION}, got {args.resolution}")
+        raise InputError("--resolution", f"must be 16..{MAX_RESOLUTION}, got {args.resolution}")
     if not (math.isfinite(args.bias) and args.bias >= 0):
-        raise SceneError("--bias", f"must be a finite number >= 0, got {args.bias}")
+        raise InputError("--bias", f"must be a finite number >= 0, got {args.bias}")
     if not 1 <= args.pcf <= MAX_PCF:
-        raise SceneError("--pcf", f"must be 1..{MAX_PCF}, got {args.pcf}")
+        raise InputError("--pcf", f"must be 1..{MAX_PCF}, got {args.pcf}")
 
 
 def command(args) -> int:
@@ -75,7 +76,7 @@ def command(args) -> int:
     except SceneError:
         raise   # the scene's (`image`, `objects`), not the light's
     except ValueError as exc:
-        raise SceneError("--light", str(exc)) from None
+        raise InputError("--light", str(exc)) from None
     with mapper:
         result = mapper.measure(args.resolution, args.bias, args.pcf)
         rows = sweep(mapper, pcf=args.pcf) if args.plot else None

@@ -7,7 +7,7 @@ import os
 
 from shadowvol.cli import options
 from shadowvol.cli import status
-from shadowvol.scene import SceneError
+from shadowvol.errors import InputError
 from shadowvol.scenefile import load_scene
 
 KEYS = """\
@@ -45,7 +45,7 @@ def command(args) -> int:
         w, h = parse_size(args.size)
         scene = scene.replace(width=w, height=h)
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-        raise SceneError("view", "no display (DISPLAY is not set): shadowvol view opens a "
+        raise InputError("view", "no display (DISPLAY is not set): shadowvol view opens a "
                                  "window; run it on a desktop, over ssh -X, or under Xvfb")
     from shadowvol.view.app import Viewer
 

@@ -13,6 +13,7 @@ from builders import SCENES, job_lines
 from shadowvol.batch import egl, job_frames
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.runner import parse_shard, share
+from shadowvol.errors import InputError
 from shadowvol.io import npz_bytes, tar_bytes
 from shadowvol.raster.egl import Device, devices
 from shadowvol.scene import Camera, PointLight, SceneError
@@ -79,7 +80,7 @@ def test_shards_cover_every_unit_once(units, count):
     covered = [u for i in range(count) for u in share(units, (i, count))]
     assert covered == list(range(units))
     assert parse_shard(f"{count - 1}/{count}") == (count - 1, count)
-    with pytest.raises(SceneError):
+    with pytest.raises(InputError):
         parse_shard(f"{count}/{count}")
 
 
@@ -102,11 +103,11 @@ def test_egl_device_choice():
     assert egl.choose("auto", gpus)[0] == 1  # CUDA device 0, wherever EGL lists it
     assert egl.choose("auto", [mesa])[0] == 0
     assert egl.choose("2", gpus)[0] == 2
-    with pytest.raises(SceneError, match=r"no EGL device 3; this machine has 3: 0 \(H200, CUDA "
+    with pytest.raises(InputError, match=r"no EGL device 3; this machine has 3: 0 \(H200, CUDA "
                                          r"device 1\), 1 \(H200, CUDA device 0\), 2 \(Mesa"):
         egl.choose(3, gpus)
     for bad in ("-1", "gpu0", True, 1.5):
-        with pytest.raises(SceneError, match="--egl-device"):
+        with pytest.raises(InputError, match="--egl-device"):
             egl.choose(bad, gpus)
     found = devices()  # this machine's, by the real queries
     assert all(d.index == i for i, d in enumerate(found))

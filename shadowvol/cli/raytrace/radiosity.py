@@ -14,6 +14,7 @@ from raytrace.outlook import estimate, radiosity
 from shadowvol import memory
 from shadowvol.cli import options
 from shadowvol.cli import outputs, status
+from shadowvol.errors import InputError
 from shadowvol.io import save_exr, save_png
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
@@ -63,7 +64,7 @@ def command(args) -> int:
                                   ("--shots", args.shots, args.shots >= 1, ">= 1"),
                                   ("--seed", args.seed, args.seed >= 0, ">= 0")):
         if not ok:
-            raise SceneError(flag, f"must be {rule}, got {value}")
+            raise InputError(flag, f"must be {rule}, got {value}")
     scene = load_scene(args.scene)
     memory.check(estimate.radiosity_display(scene, ("exr",) if args.exr else ("png",),
                                             flat=bool(args.flat)),

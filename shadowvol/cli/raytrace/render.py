@@ -15,6 +15,7 @@ from raytrace.outlook.whitted import render
 from shadowvol import memory
 from shadowvol.cli import options
 from shadowvol.cli import outputs, status
+from shadowvol.errors import InputError
 from shadowvol.io import save_exr, save_png, save_png16
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
@@ -74,11 +75,11 @@ def command(args) -> int:
             paths[kind] = Path(getattr(args, kind))
     outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
     if args.max_depth is not None and args.max_depth < 0:
-        raise SceneError("--max-depth", f"must be >= 0, got {args.max_depth}")
+        raise InputError("--max-depth", f"must be >= 0, got {args.max_depth}")
     spp = 1 if args.spp is None else args.spp
     for flag, value, low in (("--spp", spp, 1), ("--seed", args.seed, 0)):
         if value < low:
-            raise SceneError(flag, f"must be >= {low}, got {value}")
+            raise InputError(flag, f"must be >= {low}, got {value}")
     scene = load_scene(args.scene)
     memory.check(estimate.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
@@ -110,7 +111,7 @@ def analytic_rendered(args) -> int:
     outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
     for flag, value in (("--spp", args.spp), ("--max-depth", args.max_depth)):
         if value is not None:
-            raise SceneError(flag, "not with --integrator analytic (the direct light at the "
+            raise InputError(flag, "not with --integrator analytic (the direct light at the "
                                    "pixel centres)")
     scene = load_scene(args.scene)
     memory.check(estimate.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
@@ -131,10 +132,10 @@ def path_traced(args) -> int:
     spp = PATH_SPP if args.spp is None else args.spp
     for flag, value, low in (("--spp", spp, 1), ("--seed", args.seed, 0)):
         if value < low:
-            raise SceneError(flag, f"must be >= {low}, got {value}")
+            raise InputError(flag, f"must be >= {low}, got {value}")
     depth = args.max_depth
     if depth is not None and depth < 1:
-        raise SceneError("--max-depth", f"must be >= 1 for path tracing, got {depth}")
+        raise InputError("--max-depth", f"must be >= 1 for path tracing, got {depth}")
     scene = load_scene(args.scene)
     memory.check(estimate.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
@@ -163,15 +164,15 @@ def photon_mapped(args) -> int:
                                   ("--light-samples", args.light_samples,
                                    args.light_samples >= 1, ">= 1")):
         if not ok:
-            raise SceneError(flag, f"must be {rule}, got {value}")
+            raise InputError(flag, f"must be {rule}, got {value}")
     if args.knn is not None and args.radius is not None:
-        raise SceneError("--knn", "give --knn or --radius, not both")
+        raise InputError("--knn", "give --knn or --radius, not both")
     try:
         k = photon.DEFAULT_K if args.knn is None else args.knn
         density = photon.Estimate(k=None if args.radius is not None else k,
                                   radius=args.radius, kernel=args.kernel)
     except ValueError as exc:
-        raise SceneError("--radius" if args.radius is not None else "--knn", str(exc)) from None
+        raise InputError("--radius" if args.radius is not None else "--knn", str(exc)) from None
     scene = load_scene(args.scene)
     memory.check(estimate.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)

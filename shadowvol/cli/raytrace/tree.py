@@ -16,8 +16,8 @@ from shadowvol.cli import options
 from shadowvol.cli import outputs, status
 from shadowvol.course import raytree_slide
 from shadowvol.course.slides import Layout
+from shadowvol.errors import InputError
 from shadowvol.io import save_png
-from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 
@@ -47,11 +47,11 @@ def command(args) -> int:
     if args.output:
         outputs.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
     if args.depth is not None and args.depth < 0:
-        raise SceneError("--depth", f"must be >= 0, got {args.depth}")
+        raise InputError("--depth", f"must be >= 0, got {args.depth}")
     scene = load_scene(args.scene)
     x, y = args.pixel
     if not (0 <= x < scene.width and 0 <= y < scene.height):
-        raise SceneError("--pixel", f"{x} {y} is outside the {scene.width}x{scene.height} "
+        raise InputError("--pixel", f"{x} {y} is outside the {scene.width}x{scene.height} "
                                     "image")
     layout = Layout(supersample=1)  # the gallery's slide, its image traced once a pixel
     if args.output:
