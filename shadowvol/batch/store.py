@@ -105,7 +105,7 @@ class FileStore:
         return {name: member_name(spec.id, name) for name in spec.outputs}
 
     def write(self, unit: Unit, results: Sequence[dict]) -> Written:
-        return Written({spec.id: {name: put(self.out, rel, result["outputs"][name])
+        return Written({spec.id: {name: put(self.out, rel, result["encoded"][name])
                                   for name, rel in self.paths(spec).items()}
                         for spec, result in zip(unit.frames, results) if "error" not in result})
 
@@ -160,7 +160,7 @@ class TarStore:
                 continue
             files[spec.id] = {}
             for output in spec.outputs:
-                data = result["outputs"][output]
+                data = result["encoded"][output]
                 member = member_name(spec.id, output)
                 members.append((member, data))
                 files[spec.id][output] = {"tar": name, "member": member,

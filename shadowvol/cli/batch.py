@@ -7,8 +7,7 @@ import sys
 
 from shadowvol.batch.runner import DEFAULT_SAMPLES_PER_TAR, parse_shard, run
 from shadowvol.batch.layouts import FORMATS
-from shadowvol.cli import options
-from shadowvol.cli import status
+from shadowvol.cli import options, status
 
 EPILOG = """\
 A job file has one JSON object a line: a scene file, cameras (a list, an orbit/turntable or a

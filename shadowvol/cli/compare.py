@@ -9,8 +9,7 @@ import sys
 from pathlib import Path
 
 from shadowvol import memory
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.compare import estimate, pyrender_peer
 from shadowvol.compare.comparison import compare
 from shadowvol.errors import InputError
@@ -76,7 +75,7 @@ def command(args) -> int:
     paths = {"picture": Path(args.output)}
     if args.json:
         paths["json"] = Path(args.json)
-    outputs.check(paths, {"picture": "-o", "json": "--json"})
+    output_paths.check(paths, {"picture": "-o", "json": "--json"})
     if args.pyrender:
         pyrender_peer.import_pyrender()  # a missing [peer] extra is reported before any work
     scene = load_scene(args.scene)

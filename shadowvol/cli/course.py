@@ -15,8 +15,7 @@ import math
 import sys
 from pathlib import Path
 
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.course import grader, student_render, workspace
 from shadowvol.errors import InputError
 from shadowvol.io import save_png, write_bytes
@@ -89,7 +88,7 @@ def command_new(args) -> int:
 
 def command_grade(args) -> int:
     if args.json is not None:
-        outputs.check({"json": args.json}, {"json": "--json"})
+        output_paths.check({"json": args.json}, {"json": "--json"})
     if not (math.isfinite(args.timeout) and args.timeout > 0):
         print(f"error: --timeout must be a positive number of seconds, got {args.timeout:g}",
               file=sys.stderr)
@@ -120,7 +119,7 @@ def _size(text: str | None, scene) -> tuple[int, int]:
 
 
 def command_render(args) -> int:
-    outputs.check({"image": Path(args.output)}, {"image": "-o"})
+    output_paths.check({"image": Path(args.output)}, {"image": "-o"})
     if not (math.isfinite(args.timeout) and args.timeout > 0):
         raise InputError("--timeout", f"must be a positive number of seconds, got "
                                       f"{args.timeout:g}")

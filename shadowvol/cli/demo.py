@@ -6,8 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from shadowvol.cli import options
-from shadowvol.cli import status
+from shadowvol.cli import options, status
 from shadowvol.course.gallery import SCENES, build_gallery, index_html, parse_size
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE
 from shadowvol.errors import InputError

@@ -9,8 +9,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 
-from shadowvol.cli import options
-from shadowvol.cli import status
+from shadowvol.cli import options, status
 from shadowvol.course.gallery import parse_size
 from shadowvol.course.ladder import FULL, SMALL, ladder_slide
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE, Layout

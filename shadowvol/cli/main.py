@@ -19,12 +19,12 @@ import argparse
 import sys
 
 from shadowvol import __version__
-from shadowvol.cli import options
 from shadowvol.cli import (
     batch,
     compare,
     course,
     demo,
+    options,
     planar,
     render,
     shadow2d,

@@ -8,8 +8,7 @@ from pathlib import Path
 
 from shadowvol import memory
 from shadowvol.cameras import calibration
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.errors import InputError
 from shadowvol.frame import save_masks
 from shadowvol.io import save_png
@@ -43,7 +42,7 @@ def command(args) -> int:
     paths = {"image": Path(args.output)}
     if args.masks:
         paths["masks"] = Path(args.masks)
-    outputs.check(paths, {"image": "-o", "masks": "--masks"})
+    output_paths.check(paths, {"image": "-o", "masks": "--masks"})
     scene = load_scene(args.scene)
     memory.check(estimate.render(scene, written=tuple(k for k in ("png", "masks")
                                                       if k in paths or k == "png")),

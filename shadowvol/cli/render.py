@@ -10,8 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from shadowvol import memory
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.errors import InputError, OutOfMemory, RenderError
 from shadowvol.frame import GROUND_TRUTH, LAYERS, layer_exrs, save_masks
 from shadowvol.io import encode_srgb, save_exr, save_png, save_png16
@@ -114,7 +113,7 @@ def plan(args) -> list[dict[str, Path]]:
     """Per scene, where each output goes: {"image": Path, "masks": Path, ...}.  Raises
     InputError (exit 2) for arguments that do not fit the number of scenes."""
     _take_back_scenes(args)
-    args.truth = outputs.ground_truth(getattr(args, "outputs", None))
+    args.truth = options.outputs_named(getattr(args, "outputs", None))
     if args.truth and not args.masks:
         args.masks = True
     flags = {"image": "-o", **{key: f"--{key}" for key, _ in EXTRAS}}
@@ -126,7 +125,7 @@ def plan(args) -> list[dict[str, Path]]:
                 value = out["image"].with_name(out["image"].stem + suffix)
             if value:
                 out[key] = Path(value)
-        outputs.check(out, flags)
+        output_paths.check(out, flags)
         return [out]
     directory = Path(args.output)
     if directory.suffix.lower() in (".png", ".npz") or directory.is_file():

@@ -9,8 +9,7 @@ import sys
 from pathlib import Path
 
 from shadowvol import memory
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.compare.shadowmaps import ShadowMapper
 from shadowvol.course.shadowmap_plot import plot, sweep
 from shadowvol.errors import InputError
@@ -66,7 +65,7 @@ def command(args) -> int:
         paths["json"] = Path(args.json)
     if args.plot:
         paths["picture"] = Path(args.plot)
-    outputs.check(paths, {"image": "-o", "json": "--json", "picture": "--plot"})
+    output_paths.check(paths, {"image": "-o", "json": "--json", "picture": "--plot"})
     _check(args)
     scene = load_scene(args.scene)
     memory.check(estimate.render(scene, written=("png",)), args.memory_budget, args.scene)

@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 
-from shadowvol.cli import options
-from shadowvol.cli import status
+from shadowvol.cli import options, status
 from shadowvol.errors import InputError
 from shadowvol.scenefile import load_scene
 

@@ -25,8 +25,7 @@ import argparse
 import sys
 
 from shadowvol import __version__
-from shadowvol.cli import options
-from shadowvol.cli import status
+from shadowvol.cli import options, status
 from shadowvol.cli.raytrace import exercise, masks, radiosity, render, tree
 
 COMMANDS = (render, radiosity, masks, tree, exercise)

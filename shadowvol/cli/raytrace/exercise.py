@@ -7,8 +7,7 @@ import sys
 from pathlib import Path
 
 from raytrace import exercise
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.course.exercise_picture import plane_figure, tir_figure
 from shadowvol.io import atomic_write
 
@@ -42,7 +41,7 @@ def add_parser(sub) -> None:
 def command(args) -> int:
     """Print the worked solution, draw it with -o."""
     if args.output:
-        outputs.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
+        output_paths.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
     text, fig = EXERCISES[args.name]()
     print(text)
     if args.output:

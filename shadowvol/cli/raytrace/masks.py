@@ -15,8 +15,7 @@ from raytrace.outlook.estimate import layers as layers_estimate
 from raytrace.outlook.layers import layers
 from shadowvol import memory
 from shadowvol.cameras import calibration
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.frame import EXACT_OUTPUTS, LAYERS, save_masks
 from shadowvol.io import save_png
 from shadowvol.pictures import ground_truth_picture, masks_image
@@ -50,13 +49,13 @@ def add_parser(sub) -> None:
 
 
 def command(args) -> int:
-    wanted = outputs.ground_truth(args.outputs, extra=EXACT_OUTPUTS)
+    wanted = options.outputs_named(args.outputs, extra=EXACT_OUTPUTS)
     exact = tuple(o for o in wanted if o in EXACT_OUTPUTS)
     wanted = tuple(o for o in wanted if o not in EXACT_OUTPUTS)
     paths = {"masks": Path(args.output)}
     if not args.no_png:
         paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
-    outputs.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
+    output_paths.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
     scene = load_scene(args.scene)
     need = estimate.masks(scene, wanted, picture="picture" in paths, exact=len(exact))
     if set(wanted) & set(LAYERS):

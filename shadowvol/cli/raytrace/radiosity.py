@@ -12,8 +12,7 @@ from pathlib import Path
 from raytrace.backends import BACKENDS
 from raytrace.outlook import estimate, radiosity
 from shadowvol import memory
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.errors import InputError
 from shadowvol.io import save_exr, save_png
 from shadowvol.scene import SceneError
@@ -56,7 +55,7 @@ def command(args) -> int:
         paths["flat"] = Path(args.flat)
     if args.exr:
         paths["exr"] = Path(args.exr)
-    outputs.check(paths, {"image": "-o", "flat": "--flat", "exr": "--exr"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "flat": "--flat", "exr": "--exr"}, "raytrace")
     for flag, value, ok, rule in (("--level", args.level, args.level >= 0, ">= 0"),
                                   ("--rays", args.rays, args.rays >= 1, ">= 1"),
                                   ("--rays", args.rays, args.rays < 1 << 31, "< 2^31 a patch"),

@@ -13,8 +13,7 @@ from raytrace.outlook.photonmap import KERNELS
 from raytrace.outlook.sampling import FILTERS
 from raytrace.outlook.whitted import render
 from shadowvol import memory
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.errors import InputError
 from shadowvol.io import save_exr, save_png, save_png16
 from shadowvol.scene import SceneError
@@ -73,7 +72,7 @@ def command(args) -> int:
     for kind in ("exr", "png16"):
         if getattr(args, kind):
             paths[kind] = Path(getattr(args, kind))
-    outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
     if args.max_depth is not None and args.max_depth < 0:
         raise InputError("--max-depth", f"must be >= 0, got {args.max_depth}")
     spp = 1 if args.spp is None else args.spp
@@ -108,7 +107,7 @@ def analytic_rendered(args) -> int:
     for kind in ("exr", "png16"):
         if getattr(args, kind):
             paths[kind] = Path(getattr(args, kind))
-    outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
     for flag, value in (("--spp", args.spp), ("--max-depth", args.max_depth)):
         if value is not None:
             raise InputError(flag, "not with --integrator analytic (the direct light at the "
@@ -128,7 +127,7 @@ def path_traced(args) -> int:
     paths = {"image": Path(args.output)}
     if args.exr:
         paths["exr"] = Path(args.exr)
-    outputs.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
     spp = PATH_SPP if args.spp is None else args.spp
     for flag, value, low in (("--spp", spp, 1), ("--seed", args.seed, 0)):
         if value < low:
@@ -154,7 +153,7 @@ def path_traced(args) -> int:
 def photon_mapped(args) -> int:
     """`raytrace render --integrator photon`."""
     paths = {"image": Path(args.output)} | ({"exr": Path(args.exr)} if args.exr else {})
-    outputs.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
     spp = PATH_SPP if args.spp is None else args.spp
     for flag, value, ok, rule in (("--photons", args.photons, args.photons >= 1, ">= 1"),
                                   ("--spp", spp, spp >= 1, ">= 1"),

@@ -12,8 +12,7 @@ from raytrace.outlook.estimate import whitted
 from raytrace.outlook.raytree import format_tree, ray_tree
 from raytrace.outlook.whitted import render
 from shadowvol import memory
-from shadowvol.cli import options
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.course import raytree_slide
 from shadowvol.course.slides import Layout
 from shadowvol.errors import InputError
@@ -45,7 +44,7 @@ def add_parser(sub) -> None:
 def command(args) -> int:
     """Print the ray tree of one pixel, draw it with -o."""
     if args.output:
-        outputs.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
+        output_paths.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
     if args.depth is not None and args.depth < 0:
         raise InputError("--depth", f"must be >= 0, got {args.depth}")
     scene = load_scene(args.scene)

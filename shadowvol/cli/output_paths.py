@@ -1,4 +1,4 @@
-"""Output paths named on a command line, checked before any work is done.
+"""The output paths a command line names, checked before any work is done.
 
 Each kind of output has the one file format that is written for it, and a path must end in
 that format's suffix: a PNG is never written into `out.jpg`, nor a mask file into `m.png`.
@@ -13,44 +13,20 @@ import os
 from pathlib import Path
 
 from shadowvol.errors import InputError
-from shadowvol.frame import GROUND_TRUTH, LAYERS, check_outputs
-from shadowvol.scene import SceneError, shorten
+from shadowvol.scene import shorten
 
 SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".png",
             "json": ".json", "picture": ".png", "exr": ".exr", "flat": ".png", "png16": ".png"}
 
 
-def ground_truth(text: str | None, flag: str = "--outputs", extra: tuple[str, ...] = ()
-                 ) -> tuple[str, ...]:
-    """The ground-truth outputs and intrinsic layers named by a command line's comma-separated
-    list (`all`: the ground truth, `shadowvol.frame.GROUND_TRUTH`; the layers, each a frame or
-    more, by name), in GROUND_TRUTH's then `shadowvol.frame.LAYERS`' order, then those of
-    `extra` (outputs one command has besides, e.g. `shadowvol.frame.EXACT_OUTPUTS`; named only,
-    never in `all`); () for None.  InputError (exit 2) naming `flag` for an unknown name
-    (`shadowvol.frame.check_outputs`)."""
-    if text is None:
-        return ()
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    if names == ["all"]:
-        return GROUND_TRUTH
-    known = GROUND_TRUTH + LAYERS + tuple(extra)
-    if not names:
-        raise InputError(flag, f"unknown output {shorten(text)} (a comma-separated list of: "
-                               f"{', '.join(known)}; or all)")
-    try:
-        return check_outputs(names, known, key=flag)
-    except SceneError as exc:   # the model's check, named as a flag of this command line
-        raise InputError(flag, exc.problem) from None
-
-
-def check(outputs: dict[str, Path], flags: dict[str, str] | None = None,
+def check(paths: dict[str, Path], flags: dict[str, str] | None = None,
           program: str = "shadowvol") -> None:
     """Raise InputError (exit 2) for a path whose suffix is not its kind's, or for two kinds
     naming one file.  `flags` maps a kind to the option that named it (for the message);
     `program`, the command that speaks."""
     flags = flags or {}
     seen: dict[Path, str] = {}
-    for kind, path in outputs.items():
+    for kind, path in paths.items():
         flag = flags.get(kind, kind)
         stream = str(path) == "-" or _is_stream(path)
         want = SUFFIXES[kind]
