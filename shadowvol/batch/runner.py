@@ -2,11 +2,11 @@
 workers (this process, a process pool, or Ray actors) -> files and the manifest.
 
 The frames of a job file are numbered in file order; they are cut into units (a frame, or in
-webdataset format the frames of one tar), and `--shard I/N` takes the I-th of N contiguous runs
-of units, so N shards together make exactly the files of one unsharded run, with no
+the webdataset layout the frames of one tar), and `--shard I/N` takes the I-th of N contiguous
+runs of units, so N shards together make exactly the files of one unsharded run, with no
 coordination.  A unit is skipped when the manifests in OUT say it was made from the same spec
-(`job_frames.spec_hash`) and its files are there with the recorded sha256; everything else is made
-again, and written atomically.
+(`job_frames.spec_hash`) and its files are there with the recorded sha256; everything else is
+made again, and written atomically.
 """
 
 from __future__ import annotations
@@ -132,9 +132,9 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     shard        : (I, N) or "I/N": make only this shard's share
     ray          : None (local), True (ray.init() with no address) or a cluster address
     egl_device   : None, "auto" or an EGL device index (`batch.egl`)
-    format       : a layout of `batch.layouts`: "files" (OUT/<job>/<frame>.<suffix>),
-                   "webdataset" (OUT/shard-*.tar), or a dataset, "nerfstudio", "bop" or "coco"
-                   (`batch.formats`)
+    format       : the name of a layout of `batch.layouts`, as `--format` takes it: "files"
+                   (OUT/<job>/<frame>.<suffix>), "webdataset" (OUT/shard-*.tar), or a dataset,
+                   "nerfstudio", "bop", "coco", ... (`batch.datasets`)
     progress     : a tqdm bar on stderr; None: only when stderr is a terminal
     start_method : "spawn" or "forkserver" ("fork" is allowed, and fails clearly in a process
                    that has made a GL context)
@@ -148,10 +148,10 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     """
     began = time.perf_counter()
     shard = _checked(workers, shard, format, samples_per_tar, memory_budget, egl_device, ray)
+    layout = LAYOUTS[format]   # the user's word is the flag's, --format; from here on, a layout
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputError("-o", f"{str(out)!r} is not a folder")
-    layout = LAYOUTS[format]
     entries = _jobs(jobs)
     plan = _Plan(entries, layout, samples_per_tar, shard)
     own = manifest.manifest_name(shard)
@@ -188,15 +188,15 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     return summary
 
 
-def _checked(workers, shard, format, samples_per_tar, memory_budget, egl_device, ray
+def _checked(workers, shard, layout, samples_per_tar, memory_budget, egl_device, ray
              ) -> tuple[int, int]:
     """The shard as (I, N); InputError for an argument that cannot run, before any work."""
     if isinstance(shard, str):
         shard = parse_shard(shard)
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InputError("--workers", f"must be a whole number >= 1, got {workers!r}")
-    if format not in LAYOUTS:
-        raise InputError("--format", f"must be one of {', '.join(LAYOUTS)}, got {format!r}")
+    if layout not in LAYOUTS:
+        raise InputError("--format", f"must be one of {', '.join(LAYOUTS)}, got {layout!r}")
     if isinstance(samples_per_tar, bool) or not isinstance(samples_per_tar, int) or \
             samples_per_tar < 1:
         raise InputError("--samples-per-tar", f"must be a whole number >= 1, got "
@@ -302,7 +302,7 @@ def _record(journal, done, summary, spec, result, hashes, files, layout: str,
         summary.errors.append(f"{spec.id}: {result['error']}")
     else:
         seconds = dict(result["seconds"], write=write_seconds)
-        record = {**base, "format": layout,
+        record = {**base, "format": layout,   # the layout's name, under the flag's word
                   "files": files, "camera": result["camera"], "lights": result["lights"],
                   "size": result["size"], "seed": spec.seed,
                   **SOURCES[spec.renderer].options(spec),

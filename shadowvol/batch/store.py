@@ -1,7 +1,7 @@
 """Where a frame's bytes go: the `Store` protocol, over units, and the stores of the plain
 layouts: per-frame files `OUT/<job>/<frame>.<suffix>` (`FileStore`), or webdataset tar shards
 `OUT/shard-NNNNNN.tar` of a fixed number of samples (`TarStore`); the dataset layouts' store is
-`formats.DatasetStore`, and which layout has which store is the table in `batch.layouts`.
+`datasets.DatasetStore`, and which layout has which store is the table in `batch.layouts`.
 
 A unit is what a store writes, checks and cleans as one: a frame, or the frames of one tar.
 Every store has the same three calls over units: `write(unit, results)`, `verify(unit, old)`,

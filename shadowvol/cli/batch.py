@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from shadowvol.batch.runner import DEFAULT_SAMPLES_PER_TAR, parse_shard, run
-from shadowvol.batch.layouts import FORMATS
+from shadowvol.batch.layouts import LAYOUTS
 from shadowvol.cli import options, status
 
 EPILOG = """\
@@ -50,7 +50,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "device of the worker's first visible CUDA device, by "
                         "EGL_NV_device_cuda, else 0); CUDA_VISIBLE_DEVICES alone does not "
                         "choose an EGL device")
-    p.add_argument("--format", choices=FORMATS, default="files",
+    p.add_argument("--format", choices=tuple(LAYOUTS), default="files",
                    help="files: OUT/<job>/<frame>.<suffix> (default); webdataset: tar shards "
                         "of --samples-per-tar frames, keys <job>/<frame>; nerfstudio, bop, "
                         "coco, istd (shadow-removal triplets), soba, soba-lights (instance "

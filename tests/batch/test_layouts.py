@@ -48,12 +48,11 @@ def test_frame_specs_are_frozen_and_hash_as_before():
 
 
 def test_layouts_are_frozen_rows_with_one_store_interface():
-    assert tuple(layouts.LAYOUTS) == layouts.FORMATS == ("files", "webdataset", "nerfstudio",
-                                                          "bop", "coco", "istd", "soba",
-                                                          "soba-lights")
+    assert tuple(layouts.LAYOUTS) == ("files", "webdataset", "nerfstudio", "bop", "coco", "istd",
+                                      "soba", "soba-lights")
     parser = add_parser(argparse.ArgumentParser().add_subparsers())
     choices = next(a.choices for a in parser._actions if "--format" in a.option_strings)
-    assert tuple(choices) == layouts.FORMATS
+    assert tuple(choices) == tuple(layouts.LAYOUTS)
     calls = [name for name in dir(Store) if not name.startswith("_") and name != "layout"]
     assert sorted(calls) == ["clean", "finish", "verify", "write"]
     for name, layout in layouts.LAYOUTS.items():
@@ -76,7 +75,7 @@ def _parameters(function):
 
 @pytest.mark.parametrize("module", ["runner.py", "worker.py"])
 def test_no_layout_or_renderer_name_is_tested(module):
-    names = set(layouts.FORMATS) | set(sources.SOURCES)
+    names = set(layouts.LAYOUTS) | set(sources.SOURCES)
     tree = ast.parse((ROOT / "shadowvol" / "batch" / module).read_text())
     for node in ast.walk(tree):
         if isinstance(node, ast.Compare):

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from shadowvol.batch import manifest
-from shadowvol.batch.formats import encoding
+from shadowvol.batch.datasets import encoding
 from shadowvol.batch.store import Unit, Written, made, put
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.scene import Scene, SceneError
