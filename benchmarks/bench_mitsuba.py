@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import frames, plain, scenes
+from . import frame_timing, plain, scenes
 from .report.ratios import mask_bound_ms
 
 VARIANT = "llvm_ad_rgb"
@@ -152,7 +152,7 @@ def cpu_per_frame(fn, runs: int, after: float = 0.1) -> dict:
         t2 = time.process_time()
         during.append(t1 - t0)
         tail.append(t2 - t1)
-    return {"during": frames.stats(during), "after": frames.stats(tail)}
+    return {"during": frame_timing.stats(during), "after": frame_timing.stats(tail)}
 
 
 def measure(names, width: int, height: int, runs: int) -> dict:
@@ -201,7 +201,7 @@ def measure(names, width: int, height: int, runs: int) -> dict:
                     times[k].append(time.perf_counter() - t)
             make_current(r.ctx)
             # the volume pass of the same frames, glFinish-bracketed (instrumented frames)
-            volume = frames.phase_times(r, "auto", "cpu", runs,
+            volume = frame_timing.phase_times(r, "auto", "cpu", runs,
                                         outputs=("lit", "coverage"))["volume pass"]
             cpu = {"ours, masks only": cpu_per_frame(fns["ours, masks only"], runs),
                    "Mitsuba 3": cpu_per_frame(peer, runs)}
@@ -212,7 +212,7 @@ def measure(names, width: int, height: int, runs: int) -> dict:
         out["scenes"].append({
             "scene": scene.name, "triangles": int(sum(len(o.faces) for o in scene.objects)),
             "mitsuba_build_s": build, "mitsuba_first_s": first,
-            "ms": {k: frames.stats(v) for k, v in times.items()} | {"volume pass": volume},
+            "ms": {k: frame_timing.stats(v) for k, v in times.items()} | {"volume pass": volume},
             "cpu_ms": cpu,
             "differing_ours": int((ours != ref_lit[0]).sum()),
             "differing_mitsuba": int((mi_lit != ref_lit[0]).sum())})

@@ -13,7 +13,7 @@ variants interleaved round by round in the same run:
   (`outputs=("lit", "coverage")`), and the opt-in back-face culling; and the least GL work of
   any exact frame (`plain.DepthFloor`; `plain.ImageFloor` and `plain.LightingFloor` for one
   that returns the image);
-* each phase of a frame (`frames`: glFinish-bracketed wall time), and silhouette extraction
+* each phase of a frame (`frame_timing`: glFinish-bracketed wall time), and silhouette extraction
   alone on the CPU and the GPU;
 * the stencil-overflow check's cost on the shared meshes (bunny, teapot, Spot);
 * a 36-view turntable (640x480, the five shared meshes and a floor, 3 lights): our masks and

@@ -9,11 +9,11 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from . import bench_masks, frames, plain, scenes
+from . import bench_masks, frame_timing, plain, scenes
 from .machine import log, maxrss_mb
 
 ROOT = Path(__file__).resolve().parents[1]
-SILHOUETTES = frames.SILHOUETTES
+SILHOUETTES = frame_timing.SILHOUETTES
 MASKS = ("lit", "coverage")
 
 
@@ -38,7 +38,7 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
                 plain.ImageFloor(ctx, pf) as image_floor, \
                 plain.LightingFloor(ctx, pf) as lighting:
             setup = time.perf_counter() - t0
-            frames.check_same_scene(r)
+            frame_timing.check_same_scene(r)
             r.render()          # lazily built programs, kept side quads
             fns = {"plain": pf, "depth floor": depth_floor, "mask floor": mask_floor,
                    "image floor": image_floor,
@@ -60,7 +60,7 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
                 finally:
                     r.cull_back_faces = False
             fns["auto/cpu x1 culled"] = culled
-            times = frames.interleaved(fns, rep, warm)
+            times = frame_timing.interleaved(fns, rep, warm)
             frame = r.render(lights=one)
             every = r.render()   # each light's share of the covered pixels it lights
             lit_fractions = [float(lit.sum() / every.coverage.sum()) for lit in every.lit]
@@ -77,11 +77,11 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
             prep = cfg["phase_repeat"][size]
             for s in SILHOUETTES:
                 phases.append({"size": size, "method": "auto", "silhouettes": s,
-                               "phases": frames.phase_times(r, "auto", s, prep, lights=one)})
-            sil[size] = {"cpu": frames.cpu_silhouette_times(r, max(prep, 3), one),
-                         "gpu": frames.gpu_silhouette_times(r, max(prep, 3), one)}
+                               "phases": frame_timing.phase_times(r, "auto", s, prep, lights=one)})
+            sil[size] = {"cpu": frame_timing.cpu_silhouette_times(r, max(prep, 3), one),
+                         "gpu": frame_timing.gpu_silhouette_times(r, max(prep, 3), one)}
             memory[size] = {
-                "frame_python_peak_mb": frames.python_peak_bytes(
+                "frame_python_peak_mb": frame_timing.python_peak_bytes(
                     lambda: r.render("auto", "cpu", lights=one)) / 2**20,
                 "maxrss_mb": maxrss_mb()}
     return rows, phases, sil, memory
@@ -89,7 +89,7 @@ def frame_section(ctx, cfg) -> tuple[list, list, dict, dict]:
 
 def objects_section(ctx, cfg) -> list:
     """Per number of casters (`scenes.many_casters_scene`): the mask-only and the full frame's
-    wall time and the part of it spent outside GL calls (`frames.python_times`), CPU
+    wall time and the part of it spent outside GL calls (`frame_timing.python_times`), CPU
     silhouettes, one light."""
     from shadowvol import Renderer
 
@@ -99,7 +99,7 @@ def objects_section(ctx, cfg) -> list:
         with Renderer(scene, ctx) as r:
             row = {"objects": len(scene.objects), "triangles": scenes.triangle_count(scene)}
             for name, outputs in (("masks", MASKS), ("image + masks", ("image",) + MASKS)):
-                row[name] = frames.python_times(r, cfg["object_repeat"], outputs=outputs)
+                row[name] = frame_timing.python_times(r, cfg["object_repeat"], outputs=outputs)
         out.append(row)
         log(f"objects {row['objects']}: Python {row['masks']['python']['median']:.1f} ms "
             "a mask-only frame")
@@ -126,7 +126,7 @@ def overflow_section(ctx, cfg) -> list:
             fns = {"plain": pf, "checked": lambda: checked(True),
                    "unchecked": lambda: checked(False)}
             raw: dict = {}
-            times = frames.interleaved(fns, rep, warm, alternate=True, raw=raw)
+            times = frame_timing.interleaved(fns, rep, warm, alternate=True, raw=raw)
             # checked and unchecked run next to each other in every round (in either order):
             # their per-round ratio cancels the machine's drift between rounds
             paired = [c / u for c, u in zip(raw["checked"], raw["unchecked"])]
@@ -175,19 +175,19 @@ def turntable_section(ctx, cfg) -> dict:
         phase_runs = defaultdict(list)
         for cam in cameras[::max(1, len(cameras) // 6)]:
             sink = defaultdict(float)
-            with frames._phase_clock(r, sink):
+            with frame_timing._phase_clock(r, sink):
                 t0 = time.perf_counter()
                 r.render(camera=cam)
                 phase_runs["instrumented view"].append(time.perf_counter() - t0)
-            for phase in frames.PHASES:
+            for phase in frame_timing.PHASES:
                 phase_runs[phase].append(sink[phase])
     out = {"views": len(cameras), "width": w, "height": h,
            "triangles": scenes.triangle_count(scene), "lights": len(scene.lights),
-           "ours": frames.stats(ours), "ours_masks": frames.stats(masks_only),
-           "raytrace": frames.stats(ray), "ours_total_s": sum(ours), "raytrace_total_s": sum(ray),
+           "ours": frame_timing.stats(ours), "ours_masks": frame_timing.stats(masks_only),
+           "raytrace": frame_timing.stats(ray), "ours_total_s": sum(ours), "raytrace_total_s": sum(ray),
            "pixels_differing_max": max(differ),
            "pixels_differing_median": sorted(differ)[len(differ) // 2],
-           "phases": {k: frames.stats(v) for k, v in phase_runs.items()}}
+           "phases": {k: frame_timing.stats(v) for k, v in phase_runs.items()}}
     log(f"turntable: ours {out['ours']['median']:.1f} ms/view, raytrace "
         f"{out['raytrace']['median']:.1f} ms/view")
     return out
@@ -204,7 +204,7 @@ def pyrender_section(ctx, cfg) -> list:
         for kind in ("spot", "directional"):
             scene = scenes.occluder_scene(size, kind, width, height)
             with Renderer(scene, ctx) as r, plain.PlainFrame(ctx, scene) as pf, \
-                    frames.pyrender_frames(scene) as pr:
+                    frame_timing.pyrender_frames(scene) as pr:
                 def ours(s="cpu"):
                     make_current(ctx)
                     return r.render("auto", s)
@@ -216,7 +216,7 @@ def pyrender_section(ctx, cfg) -> list:
                        "auto/gpu": lambda: ours("gpu"),
                        "pyrender shadowed": pr["shadowed"],
                        "pyrender unshadowed": pr["unshadowed"]}
-                times = frames.interleaved(fns, rep, warm)
+                times = frame_timing.interleaved(fns, rep, warm)
             make_current(ctx)
             out.append({"size": size, "triangles": scenes.triangle_count(scene), "light": kind,
                         "times": times})
@@ -235,7 +235,7 @@ def raytrace_section(cfg) -> dict:
     for size in cfg["mask_sizes"]:
         scene = scenes.occluder_scene(size, 1, width, height)
         res = bench_masks.measure(scene, cfg["mask_runs"], full=True)
-        res.update(scene=f"occluders {size}", memory_python_peak_mb=frames.python_peak_bytes(
+        res.update(scene=f"occluders {size}", memory_python_peak_mb=frame_timing.python_peak_bytes(
             lambda: raytrace.shadow_masks(scene, "embree")) / 2**20)
         masks.append(res)
         log(f"masks {size}: {res['masks']['median'] * 1e3:.0f} ms vs raw "
@@ -255,7 +255,7 @@ def raytrace_section(cfg) -> dict:
         t0 = time.perf_counter()
         raytrace.render(scene, progress=False)
         times.append(time.perf_counter() - t0)
-    log(f"whitted: {frames.stats(times)['median']:.0f} ms")
+    log(f"whitted: {frame_timing.stats(times)['median']:.0f} ms")
     return {"masks": masks, "whitted": {"scene": "scenes/whitted.toml", "width": w,
                                         "height": h, "max_depth": scene.max_depth,
-                                        "times": frames.stats(times)}}
+                                        "times": frame_timing.stats(times)}}

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from shadowvol.errors import short_path
+from shadowvol.errors import MAX_MESSAGE, one_line, short_path
 
 # The float32 range the renderers use: every number of a scene has |x| <= MAX_MAGNITUDE, and
 # every length that must be positive (near, radius, sizes, scale) is >= MIN_POSITIVE, so that
@@ -21,9 +21,9 @@ from shadowvol.errors import short_path
 MAX_MAGNITUDE = 1e18
 MIN_POSITIVE = 1e-18
 # Messages quote a bad value only up to this many characters (a wrong 1e6-element list is not
-# echoed whole), and a SceneError's key and problem are cut to one line of at most this length.
+# echoed whole), and a SceneError's key is cut to one line of at most this length (its problem
+# and file to `shadowvol.errors.MAX_MESSAGE`).
 MAX_QUOTE = 80
-MAX_MESSAGE = 400
 # How far from orthonormal the rotation of a rigid 4x4 matrix (a camera pose) may be: the
 # largest |R^T R - I| entry.  Poses computed in float32 elsewhere reach ~1e-7; a scale or a
 # shear of 1e-6 is refused.  The matrix is used as given (not re-orthonormalised).
@@ -40,20 +40,13 @@ def shorten(value, limit: int = MAX_QUOTE) -> str:
     return text[:limit] + "…" + more
 
 
-def _one_line(text: str, limit: int) -> str:
-    """`text` with line breaks and other control characters escaped, cut to `limit`."""
-    if not text.isprintable():
-        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
-    return text if len(text) <= limit else text[:limit] + "…"
-
-
 class SceneError(ValueError):
     """Bad scene input: names the file (when known), the key and the problem."""
 
     def __init__(self, key: str, problem: str, file: str | None = None):
         # one line, whatever the input: keys and values from a file may hold line breaks
-        key, problem = _one_line(key, MAX_QUOTE), _one_line(problem, MAX_MESSAGE)
-        file = None if file is None else _one_line(short_path(file), MAX_MESSAGE)
+        key, problem = one_line(key, MAX_QUOTE), one_line(problem, MAX_MESSAGE)
+        file = None if file is None else one_line(short_path(file), MAX_MESSAGE)
         self.key, self.problem, self.file = key, problem, file
         parts = [part for part in (file, key) if part]
         super().__init__(": ".join(parts + [problem]))

@@ -1,7 +1,9 @@
 """The project's error classes and the exit status each means, with the one-line message.
 
-`SceneError` (bad input) lives with the scene model; these are the rest, GL-free so that the
-ray tracer, batch and the CLI can name them without importing GL.  The statuses' table and the
+Bad input has two: `InputError` (here) for a command line's flags and arguments and the
+Python API's options, and `SceneError` (with the scene model, `shadowvol.checks`) for a scene,
+a mesh or a job file; both exit 2, in one line.  The classes here are GL-free so that the ray
+tracer, batch and the CLI can name them without importing GL.  The statuses' table and the
 printing are the command line's (`shadowvol.cli.status`).
 """
 
@@ -19,6 +21,30 @@ BAD_INPUT = 2
 RENDER_FAILED = 3
 INTERRUPTED = 130  # 128 + SIGINT, the shell's convention
 TERMINATED = 143   # 128 + SIGTERM
+
+
+# A message's parts (a flag or key, the problem, a file) are cut to one line of at most this
+# many characters.
+MAX_MESSAGE = 400
+
+
+def one_line(text: str, limit: int = MAX_MESSAGE) -> str:
+    """`text` with line breaks and other control characters escaped, cut to `limit`."""
+    if not text.isprintable():
+        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    return text if len(text) <= limit else text[:limit] + "…"
+
+
+class InputError(ValueError):
+    """Bad command-line input: a flag, an argument or an option that cannot be used as given
+    (`--size 0x0`, `--workers 0`, `-o` on a file that is not a folder), named with the flag:
+    "--workers: must be a whole number >= 1, got 0".  Exit status 2, one line.  A scene, mesh
+    or job file's bad key is a `shadowvol.checks.SceneError` instead."""
+
+    def __init__(self, flag: str, problem: str):
+        flag, problem = one_line(flag), one_line(problem)
+        self.flag, self.problem = flag, problem
+        super().__init__(f"{flag}: {problem}" if flag else problem)
 
 
 class RenderError(RuntimeError):
@@ -87,7 +113,8 @@ def status_of(exc: BaseException) -> int | None:
     SceneError and moderngl.Error are looked up only where their modules were imported (the
     model and GL sit above this module): an exception of a module never loaded cannot exist."""
     scene = sys.modules.get("shadowvol.scene")
-    if isinstance(exc, MissingExtra) or (scene is not None and isinstance(exc, scene.SceneError)):
+    if isinstance(exc, (InputError, MissingExtra)) or (
+            scene is not None and isinstance(exc, scene.SceneError)):
         return BAD_INPUT
     if isinstance(exc, (RenderError, MemoryError)):
         return RENDER_FAILED

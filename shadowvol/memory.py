@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from shadowvol.errors import InputError
 from shadowvol.frame import FIELDS
 from shadowvol.scene import Scene, SceneError
 
@@ -153,7 +154,7 @@ def parse_size(text: str, key: str = ENV) -> int:
     m = re.fullmatch(r"\s*(\d+(?:\.\d*)?|\.\d+)\s*([A-Za-z]*)\s*", str(text))
     unit = m and m[2].lower()
     if not m or unit not in _UNITS or float(m[1]) <= 0:
-        raise SceneError(key, f"expected a memory size such as 12GiB, 500MiB or 2000000000 "
+        raise InputError(key, f"expected a memory size such as 12GiB, 500MiB or 2000000000 "
                               f"(bytes), got {text!r}")
     return int(float(m[1]) * _UNITS[unit])
 
@@ -172,8 +173,8 @@ def machine_memory() -> int:
 
 
 def budget(value: int | str | None = None, key: str = "memory_budget") -> int:
-    """The memory budget in bytes: `value` (bytes or a size such as "12GiB"; a bad one is a
-    SceneError naming `key`), else $SHADOWVOL_MEMORY_BUDGET, else DEFAULT_FRACTION of
+    """The memory budget in bytes: `value` (bytes or a size such as "12GiB"; a bad one is an
+    InputError naming `key`), else $SHADOWVOL_MEMORY_BUDGET, else DEFAULT_FRACTION of
     `machine_memory()`."""
     if value is None:
         value, key = os.environ.get(ENV) or None, ENV
@@ -182,7 +183,7 @@ def budget(value: int | str | None = None, key: str = "memory_budget") -> int:
     if isinstance(value, str):
         return parse_size(value, key)
     if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
-        raise SceneError(key, f"must be a positive number of bytes, got {value!r}")
+        raise InputError(key, f"must be a positive number of bytes, got {value!r}")
     return value
 
 

@@ -1,6 +1,6 @@
 """BENCHMARKS.md and its plot, written from one run's results (`benchmarks.run`).
 
-Each section of the markdown is one function returning its lines (`summary`, `frames`,
+Each section of the markdown is one function returning its lines (`summary`, `ours`,
 `meshes`, `peers`); the numbers they share are `ratios`.
 """
 
@@ -8,13 +8,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from . import frames, meshes, peers, summary
+from . import meshes, ours, peers, summary
 from .plot import plot
 
 # the sections after the headline, in the order the markdown gives them
-SECTIONS = (peers.mitsuba, frames.frames, frames.bounds, frames.phases, meshes.overflow,
-            frames.objects, meshes.turntable, peers.pyrender, peers.ray_tracer,
-            peers.ground_truth, frames.memory, summary.extras)
+SECTIONS = (peers.mitsuba, ours.frames, ours.bounds, ours.phases, meshes.overflow,
+            ours.objects, meshes.turntable, peers.pyrender, peers.ray_tracer,
+            peers.ground_truth, ours.memory, summary.extras)
 
 
 def write(results: dict, md_path: Path, png_path: Path) -> None:

@@ -3,7 +3,7 @@
     import shadowvol.batch
     summary = shadowvol.batch.run("scenes/turntable.jsonl", "out", workers=2)
 
-Jobs (`jobs`) expand into frames with stable ids (`frames`, each a `spec.FrameSpec`); a run
+Jobs (`jobs`) expand into frames with stable ids (`job_frames`, each a `spec.FrameSpec`); a run
 takes its shard's share, skips what the manifest (`manifest`) says is made and checks out, and
 has the rest made by workers (`worker`, by the renderer's `sources.FrameSource`) in this process
 or a spawned pool (`local`) or on Ray actors (`ray`), each on its chosen EGL device (`egl`); the

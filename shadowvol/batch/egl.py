@@ -12,12 +12,12 @@ loaded).
 
 from __future__ import annotations
 
+from shadowvol.errors import InputError
 from shadowvol.raster.platform.egl import Device, devices
-from shadowvol.scene import SceneError
 
 
 def parse(spec) -> int | str | None:
-    """`--egl-device`'s value: None, "auto" or a device index >= 0 (SceneError otherwise)."""
+    """`--egl-device`'s value: None, "auto" or a device index >= 0 (InputError otherwise)."""
     if spec is None or spec == "auto":
         return spec
     if isinstance(spec, int) and not isinstance(spec, bool):
@@ -25,10 +25,10 @@ def parse(spec) -> int | str | None:
     elif isinstance(spec, str) and spec.strip().isdigit():
         index = int(spec)
     else:
-        raise SceneError("--egl-device", f"must be 'auto' or a device index (0, 1, ...), "
+        raise InputError("--egl-device", f"must be 'auto' or a device index (0, 1, ...), "
                                          f"got {spec!r}")
     if index < 0:
-        raise SceneError("--egl-device", f"must be 'auto' or a device index >= 0, got {index}")
+        raise InputError("--egl-device", f"must be 'auto' or a device index >= 0, got {index}")
     return index
 
 
@@ -36,7 +36,7 @@ def choose(spec, found: list[Device] | None = None) -> tuple[int | None, str]:
     """(the device index to pass to `create_context`, a sentence saying which and why).
 
     spec: None (glcontext's default), "auto", or an index.  An index that is not one of the
-    devices found is a SceneError naming them."""
+    devices found is an InputError naming them."""
     spec = parse(spec)
     if spec is None:
         return None, "EGL device: glcontext's default (device 0 or $GLCONTEXT_DEVICE_INDEX)"
@@ -50,7 +50,7 @@ def choose(spec, found: list[Device] | None = None) -> tuple[int | None, str]:
         return 0, (f"EGL device 0: no EGL device is CUDA device 0 (no EGL_NV_device_cuda), so "
                    f"the first; devices: {listing}")
     if found and spec >= len(found):
-        raise SceneError("--egl-device", f"there is no EGL device {spec}; this machine has "
+        raise InputError("--egl-device", f"there is no EGL device {spec}; this machine has "
                                          f"{len(found)}: {listing}")
     chosen = found[spec].describe() if found else str(spec)
     return spec, f"EGL device {chosen}; devices: {listing}"

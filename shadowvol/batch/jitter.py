@@ -21,7 +21,7 @@ own centre, `jitter.colors` changes each material's colour; both seeded per fram
   again, up to `TRIES` times, until it fits beside the background and the objects placed
   before it; when no draw fits, the frame fails with a SceneError under `jitter.objects`.
 - Determinism: the draws come from generators of (seed, frame index, 1) for the objects and
-  (seed, frame index, 2) for the colours, apart from the eye's and lights' (`frames.jittered`),
+  (seed, frame index, 2) for the colours, apart from the eye's and lights' (`job_frames.jittered`),
   so a frame is the same wherever it is made, and the eye and lights move as they did before
   these keys existed.
 """

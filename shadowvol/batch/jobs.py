@@ -11,7 +11,7 @@ Keys (only `scene` and `cameras` are required):
 - cameras: a list of cameras ({"eye", "target", and optionally "up", "fov_y", "near": the
   scene camera's where left out}, or {"fx", "fy", "cx", "cy", "camera_to_world"[, "near"]}:
   intrinsics in pixels of the job's size and a pose, as a scene file's camera), or
-  {"orbit": {...}} (a turntable, `frames.orbit`), or {"path": {"keys": [camera, ...],
+  {"orbit": {...}} (a turntable, `job_frames.orbit`), or {"path": {"keys": [camera, ...],
   "frames": n}} (look-at key poses, linearly interpolated).
 - lights: a list of lights in the scene-file schema ([[lights]] tables), replacing the scene's.
 - size: [width, height] of the images (default: the scene's).
@@ -20,7 +20,7 @@ Keys (only `scene` and `cameras` are required):
   max_depth: the ray tracer's recursion (default: the scene's).
 - seed (default 0) and jitter: {"eye": r, "lights": r} moves each frame's eye and point/spot
   lights by a random offset within a ball of radius r, drawn from the frame's own generator
-  (`frames.frame_rng(seed, index)`), so a frame is the same wherever and whenever it is made;
+  (`job_frames.frame_rng(seed, index)`), so a frame is the same wherever and whenever it is made;
   {"objects": {"translation", "rotation", "scale", "axis"}, "colors": c} moves, turns, scales
   and recolours the objects (`batch.jitter`, which says what it guarantees).
 
@@ -35,7 +35,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from shadowvol.batch import frames as camera_paths
+from shadowvol.batch import job_frames
 from shadowvol.batch import jitter
 from shadowvol.batch.outputs import DEFAULT, OUTPUTS
 from shadowvol.scene import (
@@ -177,11 +177,11 @@ def _cameras(value) -> tuple[dict, ...]:
     if isinstance(value, list):
         if not value:
             raise SceneError("cameras", "the list is empty")
-        return tuple(camera_paths.camera_dict(c, f"cameras[{i}]") for i, c in enumerate(value))
+        return tuple(job_frames.camera_dict(c, f"cameras[{i}]") for i, c in enumerate(value))
     if isinstance(value, dict) and len(value) == 1 and "orbit" in value:
-        return camera_paths.orbit(value["orbit"])
+        return job_frames.orbit(value["orbit"])
     if isinstance(value, dict) and len(value) == 1 and "path" in value:
-        return camera_paths.path(value["path"])
+        return job_frames.path(value["path"])
     raise SceneError("cameras", f"expected a list of cameras, {{\"orbit\": {{...}}}} or "
                                 f"{{\"path\": {{...}}}}, got {shorten(value)}")
 

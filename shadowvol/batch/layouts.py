@@ -1,17 +1,18 @@
 """The layouts of `shadowvol batch --format`: one frozen row each, in one table (after
 trimesh's exporter table): how a worker makes a frame's bytes, which `Store` writes them, and
 where the files go.  A new layout is a row here (and, for a dataset, its module in
-`batch.formats`); the runner and the workers read rows, never test a layout's name.
+`batch.datasets`); the runner and the workers read rows, never test a layout's name.
 
 files       OUT/<job>/<frame>.<suffix>, one file per output (`store.FileStore`)
 webdataset  OUT/shard-NNNNNN.tar of --samples-per-tar frames (`store.TarStore`)
 nerfstudio, coco, istd, soba, soba-lights   OUT/<job>/ in that dataset's layout (COCO's merged
             index OUT/annotations.json too), bop OUT/train/<job's place>/ and OUT/models/
-            (`formats.DatasetStore`, docs/formats.md)
+            (`datasets.DatasetStore`, docs/formats.md)
 
 Frames of the plain layouts (files, webdataset) are the job's outputs and carry no layout in
 their spec (so their spec hashes are those of the runs before layouts had names); a dataset
-layout's frames carry its name as "format" (`tag`).
+layout's frames carry its name (`tag`: `FrameSpec.layout`, stored under the key "format", the
+name of the flag that picks it, so that the spec hashes of earlier runs still hold).
 """
 
 from __future__ import annotations
@@ -21,8 +22,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 
-from shadowvol.batch.formats import DatasetStore, bop, coco, istd, nerfstudio, soba
-from shadowvol.batch.formats.arrays import frame_arrays
+from shadowvol.batch.datasets import DatasetStore, bop, coco, istd, nerfstudio, soba
+from shadowvol.batch.datasets.arrays import frame_arrays
 from shadowvol.batch.outputs import OUTPUTS
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.batch.store import FileStore, TarStore
@@ -36,7 +37,7 @@ class Layout:
     arrays  : (worker, spec, scene, camera, lights) -> the frame's arrays, rendered
     encode  : (spec, arrays, frame scene) -> (name or path -> bytes, the index record or None)
     shards  : its units are tars of `samples_per_tar` frames (else one frame each)
-    tag     : the "format" its frame specs carry, None for the plain layouts
+    tag     : the `layout` its frame specs carry, None for the plain layouts
     index   : (job, [(spec, record)]) -> {path: bytes}, a dataset's index files, or None
     dataset_index : (specs, records by id, scene_of) -> {path: bytes}, the index files of a
               dataset of every job (ids shared by its jobs: COCO's categories and image ids,
@@ -109,16 +110,15 @@ LAYOUTS: dict[str, Layout] = {layout.name: layout for layout in (
     _own("soba", soba, soba.arrays, partial(soba.frame, per_light=False)),
     _own("soba-lights", soba, soba.arrays, partial(soba.frame, per_light=True)),
 )}
-FORMATS = tuple(LAYOUTS)           # the names --format takes
 DATASETS = tuple(name for name, layout in LAYOUTS.items() if layout.tag)
 
-# a frame spec's "format" -> the layout that makes its bytes (the plain layouts make the same)
+# a frame spec's `layout` -> the layout that makes its bytes (the plain layouts make the same)
 _BY_TAG = {None: FILES, **{layout.tag: layout for layout in LAYOUTS.values() if layout.tag}}
 
 
 def of_spec(spec: FrameSpec) -> Layout:
     """The layout that makes the bytes of the frame `spec`."""
-    return _BY_TAG[spec.format]
+    return _BY_TAG[spec.layout]
 
 
 def tag(specs: list[FrameSpec], layout: Layout, job_index: int | None = None
@@ -126,4 +126,4 @@ def tag(specs: list[FrameSpec], layout: Layout, job_index: int | None = None
     """A layout's frame specs (so their spec hash, and the worker, know the layout), with
     their job's place in the job file where the layout's index is of the whole dataset."""
     place = {"job_index": job_index} if layout.dataset_index is not None else {}
-    return [dataclasses.replace(spec, format=layout.tag, **place) for spec in specs]
+    return [dataclasses.replace(spec, layout=layout.tag, **place) for spec in specs]

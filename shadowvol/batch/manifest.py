@@ -22,9 +22,8 @@ import stat
 from pathlib import Path
 from typing import NamedTuple
 
-from shadowvol.errors import out_of_memory_while, short_path
+from shadowvol.errors import InputError, out_of_memory_while, short_path
 from shadowvol.io import WriteError, atomic_write, linked_folder, write_bytes
-from shadowvol.scene import SceneError
 
 MANIFEST = "manifest.jsonl"
 
@@ -150,12 +149,12 @@ class Journal:
 LOCK_TRIES = 8   # a run finishing replaces its manifest: open and lock again, a few times
 
 
-def _refused(path: Path, problem: str) -> SceneError:
-    return SceneError("-o", f"{short_path(path)}{problem}")
+def _refused(path: Path, problem: str) -> InputError:
+    return InputError("-o", f"{short_path(path)}{problem}")
 
 
 def _open_locked(path: Path) -> int:
-    """A descriptor of the manifest at `path` (made when missing), locked; SceneError when a
+    """A descriptor of the manifest at `path` (made when missing), locked; InputError when a
     run holds it, or when it is a link or not a regular file."""
     for _ in range(LOCK_TRIES):
         try:

@@ -2,11 +2,11 @@
 workers (this process, a process pool, or Ray actors) -> files and the manifest.
 
 The frames of a job file are numbered in file order; they are cut into units (a frame, or in
-webdataset format the frames of one tar), and `--shard I/N` takes the I-th of N contiguous runs
-of units, so N shards together make exactly the files of one unsharded run, with no
+the webdataset layout the frames of one tar), and `--shard I/N` takes the I-th of N contiguous
+runs of units, so N shards together make exactly the files of one unsharded run, with no
 coordination.  A unit is skipped when the manifests in OUT say it was made from the same spec
-(`frames.spec_hash`) and its files are there with the recorded sha256; everything else is made
-again, and written atomically.
+(`job_frames.spec_hash`) and its files are there with the recorded sha256; everything else is
+made again, and written atomically.
 """
 
 from __future__ import annotations
@@ -21,14 +21,14 @@ from pathlib import Path
 import numpy as np
 
 from shadowvol import memory
-from shadowvol.batch import egl, frames, layouts, local, manifest
+from shadowvol.batch import egl, job_frames, layouts, local, manifest
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.layouts import LAYOUTS
 from shadowvol.batch.sources import SOURCES
 from shadowvol.batch.store import Unit
 from shadowvol.batch.spec import FrameSpec
-from shadowvol.errors import BAD_INPUT, OK, require
-from shadowvol.scene import Scene, SceneError
+from shadowvol.errors import BAD_INPUT, InputError, OK, require
+from shadowvol.scene import Scene
 
 DEFAULT_SAMPLES_PER_TAR = 1000
 
@@ -64,9 +64,9 @@ def parse_shard(text: str) -> tuple[int, int]:
     try:
         index, count = (int(x) for x in str(text).split("/"))
     except ValueError:
-        raise SceneError("--shard", f"expected I/N (e.g. 0/4), got {text!r}") from None
+        raise InputError("--shard", f"expected I/N (e.g. 0/4), got {text!r}") from None
     if not 0 <= index < count:
-        raise SceneError("--shard", f"I/N needs 0 <= I < N, got {text!r}")
+        raise InputError("--shard", f"I/N needs 0 <= I < N, got {text!r}")
     return index, count
 
 
@@ -132,9 +132,9 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     shard        : (I, N) or "I/N": make only this shard's share
     ray          : None (local), True (ray.init() with no address) or a cluster address
     egl_device   : None, "auto" or an EGL device index (`batch.egl`)
-    format       : a layout of `batch.layouts`: "files" (OUT/<job>/<frame>.<suffix>),
-                   "webdataset" (OUT/shard-*.tar), or a dataset, "nerfstudio", "bop" or "coco"
-                   (`batch.formats`)
+    format       : the name of a layout of `batch.layouts`, as `--format` takes it: "files"
+                   (OUT/<job>/<frame>.<suffix>), "webdataset" (OUT/shard-*.tar), or a dataset,
+                   "nerfstudio", "bop", "coco", ... (`batch.datasets`)
     progress     : a tqdm bar on stderr; None: only when stderr is a terminal
     start_method : "spawn" or "forkserver" ("fork" is allowed, and fails clearly in a process
                    that has made a GL context)
@@ -148,10 +148,10 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     """
     began = time.perf_counter()
     shard = _checked(workers, shard, format, samples_per_tar, memory_budget, egl_device, ray)
+    layout = LAYOUTS[format]   # the user's word is the flag's, --format; from here on, a layout
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise SceneError("-o", f"{str(out)!r} is not a folder")
-    layout = LAYOUTS[format]
+        raise InputError("-o", f"{str(out)!r} is not a folder")
     entries = _jobs(jobs)
     plan = _Plan(entries, layout, samples_per_tar, shard)
     own = manifest.manifest_name(shard)
@@ -188,18 +188,18 @@ def run(jobs, out, *, workers: int = 1, shard: tuple[int, int] | str = (0, 1), r
     return summary
 
 
-def _checked(workers, shard, format, samples_per_tar, memory_budget, egl_device, ray
+def _checked(workers, shard, layout, samples_per_tar, memory_budget, egl_device, ray
              ) -> tuple[int, int]:
-    """The shard as (I, N); SceneError for an argument that cannot run, before any work."""
+    """The shard as (I, N); InputError for an argument that cannot run, before any work."""
     if isinstance(shard, str):
         shard = parse_shard(shard)
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise SceneError("--workers", f"must be a whole number >= 1, got {workers!r}")
-    if format not in LAYOUTS:
-        raise SceneError("--format", f"must be one of {', '.join(LAYOUTS)}, got {format!r}")
+        raise InputError("--workers", f"must be a whole number >= 1, got {workers!r}")
+    if layout not in LAYOUTS:
+        raise InputError("--format", f"must be one of {', '.join(LAYOUTS)}, got {layout!r}")
     if isinstance(samples_per_tar, bool) or not isinstance(samples_per_tar, int) or \
             samples_per_tar < 1:
-        raise SceneError("--samples-per-tar", f"must be a whole number >= 1, got "
+        raise InputError("--samples-per-tar", f"must be a whole number >= 1, got "
                                               f"{samples_per_tar!r}")
     memory.budget(memory_budget)  # a bad budget is an error now, not one per frame
     if egl.parse(egl_device) is not None and not ray:
@@ -260,8 +260,8 @@ class _Plan:
                 key = job.scene if isinstance(job.scene, str) else f"<Scene {id(job.scene)}>"
                 if key not in self.scenes:
                     self.scenes[key], digests[key] = job.scene, scene_digest(job.scene)
-                self.specs.extend(layouts.tag(frames.specs(job, key), layout, place))
-        self.hashes = {s.id: frames.spec_hash(s, digests[s.scene]) for s in self.specs}
+                self.specs.extend(layouts.tag(job_frames.specs(job, key), layout, place))
+        self.hashes = {s.id: job_frames.spec_hash(s, digests[s.scene]) for s in self.specs}
         per_unit = layout.frames_per_unit(samples_per_tar)
         self.units = [Unit(k, tuple(part), tuple(self.hashes[s.id] for s in part))
                       for k, part in enumerate(self.specs[i:i + per_unit]
@@ -302,7 +302,7 @@ def _record(journal, done, summary, spec, result, hashes, files, layout: str,
         summary.errors.append(f"{spec.id}: {result['error']}")
     else:
         seconds = dict(result["seconds"], write=write_seconds)
-        record = {**base, "format": layout,
+        record = {**base, "format": layout,   # the layout's name, under the flag's word
                   "files": files, "camera": result["camera"], "lights": result["lights"],
                   "size": result["size"], "seed": spec.seed,
                   **SOURCES[spec.renderer].options(spec),
@@ -319,12 +319,12 @@ def _results(specs, scenes, workers, ray, egl_device, start_method, gpus_per_wor
     if not specs:
         return iter(())
     if ray:
-        from shadowvol.batch import ray as ray_backend
+        import shadowvol.batch.ray
 
         address = None if ray is True else ray
-        return ray_backend.results(local.chunks(specs, workers), scenes, actors=workers,
-                                   address=address, egl_device=egl_device,
-                                   num_gpus=gpus_per_worker, budget=budget)
+        return shadowvol.batch.ray.results(local.chunks(specs, workers), scenes, actors=workers,
+                                          address=address, egl_device=egl_device,
+                                          num_gpus=gpus_per_worker, budget=budget)
     if workers == 1 and start_method == "spawn":
         return local.in_process(local.chunks(specs, 1), scenes, egl_device, budget)
     return local.pool(local.chunks(specs, workers), scenes, workers, egl_device, start_method,

@@ -1,7 +1,7 @@
 """Where a frame's bytes go: the `Store` protocol, over units, and the stores of the plain
 layouts: per-frame files `OUT/<job>/<frame>.<suffix>` (`FileStore`), or webdataset tar shards
 `OUT/shard-NNNNNN.tar` of a fixed number of samples (`TarStore`); the dataset layouts' store is
-`formats.DatasetStore`, and which layout has which store is the table in `batch.layouts`.
+`datasets.DatasetStore`, and which layout has which store is the table in `batch.layouts`.
 
 A unit is what a store writes, checks and cleans as one: a frame, or the frames of one tar.
 Every store has the same three calls over units: `write(unit, results)`, `verify(unit, old)`,
@@ -32,7 +32,7 @@ from shadowvol.io import tar_bytes, write_bytes
 @dataclass(frozen=True)
 class Unit:
     """A frame, or the frames of one tar: `index` (its place among the run's units), its frame
-    specs in frame order and their spec hashes (`frames.spec_hash`)."""
+    specs in frame order and their spec hashes (`job_frames.spec_hash`)."""
 
     index: int
     frames: tuple[FrameSpec, ...]
@@ -105,7 +105,7 @@ class FileStore:
         return {name: member_name(spec.id, name) for name in spec.outputs}
 
     def write(self, unit: Unit, results: Sequence[dict]) -> Written:
-        return Written({spec.id: {name: put(self.out, rel, result["outputs"][name])
+        return Written({spec.id: {name: put(self.out, rel, result["encoded"][name])
                                   for name, rel in self.paths(spec).items()}
                         for spec, result in zip(unit.frames, results) if "error" not in result})
 
@@ -160,7 +160,7 @@ class TarStore:
                 continue
             files[spec.id] = {}
             for output in spec.outputs:
-                data = result["outputs"][output]
+                data = result["encoded"][output]
                 member = member_name(spec.id, output)
                 members.append((member, data))
                 files[spec.id][output] = {"tar": name, "member": member,

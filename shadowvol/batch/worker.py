@@ -23,7 +23,7 @@ from collections import OrderedDict
 import numpy as np
 
 from shadowvol import __version__, memory, signals
-from shadowvol.batch import egl, frames, jitter, layouts
+from shadowvol.batch import egl, jitter, job_frames, layouts
 from shadowvol.batch.outputs import fields_of
 from shadowvol.batch.sources import SOURCES
 from shadowvol.batch.spec import FrameSpec
@@ -166,8 +166,8 @@ class Worker:
 
     # -- frames ----------------------------------------------------------------------------
     def render(self, spec: FrameSpec) -> dict:
-        """One frame: {"id", "outputs": {name: bytes}, "camera", "lights", "size", "seconds",
-        "versions", "device"} or, when it fails, {"id", "error", "status"}."""
+        """One frame: {"id", "encoded": {name or path: bytes}, "camera", "lights", "size",
+        "seconds", "versions", "device"} or, when it fails, {"id", "error", "status"}."""
         start = time.perf_counter()
         try:
             scene, camera, lights = self._frame_scene(spec)
@@ -185,7 +185,7 @@ class Worker:
             text = message(exc) if code is not None else f"{type(exc).__name__}: {exc}"
             return {"id": spec.id, "error": text,
                     "status": code if code is not None else RENDER_FAILED}
-        return {"id": spec.id, "outputs": encoded, "camera": camera_dict(camera),
+        return {"id": spec.id, "encoded": encoded, "camera": camera_dict(camera),
                 "lights": [light_dict(x) for x in lights], "size": [scene.width, scene.height],
                 "seconds": {"scene": round(loaded - start, 6),
                             "render": round(rendered - loaded, 6),
@@ -208,7 +208,7 @@ class Worker:
                                **spec.camera})
         lights = scene.lights if spec.lights is None else tuple(
             light_from_dict(x, f"lights[{i}]") for i, x in enumerate(spec.lights))
-        camera, lights = frames.jittered(camera, lights, spec.jitter, spec.seed,
+        camera, lights = job_frames.jittered(camera, lights, spec.jitter, spec.seed,
                                          spec.index)
         scene = jitter.jittered_scene(scene, spec.jitter, spec.seed, spec.index)
         return scene, camera, lights

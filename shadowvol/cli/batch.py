@@ -6,9 +6,8 @@ import argparse
 import sys
 
 from shadowvol.batch.runner import DEFAULT_SAMPLES_PER_TAR, parse_shard, run
-from shadowvol.batch.layouts import FORMATS
-from shadowvol.cli import args as blocks
-from shadowvol.cli import status
+from shadowvol.batch.layouts import LAYOUTS
+from shadowvol.cli import options, status
 
 EPILOG = """\
 A job file has one JSON object a line: a scene file, cameras (a list, an orbit/turntable or a
@@ -24,13 +23,13 @@ the others go on; the exit status is 0 only when every frame was made.
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "batch", help="render a job file into a dataset (local pool, shards or Ray)",
         description="Render every frame of JOBS into OUT, resumably and deterministically: the "
                     "same files whatever the workers, shards or Ray actors that made them.",
         epilog=EPILOG)
     p.add_argument("jobs", metavar="JOBS", help="the job file (.jsonl)")
-    blocks.output(p, "OUT", "the dataset folder")
+    options.output(p, "OUT", "the dataset folder")
     p.add_argument("--workers", type=int, default=1, metavar="N",
                    help="worker processes on this machine (spawned, each with one GL context "
                         "and a renderer per scene, cores/N threads each), or Ray actors with "
@@ -51,7 +50,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "device of the worker's first visible CUDA device, by "
                         "EGL_NV_device_cuda, else 0); CUDA_VISIBLE_DEVICES alone does not "
                         "choose an EGL device")
-    p.add_argument("--format", choices=FORMATS, default="files",
+    p.add_argument("--format", choices=tuple(LAYOUTS), default="files",
                    help="files: OUT/<job>/<frame>.<suffix> (default); webdataset: tar shards "
                         "of --samples-per-tar frames, keys <job>/<frame>; nerfstudio, bop, "
                         "coco, istd (shadow-removal triplets), soba, soba-lights (instance "
@@ -60,7 +59,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help=f"frames per webdataset tar (default {DEFAULT_SAMPLES_PER_TAR})")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="a progress bar with frames/s and ETA (default: only on a terminal)")
-    blocks.memory_budget(p)
+    options.memory_budget(p)
     p.set_defaults(func=command)
     return p
 

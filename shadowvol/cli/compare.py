@@ -9,10 +9,10 @@ import sys
 from pathlib import Path
 
 from shadowvol import memory
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.compare import estimate, pyrender_peer
 from shadowvol.compare.comparison import compare
+from shadowvol.errors import InputError
 from shadowvol.io import atomic_write, save_png
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
@@ -45,15 +45,15 @@ def _count(text: str) -> int:
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "compare", help="raster against ray-traced shadows: picture, table, numbers",
         description="Render SCENE with shadow volumes and with the reference ray tracer; print "
                     "per light the mismatched pixels, those away from mask edges, the IoU of "
                     "the shadow regions and each renderer's time; draw both side by side with "
                     "the masks' difference.",
         epilog=EPILOG)
-    blocks.scene(p)
-    blocks.output(p, "PNG", "the picture")
+    options.scene(p)
+    options.output(p, "PNG", "the picture")
     p.add_argument("--method", choices=("auto", "zpass", "zfail"), default="auto",
                    help="how the rasterizer counts shadow volumes (default: auto)")
     p.add_argument("--json", metavar="FILE", help="also write the numbers as JSON")
@@ -66,7 +66,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "point-light shadows; needs the [peer] extra)")
     p.add_argument("--size", type=_size, metavar="WxH",
                    help="render at this size instead of the scene's image size")
-    blocks.memory_budget(p)
+    options.memory_budget(p)
     p.set_defaults(func=command)
     return p
 
@@ -75,7 +75,7 @@ def command(args) -> int:
     paths = {"picture": Path(args.output)}
     if args.json:
         paths["json"] = Path(args.json)
-    outputs.check(paths, {"picture": "-o", "json": "--json"})
+    output_paths.check(paths, {"picture": "-o", "json": "--json"})
     if args.pyrender:
         pyrender_peer.import_pyrender()  # a missing [peer] extra is reported before any work
     scene = load_scene(args.scene)
@@ -83,7 +83,7 @@ def command(args) -> int:
         try:
             scene = scene.replace(width=args.size[0], height=args.size[1])
         except SceneError as exc:
-            raise SceneError("--size", exc.problem) from None
+            raise InputError("--size", exc.problem) from None
     # the GL frame is counted as this process's memory: the context is made later
     memory.check(estimate.compare(scene), args.memory_budget, args.scene)
     with status.naming(args.scene):

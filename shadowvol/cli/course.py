@@ -15,11 +15,10 @@ import math
 import sys
 from pathlib import Path
 
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.course import grader, student_render, workspace
+from shadowvol.errors import InputError
 from shadowvol.io import save_png, write_bytes
-from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 EPILOG = """\
@@ -31,22 +30,22 @@ crash costs that task only.  The cases and their answers come from the project's
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(subparsers, "course", help="the course's exercises: hand out, grade",
+    p = options.command(subparsers, "course", help="the course's exercises: hand out, grade",
                        description="The lecture's exercises as assignments, graded against "
                                    "the project's own implementation.",
                        epilog=EPILOG + "\n" + status.EPILOG)
     sub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    new = blocks.command(sub, "new", help="write a student's workspace (stubs)",
+    new = options.command(sub, "new", help="write a student's workspace (stubs)",
                          description="One Python module per task: the function to write, its "
                                      "docstring and an example.  DIR must be new or empty.")
     new.add_argument("folder", metavar="DIR", type=Path, help="the workspace to create")
     new.set_defaults(func=command_new, solved=False)
-    sol = blocks.command(sub, "solutions", help="write the reference solutions",
+    sol = options.command(sub, "solutions", help="write the reference solutions",
                          description="The same modules, every function filled: the "
                                      "teacher's copy.  DIR must be new or empty.")
     sol.add_argument("folder", metavar="DIR", type=Path, help="the folder to create")
     sol.set_defaults(func=command_new, solved=True)
-    grade = blocks.command(sub, "grade", help="grade a workspace",
+    grade = options.command(sub, "grade", help="grade a workspace",
                            description="Grade every task of a workspace on hidden cases.",
                            epilog="exit status: 0 full marks; 1 short of them; 2 bad input "
                                   "(no such folder, not a workspace, a bad --json path).")
@@ -56,15 +55,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     grade.add_argument("--timeout", metavar="S", type=float, default=grader.DEFAULT_TIMEOUT,
                        help=f"seconds each task may run (default {grader.DEFAULT_TIMEOUT:g})")
     grade.set_defaults(func=command_grade)
-    ren = blocks.command(sub, "render", help="render with the student's ray-sphere and shadow "
+    ren = options.command(sub, "render", help="render with the student's ray-sphere and shadow "
                                              "test",
                          description="The Whitted tracer with the workspace's "
                                      "ray_sphere.intersect and shadow_ray.in_shadow for the "
                                      "spheres, beside the tracer's own image, the pixels that "
                                      "differ marked.")
     ren.add_argument("folder", metavar="DIR", type=Path, help="the student's workspace")
-    blocks.scene(ren)
-    blocks.output(ren, "PNG", "the picture: yours | the reference | where they differ")
+    options.scene(ren)
+    options.output(ren, "PNG", "the picture: yours | the reference | where they differ")
     ren.add_argument("--size", metavar="WxH", default=None,
                      help="the image size (default: the scene's, scaled to 240 pixels wide)")
     ren.add_argument("--timeout", metavar="S", type=float,
@@ -89,7 +88,7 @@ def command_new(args) -> int:
 
 def command_grade(args) -> int:
     if args.json is not None:
-        outputs.check({"json": args.json}, {"json": "--json"})
+        output_paths.check({"json": args.json}, {"json": "--json"})
     if not (math.isfinite(args.timeout) and args.timeout > 0):
         print(f"error: --timeout must be a positive number of seconds, got {args.timeout:g}",
               file=sys.stderr)
@@ -113,21 +112,21 @@ def _size(text: str | None, scene) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise SceneError("--size", f"expected WxH, e.g. 240x180, got {text!r}") from None
+        raise InputError("--size", f"expected WxH, e.g. 240x180, got {text!r}") from None
     if not (1 <= w <= 4096 and 1 <= h <= 4096):
-        raise SceneError("--size", f"must be 1..4096 a side, got {text!r}")
+        raise InputError("--size", f"must be 1..4096 a side, got {text!r}")
     return w, h
 
 
 def command_render(args) -> int:
-    outputs.check({"image": Path(args.output)}, {"image": "-o"})
+    output_paths.check({"image": Path(args.output)}, {"image": "-o"})
     if not (math.isfinite(args.timeout) and args.timeout > 0):
-        raise SceneError("--timeout", f"must be a positive number of seconds, got "
+        raise InputError("--timeout", f"must be a positive number of seconds, got "
                                       f"{args.timeout:g}")
     try:
         grader.check_workspace(args.folder)
     except ValueError as exc:
-        raise SceneError("DIR", str(exc)) from None
+        raise InputError("DIR", str(exc)) from None
     scene = load_scene(args.scene)
     w, h = _size(args.size, scene)
     pair = student_render.render_pair(args.folder, args.scene, scene.replace(width=w, height=h),

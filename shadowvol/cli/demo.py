@@ -6,16 +6,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from shadowvol.cli import args as blocks
-from shadowvol.cli import status
+from shadowvol.cli import options, status
 from shadowvol.course.gallery import SCENES, build_gallery, index_html, parse_size
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE
+from shadowvol.errors import InputError
 from shadowvol.io import atomic_write, save_png
-from shadowvol.scene import SceneError
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "demo", help="render the course's gallery of demos and an index.html",
         description="Render every picture of the course as a slide (shadows, planar shadows, "
                     "the shadow polygons of one box, the stencil counter, counting along an "
@@ -25,7 +24,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                     "solutions, a caustic, aliasing, gloss and depth of field), and "
                     "DIR/index.html showing them in the course's order with a table of "
                     "contents and captions.")
-    blocks.output(p, "DIR", "the folder to write the pictures and index.html into", type=Path)
+    options.output(p, "DIR", "the folder to write the pictures and index.html into", type=Path)
     p.add_argument("--size", metavar="WxH", default=None,
                    help=f"slide size in pixels (default {SLIDE[0]}x{SLIDE[1]})")
     p.add_argument("--small", action="store_true",
@@ -33,7 +32,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--scenes", type=Path, default=SCENES, metavar="DIR",
                    help="the scenes folder (default: the example scenes installed with "
                         "shadowvol, or a source checkout's scenes/)")
-    blocks.memory_budget(p)
+    options.memory_budget(p)
     p.set_defaults(func=command)
     return p
 
@@ -43,7 +42,7 @@ def command(args) -> int:
         print(f"  {name}: {seconds:.1f} s", file=sys.stderr)
 
     if args.size and args.small:
-        raise SceneError("--size", "give --size or --small, not both")
+        raise InputError("--size", "give --size or --small, not both")
     size = parse_size(args.size) if args.size else None
     skipped = []
     pictures = build_gallery(args.small, args.scenes, progress=progress, size=size,

@@ -9,19 +9,18 @@ from __future__ import annotations
 import dataclasses
 import sys
 
-from shadowvol.cli import args as blocks
-from shadowvol.cli import status
+from shadowvol.cli import options, status
 from shadowvol.course.gallery import parse_size
 from shadowvol.course.ladder import FULL, SMALL, ladder_slide
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE, Layout
-from shadowvol.errors import MissingExtra
+from shadowvol.errors import InputError, MissingExtra
 from shadowvol.io import save_png
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = blocks.Parser(prog="python -m shadowvol.cli.ladder",
+    ap = options.Parser(prog="python -m shadowvol.cli.ladder",
                        description="Render the ladder slide (local -> Whitted -> direct -> "
                                    "path traced -> photon map -> radiosity), as the gallery "
                                    "of `shadowvol demo` has it.")
@@ -40,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     try:
         if args.size and args.small:
-            raise SceneError("--size", "give --size or --small, not both")
+            raise InputError("--size", "give --size or --small, not both")
         size = parse_size(args.size) if args.size else (SMALL_SLIDE if args.small else SLIDE)
         scene = load_scene(args.scene)
         settings = SMALL if args.small else FULL
@@ -48,10 +47,10 @@ def main(argv: list[str] | None = None) -> int:
                    if getattr(args, k) is not None}
         for key, value in changes.items():
             if value < 1:
-                raise SceneError(f"--{key}", f"must be a whole number >= 1, got {value}")
+                raise InputError(f"--{key}", f"must be a whole number >= 1, got {value}")
         settings = dataclasses.replace(settings, **changes)
         image, info = ladder_slide(scene, Layout(*size), settings)
-    except (SceneError, MissingExtra) as exc:
+    except (InputError, SceneError, MissingExtra) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return status.BAD_INPUT
     save_png(args.output, image)

@@ -19,12 +19,12 @@ import argparse
 import sys
 
 from shadowvol import __version__
-from shadowvol.cli import args as blocks
 from shadowvol.cli import (
     batch,
     compare,
     course,
     demo,
+    options,
     planar,
     render,
     shadow2d,
@@ -37,7 +37,7 @@ COMMANDS = (render, planar, shadow2d, compare, shadowmap, demo, view, batch, cou
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = blocks.Parser(
+    parser = options.Parser(
         prog="shadowvol",
         description="Exact hard shadows with stencil shadow volumes, headless (OpenGL on EGL).",
         epilog=status.EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)

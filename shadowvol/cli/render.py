@@ -10,9 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from shadowvol import memory
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
-from shadowvol.errors import OutOfMemory, RenderError
+from shadowvol.cli import options, output_paths, status
+from shadowvol.errors import InputError, OutOfMemory, RenderError
 from shadowvol.frame import GROUND_TRUTH, LAYERS, layer_exrs, save_masks
 from shadowvol.io import encode_srgb, save_exr, save_png, save_png16
 from shadowvol.pictures import ROLE_COLOURS, captioned, heat_maps
@@ -43,13 +42,13 @@ SCENE_SUFFIXES = (".toml", ".json")
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "render", help="render scenes with stencil shadow volumes",
         description="Render SCENE with exact hard shadows counted in the stencil buffer "
                     "(direct Phong lighting: ambient + each light where unshadowed).",
         epilog=EPILOG)
-    blocks.scene(p, blocks.SCENE_HELP + "; several: -o is a directory", nargs="*")
-    blocks.output(p, "PNG|DIR", "where to write the image (one scene: a .png) or the images "
+    options.scene(p, options.SCENE_HELP + "; several: -o is a directory", nargs="*")
+    options.output(p, "PNG|DIR", "where to write the image (one scene: a .png) or the images "
                                 "(several scenes: a directory)")
     p.add_argument("--method", choices=("auto", "zpass", "zfail"), default="auto",
                    help="how volumes are counted: zpass (from the near plane to the surface; "
@@ -76,17 +75,17 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "under its name, with a legend (0: lit, the image darkened; 1, 2, ... yellow to red to "
                         "violet; negative: blue).  Every triangle casts, so a closed object "
                         "counts 2 behind it (its front and its back)")
-    blocks.ground_truth(p, "ground truth to add to the mask file, comma-separated: "
+    options.ground_truth(p, "ground truth to add to the mask file, comma-separated: "
                            f"{', '.join(GROUND_TRUTH)} (or all); and the intrinsic layers "
                            f"{', '.join(LAYERS)}; see docs/CONVENTIONS.md.  "
                            "Implies --masks (beside the image unless named)")
-    blocks.exr(p, "also write the image as linear OpenEXR (32-bit float RGB), and each "
+    options.exr(p, "also write the image as linear OpenEXR (32-bit float RGB), and each "
                   "intrinsic layer asked for beside it (X-albedo.exr, X-direct-0.exr, ...); "
                   "without a name, beside the image", nargs="?", const=True)
     p.add_argument("--png16", metavar="PNG", nargs="?", const=True,
                    help="also write the image as a 16-bit sRGB PNG; without a name, beside the "
                         "image (NAME-16bit.png)")
-    blocks.memory_budget(p)
+    options.memory_budget(p)
     p.set_defaults(func=command)
     return p
 
@@ -107,14 +106,14 @@ def _take_back_scenes(args) -> None:
             args.scene.insert(0, value)
             setattr(args, key, True)
     if not args.scene:
-        raise SceneError("SCENE", "no scene file given")
+        raise InputError("SCENE", "no scene file given")
 
 
 def plan(args) -> list[dict[str, Path]]:
     """Per scene, where each output goes: {"image": Path, "masks": Path, ...}.  Raises
-    SceneError (exit 2) for arguments that do not fit the number of scenes."""
+    InputError (exit 2) for arguments that do not fit the number of scenes."""
     _take_back_scenes(args)
-    args.truth = outputs.ground_truth(getattr(args, "outputs", None))
+    args.truth = options.outputs_named(getattr(args, "outputs", None))
     if args.truth and not args.masks:
         args.masks = True
     flags = {"image": "-o", **{key: f"--{key}" for key, _ in EXTRAS}}
@@ -126,15 +125,15 @@ def plan(args) -> list[dict[str, Path]]:
                 value = out["image"].with_name(out["image"].stem + suffix)
             if value:
                 out[key] = Path(value)
-        outputs.check(out, flags)
+        output_paths.check(out, flags)
         return [out]
     directory = Path(args.output)
     if directory.suffix.lower() in (".png", ".npz") or directory.is_file():
-        raise SceneError("-o", f"with {len(args.scene)} scenes, -o must name a directory, "
+        raise InputError("-o", f"with {len(args.scene)} scenes, -o must name a directory, "
                                f"got {args.output!r}")
     for key, _ in EXTRAS:
         if getattr(args, key) not in (None, True):
-            raise SceneError(f"--{key}", f"with several scenes, --{key} takes no file name "
+            raise InputError(f"--{key}", f"with several scenes, --{key} takes no file name "
                                          f"(each scene writes OUTDIR/NAME{dict(EXTRAS)[key]})")
     plans, taken = [], set()
     for scene in args.scene:
@@ -149,7 +148,7 @@ def plan(args) -> list[dict[str, Path]]:
                 out[key] = directory / f"{unique}{suffix}"
         for path in out.values():  # belt and braces: nothing may land outside `directory`
             if path.resolve().parent != directory.resolve():
-                raise SceneError("-o", f"refusing to write {path} outside {directory}")
+                raise InputError("-o", f"refusing to write {path} outside {directory}")
         plans.append(out)
     return plans
 
@@ -157,7 +156,7 @@ def plan(args) -> list[dict[str, Path]]:
 def command(args) -> int:
     try:
         plans = plan(args)
-    except SceneError as exc:
+    except (InputError, SceneError) as exc:
         return status.report(exc)
     code, ctx = status.OK, None
     try:

@@ -10,8 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.course.shadow2d import (
     as_light,
     as_segments,
@@ -43,7 +42,7 @@ shadow polygons.  Without any input, --example draws the course's example.
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "shadow2d",
         help="the 2D shadow-polygon exercise: list and draw shadow polygons",
         description="Shadow polygons of segments lit by a point light in the unit square.",
@@ -118,7 +117,7 @@ def _gather(args) -> tuple[np.ndarray, np.ndarray, bool]:
 def command(args) -> int:
     """Run `shadowvol shadow2d`: print the listing, write the picture if -o is given."""
     if args.output is not None:
-        outputs.check({"picture": args.output}, {"picture": "-o"})
+        output_paths.check({"picture": args.output}, {"picture": "-o"})
     try:
         light, segments, back_faces = _gather(args)
     except (OSError, ValueError, tomllib.TOMLDecodeError) as exc:

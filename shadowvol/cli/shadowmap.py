@@ -9,10 +9,10 @@ import sys
 from pathlib import Path
 
 from shadowvol import memory
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.compare.shadowmaps import ShadowMapper
 from shadowvol.course.shadowmap_plot import plot, sweep
+from shadowvol.errors import InputError
 from shadowvol.io import save_png, write_bytes
 from shadowvol.raster import estimate
 from shadowvol.scene import SceneError
@@ -23,15 +23,15 @@ MAX_PCF = 15
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "shadowmap", help="a shadow map against the exact shadow: acne and "
                                       "peter-panning counted",
         description="Shadow-map one light of SCENE (its depth map in GL, a bias, PCF) and "
                     "count the pixels it gets wrong against the exact shadow of shadow "
                     "volumes: acne (lit surfaces called shadowed) and peter-panning (shadowed "
                     "surfaces called lit), among the visible pixels that face the light.")
-    blocks.scene(p)
-    blocks.output(p, "PNG", "the picture: the map's shadow | the exact shadow | the difference")
+    options.scene(p)
+    options.output(p, "PNG", "the picture: the map's shadow | the exact shadow | the difference")
     p.add_argument("--resolution", type=int, default=1024, metavar="N",
                    help="the map's texels a side (default 1024)")
     p.add_argument("--bias", type=float, default=0.002, metavar="B",
@@ -45,18 +45,18 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="also write the counts as JSON (misclassified, acne, peter_panning)")
     p.add_argument("--plot", metavar="PNG", default=None,
                    help="also write the error against resolution (256-4096) and bias")
-    blocks.memory_budget(p)
+    options.memory_budget(p)
     p.set_defaults(func=command)
     return p
 
 
 def _check(args) -> None:
     if not 16 <= args.resolution <= MAX_RESOLUTION:
-        raise SceneError("--resolution", f"must be 16..{MAX_RESOLUTION}, got {args.resolution}")
+        raise InputError("--resolution", f"must be 16..{MAX_RESOLUTION}, got {args.resolution}")
     if not (math.isfinite(args.bias) and args.bias >= 0):
-        raise SceneError("--bias", f"must be a finite number >= 0, got {args.bias}")
+        raise InputError("--bias", f"must be a finite number >= 0, got {args.bias}")
     if not 1 <= args.pcf <= MAX_PCF:
-        raise SceneError("--pcf", f"must be 1..{MAX_PCF}, got {args.pcf}")
+        raise InputError("--pcf", f"must be 1..{MAX_PCF}, got {args.pcf}")
 
 
 def command(args) -> int:
@@ -65,7 +65,7 @@ def command(args) -> int:
         paths["json"] = Path(args.json)
     if args.plot:
         paths["picture"] = Path(args.plot)
-    outputs.check(paths, {"image": "-o", "json": "--json", "picture": "--plot"})
+    output_paths.check(paths, {"image": "-o", "json": "--json", "picture": "--plot"})
     _check(args)
     scene = load_scene(args.scene)
     memory.check(estimate.render(scene, written=("png",)), args.memory_budget, args.scene)
@@ -75,7 +75,7 @@ def command(args) -> int:
     except SceneError:
         raise   # the scene's (`image`, `objects`), not the light's
     except ValueError as exc:
-        raise SceneError("--light", str(exc)) from None
+        raise InputError("--light", str(exc)) from None
     with mapper:
         result = mapper.measure(args.resolution, args.bias, args.pcf)
         rows = sweep(mapper, pcf=args.pcf) if args.plot else None

@@ -5,9 +5,8 @@ from __future__ import annotations
 import argparse
 import os
 
-from shadowvol.cli import args as blocks
-from shadowvol.cli import status
-from shadowvol.scene import SceneError
+from shadowvol.cli import options, status
+from shadowvol.errors import InputError
 from shadowvol.scenefile import load_scene
 
 KEYS = """\
@@ -23,7 +22,7 @@ H help, Esc quit.
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    p = blocks.command(
+    p = options.command(
         subparsers, "view", help="open an interactive window on a scene (orbit, drag the light, probe)",
         description="Open SCENE in a window: the shadow-volume frame, live, with the counting "
                     "method, the shadow polygons by role, the silhouette edges, the stencil "
@@ -31,7 +30,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                     "probe on a click.  Needs an X display (Xvfb works) and pyglet "
                     "(pip install 'shadowvol[view]').",
         epilog=KEYS + status.EPILOG)
-    blocks.scene(p)
+    options.scene(p)
     p.add_argument("--size", metavar="WxH", default=None,
                    help="the frame's size in pixels (default: the scene's)")
     p.set_defaults(func=command)
@@ -45,7 +44,7 @@ def command(args) -> int:
         w, h = parse_size(args.size)
         scene = scene.replace(width=w, height=h)
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-        raise SceneError("view", "no display (DISPLAY is not set): shadowvol view opens a "
+        raise InputError("view", "no display (DISPLAY is not set): shadowvol view opens a "
                                  "window; run it on a desktop, over ssh -X, or under Xvfb")
     from shadowvol.view.app import Viewer
 

@@ -19,7 +19,7 @@ import numpy as np
 
 from raytrace.outlook import photon, whitted
 from raytrace.outlook.path import pathtrace
-from shadowvol.course import ladder as ladder_rungs
+import shadowvol.course.ladder
 from shadowvol.course import slides
 from shadowvol.course.demos_tracing import ZOOM_FRACTION, crop_window, zoom
 from shadowvol.course.equation_picture import equation_figure
@@ -65,11 +65,11 @@ def rendering_equation(g) -> Picture:
 
 def ladder(g) -> Picture:
     L = g.layout
-    settings = ladder_rungs.SMALL if g.small else ladder_rungs.FULL
-    image, info = ladder_rungs.ladder_slide(g.scene("cornell"), L, settings)
+    settings = shadowvol.course.ladder.SMALL if g.small else shadowvol.course.ladder.FULL
+    image, info = shadowvol.course.ladder.ladder_slide(g.scene("cornell"), L, settings)
     times = {k: round(v, 1) for k, v in info.items() if k.endswith("_s")}
     return Picture(
-        "ladder", ladder_rungs.TITLE, SECTION,
+        "ladder", shadowvol.course.ladder.TITLE, SECTION,
         "The lecture's ladder of compromises, on one Cornell box and one display: local "
         "illumination drops all coupling between surfaces (no shadows, no bounces); Whitted "
         "keeps visibility to point lights and the special kind of coupling through mirrors "
@@ -85,7 +85,7 @@ def ladder(g) -> Picture:
         "bounce), path traced, photon mapped, radiosity (interpolated); each rung named with "
         "what it keeps of the equation",
         f"python -m shadowvol.cli.ladder {g.path('cornell')} -o ladder.png{_size_flags(g)}",
-        image, numbers={**info, "rungs": [name for name, _ in ladder_rungs.RUNGS]})
+        image, numbers={**info, "rungs": [name for name, _ in shadowvol.course.ladder.RUNGS]})
 
 
 def caustic(g) -> Picture:

@@ -28,7 +28,7 @@ from shadowvol.course import (
 )
 from shadowvol.course.picture import Picture
 from shadowvol.course.slides import SLIDE, SMALL_SLIDE, SUPERSAMPLE, Layout
-from shadowvol.errors import MissingExtra
+from shadowvol.errors import InputError, MissingExtra
 from shadowvol.raster.platform.context import create_context
 from shadowvol.resources import data_dir
 from shadowvol.scene import SceneError
@@ -63,13 +63,13 @@ DEMOS = (demos_volumes.cage, soft_gallery.umbra_penumbra, soft_gallery.exact_pen
 
 
 def parse_size(text: str) -> tuple[int, int]:
-    """"WxH" -> (W, H), each at least MIN_SIZE; SceneError (exit 2) otherwise."""
+    """"WxH" -> (W, H), each at least MIN_SIZE; InputError (exit 2) otherwise."""
     try:
         w, h = (int(x) for x in text.lower().split("x"))
     except ValueError:
-        raise SceneError("--size", f"{text!r} is not WIDTHxHEIGHT, e.g. 1920x1080") from None
+        raise InputError("--size", f"{text!r} is not WIDTHxHEIGHT, e.g. 1920x1080") from None
     if w < MIN_SIZE[0] or h < MIN_SIZE[1] or w * h > 8192 * 8192:
-        raise SceneError("--size", f"{w}x{h} is outside {MIN_SIZE[0]}x{MIN_SIZE[1]} .. "
+        raise InputError("--size", f"{w}x{h} is outside {MIN_SIZE[0]}x{MIN_SIZE[1]} .. "
                                    "8192x8192")
     return w, h
 
@@ -86,7 +86,7 @@ class Gallery:
         self.layout = Layout(*self.size, supersample=1 if small else SUPERSAMPLE)
         self.scenes = Path(scenes)
         if not self.scenes.is_dir():
-            raise SceneError("--scenes", f"no scenes folder at {self.scenes} (pass --scenes DIR)")
+            raise InputError("--scenes", f"no scenes folder at {self.scenes} (pass --scenes DIR)")
         self._own_ctx = ctx is None
         self._ctx = ctx
         self._loaded: dict[str, object] = {}

@@ -4,7 +4,7 @@ pyglet (not moderngl-window): it is already installed with pyrender, it is what
 moderngl-window itself wraps on Linux, and the viewer needs only a window, a GL 4.5 context and
 its events; moderngl-window would add a dependency and its own render loop for nothing more.
 
-The window's left part is the frame of the current `ViewState` (`frames.frame`, rendered by a
+The window's left part is the frame of the current `ViewState` (`picture.frame`, rendered by a
 `Renderer` in the window's own GL context, blitted one texel per pixel: the same pixels as an
 offscreen render of that state); the right part is a side panel with the state, the keys and
 the count probe's report.
@@ -28,11 +28,11 @@ from PIL import Image, ImageDraw
 
 from shadowvol.course.probe import probe
 from shadowvol.errors import MissingExtra, require
-from shadowvol.raster.platform import window as gl_window
 from shadowvol.raster.planar.draw import PlanarShadows, ReceiverError, receiver_index
+from shadowvol.raster.platform import window
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import SceneError
-from shadowvol.view import frames
+from shadowvol.view import picture
 from shadowvol.view.state import (
     ViewState,
     change_samples,
@@ -104,14 +104,14 @@ class Viewer:
                                            caption=f"shadowvol view: {scene.name}",
                                            config=config, visible=visible, resizable=False)
         self.window.switch_to()
-        self.ctx = gl_window.attach(egl=bool(pyglet.options["headless"]))
+        self.ctx = window.attach(egl=bool(pyglet.options["headless"]))
         self.renderer = Renderer(scene, self.ctx)
         try:
             receiver_index(scene)
             self.planar = PlanarShadows(self.renderer)
         except ReceiverError:
             self.planar = None      # no plane to project onto: the P key says so
-        self.blit = gl_window.Blit(self.ctx)
+        self.blit = window.Blit(self.ctx)
         self.state = ViewState.of(scene)
         self.message = ""
         self.probe_text = "left click a pixel to probe it"
@@ -133,7 +133,7 @@ class Viewer:
         """(H, W, 3) uint8: the current state's frame (rendered again only after a change)."""
         if self._frame is None:
             start = time.perf_counter()
-            self._frame = frames.frame(self.renderer, self.state, self.planar)
+            self._frame = picture.frame(self.renderer, self.state, self.planar)
             self.frame_ms = (time.perf_counter() - start) * 1e3
         return self._frame
 

@@ -1,7 +1,7 @@
 """What the viewer shows, as plain data: the camera, the lights, the counting method, the mode.
 
 A `ViewState` is immutable; every key and drag makes a new one (`orbit`, `pan`, `zoom`,
-`drag_light`, `dataclasses.replace`).  The frame of a state is `frames.frame` of it, the same
+`drag_light`, `dataclasses.replace`).  The frame of a state is `picture.frame` of it, the same
 in the window and offscreen.
 """
 

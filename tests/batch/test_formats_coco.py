@@ -11,8 +11,8 @@ import pytest
 from builders import SCENES, job_lines, write_jobs
 
 from shadowvol import batch
-from shadowvol.batch.formats.coco import SHADOW_IDS
-from shadowvol.batch.formats.encoding import rle
+from shadowvol.batch.datasets.coco import SHADOW_IDS
+from shadowvol.batch.datasets.encoding import rle
 
 # pycocotools' own decode warns under numpy 2 (its __array__ has no copy keyword)
 pytestmark = pytest.mark.filterwarnings("ignore:__array__ implementation:DeprecationWarning")

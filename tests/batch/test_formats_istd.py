@@ -16,7 +16,7 @@ from builders import ROOT, SCENES, job_lines, output_files, write_jobs
 from PIL import Image
 
 from shadowvol import batch
-from shadowvol.batch.formats.istd import check_pair, mattes, shadowless
+from shadowvol.batch.datasets.istd import check_pair, mattes, shadowless
 from shadowvol.checks import SceneError
 from shadowvol.scenefile import load_scene
 

@@ -10,16 +10,17 @@ import numpy as np
 import pytest
 from builders import SCENES, job_lines
 
-from shadowvol.batch import egl, frames
+from shadowvol.batch import egl, job_frames
 from shadowvol.batch.jobs import Job, JobError, check_jobs, read_jobs
 from shadowvol.batch.runner import parse_shard, share
+from shadowvol.errors import InputError
 from shadowvol.io import npz_bytes, tar_bytes
 from shadowvol.raster.platform.egl import Device, devices
 from shadowvol.scene import Camera, PointLight, SceneError
 
 
 def test_orbit_is_a_turntable():
-    cams = frames.orbit({"center": [1, 2, 3], "radius": 4, "elevation": 30, "frames": 8})
+    cams = job_frames.orbit({"center": [1, 2, 3], "radius": 4, "elevation": 30, "frames": 8})
     assert len(cams) == 8
     for i, cam in enumerate(cams):
         offset = np.subtract(cam["eye"], [1, 2, 3])
@@ -33,7 +34,7 @@ def test_path_goes_through_its_keys():
     keys = [{"eye": [0, 1, 5], "target": [0, 0, 0], "fov_y": 40},
             {"eye": [5, 1, 0], "target": [0, 0, 0], "fov_y": 60},
             {"eye": [0, 1, -5], "target": [0, 1, 0], "fov_y": 50}]
-    cams = frames.path({"keys": keys, "frames": 5})
+    cams = job_frames.path({"keys": keys, "frames": 5})
     assert cams[0]["eye"] == [0, 1, 5] and cams[2]["eye"] == [5, 1, 0]
     assert cams[4]["eye"] == [0, 1, -5] and cams[4]["fov_y"] == 50
     assert cams[1]["eye"] == [2.5, 1, 2.5] and cams[1]["fov_y"] == 50
@@ -64,12 +65,12 @@ def test_jobs_are_checked_with_messages_that_name_the_key(tmp_path):
 
 def test_ids_and_spec_hashes_are_stable():
     job = check_jobs([job_lines(frames=3, raytrace=False)[0]])[0]
-    specs = frames.specs(job, "key")
+    specs = job_frames.specs(job, "key")
     assert [s.id for s in specs] == [f"cage-turntable/{i:06d}" for i in range(3)]
-    again = frames.specs(check_jobs([job_lines(frames=3, raytrace=False)[0]])[0], "other key")
-    assert [frames.spec_hash(s, "d") for s in specs] == [frames.spec_hash(s, "d") for s in again]
-    assert frames.spec_hash(specs[0], "d") != frames.spec_hash(specs[0], "e")
-    assert len({frames.spec_hash(s, "d") for s in specs}) == 3
+    again = job_frames.specs(check_jobs([job_lines(frames=3, raytrace=False)[0]])[0], "other key")
+    assert [job_frames.spec_hash(s, "d") for s in specs] == [job_frames.spec_hash(s, "d") for s in again]
+    assert job_frames.spec_hash(specs[0], "d") != job_frames.spec_hash(specs[0], "e")
+    assert len({job_frames.spec_hash(s, "d") for s in specs}) == 3
     assert job.scene == str((SCENES / "cage.toml").resolve())
 
 
@@ -79,16 +80,16 @@ def test_shards_cover_every_unit_once(units, count):
     covered = [u for i in range(count) for u in share(units, (i, count))]
     assert covered == list(range(units))
     assert parse_shard(f"{count - 1}/{count}") == (count - 1, count)
-    with pytest.raises(SceneError):
+    with pytest.raises(InputError):
         parse_shard(f"{count}/{count}")
 
 
 def test_jitter_depends_only_on_seed_and_index():
     camera = Camera(eye=[0, 1, 5], target=[0, 0, 0])
     lights = (PointLight([0, 3, 0]),)
-    a = frames.jittered(camera, lights, {"eye": 0.5, "lights": 0.2}, 3, 10)
-    frames.jittered(camera, lights, {"eye": 0.5, "lights": 0.2}, 3, 11)  # another frame first
-    b = frames.jittered(camera, lights, {"eye": 0.5, "lights": 0.2}, 3, 10)
+    a = job_frames.jittered(camera, lights, {"eye": 0.5, "lights": 0.2}, 3, 10)
+    job_frames.jittered(camera, lights, {"eye": 0.5, "lights": 0.2}, 3, 11)  # another frame first
+    b = job_frames.jittered(camera, lights, {"eye": 0.5, "lights": 0.2}, 3, 10)
     assert np.array_equal(a[0].eye, b[0].eye) and np.array_equal(a[1][0].position,
                                                                  b[1][0].position)
     assert 0 < np.linalg.norm(a[0].eye - camera.eye) <= 0.5
@@ -102,11 +103,11 @@ def test_egl_device_choice():
     assert egl.choose("auto", gpus)[0] == 1  # CUDA device 0, wherever EGL lists it
     assert egl.choose("auto", [mesa])[0] == 0
     assert egl.choose("2", gpus)[0] == 2
-    with pytest.raises(SceneError, match=r"no EGL device 3; this machine has 3: 0 \(H200, CUDA "
+    with pytest.raises(InputError, match=r"no EGL device 3; this machine has 3: 0 \(H200, CUDA "
                                          r"device 1\), 1 \(H200, CUDA device 0\), 2 \(Mesa"):
         egl.choose(3, gpus)
     for bad in ("-1", "gpu0", True, 1.5):
-        with pytest.raises(SceneError, match="--egl-device"):
+        with pytest.raises(InputError, match="--egl-device"):
             egl.choose(bad, gpus)
     found = devices()  # this machine's, by the real queries
     assert all(d.index == i for i, d in enumerate(found))

@@ -12,7 +12,7 @@ import inspect
 import pytest
 from builders import ROOT
 
-from shadowvol.batch import frames, layouts, sources
+from shadowvol.batch import job_frames, layouts, sources
 from shadowvol.batch.jobs import check_jobs
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.batch.store import FileStore, Store, TarStore
@@ -26,7 +26,7 @@ JOBS = [{"name": "orbit", "scene": str(ROOT / "scenes" / "cage.toml"), "size": [
          "lights": [{"type": "point", "position": [0.0, 1.4, 0.0]}],
          "cameras": [{"eye": [4.2, 3.4, 5.2], "target": [-0.6, 1.0, -0.8], "fov_y": 40.0}]}]
 
-# frames.spec_hash(spec, "d") of these jobs' frames as the spec dicts before FrameSpec made them
+# job_frames.spec_hash(spec, "d") of these jobs' frames as the spec dicts before FrameSpec made them
 # (and, last, of the first frame tagged "bop"): what the manifests of existing datasets hold
 HASHES = {"orbit": ["063ba2055434db9bf697c73a2dd02cbf6516b51dcf8a26ef63eb3881d3364767",
                     "32cd9362d8461225c2317e88b7632741d48f4e79a6f6780e0e9fe26d8d9eb22b",
@@ -37,10 +37,10 @@ HASHES = {"orbit": ["063ba2055434db9bf697c73a2dd02cbf6516b51dcf8a26ef63eb3881d33
 
 def test_frame_specs_are_frozen_and_hash_as_before():
     for job in check_jobs(JOBS):
-        specs = frames.specs(job, "key")
+        specs = job_frames.specs(job, "key")
         assert all(isinstance(s, FrameSpec) for s in specs)
         tagged = layouts.tag(specs[:1], layouts.LAYOUTS["bop"])[0]
-        got = [frames.spec_hash(s, "d") for s in specs] + [frames.spec_hash(tagged, "d")]
+        got = [job_frames.spec_hash(s, "d") for s in specs] + [job_frames.spec_hash(tagged, "d")]
         assert got == HASHES[job.name]
         with pytest.raises(dataclasses.FrozenInstanceError):
             specs[0].renderer = "raytrace"
@@ -48,12 +48,11 @@ def test_frame_specs_are_frozen_and_hash_as_before():
 
 
 def test_layouts_are_frozen_rows_with_one_store_interface():
-    assert tuple(layouts.LAYOUTS) == layouts.FORMATS == ("files", "webdataset", "nerfstudio",
-                                                          "bop", "coco", "istd", "soba",
-                                                          "soba-lights")
+    assert tuple(layouts.LAYOUTS) == ("files", "webdataset", "nerfstudio", "bop", "coco", "istd",
+                                      "soba", "soba-lights")
     parser = add_parser(argparse.ArgumentParser().add_subparsers())
     choices = next(a.choices for a in parser._actions if "--format" in a.option_strings)
-    assert tuple(choices) == layouts.FORMATS
+    assert tuple(choices) == tuple(layouts.LAYOUTS)
     calls = [name for name in dir(Store) if not name.startswith("_") and name != "layout"]
     assert sorted(calls) == ["clean", "finish", "verify", "write"]
     for name, layout in layouts.LAYOUTS.items():
@@ -76,7 +75,7 @@ def _parameters(function):
 
 @pytest.mark.parametrize("module", ["runner.py", "worker.py"])
 def test_no_layout_or_renderer_name_is_tested(module):
-    names = set(layouts.FORMATS) | set(sources.SOURCES)
+    names = set(layouts.LAYOUTS) | set(sources.SOURCES)
     tree = ast.parse((ROOT / "shadowvol" / "batch" / module).read_text())
     for node in ast.walk(tree):
         if isinstance(node, ast.Compare):
@@ -93,12 +92,12 @@ def test_a_whole_dataset_layouts_frames_carry_their_jobs_place():
     job's place (so their hashes differ from a dataset made before they had it, which is made
     again), nerfstudio's do not (its hashes stay)."""
     (job,) = check_jobs(JOBS[:1])
-    specs = frames.specs(job, "key")
+    specs = job_frames.specs(job, "key")
     for name in ("bop", "coco"):
         tagged = layouts.tag(specs, layouts.LAYOUTS[name], 3)
         assert [s.job_index for s in tagged] == [3, 3]
         assert tagged[0].as_dict()["job_index"] == 3
-        assert frames.spec_hash(tagged[0], "d") != frames.spec_hash(
+        assert job_frames.spec_hash(tagged[0], "d") != job_frames.spec_hash(
             layouts.tag(specs, layouts.LAYOUTS[name])[0], "d")
     nerf = layouts.tag(specs, layouts.LAYOUTS["nerfstudio"], 3)
     assert nerf[0].job_index is None and "job_index" not in nerf[0].as_dict()

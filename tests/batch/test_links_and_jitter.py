@@ -10,7 +10,7 @@ import pytest
 from builders import SCENES, job_lines, write_jobs
 
 from shadowvol import batch
-from shadowvol.batch import frames
+from shadowvol.batch import job_frames
 from shadowvol.scene import AreaLight, Camera, PointLight
 
 pytestmark = pytest.mark.gl
@@ -54,7 +54,7 @@ def test_jitter_moves_an_area_light_whole():
     camera = Camera(eye=[0, 1, 5], target=[0, 0, 0])
     area = AreaLight("rect", center=[0, 3, 0], normal=[0, -1, 0], size=[1.0, 0.5], samples=9)
     lights = (PointLight([1, 3, 0]), area)
-    _, (point, moved) = frames.jittered(camera, lights, {"lights": 0.3}, 5, 2)
+    _, (point, moved) = job_frames.jittered(camera, lights, {"lights": 0.3}, 5, 2)
     offset = moved.center - area.center
     assert 0 < np.linalg.norm(offset) <= 0.3
     np.testing.assert_allclose(moved.positions, area.positions + offset, rtol=0, atol=1e-12)

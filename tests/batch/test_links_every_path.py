@@ -23,7 +23,7 @@ from builders import ROOT, job_lines, write_jobs
 
 from shadowvol import batch
 from shadowvol.batch import manifest
-from shadowvol.scene import SceneError
+from shadowvol.errors import InputError
 
 pytestmark = pytest.mark.gl
 
@@ -132,7 +132,7 @@ def test_a_manifest_that_is_a_link_is_refused_before_anything_is_touched(made, t
         (out / MANIFEST).unlink()
         os.symlink(target, out / MANIFEST)
         before = _tree(out)
-        with pytest.raises(SceneError, match="manifest.jsonl is a symbolic link"):
+        with pytest.raises(InputError, match="manifest.jsonl is a symbolic link"):
             _run(jobs, out, layout)
         assert _tree(out) == before
         assert outside.read_bytes() == first[MANIFEST]
@@ -198,7 +198,7 @@ def test_a_refused_second_run_changes_nothing_of_the_running_one(made, layout):
     with open(out / MANIFEST, "ab") as held:   # as the running run's journal holds it
         fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
         before = _tree(out)
-        with pytest.raises(SceneError, match="another run is writing"):
+        with pytest.raises(InputError, match="another run is writing"):
             _run(jobs, out, layout)
         assert _tree(out) == before
 
@@ -245,7 +245,7 @@ def test_a_finished_manifest_stays_locked_until_the_run_closes_it(tmp_path):
     journal.add({"id": "a/000000"})
     journal.finish([{"id": "a/000000"}])
     try:
-        with pytest.raises(SceneError, match="another run is writing"):
+        with pytest.raises(InputError, match="another run is writing"):
             manifest.Journal(path)
     finally:
         journal.close()

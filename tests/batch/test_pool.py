@@ -19,7 +19,7 @@ import pytest
 from builders import ROOT, job_lines, write_jobs
 
 from shadowvol import batch
-from shadowvol.batch import frames, local
+from shadowvol.batch import job_frames, local
 from shadowvol.batch.jobs import check_jobs
 from shadowvol.batch.worker import THREAD_VARIABLES, thread_settings
 from shadowvol.cli import status
@@ -52,7 +52,7 @@ def test_thread_settings(monkeypatch):
 
 def _specs(count: int):
     job = check_jobs(job_lines(frames=count, size=(32, 24), raytrace=False))[0]
-    return list(frames.specs(job, job.scene)), {job.scene: job.scene}
+    return list(job_frames.specs(job, job.scene)), {job.scene: job.scene}
 
 
 @pytest.mark.gl

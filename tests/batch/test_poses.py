@@ -15,7 +15,7 @@ from builders import output_files, pose_jobs, write_jobs
 from PIL import Image
 
 from shadowvol import batch
-from shadowvol.batch.formats.coco import SHADOW_IDS
+from shadowvol.batch.datasets.coco import SHADOW_IDS
 
 pytestmark = [pytest.mark.gl,
               pytest.mark.filterwarnings("ignore:__array__ implementation:DeprecationWarning")]

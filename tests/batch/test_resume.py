@@ -86,12 +86,12 @@ def test_rerun_remakes_only_what_is_missing_damaged_or_changed(reference, tmp_pa
 
 def test_a_second_run_into_the_same_manifest_is_refused(tmp_path):
     from shadowvol.batch import manifest
-    from shadowvol.scene import SceneError
+    from shadowvol.errors import InputError
 
     jobs = write_jobs(tmp_path / "jobs.jsonl", job_lines(frames=1, raytrace=False))
     held = manifest.Journal(tmp_path / "out" / "manifest.jsonl")  # as a running batch holds it
     try:
-        with pytest.raises(SceneError, match="another run is writing"):
+        with pytest.raises(InputError, match="another run is writing"):
             batch.run(jobs, tmp_path / "out", progress=False)
         other = batch.run(jobs, tmp_path / "out", shard=(1, 2), progress=False)  # its own file
         assert (other.status, other.rendered) == (0, 1)

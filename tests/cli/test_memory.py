@@ -39,6 +39,7 @@ from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.cli.raytrace import main as raytrace_main
 from shadowvol.course import raytree_slide
 from shadowvol.course.slides import Layout
+from shadowvol.errors import InputError
 from shadowvol.raster import target
 from shadowvol.scene import MAX_IMAGE_PIXELS, SceneError
 from shadowvol.scenefile import load_scene, save_scene
@@ -78,7 +79,7 @@ def test_a_budget_is_a_size(text, value):
 
 @pytest.mark.parametrize("text", ["", "lots", "-1GiB", "0", "12 GiBs", "1e9", "12 PiB"])
 def test_a_bad_budget_names_the_variable(text):
-    with pytest.raises(SceneError, match=r"SHADOWVOL_MEMORY_BUDGET: expected a memory size"):
+    with pytest.raises(InputError, match=r"SHADOWVOL_MEMORY_BUDGET: expected a memory size"):
         memory.parse_size(text)
 
 

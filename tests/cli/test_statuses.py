@@ -10,6 +10,7 @@ import textwrap
 import pytest
 from builders import ROOT, SCENES
 
+import shadowvol.batch
 import shadowvol.cli.compare
 import shadowvol.cli.raytrace
 import shadowvol.cli.render
@@ -18,7 +19,9 @@ import shadowvol.raster.renderer
 from shadowvol.cli import status
 from shadowvol.cli.main import main as shadowvol_main
 from shadowvol.cli.raytrace import main as raytrace_main
+from shadowvol.errors import InputError
 from shadowvol.raster.platform.context import ContextError
+from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene, save_scene
 
 pytestmark = pytest.mark.gl  # the OK cases render
@@ -182,6 +185,51 @@ def test_batch_ok_and_a_frame_that_fails_to_render(small, tmp_path, monkeypatch)
     monkeypatch.setattr(shadowvol.raster.renderer.Renderer, "render", _no_memory)
     assert shadowvol_main(["batch", str(jobs), "-o", str(tmp_path / "fail")]) == \
         status.RENDER_FAILED
+
+
+# A flag that cannot be used, and a scene file that cannot be read: each its own class (the
+# command line's InputError, the scene's SceneError), both status 2 in one line.
+BAD_FLAGS = {
+    "suffix": (shadowvol_main, ["render", "S", "-o", "O/x.jpg"], "-o: 'O/x.jpg' must end in .png"),
+    "budget": (shadowvol_main, ["render", "S", "-o", "O/x.png", "--memory-budget", "lots"],
+               "--memory-budget: expected a memory size"),
+    "size": (shadowvol_main, ["compare", "S", "-o", "O/x.png", "--size", "99999999x5"],
+             "--size: 99999999x5 is more than"),
+    "pixel": (raytrace_main, ["tree", "S", "--pixel", "99", "0", "-o", "O/x.png"],
+              "--pixel: 99 0 is outside the 32x24"),
+    "spp": (raytrace_main, ["render", "S", "-o", "O/x.png", "--integrator", "path", "--spp", "0"],
+            "--spp: must be >= 1, got 0"),
+}
+
+
+def _raised(monkeypatch) -> list:
+    """The exceptions the commands report from now on."""
+    raised, report = [], status.report
+    monkeypatch.setattr(status, "report", lambda exc, *a: raised.append(exc) or report(exc, *a))
+    return raised
+
+
+@pytest.mark.parametrize("case", BAD_FLAGS)
+def test_a_bad_flag_is_an_input_error(case, small, tmp_path, capsys, monkeypatch):
+    tool, argv, words = BAD_FLAGS[case]
+    raised = _raised(monkeypatch)
+    fill = {"S": str(small), "O/x.jpg": f"{tmp_path}/x.jpg", "O/x.png": f"{tmp_path}/x.png"}
+    assert tool([fill.get(a, a) for a in argv]) == status.BAD_INPUT
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("error: " + words.replace("O/", f"{tmp_path}/"))
+    assert [type(exc) for exc in raised] == [InputError], raised
+
+
+def test_a_bad_scene_file_is_a_scene_error_and_a_bad_batch_option_an_input_error(
+        tmp_path, capsys, monkeypatch):
+    raised = _raised(monkeypatch)
+    (tmp_path / "bad.toml").write_text("[camera]\neye = [0, 1]\n")
+    assert shadowvol_main(["render", str(tmp_path / "bad.toml"), "-o",
+                           str(tmp_path / "x.png")]) == status.BAD_INPUT
+    assert [type(exc) for exc in raised] == [SceneError], raised
+    assert capsys.readouterr().err.startswith(f"error: {tmp_path / 'bad.toml'}: ")
+    with pytest.raises(InputError, match="^--workers: must be a whole number >= 1, got 0$"):
+        shadowvol.batch.run([], tmp_path / "out", workers=0)
 
 
 def test_view_without_a_display_is_bad_input(small, monkeypatch):

@@ -26,7 +26,7 @@ from shadowvol.raster.planar.draw import PlanarShadows
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import Camera, DirectionalLight
 from shadowvol.scenefile import load_scene
-from shadowvol.view import frames
+from shadowvol.view import picture
 from shadowvol.view.app import PANEL_WIDTH
 from shadowvol.view.state import ViewState
 
@@ -234,7 +234,7 @@ def _check_frame(ctx, session, name, tag):
     shot = np.asarray(Image.open(out / f"{name}.png"))
     assert shot.shape == (SIZE[1], SIZE[0] + PANEL_WIDTH, 3)
     with Renderer(scene, ctx) as r, PlanarShadows(r) as p:
-        expected = frames.frame(r, state, p)
+        expected = picture.frame(r, state, p)
         if name == "start":           # marker off, shaded: the renderer's image itself
             assert (expected == encode_srgb(r.render().image)).all()
     window = shot[:, :SIZE[0]]
@@ -361,7 +361,7 @@ def test_every_mode_draws_an_area_light_scene(ctx, mode):
 
     from shadowvol.raster.planar.draw import PlanarShadows
     from shadowvol.raster.renderer import Renderer
-    from shadowvol.view.frames import frame
+    from shadowvol.view.picture import frame
     from shadowvol.view.state import hard_view
     scene = load_scene(SCENES / "soft.toml").replace(width=64, height=48)
     s = replace(ViewState.of(scene), mode=mode)

@@ -22,7 +22,7 @@ pytest.importorskip("numba", reason="the numba shading needs numba: "
 from raytrace.outlook.path import pathtrace  # noqa: E402
 from raytrace.outlook.path.pathstate import PathWorld  # noqa: E402
 from raytrace.outlook.path.pathtrace import render, shading, trace_paths  # noqa: E402
-from shadowvol.errors import MissingExtra  # noqa: E402
+from shadowvol.errors import InputError, MissingExtra  # noqa: E402
 from shadowvol.io import save_png  # noqa: E402
 from shadowvol.primitives import box, plane, sphere  # noqa: E402
 from shadowvol.scene import (  # noqa: E402
@@ -32,7 +32,6 @@ from shadowvol.scene import (  # noqa: E402
     Material,
     PointLight,
     Scene,
-    SceneError,
     SpotLight,
 )
 from shadowvol.scenefile import load_scene  # noqa: E402
@@ -151,10 +150,10 @@ def test_shading_is_chosen_by_argument_then_environment(monkeypatch):
         assert shading() == ("numpy" if "numpy" in value.lower() else "numba")
     assert shading("numpy") == "numpy"  # the argument wins
     monkeypatch.setenv(pathtrace.SHADING_ENV, "cuda")
-    with pytest.raises(SceneError, match="SHADOWVOL_PATHTRACE: unknown path-tracer shading "
+    with pytest.raises(InputError, match="SHADOWVOL_PATHTRACE: unknown path-tracer shading "
                                          "'cuda'"):
         render(cornell(4), spp=1)
-    with pytest.raises(SceneError, match="shading: unknown"):
+    with pytest.raises(InputError, match="shading: unknown"):
         shading("fortran")
 
 

@@ -3,7 +3,8 @@ installed with pip into a fresh venv outside the checkout, and run from there.
 
 Every other test imports the checkout (`pythonpath = ["."]`), so a module left out of the wheel,
 a shader or scene not shipped, or a dependency missing from `pyproject.toml` would pass them all;
-once, `shadowvol.batch.formats` was missing from the wheel and every command failed to import.
+once, the batch's dataset package (`shadowvol.batch.datasets`) was missing from the wheel and
+every command failed to import.
 Here the README's first command runs verbatim in that venv (it builds and installs the wheel),
 then, from a folder that is not the checkout, `shadowvol batch` in every `--format`, `raytrace
 masks`, `shadowvol demo --small` and a script importing every public module.  The venv has the
@@ -189,7 +190,7 @@ def test_every_public_module_imports(installed):
     assert done.returncode == 0, done.stderr[-4000:]
     result = json.loads(done.stdout.splitlines()[-1])
     assert len(result["names"]) > 100
-    assert "shadowvol.batch.formats" in result["names"]
+    assert "shadowvol.batch.datasets" in result["names"]
     assert not result["failed"], result["failed"]
 
 

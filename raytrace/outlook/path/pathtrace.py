@@ -67,12 +67,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shadowvol.errors import MissingExtra
+from shadowvol.errors import InputError, MissingExtra
 from shadowvol.scene import (
     AreaSample,
     DirectionalLight,
     Scene,
-    SceneError,
     SpotLight,
 )
 
@@ -238,14 +237,14 @@ def shading(choice: str | None = None) -> str:
     """Which per-bounce shading the path tracer runs: "numba" (`raytrace.outlook.path.pathkernels`,
     the `fast` extra) or "numpy" (the reference below).  choice None: $SHADOWVOL_PATHTRACE, and
     where that is unset or "auto", numba when it imports, else numpy.  Both give the same samples
-    (`raytrace.outlook.path.pathkernels`).  An unknown name is a SceneError naming where it came
+    (`raytrace.outlook.path.pathkernels`).  An unknown name is an InputError naming where it came
     from; numba asked for but missing is a MissingExtra (exit status 2 in the CLI)."""
     where = "shading"
     if choice is None:
         choice, where = os.environ.get(SHADING_ENV, "auto").strip().lower() or "auto", \
             SHADING_ENV
     if choice not in SHADINGS + ("auto",):
-        raise SceneError(where, f"unknown path-tracer shading {choice!r} (one of: auto, "
+        raise InputError(where, f"unknown path-tracer shading {choice!r} (one of: auto, "
                                 f"{', '.join(SHADINGS)})")
     if choice == "numpy":
         return "numpy"

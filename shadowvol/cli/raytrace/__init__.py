@@ -25,15 +25,14 @@ import argparse
 import sys
 
 from shadowvol import __version__
-from shadowvol.cli import args as blocks
-from shadowvol.cli import status
+from shadowvol.cli import options, status
 from shadowvol.cli.raytrace import exercise, masks, radiosity, render, tree
 
 COMMANDS = (render, radiosity, masks, tree, exercise)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    ap = blocks.Parser(
+    ap = options.Parser(
         prog="raytrace",
         description="Reference CPU ray tracer of shadowvol: Whitted images and the exact "
                     "shadow masks the shadow-volume rasterizer is checked against.",

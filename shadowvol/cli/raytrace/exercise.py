@@ -7,8 +7,7 @@ import sys
 from pathlib import Path
 
 from raytrace import exercise
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.course.exercise_picture import plane_figure, tir_figure
 from shadowvol.io import atomic_write
 
@@ -27,7 +26,7 @@ EXERCISES = {"plane": _plane, "tir": _tir}
 
 
 def add_parser(sub) -> None:
-    e = blocks.command(sub, "exercise", help="a worked exercise of the course, printed and drawn",
+    e = options.command(sub, "exercise", help="a worked exercise of the course, printed and drawn",
                        description="Print the worked solution of one of the course's "
                                    "exercises, computed with the ray tracer's own formulas, "
                                    "and optionally draw it.  plane: the ray (5,1) + λ(−1,3) "
@@ -35,14 +34,14 @@ def add_parser(sub) -> None:
                                    "Snell's law from glass into air, past the critical angle.")
     e.add_argument("name", choices=tuple(EXERCISES), metavar="NAME",
                    help="the exercise: " + ", ".join(EXERCISES))
-    blocks.output(e, "PNG", "also draw the exercise's 2D picture", required=False)
+    options.output(e, "PNG", "also draw the exercise's 2D picture", required=False)
     e.set_defaults(func=command)
 
 
 def command(args) -> int:
     """Print the worked solution, draw it with -o."""
     if args.output:
-        outputs.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
+        output_paths.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
     text, fig = EXERCISES[args.name]()
     print(text)
     if args.output:

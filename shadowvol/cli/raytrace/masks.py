@@ -15,8 +15,7 @@ from raytrace.outlook.estimate import layers as layers_estimate
 from raytrace.outlook.layers import layers
 from shadowvol import memory
 from shadowvol.cameras import calibration
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.frame import EXACT_OUTPUTS, LAYERS, save_masks
 from shadowvol.io import save_png
 from shadowvol.pictures import ground_truth_picture, masks_image
@@ -25,14 +24,14 @@ from shadowvol.scenefile import load_scene
 
 
 def add_parser(sub) -> None:
-    m = blocks.command(sub, "masks", help="reference shadow masks (lit per light, coverage)",
+    m = options.command(sub, "masks", help="reference shadow masks (lit per light, coverage)",
                        description="Trace the reference shadow masks of SCENE on its triangles "
                                    "and write them as a .npz (lit, coverage, the camera "
                                    "matrices K, world_to_camera, camera_to_world and the light "
                                    "arrays; with --outputs, the ground truth too) and a "
                                    "picture.")
-    blocks.scene(m)
-    blocks.output(m, "NPZ",
+    options.scene(m)
+    options.output(m, "NPZ",
                   "where to write the masks (.npz with lit (L, H, W) and coverage (H, W); "
                   "with an area light also lit_count (L, H, W) and samples (L,))")
     m.add_argument("--png", metavar="PNG", default=None,
@@ -40,23 +39,23 @@ def add_parser(sub) -> None:
                         "grey shadowed, black empty), with --outputs also of the outputs side by "
                         "side (default: beside the .npz, same name, .png)")
     m.add_argument("--no-png", action="store_true", help="write the .npz only")
-    blocks.ground_truth(m, "ground truth to add to the .npz, comma-separated: "
-                           f"{blocks.GROUND_TRUTH_LIST} (or all), and visibility_exact, "
+    options.ground_truth(m, "ground truth to add to the .npz, comma-separated: "
+                           f"{options.GROUND_TRUTH_LIST} (or all), and visibility_exact, "
                            "irradiance_exact (the exact visible part of rect, disk and polygon "
                            "lights, float64; named only); see docs/CONVENTIONS.md")
-    blocks.backend(m, BACKENDS)
-    blocks.memory_budget(m)
+    options.backend(m, BACKENDS)
+    options.memory_budget(m)
     m.set_defaults(func=command)
 
 
 def command(args) -> int:
-    wanted = outputs.ground_truth(args.outputs, extra=EXACT_OUTPUTS)
+    wanted = options.outputs_named(args.outputs, extra=EXACT_OUTPUTS)
     exact = tuple(o for o in wanted if o in EXACT_OUTPUTS)
     wanted = tuple(o for o in wanted if o not in EXACT_OUTPUTS)
     paths = {"masks": Path(args.output)}
     if not args.no_png:
         paths["picture"] = Path(args.png) if args.png else Path(args.output).with_suffix(".png")
-    outputs.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
+    output_paths.check(paths, {"masks": "-o", "picture": "--png"}, "raytrace")
     scene = load_scene(args.scene)
     need = estimate.masks(scene, wanted, picture="picture" in paths, exact=len(exact))
     if set(wanted) & set(LAYERS):

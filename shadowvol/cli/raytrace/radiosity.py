@@ -12,25 +12,25 @@ from pathlib import Path
 from raytrace.backends import BACKENDS
 from raytrace.outlook import estimate, radiosity
 from shadowvol import memory
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
+from shadowvol.errors import InputError
 from shadowvol.io import save_exr, save_png
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 
 def add_parser(sub) -> None:
-    r = blocks.command(sub, "radiosity", help="radiosity of the diffuse scene (patches, "
+    r = options.command(sub, "radiosity", help="radiosity of the diffuse scene (patches, "
                                               "ray-cast form factors, progressive refinement)",
                        description="Mesh SCENE into patches, compute form factors by casting "
                                    "rays through Embree, solve by progressive refinement and "
                                    "show the solution from the camera.  Prints the number of "
                                    "patches, iterations and time.")
-    blocks.scene(r)
-    blocks.output(r, "PNG", "the interpolated (Gouraud) display, sRGB PNG")
+    options.scene(r)
+    options.output(r, "PNG", "the interpolated (Gouraud) display, sRGB PNG")
     r.add_argument("--flat", metavar="PNG", default=None,
                    help="also write the flat display (one colour per patch)")
-    blocks.exr(r, "also write the interpolated display as linear OpenEXR")
+    options.exr(r, "also write the interpolated display as linear OpenEXR")
     r.add_argument("--level", type=int, default=radiosity.DEFAULT_LEVEL, metavar="L",
                    help="subdivision level: patches no longer than the longest triangle edge "
                         f"/ 2^L (default {radiosity.DEFAULT_LEVEL})")
@@ -43,9 +43,9 @@ def add_parser(sub) -> None:
                         f"{radiosity.DEFAULT_TOL:g})")
     r.add_argument("--shots", type=int, default=1, metavar="N",
                    help="patches shot per iteration (default 1: Cohen et al.'s one at a time)")
-    blocks.seed(r, "random seed (default 0)")
-    blocks.backend(r, BACKENDS, "triangle intersection (default: embree)")
-    blocks.memory_budget(r)
+    options.seed(r, "random seed (default 0)")
+    options.backend(r, BACKENDS, "triangle intersection (default: embree)")
+    options.memory_budget(r)
     r.set_defaults(func=command)
 
 
@@ -55,7 +55,7 @@ def command(args) -> int:
         paths["flat"] = Path(args.flat)
     if args.exr:
         paths["exr"] = Path(args.exr)
-    outputs.check(paths, {"image": "-o", "flat": "--flat", "exr": "--exr"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "flat": "--flat", "exr": "--exr"}, "raytrace")
     for flag, value, ok, rule in (("--level", args.level, args.level >= 0, ">= 0"),
                                   ("--rays", args.rays, args.rays >= 1, ">= 1"),
                                   ("--rays", args.rays, args.rays < 1 << 31, "< 2^31 a patch"),
@@ -63,7 +63,7 @@ def command(args) -> int:
                                   ("--shots", args.shots, args.shots >= 1, ">= 1"),
                                   ("--seed", args.seed, args.seed >= 0, ">= 0")):
         if not ok:
-            raise SceneError(flag, f"must be {rule}, got {value}")
+            raise InputError(flag, f"must be {rule}, got {value}")
     scene = load_scene(args.scene)
     memory.check(estimate.radiosity_display(scene, ("exr",) if args.exr else ("png",),
                                             flat=bool(args.flat)),

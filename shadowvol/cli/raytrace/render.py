@@ -13,8 +13,8 @@ from raytrace.outlook.photonmap import KERNELS
 from raytrace.outlook.sampling import FILTERS
 from raytrace.outlook.whitted import render
 from shadowvol import memory
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
+from shadowvol.errors import InputError
 from shadowvol.io import save_exr, save_png, save_png16
 from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
@@ -23,18 +23,18 @@ PATH_SPP = 16  # the path tracer's paths per pixel when --spp is not given
 
 
 def add_parser(sub) -> None:
-    r = blocks.command(sub, "render", help="ray-trace an image (Whitted: shadows, reflection, "
+    r = options.command(sub, "render", help="ray-trace an image (Whitted: shadows, reflection, "
                                            "refraction, Phong)",
                        description="Ray-trace SCENE into an 8-bit sRGB PNG.")
-    blocks.scene(r)
-    blocks.output(r, "PNG", "where to write the image (PNG, sRGB, row 0 at the top)")
+    options.scene(r)
+    options.output(r, "PNG", "where to write the image (PNG, sRGB, row 0 at the top)")
     r.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="reflection/refraction generations; 0 = direct lighting only, as the "
                         "rasterizer draws it (default: the scene's render.max_depth)")
     r.add_argument("--png16", metavar="PNG", default=None,
                    help="also write the image as a 16-bit sRGB PNG")
-    blocks.backend(r, BACKENDS)
-    blocks.memory_budget(r)
+    options.backend(r, BACKENDS)
+    options.memory_budget(r)
     r.add_argument("--no-progress", action="store_true",
                    help="no progress bar (it is shown only on a terminal anyway)")
     r.add_argument("--filter", choices=FILTERS, default="box",
@@ -52,12 +52,12 @@ def add_parser(sub) -> None:
                    help="samples per pixel: path tracing's paths and the photon map's eye "
                         f"rays (default {PATH_SPP}); Whitted's stratified jittered samples, "
                         "see --filter (default 1: the pixel centre, no jitter)")
-    blocks.seed(r, "random seed of the path tracer, the photon map and Whitted's "
+    options.seed(r, "random seed of the path tracer, the photon map and Whitted's "
                    "distributed samples (--spp, roughness, aperture); the same seed gives "
                    "the same image "
                    "(default 0)")
-    blocks.exr(r, "also write the linear image as OpenEXR")
-    blocks.photon(r, KERNELS)
+    options.exr(r, "also write the linear image as OpenEXR")
+    options.photon(r, KERNELS)
     r.set_defaults(func=command)
 
 
@@ -72,13 +72,13 @@ def command(args) -> int:
     for kind in ("exr", "png16"):
         if getattr(args, kind):
             paths[kind] = Path(getattr(args, kind))
-    outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
     if args.max_depth is not None and args.max_depth < 0:
-        raise SceneError("--max-depth", f"must be >= 0, got {args.max_depth}")
+        raise InputError("--max-depth", f"must be >= 0, got {args.max_depth}")
     spp = 1 if args.spp is None else args.spp
     for flag, value, low in (("--spp", spp, 1), ("--seed", args.seed, 0)):
         if value < low:
-            raise SceneError(flag, f"must be >= {low}, got {value}")
+            raise InputError(flag, f"must be >= {low}, got {value}")
     scene = load_scene(args.scene)
     memory.check(estimate.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
@@ -107,10 +107,10 @@ def analytic_rendered(args) -> int:
     for kind in ("exr", "png16"):
         if getattr(args, kind):
             paths[kind] = Path(getattr(args, kind))
-    outputs.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "exr": "--exr", "png16": "--png16"}, "raytrace")
     for flag, value in (("--spp", args.spp), ("--max-depth", args.max_depth)):
         if value is not None:
-            raise SceneError(flag, "not with --integrator analytic (the direct light at the "
+            raise InputError(flag, "not with --integrator analytic (the direct light at the "
                                    "pixel centres)")
     scene = load_scene(args.scene)
     memory.check(estimate.whitted(scene, tuple(paths.keys() - {"image"}) + ("png",)),
@@ -127,14 +127,14 @@ def path_traced(args) -> int:
     paths = {"image": Path(args.output)}
     if args.exr:
         paths["exr"] = Path(args.exr)
-    outputs.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
     spp = PATH_SPP if args.spp is None else args.spp
     for flag, value, low in (("--spp", spp, 1), ("--seed", args.seed, 0)):
         if value < low:
-            raise SceneError(flag, f"must be >= {low}, got {value}")
+            raise InputError(flag, f"must be >= {low}, got {value}")
     depth = args.max_depth
     if depth is not None and depth < 1:
-        raise SceneError("--max-depth", f"must be >= 1 for path tracing, got {depth}")
+        raise InputError("--max-depth", f"must be >= 1 for path tracing, got {depth}")
     scene = load_scene(args.scene)
     memory.check(estimate.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)
@@ -153,7 +153,7 @@ def path_traced(args) -> int:
 def photon_mapped(args) -> int:
     """`raytrace render --integrator photon`."""
     paths = {"image": Path(args.output)} | ({"exr": Path(args.exr)} if args.exr else {})
-    outputs.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
+    output_paths.check(paths, {"image": "-o", "exr": "--exr"}, "raytrace")
     spp = PATH_SPP if args.spp is None else args.spp
     for flag, value, ok, rule in (("--photons", args.photons, args.photons >= 1, ">= 1"),
                                   ("--spp", spp, spp >= 1, ">= 1"),
@@ -163,15 +163,15 @@ def photon_mapped(args) -> int:
                                   ("--light-samples", args.light_samples,
                                    args.light_samples >= 1, ">= 1")):
         if not ok:
-            raise SceneError(flag, f"must be {rule}, got {value}")
+            raise InputError(flag, f"must be {rule}, got {value}")
     if args.knn is not None and args.radius is not None:
-        raise SceneError("--knn", "give --knn or --radius, not both")
+        raise InputError("--knn", "give --knn or --radius, not both")
     try:
         k = photon.DEFAULT_K if args.knn is None else args.knn
         density = photon.Estimate(k=None if args.radius is not None else k,
                                   radius=args.radius, kernel=args.kernel)
     except ValueError as exc:
-        raise SceneError("--radius" if args.radius is not None else "--knn", str(exc)) from None
+        raise InputError("--radius" if args.radius is not None else "--knn", str(exc)) from None
     scene = load_scene(args.scene)
     memory.check(estimate.path_traced(scene, spp, tuple(paths.keys() - {"image"}) + ("png",)),
                  args.memory_budget, args.scene)

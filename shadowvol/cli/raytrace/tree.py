@@ -12,46 +12,45 @@ from raytrace.outlook.estimate import whitted
 from raytrace.outlook.raytree import format_tree, ray_tree
 from raytrace.outlook.whitted import render
 from shadowvol import memory
-from shadowvol.cli import args as blocks
-from shadowvol.cli import outputs, status
+from shadowvol.cli import options, output_paths, status
 from shadowvol.course import raytree_slide
 from shadowvol.course.slides import Layout
+from shadowvol.errors import InputError
 from shadowvol.io import save_png
-from shadowvol.scene import SceneError
 from shadowvol.scenefile import load_scene
 
 
 def add_parser(sub) -> None:
-    t = blocks.command(sub, "tree", help="the ray tree of one pixel (the course's exercise)",
+    t = options.command(sub, "tree", help="the ray tree of one pixel (the course's exercise)",
                        description="Print every ray the Whitted tracer follows for pixel "
                                    "(X, Y) — primary, shadow rays with their verdicts, "
                                    "reflected, refracted, total internal reflection — as an "
                                    "indented tree, and optionally draw the gallery's slide of "
                                    "it: the rays over the render, the tree as boxes beside "
                                    "it.")
-    blocks.scene(t)
+    options.scene(t)
     t.add_argument("--pixel", nargs=2, type=int, required=True, metavar=("X", "Y"),
                    help="column X from the left, row Y from the top")
     t.add_argument("--depth", type=int, default=None, metavar="N",
                    help="reflection/refraction generations (default: the scene's "
                         "render.max_depth)")
-    blocks.output(t, "PNG", "also draw the tree (a 1920x1080 slide): the rays over the "
+    options.output(t, "PNG", "also draw the tree (a 1920x1080 slide): the rays over the "
                             "ray-traced image and one box per ray", required=False)
-    blocks.backend(t, BACKENDS)
-    blocks.memory_budget(t)
+    options.backend(t, BACKENDS)
+    options.memory_budget(t)
     t.set_defaults(func=command)
 
 
 def command(args) -> int:
     """Print the ray tree of one pixel, draw it with -o."""
     if args.output:
-        outputs.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
+        output_paths.check({"picture": Path(args.output)}, {"picture": "-o"}, "raytrace")
     if args.depth is not None and args.depth < 0:
-        raise SceneError("--depth", f"must be >= 0, got {args.depth}")
+        raise InputError("--depth", f"must be >= 0, got {args.depth}")
     scene = load_scene(args.scene)
     x, y = args.pixel
     if not (0 <= x < scene.width and 0 <= y < scene.height):
-        raise SceneError("--pixel", f"{x} {y} is outside the {scene.width}x{scene.height} "
+        raise InputError("--pixel", f"{x} {y} is outside the {scene.width}x{scene.height} "
                                     "image")
     layout = Layout(supersample=1)  # the gallery's slide, its image traced once a pixel
     if args.output:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shadowvol.batch.formats import encoding
+from shadowvol.batch.datasets import encoding
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.io import encode_srgb, png_bytes
 from shadowvol.scene import BACKGROUND, SceneError

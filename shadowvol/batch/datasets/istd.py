@@ -26,7 +26,7 @@ import dataclasses
 
 import numpy as np
 
-from shadowvol.batch.formats import encoding
+from shadowvol.batch.datasets import encoding
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.checks import SceneError
 from shadowvol.io import encode_srgb, png_bytes

@@ -172,7 +172,7 @@ def objects(results: dict) -> list[str]:
         "icosahedra, 20 triangles each, at 64x48 so the draws are small), one point "
         "light, CPU silhouettes: the whole frame and its wall time outside the GL calls "
         "that can wait for the GL (draws, clears, reads, glFinish: "
-        "`frames.python_times`), ms, median (min–max).  The draws are runs of "
+        "`frame_timing.python_times`), ms, median (min–max).  The draws are runs of "
         "triangles, not objects; what is left per object is numpy over every object's "
         "box (the z-fail choice, the overflow check's slack).")
     add("")

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from shadowvol.batch import manifest
-from shadowvol.batch.formats import encoding
+from shadowvol.batch.datasets import encoding
 from shadowvol.batch.store import Unit, Written, made, put
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.scene import Scene, SceneError
@@ -52,7 +52,7 @@ class DatasetStore:
 
     def write(self, unit: Unit, results: Sequence[dict]) -> Written:
         return Written({spec.id: {rel: put(self.out, rel, data)
-                                  for rel, data in result["outputs"].items()}
+                                  for rel, data in result["encoded"].items()}
                         for spec, result in zip(unit.frames, results) if "error" not in result})
 
     def verify(self, unit: Unit, old: dict[str, dict]) -> list[dict] | None:

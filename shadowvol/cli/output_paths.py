@@ -1,4 +1,4 @@
-"""Output paths named on a command line, checked before any work is done.
+"""The output paths a command line names, checked before any work is done.
 
 Each kind of output has the one file format that is written for it, and a path must end in
 that format's suffix: a PNG is never written into `out.jpg`, nor a mask file into `m.png`.
@@ -12,60 +12,40 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from shadowvol.frame import GROUND_TRUTH, LAYERS, check_outputs
-from shadowvol.scene import SceneError, shorten
+from shadowvol.errors import InputError
+from shadowvol.scene import shorten
 
 SUFFIXES = {"image": ".png", "masks": ".npz", "volumes": ".png", "stencil": ".png",
             "json": ".json", "picture": ".png", "exr": ".exr", "flat": ".png", "png16": ".png"}
 
 
-def ground_truth(text: str | None, flag: str = "--outputs", extra: tuple[str, ...] = ()
-                 ) -> tuple[str, ...]:
-    """The ground-truth outputs and intrinsic layers named by a command line's comma-separated
-    list (`all`: the ground truth, `shadowvol.frame.GROUND_TRUTH`; the layers, each a frame or
-    more, by name), in GROUND_TRUTH's then `shadowvol.frame.LAYERS`' order, then those of
-    `extra` (outputs one command has besides, e.g. `shadowvol.frame.EXACT_OUTPUTS`; named only,
-    never in `all`); () for None.  SceneError (exit 2) naming `flag` for an unknown name
-    (`shadowvol.frame.check_outputs`)."""
-    if text is None:
-        return ()
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    if names == ["all"]:
-        return GROUND_TRUTH
-    known = GROUND_TRUTH + LAYERS + tuple(extra)
-    if not names:
-        raise SceneError(flag, f"unknown output {shorten(text)} (a comma-separated list of: "
-                               f"{', '.join(known)}; or all)")
-    return check_outputs(names, known, key=flag)
-
-
-def check(outputs: dict[str, Path], flags: dict[str, str] | None = None,
+def check(paths: dict[str, Path], flags: dict[str, str] | None = None,
           program: str = "shadowvol") -> None:
-    """Raise SceneError (exit 2) for a path whose suffix is not its kind's, or for two kinds
+    """Raise InputError (exit 2) for a path whose suffix is not its kind's, or for two kinds
     naming one file.  `flags` maps a kind to the option that named it (for the message);
     `program`, the command that speaks."""
     flags = flags or {}
     seen: dict[Path, str] = {}
-    for kind, path in outputs.items():
+    for kind, path in paths.items():
         flag = flags.get(kind, kind)
         stream = str(path) == "-" or _is_stream(path)
         want = SUFFIXES[kind]
         if not stream and path.suffix.lower() != want:
-            raise SceneError(flag, f"{str(path)!r} must end in {want} ({program} writes "
+            raise InputError(flag, f"{str(path)!r} must end in {want} ({program} writes "
                                    f"{want[1:].upper()} there and nothing else)")
         key = Path("-") if str(path) == "-" else _resolved(path, flag)
         if key in seen:
-            raise SceneError(flag, f"{str(path)!r} is also the {flags.get(seen[key], seen[key])} "
+            raise InputError(flag, f"{str(path)!r} is also the {flags.get(seen[key], seen[key])} "
                                    "output; give each output its own file")
         seen[key] = kind
 
 
 def _resolved(path: Path, flag: str) -> Path:
-    """The file `path` names, links followed; SceneError for a loop of links."""
+    """The file `path` names, links followed; InputError for a loop of links."""
     try:
         return Path(path).resolve()
     except (RuntimeError, OSError) as exc:   # a loop: RuntimeError before Python 3.13
-        raise SceneError(flag, f"{shorten(str(path))} cannot be written: "
+        raise InputError(flag, f"{shorten(str(path))} cannot be written: "
                                f"{getattr(exc, 'strerror', None) or 'a loop of symbolic links'}"
                          ) from None
 

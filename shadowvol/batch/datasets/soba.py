@@ -29,7 +29,7 @@ import dataclasses
 
 import numpy as np
 
-from shadowvol.batch.formats import encoding
+from shadowvol.batch.datasets import encoding
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.io import encode_srgb, png_bytes
 from shadowvol.scene import BACKGROUND

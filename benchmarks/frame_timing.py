@@ -266,11 +266,11 @@ def pyrender_frames(scene):
     """Yields {"shadowed": fn, "unshadowed": fn}: pyrender 0.1.45 frames of `scene` (its own EGL
     context; each call makes it current and reads colour and depth back, as
     OffscreenRenderer.render always does).  The caller's context is current again after."""
-    from shadowvol.compare import pyrender_peer as pb
+    from shadowvol.compare import pyrender_peer
 
-    pr_scene = pb.to_pyrender(scene)
-    with pb._offscreen(scene.width, scene.height) as pr:
-        shadowed, plain = pb._flags(shadows=True), pb._flags(shadows=False)
+    pr_scene = pyrender_peer.to_pyrender(scene)
+    with pyrender_peer._offscreen(scene.width, scene.height) as pr:
+        shadowed, plain = pyrender_peer._flags(shadows=True), pyrender_peer._flags(shadows=False)
         yield {"shadowed": lambda: pr.render(pr_scene, flags=shadowed),
                "unshadowed": lambda: pr.render(pr_scene, flags=plain)}
 

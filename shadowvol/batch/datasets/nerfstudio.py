@@ -14,7 +14,7 @@
 
 from __future__ import annotations
 
-from shadowvol.batch.formats import encoding
+from shadowvol.batch.datasets import encoding
 from shadowvol.batch.spec import FrameSpec
 from shadowvol.io import encode_srgb, png_bytes
 

@@ -1,4 +1,5 @@
-"""The argument blocks that the subcommands of both tools share, each written once.
+"""The argument blocks that the subcommands of both tools share, each written once, and what
+the shared `--outputs` list names (`outputs_named`).
 
 A block takes the parser and, where commands word it differently, the help or metavar; the
 flags, destinations and defaults stay the block's.  Every subcommand's --help ends with the one
@@ -11,7 +12,9 @@ import argparse
 
 from shadowvol import memory
 from shadowvol.cli import status
-from shadowvol.frame import GROUND_TRUTH, LAYERS
+from shadowvol.errors import InputError
+from shadowvol.frame import GROUND_TRUTH, LAYERS, check_outputs
+from shadowvol.scene import SceneError, shorten
 
 SCENE_HELP = "scene file (.toml or .json)"
 BACKEND_HELP = ("triangle intersection: 'embree' (fast, float32) or 'numpy' (the float64 "
@@ -60,11 +63,34 @@ def memory_budget(p: argparse.ArgumentParser) -> None:
 
 
 def ground_truth(p: argparse.ArgumentParser, help: str) -> None:
-    """`--outputs LIST`: the ground truth added to a mask file (`outputs.ground_truth`)."""
+    """`--outputs LIST`: the ground truth added to a mask file (`outputs_named`)."""
     p.add_argument("--outputs", metavar="LIST", default=None, help=help)
 
 
 GROUND_TRUTH_LIST = ",".join(GROUND_TRUTH + LAYERS)
+
+
+def outputs_named(text: str | None, flag: str = "--outputs", extra: tuple[str, ...] = ()
+                  ) -> tuple[str, ...]:
+    """The ground-truth outputs and intrinsic layers named by a command line's comma-separated
+    list (`all`: the ground truth, `shadowvol.frame.GROUND_TRUTH`; the layers, each a frame or
+    more, by name), in GROUND_TRUTH's then `shadowvol.frame.LAYERS`' order, then those of
+    `extra` (outputs one command has besides, e.g. `shadowvol.frame.EXACT_OUTPUTS`; named only,
+    never in `all`); () for None.  InputError (exit 2) naming `flag` for an unknown name
+    (`shadowvol.frame.check_outputs`)."""
+    if text is None:
+        return ()
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if names == ["all"]:
+        return GROUND_TRUTH
+    known = GROUND_TRUTH + LAYERS + tuple(extra)
+    if not names:
+        raise InputError(flag, f"unknown output {shorten(text)} (a comma-separated list of: "
+                               f"{', '.join(known)}; or all)")
+    try:
+        return check_outputs(names, known, key=flag)
+    except SceneError as exc:   # the model's check, named as a flag of this command line
+        raise InputError(flag, exc.problem) from None
 
 
 def exr(p: argparse.ArgumentParser, help: str, **kwargs) -> None:
