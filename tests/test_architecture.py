@@ -76,9 +76,6 @@ CONFINED = {"moderngl": "shadowvol/raster/", "glcontext": "shadowvol/raster/",
             "argparse": "shadowvol/cli/"}
 PRODUCT = ("shadowvol", "raytrace")
 SIZED = ("shadowvol", "raytrace", "benchmarks")
-# Folders whose imports may still rename a module of ours: shadowvol/raster/ (its three
-# `stencil as stencil_gl`) until its restructuring (issue 37 step 2) names them plainly.
-RENAMES_LEFT = ("shadowvol/raster/",)
 MAX_MODULE_LINES = 500
 MAX_FUNCTION_LINES = 80
 MAX_README_LINES = 200
@@ -252,8 +249,6 @@ def renamed_imports(root: Path) -> list[str]:
     out = []
     for name, path in found.items():
         rel = _rel(root, path)
-        if rel.startswith(RENAMES_LEFT):
-            continue
         for node in ast.walk(ast.parse(path.read_text(), str(path))):
             if isinstance(node, ast.Import):
                 renamed = [(a.name, a.asname) for a in node.names
