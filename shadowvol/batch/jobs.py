@@ -38,6 +38,7 @@ from pathlib import Path
 from shadowvol.batch import job_frames
 from shadowvol.batch import jitter
 from shadowvol.batch.outputs import DEFAULT, OUTPUTS
+from shadowvol.raster.methods import METHODS
 from shadowvol.scene import (
     MAX_MAGNITUDE,
     Scene,
@@ -52,7 +53,6 @@ from shadowvol.scenefile_mesh import check_regular_file, read_regular_file
 KEYS = {"name", "scene", "cameras", "lights", "size", "outputs", "renderer", "method",
         "max_depth", "seed", "jitter"}
 RENDERERS = ("shadowvol", "raytrace")
-METHODS = ("auto", "zpass", "zfail")
 NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
 MAX_JOB_FILE_BYTES = 64 << 20
 MAX_FRAMES_PER_JOB = 10_000_000

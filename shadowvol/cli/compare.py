@@ -12,6 +12,7 @@ from shadowvol import memory
 from shadowvol.cli import options, output_paths, status
 from shadowvol.compare import estimate, pyrender_peer
 from shadowvol.compare.comparison import compare
+from shadowvol.raster import methods
 from shadowvol.errors import InputError
 from shadowvol.io import atomic_write, save_png
 from shadowvol.scene import SceneError
@@ -54,7 +55,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         epilog=EPILOG)
     options.scene(p)
     options.output(p, "PNG", "the picture")
-    p.add_argument("--method", choices=("auto", "zpass", "zfail"), default="auto",
+    p.add_argument("--method", choices=methods.METHODS, default="auto",
                    help="how the rasterizer counts shadow volumes (default: auto)")
     p.add_argument("--json", metavar="FILE", help="also write the numbers as JSON")
     p.add_argument("--max-interior", type=_count, metavar="N",

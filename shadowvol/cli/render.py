@@ -15,7 +15,7 @@ from shadowvol.errors import InputError, OutOfMemory, RenderError
 from shadowvol.frame import GROUND_TRUTH, LAYERS, layer_exrs, save_masks
 from shadowvol.io import encode_srgb, save_exr, save_png, save_png16
 from shadowvol.pictures import ROLE_COLOURS, captioned, heat_maps
-from shadowvol.raster import estimate
+from shadowvol.raster import estimate, methods
 from shadowvol.raster.platform.context import create_context
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight, SceneError, light_samples
@@ -50,13 +50,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     options.scene(p, options.SCENE_HELP + "; several: -o is a directory", nargs="*")
     options.output(p, "PNG|DIR", "where to write the image (one scene: a .png) or the images "
                                 "(several scenes: a directory)")
-    p.add_argument("--method", choices=("auto", "zpass", "zfail"), default="auto",
+    p.add_argument("--method", choices=methods.METHODS, default="auto",
                    help="how volumes are counted: zpass (from the near plane to the surface; "
                         "wrong when the near plane cuts a volume, e.g. the camera stands in a "
                         "shadow), zfail (from the surface to infinity, with caps; always "
                         "right, costs more), auto (z-fail only for casters whose volume the "
                         "near plane may cut; default)")
-    p.add_argument("--silhouettes", choices=("cpu", "gpu"), default="cpu",
+    p.add_argument("--silhouettes", choices=methods.SILHOUETTES, default="cpu",
                    help="where silhouette edges and caps are found: cpu (numpy, per light) "
                         "or gpu (geometry shader over an edge buffer) (default: cpu)")
     p.add_argument("--masks", metavar="NPZ", nargs="?", const=True,

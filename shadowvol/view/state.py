@@ -12,10 +12,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from shadowvol.cameras import camera_to_world, pinhole
+from shadowvol.raster.methods import METHODS
 from shadowvol.scene import AreaLight, Camera, DirectionalLight, Scene
 
 MODES = ("shaded", "roles", "silhouettes", "stencil", "planar", "raytraced", "exact")
-METHODS = ("auto", "zpass", "zfail")
 ORBIT_PER_PIXEL = 0.01       # radians of orbit per pixel dragged
 ZOOM_PER_STEP = 0.9          # the eye's distance scales by this per scroll step
 MIN_PITCH = 0.02             # radians kept between the view direction and the up axis
