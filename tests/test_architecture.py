@@ -462,8 +462,8 @@ def _module_names(found) -> dict[str, list[str]]:
 def unnamed_modules(root: Path) -> list[str]:
     """Every module of the product is named in docs/ARCHITECTURE.md, as a whole word (not the end
     of a longer path): its dotted path or an end of it that no other module shares (`passes`,
-    `raster/estimate`, `outlook.estimate`; a package's ends end with / too); `python -m P` names
-    P/__main__.py."""
+    `raster/estimate`, `outlook.estimate`, a package as `outlook/`), with / or . between the
+    parts; `python -m P` names P/__main__.py."""
     doc = root / "docs" / "ARCHITECTURE.md"
     text = doc.read_text() if doc.exists() else ""
     found = modules(root)
