@@ -8,7 +8,7 @@ per pixel x pixels" or a fixed tile size, read off the code that allocates them 
 call makes and keeps, its staging buffers and its largest temporaries, and the encoders'
 copies).  It counts what grows with the
 image; the process itself (Python, numpy, the GL driver, Embree, the scene's geometry) is the
-fixed `BASE` allowance.  `tests/cli/test_memory_model.py` measures the peak RSS growth (VmHWM)
+fixed `BASE` allowance.  `tests/scene/test_memory_model.py` measures the peak RSS growth (VmHWM)
 of fresh processes and checks the model is an upper bound within a factor of it.
 
 `budget()` is the memory an image may take: `SHADOWVOL_MEMORY_BUDGET` (e.g. "12GiB"), or by

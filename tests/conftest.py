@@ -7,7 +7,8 @@ EGL driver fails loudly: it never skips.
 The `gl` marker: every test under raster/ and compare/, every test that uses `ctx`, and every
 module that says `pytestmark = pytest.mark.gl` needs a GL context; `pytest -m "not gl"` runs
 the rest, and for those the context factory is blocked, so a test that needs GL but is not
-marked fails instead of passing by luck.  Child processes are not covered by that block: run
+marked fails instead of passing by luck.  A module of raster/ or compare/ that says
+`FOLDER_GL = False` renders only through `ctx`: its other tests run unmarked, with GL blocked.  Child processes are not covered by that block: run
 `__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json pytest -m "not gl"` (EGL then finds no
 driver anywhere) to check that no unmarked test starts a process that renders.
 """
@@ -35,7 +36,8 @@ MAX_MISMATCH_FRACTION = 0.001
 def pytest_collection_modifyitems(config, items):
     for item in items:
         folder = Path(str(item.fspath)).parent.name
-        if folder in GL_FOLDERS or {"ctx", "gl_session"} & set(item.fixturenames):
+        by_folder = folder in GL_FOLDERS and getattr(item.module, "FOLDER_GL", True)
+        if by_folder or {"ctx", "gl_session"} & set(item.fixturenames):
             item.add_marker(pytest.mark.gl)
 
 

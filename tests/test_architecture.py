@@ -395,8 +395,126 @@ def broken_references(root: Path) -> list[str]:
     return out
 
 
+# The wings of tests/: a test file lives in the folder of what it tests, read from what it uses.
+# Folder -> the product's modules it holds the tests of (longest prefix wins, as in FLOORS; the
+# model and the base floors are one test wing, `scene`).  tests/system/ holds the whole-product
+# tests, which use the product only as a user does: processes, or the packages' public API.
+TEST_WINGS = {
+    "cli": ("shadowvol.cli",), "batch": ("shadowvol.batch",), "view": ("shadowvol.view",),
+    "course": ("shadowvol.course",), "compare": ("shadowvol.compare",),
+    "raster": ("shadowvol.raster",), "raytrace": ("raytrace",),
+    "raytrace/outlook": ("raytrace.outlook",), "scene": ("shadowvol",),
+    "benchmarks": ("benchmarks",),
+}
+SYSTEM = "system"
+# what `python -m shadowvol` / `python -m raytrace` (or an argv naming a tool) runs
+COMMANDS = {"shadowvol": "shadowvol.cli", "raytrace": "shadowvol.cli"}
+PACKAGES = {"shadowvol", "raytrace"}
+
+
+def wing_of_module(module: str):
+    """The folder of tests/ that holds the tests of one of the project's modules."""
+    best = max(((prefix, folder) for folder, prefixes in TEST_WINGS.items() for prefix in prefixes
+                if module == prefix or module.startswith(prefix + ".")),
+               key=lambda row: len(row[0]), default=(None, None))
+    return best[1]
+
+
+def uses_of(path: Path, known) -> tuple[set[str], set[str]]:
+    """(imported, used) modules of the project by a test file: `imported` its imports (function
+    level too); `used` those, the modules a string names (`python -m benchmarks.run`), and the
+    command line where a string names a tool (`python -m shadowvol`, an argv)."""
+    imported, used = set(), set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            imported |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            imported |= {f"{node.module}.{a.name}" if f"{node.module}.{a.name}" in known
+                         else node.module for a in node.names}
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            if node.value in COMMANDS:
+                used.add(COMMANDS[node.value])
+            elif "." in node.value and node.value in known:
+                used.add(node.value)
+    imported = {m for m in imported if m.split(".")[0] in SIZED}
+    return imported, imported | used
+
+
+def misplaced_tests(root: Path) -> list[str]:
+    """Each tests/<wing>/test_*.py uses a module of its wing (the witness's tests, at the top of
+    tests/raytrace/, none of raytrace/outlook/); each tests/system/ one imports nothing of the
+    product but the packages themselves.  Shared helpers (tests/*.py) and conftest.py are free."""
+    known = modules(root, SIZED)
+    out = []
+    for path in sorted((root / "tests").rglob("test_*.py")):
+        folder = path.parent.relative_to(root / "tests").as_posix()
+        if folder == ".":
+            continue
+        rel = _rel(root, path)
+        imported, used = uses_of(path, known)
+        if folder == SYSTEM:
+            inside = sorted(imported - PACKAGES)
+            if inside:
+                out.append(f"{rel}: a whole-product test imports {', '.join(inside)}: it tests "
+                           f"that module's wing ({wing_of_module(inside[0])}), or the product only "
+                           "through processes and the packages")
+            continue
+        if folder not in TEST_WINGS:
+            out.append(f"{rel}: tests/{folder}/ is no wing of tests/ (TEST_WINGS in tests/"
+                       f"test_architecture.py)")
+            continue
+        wings = {wing_of_module(m) for m in used}
+        if folder not in wings:
+            named = ", ".join(sorted(w for w in wings if w)) or "nothing of the product"
+            out.append(f"{rel}: uses nothing of its wing tests/{folder}/ (it uses: {named}): a "
+                       "test lives in the wing of what it tests")
+        elif folder == "raytrace" and "raytrace/outlook" in wings:
+            outlook = sorted(m for m in used if wing_of_module(m) == "raytrace/outlook")
+            out.append(f"{rel}: a test of the witness uses {', '.join(outlook)}: it is a test of "
+                       "the outlook (tests/raytrace/outlook/)")
+    return out
+
+
+def _module_names(found) -> dict[str, list[str]]:
+    """Module -> the words that name it: its dotted path, and each end of that path no other
+    module shares (`raster.estimate`, `passes`), with / or . between the parts."""
+    ends: dict[str, set[str]] = {}
+    for name in found:
+        parts = name.split(".")
+        for i in range(len(parts)):
+            ends.setdefault(".".join(parts[i:]), set()).add(name)
+    out = {}
+    for name in found:
+        parts = name.split(".")
+        own = [".".join(parts[i:]) for i in range(len(parts))
+               if i == 0 or ends[".".join(parts[i:])] == {name}]
+        out[name] = own + [o.replace(".", "/") for o in own]
+    return out
+
+
+def unnamed_modules(root: Path) -> list[str]:
+    """Every module of the product is named in docs/ARCHITECTURE.md, as a whole word (not the end
+    of a longer path): its dotted path or an end of it that no other module shares (`passes`,
+    `raster/estimate`, `outlook.estimate`, a package as `outlook/`), with / or . between the
+    parts; `python -m P` names P/__main__.py."""
+    doc = root / "docs" / "ARCHITECTURE.md"
+    text = doc.read_text() if doc.exists() else ""
+    found = modules(root)
+    out = []
+    for name, words in _module_names(found).items():
+        if found[name].name == "__main__.py":
+            ok = f"python -m {name.rpartition('.')[0]}" in text
+        else:
+            ok = any(re.search(rf"(?<![\w./]){re.escape(w)}(?![\w])", text) for w in words)
+        if not ok:
+            out.append(f"{_rel(root, found[name])}: module {name} is not named in docs/"
+                       "ARCHITECTURE.md: say where it sits and what it does")
+    return out
+
+
 RULES = [unplaced_modules, upward_imports, import_cycles, confined_imports, witness_imports,
-         witness_apart, renamed_imports, oversized, long_docs, broken_references]
+         witness_apart, renamed_imports, oversized, long_docs, broken_references,
+         misplaced_tests, unnamed_modules]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -439,7 +557,14 @@ def test_a_clean_planted_tree_keeps_every_rule(tmp_path):
                                                                   "from raytrace import masks\n"
                                                                   "import numpy as np\n"
                                                                   "import raytrace.masks as masks\n"
-                                                                  "from raytrace.masks import x as y\n"})
+                                                                  "from raytrace.masks import x as y\n",
+                            "tests/raster/test_passes.py": "from shadowvol.raster import passes\n",
+                            "tests/raytrace/test_masks.py": "import raytrace\n",
+                            "tests/cli/test_help.py": "run('-m', 'shadowvol', '--help')\n",
+                            "tests/system/test_installed.py": "import shadowvol\n",
+                            "docs/ARCHITECTURE.md": "`shadowvol/`: `errors`, `scene`, `raster/` "
+                                                    "(`passes`), `cli/`; `raytrace/`: `masks`, "
+                                                    "`outlook/` (`path/`: `pathtrace`)\n"})
     assert [v for rule in RULES for v in rule(root)] == []
 
 
@@ -506,6 +631,40 @@ PLANTED = {
     "module run": (broken_references, {"docs/x.md": "Run `python -m benchmarks.gone`.\n",
                                        "benchmarks/__init__.py": ""},
                    "docs/x.md:1: runs python -m benchmarks.gone", "does not exist"),
+    "misplaced test": (misplaced_tests, {"tests/cli/test_memory.py": "from shadowvol import memory\n",
+                                         "shadowvol/memory.py": ""},
+                       "tests/cli/test_memory.py: uses nothing of its wing tests/cli/ (it uses: "
+                       "scene)", "the wing of what it tests"),
+    "witness test of the outlook": (misplaced_tests,
+                                    {"tests/raytrace/test_whitted.py":
+                                     "import raytrace\nfrom raytrace.outlook import whitted\n",
+                                     "raytrace/outlook/__init__.py": "",
+                                     "raytrace/outlook/whitted.py": ""},
+                                    "tests/raytrace/test_whitted.py: a test of the witness uses "
+                                    "raytrace.outlook.whitted", "tests/raytrace/outlook/"),
+    "system test inside": (misplaced_tests,
+                           {"tests/system/test_readme.py": "from shadowvol.raster import passes\n",
+                            "shadowvol/raster/passes.py": ""},
+                           "tests/system/test_readme.py: a whole-product test imports "
+                           "shadowvol.raster.passes", "tests that module's wing (raster)"),
+    "test in no wing": (misplaced_tests, {"tests/misc/test_x.py": "import shadowvol\n"},
+                        "tests/misc/test_x.py: tests/misc/ is no wing", "TEST_WINGS"),
+    "module not in ARCHITECTURE.md": (unnamed_modules,
+                                      {"docs/ARCHITECTURE.md": "`shadowvol/`: `errors`, `scene`, "
+                                                               "`raster/` (`passes`), `cli/`; "
+                                                               "`raytrace/`\n",
+                                       "shadowvol/raster/passes.py": "",
+                                       "raytrace/masks.py": ""},
+                                      "raytrace/masks.py: module raytrace.masks is not named",
+                                      "docs/ARCHITECTURE.md"),
+    "shared stem unqualified": (unnamed_modules,
+                                {"docs/ARCHITECTURE.md": "`shadowvol/`: `errors`, `scene`, "
+                                                         "`raster/` (`estimate`), `cli/`; "
+                                                         "`raytrace/`: `raytrace/estimate`\n",
+                                 "shadowvol/raster/estimate.py": "",
+                                 "raytrace/estimate.py": ""},
+                                "shadowvol/raster/estimate.py: module shadowvol.raster.estimate "
+                                "is not named", "ARCHITECTURE.md"),
     "name in a module": (broken_references,
                          {"README.md": "`shadowvol.scene.Gone` is\n"},
                          "README.md:1: names shadowvol.scene.Gone", "does not exist"),

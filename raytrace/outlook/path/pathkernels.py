@@ -18,7 +18,7 @@ reassociates nor contracts to FMA).  The image is then bit-identical to the nump
 no power is taken (Lambertian, mirror and glass materials, every kind of light: the Cornell box,
 the furnace); the glossy lobe's cos^s is the one power computed in a kernel (libm's powf where
 numpy uses its SIMD power), so a glossy scene agrees to float32 rounding, and where that
-rounding flips a Russian-roulette choice a path differs (tests/raytrace/test_pathkernels.py
+rounding flips a Russian-roulette choice a path differs (tests/raytrace/outlook/test_pathkernels.py
 states the budget).  `camera_rays` is `pathtrace.camera_rays` compiled, bit-identical too.
 
 Kernels release the GIL (`nogil`), so `pathtrace.render`'s tiles run on its thread pool;

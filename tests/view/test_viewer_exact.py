@@ -22,7 +22,7 @@ from shadowvol.io import encode_srgb
 from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import AreaLight
 from shadowvol.scenefile import load_scene
-from shadowvol.view import frames
+from shadowvol.view import picture
 from shadowvol.view.app import PANEL_WIDTH
 from shadowvol.view.state import ViewState
 
@@ -84,14 +84,14 @@ def test_the_key_shows_the_exact_frame_beside_the_sampled_one(ctx, session):
     scene = load_scene(SCENES / "soft.toml").replace(width=SIZE[0], height=SIZE[1])
     state = replace(ViewState.of(scene), mode="exact", marker=False)
     with Renderer(scene, ctx) as r:
-        expected = frames.frame(r, state)
+        expected = picture.frame(r, state)
         sampled = encode_srgb(r.render(lights=state.lights).image)
     shot = np.asarray(Image.open(out / "soft.png"))
     assert shot.shape == (SIZE[1], SIZE[0] + PANEL_WIDTH, 3)
     assert (shot[:, :SIZE[0]] == expected).all()
     # the right half is the analytic image of the scene with the view's lights, the left the
     # raster's sampled frame (below the labels' strip)
-    exact = frames.exact_image(scene.replace(lights=state.lights))
+    exact = picture.exact_image(scene.replace(lights=state.lights))
     half, below = SIZE[0] // 2, 24  # under the labels
     assert (expected[below:, half + 1:] == exact[below:, half + 1:]).all()
     assert (expected[below:, :half - 1] == sampled[below:, :half - 1]).all()

@@ -12,6 +12,8 @@ from shadowvol.raster.planar.matrix import (
 )
 from shadowvol.scene import DirectionalLight, PointLight, SpotLight
 
+FOLDER_GL = False  # numpy only: no test here renders (conftest.py)
+
 EXACT = 1e-12       # hand-worked numbers, exact up to float rounding
 GEOMETRY = 1e-9     # on-plane and collinearity residuals for random points (relative to scale)
 

@@ -25,6 +25,8 @@ from shadowvol.raster.renderer import Renderer
 from shadowvol.scene import Camera, DirectionalLight, Material, PointLight, Scene
 from shadowvol.scenefile import load_scene
 
+FOLDER_GL = False  # only the tests that take `ctx` render (conftest.py)
+
 FLOOR = Material(ambient=[0.5, 0.5, 0.5], diffuse=[0.8, 0.8, 0.8], specular=[0, 0, 0])
 BLOCK = Material(ambient=[0.2, 0.3, 0.5], diffuse=[0.3, 0.5, 0.8], specular=[0, 0, 0])
 
