@@ -1,6 +1,7 @@
 """Stress (not a test): SIGINT and SIGTERM at random moments to batch, render and raytrace runs,
 each under faulthandler, looking for a crash in native code (issue "As shipped, nothing lost":
-a SIGSEGV was seen once after a SIGINT to a coco batch, and once after a SIGTERM before).
+a SIGSEGV was seen once after a SIGINT to a coco batch, and once after a SIGTERM before; its
+cause and a reproducer that hits it in a few signals: `benchmarks/signal_in_compile.py`).
 
     python -m benchmarks.stress_signals [--runs 1000] [--seed 0] [--json out.json]
 
@@ -59,6 +60,9 @@ def make_inputs(folder: Path) -> dict[str, list[str]]:
     return {
         "batch coco": ["shadowvol", "batch", jobs, "-o", "{out}", "--format", "coco"],
         "batch files": ["shadowvol", "batch", jobs, "-o", "{out}"],
+        "batch bop": ["shadowvol", "batch", jobs, "-o", "{out}", "--format", "bop"],
+        "batch nerfstudio": ["shadowvol", "batch", jobs, "-o", "{out}", "--format", "nerfstudio"],
+        "batch webdataset": ["shadowvol", "batch", jobs, "-o", "{out}", "--format", "webdataset"],
         "batch 2 workers": ["shadowvol", "batch", jobs, "-o", "{out}", "--workers", "2"],
         "render": ["shadowvol", "render", scene_file, "-o", "{out}/x.png", "--masks",
                    "{out}/x.npz", "--outputs", "all"],
