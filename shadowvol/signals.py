@@ -14,8 +14,8 @@ SIGSEGV), a finalizer, or importlib's lock callback; it answers the signal again
 
 from __future__ import annotations
 
-import _thread
 import contextlib
+import os
 import signal
 import threading
 
@@ -61,11 +61,11 @@ def _unsafe(frame) -> bool:
 
 
 def _again(signum: int) -> None:
-    """The deferred signal once more, in the main thread, unless it was answered meanwhile
-    (`raise_pending`, the end of `handled`) or its handler is no longer Python's (`finished`:
-    `interrupt_main` then does nothing, and `raise_pending` reports it)."""
-    if _Pending.deferred == signum:
-        _thread.interrupt_main(signum)
+    """The deferred signal once more, unless it was answered meanwhile (`raise_pending`, the
+    end of `handled`) or Python no longer catches it (`finished`: the CLI's `raise_pending`
+    reports it).  A real signal, not `_thread.interrupt_main`, which wakes no blocking wait."""
+    if _Pending.deferred == signum and callable(signal.getsignal(signum)):
+        os.kill(os.getpid(), signum)
 
 
 def _handler(signum, frame):
