@@ -123,6 +123,7 @@ def stress(runs: int, seed: int, scratch: Path) -> dict:
     commands = make_inputs(scratch)
     windows = {name: duration(argv, scratch) for name, argv in commands.items()}
     counts: dict[str, Counter] = {name: Counter() for name in commands}
+    statuses: dict[str, Counter] = {name: Counter() for name in commands}  # 0: done first
     crashes = []
     names = sorted(commands)
     for i in range(runs):
@@ -144,6 +145,7 @@ def stress(runs: int, seed: int, scratch: Path) -> dict:
             proc.returncode = HUNG
         kind = outcome(proc.returncode, err, handlers)
         counts[name][kind] += 1
+        statuses[name][proc.returncode] += 1
         if kind != "ok" and kind != "early":
             crashes.append({"command": name, "signal": signal.Signals(signum).name,
                             "delay_s": round(delay, 4), "status": proc.returncode,
@@ -157,7 +159,8 @@ def stress(runs: int, seed: int, scratch: Path) -> dict:
             print(f"stress_signals: {i + 1}/{runs} runs, {bad} not ok", file=sys.stderr,
                   flush=True)
     return {"runs": runs, "seed": seed, "windows_s": {k: round(v, 3) for k, v in windows.items()},
-            "counts": {k: dict(v) for k, v in counts.items()}, "crashes": crashes}
+            "counts": {k: dict(v) for k, v in counts.items()},
+            "statuses": {k: dict(v) for k, v in statuses.items()}, "crashes": crashes}
 
 
 def main(argv=None) -> int:
@@ -169,7 +172,7 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="stress-signals-") as scratch:
         result = stress(args.runs, args.seed, Path(scratch))
     for name, count in result["counts"].items():
-        print(f"{name:18s} {dict(count)}")
+        print(f"{name:18s} {dict(count)} statuses {result['statuses'][name]}")
     for crash in result["crashes"]:
         head = crash["stderr"].strip().splitlines()[:3]
         print(f"{crash['kind']}: {crash['command']} {crash['signal']} after "
