@@ -1,6 +1,7 @@
 """Stress (not a test): SIGINT and SIGTERM at random moments to batch, render and raytrace runs,
 each under faulthandler, looking for a crash in native code (issue "As shipped, nothing lost":
-a SIGSEGV was seen once after a SIGINT to a coco batch, and once after a SIGTERM before).
+a SIGSEGV was seen once after a SIGINT to a coco batch, and once after a SIGTERM before; its
+cause and a reproducer that hits it in a few signals: `benchmarks/signal_in_compile.py`).
 
     python -m benchmarks.stress_signals [--runs 1000] [--seed 0] [--json out.json]
 
@@ -59,6 +60,9 @@ def make_inputs(folder: Path) -> dict[str, list[str]]:
     return {
         "batch coco": ["shadowvol", "batch", jobs, "-o", "{out}", "--format", "coco"],
         "batch files": ["shadowvol", "batch", jobs, "-o", "{out}"],
+        "batch bop": ["shadowvol", "batch", jobs, "-o", "{out}", "--format", "bop"],
+        "batch nerfstudio": ["shadowvol", "batch", jobs, "-o", "{out}", "--format", "nerfstudio"],
+        "batch webdataset": ["shadowvol", "batch", jobs, "-o", "{out}", "--format", "webdataset"],
         "batch 2 workers": ["shadowvol", "batch", jobs, "-o", "{out}", "--workers", "2"],
         "render": ["shadowvol", "render", scene_file, "-o", "{out}/x.png", "--masks",
                    "{out}/x.npz", "--outputs", "all"],
@@ -119,6 +123,7 @@ def stress(runs: int, seed: int, scratch: Path) -> dict:
     commands = make_inputs(scratch)
     windows = {name: duration(argv, scratch) for name, argv in commands.items()}
     counts: dict[str, Counter] = {name: Counter() for name in commands}
+    statuses: dict[str, Counter] = {name: Counter() for name in commands}  # 0: done first
     crashes = []
     names = sorted(commands)
     for i in range(runs):
@@ -140,6 +145,7 @@ def stress(runs: int, seed: int, scratch: Path) -> dict:
             proc.returncode = HUNG
         kind = outcome(proc.returncode, err, handlers)
         counts[name][kind] += 1
+        statuses[name][proc.returncode] += 1
         if kind != "ok" and kind != "early":
             crashes.append({"command": name, "signal": signal.Signals(signum).name,
                             "delay_s": round(delay, 4), "status": proc.returncode,
@@ -153,7 +159,8 @@ def stress(runs: int, seed: int, scratch: Path) -> dict:
             print(f"stress_signals: {i + 1}/{runs} runs, {bad} not ok", file=sys.stderr,
                   flush=True)
     return {"runs": runs, "seed": seed, "windows_s": {k: round(v, 3) for k, v in windows.items()},
-            "counts": {k: dict(v) for k, v in counts.items()}, "crashes": crashes}
+            "counts": {k: dict(v) for k, v in counts.items()},
+            "statuses": {k: dict(v) for k, v in statuses.items()}, "crashes": crashes}
 
 
 def main(argv=None) -> int:
@@ -165,7 +172,7 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="stress-signals-") as scratch:
         result = stress(args.runs, args.seed, Path(scratch))
     for name, count in result["counts"].items():
-        print(f"{name:18s} {dict(count)}")
+        print(f"{name:18s} {dict(count)} statuses {result['statuses'][name]}")
     for crash in result["crashes"]:
         head = crash["stderr"].strip().splitlines()[:3]
         print(f"{crash['kind']}: {crash['command']} {crash['signal']} after "

@@ -6,6 +6,10 @@ their imports (trimesh guards optional imports with `except BaseException`), so 
 the first fraction of a second could vanish and the command finish with status 0; the writer
 therefore asks `raise_pending()` before it renames a file into place, and the CLI asks again
 before it reports success.
+
+The handler never raises where the exception could not propagate (`_unsafe`): inside a Python
+function that C code calls and whose result it does not check (moderngl's, where it was a
+SIGSEGV), a finalizer, or importlib's lock callback; it answers the signal again 10 ms later.
 """
 
 from __future__ import annotations
@@ -25,25 +29,64 @@ class _Pending:
     nested (process facts)."""
     signum: int | None = None
     depth: int = 0
+    deferred: int | None = None  # the signal `_handler` will answer again (`_again`)
 
 
 # Where an exception raised by the handler is not propagated but printed as "Exception ignored
 # in ..." with a traceback: importlib's module-lock weakref callback (`_get_module_lock.cb`),
 # which runs whenever a module lock is collected, during any import.
 _IGNORING = {("<frozen importlib._bootstrap>", "cb")}
+# Modules whose functions C code calls and whose result it does not check: moderngl's
+# `Context.program` (C) calls `_moderngl.make_attribute`, `make_uniform`, ... once per name of
+# the program it linked and stores what comes back unchecked.  A signal that arrives while the
+# driver compiles or links (no bytecode runs then) is answered at the first line of that
+# callback; raised there, it is a NULL that moderngl dereferences: SIGSEGV (seen after a SIGINT
+# to a batch, `benchmarks/signal_in_compile.py` reproduces it in a few signals).
+_CALLED_FROM_C = frozenset({"_moderngl"})
 REDELIVER_S = 0.01  # a signal that lands there comes again this much later
+
+
+def _unsafe(frame) -> bool:
+    """Whether an exception raised in `frame` would be lost or crash the process: a frame of
+    `_IGNORING`, one inside a call from C that does not check it (`_CALLED_FROM_C`), or inside
+    a finalizer (`__del__`: moderngl's objects have one; Python prints what it raises as
+    "Exception ignored in ..." with a traceback, and drops it)."""
+    if frame is not None and (frame.f_code.co_filename, frame.f_code.co_name) in _IGNORING:
+        return True
+    while frame is not None:
+        if frame.f_code.co_name == "__del__" or frame.f_globals.get("__name__") in _CALLED_FROM_C:
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _again(signum: int) -> None:
+    """The deferred signal once more, unless it was answered meanwhile (`raise_pending`, the
+    end of `handled`) or Python no longer catches it (`finished`: the CLI's `raise_pending`
+    reports it).  A real signal, not `_thread.interrupt_main`, which wakes no blocking wait."""
+    if _Pending.deferred == signum and callable(signal.getsignal(signum)):
+        os.kill(os.getpid(), signum)
 
 
 def _handler(signum, frame):
     _Pending.signum = signum
-    if frame is not None and (frame.f_code.co_filename, frame.f_code.co_name) in _IGNORING:
-        # raising here would print a traceback and lose the exception: send the signal again
-        # in a moment, when the main thread is back in code that propagates it
-        timer = threading.Timer(REDELIVER_S, os.kill, (os.getpid(), signum))
+    if _unsafe(frame):
+        # raising here would print a traceback and lose the exception, or crash: answer the
+        # signal again in a moment, when the main thread is back in code that propagates it
+        _Pending.deferred = signum
+        timer = threading.Timer(REDELIVER_S, _again, (signum,))
         timer.daemon = True
         timer.start()
         return
+    _Pending.deferred = None
     raise KeyboardInterrupt() if signum == signal.SIGINT else Terminated()
+
+
+def keyboard_interrupt() -> None:
+    """SIGINT raises KeyboardInterrupt, as Python's own handler does, but never where raising
+    would crash (`_unsafe`): for a process that has no `handled` block, a batch's pool worker
+    (a Ctrl-C in a terminal reaches the whole process group).  Main thread only."""
+    signal.signal(signal.SIGINT, _handler)
 
 
 @contextlib.contextmanager
@@ -63,7 +106,7 @@ def handled(restore: bool = True):
         finally:
             _Pending.depth -= 1
         return
-    _Pending.signum, _Pending.depth = None, 1
+    _Pending.signum, _Pending.depth, _Pending.deferred = None, 1, None
     previous = signal.signal(signal.SIGINT, _handler), signal.signal(signal.SIGTERM, _handler)
     try:
         yield
@@ -74,7 +117,7 @@ def handled(restore: bool = True):
             signal.signal(signal.SIGTERM, previous[1])
             # the block has answered its signal: left pending, it would stop every later atomic
             # write of this process (`raise_pending`), in code that never saw it
-            _Pending.signum = None
+            _Pending.signum = _Pending.deferred = None
 
 
 @contextlib.contextmanager
@@ -125,4 +168,5 @@ def raise_pending() -> None:
     """Raise again an interrupt that arrived and was swallowed on its way up."""
     exc = pending()
     if exc is not None:
+        _Pending.deferred = None  # answered now: not again
         raise exc

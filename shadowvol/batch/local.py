@@ -57,6 +57,7 @@ def _serve(tasks, results, egl_device, environment: dict[str, str], label: str) 
     `results` (its own pipe, so a worker that dies takes no lock with it).  It ends on its own
     when the parent is gone (killed with no chance to stop it)."""
     os.environ.update(environment)  # before GL is loaded: Mesa reads LP_NUM_THREADS then
+    signals.keyboard_interrupt()  # a Ctrl-C while the driver links a program: no SIGSEGV
     parent = multiprocessing.parent_process()
     worker = Worker({}, egl_device, label=label)
     try:

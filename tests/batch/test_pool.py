@@ -159,3 +159,22 @@ def test_a_signal_while_the_workers_start_leaves_none_behind(monkeypatch, capfd,
         assert not process.is_alive(), "a worker was left behind"
     time.sleep(0.5)
     assert "Traceback" not in capfd.readouterr().err
+
+
+def test_a_pool_worker_answers_ctrl_c_with_the_handler_that_waits_for_a_safe_line():
+    """A Ctrl-C in a terminal reaches the pool's workers too.  They had Python's own SIGINT
+    handler, which raises KeyboardInterrupt inside moderngl's callbacks as well: the SIGSEGV
+    of docs/robustness.md ("Signals at random moments").  `_serve` installs `signals`' handler,
+    which answers a signal there 10 ms later (tests/cli/test_signals.py)."""
+    import queue
+
+    from shadowvol import signals
+
+    tasks = queue.Queue()
+    tasks.put(None)  # no work: the worker starts, installs its handlers, and ends
+    previous = signal.getsignal(signal.SIGINT)
+    try:
+        local._serve(tasks, None, None, {}, "a test's worker")
+        assert signal.getsignal(signal.SIGINT) is signals._handler
+    finally:
+        signal.signal(signal.SIGINT, previous)
