@@ -35,7 +35,7 @@ CHILD = """
 import os, signal, sys, time
 from shadowvol import signals
 from shadowvol.raster import glsl
-from shadowvol.raster.context import create_context
+from shadowvol.raster.platform.context import create_context
 ctx = create_context()
 signal.signal(signal.SIGUSR1, lambda *a: os._exit(0))  # the parent's "enough"
 with signals.handled():
