@@ -27,6 +27,7 @@ queries (Embree stops at the first hit before tfar), which trimesh's wrapper doe
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import numpy as np
