@@ -169,12 +169,13 @@ def main(argv=None) -> int:
     print(f"Open3D {open3d.__version__}, {args.runs} rounds; load {load[0]:.1f} -> "
           f"{os.getloadavg()[0]:.1f}; ms median wall / CPU (all threads)")
     print("| scene | triangles | size | lights | " +
-          " | ".join(rows[0]["ms"]) + " | pixels differing |")
-    print("|---|---:|---|---:|" + "---:|" * (len(rows[0]["ms"]) + 1))
+          " | ".join(rows[0]["ms"]) + " | pixels differing | single rays vs packets |")
+    print("|---|---:|---|---:|" + "---:|" * (len(rows[0]["ms"]) + 2))
     for r in rows:
         cells = " | ".join(f"{v['wall']:.0f} / {v['cpu']:.0f}" for v in r["ms"].values())
         print(f"| {r['scene']} | {r['triangles']:,} | {r['size'][0]}x{r['size'][1]} | "
-              f"{r['lights']} | {cells} | {r['pixels_differing']:,} |")
+              f"{r['lights']} | {cells} | {r['pixels_differing']:,} | "
+              f"{r['single_rays_differing']:,} |")
     return 0
 
 
