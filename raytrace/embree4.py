@@ -35,6 +35,7 @@ _NATIVE_RAY = {4: 32, 8: 33, 16: 34}   # RTC_DEVICE_PROPERTY_NATIVE_RAY{4,8,16}_
 
 _lock = threading.Lock()
 _loaded: list = []   # [Library or None], once
+_why: list = []      # [why it is None, or ""]
 
 
 class Library:
@@ -98,9 +99,6 @@ def library() -> Library | None:
                 _loaded.append(None)
                 _why.append(f"Embree 4 library {path}: {exc}")
         return _loaded[0]
-
-
-_why: list = []
 
 
 def why_not() -> str:
