@@ -152,10 +152,15 @@ def measure(scene, runs: int, full: bool = True) -> dict:
                      np.ascontiguousarray(shadow_dir, dtype=np.float32), dist),
     }
     # Sanity: these rays give the same masks (up to float32-vs-float64 decisions of n·l > 0).
+    # The raw casts are embreex's (one rtcIntersect1/rtcOccluded1 a ray), whichever Embree
+    # queries the masks' backend runs (`raytrace.embree`: packets by default).
+    from raytrace.embree import EmbreeBackend
+    single = tracer if isinstance(tracer, EmbreeBackend) else EmbreeBackend(tracer.vertices,
+                                                                            tracer.faces)
     raw_lit = np.zeros(len(o), bool)
-    raw_lit[idx[cand]] = tracer._scene.run(*raw["OCCLUDED"], query="OCCLUDED") == -1
+    raw_lit[idx[cand]] = single._scene.run(*raw["OCCLUDED"], query="OCCLUDED") == -1
     mismatched = int((raw_lit.reshape(lit.shape[1:]) != lit[0]).sum())
-    emb = tracer._scene
+    emb = single._scene
     threads = tracer.threads
     one_light = scene.replace(lights=scene.lights[:1])
 

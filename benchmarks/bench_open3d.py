@@ -7,7 +7,8 @@ bench extra: Embree 4 on all cores): the same pixel-centre primary rays (`raytra
 cast with `cast_rays`, each hit offset 1e-4 of the scene's size along its camera-facing
 normal, one `test_occlusions` ray per light (a segment ending 1e-4 short of a point light).
 Ours: `raytrace.shadow_masks` on a backend built before the clock (and, apart, with the
-build), the rasterizer's mask-only frame is `bench_mitsuba`'s.  The variants take turns round
+build; and with embreex's single rays in place of Embree's packets, `raytrace.embree`, whose
+masks must equal the packets' bit for bit: counted), the rasterizer's mask-only frame is `bench_mitsuba`'s.  The variants take turns round
 by round in one process; medians of wall and CPU time (all threads).  Open3D's masks are not
 exact (the offsets): the pixels where they differ from ours are counted, not judged.
 
@@ -112,20 +113,38 @@ def _timed(fns: dict, runs: int) -> dict:
     return {k: {m: statistics.median(v[m]) for m in ("wall", "cpu")} for k, v in out.items()}
 
 
+def _built(scene, queries: str):
+    """`scene_backend(scene)` with Embree's `queries` ($SHADOWVOL_EMBREE while it is built)."""
+    from raytrace.masks import scene_backend
+    before = os.environ.get("SHADOWVOL_EMBREE")
+    os.environ["SHADOWVOL_EMBREE"] = queries
+    try:
+        return scene_backend(scene)
+    finally:
+        if before is None:
+            del os.environ["SHADOWVOL_EMBREE"]
+        else:
+            os.environ["SHADOWVOL_EMBREE"] = before
+
+
 def measure(scene, runs: int) -> dict:
     from raytrace import shadow_masks
     from raytrace.masks import scene_backend
     peer = Open3DMasks(scene)
-    backend = scene_backend(scene)
+    backend, single = scene_backend(scene), _built(scene, "single")
     ours_lit, ours_cov = shadow_masks(scene, backend)
+    single_lit, single_cov = shadow_masks(scene, single)
     lit, cov = peer()
     times = _timed({"raytrace.shadow_masks (built backend)": lambda: shadow_masks(scene, backend),
+                    "the same, embreex's single rays": lambda: shadow_masks(scene, single),
                     "raytrace.shadow_masks (with its build)": lambda: shadow_masks(scene),
                     "Open3D (built scene)": peer,
                     "Open3D (with its build)": lambda: Open3DMasks(scene)()}, runs)
     return {"scene": scene.name, "triangles": sum(len(o.faces) for o in scene.objects),
             "size": [scene.width, scene.height], "lights": len(scene.lights), "ms": times,
-            "pixels_differing": int((lit != ours_lit).sum() + (cov != ours_cov).sum())}
+            "pixels_differing": int((lit != ours_lit).sum() + (cov != ours_cov).sum()),
+            "single_rays_differing": int((single_lit != ours_lit).sum() +
+                                         (single_cov != ours_cov).sum())}
 
 
 def main(argv=None) -> int:
@@ -150,12 +169,13 @@ def main(argv=None) -> int:
     print(f"Open3D {open3d.__version__}, {args.runs} rounds; load {load[0]:.1f} -> "
           f"{os.getloadavg()[0]:.1f}; ms median wall / CPU (all threads)")
     print("| scene | triangles | size | lights | " +
-          " | ".join(rows[0]["ms"]) + " | pixels differing |")
-    print("|---|---:|---|---:|" + "---:|" * (len(rows[0]["ms"]) + 1))
+          " | ".join(rows[0]["ms"]) + " | pixels differing | single rays vs packets |")
+    print("|---|---:|---|---:|" + "---:|" * (len(rows[0]["ms"]) + 2))
     for r in rows:
         cells = " | ".join(f"{v['wall']:.0f} / {v['cpu']:.0f}" for v in r["ms"].values())
         print(f"| {r['scene']} | {r['triangles']:,} | {r['size'][0]}x{r['size'][1]} | "
-              f"{r['lights']} | {cells} | {r['pixels_differing']:,} |")
+              f"{r['lights']} | {cells} | {r['pixels_differing']:,} | "
+              f"{r['single_rays_differing']:,} |")
     return 0
 
 

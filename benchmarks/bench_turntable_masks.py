@@ -1,7 +1,7 @@
 """Benchmark (not a test): `raytrace.shadow_masks` per view of the turntable, across checkouts.
 
     python -m benchmarks.bench_turntable_masks [--views 36] [--rounds 3]
-           [--against PATH ...] [--json FILE]
+           [--against PATH ...] [--queries auto|packets|single ...] [--json FILE]
 
 The scene: the five shared meshes (../shared/models beside the checkout: bunny, teapot,
 suzanne, spot, lampshade, `scenes.turntable_scene`) on a floor at 640x480, under a point, a
@@ -15,7 +15,9 @@ older commit) is measured in processes of its own that import `raytrace` from it
 turns round by round; each process reports the CPU time (all threads) and the wall time per
 view, and the table gives the medians over all views of all rounds, and each checkout's CPU
 median over this one's.  The scene is built by this file's `benchmarks.scenes` in every
-process, so all see the same triangles.
+process, so all see the same triangles.  `--queries` measures each checkout once per choice
+of Embree queries ($SHADOWVOL_EMBREE in its processes: `raytrace.embree.embree_queries`),
+e.g. `--queries single packets` for embreex's single rays against Embree's packets.
 """
 
 from __future__ import annotations
@@ -62,34 +64,39 @@ print(json.dumps(dict(cpu=cpu, wall=wall, lit=lit, shared=shared,
 """
 
 
-def measure(code: Path, views: int) -> dict:
-    """One process importing raytrace from the checkout `code`: its per-view times."""
+def measure(code: Path, views: int, queries: str | None = None) -> dict:
+    """One process importing raytrace from the checkout `code` (Embree's `queries`, None:
+    as the environment says): its per-view times."""
     child = CHILD.format(code=str(code), scenes=str(ROOT / "benchmarks" / "scenes.py"),
                          views=views)
     env = dict(os.environ, PYTHONPATH=str(code))
+    if queries:
+        env["SHADOWVOL_EMBREE"] = queries
     done = subprocess.run([sys.executable, "-c", child], cwd=code, env=env,
                           capture_output=True, text=True, check=True)
     return json.loads(done.stdout.splitlines()[-1])
 
 
-def run(checkouts: list[Path], views: int, rounds: int) -> dict:
-    """Every checkout measured `rounds` times, taking turns; medians in ms per view."""
-    samples = {str(c): {"cpu": [], "wall": [], "lit": set(), "runs": []} for c in checkouts}
+def run(checkouts: list[Path], views: int, rounds: int, queries=(None,)) -> dict:
+    """Every checkout measured `rounds` times per choice of `queries`, taking turns; medians in
+    ms per view."""
+    variants = [(c, q) for c in checkouts for q in queries]
+    samples = {v: {"cpu": [], "wall": [], "lit": set(), "runs": []} for v in variants}
     for _ in range(rounds):
-        for c in checkouts:
-            r = measure(c, views)
-            s = samples[str(c)]
+        for c, q in variants:
+            r = measure(c, views, q)
+            s = samples[(c, q)]
             s["cpu"] += r["cpu"]
             s["wall"] += r["wall"]
             s["lit"].add(r["lit"])
             s["runs"].append(statistics.median(r["cpu"]) * 1e3)
             shared, triangles = r["shared"], r["triangles"]
-    first = statistics.median(samples[str(checkouts[0])]["cpu"])
+    first = statistics.median(samples[variants[0]]["cpu"])
     rows = []
-    for c in checkouts:
-        s = samples[str(c)]
+    for c, q in variants:
+        s = samples[(c, q)]
         cpu = statistics.median(s["cpu"])
-        rows.append({"checkout": str(c), "commit": _commit(c),
+        rows.append({"checkout": str(c) + (f" ({q})" if q else ""), "commit": _commit(c),
                      "cpu_ms": cpu * 1e3, "wall_ms": statistics.median(s["wall"]) * 1e3,
                      "cpu_ms_per_run": s["runs"], "over_first": cpu / first,
                      "lit_pixels": sorted(s["lit"])})
@@ -123,9 +130,13 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--against", type=Path, nargs="*", default=[],
                     help="other checkouts to measure in the same run (their raytrace)")
+    ap.add_argument("--queries", nargs="*", default=[None],
+                    choices=["auto", "packets", "single"],
+                    help="Embree's queries ($SHADOWVOL_EMBREE), each measured in turn")
     ap.add_argument("--json", type=Path, help="write every number here")
     args = ap.parse_args(argv)
-    result = run([ROOT] + [p.resolve() for p in args.against], args.views, args.rounds)
+    result = run([ROOT] + [p.resolve() for p in args.against], args.views, args.rounds,
+                 args.queries or [None])
     if args.json:
         args.json.write_text(json.dumps(result, indent=1))
     print(table(result))

@@ -27,25 +27,20 @@ queries (Embree stops at the first hit before tfar), which trimesh's wrapper doe
 
 from __future__ import annotations
 
-import os
-import threading
 from concurrent.futures import ThreadPoolExecutor
-from typing import NamedTuple, Protocol
+from typing import NamedTuple
 
 import numpy as np
 
-from shadowvol.errors import require
+from .embree import MIN_RAYS_PER_THREAD, EmbreeBackend, PacketBackend, cpu_threads, embree_backend
+from .intersect import ray_triangle
+from .tolerances import BVH_BOX_PAD_RELATIVE, plane_error64
+from .triangles import Hits, TriangleBackend, TriangleSet
 
-from .intersect import dot, ray_triangle
-from .neargrid import NearGrid
-from .tolerances import (
-    BVH_BOX_PAD_RELATIVE,
-    cross_rows,
-    error_weight,
-    norm_rows,
-    plane_error64,
-    sliver_edges,
-)
+# the names the rest of raytrace/ imports from here
+__all__ = ["BACKENDS", "EmbreeBackend", "Hits", "MIN_RAYS_PER_THREAD", "NumpyBackend",
+           "PacketBackend", "TriangleBackend", "TriangleSet", "cpu_threads", "for_each_tile",
+           "make_backend"]
 
 BACKENDS = ("numpy", "embree")
 
@@ -56,88 +51,13 @@ BVH_LEAF_SIZE = 32
 MAX_PAIRS_PER_BATCH = 1 << 18
 
 
-class Hits(NamedTuple):
-    """Closest hits of n rays.
-
-    t   : (n,) float, the dtype of the rays' origins: distance along the ray in units of
-          |direction|; np.inf for a miss
-    tri : (n,) int64, index of the hit triangle in `faces`; -1 for a miss
-    """
-
-    t: np.ndarray
-    tri: np.ndarray
-
-
-class TriangleBackend(Protocol):
-    normals: np.ndarray  # (M, 3) float64 unit face normals, plane_d (M,): see TriangleSet
-    plane_d: np.ndarray
-
-    def closest_triangle(self, origins: np.ndarray, directions: np.ndarray,
-                         tmax: np.ndarray | float | None = None, parallel: bool = True
-                         ) -> np.ndarray: ...
-
-    def closest_hit(self, origins: np.ndarray, directions: np.ndarray,
-                    tmax: np.ndarray | float | None = None, parallel: bool = True) -> Hits: ...
-
-    def occluded(self, origins: np.ndarray, directions: np.ndarray,
-                 tmax: np.ndarray | float | None = None, parallel: bool = True
-                 ) -> np.ndarray: ...
-
-    def first_hit(self, origins: np.ndarray, directions: np.ndarray,
-                  tmax: np.ndarray | float | None = None) -> Hits: ...
-
-    def occluded_leaving(self, origins: np.ndarray, directions: np.ndarray,
-                         tmax: np.ndarray, own: np.ndarray) -> np.ndarray: ...
-
-
-class TriangleSet:
-    """The triangles a backend traces, with what every backend needs in float64.
-
-    vertices : (N, 3) float64;  faces : (M, 3) int64.
-    normals  : (M, 3) float64 unit face normals by winding, (b − a) × (c − a) normalised
-               (zero for degenerate triangles);  plane_d : (M,) float64, normals · a.
-    weight   : (M,) float64, `tolerances.error_weight`;  fragile : (M,) bool,
-               `tolerances.is_sliver` (what the masks need per triangle).
-    """
-
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
-        self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
-        self.faces = np.ascontiguousarray(faces, dtype=np.int64)
-        tri = self.vertices[self.faces]
-        e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-        n = cross_rows(e1, e2)
-        area2 = norm_rows(n)
-        length = area2[:, None]
-        self.normals = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
-        self.plane_d = dot(self.normals, tri[:, 0])
-        # what the masks need per triangle (`raytrace.tolerances`), from the same corners
-        self.weight = error_weight(self.normals, tri)
-        self.fragile = sliver_edges(e1, e2, tri[:, 2] - tri[:, 1], area2)  # = is_sliver(tri)
-
-    def __len__(self) -> int:
-        return len(self.faces)
-
-    def refine(self, origins: np.ndarray, directions: np.ndarray, tri: np.ndarray) -> np.ndarray:
-        """Distance t (n,) to the plane of triangle `tri` (n,) int (-1 = miss -> inf): the
-        ray–plane formula, in the dtype of `origins` (float32 or float64), whatever precision
-        chose the triangle."""
-        dtype = np.float32 if origins.dtype == np.float32 else np.float64
-        t = np.full(len(tri), np.inf, dtype)
-        hit = np.flatnonzero(tri >= 0)
-        k = tri[hit]
-        n = self.normals[k].astype(dtype, copy=False)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            th = (self.plane_d[k].astype(dtype) - dot(n, origins[hit])) / dot(n, directions[hit])
-        t[hit] = np.where(np.isfinite(th), th, 0.0)  # a ray inside a triangle's plane: t ~ 0
-        return t
-
-
 def make_backend(name: str, vertices: np.ndarray, faces: np.ndarray) -> TriangleBackend:
-    """A backend by name ("numpy" or "embree") for the triangles (vertices, faces)."""
+    """A backend by name ("numpy" or "embree") for the triangles (vertices, faces); "embree"
+    is Embree's packets or its single rays, as `raytrace.embree.embree_backend` chooses."""
     if name == "numpy":
         return NumpyBackend(vertices, faces)
     if name == "embree":
-        return EmbreeBackend(vertices, faces)
+        return embree_backend(vertices, faces)
     raise ValueError(f"unknown backend {name!r} (one of: {', '.join(BACKENDS)})")
 
 
@@ -307,18 +227,6 @@ class NumpyBackend(TriangleSet):
         return tri_best >= 0
 
 
-# ---------------------------------------------------------------------------------------------
-# Embree
-# ---------------------------------------------------------------------------------------------
-
-def cpu_threads() -> int:
-    """How many cores this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not Linux
-        return max(1, os.cpu_count() or 1)
-
-
 def for_each_tile(work, tiles: list, tracer) -> None:
     """work(tile) for every tile, on a pool of the tracer's `threads` (at most one per tile;
     Embree and numpy's large operations release the GIL); a tile's exception is raised here."""
@@ -329,99 +237,3 @@ def for_each_tile(work, tiles: list, tracer) -> None:
     else:
         with ThreadPoolExecutor(threads) as pool:
             list(pool.map(work, tiles))  # list(): re-raises a tile's exception here
-
-
-# Below this many rays the thread pool costs more than it saves.
-MIN_RAYS_PER_THREAD = 4096
-
-
-class EmbreeBackend(TriangleSet):
-    """Embree (float32) through embreex.  Rays are split into one contiguous chunk per core and
-    traced on a thread pool (embreex releases the GIL while tracing)."""
-
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray, threads: int | None = None):
-        super().__init__(vertices, faces)
-        rtcore_scene = require("embreex.rtcore_scene", "the Embree backend (or backend "
-                               "'numpy', for small scenes)", package="embreex")
-        TriangleMesh = require("embreex.mesh_construction", "the Embree backend",
-                               package="embreex").TriangleMesh
-        # float32: Embree's only vertex format.
-        self._scene = rtcore_scene.EmbreeScene()
-        TriangleMesh(self._scene, self.vertices.astype(np.float32),
-                     self.faces.astype(np.int32))
-        self.threads = threads or cpu_threads()
-        # embreex commits the scene (builds the BVH) lazily in the first run(); do it now, so
-        # that threads never race to do it and the build is not billed to the first trace.
-        self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
-        self._near: NearGrid | None = None  # built on first use (occluded_leaving)
-        self._near_lock = threading.Lock()
-
-    def _run(self, origins, directions, dists, query: str, parallel: bool) -> np.ndarray:
-        """Trace; returns primID (INTERSECT) or geomID (OCCLUDED), int32 (n,), -1 for a miss /
-        an unoccluded ray.  origins (n, 3); directions (n, 3), or (1, 3): one for all rays;
-        dists : None (unbounded), a float, or (n,): each ray's tfar.
-        With `parallel`, in one contiguous chunk per core on a thread pool."""
-        # float32: Embree's only ray format.  No copy for float32 input, strided or not:
-        # embreex reads its arguments through strided buffers.
-        o = np.asarray(origins, dtype=np.float32)
-        d = np.asarray(directions, dtype=np.float32)
-        n = len(o)
-        if dists is not None and np.ndim(dists) == 0:
-            dists = min(float(dists), 1e37)  # 1e37: embreex's own "no bound"; float32-safe
-        elif dists is not None:
-            dists = np.minimum(np.asarray(dists, dtype=np.float32), np.float32(1e37))
-        chunks = min(self.threads, max(1, n // MIN_RAYS_PER_THREAD)) if parallel else 1
-        if chunks == 1:
-            return self._scene.run(o, d, dists=dists, query=query)
-
-        def run(part: slice) -> np.ndarray:
-            bound = dists if dists is None or np.ndim(dists) == 0 else dists[part]
-            return self._scene.run(o[part], d if len(d) == 1 else d[part], dists=bound,
-                                   query=query)
-
-        bounds = np.linspace(0, n, chunks + 1).astype(int)
-        with ThreadPoolExecutor(chunks) as pool:
-            return np.concatenate(list(pool.map(run, [slice(a, b) for a, b in
-                                                      zip(bounds[:-1], bounds[1:])])))
-
-    def closest_triangle(self, origins, directions, tmax=None, parallel=True) -> np.ndarray:
-        """Index (n,) int64 of the nearest triangle hit at 0 < t < tmax, -1 for none.
-        origins, directions : (n, 3) float64 or float32 (traced in float32 either way);
-        tmax : None, float or (n,)."""
-        return self._run(origins, directions, tmax, "INTERSECT", parallel).astype(np.int64)
-
-    def closest_hit(self, origins, directions, tmax=None, parallel=True) -> Hits:
-        """`closest_triangle` and t, the ray–plane distance to it in the dtype of `origins`."""
-        o, d = np.asarray(origins), np.asarray(directions)
-        tri = self.closest_triangle(o, d, tmax, parallel)
-        return Hits(self.refine(o, d, tri), tri)
-
-    def first_hit(self, origins, directions, tmax=None) -> Hits:
-        """The nearest hit at 0 < t < tmax as Embree computes it (float32, on one thread):
-        t (n,) float32, Embree's own tfar (inf for none), and tri (n,) int64 (-1 for none).
-        directions : (n, 3) or (1, 3)."""
-        o = np.asarray(origins, dtype=np.float32)
-        d = np.asarray(directions, dtype=np.float32)
-        if len(d) == 1 and len(o) > 1:
-            d = np.broadcast_to(d, o.shape)
-        dists = None if tmax is None else np.minimum(np.asarray(tmax, np.float32),
-                                                     np.float32(1e37))
-        out = self._scene.run(o, d, dists=dists, query="INTERSECT", output=1)
-        tri = out["primID"].astype(np.int64)
-        return Hits(np.where(tri >= 0, out["tfar"], np.float32(np.inf)), tri)
-
-    def occluded(self, origins, directions, tmax=None, parallel=True) -> np.ndarray:
-        """(n,) bool: does the ray hit any triangle at 0 < t < tmax (None: anywhere)?  A bounded
-        Embree occlusion query: it stops at the first hit and never looks past tmax.
-        directions : (n, 3), or (1, 3) for one direction shared by all rays."""
-        return self._run(origins, directions, tmax, "OCCLUDED", parallel) != -1
-
-    def occluded_leaving(self, origins, directions, tmax, own) -> np.ndarray:
-        """`NumpyBackend.occluded_leaving` on the same triangles, float64: the walk's test on
-        the triangles whose padded boxes the pieces' boxes touch (`raytrace.neargrid`: the
-        pieces a grazing shadow ray's lift skips are short, and meet few).  The grid is built
-        on the first call, once, whichever thread makes it."""
-        with self._near_lock:
-            if self._near is None:
-                self._near = NearGrid(self.vertices, self.faces, self.fragile)
-        return self._near.occluded_leaving(self, origins, directions, tmax, own)

@@ -1,6 +1,8 @@
 """The two triangle backends (numpy float64 reference, Embree float32) give the same answers, and
 a ray leaving a surface with the shadow-ray offset never hits that surface again."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -105,6 +107,25 @@ def test_embree_thread_split_changes_nothing():
     o, d = random_rays(rng, 50000)
     assert np.array_equal(emb.closest_triangle(o, d, parallel=True),
                           emb.closest_triangle(o, d, parallel=False))
+
+
+def test_without_packets_embree_falls_back_to_single_rays_said_once(monkeypatch):
+    """numba or the library missing: the "embree" backend is embreex's single rays, and the
+    process is told once; asked for by name, the packets' absence is a MissingExtra."""
+    from raytrace import embree
+    from shadowvol.errors import MissingExtra
+    monkeypatch.setattr(embree, "_packets_missing", lambda: "numba: No module named 'numba'")
+    monkeypatch.setattr(embree, "_fallback_said", [])
+    monkeypatch.delenv("SHADOWVOL_EMBREE", raising=False)
+    v, f = random_soup(np.random.default_rng(0), m=4)
+    with pytest.warns(RuntimeWarning, match="packet queries unavailable .*numba"):
+        assert type(make_backend("embree", v, f)) is EmbreeBackend
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert type(make_backend("embree", v, f)) is EmbreeBackend   # said once
+    monkeypatch.setenv("SHADOWVOL_EMBREE", "packets")
+    with pytest.raises(MissingExtra, match=r"shadowvol\[fast\]"):
+        make_backend("embree", v, f)
 
 
 def test_unknown_backend():
