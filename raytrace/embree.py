@@ -215,11 +215,19 @@ def embree_queries(choice: str | None = None) -> str:
         return "packets"
     if choice == "packets":
         raise MissingExtra(f"{where}=packets (Embree's packet queries: {why})", "numba", "fast")
-    if not _fallback_said:
+    if not _fallback_said and _embreex_loads():   # no embreex: its own error says so, alone
         _fallback_said.append(why)
         warnings.warn(f"Embree's packet queries unavailable ({why}): tracing single rays "
                       f"(embreex)", RuntimeWarning, stacklevel=2)
     return "single"
+
+
+def _embreex_loads() -> bool:
+    try:
+        import embreex  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
 def _packets_missing() -> str:

@@ -40,8 +40,10 @@ from shadowvol.scene import Scene, SceneError
 ENV = "SHADOWVOL_MEMORY_BUDGET"
 DEFAULT_FRACTION = 0.75
 # the process before the image: interpreter, numpy, Pillow, the GL driver's context and its
-# compiled shaders, Embree's threads (measured: 110-200 MiB; kept apart from the image's terms)
-BASE = 256 << 20
+# compiled shaders, Embree's threads, and with Embree's packets numba, llvmlite and the compiled
+# kernels (measured, VmHWM after a 16x12 `shadowvol compare` of scenes/stack.toml: 213 MiB with
+# single rays, 314 MiB with the packets; kept apart from the image's terms)
+BASE = 384 << 20
 
 # renderers that keep their "GPU" memory in the process's own memory
 SOFTWARE_GL = ("llvmpipe", "softpipe", "swrast", "lavapipe")
