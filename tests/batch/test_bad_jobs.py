@@ -111,8 +111,10 @@ def test_a_frame_over_the_memory_budget_is_refused_and_the_others_go_on(tmp_path
     jobs = write_jobs(tmp_path / "jobs.jsonl", [small, big])
     scene = load_scene(small["scene"]).replace(width=2000, height=1500)
     need = estimate.render(scene, written=("png", "masks")).total + memory.BASE
-    out = tmp_path / "out"
-    summary = batch.run(jobs, out, progress=False, memory_budget=need // 2)
+    fits = estimate.render(scene.replace(width=32, height=24),
+                           written=("png", "masks")).total + memory.BASE
+    out = tmp_path / "out"      # a budget the small frame fits and the big one does not
+    summary = batch.run(jobs, out, progress=False, memory_budget=(fits + need) // 2)
     assert (summary.rendered, summary.failed, summary.status) == (1, 1, status.BAD_INPUT)
     record = [json.loads(line) for line in (out / "manifest.jsonl").read_text().splitlines()
               if "big" in line][0]
