@@ -215,19 +215,13 @@ def embree_queries(choice: str | None = None) -> str:
         return "packets"
     if choice == "packets":
         raise MissingExtra(f"{where}=packets (Embree's packet queries: {why})", "numba", "fast")
-    if not _fallback_said and _embreex_loads():   # no embreex: its own error says so, alone
+    from . import embree4
+    # no embreex at all: the single rays' own error (MissingExtra) says so, alone
+    if not _fallback_said and embree4.embreex_module() is not None:
         _fallback_said.append(why)
         warnings.warn(f"Embree's packet queries unavailable ({why}): tracing single rays "
                       f"(embreex)", RuntimeWarning, stacklevel=2)
     return "single"
-
-
-def _embreex_loads() -> bool:
-    try:
-        import embreex  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 def _packets_missing() -> str:

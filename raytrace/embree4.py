@@ -75,11 +75,19 @@ class Library:
         self.occluded = fn(f"rtcOccluded{self.width}", None, word, word, word, word)
 
 
-def library_path() -> str | None:
-    """The path of the Embree 4 library inside the embreex wheel, or None."""
+def embreex_module():
+    """The embreex package, or None where it is not installed."""
     try:
         import embreex
     except ImportError:
+        return None
+    return embreex
+
+
+def library_path() -> str | None:
+    """The path of the Embree 4 library inside the embreex wheel, or None."""
+    embreex = embreex_module()
+    if embreex is None:
         return None
     here = os.path.dirname(os.path.dirname(os.path.abspath(embreex.__file__)))
     found = sorted(glob.glob(os.path.join(here, "embreex.libs", "libembree4*.so*")))
