@@ -88,6 +88,11 @@ def frame(name: str, scene: Scene) -> None:
 def main() -> None:
     width = int(sys.argv[1]) if len(sys.argv) > 1 else 96
     print(f"load {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    # warm up first (imports, GEOS, the kernels' compilation), so the first frame's times are
+    # its own
+    tiny = load_scene("scenes/soft.toml").replace(width=8, height=6)
+    exact_soft.exact_visibility(tiny)
+    soft_masks(tiny)
     frame("soft.toml", load_scene("scenes/soft.toml").replace(width=width,
                                                               height=width * 3 // 4))
     frame("blob", blob_scene(48))

@@ -7,11 +7,12 @@ an edge (the same two welded corners) and lie on its two sides (each ring turned
 clockwise, they run it in opposite directions), every point near that edge's inside is
 covered: the edge is not on the union's boundary.  What is left (the other edges of those
 shadows, and every edge of a cut shadow) holds the whole boundary of the union: GEOS nodes
-it, snap-rounded to the light's grid (`lightshapes.OVERLAY_GRID`, as every other boolean
-here), and polygonizes it into faces that the boundary does not cross, so each face is
+it in float64 (its robust overlay: floating noding, checked fully noded, snap-rounding only
+where that fails; the union is snapped to the light's grid, `lightshapes.OVERLAY_GRID`, where
+it is next united or taken away, as every other boolean here), and polygonizes it into faces that the boundary does not cross, so each face is
 wholly inside the union or wholly outside: the faces whose interior point meets a piece of
 some area (closed: a point on an edge left out is inside both of its shadows) are the union,
-which GEOS's coverage union joins.  The same region as the pieces' union (up to the snapping
+which GEOS's coverage union joins.  The same region as the pieces' union (up to the roundings
 and to slivers of a rounding between shadows of one corner), from a few hundred edges
 instead of a cascade of thousands of overlays.
 """
@@ -45,8 +46,7 @@ def unions(shapely, light: FramedLight, corners: np.ndarray, p: np.ndarray, flat
 
     def one(k: int):
         q, at = heavy[starts[k]:ends[k]], slice(starts[k], ends[k])
-        return union(shapely, flat[q], count[q], loose[at], free[at], welded[tri[q]],
-                     light.grid, box)
+        return union(shapely, flat[q], count[q], loose[at], free[at], welded[tri[q]], box)
 
     threads = min(THREADS or cpu_threads(), len(starts))
     united = np.empty(len(starts), object)
@@ -59,12 +59,13 @@ def unions(shapely, light: FramedLight, corners: np.ndarray, p: np.ndarray, flat
 
 
 def union(shapely, flat: np.ndarray, count: np.ndarray, uncut: np.ndarray, free: np.ndarray,
-          ids: np.ndarray, grid: float, box: np.ndarray):
+          ids: np.ndarray, box: np.ndarray):
     """The union (a shapely geometry) of the shadows of one pixel's triangles: cut to the
     pyramid, corners flat (q, k, 2), count (q,); where free (q,) their whole shadows uncut
     (q, 3, 2) instead (`pyramid.uncut`: the same inside the light's outline, and only that
-    part is ever used), ids (q, 3) their welded corners' indices; snap-rounded to `grid`; box (2, 2): the corners of a
-    rectangle that holds the light (the union's part there is exact; outside, it is cut to it)."""
+    part is ever used), ids (q, 3) their welded corners' indices (noded in float64: the
+    module); box (2, 2): the corners of a rectangle that holds the light (the union's part
+    there is exact; outside, it is cut to it)."""
     polys = np.empty(len(flat), object)
     polys[free] = shapely.polygons(uncut[free])
     cut = np.flatnonzero(~free)
@@ -99,7 +100,10 @@ def union(shapely, flat: np.ndarray, count: np.ndarray, uncut: np.ndarray, free:
     frame = shapely.box(*box[0], *box[1])
     lines = shapely.clip_by_rect(shapely.multilinestrings(
         shapely.get_parts(np.concatenate(lines))), *box[0], *box[1])
-    noded = shapely.union_all([lines, shapely.boundary(frame)], grid_size=grid)
+    # noded in float64 by GEOS's robust overlay (floating noding, checked, snap-rounding only
+    # where that fails): a quarter of the snap-rounding noder's time on a few hundred edges;
+    # the union is snapped to the light's grid where it is next united or taken away
+    noded = shapely.union_all([lines, shapely.boundary(frame)])
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
     if len(faces) == 0:
         return shapely.Polygon()
