@@ -1,6 +1,7 @@
 """The `shadowvol` command: one module per subcommand, each with `add_parser(subparsers)`.
 
     shadowvol render SCENE -o out.png [--masks out.npz] [--volumes v.png] [--stencil s.png]
+    shadowvol masks SCENE -o masks.npz [--renderer auto|shadowvol|raytrace] [--png m.png]
     shadowvol compare SCENE -o cmp.png [--pyrender] [--max-interior N]
     shadowvol planar SCENE -o out.png [--receiver NAME] [--masks m.npz]
     shadowvol demo -o DIR [--size WxH] [--small]
@@ -24,6 +25,7 @@ from shadowvol.cli import (
     compare,
     course,
     demo,
+    masks,
     options,
     planar,
     render,
@@ -33,7 +35,7 @@ from shadowvol.cli import (
     view,
 )
 
-COMMANDS = (render, planar, shadow2d, compare, shadowmap, demo, view, batch, course)
+COMMANDS = (render, masks, planar, shadow2d, compare, shadowmap, demo, view, batch, course)
 
 
 def build_parser() -> argparse.ArgumentParser:
