@@ -7,7 +7,8 @@ Per scene, the masks the command writes (`shadowvol.compare.fastest.masks`: the 
 mask-only frame with its Renderer built, the ray tracer with its BVH built, as one command
 makes them) by each renderer in turn, round by round after a warm-up, wall ms medians; the
 cost model's estimates (`fastest.costs`) and choice (`fastest.choose`); and what the choice
-costs against the faster one measured (1.00: it chose the faster).  Then the model's
+costs against the faster one measured (1.00: it chose the faster), all after a warm-up (the
+model's `first=False`: a fresh process's one-off costs are not in these times).  Then the model's
 constants fitted again to this run (non-negative least squares), to compare with those in
 `shadowvol.compare.fastest`.
 """
@@ -62,7 +63,8 @@ def measure(scene, ctx, runs: int) -> dict:
             fastest.masks(scene, renderer, ctx)
             times[renderer].append((time.perf_counter() - start) * 1e3)
     sizes = fastest.scene_sizes(scene)
-    choice = fastest.choose("auto", *sizes, ctx.info["GL_RENDERER"], fastest.ray_queries())
+    choice = fastest.choose("auto", *sizes, ctx.info["GL_RENDERER"], fastest.ray_queries(),
+                            first=False)   # warmed up: the one-off costs are paid
     ms = {r: statistics.median(v) for r, v in times.items()}
     return {"scene": scene.name or "scene", "triangles": sizes[0], "pixels": sizes[1],
             "lights": sizes[2], "ms": ms, "model": [choice.raster_ms, choice.raytrace_ms],
@@ -80,9 +82,10 @@ def fit(rows: list[dict]) -> dict:
                                                                        "lights"))
     raster = np.array([r["ms"]["shadowvol"] for r in rows]) * 1e6
     rays = np.array([r["ms"]["raytrace"] for r in rows]) * 1e6
-    a, _ = nnls(np.stack([T * L, P * L], axis=1), raster)
+    a, _ = nnls(np.stack([np.full_like(T, 1e6), T, T * L, P * L], axis=1), raster)
     b, _ = nnls(np.stack([T, P * (1 + fastest.SHADOW_RAY_SHARE * L)], axis=1), rays)
-    return {"RASTER_NS_PER_TRIANGLE_LIGHT": a[0], "RASTER_NS_PER_PIXEL_LIGHT": a[1],
+    return {"RASTER_MS": a[0], "RASTER_NS_PER_TRIANGLE": a[1],
+            "RASTER_NS_PER_TRIANGLE_LIGHT": a[2], "RASTER_NS_PER_PIXEL_LIGHT": a[3],
             "RAYS_NS_PER_TRIANGLE": b[0], "RAYS_NS_PER_RAY": b[1]}
 
 

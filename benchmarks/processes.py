@@ -92,6 +92,14 @@ EXTRAS = (
      "RaycastingScene and Mitsuba 3 llvm_ad_rgb (optional peers: the bench extra) on 100k, 1M, "
      "two bunnies and 4 turntable views; the ground truth against the masks, ns per ray, "
      "1 -> 2 threads (issue: rays at full speed)"),
+    ("bench_packets.py", ["--json", "{json}"],
+     "ns a ray of Embree's packets (rtcIntersect16/rtcOccluded16 driven by numba) against "
+     "embreex's single rays, the same rays and answers, 1 and 2 threads (issue: rays at full "
+     "speed)"),
+    ("bench_fastest.py", ["--json", "{json}"],
+     "`shadowvol masks --renderer auto` against the renderer it did not choose, scenes of 1k to "
+     "1M triangles and 1 to 144 hard lights, and the cost model fitted again (issue: rays at "
+     "full speed)"),
     ("bench_exact_soft.py", [],
      "exact soft shadows (raytrace.exact_soft) against counting 64, 256 and 1,024 samples on "
      "scenes/soft.toml, a closed non-convex mesh of 5,120 triangles and the bunny under a rect "

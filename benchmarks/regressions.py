@@ -63,12 +63,44 @@ def ratios(results: dict) -> dict[str, Ratio]:
     for row in (results.get("raytrace") or {}).get("masks", []):
         out[f"raytrace {row['scene']}: shadow_masks / raw Embree casts of its rays"] = Ratio(
             row["masks"]["median"] / row["raw"]["median"], True)
+    out.update(extras_ratios(results))
     truth = results.get("groundtruth") or {}
     for renderer, base in (("raster", "frame"), ("raytrace", "shadow_masks")):
         times = truth.get(renderer) or {}
         if base in times and "+ all" in times:
             out[f"ground truth {renderer}: + all / {base}"] = Ratio(
                 times["+ all"]["median"] / times[base]["median"], True)
+    return out
+
+
+def _extra(results: dict, script: str) -> dict:
+    """What the extra `script` (`benchmarks.processes.EXTRAS`) wrote to its --json, or {}."""
+    for row in results.get("extras") or []:
+        if row.get("script") == script and isinstance(row.get("results"), dict):
+            return row["results"]
+    return {}
+
+
+def extras_ratios(results: dict) -> dict[str, Ratio]:
+    """The ratios of the other benchmark modules that measure two variants in one run: Embree's
+    packets against its single rays (`bench_packets`), our masks against the best peer
+    (`bench_peers`), auto's choice against the faster renderer (`bench_fastest`)."""
+    out: dict[str, Ratio] = {}
+    rows = {(r["rays"], r["backend"], r["threads"]): r
+            for r in _extra(results, "bench_packets.py").get("rows", [])}
+    for (rays, backend, threads), r in rows.items():
+        if backend == "packets" and (rays, "single", threads) in rows:
+            out[f"bench_packets {rays}, {threads} threads: single / packets (wall)"] = Ratio(
+                rows[rays, "single", threads]["wall_ns"] / r["wall_ns"], False)
+    for r in _extra(results, "bench_peers.py").get("scenes", []):
+        ms = {k: v["wall"] for k, v in r["ms"].items()}
+        peer = min((ms[k] for k in ("Open3D", "Mitsuba 3") if k in ms), default=None)
+        if peer:
+            out[f"bench_peers {r['scene']}: ours (the faster) / the best peer"] = Ratio(
+                min(ms["ray tracer"], ms["raster masks"]) / peer, True)
+    for r in _extra(results, "bench_fastest.py").get("scenes", []):
+        out[f"bench_fastest {r['scene']} ({r['pixels']:,} px, {r['lights']} lights): auto's "
+            "choice / the faster"] = Ratio(r["chosen_over_best"], True)
     return out
 
 

@@ -110,19 +110,66 @@ def headline_table(results: dict) -> list[str]:
     return L
 
 
-def extras(results: dict) -> list[str]:
-    """What the other benchmark modules printed in the same run."""
+def extras_folder(png_path: Path) -> Path:
+    """Where the other benchmark modules' outputs go: `benchmarks/` beside the plot
+    (docs/benchmarks/ for the full run)."""
+    return png_path.parent / "benchmarks"
+
+
+def extra_name(row: dict) -> str:
+    """The file of one extra's output: its module's name ("bench_soft.md")."""
+    return Path(row["script"]).stem + ".md"
+
+
+def extra_page(results: dict, row: dict, back: str = "../../BENCHMARKS.md") -> str:
+    """One extra's page: its command, what it measures, how long it took and what it
+    printed, verbatim, under the run it was part of (`back`: the markdown, relative to the
+    page)."""
+    m = results["machine"]
+    status = ("ok" if row["returncode"] == 0 else
+              f"exit status {row['returncode']}" if row["returncode"] is not None
+              else "timed out")
+    return (f"# `{row['command']}`\n\nWritten by `python -m benchmarks.run` (commit "
+            f"{m['commit']}, run {m['date']}) from what the module printed; do not edit by "
+            f"hand.  The run's machine, load and the other sections: "
+            f"[BENCHMARKS.md]({back}).\n\n{row['what']}; {row['seconds']:.0f} s, "
+            f"{status}.\n\n```\n{row['output']}\n```\n")
+
+
+def extras(results: dict, md_path: Path | None = None, png_path: Path | None = None
+           ) -> list[str]:
+    """What the other benchmark modules printed in the same run: a line each here, linking
+    its page (`extra_page`, written by `write_extras`)."""
     L: list[str] = []
     add = L.append
     if not results.get("extras"):
         return []
+    folder = extras_folder(png_path) if png_path is not None else Path("docs/benchmarks")
+    where = os.path.relpath(folder, md_path.parent) if md_path is not None else str(folder)
     add("## The other issues' benchmarks (the same run)")
-    add("Each is a script of its own in `benchmarks/`, run by `run.py` after the sections "
-        "above, one after another, under the same load; what it printed is kept verbatim.")
+    add("")
+    add("Each is a module of its own in `benchmarks/`, run by `run.py` after the sections "
+        f"above, one after another, under the same load; what it printed is kept verbatim, "
+        f"one page each in [{where}/]({where}/).")
+    add("")
     for row in results["extras"]:
         status = ("ok" if row["returncode"] == 0 else
                   f"exit status {row['returncode']}" if row["returncode"] is not None
                   else "timed out")
-        add(f"### `{row['command']}`\n\n{row['what']}; {row['seconds']:.0f} s, {status}."
-            f"\n\n```\n{row['output']}\n```")
+        add(f"- [`{row['command']}`]({where}/{extra_name(row)}): {row['what']}; "
+            f"{row['seconds']:.0f} s, {status}.")
+    add("")
     return L
+
+
+def write_extras(results: dict, md_path: Path, png_path: Path) -> list[Path]:
+    """Each extra's page (`extra_page`) in `extras_folder`; the paths written."""
+    folder = extras_folder(png_path)
+    back = os.path.relpath(md_path, folder)
+    written = []
+    for row in results.get("extras") or []:
+        folder.mkdir(parents=True, exist_ok=True)
+        path = folder / extra_name(row)
+        path.write_text(extra_page(results, row, back))
+        written.append(path)
+    return written

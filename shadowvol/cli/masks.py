@@ -51,13 +51,13 @@ def _context(asked: str):
     named, or, under auto, where none can be made: then the ray tracer runs)."""
     if asked == "raytrace":
         return None
-    from shadowvol.raster.platform.context import create_context
+    from shadowvol.raster.platform.context import ContextError, create_context
 
     if asked == "shadowvol":
         return create_context()
     try:
         return create_context()
-    except Exception:  # noqa: BLE001 - no GL of any kind here: auto takes the ray tracer
+    except ContextError:   # no EGL driver or no OpenGL 4.5 here: auto takes the ray tracer
         return None
 
 

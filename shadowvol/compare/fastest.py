@@ -8,19 +8,22 @@ Both renderers give the float64 answer at every pixel that is not a tie (docs/CO
 choice, which depends on the machine, may change tie pixels and nothing else.  The choice is
 deterministic: the same scene, GL renderer and Embree queries always choose the same.
 
-The cost model, in ns (`costs`): a software GL (`shadowvol.memory.SOFTWARE_GL`, e.g. Mesa's
-llvmpipe) draws a mask-only frame in about RASTER_NS_PER_TRIANGLE_LIGHT per triangle and hard
-light plus RASTER_NS_PER_PIXEL_LIGHT per pixel and hard light (the volume pass of each light
-over its triangles and the screen); the ray tracer builds its BVH in RAYS_NS_PER_TRIANGLE per
-triangle and traces each pixel's primary ray and, from the SHADOW_RAY_SHARE of the pixels that
-are covered and face a light, one shadow ray per hard light, RAYS_NS_PER_RAY each with
-Embree's packets (`raytrace.embree.PacketBackend`), SINGLE_RAYS_SLOWER times that with
-embreex's single rays.  The constants are the least-squares fit of the four scenes of
-BENCHMARKS.md, "Exact masks against the peers" (`benchmarks.bench_peers` at d0150e1: 100k and
-1M triangles at 1280x720 under one light, two bunnies under two, the turntable at 640x480
-under three; 2 cores, llvmpipe 256 bits, wall ms); it chooses the faster one on each of them.
-A hardware GPU draws the rasterizer's frame, which the model does not time: there the
-rasterizer is chosen.  Without a GL the ray tracer is; without Embree the rasterizer.
+The cost model (`costs`), in ms of one command (a scene loaded, its masks made once): on a
+software GL (`shadowvol.memory.SOFTWARE_GL`, e.g. Mesa's llvmpipe) the rasterizer takes
+RASTER_MS, RASTER_NS_PER_TRIANGLE per triangle (the Renderer built: geometry, topology), and
+RASTER_NS_PER_TRIANGLE_LIGHT per triangle and RASTER_NS_PER_PIXEL_LIGHT per pixel for each
+hard light (its volume pass); the ray tracer RAYS_NS_PER_TRIANGLE per triangle (the scene's
+triangles and the BVH) and RAYS_NS_PER_RAY per ray with Embree's packets
+(`raytrace.embree.PacketBackend`; SINGLE_RAYS_SLOWER times that with embreex's single rays),
+a ray for each pixel and, from the SHADOW_RAY_SHARE of the pixels that are covered and face a
+light, one per hard light (an area light's samples each count).  A process's first masks pay
+once more: RASTER_FIRST_MS for the shaders, RAYS_FIRST_MS for the packets' numba kernels.
+The constants are the fit of `benchmarks.bench_fastest` (13 scenes: 1k to 1M triangles, 50k
+to 920k pixels, 1 to 144 hard lights; 2 cores, llvmpipe 256 bits, load ~1), on which the model
+chose the faster renderer on 11, the other two within 1.22x; the first masks' costs were
+measured in fresh processes.  A hardware GPU draws the rasterizer's frame, which the model
+does not time: there the rasterizer is chosen.  Without a GL the ray tracer is; without
+Embree the rasterizer.
 """
 
 from __future__ import annotations
@@ -36,13 +39,18 @@ from shadowvol.scene import Scene, hard_lights
 RENDERERS = ("auto", "shadowvol", "raytrace")
 NAMES = {"shadowvol": "the rasterizer's mask-only frame", "raytrace": "the ray tracer"}
 
-# the cost model (module docstring): ns, fitted to BENCHMARKS.md's four scenes
-RASTER_NS_PER_TRIANGLE_LIGHT = 92.7
-RASTER_NS_PER_PIXEL_LIGHT = 50.3
-RAYS_NS_PER_TRIANGLE = 92.4
-RAYS_NS_PER_RAY = 62.7
+# the cost model (module docstring): benchmarks.bench_fastest's fit, 2026-12-05
+RASTER_MS = 30.5
+RASTER_NS_PER_TRIANGLE = 856.0
+RASTER_NS_PER_TRIANGLE_LIGHT = 323.0
+RASTER_NS_PER_PIXEL_LIGHT = 5.6
+RAYS_NS_PER_TRIANGLE = 1214.0
+RAYS_NS_PER_RAY = 79.0
 SINGLE_RAYS_SLOWER = 1.2     # benchmarks.bench_packets: single / packets 1.15-1.24x
 SHADOW_RAY_SHARE = 0.6       # the share of pixels sending a shadow ray: 0.50-0.62 measured
+# a fresh process's first masks: the shaders compiled; the packets' kernels loaded (numba)
+RASTER_FIRST_MS = 20.0
+RAYS_FIRST_MS = {"packets": 340.0, "single": 3.0}
 
 
 @dataclass(frozen=True)
@@ -62,24 +70,29 @@ class Choice:
         return f"by {NAMES[self.renderer]} ({self.asked}: {self.reason})"
 
 
-def costs(triangles: int, pixels: int, lights: int, queries: str = "packets"
-          ) -> tuple[float, float]:
-    """(rasterizer, ray tracer): the model's ms of one mask frame of `triangles` triangles,
+def costs(triangles: int, pixels: int, lights: int, queries: str = "packets",
+          first: bool = True) -> tuple[float, float]:
+    """(rasterizer, ray tracer): the model's ms for the masks of `triangles` triangles,
     `pixels` pixels and `lights` hard lights (an area light's samples each count) on a
-    software GL, the ray tracer with Embree's `queries` ("packets" or "single")."""
-    raster = lights * (RASTER_NS_PER_TRIANGLE_LIGHT * triangles
-                       + RASTER_NS_PER_PIXEL_LIGHT * pixels)
+    software GL, the ray tracer with Embree's `queries` ("packets" or "single"); `first`:
+    this process's first masks (a command's), which pay the one-off costs too."""
+    raster = (RASTER_MS * 1e6 + RASTER_NS_PER_TRIANGLE * triangles
+              + lights * (RASTER_NS_PER_TRIANGLE_LIGHT * triangles
+                          + RASTER_NS_PER_PIXEL_LIGHT * pixels))
     per_ray = RAYS_NS_PER_RAY * (SINGLE_RAYS_SLOWER if queries == "single" else 1.0)
     rays = RAYS_NS_PER_TRIANGLE * triangles + per_ray * pixels * (1 + SHADOW_RAY_SHARE * lights)
+    if first:
+        raster += RASTER_FIRST_MS * 1e6
+        rays += RAYS_FIRST_MS[queries] * 1e6
     return raster / 1e6, rays / 1e6
 
 
 def choose(asked: str, triangles: int, pixels: int, lights: int, gl_renderer: str | None,
-           queries: str | None) -> Choice:
+           queries: str | None, first: bool = True) -> Choice:
     """The renderer of a masks-only frame.  `asked`: one of `RENDERERS` (ValueError
     otherwise); `gl_renderer`: the GL's GL_RENDERER string, None where no GL context could be
-    made; `queries`: Embree's queries here ("packets", "single"), None without Embree.  A
-    renderer asked for by name is that renderer."""
+    made; `queries`: Embree's queries here ("packets", "single"), None without Embree;
+    `first`: as `costs` takes it.  A renderer asked for by name is that renderer."""
     if asked not in RENDERERS:
         raise ValueError(f"unknown renderer {asked!r} (one of: {', '.join(RENDERERS)})")
     if asked != "auto":
@@ -90,12 +103,12 @@ def choose(asked: str, triangles: int, pixels: int, lights: int, gl_renderer: st
         return Choice("shadowvol", asked, "no Embree here")
     if not gl_in_host(gl_renderer):
         return Choice("shadowvol", asked, f"a hardware GL ({gl_renderer})")
-    raster, rays = costs(triangles, pixels, lights, queries)
+    raster, rays = costs(triangles, pixels, lights, queries, first)
     renderer = "raytrace" if rays < raster else "shadowvol"
     return Choice(renderer, asked, f"{triangles:,} triangles, {pixels:,} pixels, {lights} hard "
                                    f"lights on {gl_renderer.split(' (')[0]}: estimated "
                                    f"{raster:.0f} ms rasterized, {rays:.0f} ms ray traced "
-                                   f"({queries} rays)", raster, rays)
+                                   f"({queries} rays{', first masks' if first else ''})", raster, rays)
 
 
 def scene_sizes(scene: Scene) -> tuple[int, int, int]:

@@ -114,3 +114,34 @@ def test_the_command_names_the_commits_and_each_regression(tmp_path):
                           cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert same.returncode == 0 and "0 of" in same.stdout
 
+
+
+def with_extras(r: dict, packets_ns: float = 50.0, peer_ms: float = 100.0,
+                chosen_over_best: float = 1.0) -> dict:
+    """`r` with the extras `benchmarks.run` now records (`processes.EXTRAS`): bench_packets',
+    bench_peers' and bench_fastest's --json results, cut to what the ratios read."""
+    out = copy.deepcopy(r)
+    packets = [{"rays": "shadow (occluded)", "backend": b, "threads": 2,
+                "wall_ns": 60.0 if b == "single" else packets_ns} for b in ("single", "packets")]
+    peers = [{"scene": "100k", "ms": {"ray tracer": {"wall": 110.0}, "raster masks":
+                                      {"wall": 30.0}, "Open3D": {"wall": peer_ms}}}]
+    choices = [{"scene": "turntable", "pixels": 307200, "lights": 3,
+                "chosen_over_best": chosen_over_best}]
+    out["extras"] = [{"script": "bench_packets.py", "results": {"rows": packets}},
+                     {"script": "bench_peers.py", "results": {"scenes": peers}},
+                     {"script": "bench_fastest.py", "results": {"scenes": choices}},
+                     {"script": "bench_viewer.py", "results": None}]
+    return out
+
+
+def test_the_extras_ratios_are_guarded_too():
+    """Embree's packets losing their lead over single rays, our masks falling behind a peer,
+    and auto choosing the slower renderer are each flagged; the same extras are not."""
+    old = with_extras(results())
+    assert names(with_extras(results("bbbbbbb")), old) == []
+    assert names(with_extras(results("bbbbbbb"), packets_ns=58.0), old) == [
+        "bench_packets shadow (occluded), 2 threads: single / packets (wall)"]
+    assert names(with_extras(results("bbbbbbb"), peer_ms=50.0), old) == [
+        "bench_peers 100k: ours (the faster) / the best peer"]
+    assert names(with_extras(results("bbbbbbb"), chosen_over_best=1.5), old) == [
+        "bench_fastest turntable (307,200 px, 3 lights): auto's choice / the faster"]

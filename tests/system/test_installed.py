@@ -7,7 +7,7 @@ once, the batch's dataset package (`shadowvol.batch.datasets`) was missing from 
 every command failed to import.
 Here the README's first command runs verbatim in that venv (it builds and installs the wheel),
 then, from a folder that is not the checkout, `shadowvol batch` in every `--format`, `raytrace
-masks`, `shadowvol demo --small` and a script importing every public module.  The venv has the
+masks`, `shadowvol masks`, `shadowvol demo --small` and a script importing every public module.  The venv has the
 runtime dependencies only (no test extra), resolved by pip from the package index as a user's
 would be.
 """
@@ -254,6 +254,24 @@ def test_raytrace_masks(installed):
         assert lit.shape[1:] == coverage.shape == depth.shape and coverage.any()
         assert lit[:, coverage].any() and not lit[:, coverage].all()
     assert (installed.work / "m.png").is_file()
+
+
+def test_shadowvol_masks_says_which_renderer_made_them(installed):
+    """The masks alone through the installed command (numba, the `fast` extra, is not in this
+    venv: the ray tracer's single rays are what auto weighs), the renderer in the log line; the
+    two renderers named give the same file but at tie pixels."""
+    scene = example_scene(installed, "cage")
+    for renderer in ("auto", "shadowvol", "raytrace"):
+        done = installed.run(["shadowvol", "masks", scene, "-o", f"{renderer}.npz",
+                              "--renderer", renderer])
+        assert done.returncode == 0, done.stderr[-3000:]
+        line = done.stderr.strip().splitlines()[-1]
+        assert line.startswith(f"wrote {renderer}.npz by the "), line
+        assert f"({renderer}: " in line and (renderer != "auto" or "single rays" in line), line
+    with np.load(installed.work / "shadowvol.npz") as a, \
+            np.load(installed.work / "raytrace.npz") as b:
+        assert a.files == b.files and a["coverage"].any()
+        assert (a["lit"] != b["lit"]).mean() < 1e-4
 
 
 def test_demo_small(installed):
