@@ -85,8 +85,8 @@ MAX_FUNCTION_LINES = 80
 MAX_README_LINES = 200
 MAX_BENCHMARKS_LINES = 450
 # The docs whose paths must exist; docstrings and comments of every module are read too.
-DOCS = ("README.md", "BENCHMARKS.md", "docs/*.md", "docs/*.ipynb", "scenes/README.md",
-        "benchmarks/*.md")
+DOCS = ("README.md", "BENCHMARKS.md", "docs/*.md", "docs/benchmarks/*.md", "docs/*.ipynb",
+        "scenes/README.md", "benchmarks/*.md")
 TOP_DIRS = {"shadowvol", "raytrace", "shaders", "scenes", "tests", "docs", "benchmarks", ".ci"}
 
 

@@ -72,7 +72,8 @@ def build(out: Path) -> list[str]:
 
 # The docs whose backticked `module.NAME` references are resolved (as tests/test_architecture.py
 # reads them for paths).
-DOCS = ("README.md", "BENCHMARKS.md", "docs/*.md", "scenes/README.md", "benchmarks/*.md")
+DOCS = ("README.md", "BENCHMARKS.md", "docs/*.md", "docs/benchmarks/*.md", "scenes/README.md",
+        "benchmarks/*.md")
 # `a.b` or `a.b.c`, with `()` after a call: a module of the project, then names in it.
 BACKTICKED = re.compile(r"`([A-Za-z_]\w*(?:\.[A-Za-z_]\w*)+)(?:\(\))?`")
 # `scene.toml`, `run.py`: a file, not a name

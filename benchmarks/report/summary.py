@@ -88,7 +88,8 @@ def guide() -> list[str]:
         "- **Sections**: the headline's targets; whole frames by size, their floors and phases; "
         "the overflow check and the turntable on the shared meshes; the Python per object; "
         "the peers (Mitsuba 3, pyrender); the ray tracer against raw Embree; the ground "
-        "truth's cost; memory; the other benchmark modules' own output, verbatim.",
+        "truth's cost; memory; the other benchmark modules' own output, verbatim, a "
+        "page each (docs/benchmarks/ for the full run).",
         "- **Scenes** (`benchmarks/scenes.py`): a 14 x 14 floor and seeded icospheres (closed "
         "meshes) under the same camera; 1, 2 or 4 point lights; the pyrender comparison uses "
         "one spot (45°) or one directional light, since pyrender has no point-light shadows.",
