@@ -10,7 +10,8 @@ cost model's estimates (`fastest.costs`) and choice (`fastest.choose`); and what
 costs against the faster one measured (1.00: it chose the faster), all after a warm-up (the
 model's `first=False`: a fresh process's one-off costs are not in these times).  Then the model's
 constants fitted again to this run (non-negative least squares), to compare with those in
-`shadowvol.compare.fastest`.
+`shadowvol.compare.fastest`, and the one-off costs of a fresh process's first masks (each
+renderer in processes of its own: the first masks of a 32x24 scene less its second).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import argparse
 import json
 import os
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -72,6 +74,47 @@ def measure(scene, ctx, runs: int) -> dict:
             "chosen_over_best": ms[choice.renderer] / min(ms.values())}
 
 
+# a fresh process's first masks and its second, of a tiny scene: the one-off costs
+FIRST_CHILD = """
+import time
+from shadowvol.compare import fastest
+from shadowvol.scenefile import load_scene
+scene = load_scene({scene!r}).replace(width=32, height=24)
+ctx = None
+if {renderer!r} == "shadowvol":
+    from shadowvol.raster.platform.context import create_context
+    ctx = create_context()
+times = []
+for _ in range(2):
+    start = time.perf_counter()
+    fastest.masks(scene, {renderer!r}, ctx)
+    times.append((time.perf_counter() - start) * 1e3)
+print(times[0], times[1])
+"""
+
+
+def first_costs(runs: int) -> dict:
+    """ms of the one-off costs of a fresh process's first masks (its first minus its second
+    masks of a 32x24 scene), per renderer and, for the ray tracer, per Embree queries
+    ($SHADOWVOL_EMBREE); medians of `runs` processes each."""
+    out = {}
+    scene = str(ROOT / "scenes" / "stack.toml")
+    for name, renderer, queries in (("shadowvol", "shadowvol", "auto"),
+                                    ("raytrace, packets", "raytrace", "packets"),
+                                    ("raytrace, single rays", "raytrace", "single")):
+        gaps = []
+        for _ in range(runs):
+            done = subprocess.run([sys.executable, "-c", FIRST_CHILD.format(
+                scene=scene, renderer=renderer)], cwd=ROOT, capture_output=True, text=True,
+                env={**os.environ, "SHADOWVOL_EMBREE": queries}, timeout=300)
+            if done.returncode != 0:
+                break
+            first, second = (float(x) for x in done.stdout.split()[-2:])
+            gaps.append(first - second)
+        out[name] = statistics.median(gaps) if gaps else None
+    return out
+
+
 def fit(rows: list[dict]) -> dict:
     """The model's constants (`fastest`'s names) fitted to the rows' wall ms."""
     from scipy.optimize import nnls
@@ -103,7 +146,10 @@ def table(result: dict) -> list[str]:
     lines += ["", f"auto chose the faster renderer on {right} of {len(result['scenes'])} "
                   f"scenes; its worst choice cost {worst:.2f}x the faster one",
               "fitted to this run: " + ", ".join(f"{k} {v:.1f}" for k, v in
-                                                  result["fit"].items())]
+                                                  result["fit"].items()),
+              "a fresh process's first masks, ms more than its second (RASTER_FIRST_MS, "
+              "RAYS_FIRST_MS): " + ", ".join(
+                  f"{k} {'-' if v is None else f'{v:.0f}'}" for k, v in result["first"].items())]
     return lines
 
 
@@ -121,7 +167,8 @@ def main(argv=None) -> int:
     try:
         rows = [measure(scene, ctx, args.runs) for scene in bench_scenes(args.quick)]
         result = {"runs": args.runs, "gl_renderer": ctx.info["GL_RENDERER"], "scenes": rows,
-                  "fit": fit(rows), "load": [load, os.getloadavg()]}
+                  "fit": fit(rows), "first": first_costs(args.runs),
+                  "load": [load, os.getloadavg()]}
     finally:
         ctx.release()
     if args.json:

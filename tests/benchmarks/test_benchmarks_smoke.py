@@ -146,3 +146,20 @@ def test_the_mitsuba_soft_peer_runs_or_says_why_not(tmp_path):
         return
     assert r["variant"] == "scalar_rgb" and r["penumbra_pixels"] > 50
     assert r["p_value"] >= 0.01 and r["p_value_2_percent_off"] < 0.01, r
+
+
+def test_the_masks_choice_benchmark_runs(tmp_path):
+    """bench_fastest --quick: both renderers timed per scene, auto's choice against them, the
+    model refitted and a fresh process's one-off costs (structure only, nothing compared)."""
+    out = tmp_path / "fastest.json"
+    done = subprocess.run([sys.executable, "-m", "benchmarks.bench_fastest", "--quick", "--runs",
+                           "1", "--json", str(out)], cwd=ROOT, capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(out.read_text())
+    assert len(result["scenes"]) == 2
+    for row in result["scenes"]:
+        assert row["chosen"] in ("shadowvol", "raytrace") and row["chosen_over_best"] >= 1.0
+        assert set(row["ms"]) == {"shadowvol", "raytrace"}
+    assert set(result["first"]) == {"shadowvol", "raytrace, packets", "raytrace, single rays"}
+    assert "auto chose the faster renderer on" in done.stdout
