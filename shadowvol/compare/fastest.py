@@ -20,8 +20,10 @@ light, one per hard light (an area light's samples each count).  A process's fir
 once more: RASTER_FIRST_MS for the shaders, RAYS_FIRST_MS for the packets' numba kernels.
 The constants are the fit of `benchmarks.bench_fastest` (13 scenes: 1k to 1M triangles, 50k
 to 920k pixels, 1 to 144 hard lights; 2 cores, llvmpipe 256 bits, load ~1), on which the model
-chose the faster renderer on 11, the other two within 1.22x; the first masks' costs were
-measured in fresh processes.  A hardware GPU draws the rasterizer's frame, which the model
+chose the faster renderer on 11, the other two within 1.22x; in the run BENCHMARKS.md gives
+(5 rounds, load 1.2-1.3) on 10 of 13, the worst 1.36x (the bunny: a scanned mesh's many
+silhouette edges cost the rasterizer more than the model's icospheres); the first masks' costs
+are that run's (17 ms; 331 ms with packets, 3 ms with single rays).  A hardware GPU draws the rasterizer's frame, which the model
 does not time: there the rasterizer is chosen.  Without a GL the ray tracer is; without
 Embree the rasterizer.
 """
