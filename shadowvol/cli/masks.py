@@ -80,9 +80,8 @@ def command(args) -> int:
     scene = load_scene(args.scene)
     ctx = _context(args.renderer)
     try:
-        choice = fastest.choose(args.renderer, *fastest.scene_sizes(scene),
-                                None if ctx is None else ctx.info["GL_RENDERER"],
-                                fastest.ray_queries() if args.renderer == "auto" else "packets")
+        choice = fastest.choose_for(scene, args.renderer,
+                                    None if ctx is None else ctx.info["GL_RENDERER"])
         if choice.renderer != "shadowvol" and ctx is not None:
             ctx.release()
             ctx = None

@@ -113,6 +113,14 @@ def choose(asked: str, triangles: int, pixels: int, lights: int, gl_renderer: st
                                    f"({queries} rays{', first masks' if first else ''})", raster, rays)
 
 
+def choose_for(scene: Scene, asked: str, gl_renderer: str | None, first: bool = True) -> Choice:
+    """`choose` for `scene` on this machine: its sizes (`scene_sizes`) and Embree's queries
+    (`ray_queries`) looked at only when `asked` is auto."""
+    if asked != "auto":
+        return choose(asked, 0, 0, 0, gl_renderer, None)
+    return choose(asked, *scene_sizes(scene), gl_renderer, ray_queries(), first)
+
+
 def scene_sizes(scene: Scene) -> tuple[int, int, int]:
     """(triangles, pixels, hard lights) of a scene, as `choose` takes them."""
     _, faces, _ = scene.triangles()

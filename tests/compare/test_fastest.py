@@ -111,3 +111,12 @@ def test_an_area_light_s_counts_come_from_either_renderer(ctx):
     np.testing.assert_array_equal(made["shadowvol"]["samples"], made["raytrace"]["samples"])
     differ = made["shadowvol"]["lit_count"] != made["raytrace"]["lit_count"]
     assert differ.mean() < 0.05   # the counts' own witness: tests/raster/test_soft_witness_raster
+
+
+def test_a_scene_s_sizes_and_this_machine_s_queries():
+    scene = load_scene(SCENES / "soft.toml")
+    assert fastest.scene_sizes(scene) == (1306, 640 * 480, 144)   # the rect light's samples
+    assert fastest.ray_queries() in ("packets", "single")
+    auto = fastest.choose_for(scene, "auto", LLVMPIPE)
+    assert auto == fastest.choose("auto", 1306, 640 * 480, 144, LLVMPIPE, fastest.ray_queries())
+    assert fastest.choose_for(scene, "raytrace", None).renderer == "raytrace"
