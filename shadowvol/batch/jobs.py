@@ -16,8 +16,10 @@ Keys (only `scene` and `cameras` are required):
 - lights: a list of lights in the scene-file schema ([[lights]] tables), replacing the scene's.
 - size: [width, height] of the images (default: the scene's).
 - outputs: names from `batch.outputs.OUTPUTS` (default: image and masks).
-- renderer: "shadowvol" (default) or "raytrace"; method: auto|zpass|zfail (shadowvol);
-  max_depth: the ray tracer's recursion (default: the scene's).
+- renderer: "shadowvol" (default) or "raytrace"; or "auto" for a job whose outputs are the
+  masks alone: per frame the renderer `shadowvol.compare.fastest` says is faster on the worker
+  (the frame's manifest line says which, as `masks_by`); method: auto|zpass|zfail
+  (shadowvol); max_depth: the ray tracer's recursion (default: the scene's).
 - seed (default 0) and jitter: {"eye": r, "lights": r} moves each frame's eye and point/spot
   lights by a random offset within a ball of radius r, drawn from the frame's own generator
   (`job_frames.frame_rng(seed, index)`), so a frame is the same wherever and whenever it is made;
@@ -52,7 +54,7 @@ from shadowvol.scenefile_mesh import check_regular_file, read_regular_file
 
 KEYS = {"name", "scene", "cameras", "lights", "size", "outputs", "renderer", "method",
         "max_depth", "seed", "jitter"}
-RENDERERS = ("shadowvol", "raytrace")
+RENDERERS = ("shadowvol", "raytrace", "auto")
 NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
 MAX_JOB_FILE_BYTES = 64 << 20
 MAX_FRAMES_PER_JOB = 10_000_000
@@ -160,10 +162,10 @@ def _job(data: dict, source: str, base_dir: Path, position: int) -> Job | JobErr
             raise SceneError("name", f"must be 1-64 letters, digits, '_' or '-', got "
                                      f"{shorten(name)}")
         fallback = name
+        outputs = _outputs(data.get("outputs", list(DEFAULT)))
         job = Job(name=name, scene=scene, cameras=_cameras(data.get("cameras")),
                   lights=_lights(data.get("lights")), size=_size(data.get("size")),
-                  outputs=_outputs(data.get("outputs", list(DEFAULT))),
-                  renderer=_choice(data.get("renderer", "shadowvol"), "renderer", RENDERERS),
+                  outputs=outputs, renderer=_renderer(data.get("renderer", "shadowvol"), outputs),
                   method=_choice(data.get("method", "auto"), "method", METHODS),
                   max_depth=_whole(data.get("max_depth"), "max_depth", low=0),
                   seed=_whole(data.get("seed", 0), "seed", low=0),
@@ -214,6 +216,16 @@ def _outputs(value) -> tuple[str, ...]:
     if len(set(value)) != len(value):
         raise SceneError("outputs", f"an output is named twice in {value}")
     return tuple(value)
+
+
+def _renderer(value, outputs: tuple[str, ...]) -> str:
+    """The job's renderer; "auto" only for the masks alone (what both renderers make alike)."""
+    renderer = _choice(value, "renderer", RENDERERS)
+    if renderer == "auto" and outputs != ("masks",):
+        raise SceneError("renderer", f"auto chooses the renderer of the masks alone (outputs "
+                                     f"[\"masks\"]), got outputs {list(outputs)}: name "
+                                     f"shadowvol or raytrace")
+    return renderer
 
 
 def _choice(value, key: str, allowed: tuple[str, ...]) -> str:

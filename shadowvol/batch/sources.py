@@ -5,6 +5,10 @@ renderer (after Kubric's renderer interface), in the table `SOURCES` keyed by a 
 raster    `shadowvol` : the stencil shadow-volume renderer (`raster.Renderer`), on the
             worker's GL context; option `method`
 rays      `raytrace`  : the ray tracer (the witness); option `max_depth`
+auto      `auto`      : the masks alone, per frame by whichever of the two the cost model of
+            `shadowvol.compare.fastest` says is faster on this worker (its GL, Embree's queries;
+            a worker renders many frames, so without a process's one-off costs); the frame's
+            versions say which (`masks_by`)
 
 GL and the ray tracer are imported when a frame first needs them (a spawned worker sets its
 thread counts first).
@@ -142,4 +146,39 @@ class Rays:
         return {"embreex": _version("embreex")}
 
 
-SOURCES: dict[str, FrameSource] = {"shadowvol": Raster(), "raytrace": Rays()}
+class Auto:
+    def choice(self, worker, frame_scene) -> FrameSource:
+        """The source of the frame's masks: the faster renderer here (`fastest.choose_for`;
+        no GL on the worker: the ray tracer), said in the worker's `masks_by`."""
+        from shadowvol.compare import fastest
+        from shadowvol.raster.platform.context import ContextError
+
+        if worker.gl_renderer is None:
+            try:
+                worker.context()
+            except ContextError:   # no GL here: the ray tracer makes the masks
+                pass
+        worker.masks_by = fastest.choose_for(frame_scene, "auto", worker.gl_renderer,
+                                             first=False).renderer
+        return SOURCES[worker.masks_by]
+
+    def options(self, spec: FrameSpec) -> dict:
+        return {"method": spec.method}
+
+    def estimate(self, worker, frame_scene, wanted, truth, written) -> memory.Estimate:
+        return self.choice(worker, frame_scene).estimate(worker, frame_scene, wanted, truth,
+                                                         written)
+
+    def arrays(self, worker, spec, scene, camera, lights, wanted, truth) -> dict:
+        source = self.choice(worker, scene.replace(camera=camera, lights=lights))
+        return source.arrays(worker, spec, scene, camera, lights, wanted, truth)
+
+    def alone(self, worker, spec, single) -> np.ndarray:
+        return self.choice(worker, single).alone(worker, spec, single)
+
+    def versions(self, worker) -> dict:
+        used = getattr(worker, "masks_by", None)
+        return {"masks_by": used, **(SOURCES[used].versions(worker) if used else {})}
+
+
+SOURCES: dict[str, FrameSource] = {"shadowvol": Raster(), "raytrace": Rays(), "auto": Auto()}

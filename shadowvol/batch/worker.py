@@ -107,6 +107,7 @@ class Worker:
         self._thread = None
         self.device = None       # "EGL device 0 (...)" once a context exists
         self.gl_renderer = None
+        self.masks_by = None     # the renderer of the last frame of renderer "auto"
 
     # -- scenes and renderers ------------------------------------------------------------
     def scene(self, key: str) -> Scene:
