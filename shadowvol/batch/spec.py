@@ -25,7 +25,7 @@ class FrameSpec:
     lights    : the job's light tables (the scene-file schema), or None for the scene's
     size      : (width, height), or None for the scene's
     outputs   : the output names (`outputs.OUTPUTS`) it makes, in order
-    renderer  : "shadowvol" or "raytrace" (a row of `sources.SOURCES`)
+    renderer  : "shadowvol", "raytrace" or "auto" (a row of `sources.SOURCES`)
     method    : the rasterizer's method; max_depth: the ray tracer's recursion depth
     seed, jitter : the job's seed and jitter (`job_frames.jittered`)
     layout    : the dataset layout its files are made as (`layouts.tag`), or None for the job's
