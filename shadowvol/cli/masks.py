@@ -12,7 +12,7 @@ from shadowvol.compare import fastest
 from shadowvol.frame import save_masks
 from shadowvol.io import save_png
 from shadowvol.pictures import masks_image
-from shadowvol.scene import light_samples
+from shadowvol.scene import SceneError, light_samples
 from shadowvol.scenefile import load_scene
 
 EPILOG = """\
@@ -88,6 +88,8 @@ def command(args) -> int:
         memory.check(_estimate(scene, choice.renderer, ctx, "picture" in paths),
                      args.memory_budget, args.scene)
         lit, coverage, arrays = fastest.masks(scene, choice.renderer, ctx)
+    except SceneError as exc:   # a renderer's (e.g. `image`): named with the scene file
+        raise (exc.in_file(args.scene) if exc.file is None else exc) from None
     finally:
         if ctx is not None:
             ctx.release()

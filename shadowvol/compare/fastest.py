@@ -18,14 +18,18 @@ triangles and the BVH) and RAYS_NS_PER_RAY per ray with Embree's packets
 a ray for each pixel and, from the SHADOW_RAY_SHARE of the pixels that are covered and face a
 light, one per hard light (an area light's samples each count).  A process's first masks pay
 once more: RASTER_FIRST_MS for the shaders, RAYS_FIRST_MS for the packets' numba kernels.
-The constants are the fit of `benchmarks.bench_fastest` (13 scenes: 1k to 1M triangles, 50k
+The constants are the fit of `benchmarks.bench_fastest` (13 scenes: 1k to 1M triangles, 77k
 to 920k pixels, 1 to 144 hard lights; 2 cores, llvmpipe 256 bits, load ~1), on which the model
-chose the faster renderer on 11, the other two within 1.22x; in the run BENCHMARKS.md gives
-(5 rounds, load 1.2-1.3) on 10 of 13, the worst 1.36x (the bunny: a scanned mesh's many
+chose the faster renderer on 11, the other two within 1.22x; in the run BENCHMARKS.md gives (5
+rounds, load 1.2-1.3) on 10 of 13, the worst 1.36x (the bunny: a scanned mesh's many
 silhouette edges cost the rasterizer more than the model's icospheres); the first masks' costs
-are that run's (17 ms; 331 ms with packets, 3 ms with single rays).  A hardware GPU draws the rasterizer's frame, which the model
-does not time: there the rasterizer is chosen.  Without a GL the ray tracer is; without
-Embree the rasterizer.
+are that run's (17 ms; 331 ms with packets, 3 ms with single rays).  A hardware GPU draws the
+rasterizer's frame, which the model does not time: there the rasterizer is chosen.  Without a
+GL the ray tracer is; without Embree the rasterizer.
+
+`shadowvol masks` chooses for its process's first masks (`first=True`); a batch job of
+renderer "auto" (`shadowvol.batch.sources`) for each frame of a worker that renders many
+(`first=False`).
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ import numpy as np
 from shadowvol.memory import gl_in_host
 from shadowvol.scene import Scene, hard_lights
 
-# what `--renderer` takes: the job file's names of the two renderers (docs/formats.md), or auto
+# what `--renderer` takes: the job file's names of the two renderers (docs/datasets.md), or auto
 RENDERERS = ("auto", "shadowvol", "raytrace")
 NAMES = {"shadowvol": "the rasterizer's mask-only frame", "raytrace": "the ray tracer"}
 
@@ -110,7 +114,8 @@ def choose(asked: str, triangles: int, pixels: int, lights: int, gl_renderer: st
     return Choice(renderer, asked, f"{triangles:,} triangles, {pixels:,} pixels, {lights} hard "
                                    f"lights on {gl_renderer.split(' (')[0]}: estimated "
                                    f"{raster:.0f} ms rasterized, {rays:.0f} ms ray traced "
-                                   f"({queries} rays{', first masks' if first else ''})", raster, rays)
+                                   f"({queries} rays{', first masks' if first else ''})",
+                  raster, rays)
 
 
 def choose_for(scene: Scene, asked: str, gl_renderer: str | None, first: bool = True) -> Choice:

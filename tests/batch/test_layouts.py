@@ -66,7 +66,7 @@ def test_layouts_are_frozen_rows_with_one_store_interface():
                 list(_parameters(getattr(Store, call))), (name, call)
     assert layouts.LAYOUTS["files"].store is FileStore
     assert layouts.LAYOUTS["webdataset"].store is TarStore
-    assert set(sources.SOURCES) == {"shadowvol", "raytrace"}
+    assert set(sources.SOURCES) == {"shadowvol", "raytrace", "auto"}
 
 
 def _parameters(function):

@@ -13,8 +13,8 @@ from benchmarks.report import summary
 def fake_results() -> dict:
     output = "\n".join(f"| row {i} | {i * 1.5:.1f} |" for i in range(200))
     return {"machine": {"commit": "abc1234", "date": "2026-12-05 06:00 UTC"},
-            "extras": [{"script": "bench_packets.py", "command": "python -m benchmarks.bench_packets",
-                        "what": "packets against single rays", "seconds": 12.3, "returncode": 0,
+            "extras": [{"script": "bench_packets.py",
+                        "command": "python -m benchmarks.bench_packets", "what": "packets against single rays", "seconds": 12.3, "returncode": 0,
                         "output": output, "results": None},
                        {"script": "bench_viewer.py", "command": "python -m benchmarks.bench_viewer",
                         "what": "the viewer", "seconds": 900.0, "returncode": None,
