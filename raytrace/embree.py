@@ -1,6 +1,6 @@
 """The Embree backends: one interface (`raytrace.backends`), two ways to ask Embree.
 
-* `PacketBackend` — Embree's packet queries (`rtcIntersect16`/`rtcOccluded16`, or the width
+* `PacketBackend` — Embree's packet queries (`rtcIntersect8`/`rtcOccluded8`, or the width
   the CPU has) on the Embree 4 library the embreex wheel ships (`raytrace.embree4`, ctypes),
   driven by numba (`raytrace.packetkernels`, the `fast` extra): the default where both load.
 * `EmbreeBackend` — embreex, one ray per call (`rtcIntersect1`/`rtcOccluded1`): the fallback
