@@ -174,6 +174,11 @@ class PacketBackend(_EmbreeQueries):
             raise ImportError(embree4.why_not())
         self._scene = embree4.Scene(self._lib, self.vertices, self.faces)
 
+    def packets(self) -> tuple:
+        """(rtcIntersectN, rtcOccludedN, the scene's address, N): what numba kernels of
+        their own (`raytrace.maskkernels`) need to trace on this backend's scene."""
+        return self._lib.intersect, self._lib.occluded, self._scene.handle, self._lib.width
+
     def _trace(self, origins, directions, dists, query: int, parallel: bool):
         o = np.asarray(origins, dtype=np.float32)
         d = np.asarray(directions, dtype=np.float32)
