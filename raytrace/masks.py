@@ -136,8 +136,13 @@ def _local_light(light, origin: np.ndarray, triangles: "_Triangles") -> _LocalLi
     if not isinstance(light, (PointLight, SpotLight)):
         raise TypeError(f"not a light: {type(light).__name__}")
     position = light.position - origin
-    return _LocalLight(light, position, through_light(triangles.normals_t.T, triangles.plane_d,
-                                                      triangles.weight, position))
+    try:   # in one pass where numba loads (the same number)
+        from .maskkernels import through_light as through
+        return _LocalLight(light, position, through(triangles.normals_t, triangles.plane_d,
+                                                    triangles.weight, position))
+    except ImportError:
+        return _LocalLight(light, position, through_light(
+            triangles.normals_t.T, triangles.plane_d, triangles.weight, position))
 
 
 class _Hits(NamedTuple):
@@ -236,9 +241,9 @@ def _packet_primary_hits(tracer: PacketBackend, triangles: _Triangles,
     grid32, grid64 = grids
     intersect, _, scene, width = tracer.packets()
     tri, index, *fields = maskkernels.primary_hits(
-        intersect, scene, width, *rows.indices(grid32.height)[:2], grid32.row, grid32.col, grid32.eye,
-        grid32.near, grid64.row, grid64.col, grid64.eye, triangles.normals_t,
-        triangles.plane_d, triangles.weight, triangles.fragile)
+        intersect, scene, width, maskkernels.BLOCK_ROWS, *rows.indices(grid32.height)[:2],
+        grid32.row, grid32.col, grid32.eye, grid32.near, grid64.row, grid64.col, grid64.eye,
+        triangles.normals_t, triangles.plane_d, triangles.weight, triangles.fragile)
     covered = tri >= 0
     return covered, index, (_Hits(*fields) if len(index) else None)
 

@@ -82,3 +82,24 @@ def test_random_scenes_bit_for_bit(scene):
 @given(scene=grazing_scenes())
 def test_grazing_scenes_bit_for_bit(scene):
     assert _differences(scene) == []
+
+
+def test_through_light_equals_numpy():
+    """`maskkernels.through_light` is `tolerances.through_light`, to the bit: random triangles,
+    lights on some of their planes (a weight found), off all of them (0.0), and far away."""
+    from raytrace.maskkernels import through_light as kernel
+    from raytrace.tolerances import through_light
+    from raytrace.triangles import TriangleSet
+
+    rng = np.random.default_rng(5)
+    for scale in (1.0, 1e-3, 1e5):
+        v = rng.integers(-64, 64, (600, 3)) / 16.0 * scale
+        tris = TriangleSet(v, rng.integers(0, len(v), (400, 3)))
+        on = [v[f].mean(axis=0) for f in tris.faces[:20]]   # on a triangle's plane
+        for light in on + list(rng.uniform(-8, 8, (20, 3)) * scale):
+            light = np.asarray(light, np.float64)
+            want = through_light(tris.normals, tris.plane_d, tris.weight, light)
+            got = kernel(np.ascontiguousarray(tris.normals.T), tris.plane_d, tris.weight,
+                         light)
+            assert np.float64(got).tobytes() == np.float64(want).tobytes()
+        assert any(through_light(tris.normals, tris.plane_d, tris.weight, p) > 0 for p in on)
