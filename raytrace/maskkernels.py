@@ -142,7 +142,7 @@ def _round_down32(x):
 
 @_jit()
 def point_segments(position, own, through, spot, axis, cos_cutoff, point, normal, side,
-                   side_d, height, point64):
+                   side_d, height):
     """`masks._point_segments` toward the point light at position (3,) float64 (own: the
     largest |coordinate| of it; through: `_LocalLight.through`); spot: a spot light, of unit
     axis (3,) float64 and cos_cutoff (float32, as numpy rounds the Python float against the

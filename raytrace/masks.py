@@ -137,12 +137,12 @@ def _local_light(light, origin: np.ndarray, triangles: "_Triangles") -> _LocalLi
         raise TypeError(f"not a light: {type(light).__name__}")
     position = light.position - origin
     try:   # in one pass where numba loads (the same number)
-        from .maskkernels import through_light as through
-        return _LocalLight(light, position, through(triangles.normals_t, triangles.plane_d,
-                                                    triangles.weight, position))
+        from .maskkernels import through_light as one_pass
     except ImportError:
         return _LocalLight(light, position, through_light(
             triangles.normals_t.T, triangles.plane_d, triangles.weight, position))
+    return _LocalLight(light, position, one_pass(triangles.normals_t, triangles.plane_d,
+                                                 triangles.weight, position))
 
 
 class _Hits(NamedTuple):
@@ -380,7 +380,7 @@ def _fused_segments(local: _LocalLight, hit: _Hits, reach: float) -> _Segments:
     facing, rays, start, l, gap, k, tmax = maskkernels.point_segments(
         position, float(np.abs(position).max()), float(local.through), spot,
         np.asarray(axis, np.float64), cos_cutoff, hit.point, hit.normal, hit.side,
-        hit.side_d, hit.height, hit.point64)
+        hit.side_d, hit.height)
     origin = hit.point64[:, k]
     return _Segments(facing, rays, start, l, gap,
                      _NearPieces(k, origin, position[:, None] - origin, tmax))

@@ -259,7 +259,7 @@ class NearGrid:
         """The grid's tables as `nearkernels.candidates` takes them."""
         return (float(self.cell), self.origin, self.levels, self.keys, self.starts,
                 self.members, np.ascontiguousarray(self.boxes), self._table, self._bits,
-                NEAR_PIECE_CELLS, _HASH)
+                NEAR_PIECE_CELLS, _HASH, AXIS_BITS)
 
     def _numpy_candidates(self, origins, directions, tmax) -> tuple[np.ndarray, np.ndarray]:
         """`candidates` in numpy."""

@@ -17,8 +17,6 @@ import numpy as np
 from .packetkernels import _jit
 from .tolerances import FLOAT64_EPS
 
-_TOP = 2 ** 19 - 1   # the largest cell coordinate (neargrid.AXIS_BITS = 19)
-
 
 @_jit()
 def _emit(out, n, piece, tri):
@@ -37,27 +35,29 @@ def _part(out, n, piece, lo, hi, grid):
     """The pairs of piece and the triangles whose padded boxes touch the box lo, hi (3,): at
     each level, the cells the low corners of such boxes can lie in (`NearGrid._cell_pairs`),
     or every box of the level where they are too many."""
-    cell, origin, levels, keys, starts, members, boxes, table, bits, wide_cells, hash_ = grid
+    (cell, origin, levels, keys, starts, members, boxes, table, bits, wide_cells, hash_,
+     axis_bits) = grid
     shift = np.uint64(64 - bits)
+    top = float(2 ** axis_bits - 1)   # the largest cell coordinate
     c0, c1 = np.empty(3, np.int64), np.empty(3, np.int64)
     for level in levels:
         width = cell * 2.0 ** level
         count, wide = 1, False
         for a in range(3):
-            c0[a] = np.int64(min(max(np.floor((lo[a] - origin[a]) / width - 1.01), 0.0), _TOP))
-            c1[a] = np.int64(min(max(np.floor((hi[a] - origin[a]) / width), -1.0), _TOP))
+            c0[a] = np.int64(min(max(np.floor((lo[a] - origin[a]) / width - 1.01), 0.0), top))
+            c1[a] = np.int64(min(max(np.floor((hi[a] - origin[a]) / width), -1.0), top))
             span = max(c1[a] - c0[a] + 1, 0)
             count *= span
             wide = wide or span > wide_cells
         if wide or count > wide_cells:   # every box of the level
-            first = np.searchsorted(keys, level << 57)
-            last = np.searchsorted(keys, (level + 1) << 57)
+            first = np.searchsorted(keys, level << 3 * axis_bits)
+            last = np.searchsorted(keys, (level + 1) << 3 * axis_bits)
             out, n = _boxes(out, n, piece, lo, hi, boxes, members, starts[first], starts[last])
             continue
         for cx in range(c0[0], c1[0] + 1):
             for cy in range(c0[1], c1[1] + 1):
                 for cz in range(c0[2], c1[2] + 1):
-                    key = (((level << 19 | cx) << 19 | cy) << 19) | cz
+                    key = (((level << axis_bits | cx) << axis_bits | cy) << axis_bits) | cz
                     at = np.int64(table[(np.uint64(key) * hash_) >> shift])
                     if at == -2:
                         at = min(np.searchsorted(keys, key), len(keys) - 1)
