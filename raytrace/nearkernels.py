@@ -20,14 +20,29 @@ from .tolerances import FLOAT64_EPS
 
 @_jit()
 def _emit(out, n, piece, tri):
-    """Append the pair (piece, tri) to out (2, cap) int64 holding n: (out, n + 1), out grown
-    by doubling when full."""
-    if n == out.shape[1]:
-        grown = np.empty((2, 2 * n + 64), np.int64)
-        grown[:, :n] = out[:, :n]
+    """Append the pair (piece, tri) to out (2 * cap,) int64 holding n pairs, interleaved:
+    (out, n + 1), out grown by doubling when full."""
+    if 2 * n == out.shape[0]:
+        grown = np.empty(4 * n + 128, np.int64)
+        for i in range(2 * n):
+            grown[i] = out[i]
         out = grown
-    out[0, n], out[1, n] = piece, tri
+    out[2 * n], out[2 * n + 1] = piece, tri
     return out, n + 1
+
+
+@_jit()
+def _left(keys, key):
+    """np.searchsorted(keys, key) (side "left") of the sorted keys (n,) int64: written out,
+    numba compiles numpy's own for seconds."""
+    lo, hi = 0, keys.shape[0]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if keys[mid] < key:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 @_jit()
@@ -50,8 +65,8 @@ def _part(out, n, piece, lo, hi, grid):
             count *= span
             wide = wide or span > wide_cells
         if wide or count > wide_cells:   # every box of the level
-            first = np.searchsorted(keys, level << 3 * axis_bits)
-            last = np.searchsorted(keys, (level + 1) << 3 * axis_bits)
+            first = _left(keys, level << 3 * axis_bits)
+            last = _left(keys, (level + 1) << 3 * axis_bits)
             out, n = _boxes(out, n, piece, lo, hi, boxes, members, starts[first], starts[last])
             continue
         for cx in range(c0[0], c1[0] + 1):
@@ -60,7 +75,7 @@ def _part(out, n, piece, lo, hi, grid):
                     key = (((level << axis_bits | cx) << axis_bits | cy) << axis_bits) | cz
                     at = np.int64(table[(np.uint64(key) * hash_) >> shift])
                     if at == -2:
-                        at = min(np.searchsorted(keys, key), len(keys) - 1)
+                        at = min(_left(keys, key), len(keys) - 1)
                     if at < 0 or keys[at] != key:
                         continue
                     out, n = _boxes(out, n, piece, lo, hi, boxes, members, starts[at],
@@ -86,7 +101,7 @@ def candidates(start, step, tmax, reach, part_cells, max_parts, always, n_faces,
     `NearGrid`'s tables (`NearGrid._kernel_grid`), reach its reach, part_cells and max_parts
     `neargrid.NEAR_PART_CELLS` and `NEAR_MAX_PARTS`, always its thin triangles."""
     cell = grid[0]
-    out, n = np.empty((2, 64 + 4 * start.shape[1]), np.int64), 0
+    out, n = np.empty(128 + 8 * start.shape[1], np.int64), 0
     lo, hi, sv, dv = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     for i in range(start.shape[1]):
         s0, s1, s2 = start[0, i], start[1, i], start[2, i]
@@ -115,4 +130,4 @@ def candidates(start, step, tmax, reach, part_cells, max_parts, always, n_faces,
         else:
             for k in always:
                 out, n = _emit(out, n, i, k)
-    return out[0, :n], out[1, :n]
+    return out[0:2 * n:2].copy(), out[1:2 * n:2].copy()
