@@ -1,6 +1,6 @@
 """The Embree backends: one interface (`raytrace.backends`), two ways to ask Embree.
 
-* `PacketBackend` — Embree's packet queries (`rtcIntersect16`/`rtcOccluded16`, or the width
+* `PacketBackend` — Embree's packet queries (`rtcIntersect8`/`rtcOccluded8`, or the width
   the CPU has) on the Embree 4 library the embreex wheel ships (`raytrace.embree4`, ctypes),
   driven by numba (`raytrace.packetkernels`, the `fast` extra): the default where both load.
 * `EmbreeBackend` — embreex, one ray per call (`rtcIntersect1`/`rtcOccluded1`): the fallback
@@ -173,6 +173,11 @@ class PacketBackend(_EmbreeQueries):
         if self._lib is None:
             raise ImportError(embree4.why_not())
         self._scene = embree4.Scene(self._lib, self.vertices, self.faces)
+
+    def packets(self) -> tuple:
+        """(rtcIntersectN, rtcOccludedN, the scene's address, N): what numba kernels of
+        their own (`raytrace.maskkernels`) need to trace on this backend's scene."""
+        return self._lib.intersect, self._lib.occluded, self._scene.handle, self._lib.width
 
     def _trace(self, origins, directions, dists, query: int, parallel: bool):
         o = np.asarray(origins, dtype=np.float32)

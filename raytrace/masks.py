@@ -15,7 +15,7 @@ import numpy as np
 
 from shadowvol.scene import DirectionalLight, PointLight, Scene, SpotLight
 
-from .backends import TriangleBackend, for_each_tile, make_backend
+from .backends import PacketBackend, TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
 from .switches import receiving, switched_backend
 from .tolerances import (
@@ -136,8 +136,13 @@ def _local_light(light, origin: np.ndarray, triangles: "_Triangles") -> _LocalLi
     if not isinstance(light, (PointLight, SpotLight)):
         raise TypeError(f"not a light: {type(light).__name__}")
     position = light.position - origin
-    return _LocalLight(light, position, through_light(triangles.normals_t.T, triangles.plane_d,
-                                                      triangles.weight, position))
+    try:   # in one pass where numba loads (the same number)
+        from .maskkernels import through_light as one_pass
+    except ImportError:
+        return _LocalLight(light, position, through_light(
+            triangles.normals_t.T, triangles.plane_d, triangles.weight, position))
+    return _LocalLight(light, position, one_pass(triangles.normals_t, triangles.plane_d,
+                                                 triangles.weight, position))
 
 
 class _Hits(NamedTuple):
@@ -196,6 +201,8 @@ def _primary_hits(tracer: TriangleBackend, triangles: _Triangles,
     """The visible triangles of the image rows `rows`: covered (R*W,) bool, index (h,) int64
     (the covered pixels, row-major within the rows) and their `_Hits` (None when no pixel is
     covered or `need_hits` is False)."""
+    if need_hits and isinstance(tracer, PacketBackend):
+        return _packet_primary_hits(tracer, triangles, grids, rows)
     grid32, grid64 = grids
     view32 = grid32.directions(rows)
     tri = tracer.closest_triangle(grid32.origins(view32).T, view32.T, parallel=False)
@@ -214,7 +221,7 @@ def _primary_hits(tracer: TriangleBackend, triangles: _Triangles,
     # p does not depend on where along the ray it starts).
     eye = grid64.eye
     with np.errstate(divide="ignore", invalid="ignore"):  # a degenerate triangle has n = 0
-        s = (plane_d - eye @ normal) / n_dot_v
+        s = (plane_d - _dot(eye, normal)) / n_dot_v
     point64 = eye[:, None] + s * view
     point = point64.astype(np.float32)  # rounded once, for Embree
     side = np.where(n_dot_v > 0, -1.0, 1.0)
@@ -222,6 +229,23 @@ def _primary_hits(tracer: TriangleBackend, triangles: _Triangles,
     height = shadow_height(np.take(triangles.weight, k) + _dot(np.abs(normal), np.abs(point64)))
     return covered, index, _Hits(point, normal, side, side * plane_d, height, k,
                                  np.take(triangles.fragile, k), s, point64)
+
+
+def _packet_primary_hits(tracer: PacketBackend, triangles: _Triangles,
+                         grids: tuple[RayGrid, RayGrid], rows: slice
+                         ) -> tuple[np.ndarray, np.ndarray, _Hits | None]:
+    """`_primary_hits` on Embree's packets, rays and hits made in numba
+    (`raytrace.maskkernels.primary_hits`): the same arrays, bit for bit."""
+    from . import maskkernels
+
+    grid32, grid64 = grids
+    intersect, _, scene, width = tracer.packets()
+    tri, index, *fields = maskkernels.primary_hits(
+        intersect, scene, width, maskkernels.BLOCK_ROWS, *rows.indices(grid32.height)[:2],
+        grid32.row, grid32.col, grid32.eye, grid32.near, grid64.row, grid64.col, grid64.eye,
+        triangles.normals_t, triangles.plane_d, triangles.weight, triangles.fragile)
+    covered = tri >= 0
+    return covered, index, (_Hits(*fields) if len(index) else None)
 
 
 def _round_down32(x: np.ndarray) -> np.ndarray:
@@ -311,14 +335,16 @@ def _lit(tracer: TriangleBackend, local: _LocalLight, hit: _Hits, reach: float
     shadow ray (`_segments`) not blocked by a triangle other than their own (`_blocked`) --
     but for the near pieces a long lift skips (`_NearPieces`, those of the points lit so
     far), returned too: lit where `_near_blocked` finds them clear."""
-    seg = receiving(tracer, local.light, _segments(local, hit, reach), hit)
+    seg = receiving(tracer, local.light,
+                    _segments(local, hit, reach, isinstance(tracer, PacketBackend)), hit)
     out = seg.facing.copy()
     out[seg.rays] = ~_blocked(tracer, seg.start, seg.direction, seg.tmax, hit.tri[seg.rays],
                               hit.fragile[seg.rays])
     return out, seg.near.where(out[seg.near.rays])  # those the rest of the segment left lit
 
 
-def _segments(local: _LocalLight, hit: _Hits, reach: float) -> _Segments:
+def _segments(local: _LocalLight, hit: _Hits, reach: float, fused: bool = False
+              ) -> _Segments:
     """The shadow rays of the tile's hit points toward one light.
 
     The shadow ray is the segment p -> light (p + t·l, 0 < t < 1, l = L − p) or the ray
@@ -327,10 +353,37 @@ def _segments(local: _LocalLight, hit: _Hits, reach: float) -> _Segments:
     t < 1 − light_margin/|l|, and the hit triangle does not count (`_blocked`).  Where that
     lift is longer than LIFT_HEIGHTS heights, the piece it skips is `_Segments.near`.
     Origins and directions go to Embree as float32, component-major (embreex reads the
-    transposed views without a copy)."""
+    transposed views without a copy).  fused: made in numba (`_fused_segments`), the same
+    arrays."""
+    if fused:
+        return _fused_segments(local, hit, reach)
     if isinstance(local.light, DirectionalLight):
         return _directional_segments(local.light, hit, reach)
     return _point_segments(local, hit)
+
+
+def _fused_segments(local: _LocalLight, hit: _Hits, reach: float) -> _Segments:
+    """`_segments` made in numba, in one pass over the hits (`raytrace.maskkernels`)."""
+    from . import maskkernels
+
+    light = local.light
+    if isinstance(light, DirectionalLight):
+        toward = -light.direction
+        facing, rays, start, k, tmax = maskkernels.directional_segments(
+            toward, float(reach), hit.point, hit.normal, hit.side, hit.height)
+        near = _NearPieces(k, hit.point64[:, k], toward[:, None], tmax)
+        return _Segments(facing, rays, start, toward.astype(np.float32)[:, None], None, near)
+    position = local.position
+    spot = isinstance(light, SpotLight)
+    axis = light.direction if spot else position
+    cos_cutoff = np.float32(light.cos_cutoff if spot else 0.0)
+    facing, rays, start, l, gap, k, tmax = maskkernels.point_segments(
+        position, float(np.abs(position).max()), float(local.through), spot,
+        np.asarray(axis, np.float64), cos_cutoff, hit.point, hit.normal, hit.side,
+        hit.side_d, hit.height)
+    origin = hit.point64[:, k]
+    return _Segments(facing, rays, start, l, gap,
+                     _NearPieces(k, origin, position[:, None] - origin, tmax))
 
 
 def _long_lifts(rays: np.ndarray, near: np.ndarray, lift: np.ndarray, end, hit: _Hits,
@@ -351,7 +404,7 @@ def _directional_segments(light: DirectionalLight, hit: _Hits, reach: float) -> 
     """`_segments` toward a directional light: rays, unbounded, ending at the scene's reach."""
     f32 = np.float32
     toward = -light.direction
-    n_dot_l = hit.side * (toward @ hit.normal)  # n facing the camera
+    n_dot_l = hit.side * _dot(toward, hit.normal)  # n facing the camera
     facing = n_dot_l > 0
     with np.errstate(divide="ignore"):
         near = hit.height / n_dot_l  # distance along the unit l
@@ -371,7 +424,7 @@ def _point_segments(local: _LocalLight, hit: _Hits) -> _Segments:
     f32 = np.float32
     light, position = local.light, local.position
     # n·(L − p) = n·L − n·p, and n·p = plane_d on the triangle's plane.
-    n_dot_l = hit.side * (position @ hit.normal) - hit.side_d
+    n_dot_l = hit.side * _dot(position, hit.normal) - hit.side_d
     facing = n_dot_l > 0
     c = np.flatnonzero(facing)
     start = hit.point.compress(facing, axis=1)
@@ -379,7 +432,7 @@ def _point_segments(local: _LocalLight, hit: _Hits) -> _Segments:
     length = np.sqrt(_dot(l, l))
     if isinstance(light, SpotLight):
         # Inside the cone: cos(angle between the spot's axis and the point) >= cos_cutoff.
-        inside = -(light.direction @ l) >= light.cos_cutoff * length
+        inside = -_dot(light.direction, l) >= light.cos_cutoff * length
         facing[c[~inside]] = False
         c, start, l, length = c[inside], start[:, inside], l[:, inside], length[inside]
     near = hit.height[c] / n_dot_l[c]                      # fractions of the segment

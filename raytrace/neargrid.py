@@ -239,11 +239,30 @@ class NearGrid:
         return (np.full(int(touch.sum()), pieces[j]),
                 self.members[self.starts[first]:self.starts[last]][touch])
 
-    def candidates(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray]:
+    def candidates(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray,
+                   compiled: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """(piece, triangle) int64 pairs, (p,) each (a pair may repeat), that hold every
         triangle on which `intersect.ray_triangle` may meet the float64 piece origins +
-        t·directions, 0 < t < tmax: origins, directions (n, 3) float64, tmax (n,) > 0."""
+        t·directions, 0 < t < tmax: origins, directions (n, 3) float64, tmax (n,) > 0.
+        compiled: by `raytrace.nearkernels` where numba loads (the same pairs, as a set),
+        else (or False) in numpy."""
+        kernels = _kernels() if compiled else None
+        if kernels is not None:
+            start = np.ascontiguousarray(np.asarray(origins, dtype=np.float64).T)
+            step = np.ascontiguousarray(np.asarray(directions, dtype=np.float64).T)
+            return kernels.candidates(start, step, np.asarray(tmax, dtype=np.float64),
+                                      self.reach, NEAR_PART_CELLS, NEAR_MAX_PARTS,
+                                      self.always, len(self.faces), self._kernel_grid())
+        return self._numpy_candidates(origins, directions, tmax)
+
+    def _kernel_grid(self) -> tuple:
+        """The grid's tables as `nearkernels.candidates` takes them."""
+        return (float(self.cell), self.origin, self.levels, self.keys, self.starts,
+                self.members, np.ascontiguousarray(self.boxes), self._table, self._bits,
+                NEAR_PIECE_CELLS, _HASH, AXIS_BITS)
+
+    def _numpy_candidates(self, origins, directions, tmax) -> tuple[np.ndarray, np.ndarray]:
+        """`candidates` in numpy."""
         # Each piece in parts of at most NEAR_PART_CELLS finest cells (a long one's box would
         # span a whole level's cells); a part's box padded by a bound of the rounding of its
         # computed end points (|o| + tmax·|d| bounds every |x| along the piece).
@@ -291,6 +310,15 @@ class NearGrid:
             hit = _pair_hits(triangles, self, o[p], d[p], tmax[p], k, own[p])
             blocked[p[hit]] = True
         return blocked
+
+
+def _kernels():
+    """`raytrace.nearkernels`, or None where numba is missing."""
+    try:
+        from . import nearkernels
+    except ImportError:
+        return None
+    return nearkernels
 
 
 def _pair_hits(triangles, grid: NearGrid, o, d, tmax, k, own) -> np.ndarray:

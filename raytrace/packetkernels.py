@@ -1,6 +1,6 @@
 """Embree's packet queries driven by numba (the optional `fast` extra): rays in packets of the
-library's native width (16 with AVX-512, else 8 or 4; `raytrace.embree4`), `nogil`, over
-chunks of consecutive rays on numba's threads (`trace(..., parallel=True)`) or on the caller's
+library's width (8 where the CPU runs it natively, else 16 or 4; `raytrace.embree4`), `nogil`,
+over chunks of consecutive rays on numba's threads (`trace(..., parallel=True)`) or on the caller's
 (`parallel=False`: the masks' tiles, each on a thread of their own pool).
 
 Consecutive rays make a packet: in the masks that is a run of pixels of one image row (primary

@@ -243,6 +243,10 @@ def through_light(normals: np.ndarray, plane_d: np.ndarray, weight: np.ndarray,
     """The largest weight W + Σ|n_j||L_j| of the triangles whose plane passes within its own
     `shadow_height` of the light (a floor the light lies on), 0.0 if none.  normals (M, 3),
     plane_d (M,), weight (M,): eye's frame; light_position (3,)."""
-    w = weight + np.abs(normals) @ np.abs(light_position)
-    near = np.abs(normals @ light_position - plane_d) <= shadow_height(w)
+    a, at = np.abs(normals), np.abs(light_position)
+    # dot products summed x, y, z left to right, as `raytrace.maskkernels.through_light` does
+    w = weight + (a[:, 0] * at[0] + a[:, 1] * at[1] + a[:, 2] * at[2])
+    n, p = normals, light_position
+    near = np.abs((n[:, 0] * p[0] + n[:, 1] * p[1] + n[:, 2] * p[2]) - plane_d) <= \
+        shadow_height(w)
     return float(w[near].max()) if near.any() else 0.0

@@ -85,10 +85,16 @@ def test_the_cheap_query_keeps_every_triangle_the_float64_test_meets(data):
          f"{len(piece)} candidates")
     missed = np.argwhere(met & ~kept)
     assert len(missed) == 0, f"hits left out of the candidates (piece, triangle): {missed[:5]}"
+    # numba's pairs (raytrace.nearkernels, where it loads) are numpy's, as a set
+    assert _pairs(grid.candidates(o, d, tmax)) == _pairs(grid.candidates(o, d, tmax, False))
     walk = NumpyBackend(vertices, faces).occluded_leaving(o, d, tmax, own)
     assert np.array_equal(grid.occluded_leaving(NumpyBackend(vertices, faces), o, d, tmax, own),
                           walk)
     assert np.array_equal(EmbreeBackend(vertices, faces).occluded_leaving(o, d, tmax, own), walk)
+
+
+def _pairs(found) -> set:
+    return set(zip(*(x.tolist() for x in found)))
 
 
 def test_the_query_is_empty_away_from_the_geometry_and_full_beside_it():
@@ -131,3 +137,4 @@ def test_cells_are_found_whether_or_not_their_table_slot_is_shared():
         assert np.array_equal(queries[found], grid.keys[at])
         assert len(found) == len(grid.keys)
         assert set(zip(*(x.tolist() for x in grid.candidates(o, d, tmax)))) == expected
+        assert _pairs(grid.candidates(o, d, tmax, False)) == expected

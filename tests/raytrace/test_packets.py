@@ -1,4 +1,4 @@
-"""Embree's packets (`raytrace.embree.PacketBackend`: rtcIntersect16/rtcOccluded16 through numba
+"""Embree's packets (`raytrace.embree.PacketBackend`: rtcIntersect8/rtcOccluded8 through numba
 on the library the embreex wheel ships) answer as embreex's single rays (`EmbreeBackend`) do, bit
 for bit: every query on random soups, with rays aimed at shared vertices and edges (where the
 order of the walk picks between tied triangles), and the masks and the ground truth of random
