@@ -17,15 +17,31 @@ triangles and the BVH) and RAYS_NS_PER_RAY per ray with Embree's packets
 (`raytrace.embree.PacketBackend`; SINGLE_RAYS_SLOWER times that with embreex's single rays),
 a ray for each pixel and, from the SHADOW_RAY_SHARE of the pixels that are covered and face a
 light, one per hard light (an area light's samples each count).  A process's first masks pay
-once more: RASTER_FIRST_MS for the shaders, RAYS_FIRST_MS for the packets' numba kernels.
-The constants are the fit of `benchmarks.bench_fastest` (13 scenes: 1k to 1M triangles, 77k
-to 920k pixels, 1 to 144 hard lights; 2 cores, llvmpipe 256 bits, load ~1), on which the model
-chose the faster renderer on 11, the other two within 1.22x; in the run BENCHMARKS.md gives (5
-rounds, load 1.2-1.3) on 10 of 13, the worst 1.36x (the bunny: a scanned mesh's many
-silhouette edges cost the rasterizer more than the model's icospheres); the first masks' costs
-are that run's (17 ms; 331 ms with packets, 3 ms with single rays).  A hardware GPU draws the
-rasterizer's frame, which the model does not time: there the rasterizer is chosen.  Without a
-GL the ray tracer is; without Embree the rasterizer.
+once more: RASTER_FIRST_MS for the shaders, RAYS_FIRST_MS for the ray tracer's numba kernels
+(the packets' and the masks' around them, `raytrace.maskkernels`, `raytrace.nearkernels`; the
+single-ray path loads the last two as well) read from numba's cache.
+The constants are the fit of `benchmarks.bench_fastest` at 7ea2da1 (after the masks' kernels
+of issue 40 step 3; 13 scenes: 1k to 1M triangles, 77k to 920k pixels, 1 to 144 hard lights;
+5 rounds, 2 cores, llvmpipe 256 bits, load 0.9-2.2), the run BENCHMARKS.md gives: on it the
+model chose the faster renderer on 11 of 13, the worst 1.37x (the bunny: a scanned mesh's
+many silhouette edges cost the rasterizer more than the model's icospheres); on a run just
+before it (load 0.6-2.0, whose own fit gave RAYS_NS_PER_RAY 107: the soft scene's 26 M rays
+weigh most) on 9 of 13, the worst 1.49x.  The first masks' costs are that run's (16 ms; 359
+ms with packets, 338 ms with single rays).
+
+The kernels' cache (`raytrace.packetkernels._jit`, numba's `cache=True`): numba keeps them in
+$NUMBA_CACHE_DIR where that is set, else in the `__pycache__` beside the module where that is
+writable, else in the user's cache directory (~/.cache/numba, or $XDG_CACHE_HOME/numba), so an
+install into a read-only site-packages still caches them; an entry holds for the module's
+source (its content hash) and the CPU.  RAYS_FIRST_MS assumes a warm cache, the usual case
+from a machine's second command on: a fresh process's first masks at 32x24 took 360-375 ms
+with it and 7,770-7,890 ms with an empty cache (the kernels compiled and written: the first
+command after an install or upgrade, once).  Where no cache directory is writable at all numba
+refuses `cache=True`, the kernels compile in every process (~7.8 s each), and the model, which
+does not know, underestimates a one-shot command's ray tracer by that much.
+
+A hardware GPU draws the rasterizer's frame, which the model does not time: there the
+rasterizer is chosen.  Without a GL the ray tracer is; without Embree the rasterizer.
 
 `shadowvol masks` chooses for its process's first masks (`first=True`); a batch job of
 renderer "auto" (`shadowvol.batch.sources`) for each frame of a worker that renders many
@@ -45,18 +61,18 @@ from shadowvol.scene import Scene, hard_lights
 RENDERERS = ("auto", "shadowvol", "raytrace")
 NAMES = {"shadowvol": "the rasterizer's mask-only frame", "raytrace": "the ray tracer"}
 
-# the cost model (module docstring): benchmarks.bench_fastest's fit, 2026-12-05
-RASTER_MS = 30.5
-RASTER_NS_PER_TRIANGLE = 856.0
-RASTER_NS_PER_TRIANGLE_LIGHT = 323.0
-RASTER_NS_PER_PIXEL_LIGHT = 5.6
-RAYS_NS_PER_TRIANGLE = 1214.0
-RAYS_NS_PER_RAY = 79.0
+# the cost model (module docstring): benchmarks.bench_fastest's fit at 7ea2da1, 2026-12-05
+RASTER_MS = 34.4
+RASTER_NS_PER_TRIANGLE = 844.0
+RASTER_NS_PER_TRIANGLE_LIGHT = 371.0
+RASTER_NS_PER_PIXEL_LIGHT = 5.3
+RAYS_NS_PER_TRIANGLE = 1399.0
+RAYS_NS_PER_RAY = 71.0
 SINGLE_RAYS_SLOWER = 1.2     # benchmarks.bench_packets: single / packets 1.15-1.24x
 SHADOW_RAY_SHARE = 0.6       # the share of pixels sending a shadow ray: 0.50-0.62 measured
-# a fresh process's first masks: the shaders compiled; the packets' kernels loaded (numba)
-RASTER_FIRST_MS = 20.0
-RAYS_FIRST_MS = {"packets": 340.0, "single": 3.0}
+# a fresh process's first masks: the shaders compiled; the ray tracer's numba kernels loaded
+RASTER_FIRST_MS = 16.0
+RAYS_FIRST_MS = {"packets": 360.0, "single": 340.0}   # numba's cache warm
 
 
 @dataclass(frozen=True)
