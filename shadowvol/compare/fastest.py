@@ -27,7 +27,12 @@ model chose the faster renderer on 11 of 13, the worst 1.37x (the bunny: a scann
 many silhouette edges cost the rasterizer more than the model's icospheres); on a run just
 before it (load 0.6-2.0, whose own fit gave RAYS_NS_PER_RAY 107: the soft scene's 26 M rays
 weigh most) on 9 of 13, the worst 1.49x.  The first masks' costs are that run's (16 ms; 359
-ms with packets, 338 ms with single rays).
+ms with packets, 338 ms with single rays: numba installed, the single rays asked for or
+Embree's library not loadable; where numba is missing the single-ray path loads no kernels and
+its first masks pay ~4 ms, which the model, keyed by the queries alone, overestimates).
+SINGLE_RAYS_SLOWER is bench_packets' ratio of the rays alone, from before the masks' kernels:
+the whole masks with single rays now cost 1.61-1.72x the packets' (4 scenes, warm), and
+1.37-2.0x without numba; not refitted here.
 
 The kernels' cache (`raytrace.packetkernels._jit`, numba's `cache=True`): numba keeps them in
 $NUMBA_CACHE_DIR where that is set, else in the `__pycache__` beside the module where that is
