@@ -5,12 +5,14 @@ The shadows of one pixel's triangles, each taken whole (`pyramid.uncut`) and tur
 clockwise, cover a point of the light's plane as many times as the winding number there of
 the sum of their rings; an edge two of them run in opposite directions cancels from that
 sum, so what is left (the outline: each edge between two welded corners with its net count)
-has the same winding numbers.  Where no two of the outline's edges meet but at a shared
-corner (checked in float64 with a margin: any doubt and the pixel takes `raytrace.arrange`'s
-union instead), its winding number is constant on each face it bounds, and an edge's right
-side is covered by its count less than its left: the union's boundary is the edges whose right
-side is covered 0 times (the winding number at the edge's midpoint of all other edges, less
-half the edge's own count).  The union's measures (area, Lambert's irradiance) are boundary
+has the same winding numbers.  The edges are split where two cross (float64, one crossing
+point for both); every other two must lie apart or share a corner only (checked with a
+margin: any doubt and the pixel takes `raytrace.arrange`'s union instead).  Then the winding
+number is constant on each face the pieces bound, and a piece's right side is covered by its
+count less than its left: the union's boundary is the pieces whose right side is covered 0
+times (counted along a ray in +x from the first piece of one edge per run
+of edges through corners with one edge in and one out, and carried along the run, adding the
+count of each edge crossed).  The union's measures (area, Lambert's irradiance) are boundary
 integrals: those of the fan of signed triangles from the light's centre over that boundary,
 each clipped to the light's part seen from p (convex) in numpy (`regions.inside`).
 """
@@ -56,15 +58,52 @@ def boundary(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray) -> np.ndarray
         return None
     sa, sb, parent, jump = pieces
     first = np.flatnonzero(np.r_[True, parent[1:] != parent[:-1]])     # one per edge, in order
-    base = _right_cover(sa[first], sb[first], parent[first], a, b, count)
-    if base is None:
+    walk, root, offset = _runs(ia, ib, count, jump[np.r_[first[1:], len(parent)] - 1])
+    at = first[walk[np.r_[True, root[1:] != root[:-1]]]]
+    cover = _right_cover(sa[at], sb[at], parent[at], a, b, count)
+    if cover is None:
         return None
+    base = np.empty(len(a))
+    base[walk] = cover[root] + offset
     # along an edge the cover changes only where another crosses it
     right = base[parent] + jump
     if (right < 0).any():
         return None
     edge = right == 0
     return np.stack([sa[edge], sb[edge]], axis=1)
+
+
+def _runs(ia: np.ndarray, ib: np.ndarray, count: np.ndarray, total: np.ndarray):
+    """The edges ia-ib (e,) with counts (e,) in runs through corners of one edge in and one
+    out of equal counts (there the right sides of the two meet, so the second's first piece
+    is covered as much as the first's last: by `total` (e,) more than its first piece):
+    (the edges in run order (e,), the run of each (e,), how much more its first piece is
+    covered than its run's first edge's (e,))."""
+    corner, inv = np.unique(np.r_[ia, ib], return_inverse=True)
+    va, vb = inv[:len(ia)], inv[len(ia):]
+    out_deg = np.bincount(va, minlength=len(corner))
+    in_deg = np.bincount(vb, minlength=len(corner))
+    leaving = np.full(len(corner), -1)
+    leaving[va] = np.arange(len(ia))
+    succ = np.where((in_deg[vb] == 1) & (out_deg[vb] == 1), leaving[vb], -1)
+    succ[(succ >= 0) & (count[np.maximum(succ, 0)] != count)] = -1
+    has_pred = np.zeros(len(ia), bool)
+    has_pred[succ[succ >= 0]] = True
+    nxt, seen, walk, root = succ.tolist(), [False] * len(ia), [], []
+    # runs from an edge with none before it, then the closed ones
+    for s in np.flatnonzero(~has_pred).tolist() + list(range(len(ia))):
+        e, r = s, (root[-1] + 1 if root else 0)
+        while e >= 0 and not seen[e]:
+            seen[e] = True
+            walk.append(e)
+            root.append(r)
+            e = nxt[e]
+    walk, root = np.array(walk, np.int64), np.array(root, np.int64)
+    step = np.r_[0.0, total[walk][:-1]]
+    run_start = np.flatnonzero(np.r_[True, root[1:] != root[:-1]])
+    acc = np.cumsum(step)
+    offset = acc - acc[run_start][root]
+    return walk, root, offset
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
