@@ -73,26 +73,11 @@ def union(shapely, flat: np.ndarray, count: np.ndarray, uncut: np.ndarray, free:
         mask = np.arange(flat.shape[1])[None] < count[cut, None]
         polys[cut] = shapely.polygons(shapely.linearrings(
             flat[cut][mask], indices=np.repeat(np.arange(len(cut)), count[cut])))
-    flat, whole = uncut, free
-    tri = flat[:, :3]
-    signed = (tri[:, 1, 0] - tri[:, 0, 0]) * (tri[:, 2, 1] - tri[:, 0, 1]) - \
-        (tri[:, 1, 1] - tri[:, 0, 1]) * (tri[:, 2, 0] - tri[:, 0, 0])
-    at = np.flatnonzero(whole & (signed != 0))
-    turn = signed[at] < 0
-    start, end, key_a, key_b = [], [], [], []
-    for e in range(3):
-        s0 = np.where(turn, (e + 1) % 3, e)
-        s1 = np.where(turn, e, (e + 1) % 3)
-        start.append(flat[at, s0])
-        end.append(flat[at, s1])
-        key_a.append(ids[at, s0])
-        key_b.append(ids[at, s1])
-    start, end = np.concatenate(start), np.concatenate(end)
-    key_a, key_b = np.concatenate(key_a), np.concatenate(key_b)
+    start, end, key_a, key_b = edges(uncut, ids, free)
     big = int(max(key_a.max(initial=0), key_b.max(initial=0))) + 1
     inner = np.isin(key_a * big + key_b, key_b * big + key_a)
     lines = [shapely.linestrings(np.stack([start[~inner], end[~inner]], axis=1))]
-    other = np.flatnonzero(~whole)
+    other = np.flatnonzero(~free)
     if len(other):
         lines.append(shapely.boundary(polys[other]))
     # only the union's part in the light's box is ever used: the edges cut to it, its outline
@@ -110,6 +95,27 @@ def union(shapely, flat: np.ndarray, count: np.ndarray, uncut: np.ndarray, free:
     tree = shapely.STRtree(polys[shapely.area(polys) > 0])   # no area: no cover
     inside = np.unique(tree.query(shapely.point_on_surface(faces), predicate="intersects")[0])
     return shapely.coverage_union_all(faces[inside])
+
+
+def edges(uncut: np.ndarray, ids: np.ndarray, free: np.ndarray
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The edges of the free whole shadows uncut (q, 3, 2) of some area, each turned counter-
+    clockwise: (start (e, 2), end (e, 2), their welded corner ids (e,), (e,))."""
+    tri = uncut[:, :3]
+    signed = (tri[:, 1, 0] - tri[:, 0, 0]) * (tri[:, 2, 1] - tri[:, 0, 1]) - \
+        (tri[:, 1, 1] - tri[:, 0, 1]) * (tri[:, 2, 0] - tri[:, 0, 0])
+    at = np.flatnonzero(free & (signed != 0))
+    turn = signed[at] < 0
+    start, end, key_a, key_b = [], [], [], []
+    for e in range(3):
+        s0 = np.where(turn, (e + 1) % 3, e)
+        s1 = np.where(turn, e, (e + 1) % 3)
+        start.append(uncut[at, s0])
+        end.append(uncut[at, s1])
+        key_a.append(ids[at, s0])
+        key_b.append(ids[at, s1])
+    return (np.concatenate(start), np.concatenate(end), np.concatenate(key_a),
+            np.concatenate(key_b))
 
 
 def polygonal(shapely, geoms: np.ndarray) -> np.ndarray:

@@ -20,7 +20,9 @@ box, a sphere's tessellation) shadows p from outside as one convex polygon (the 
 convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
 where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
 not at all from its own outside.  Every other object's triangles are united, a pixel's union of
-more than MANY_PIECES from its outline alone (`raytrace.arrange`).  One
+more than MANY_PIECES from its outline alone (`raytrace.arrange`), or, under a rect or disk
+light where those are all its shadows and all uncut, measured from the outline's winding
+numbers with no polygon boolean (`raytrace.windings`).  One
 convex shadow on a rect or disk is taken away in numpy (clipped edge by edge); several are
 united, and taken away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
 (`lightshapes.OVERLAY_GRID`); the measures are `raytrace.polygons`'.
@@ -36,7 +38,7 @@ import numpy as np
 from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
-from . import arrange, polygons, pyramid
+from . import arrange, polygons, pyramid, windings
 from .arrange import polygonal as _polygonal
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
@@ -199,10 +201,12 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     p, normal, own = p[front], normal[front], own[front]
     base = light.center + light.hull @ light.axes                 # (k, 3)
     pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
+    chains = np.full(len(p), None, object)
     at = np.arange(len(p)) if shadowed is None else np.flatnonzero(shadowed[front])
     if len(at) and len(objects.members):
-        pieces[at], single[at] = _shadows(shapely, light, objects, corners, p[at], normal[at],
-                                          own[at], base)
+        pieces[at], single[at], chains[at] = _shadows(
+            shapely, light, objects, corners, p[at], normal[at], own[at], base,
+            light.outline is None and regions is None)
     # the light cut to p's side: its hull's box cut by n . (x - p) > 0, then the outline
     box = np.array([light.hull.min(axis=0), [light.hull[:, 0].max(), light.hull[:, 1].min()],
                     light.hull.max(axis=0), [light.hull[:, 0].min(), light.hull[:, 1].max()]])
@@ -213,7 +217,8 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     cut = cut[..., :2]
     area, irr, unatt = np.zeros(len(p)), np.zeros(len(p)), np.zeros(len(p))
     measures = (area, irr, unatt) if direct else (area, irr)
-    has = pieces != None  # noqa: E711 (an object array)
+    wound = windings.found(chains)
+    has = (pieces != None) | wound  # noqa: E711 (an object array)
     # nothing in the way of a rect or disk: its box cut to p's side, measured as it is
     plain = np.flatnonzero(~has & (count >= 3)) if light.outline is None and regions is None \
         else np.zeros(0, int)
@@ -230,7 +235,13 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
                                                     pieces[lone], p[lone], normal[lone],
                                                     direct)):
             out[lone] = got
-    rest = np.setdiff1d(np.arange(len(p)), np.r_[plain, lone])
+    wound = np.flatnonzero(wound & (count >= 3))
+    if len(wound):
+        for out, got in zip(measures, windings.measures(light, cut[wound], count[wound],
+                                                        chains[wound], p[wound],
+                                                        normal[wound], direct)):
+            out[wound] = got
+    rest = np.setdiff1d(np.arange(len(p)), np.r_[plain, lone, wound])
     if len(rest):
         seen = _polygons(shapely, cut[rest], count[rest])
         if light.outline is not None:  # a polygon light: its own outline
@@ -267,11 +278,12 @@ def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
 
 
 def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
-             normal: np.ndarray, own: np.ndarray, base: np.ndarray
-             ) -> tuple[np.ndarray, np.ndarray]:
+             normal: np.ndarray, own: np.ndarray, base: np.ndarray, outlines: bool = False
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(n,) object array: the union of every triangle's shadow on the light's plane seen from
-    each p (None where none falls inside the pyramid over `base` (k, 3)); and where that is
-    one convex polygon (`_unite`)."""
+    each p (None where none falls inside the pyramid over `base` (k, 3)); where that is
+    one convex polygon (`_unite`); and, with `outlines`, the union's boundary from its
+    outline's windings (`raytrace.windings`) where that is certain (the union None there)."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = (objects.lo[None] <= hi[:, None]).all(-1) & (objects.hi[None] >= lo[:, None]).all(-1)
@@ -299,6 +311,14 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     arranged = np.zeros(0, np.int64)
     crowd = np.bincount(pix[rest], minlength=len(p)) > MANY_PIECES
     heavy = rest[crowd[pix[rest]]]
+    chains = np.full(len(p), None, object)
+    if len(heavy) and outlines:
+        # a pixel whose every shadow is in the crowd: measured from its outline's windings
+        alone = crowd.copy()
+        alone[np.concatenate(owner + [np.zeros(0, np.int64)]).astype(np.int64)] = False
+        chains, heavy = windings.split(light, corners, p, pix, tri, heavy, objects.corner_ids,
+                                       alone)
+        rest = rest[~windings.found(chains)[pix[rest]]]
     if len(heavy):
         # many pieces: their union from its outline (`raytrace.arrange`)
         rest = rest[~crowd[pix[rest]]]
@@ -311,7 +331,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         owner.append(pix[rest])
     union, single = _unite(shapely, shapes, owner, len(p), light.grid)
     single[arranged] = False       # an outline's union is not one convex polygon
-    return union, single
+    return union, single, chains
 
 
 def _whole_bodies(shapely, light: FramedLight, objects: Objects, p: np.ndarray, normal: np.ndarray,

@@ -10,7 +10,7 @@ import numpy as np
 from . import polygons
 from .lightshapes import FramedLight
 
-__all__ = ["closed_rings", "measure", "minus_convex", "ring_measures"]
+__all__ = ["closed_rings", "inside", "measure", "minus_convex", "ring_measures"]
 
 
 def minus_convex(shapely, light: FramedLight, cut: np.ndarray, count: np.ndarray,
@@ -27,6 +27,15 @@ def minus_convex(shapely, light: FramedLight, cut: np.ndarray, count: np.ndarray
     inner = coords[first[:, None] + np.minimum(np.arange(m.max())[None], m[:, None] - 1)]
     inner_count = np.where(m >= 3, m, 0)
     whole = ring_measures(light, *closed_rings(cut, count), p, normal, direct)
+    inner, inner_count = inside(cut, count, inner, inner_count)
+    part = ring_measures(light, *closed_rings(inner, inner_count), p, normal, direct)
+    return tuple(w - q for w, q in zip(whole, part))
+
+
+def inside(cut: np.ndarray, count: np.ndarray, inner: np.ndarray, inner_count: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Convex polygons inner (n, m, 2), inner_count (n,) clipped by each edge of the convex
+    counter-clockwise polygons cut (n, k, 2), count (n,): (corners, counts)."""
     for e in range(cut.shape[1]):
         start = cut[:, e]
         edge = cut[np.arange(len(cut)), (e + 1) % np.maximum(count, 1)] - start
@@ -34,8 +43,7 @@ def minus_convex(shapely, light: FramedLight, cut: np.ndarray, count: np.ndarray
              - edge[:, None, 1] * (inner[..., 0] - start[:, None, 0]))
         d = np.where((e < count)[:, None], d, 1.0)           # past the cut's last edge: keep
         inner, inner_count = polygons.clip(inner, inner_count, d)
-    part = ring_measures(light, *closed_rings(inner, inner_count), p, normal, direct)
-    return tuple(w - q for w, q in zip(whole, part))
+    return inner, inner_count
 
 
 def closed_rings(flat: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

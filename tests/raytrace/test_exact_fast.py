@@ -1,6 +1,6 @@
 """The fast path of the exact visibility (`raytrace.exact_soft`) against its plain float64
 reference, the union of every triangle's shadow one by one: crowded pixels' unions taken from
-their outline (`raytrace.arrange`), on random scenes of closed (a noisy ball, wound either way), open (a
+their outline (`raytrace.arrange`) or measured from its windings (`raytrace.windings`), on random scenes of closed (a noisy ball, wound either way), open (a
 bowl, a sheet) and non-manifold (fins on one edge) casters, each standing on the floor (contact
 shadows) or floating, under rect, disk and polygon lights.  The same V and irradiance to
 ROUNDING (the two differ by GEOS's snapping of different pieces, ~1e-14), where the fast path
@@ -17,6 +17,7 @@ from builders import FLOOR_Y, LIGHT_Y, MATTE
 
 import raytrace.arrange
 import raytrace.exact_soft
+import raytrace.windings
 from raytrace.exact_soft import exact_visibility
 from shadowvol.primitives import mesh, plane
 from shadowvol.scene import AreaLight, Camera, Scene
@@ -100,14 +101,23 @@ def _counted(monkeypatch, module, name):
 def test_fast_paths_equal_the_triangle_by_triangle_union(seed, monkeypatch):
     scene = _random_scene(seed)
     slow = _reference(scene, monkeypatch)
-    arranged = _counted(monkeypatch, raytrace.arrange, "union")
-    fast = exact_visibility(scene)
-    # crowded from 4 pieces: the outline's union on most shadowed pixels
-    monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", 4)
-    crowded = exact_visibility(scene)
-    assert len(arranged) >= 10
     v = slow.visibility[0]
     assert ((v > 0) & (v < 1)).sum() > 40 and (v == 0).sum() > 5
-    for got in (fast, crowded):
-        assert np.abs(got.visibility - slow.visibility).max() <= ROUNDING
-        assert np.abs(got.irradiance - slow.irradiance).max() <= ROUNDING
+    got = []
+    wound = _counted(monkeypatch, raytrace.windings, "boundary")
+    for many in (raytrace.exact_soft.MANY_PIECES, 4):
+        # crowded from 4 pieces: the outline on most shadowed pixels
+        monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", many)
+        got.append(exact_visibility(scene))
+    # its windings on a rect or disk light (a polygon light's outline is not convex)
+    assert sum(c is not None for c in wound) >= (10 if seed % 3 != 2 else 0)
+    # the outline's union by GEOS (`raytrace.arrange`), the windings off
+    monkeypatch.setattr(raytrace.windings, "boundary", lambda *args: None)
+    arranged = _counted(monkeypatch, raytrace.arrange, "union")
+    for many in (raytrace.exact_soft.MANY_PIECES, 4):
+        monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", many)
+        got.append(exact_visibility(scene))
+    assert len(arranged) >= 10
+    for fast in got:
+        assert np.abs(fast.visibility - slow.visibility).max() <= ROUNDING
+        assert np.abs(fast.irradiance - slow.irradiance).max() <= ROUNDING
