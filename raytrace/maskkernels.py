@@ -22,8 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .packetkernels import DIR, FLAGS, GEOM_ID, ID, INVALID, MASK, NO_BOUND, ORG, PRIM_ID, ROWS
-from .packetkernels import TFAR, TIME, TNEAR, VALID, _jit
+from .packetkernels import DIR, INVALID, NO_BOUND, ORG, PRIM_ID, ROWS, VALID, _jit, reset_lane
 from .tolerances import FLOAT32_EPS, LIGHT_ERROR_ULPS, LIFT_HEIGHTS, SURFACE_ERROR_ULPS
 
 _HEIGHT = SURFACE_ERROR_ULPS * FLOAT32_EPS   # `tolerances.shadow_height`'s factor
@@ -52,7 +51,7 @@ BLOCK_ROWS = 2
 def _trace_blocks(fn, scene, width, block_rows, y0, y1, row32, col32, eye32, near32, tri):
     """tri (R*W,) int64, row-major: the primID of each pixel of rows y0..y1-1, -1 for none:
     the ray eye32 + near32·d, d = row32[:, y] + col32[:, x] (float32), unbounded (tfar
-    NO_BOUND), set as `packetkernels._rays` sets it, in packets of `width` pixels, blocks of
+    NO_BOUND), its lanes set by `packetkernels.reset_lane`, in packets of `width` pixels, blocks of
     block_rows rows (fewer at the tile's foot and right edge)."""
     W = col32.shape[1]
     bh = min(block_rows, width)
@@ -73,15 +72,7 @@ def _trace_blocks(fn, scene, width, block_rows, y0, y1, row32, col32, eye32, nea
                         d = row32[a, y] + col32[a, x]
                         f[(ORG + a) * width + k] = eye32[a] + near32 * d
                         f[(DIR + a) * width + k] = d
-                    f[TNEAR * width + k] = 0.0
-                    f[TIME * width + k] = 0.0
-                    f[TFAR * width + k] = NO_BOUND
-                    u[MASK * width + k] = INVALID
-                    u[ID * width + k] = 0
-                    u[FLAGS * width + k] = 0
-                    u[PRIM_ID * width + k] = INVALID
-                    u[GEOM_ID * width + k] = INVALID
-                    u[(GEOM_ID + 1) * width + k] = INVALID
+                    reset_lane(f, u, width, k, NO_BOUND)
                     k += 1
             for lane in range(width):
                 valid[lane] = -1 if lane < k else 0

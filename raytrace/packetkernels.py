@@ -42,6 +42,22 @@ def _jit(**flags):
 
 
 @_jit()
+def reset_lane(f, u, width, k, tfar):
+    """Lane k of the packet f (its uint32 view u) set as embreex sets its single ray, bar the
+    origin and direction: tnear 0, time 0, tfar, mask all ones, id 0, flags 0, the hit's
+    primID, geomID and instID invalid."""
+    f[TNEAR * width + k] = 0.0
+    f[TIME * width + k] = 0.0
+    f[TFAR * width + k] = tfar
+    u[MASK * width + k] = INVALID
+    u[ID * width + k] = 0
+    u[FLAGS * width + k] = 0
+    u[PRIM_ID * width + k] = INVALID
+    u[GEOM_ID * width + k] = INVALID
+    u[(GEOM_ID + 1) * width + k] = INVALID
+
+
+@_jit()
 def _rays(query, fn, scene, width, o, d, tfar, lo, hi, tri, t):
     """Trace rays lo..hi-1 in packets of `width` through fn (rtcIntersectN or rtcOccludedN)
     on `scene`: tri[i] = the hit's primID (INTERSECT) or 0 for blocked (OCCLUDED), -1 for
@@ -63,15 +79,7 @@ def _rays(query, fn, scene, width, o, d, tfar, lo, hi, tri, t):
             for a in range(3):
                 f[(ORG + a) * width + k] = o[i, a]
                 f[(DIR + a) * width + k] = d[i * step_d, a]
-            f[TNEAR * width + k] = 0.0
-            f[TIME * width + k] = 0.0
-            f[TFAR * width + k] = tfar[i * step_t]
-            u[MASK * width + k] = INVALID
-            u[ID * width + k] = 0
-            u[FLAGS * width + k] = 0
-            u[PRIM_ID * width + k] = INVALID
-            u[GEOM_ID * width + k] = INVALID
-            u[(GEOM_ID + 1) * width + k] = INVALID
+            reset_lane(f, u, width, k, tfar[i * step_t])
         fn(valid.ctypes.data, scene, f.ctypes.data, 0)
         for k in range(min(width, hi - first)):
             i = first + k
