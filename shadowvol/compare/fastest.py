@@ -30,9 +30,14 @@ weigh most) on 9 of 13, the worst 1.49x.  The first masks' costs are that run's 
 ms with packets, 338 ms with single rays: numba installed, the single rays asked for or
 Embree's library not loadable; where numba is missing the single-ray path loads no kernels and
 its first masks pay ~4 ms, which the model, keyed by the queries alone, overestimates).
-SINGLE_RAYS_SLOWER is bench_packets' ratio of the rays alone, from before the masks' kernels:
-the whole masks with single rays now cost 1.61-1.72x the packets' (4 scenes, warm), and
-1.37-2.0x without numba; not refitted here.
+SINGLE_RAYS_SLOWER is `benchmarks.bench_single_masks`' fit at 82cc7c0 (5 rounds, 1280x720,
+load 0.6-0.7): whole masks, the Embree scene built each time, with single rays and with
+packets; each scene's 1 + (single - packets) / (the model's rays at RAYS_NS_PER_RAY), the
+median of 5 scenes 1.54 (10k 1.39, 100k 1.71 and 1.50 with 4 lights, the bunny 1.54; the
+whole masks 1.61-1.96x the packets').  The 1M scene fits 7.1: the single rays' extra grows
+with the BVH there (+640 ms over 666), which a per-ray constant cannot follow, so the model
+underestimates the single rays on a million triangles.  (Before: 1.2, bench_packets' ratio of
+the rays alone, from before the masks' kernels.)
 
 The kernels' cache (`raytrace.packetkernels._jit`, numba's `cache=True`): numba keeps them in
 $NUMBA_CACHE_DIR where that is set, else in the `__pycache__` beside the module where that is
@@ -73,7 +78,7 @@ RASTER_NS_PER_TRIANGLE_LIGHT = 371.0
 RASTER_NS_PER_PIXEL_LIGHT = 5.3
 RAYS_NS_PER_TRIANGLE = 1399.0
 RAYS_NS_PER_RAY = 71.0
-SINGLE_RAYS_SLOWER = 1.2     # benchmarks.bench_packets: single / packets 1.15-1.24x
+SINGLE_RAYS_SLOWER = 1.54    # benchmarks.bench_single_masks: the median fit of 5 scenes
 SHADOW_RAY_SHARE = 0.6       # the share of pixels sending a shadow ray: 0.50-0.62 measured
 # a fresh process's first masks: the shaders compiled; the ray tracer's numba kernels loaded
 RASTER_FIRST_MS = 16.0
