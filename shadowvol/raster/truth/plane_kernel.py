@@ -1,0 +1,42 @@
+"""`plane_depth.plane_depths`' per-pixel step compiled with numba (the `fast` extra), the same
+float64 operations in the same order as its numpy form; `None` where numba is missing.
+
+Per pixel i (flat index pixel[i], triangle row which[i]): n . v summed from 0 as
+((0 + t0) + t1) + t2 with t_k = (row[k, y] + col[k, x]) * n[w, k], s = num[w] / (n . v) and, where
+s is finite and positive, out[pixel[i]] = float32(s).  numba's default keeps IEEE order (no
+fast-math, no fused multiply-add) and `error_model="numpy"` divides by zero as numpy does.
+"""
+
+from __future__ import annotations
+
+import math
+
+try:
+    import numba
+except ImportError:    # the `fast` extra not installed: plane_depth's numpy path
+    numba = None
+
+
+def _depths(pixel, which, width, row, col, n, num, out):
+    for i in range(pixel.shape[0]):
+        p = pixel[i]
+        y = p // width
+        x = p - y * width
+        w = which[i]
+        n_dot_v = 0.0
+        for k in range(3):
+            term = row[k, y]
+            term += col[k, x]
+            term *= n[w, k]
+            n_dot_v += term
+        s = num[w] / n_dot_v
+        if s > 0 and s < math.inf:   # finite and positive (nan fails both)
+            out[p] = s
+
+
+depths = None
+if numba is not None:
+    try:
+        depths = numba.njit(cache=True, nogil=True, error_model="numpy")(_depths)
+    except RuntimeError:   # no writable cache directory
+        depths = numba.njit(nogil=True, error_model="numpy")(_depths)
