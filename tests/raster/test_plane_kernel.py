@@ -44,3 +44,30 @@ def test_kernel_matches_numpy(monkeypatch, count):
     assert compiled.dtype == plain.dtype == np.float32
     assert compiled.tobytes() == plain.tobytes()
     assert (compiled != fallback).any() and (compiled[:3] == fallback[:3]).all()
+
+
+class _Surfaces:
+    """What surface_outputs reads of a SceneGeometry: float32 normals, each triangle's object."""
+
+    def __init__(self, rng, count: int):
+        self.face_normals32 = rng.normal(0, 1, (count, 3)).astype(np.float32)
+        self.face_normals32[0] = 0.0                                   # negated: -0.0
+        self.triangle_objects = rng.integers(0, 70000, count)          # wraps past uint16
+
+
+def test_surface_kernel_matches_numpy(monkeypatch):
+    from shadowvol.raster.truth import truth_pass
+
+    rng = np.random.default_rng(7)
+    geo = _Surfaces(rng, 300)
+    triangle = rng.integers(-1, 300, (29, 41))
+    front = rng.random((29, 41)) < 0.5
+    for want in ({"normal"}, {"object_id"}, {"normal", "object_id"}):
+        compiled = truth_pass.surface_outputs(geo, triangle, front, want)
+        with monkeypatch.context() as m:
+            m.setattr(plane_kernel, "surface", None)
+            plain = truth_pass.surface_outputs(geo, triangle, front, want)
+        assert compiled.keys() == plain.keys() == want
+        for name in want:
+            assert compiled[name].dtype == plain[name].dtype
+            assert compiled[name].tobytes() == plain[name].tobytes(), name

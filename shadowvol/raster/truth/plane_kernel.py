@@ -1,5 +1,6 @@
-"""`plane_depth.plane_depths`' per-pixel step compiled with numba (the `fast` extra), the same
-float64 operations in the same order as its numpy form; `None` where numba is missing.
+"""`plane_depth.plane_depths`' per-pixel step and `truth_pass.surface_outputs` compiled with
+numba (the `fast` extra), the same values as their numpy forms (the depth's float64 operations in
+the same order); each `None` where numba is missing.
 
 Per pixel i (flat index pixel[i], triangle row which[i]): n . v summed from 0 as
 ((0 + t0) + t1) + t2 with t_k = (row[k, y] + col[k, x]) * n[w, k], s = num[w] / (n . v) and, where
@@ -40,3 +41,29 @@ if numba is not None:
         depths = numba.njit(cache=True, nogil=True, error_model="numpy")(_depths)
     except RuntimeError:   # no writable cache directory
         depths = numba.njit(nogil=True, error_model="numpy")(_depths)
+
+
+def _surface(triangle, front, normals, objects, normal, object_id, want_normal, want_id):
+    """`truth_pass.surface_outputs` in one pass over the pixels (flat arrays): each covered
+    pixel's triangle's float32 normal, negated where its back face is seen, and its object's
+    index + 1 as uint16 (wrapping as numpy's astype does); 0 where nothing is drawn."""
+    for i in range(triangle.shape[0]):
+        t = triangle[i]
+        if want_normal:
+            for k in range(3):
+                if t < 0:
+                    normal[i, k] = 0.0
+                elif front[i]:
+                    normal[i, k] = normals[t, k]
+                else:
+                    normal[i, k] = -normals[t, k]
+        if want_id:
+            object_id[i] = 0 if t < 0 else objects[t] + 1
+
+
+surface = None
+if numba is not None:
+    try:
+        surface = numba.njit(cache=True, nogil=True)(_surface)
+    except RuntimeError:   # no writable cache directory
+        surface = numba.njit(nogil=True)(_surface)

@@ -41,6 +41,7 @@ from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.passes import FARTHER_THAN_NOTHING, NO_CONE
 from shadowvol.raster.projection import NEARER, in_frame, top_row_first
 from shadowvol.raster.target import LIGHTS_PER_PAGE
+from shadowvol.raster.truth import plane_kernel
 from shadowvol.scene import Camera, SpotLight
 
 LIGHTS_PER_PASS = LIGHTS_PER_PAGE  # the frame's pages: facing and lit bits exact in a float32
@@ -340,6 +341,21 @@ def surface_outputs(geometry, triangle: np.ndarray, front: np.ndarray, want: set
     """normal (H, W, 3) float32 and object_id (H, W) uint16, as asked, from the G-buffer's
     triangle key."""
     out = {}
+    if plane_kernel.surface is not None:   # the same values in one compiled pass
+        h, w = triangle.shape
+        normal = np.empty((h, w, 3), np.float32)
+        ids = np.empty((h, w), np.uint16)
+        plane_kernel.surface(np.ascontiguousarray(triangle, np.int64).reshape(-1),
+                             np.ascontiguousarray(front).reshape(-1),
+                             np.ascontiguousarray(geometry.face_normals32),
+                             np.ascontiguousarray(geometry.triangle_objects),
+                             normal.reshape(-1, 3), ids.reshape(-1),
+                             "normal" in want, "object_id" in want)
+        if "normal" in want:
+            out["normal"] = normal
+        if "object_id" in want:
+            out["object_id"] = ids
+        return out
     hit = triangle >= 0
     t = np.where(hit, triangle, 0)
     if "normal" in want:
