@@ -302,16 +302,16 @@ class CasterCounts:
                 obj.release()
 
 
-def read_surface(target, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The G-buffer where `covered` (H, W) bool: triangle (H, W) int64 (−1 elsewhere), front
-    (H, W) bool (its front face is seen) and world (H, W, 3) float32 positions, row 0 at the
-    top.  Only covered pixels are read: the geometry pass writes the G-buffer only where it
-    draws (it is not cleared), so elsewhere it may hold an earlier frame's surfaces."""
+def read_surface(target, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The G-buffer where `covered` (H, W) bool: triangle (H, W) int64 (−1 elsewhere) and
+    front (H, W) bool (its front face is seen), row 0 at the top.  Only covered pixels are
+    read: the geometry pass writes the G-buffer only where it draws (it is not cleared), so
+    elsewhere it may hold an earlier frame's surfaces.  Only the key channel is flipped (its
+    `np.where` makes the one copy; the positions, channels 0-2, are not returned)."""
     raw = np.empty((target.height, target.width, 4), np.float32)
     target.gbuffer_fbo.read_into(raw, components=4, attachment=0, dtype="f4")
-    raw = top_row_first(raw)
-    key = np.where(covered, raw[..., 3], 0.0).astype(np.int64)
-    return np.abs(key) - 1, key > 0, raw[..., :3]
+    key = np.where(covered, raw[::-1, :, 3], 0.0).astype(np.int64)   # top_row_first's flip
+    return np.abs(key) - 1, key > 0
 
 
 def read_depth(target) -> np.ndarray:
