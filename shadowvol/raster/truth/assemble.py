@@ -30,7 +30,7 @@ def frame_truth(pipe, state, truth_pages, counters, object_bounds) -> dict[str, 
     stored = truth_pass.read_depth(target)
     covered = stored > 0
     if want & {"depth", "distance", "normal", "object_id"}:
-        triangle, front, _ = truth_pass.read_surface(target, covered)
+        triangle, front = truth_pass.read_surface(target, covered)
         triangle = geometry.triangle_of_key(triangle)   # a piece's key: its triangle
     if want & {"depth", "distance"}:
         # exact: the pixel's ray met with its triangle's plane (`plane_depth`), the depth

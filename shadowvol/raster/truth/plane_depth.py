@@ -15,6 +15,7 @@ import numpy as np
 
 from shadowvol.cameras import look_at_basis, pinhole
 from shadowvol.raster.projection import frame_camera
+from shadowvol.raster.truth import plane_kernel
 from shadowvol.scene import Camera
 
 
@@ -54,6 +55,13 @@ def plane_depths(geometry, camera: Camera, triangle: np.ndarray, fallback: np.nd
     plane_d = np.einsum("...i,...i->...", n, corners[:, 0])
     local = frame_camera(camera, geometry.origin)
     col, row = direction_grid(local, width, height)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        num = plane_d - n @ local.eye
+    if plane_kernel.depths is not None:   # the same operations per pixel, compiled
+        plane_kernel.depths(pixel, np.ascontiguousarray(which, np.int64), width,
+                            np.ascontiguousarray(row), np.ascontiguousarray(col),
+                            np.ascontiguousarray(n), num, out.reshape(-1))
+        return out
     rows, cols = np.divmod(pixel, width)
     # n . v = n0 v0 + n1 v1 + n2 v2, left to right, v = row + col per component
     n_dot_v = np.zeros(len(pixel))
@@ -63,7 +71,7 @@ def plane_depths(geometry, camera: Camera, triangle: np.ndarray, fallback: np.nd
         term *= n[:, k][which]
         n_dot_v += term
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = (plane_d - n @ local.eye)[which] / n_dot_v
+        s = num[which] / n_dot_v
     good = np.isfinite(s) & (s > 0)
     out.reshape(-1)[pixel[good]] = s[good]
     return out

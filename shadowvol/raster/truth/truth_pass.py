@@ -41,6 +41,7 @@ from shadowvol.raster.glsl import set_uniform
 from shadowvol.raster.passes import FARTHER_THAN_NOTHING, NO_CONE
 from shadowvol.raster.projection import NEARER, in_frame, top_row_first
 from shadowvol.raster.target import LIGHTS_PER_PAGE
+from shadowvol.raster.truth import plane_kernel
 from shadowvol.scene import Camera, SpotLight
 
 LIGHTS_PER_PASS = LIGHTS_PER_PAGE  # the frame's pages: facing and lit bits exact in a float32
@@ -301,16 +302,16 @@ class CasterCounts:
                 obj.release()
 
 
-def read_surface(target, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The G-buffer where `covered` (H, W) bool: triangle (H, W) int64 (−1 elsewhere), front
-    (H, W) bool (its front face is seen) and world (H, W, 3) float32 positions, row 0 at the
-    top.  Only covered pixels are read: the geometry pass writes the G-buffer only where it
-    draws (it is not cleared), so elsewhere it may hold an earlier frame's surfaces."""
+def read_surface(target, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The G-buffer where `covered` (H, W) bool: triangle (H, W) int64 (−1 elsewhere) and
+    front (H, W) bool (its front face is seen), row 0 at the top.  Only covered pixels are
+    read: the geometry pass writes the G-buffer only where it draws (it is not cleared), so
+    elsewhere it may hold an earlier frame's surfaces.  Only the key channel is flipped (its
+    `np.where` makes the one copy; the positions, channels 0-2, are not returned)."""
     raw = np.empty((target.height, target.width, 4), np.float32)
     target.gbuffer_fbo.read_into(raw, components=4, attachment=0, dtype="f4")
-    raw = top_row_first(raw)
-    key = np.where(covered, raw[..., 3], 0.0).astype(np.int64)
-    return np.abs(key) - 1, key > 0, raw[..., :3]
+    key = np.where(covered, raw[::-1, :, 3], 0.0).astype(np.int64)   # top_row_first's flip
+    return np.abs(key) - 1, key > 0
 
 
 def read_depth(target) -> np.ndarray:
@@ -340,6 +341,21 @@ def surface_outputs(geometry, triangle: np.ndarray, front: np.ndarray, want: set
     """normal (H, W, 3) float32 and object_id (H, W) uint16, as asked, from the G-buffer's
     triangle key."""
     out = {}
+    if plane_kernel.surface is not None:   # the same values in one compiled pass
+        h, w = triangle.shape
+        normal = np.empty((h, w, 3), np.float32)
+        ids = np.empty((h, w), np.uint16)
+        plane_kernel.surface(np.ascontiguousarray(triangle, np.int64).reshape(-1),
+                             np.ascontiguousarray(front).reshape(-1),
+                             np.ascontiguousarray(geometry.face_normals32),
+                             np.ascontiguousarray(geometry.triangle_objects),
+                             normal.reshape(-1, 3), ids.reshape(-1),
+                             "normal" in want, "object_id" in want)
+        if "normal" in want:
+            out["normal"] = normal
+        if "object_id" in want:
+            out["object_id"] = ids
+        return out
     hit = triangle >= 0
     t = np.where(hit, triangle, 0)
     if "normal" in want:
