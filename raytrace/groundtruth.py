@@ -77,7 +77,21 @@ class _ObjectTracers:
         self.local = [o.vertices - mask_tracer.origin for o in scene.objects]
         self.faces = [o.faces.copy() for o in scene.objects]
         self.casts = [o.cast_shadows for o in scene.objects]
-        self._build(scene, mask_tracer)
+        self.built = False
+        self.normals: np.ndarray | None = None   # `face_normals` of the scene, when asked
+
+    def built_for(self, scene: Scene, mask_tracer: MaskTracer) -> "_ObjectTracers":
+        """These, with their backends built (on the first call)."""
+        if not self.built:
+            self._build(scene, mask_tracer)
+            self.built = True
+        return self
+
+    def world_normals(self, corners) -> np.ndarray:
+        """`face_normals(corners())`, the scene's world-space corners, computed once."""
+        if self.normals is None:
+            self.normals = face_normals(corners())
+        return self.normals
 
     def fits(self, scene: Scene, origin: np.ndarray) -> bool:
         """Whether these tracers are still `scene`'s in the frame of `origin`: the same objects,
@@ -105,8 +119,8 @@ class _ObjectTracers:
             np.float32).tiny
 
 
-# each MaskTracer's backend -> its scene's per-object tracers, built on the first `casters` call
-# and kept while the backend lives (a turntable or batch over one MaskTracer builds them once)
+# each MaskTracer's backend -> its scene's per-object tracers and world normals, built on the first
+# call that asks, kept while the backend lives (a turntable over one MaskTracer builds them once)
 _OBJECT_TRACERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
@@ -130,7 +144,8 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
     tracer, triangles, origin = mt
     H, W, L, n = scene.height, scene.width, len(scene.lights), len(scene.objects)
-    objects = _object_tracers(scene, mt) if "casters" in outputs else None
+    kept = _object_tracers(scene, mt) if {"casters", "normal"} & set(outputs) else None
+    objects = kept.built_for(scene, mt) if "casters" in outputs else None
     coverage = np.zeros(H * W, bool)
     # the outputs asked for, flat (pixels row-major), with what is stored where nothing is hit
     out = {name: frame.blank(name, frame.shape(name, L, H, W, flat=True, objects=n))
@@ -139,7 +154,7 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     vertices, faces, ids = scene.triangles()
     # the output normals: world-space (b − a) × (c − a), normalised in float64 (CONVENTIONS),
     # not the frame's (the same up to rounding, and the same sign: `hit.side` turns either)
-    world_normals = face_normals(vertices[faces]) if "normal" in out else None
+    world_normals = kept.world_normals(lambda: vertices[faces]) if "normal" in out else None
     camera = scene.camera.translated(-origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     # every sample of every light, as the light it counts for and a hard light
