@@ -16,6 +16,7 @@ i".  `object_id` counts up to 65535 objects (uint16); `casters` any number.
 from __future__ import annotations
 
 import dataclasses
+import weakref
 
 import numpy as np
 
@@ -73,13 +74,41 @@ class _ObjectTracers:
     that misses the padded box cannot meet the object in float32 either)."""
 
     def __init__(self, scene: Scene, mask_tracer: MaskTracer):
+        self.local = [o.vertices - mask_tracer.origin for o in scene.objects]
+        self.faces = [o.faces.copy() for o in scene.objects]
+        self.casts = [o.cast_shadows for o in scene.objects]
+        self.built = False
+        self.normals: np.ndarray | None = None   # `face_normals` of the scene, when asked
+
+    def built_for(self, scene: Scene, mask_tracer: MaskTracer) -> "_ObjectTracers":
+        """These, with their backends built (on the first call)."""
+        if not self.built:
+            self._build(scene, mask_tracer)
+            self.built = True
+        return self
+
+    def world_normals(self, corners) -> np.ndarray:
+        """`face_normals(corners())`, the scene's world-space corners, computed once."""
+        if self.normals is None:
+            self.normals = face_normals(corners())
+        return self.normals
+
+    def fits(self, scene: Scene, origin: np.ndarray) -> bool:
+        """Whether these tracers are still `scene`'s in the frame of `origin`: the same objects,
+        vertices, faces and switches, compared by value (a scene edited in place is rebuilt)."""
+        return len(scene.objects) == len(self.local) and all(
+            o.cast_shadows == c and np.array_equal(o.faces, f)
+            and np.array_equal(o.vertices - origin, v)
+            for o, c, f, v in zip(scene.objects, self.casts, self.faces, self.local))
+
+    def _build(self, scene: Scene, mask_tracer: MaskTracer) -> None:
         kind = backend_kind(mask_tracer.tracer)
         _, _, ids = scene.triangles()
         self.object = ids.astype(np.int64)
         self.first = np.searchsorted(self.object, np.arange(len(scene.objects) + 1))
         # each object's own vertices and faces (its face k is scene triangle first[j] + k);
         # None for an object that casts no shadow (`Object.cast_shadows`): it blocks nothing
-        local = [o.vertices - mask_tracer.origin for o in scene.objects]
+        local = self.local
         self.tracers: list[TriangleBackend | None] = [
             make_backend(kind, v, o.faces) if o.cast_shadows else None
             for v, o in zip(local, scene.objects)]
@@ -88,6 +117,19 @@ class _ObjectTracers:
         pad = BOX_PAD_RELATIVE * np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, keepdims=True)
         self.lo, self.hi = lo - pad - np.finfo(np.float32).tiny, hi + pad + np.finfo(
             np.float32).tiny
+
+
+# each MaskTracer's backend -> its scene's per-object tracers and world normals, built on the first
+# call that asks, kept while the backend lives (a turntable over one MaskTracer builds them once)
+_OBJECT_TRACERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _object_tracers(scene: Scene, mt: MaskTracer) -> _ObjectTracers:
+    """`scene`'s per-object tracers in the frame of `mt`, reused when `mt` made them before."""
+    kept = _OBJECT_TRACERS.get(mt.tracer)
+    if kept is None or not kept.fits(scene, mt.origin):
+        kept = _OBJECT_TRACERS[mt.tracer] = _ObjectTracers(scene, mt)
+    return kept
 
 
 def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer = "embree"
@@ -102,7 +144,8 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     mt = scene_backend(scene, backend) if isinstance(backend, str) else backend
     tracer, triangles, origin = mt
     H, W, L, n = scene.height, scene.width, len(scene.lights), len(scene.objects)
-    objects = _ObjectTracers(scene, mt) if "casters" in outputs else None
+    kept = _object_tracers(scene, mt) if {"casters", "normal"} & set(outputs) else None
+    objects = kept.built_for(scene, mt) if "casters" in outputs else None
     coverage = np.zeros(H * W, bool)
     # the outputs asked for, flat (pixels row-major), with what is stored where nothing is hit
     out = {name: frame.blank(name, frame.shape(name, L, H, W, flat=True, objects=n))
@@ -111,7 +154,7 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
     vertices, faces, ids = scene.triangles()
     # the output normals: world-space (b − a) × (c − a), normalised in float64 (CONVENTIONS),
     # not the frame's (the same up to rounding, and the same sign: `hit.side` turns either)
-    world_normals = face_normals(vertices[faces]) if "normal" in out else None
+    world_normals = kept.world_normals(lambda: vertices[faces]) if "normal" in out else None
     camera = scene.camera.translated(-origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     # every sample of every light, as the light it counts for and a hard light

@@ -221,6 +221,30 @@ def test_embree_and_numpy_agree():
                                rtol=DEPTH_RTOL)
 
 
+def test_views_over_one_backend_build_the_object_tracers_once_and_match_a_fresh_build():
+    """A turntable over one `scene_backend`: `casters` reuses its per-object tracers from the
+    first view on, and every view's outputs equal a build of its own; a scene whose geometry
+    changed gets its tracers rebuilt."""
+    from raytrace import groundtruth
+    from raytrace.masks import scene_backend
+    scene = load_scene(SCENES / "stack.toml").replace(width=48, height=36)
+    mt = scene_backend(scene)
+    kept = None
+    for eye in ([4.0, 5.0, 6.0], [-5.0, 4.0, 3.0], [0.5, 6.0, -5.0]):
+        view = scene.replace(camera=Camera(eye=eye, target=[0.0, 0.3, 0.0], fov_y=40.0))
+        got = ground_truth(view, backend=mt)
+        kept = kept or groundtruth._OBJECT_TRACERS[mt.tracer]
+        assert groundtruth._OBJECT_TRACERS[mt.tracer] is kept
+        fresh = ground_truth(view, backend=scene_backend(scene))   # its own tracers
+        for name, want in fresh.arrays().items():
+            np.testing.assert_array_equal(got.arrays()[name], want, err_msg=name)
+    import dataclasses
+    moved = dataclasses.replace(scene.objects[1], vertices=scene.objects[1].vertices + 0.25)
+    ground_truth(scene.replace(objects=[scene.objects[0], moved, *scene.objects[2:]]),
+                 ["casters"], backend=mt)
+    assert groundtruth._OBJECT_TRACERS[mt.tracer] is not kept
+
+
 # ---- outputs, limits ---------------------------------------------------------------------------
 
 def test_only_the_outputs_asked_for_and_the_calibration_always():
