@@ -23,12 +23,13 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     plane, then each side plane through p) and carried onto the light's plane: (flat (q', k',
     2), count (q',), pix, tri) of those with something left, in the order given."""
     poly = corners[tri]
-    dist = [(poly - light.center) @ light.normal]
+    dist = (poly - light.center) @ light.normal                      # (q, 3) per plane
+    out, whole = (dist < 0).all(axis=1), (dist >= 0).all(axis=1)
+    rel = poly - p[pix][:, None]
     for m in sides(light, p, base):
-        dist.append(np.einsum("mkj,mj->mk", poly - p[pix][:, None], m[pix]))
-    dist = np.stack(dist)                                            # (planes, q, 3)
-    out = (dist < 0).all(axis=2).any(axis=0)
-    whole = (dist >= 0).all(axis=(0, 2))
+        dist = np.einsum("mkj,mj->mk", rel, m[pix])
+        out |= (dist < 0).all(axis=1)
+        whole &= (dist >= 0).all(axis=1)
     crossing = np.flatnonzero(~out & ~whole)
     flat = [polygons.project(poly[whole], p[pix[whole]], light.center, light.normal,
                              light.axes)]
