@@ -212,8 +212,13 @@ def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: floa
     blocked = _blocked(tracer, seg.start, seg.direction, seg.tmax, own, fragile)
     lit_here = seg.facing.copy()
     lit_here[seg.rays] = ~blocked
-    near = seg.near.where(lit_here[seg.near.rays])  # those the rest of the segment left lit
-    lit_here[near.rays] = ~_near_blocked(tracer, near, hit.tri[near.rays])
+    left_lit = lit_here[seg.near.rays]  # the near pieces whose rest left them lit
+    if casters is None:
+        near = seg.near.where(left_lit)
+        lit_here[near.rays] = ~_near_blocked(tracer, near, hit.tri[near.rays])
+    else:   # every near piece asked of the scene: the objects are asked of those blocked only
+        near_blocked = _near_blocked(tracer, seg.near, hit.tri[seg.near.rays])
+        lit_here[seg.near.rays[left_lit]] = ~near_blocked[left_lit]
     counts["lit_count"][i, pixel] += lit_here
     counts["facing_count"][i, pixel] += seg.facing
     if casters is not None and blocked.any():
@@ -221,9 +226,9 @@ def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: floa
         casters[i, pixel[seg.rays[b]]] |= _caster_bits(
             objects, start[:, b], seg.direction if seg.direction.shape[1] == 1
             else seg.direction[:, b], None if tmax is None else tmax[b], own[b], fragile[b])
-    if casters is not None and len(seg.near.rays):
-        casters[i, pixel[seg.near.rays]] |= _near_caster_bits(objects, seg.near,
-                                                              hit.tri[seg.near.rays])
+    if casters is not None and near_blocked.any():
+        near = seg.near.where(near_blocked)
+        casters[i, pixel[near.rays]] |= _near_caster_bits(objects, near, hit.tri[near.rays])
 
 
 def face_normals(corners: np.ndarray) -> np.ndarray:
@@ -236,58 +241,86 @@ def face_normals(corners: np.ndarray) -> np.ndarray:
 
 def _caster_bits(objects: _ObjectTracers, start: np.ndarray, direction: np.ndarray,
                  tmax: np.ndarray | None, own: np.ndarray, fragile: np.ndarray) -> np.ndarray:
-    """(b, K) uint64: the objects that block each of b blocked shadow segments, as bits
-    (object j: bit j mod 64 of word j div 64).
+    """(b, K) uint64: the objects that block each of b segments that the scene's backend found
+    blocked, as bits (object j: bit j mod 64 of word j div 64).
 
     start (3, b) float32, direction (3, b) or (3, 1) float32, tmax (b,) float32 or None: the
     segments as `_segments` made them (before `_blocked` moved any start); own (b,) int64 the
     scene triangle each leaves, fragile (b,) bool.  Each object's backend is asked the masks'
-    own question (`_blocked`), its own triangle excluded by id in the object it belongs to."""
-    bits = np.zeros((len(own), frame.caster_words(len(objects.tracers))), np.uint64)
-    own_object = objects.object[own]
+    own question (`_blocked`), its own triangle excluded by id in the object it belongs to,
+    except where the answer is known (`_candidates`): a segment that does not leave a sliver,
+    blocked in the scene and found clear by every other object it may meet, is blocked by the
+    last one."""
     start64 = start.astype(np.float64)
     direction64 = np.broadcast_to(direction, start.shape).astype(np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
         inverse = 1.0 / direction64
     end = np.inf if tmax is None else tmax.astype(np.float64)
-    for j, tracer in enumerate(objects.tracers):
-        if tracer is None:
-            continue
-        mine = own_object == j
-        near = _meets_box(start64, inverse, end, objects.lo[j], objects.hi[j]) | mine
-        k = np.flatnonzero(near)
-        if len(k) == 0:
-            continue
-        local_own = np.where(mine[k], own[k] - objects.first[j], -1)
-        hit = _blocked(tracer, start[:, k], direction if direction.shape[1] == 1
-                       else direction[:, k], None if tmax is None else tmax[k].copy(),
-                       local_own, fragile[k] & mine[k])
-        bits[k[hit], j // frame.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
-            j % frame.CASTER_WORD_BITS)
-    return bits
+
+    def ask(j, tracer, k, local_own, mine):
+        return _blocked(tracer, start[:, k], direction if direction.shape[1] == 1
+                        else direction[:, k], None if tmax is None else tmax[k].copy(),
+                        local_own, fragile[k] & mine)
+
+    return _candidates(objects, start64, inverse, end, own, ~fragile, ask)
 
 
 def _near_caster_bits(objects: _ObjectTracers, near, own: np.ndarray) -> np.ndarray:
     """(q, K) uint64: the objects that block the float64 near pieces `near`
-    (`masks._NearPieces`) of segments leaving scene triangles own (q,), as bits (object j: bit
-    j mod 64 of word j div 64).  Each object's backend is asked the masks' own question
-    (`masks._near_blocked`), its own triangle excluded by id in the object it belongs to; a
-    piece that misses an object's padded box is not asked of it."""
-    bits = np.zeros((len(own), frame.caster_words(len(objects.tracers))), np.uint64)
-    own_object = objects.object[own]
+    (`masks._NearPieces`), which the scene's backend found blocked, of segments leaving scene
+    triangles own (q,), as bits (object j: bit j mod 64 of word j div 64).  Each object's
+    backend is asked the masks' own question (`masks._near_blocked`), its own triangle
+    excluded by id in the object it belongs to, except where the answer is known
+    (`_candidates`)."""
     direction = np.broadcast_to(near.direction, near.origin.shape)
     with np.errstate(divide="ignore"):
         inverse = 1.0 / direction
+
+    def ask(j, tracer, k, local_own, mine):
+        keep = np.zeros(len(own), bool)
+        keep[k] = True
+        return _near_blocked(tracer, near.where(keep), local_own)
+
+    return _candidates(objects, near.origin, inverse, near.tmax, own,
+                       np.ones(len(own), bool), ask)
+
+
+def _candidates(objects: _ObjectTracers, start: np.ndarray, inverse: np.ndarray, end,
+                own: np.ndarray, deducible: np.ndarray, ask) -> np.ndarray:
+    """(b, K) uint64: the casting objects that block each of b segments the scene found
+    blocked, as bits.  An object may block a segment only where the segment meets its padded
+    box or leaves one of its triangles (own (b,) int64): its candidates.  ask(j, tracer, k,
+    local_own, mine) -> (len(k),) bool asks object j of the segments k (ascending), own
+    triangle local_own (-1: not in j; mine: in j).
+
+    The objects are asked in order; where a segment is `deducible` (b,) bool and every
+    candidate before its last found it clear, the last is not asked: it blocks.  The scene's
+    answer is its triangles' (an occlusion query without exclusions but the own triangle's,
+    the same in the object's backend: `_blocked` retries slivers only, which are not
+    deducible; `occluded_leaving` excludes per triangle), and the triangles of the other
+    objects cannot meet the segment, so the blocker is in the last one."""
+    bits = np.zeros((len(own), frame.caster_words(len(objects.tracers))), np.uint64)
+    own_object = objects.object[own]
+    asked = []   # (j, tracer, k, mine[k]) per casting object with candidates
+    last = np.full(len(own), -1, np.int64)
     for j, tracer in enumerate(objects.tracers):
         if tracer is None:
             continue
         mine = own_object == j
-        ask = _meets_box(near.origin, inverse, near.tmax, objects.lo[j], objects.hi[j]) | mine
-        if not ask.any():
-            continue
-        k = np.flatnonzero(ask)
-        local_own = np.where(mine[k], own[k] - objects.first[j], -1)
-        hit = _near_blocked(tracer, near.where(ask), local_own)
+        k = np.flatnonzero(_meets_box(start, inverse, end, objects.lo[j], objects.hi[j])
+                           | mine)
+        if len(k):
+            asked.append((j, tracer, k, mine[k]))
+            last[k] = j
+    found = ~deducible   # a segment not deducible counts as found: every candidate is asked
+    for j, tracer, k, mine in asked:
+        known = (last[k] == j) & ~found[k]
+        hit = known.copy()
+        q = np.flatnonzero(~known)
+        if len(q):
+            hit[q] = ask(j, tracer, k[q], np.where(mine[q], own[k[q]] - objects.first[j], -1),
+                         mine[q])
+        found[k[hit]] = True
         bits[k[hit], j // frame.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
             j % frame.CASTER_WORD_BITS)
     return bits
