@@ -303,15 +303,9 @@ def _candidates(objects: _ObjectTracers, start: np.ndarray, inverse: np.ndarray,
     own_object = objects.object[own]
     asked = []   # (j, tracer, k, mine[k]) per casting object with candidates
     last = np.full(len(own), -1, np.int64)
-    for j, tracer in enumerate(objects.tracers):
-        if tracer is None:
-            continue
-        mine = own_object == j
-        k = np.flatnonzero(_meets_box(start, inverse, end, objects.lo[j], objects.hi[j])
-                           | mine)
-        if len(k):
-            asked.append((j, tracer, k, mine[k]))
-            last[k] = j
+    for j, k in _boxes_met(objects, start, inverse, end, own_object):
+        asked.append((j, objects.tracers[j], k, own_object[k] == j))
+        last[k] = j
     found = ~deducible   # a segment not deducible counts as found: every candidate is asked
     for j, tracer, k, mine in asked:
         known = (last[k] == j) & ~found[k]
@@ -324,6 +318,31 @@ def _candidates(objects: _ObjectTracers, start: np.ndarray, inverse: np.ndarray,
         bits[k[hit], j // frame.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
             j % frame.CASTER_WORD_BITS)
     return bits
+
+
+def _boxes_met(objects: _ObjectTracers, start: np.ndarray, inverse: np.ndarray, end,
+               own_object: np.ndarray):
+    """(j, k) for each casting object j, in order, that some segment may meet: k ascending,
+    the segments that meet j's padded box (`_meets_box`) or leave it (own_object == j).  In
+    numba where it loads (`maskkernels.box_candidates`, the same segments), else in numpy."""
+    try:
+        from .maskkernels import box_candidates
+    except ImportError:
+        box_candidates = None
+    casts = np.array([t is not None for t in objects.tracers], bool)
+    if box_candidates is not None:
+        first, k = box_candidates(
+            np.ascontiguousarray(start, np.float64), np.ascontiguousarray(inverse, np.float64),
+            np.broadcast_to(np.asarray(end, np.float64), own_object.shape).copy(),
+            objects.lo, objects.hi, casts, own_object)
+        return [(j, k[first[j]:first[j + 1]]) for j in np.flatnonzero(first[1:] > first[:-1])]
+    out = []
+    for j in np.flatnonzero(casts):
+        k = np.flatnonzero(_meets_box(start, inverse, end, objects.lo[j], objects.hi[j])
+                           | (own_object == j))
+        if len(k):
+            out.append((j, k))
+    return out
 
 
 def _meets_box(start: np.ndarray, inverse: np.ndarray, end, lo: np.ndarray, hi: np.ndarray

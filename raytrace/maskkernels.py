@@ -219,3 +219,65 @@ def through_light(normals_t, plane_d, weight, position):
             best = w if not found else _max(best, w)
             found = True
     return best
+
+
+@_jit()
+def _fmin(a, b):
+    """np.fmin of two floats: the other where one is NaN."""
+    if a != a:
+        return b
+    return a if a < b or b != b else b
+
+
+@_jit()
+def _fmax(a, b):
+    """np.fmax of two floats: the other where one is NaN."""
+    if a != a:
+        return b
+    return a if a > b or b != b else b
+
+
+@_jit()
+def _slab(start, inverse, lo, hi, i, j, a):
+    """Where segment i enters and leaves box j's slab along axis a (NaN: inside it, 0 · inf)."""
+    t1 = (lo[j, a] - start[a, i]) * inverse[a, i]
+    t2 = (hi[j, a] - start[a, i]) * inverse[a, i]
+    return _fmin(t1, t2), _fmax(t1, t2)
+
+
+@_jit()
+def _meets(start, inverse, end, lo, hi, i, j):
+    """`groundtruth._meets_box` of segment i and box j: the same slab arithmetic, NaN rules."""
+    l0, u0 = _slab(start, inverse, lo, hi, i, j, 0)
+    l1, u1 = _slab(start, inverse, lo, hi, i, j, 1)
+    l2, u2 = _slab(start, inverse, lo, hi, i, j, 2)
+    t_in = _fmax(_fmax(l0, l1), _fmax(l2, 0.0))
+    t_out = _fmin(_fmin(u0, u1), _fmin(u2, end[i]))
+    return t_in <= t_out
+
+
+@_jit()
+def box_candidates(start, inverse, end, lo, hi, casts, own_object):
+    """The segments (start, inverse (3, b) float64, end (b,) float64) that may meet each
+    casting object j (casts (n,) bool): those meeting its padded box [lo[j], hi[j]] ((n, 3)
+    float64, as `groundtruth._meets_box` tests it) or leaving it (own_object (b,) == j).
+    Returns first (n + 1,) int64 and k (first[n],) int64: object j's segments, ascending, are
+    k[first[j]:first[j + 1]]."""
+    n, b = lo.shape[0], start.shape[1]
+    first = np.zeros(n + 1, np.int64)
+    for j in range(n):
+        count = 0
+        if casts[j]:
+            for i in range(b):
+                if own_object[i] == j or _meets(start, inverse, end, lo, hi, i, j):
+                    count += 1
+        first[j + 1] = first[j] + count
+    k = np.empty(first[n], np.int64)
+    for j in range(n):
+        if casts[j]:
+            m = first[j]
+            for i in range(b):
+                if own_object[i] == j or _meets(start, inverse, end, lo, hi, i, j):
+                    k[m] = i
+                    m += 1
+    return first, k
