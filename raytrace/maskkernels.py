@@ -8,7 +8,10 @@ each, with the GIL released (the tiles run on the masks' thread pool).
   rounding, the side, the height bound);
 * `point_segments` and `directional_segments`: the shadow rays of the hits toward one light
   and the near pieces a long lift skips, as `masks._point_segments` and
-  `masks._directional_segments` make them.
+  `masks._directional_segments` make them;
+* `box_candidates`: for `raytrace.groundtruth`'s casters, the blocked segments that may meet
+  each object's padded box, as `groundtruth._meets_box` tests them (np.fmin and np.fmax's NaN
+  rules), without numpy's temporaries (tests/raytrace/test_groundtruth.py compares them).
 
 Each is the numpy code's own arithmetic, operation for operation and in the same order, in the
 same precision (float32 where numpy works in float32, float64 where it works in float64; dot

@@ -324,3 +324,38 @@ def check_bits(got: np.ndarray, want: np.ndarray, ids: np.ndarray, objects: int)
 def popcount(bits: np.ndarray) -> np.ndarray:
     """How many bits are set in each uint64."""
     return np.unpackbits(bits.view(np.uint8)).reshape(bits.shape + (64,)).sum(axis=-1)
+
+
+def test_the_numba_box_test_meets_the_boxes_numpy_meets():
+    """`maskkernels.box_candidates` lists, per casting object, exactly the segments that
+    `groundtruth._meets_box` finds meeting its box or leaving it: random segments, some with
+    zero direction components (1/d infinite) running inside a box's face (0 · inf), bounded and
+    unbounded."""
+    pytest.importorskip("numba")
+    from raytrace.groundtruth import _meets_box
+    from raytrace.maskkernels import box_candidates
+
+    rng = np.random.default_rng(7)
+    n, b = 9, 4000
+    lo = rng.uniform(-2, 1, (n, 3))
+    hi = lo + rng.uniform(0, 1.5, (n, 3))
+    hi[3] = lo[3]   # a flat box
+    start = rng.uniform(-3, 3, (3, b))
+    direction = rng.normal(size=(3, b))
+    direction[rng.random((3, b)) < 0.2] = 0.0
+    face = np.flatnonzero(rng.random(b) < 0.2)   # inside a box's face x = lo, along it
+    box_of = rng.integers(0, n, len(face))
+    start[:, face] = ((lo + hi) / 2)[box_of].T
+    start[0, face] = lo[box_of, 0]
+    direction[0, face] = 0.0
+    with np.errstate(divide="ignore"):
+        inverse = 1.0 / direction
+    own_object = rng.integers(-1, n, b)
+    casts = rng.random(n) < 0.8
+    for end in (np.inf, rng.uniform(0, 2, b)):
+        first, k = box_candidates(start, inverse, np.broadcast_to(end, (b,)).copy(), lo, hi,
+                                  casts, own_object)
+        for j in range(n):
+            want = (np.flatnonzero(_meets_box(start, inverse, end, lo[j], hi[j])
+                                   | (own_object == j)) if casts[j] else np.zeros(0, int))
+            assert np.array_equal(k[first[j]:first[j + 1]], want), j
