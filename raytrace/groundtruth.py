@@ -25,7 +25,7 @@ from shadowvol.cameras import calibration
 from shadowvol.frame import GROUND_TRUTH, Frame, check_outputs
 from shadowvol.scene import Scene, hard_lights
 
-from .backends import TriangleBackend, for_each_tile, make_backend
+from .backends import PacketBackend, TriangleBackend, for_each_tile, make_backend
 from .camera import RayGrid
 from .masks import (
     MASK_TILE_RAYS,
@@ -205,7 +205,8 @@ def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: floa
     `casters` (L, H * W, K) uint64 when given.  Lit as `masks._lit` decides it: the segment
     past the lift unblocked, and then the float64 near piece a long lift skips
     (`masks._NearPieces`) unblocked too."""
-    seg = receiving(tracer, light.light, _segments(light, hit, reach), hit)
+    seg = receiving(tracer, light.light,
+                    _segments(light, hit, reach, isinstance(tracer, PacketBackend)), hit)
     own, fragile = hit.tri[seg.rays], hit.fragile[seg.rays]
     start = seg.start.copy() if casters is not None else seg.start
     tmax = None if seg.tmax is None else seg.tmax.copy()
