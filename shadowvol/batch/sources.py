@@ -124,12 +124,14 @@ class Rays:
         soft = any(len(hard_lights(lt)) > 1 for lt in lights)
         if truth or (soft and {"lit", "coverage", "counts"} & set(wanted)):
             # the masks and an area light's counts come with it, on the same rays
-            gt = raytrace.ground_truth(frame_scene, outputs=truth)
+            gt = raytrace.ground_truth(frame_scene, outputs=truth,
+                                       backend=_mask_tracer(worker, frame_scene))
             arrays.update({name: getattr(gt, name) for name in truth},
                           lit=gt.lit, coverage=gt.coverage,
                           counts=soft_arrays(gt.lit_count, gt.samples))
         elif {"lit", "coverage", "counts"} & set(wanted):
-            arrays["lit"], arrays["coverage"] = raytrace.shadow_masks(frame_scene)
+            arrays["lit"], arrays["coverage"] = raytrace.shadow_masks(
+                frame_scene, _mask_tracer(worker, frame_scene))
             arrays["counts"] = {}
         names = tuple(name for name in LAYERS if name in wanted)
         if names:   # Whitted's depth-0 direct light (`raytrace.outlook.layers`)
@@ -144,6 +146,29 @@ class Rays:
 
     def versions(self, worker) -> dict:
         return {"embreex": _version("embreex")}
+
+
+def _mask_tracer(worker, frame_scene):
+    """The masks' backend of `frame_scene` (`raytrace.masks.scene_backend`), the worker's last
+    one where it still holds: the same objects (by identity: a batch's scene is not edited in
+    place; a jittered object is a new one) and the same frame origin (the eye: the backend's
+    triangles are the scene's minus it, so a new eye needs a new backend).  Frames from one
+    viewpoint (lights or targets varied) share it, and with it `ground_truth`'s per-object
+    tracers."""
+    from raytrace.masks import scene_backend
+    from raytrace.tolerances import frame_origin
+
+    origin = frame_origin(frame_scene)
+    kept = getattr(worker, "mask_tracer", None)
+    if kept is not None:
+        objects, kept_origin, tracer = kept
+        if (len(objects) == len(frame_scene.objects) and np.array_equal(kept_origin, origin)
+                and all(a is b for a, b in zip(objects, frame_scene.objects))):
+            return tracer
+    worker.mask_tracer = None   # the old one freed before the new one is built
+    tracer = scene_backend(frame_scene)
+    worker.mask_tracer = (tuple(frame_scene.objects), origin, tracer)
+    return tracer
 
 
 class Auto:

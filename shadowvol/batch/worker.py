@@ -108,6 +108,9 @@ class Worker:
         self.device = None       # "EGL device 0 (...)" once a context exists
         self.gl_renderer = None
         self.masks_by = None     # the renderer of the last frame of renderer "auto"
+        # (objects, frame origin, raytrace.masks.MaskTracer) of the last ray-traced frame:
+        # the next frame with the same objects and eye reuses it (`batch.sources`)
+        self.mask_tracer = None
 
     # -- scenes and renderers ------------------------------------------------------------
     def scene(self, key: str) -> Scene:
