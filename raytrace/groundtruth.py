@@ -170,15 +170,7 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
         if hit is None:
             return
         pixel = first + index
-        if "depth" in out:
-            out["depth"][pixel] = hit.depth
-        if "distance" in out:
-            view = np.take(grids[1].directions(rows), index, axis=1)
-            out["distance"][pixel] = hit.depth * np.sqrt((view * view).sum(axis=0))
-        if "normal" in out:
-            out["normal"][pixel] = world_normals[hit.tri] * hit.side[:, None]
-        if "object_id" in out:
-            out["object_id"][pixel] = ids[hit.tri] + 1
+        _pixel_outputs(out, grids[1], rows, first, index, hit, world_normals, ids)
         for i, light in lights:
             _shadow_tile(tracer, objects, light, hit, scene.extent, pixel, counts, i,
                          out.get("casters"))
@@ -195,6 +187,41 @@ def ground_truth(scene: Scene, outputs=GROUND_TRUTH, backend: str | MaskTracer =
                        lit_count=counts["lit_count"].reshape(L, H, W), samples=samples,
                        **{name: value.reshape(frame.shape(name, L, H, W, objects=n))
                           for name, value in out.items()})
+
+
+PIXEL_OUTPUTS = ("depth", "distance", "normal", "object_id")
+
+
+def _pixel_outputs(out: dict, grid64: RayGrid, rows: slice, first: int, index: np.ndarray,
+                   hit, world_normals: np.ndarray | None, ids: np.ndarray) -> None:
+    """The per-pixel outputs in `out` (flat, pixels row-major) of a tile's hits at pixels
+    first + index (h,): depth, distance (depth · |v|, v the pixel's float64 direction of
+    depth 1), normal (world_normals of the hit triangle turned toward the camera) and
+    object_id.  In one numba pass where it loads (`maskkernels.pixel_outputs`: the same
+    bits), else in numpy."""
+    try:
+        from .maskkernels import pixel_outputs
+    except ImportError:
+        pixel_outputs = None
+    if pixel_outputs is not None:
+        empty = {name: np.zeros((0, 3) if name == "normal" else 0, frame.FIELDS[name].dtype)
+                 for name in PIXEL_OUTPUTS}
+        want = np.array([name in out for name in PIXEL_OUTPUTS])
+        normals = world_normals if world_normals is not None else np.zeros((0, 3))
+        pixel_outputs(first, grid64.width, rows.start, index, grid64.row, grid64.col,
+                      hit.depth, hit.tri, hit.side, normals, ids, want,
+                      *[out.get(name, empty[name]) for name in PIXEL_OUTPUTS])
+        return
+    pixel = first + index
+    if "depth" in out:
+        out["depth"][pixel] = hit.depth
+    if "distance" in out:
+        view = np.take(grid64.directions(rows), index, axis=1)
+        out["distance"][pixel] = hit.depth * np.sqrt((view * view).sum(axis=0))
+    if "normal" in out:
+        out["normal"][pixel] = world_normals[hit.tri] * hit.side[:, None]
+    if "object_id" in out:
+        out["object_id"][pixel] = ids[hit.tri] + 1
 
 
 def _shadow_tile(tracer, objects: _ObjectTracers | None, light, hit, reach: float,

@@ -11,7 +11,9 @@ each, with the GIL released (the tiles run on the masks' thread pool).
   `masks._directional_segments` make them;
 * `box_candidates`: for `raytrace.groundtruth`'s casters, the blocked segments that may meet
   each object's padded box, as `groundtruth._meets_box` tests them (np.fmin and np.fmax's NaN
-  rules), without numpy's temporaries (tests/raytrace/test_groundtruth.py compares them).
+  rules), without numpy's temporaries (tests/raytrace/test_groundtruth.py compares them);
+* `pixel_outputs`: `groundtruth`'s depth, distance, normal and object_id of a tile's hits in
+  one pass, without gathering the tile's directions (the same test compares the bytes).
 
 Each is the numpy code's own arithmetic, operation for operation and in the same order, in the
 same precision (float32 where numpy works in float32, float64 where it works in float64; dot
@@ -284,3 +286,29 @@ def box_candidates(start, inverse, end, lo, hi, casts, own_object):
                     k[m] = i
                     m += 1
     return first, k
+
+
+@_jit()
+def pixel_outputs(first, width, y0, index, row64, col64, depth, tri, side, normals, ids,
+                  want, out_depth, out_distance, out_normal, out_object_id):
+    """`groundtruth`'s per-pixel outputs of a tile's hits, written at pixel first + index[i]:
+    depth (float32 of the eye-space depth), distance (depth · |v|, v = row64[:, y] +
+    col64[:, x] the pixel's float64 direction of depth 1, |v|² summed x, y, z left to right
+    as numpy sums axis 0), normal (normals[tri] · side) and object_id (ids[tri] + 1), each
+    where want[0..3] is True (the others may be empty arrays)."""
+    for i in range(index.shape[0]):
+        p = first + index[i]
+        t = tri[i]
+        if want[0]:
+            out_depth[p] = np.float32(depth[i])
+        if want[1]:
+            y, x = y0 + index[i] // width, index[i] % width
+            v0 = row64[0, y] + col64[0, x]
+            v1 = row64[1, y] + col64[1, x]
+            v2 = row64[2, y] + col64[2, x]
+            out_distance[p] = np.float32(depth[i] * np.sqrt(v0 * v0 + v1 * v1 + v2 * v2))
+        if want[2]:
+            for a in range(3):
+                out_normal[p, a] = np.float32(normals[t, a] * side[i])
+        if want[3]:
+            out_object_id[p] = np.uint16(ids[t] + 1)

@@ -359,3 +359,19 @@ def test_the_numba_box_test_meets_the_boxes_numpy_meets():
             want = (np.flatnonzero(_meets_box(start, inverse, end, lo[j], hi[j])
                                    | (own_object == j)) if casts[j] else np.zeros(0, int))
             assert np.array_equal(k[first[j]:first[j + 1]], want), j
+
+
+def test_the_numba_kernels_give_numpys_bytes(monkeypatch):
+    """Every output of `ground_truth` (the per-pixel ones of `maskkernels.pixel_outputs`, the
+    casters of `maskkernels.box_candidates`) is numpy's, byte for byte, on the numpy backend
+    with and without the kernels."""
+    pytest.importorskip("numba")
+    import sys
+    scene = load_scene(SCENES / "stack.toml").replace(width=96, height=72)
+    fast = ground_truth(scene, backend="numpy").arrays()
+    monkeypatch.setitem(sys.modules, "raytrace.maskkernels", None)   # import fails: numpy
+    slow = ground_truth(scene, backend="numpy").arrays()
+    assert fast.keys() == slow.keys()
+    for name, want in slow.items():
+        got = fast[name]
+        assert got.dtype == want.dtype and got.tobytes() == want.tobytes(), name
