@@ -7,10 +7,12 @@ float64 hit point, the same shadow segments with the same margins and the same f
 that a long lift skips (`raytrace.masks._NearPieces`).  An area light is its N samples
 (`shadowvol.scene.hard_lights`), each traced as a hard light; its counts add up and its
 casters OR, so `lit_count` equals `raytrace.soft_masks`' and `lit` `shadow_masks`'.  `casters`
-traces every blocked segment again against each object alone (one backend per object, in the
-masks' frame, the visible triangle excluded by id in its own object): bit j mod 64 of word
-j div 64 of `casters[i, p]` says "object j blocks p's segment to some facing sample of light
-i".  `object_id` counts up to 65535 objects (uint16); `casters` any number.
+traces each segment the scene found blocked again against each object alone whose padded box
+it meets (one backend per object, in the masks' frame, the visible triangle excluded by id in
+its own object), but for the last such object where every other found it clear (then the
+blocker can only be there; `_candidates`): bit j mod 64 of word j div 64 of `casters[i, p]`
+says "object j blocks p's segment to some facing sample of light i".  `object_id` counts up
+to 65535 objects (uint16); `casters` any number.
 """
 
 from __future__ import annotations
