@@ -46,6 +46,10 @@ from .switches import backend_kind, receiving
 # start and direction, 100 times over.  A speed-up only: the culled segments are those that
 # the object's own backend would find unblocked.
 BOX_PAD_RELATIVE = 1e-5
+# Tuning (memory only, never results): the most (object, segment) candidates `casters` lists
+# at once (int64 indices: 32 MiB), the blocked segments taken in parts of at most this over
+# the number of objects.
+CANDIDATE_PAIRS = 1 << 22
 
 
 @dataclasses.dataclass(frozen=True, eq=False, kw_only=True)
@@ -330,6 +334,20 @@ def _candidates(objects: _ObjectTracers, start: np.ndarray, inverse: np.ndarray,
     deducible; `occluded_leaving` excludes per triangle), and the triangles of the other
     objects cannot meet the segment, so the blocker is in the last one."""
     bits = np.zeros((len(own), frame.caster_words(len(objects.tracers))), np.uint64)
+    # at most CANDIDATE_PAIRS (object, segment) candidates listed at once
+    step = max(1, CANDIDATE_PAIRS // max(1, len(objects.tracers)))
+    for s in range(0, len(own), step):
+        part = slice(s, min(s + step, len(own)))
+        _ask_candidates(objects, start[:, part], inverse[:, part],
+                        end if np.ndim(end) == 0 else end[part], own[part], deducible[part],
+                        lambda j, tracer, k, *rest: ask(j, tracer, k + part.start, *rest),
+                        bits[part])
+    return bits
+
+
+def _ask_candidates(objects: _ObjectTracers, start, inverse, end, own, deducible, ask,
+                    bits) -> None:
+    """`_candidates` of some segments, their bits ORed into bits (b, K) (a view)."""
     own_object = objects.object[own]
     asked = []   # (j, tracer, k, mine[k]) per casting object with candidates
     last = np.full(len(own), -1, np.int64)
@@ -347,7 +365,6 @@ def _candidates(objects: _ObjectTracers, start: np.ndarray, inverse: np.ndarray,
         found[k[hit]] = True
         bits[k[hit], j // frame.CASTER_WORD_BITS] |= np.uint64(1) << np.uint64(
             j % frame.CASTER_WORD_BITS)
-    return bits
 
 
 def _boxes_met(objects: _ObjectTracers, start: np.ndarray, inverse: np.ndarray, end,

@@ -375,3 +375,14 @@ def test_the_numba_kernels_give_numpys_bytes(monkeypatch):
     for name, want in slow.items():
         got = fast[name]
         assert got.dtype == want.dtype and got.tobytes() == want.tobytes(), name
+
+
+def test_casters_in_parts_are_the_casters_at_once(monkeypatch):
+    """The blocked segments taken a few at a time (`groundtruth.CANDIDATE_PAIRS`) give the
+    same bits as all at once."""
+    from raytrace import groundtruth
+    scene = load_scene(SCENES / "stack.toml").replace(width=64, height=48)
+    whole = ground_truth(scene, ["casters"]).casters
+    assert whole.any()
+    monkeypatch.setattr(groundtruth, "CANDIDATE_PAIRS", 7)
+    np.testing.assert_array_equal(ground_truth(scene, ["casters"]).casters, whole)
