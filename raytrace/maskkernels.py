@@ -267,24 +267,25 @@ def box_candidates(start, inverse, end, lo, hi, casts, own_object):
     casting object j (casts (n,) bool): those meeting its padded box [lo[j], hi[j]] ((n, 3)
     float64, as `groundtruth._meets_box` tests it) or leaving it (own_object (b,) == j).
     Returns first (n + 1,) int64 and k (first[n],) int64: object j's segments, ascending, are
-    k[first[j]:first[j + 1]]."""
+    k[first[j]:first[j + 1]].  Each (segment, box) pair is tested once, its answer kept as a
+    bit (b x ceil(n / 64) words) until the lists are written."""
     n, b = lo.shape[0], start.shape[1]
+    met = np.zeros((b, (n + 63) // 64), np.uint64)
     first = np.zeros(n + 1, np.int64)
+    for i in range(b):
+        for j in range(n):
+            if casts[j] and (own_object[i] == j or _meets(start, inverse, end, lo, hi, i, j)):
+                met[i, j >> 6] |= np.uint64(1) << np.uint64(j & 63)
+                first[j + 1] += 1
     for j in range(n):
-        count = 0
-        if casts[j]:
-            for i in range(b):
-                if own_object[i] == j or _meets(start, inverse, end, lo, hi, i, j):
-                    count += 1
-        first[j + 1] = first[j] + count
+        first[j + 1] += first[j]
     k = np.empty(first[n], np.int64)
-    for j in range(n):
-        if casts[j]:
-            m = first[j]
-            for i in range(b):
-                if own_object[i] == j or _meets(start, inverse, end, lo, hi, i, j):
-                    k[m] = i
-                    m += 1
+    fill = first[:n].copy()
+    for i in range(b):
+        for j in range(n):
+            if (met[i, j >> 6] >> np.uint64(j & 63)) & np.uint64(1):
+                k[fill[j]] = i
+                fill[j] += 1
     return first, k
 
 
