@@ -27,9 +27,13 @@ from .tolerances import (
     through_light,
 )
 
-# Rays per tile: big enough that numpy's per-call overhead is small, small enough that a
-# tile's arrays stay in cache and come from the allocator's free list, not fresh pages.
-MASK_TILE_RAYS = 1 << 15
+# Rays per tile: big enough that a tile's fixed cost (numpy's per-call overhead, the kernels'
+# set-up, the pool's hand-over: ~0.3 ms a tile) is small, small enough that two tiles in flight
+# stay within a few tens of MiB (`raytrace.estimate`).  Swept at 7395f45 (load 0.0-0.4, medians
+# of 7-11 interleaved rounds, 1280 x 720): 8k 86 ms, 16k 71, 32k 62-67, 64k 59-63, 96k 63,
+# 128k 60 on the 100k scene, the same order on 1M and two bunnies; 64k against 32k: masks
+# 0.94-0.97x, ground truth 0.90-0.96x (docs/speed.md).
+MASK_TILE_RAYS = 1 << 16
 
 
 class MaskTracer(NamedTuple):
