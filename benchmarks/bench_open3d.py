@@ -21,8 +21,6 @@ and exits 0.
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
 import statistics
 import sys
@@ -31,6 +29,7 @@ import time
 import numpy as np
 
 from . import scenes
+from .cli import bench_main, load_span
 from .bench_masks import BUNNY, bunny_scene
 
 
@@ -148,35 +147,34 @@ def measure(scene, runs: int) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_open3d",
-                                 description=__doc__.split("\n\n")[0])
-    ap.add_argument("--runs", type=int, default=5)
-    ap.add_argument("--json", type=str, default=None)
-    args = ap.parse_args(argv)
     try:
-        import open3d  # noqa: F401
+        import open3d
     except ImportError as exc:
         print(f"skipped: Open3D is not installed or does not load ({exc}); "
               "pip install open3d-cpu (the bench extra)")
         return 0
-    load = os.getloadavg()
-    rows = [measure(s, args.runs) for s in bench_scenes()]
-    result = {"load": [load, os.getloadavg()], "runs": args.runs, "scenes": rows,
-              "open3d": open3d.__version__}
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(result, f, indent=1)
-    print(f"Open3D {open3d.__version__}, {args.runs} rounds; load {load[0]:.1f} -> "
-          f"{os.getloadavg()[0]:.1f}; ms median wall / CPU (all threads)")
-    print("| scene | triangles | size | lights | " +
-          " | ".join(rows[0]["ms"]) + " | pixels differing | single rays vs packets |")
-    print("|---|---:|---|---:|" + "---:|" * (len(rows[0]["ms"]) + 2))
+
+    def run(args) -> dict:
+        return {"runs": args.runs, "scenes": [measure(s, args.runs) for s in bench_scenes()],
+                "open3d": open3d.__version__}
+
+    return bench_main(argv, "bench_open3d", __doc__, run, report)
+
+
+def report(result: dict, args) -> str:
+    """The table of a run: ms median wall / CPU a scene, and the masks' agreement."""
+    rows = result["scenes"]
+    lines = [f"Open3D {result['open3d']}, {args.runs} rounds; {load_span(result)}; "
+             "ms median wall / CPU (all threads)",
+             "| scene | triangles | size | lights | " + " | ".join(rows[0]["ms"]) +
+             " | pixels differing | single rays vs packets |",
+             "|---|---:|---|---:|" + "---:|" * (len(rows[0]["ms"]) + 2)]
     for r in rows:
         cells = " | ".join(f"{v['wall']:.0f} / {v['cpu']:.0f}" for v in r["ms"].values())
-        print(f"| {r['scene']} | {r['triangles']:,} | {r['size'][0]}x{r['size'][1]} | "
-              f"{r['lights']} | {cells} | {r['pixels_differing']:,} | "
-              f"{r['single_rays_differing']:,} |")
-    return 0
+        lines.append(f"| {r['scene']} | {r['triangles']:,} | {r['size'][0]}x{r['size'][1]} | "
+                     f"{r['lights']} | {cells} | {r['pixels_differing']:,} | "
+                     f"{r['single_rays_differing']:,} |")
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

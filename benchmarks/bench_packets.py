@@ -16,9 +16,6 @@ per ray (all threads: the cost of a ray on one core).
 
 from __future__ import annotations
 
-import argparse
-import json
-import os
 import statistics
 import sys
 import time
@@ -26,6 +23,7 @@ import time
 import numpy as np
 
 from . import scenes
+from .cli import bench_main, load_span
 from .bench_masks import BUNNY, bunny_scene
 
 
@@ -104,22 +102,12 @@ def table(result: dict) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_packets",
-                                 description=__doc__.split("\n\n")[0])
-    ap.add_argument("--runs", type=int, default=5)
-    ap.add_argument("--json", type=str, default=None)
-    args = ap.parse_args(argv)
-    load = os.getloadavg()
-    result = measure(args.runs)
-    result["load"] = [load, os.getloadavg()]
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(result, f, indent=1)
-    print(f"{result['scene']}, {result['triangles']:,} triangles"
-          f"{'' if result['shared_meshes'] else ' (../shared/models not found)'}, "
-          f"{args.runs} rounds; load {load[0]:.1f} -> {os.getloadavg()[0]:.1f}")
-    print(table(result))
-    return 0
+    def report(result: dict, args) -> str:
+        missing = "" if result["shared_meshes"] else " (../shared/models not found)"
+        return (f"{result['scene']}, {result['triangles']:,} triangles{missing}, "
+                f"{args.runs} rounds; {load_span(result)}\n{table(result)}")
+
+    return bench_main(argv, "bench_packets", __doc__, lambda a: measure(a.runs), report)
 
 
 if __name__ == "__main__":

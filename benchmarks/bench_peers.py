@@ -34,8 +34,6 @@ tracer on 1 and on 2 threads (interleaved) and their ratio.
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
 import statistics
 import subprocess
@@ -46,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from . import scenes
+from .cli import bench_main
 from .bench_masks import BUNNY
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -319,19 +318,14 @@ def table(result: dict) -> list[str]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_peers",
-                                 description=__doc__.split("\n\n")[0])
-    ap.add_argument("--runs", type=int, default=5)
-    ap.add_argument("--quick", action="store_true", help="a smoke run: tiny scenes, one round")
-    ap.add_argument("--json", type=Path, help="write every number here")
-    args = ap.parse_args(argv)
-    result = measure(args.quick, 1 if args.quick else args.runs)
-    for r in result["scenes"]:
-        r["summary"] = summary(r)
-    if args.json:
-        args.json.write_text(json.dumps(result, indent=1))
-    print("\n".join(table(result)))
-    return 0
+    def run(args) -> dict:
+        result = measure(args.quick, 1 if args.quick else args.runs)
+        for r in result["scenes"]:
+            r["summary"] = summary(r)
+        return result
+
+    return bench_main(argv, "bench_peers", __doc__, run,
+                      lambda result, _: "\n".join(table(result)), quick=True)
 
 
 if __name__ == "__main__":

@@ -15,14 +15,13 @@ model's rays at RAYS_NS_PER_RAY), and the constant is the median over the scenes
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
 import statistics
 import sys
 import time
 
 from . import scenes
+from .cli import bench_main, load_span
 from .bench_masks import BUNNY, bunny_scene
 
 CASES = (("10k", 2), ("100k", 1), ("100k", 4), ("1M", 1))
@@ -83,20 +82,9 @@ def table(result: dict) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_single_masks",
-                                 description=__doc__.split("\n\n")[0])
-    ap.add_argument("--runs", type=int, default=5)
-    ap.add_argument("--json", type=str, default=None)
-    args = ap.parse_args(argv)
-    load = os.getloadavg()
-    result = measure(args.runs)
-    result["load"] = [load, os.getloadavg()]
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(result, f, indent=1)
-    print(f"{args.runs} rounds, {WIDTH}x{HEIGHT}; load {load[0]:.1f} -> {os.getloadavg()[0]:.1f}")
-    print(table(result))
-    return 0
+    return bench_main(argv, "bench_single_masks", __doc__, lambda a: measure(a.runs),
+                      lambda r, a: f"{a.runs} rounds, {WIDTH}x{HEIGHT}; {load_span(r)}\n"
+                                   f"{table(r)}")
 
 
 if __name__ == "__main__":
