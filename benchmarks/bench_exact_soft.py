@@ -1,7 +1,7 @@
 """Exact soft shadows against counted samples (BENCHMARKS.md, "Exact soft shadows"): one run,
 milliseconds per frame, wall clock and CPU.
 
-    python -m benchmarks.bench_exact_soft [WIDTH]
+    python -m benchmarks.bench_exact_soft [--width WIDTH]
 
 Three frames under one rect light each: scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96;
 closed convex bodies), a closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a
@@ -9,13 +9,16 @@ floor at 48 x 48, and the shared bunny (69,451 triangles, open at its base) on a
 32 x 32.  Each: `exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on a thread per core
 and on one thread (`arrange.THREADS`), with the fast path off (every triangle's shadow
 united one by one: the reference of `tests/raytrace/test_exact_fast.py`), and `soft_masks`
-counting the light's 64, 256 and 1024 stratified samples."""
+counting the light's 64, 256 and 1024 stratified samples.  Then the bunny at 16 x 16,
+32 x 32 and 64 x 64: exact against counting 256 samples, and what a pixel more costs each
+(the slope between the two largest frames), so the fixed cost of a frame (the scene's
+Embree build, the objects' topology) is told apart from the per-pixel one."""
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import os
-import sys
 import time
 
 import numpy as np
@@ -33,9 +36,15 @@ from shadowvol.scenefile import load_scene
 def timed(f) -> str:
     """Milliseconds of one call: wall clock, and the CPU time of this process's threads
     (what the call costs a core of its own, when others share the machine)."""
+    wall, cpu = clocked(f)
+    return f"{wall:.0f} ({cpu:.0f} cpu)"
+
+
+def clocked(f) -> tuple[float, float]:
+    """(wall, CPU) milliseconds of one call of f."""
     t, c = time.perf_counter(), time.process_time()
     f()
-    return f"{(time.perf_counter() - t) * 1e3:.0f} ({(time.process_time() - c) * 1e3:.0f} cpu)"
+    return (time.perf_counter() - t) * 1e3, (time.process_time() - c) * 1e3
 
 
 def blob_scene(size: int) -> Scene:
@@ -85,8 +94,29 @@ def frame(name: str, scene: Scene) -> None:
         print(f"  counting {n}: {timed(lambda: soft_masks(counted))}", flush=True)
 
 
-def main() -> None:
-    width = int(sys.argv[1]) if len(sys.argv) > 1 else 96
+def per_pixel(sizes=(16, 32, 64)) -> None:
+    """The bunny's frame cost against its size: exact and counting 256 samples (CPU ms), and
+    the CPU a pixel more costs each between the two largest frames."""
+    print("bunny by frame size, CPU ms a frame (exact / counting 256):")
+    cost = {}
+    for n in sizes:
+        scene = bunny_rect_scene(n)
+        counted = scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=256)])
+        cost[n] = (clocked(lambda: exact_soft.exact_visibility(scene))[1],
+                   clocked(lambda: soft_masks(counted))[1])
+        print(f"  {n}x{n}: {cost[n][0]:.0f} / {cost[n][1]:.0f}", flush=True)
+    a, b = sizes[-2:]
+    more = b * b - a * a
+    slope = [(cost[b][k] - cost[a][k]) / more for k in (0, 1)]
+    print(f"  a pixel more ({a}x{a} -> {b}x{b}): exact {slope[0]:.3f} ms, counting 256 "
+          f"{slope[1]:.3f} ms ({slope[0] / max(slope[1], 1e-9):.0f}x)")
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_exact_soft",
+                                 description=__doc__.split("\n\n")[0])
+    ap.add_argument("--width", type=int, default=96, help="soft.toml's width (default 96)")
+    width = ap.parse_args(argv).width
     print(f"load {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     # warm up first (imports, GEOS, the kernels' compilation), so the first frame's times are
     # its own
@@ -98,10 +128,10 @@ def main() -> None:
     frame("blob", blob_scene(48))
     if BUNNY.is_file():
         frame("bunny", bunny_rect_scene(32))
+        per_pixel()
     else:
         print(f"bunny: {BUNNY} missing")
     print(f"load {os.getloadavg()[0]:.2f}")
-
 
 if __name__ == "__main__":
     main()
