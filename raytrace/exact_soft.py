@@ -286,7 +286,10 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     outline's windings (`raytrace.windings`) where that is certain (the union None there)."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
-    meet = (objects.lo[None] <= hi[:, None]).all(-1) & (objects.hi[None] >= lo[:, None]).all(-1)
+    meet = np.ones((len(p), len(objects.lo)), bool)      # (n, C): axis by axis, no (n, C, 3)
+    for a in range(3):
+        meet &= objects.lo[None, :, a] <= hi[:, None, a]
+        meet &= objects.hi[None, :, a] >= lo[:, None, a]
     meet &= _sphere_meets(light, objects, p, base)
     shapes, owner = _whole_bodies(shapely, light, objects, p, normal, own, meet)
     # the objects wholly on the light's emitting side (every corner strictly above its plane):
@@ -402,7 +405,10 @@ def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np
     tri = objects.members[clu].reshape(-1)
     keep = tri >= 0
     pix, tri = pix[keep], tri[keep]
-    keep = (objects.tri_lo[tri] <= hi[pix]).all(-1) & (objects.tri_hi[tri] >= lo[pix]).all(-1)
+    keep = np.ones(len(tri), bool)
+    for a in range(3):
+        keep &= objects.tri_lo[tri, a] <= hi[pix, a]
+        keep &= objects.tri_hi[tri, a] >= lo[pix, a]
     keep &= tri != own[pix]
     pix, tri = pix[keep], tri[keep]
     # coplanar: every corner within COPLANAR_RELATIVE of p's own triangle's plane.  Only near-

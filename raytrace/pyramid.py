@@ -24,12 +24,12 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     2), count (q',), pix, tri) of those with something left, in the order given."""
     poly = corners[tri]
     dist = (poly - light.center) @ light.normal                      # (q, 3) per plane
-    out, whole = (dist < 0).all(axis=1), (dist >= 0).all(axis=1)
+    out, whole = _beyond(dist)
     rel = poly - p[pix][:, None]
     for m in sides(light, p, base):
-        dist = np.einsum("mkj,mj->mk", rel, m[pix])
-        out |= (dist < 0).all(axis=1)
-        whole &= (dist >= 0).all(axis=1)
+        beyond, inside = _beyond(np.einsum("mkj,mj->mk", rel, m[pix]))
+        out |= beyond
+        whole &= inside
     crossing = np.flatnonzero(~out & ~whole)
     flat = [polygons.project(poly[whole], p[pix[whole]], light.center, light.normal,
                              light.axes)]
@@ -48,6 +48,13 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     order = np.argsort(at, kind="stable")
     at = at[order]
     return flat[order], count[order], pix[at], tri[at]
+
+
+def _beyond(dist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per triangle, from its corners' signed distances (q, 3): (every corner below the
+    plane, every corner on or above it), three columns compared (no (q, 3) reduction)."""
+    a, b, c = dist[:, 0], dist[:, 1], dist[:, 2]
+    return (a < 0) & (b < 0) & (c < 0), (a >= 0) & (b >= 0) & (c >= 0)
 
 
 def _clip(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
