@@ -25,11 +25,14 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     poly = corners[tri]
     dist = (poly - light.center) @ light.normal                      # (q, 3) per plane
     out, whole = _beyond(dist)
-    rel = poly - p[pix][:, None]
+    # plane by plane, only the triangles no plane has put wholly outside yet
+    live = np.flatnonzero(~out)
+    rel = poly[live] - p[pix[live]][:, None]
     for m in sides(light, p, base):
-        beyond, inside = _beyond(np.einsum("mkj,mj->mk", rel, m[pix]))
-        out |= beyond
-        whole &= inside
+        beyond, inside = _beyond(np.einsum("mkj,mj->mk", rel, m[pix[live]]))
+        out[live] = beyond
+        whole[live] &= inside
+        live, rel = live[~beyond], rel[~beyond]
     crossing = np.flatnonzero(~out & ~whole)
     flat = [polygons.project(poly[whole], p[pix[whole]], light.center, light.normal,
                              light.axes)]
