@@ -298,12 +298,15 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     clear = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
     np.minimum.at(clear, objects.object, height)
     pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
-    flat, count, pix, tri = pyramid.cut(light, corners, p, pix, tri, base)
+    pieces, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base)
+    # carried onto the light's plane only where used (not for pixels the windings settle)
+    flat = np.zeros(pieces.shape[:2] + (2,))
     # a convex object seen from outside: one hull per (pixel, object)
     obj = objects.object[tri]
     hullable = objects.convex[tri] & _outside(objects, corners, p, pix, tri)
     if hullable.any():
         h = np.flatnonzero(hullable)
+        flat[h] = pyramid.carry(light, p, pieces, pix, whole, h)
         key = pix[h] * (objects.object.max() + 1) + obj[h]
         group, which = np.unique(key, return_inverse=True)
         mask = np.arange(flat.shape[1])[None] < count[h, None]
@@ -322,6 +325,8 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         chains, heavy = windings.split(light, corners, p, pix, tri, heavy, objects.corner_ids,
                                        alone)
         rest = rest[~windings.found(chains)[pix[rest]]]
+    used = np.union1d(heavy, rest)
+    flat[used] = pyramid.carry(light, p, pieces, pix, whole, used)
     if len(heavy):
         # many pieces: their union from its outline (`raytrace.arrange`)
         rest = rest[~crowd[pix[rest]]]

@@ -20,8 +20,10 @@ from .lightshapes import FramedLight
 def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
         tri: np.ndarray, base: np.ndarray):
     """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (k, 3) (the light's
-    plane, then each side plane through p) and carried onto the light's plane: (flat (q', k',
-    2), count (q',), pix, tri) of those with something left, in the order given."""
+    plane, then each side plane through p), not yet carried onto the light's plane (`carry`
+    does that for the rows wanted): (pieces (q', k', 3), count (q',), pix, tri, whole (q',))
+    of those with something left, in the order given; whole where the triangle lies wholly
+    inside (its three corners, zero-padded past them)."""
     poly = corners[tri]
     dist = (poly - light.center) @ light.normal                      # (q, 3) per plane
     out, whole = _beyond(dist)
@@ -34,23 +36,34 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
         whole[live] &= inside
         live, rel = live[~beyond], rel[~beyond]
     crossing = np.flatnonzero(~out & ~whole)
-    flat = [polygons.project(poly[whole], p[pix[whole]], light.center, light.normal,
-                             light.axes)]
-    count = [np.full(int(whole.sum()), 3)]
-    at = [np.flatnonzero(whole)]
+    pieces, count, at = [poly[whole]], [np.full(int(whole.sum()), 3)], [np.flatnonzero(whole)]
     if len(crossing):
-        piece, n, pc, tc = _clip(light, corners, p, pix[crossing], tri[crossing], base)
+        piece, n, _, _ = _clip(light, corners, p, pix[crossing], tri[crossing], base)
         keep = n >= 3
-        flat.append(polygons.project(piece[keep], p[pc[keep]], light.center, light.normal,
-                                     light.axes))
+        pieces.append(piece[keep])
         count.append(n[keep])
         at.append(crossing[keep])
-    width = max(f.shape[1] for f in flat)
-    flat = np.concatenate([np.pad(f, ((0, 0), (0, width - f.shape[1]), (0, 0))) for f in flat])
+    width = max(f.shape[1] for f in pieces)
+    pieces = np.concatenate([np.pad(f, ((0, 0), (0, width - f.shape[1]), (0, 0)))
+                             for f in pieces])
+    inside = np.zeros(len(pieces), bool)
+    inside[:int(whole.sum())] = True
     count, at = np.concatenate(count), np.concatenate(at)
     order = np.argsort(at, kind="stable")
     at = at[order]
-    return flat[order], count[order], pix[at], tri[at]
+    return pieces[order], count[order], pix[at], tri[at], inside[order]
+
+
+def carry(light: FramedLight, p: np.ndarray, pieces: np.ndarray, pix: np.ndarray,
+          whole: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """(q, k, 2): the rows `rows` of `cut`'s pieces carried onto the light's plane, as one
+    carrying of every piece would give them (row by row the same floats); a whole
+    triangle's slots past its three corners are zero."""
+    rows = np.asarray(rows, np.int64)
+    flat = polygons.project(pieces[rows], p[pix[rows]], light.center, light.normal,
+                            light.axes)
+    flat[whole[rows], 3:] = 0.0
+    return flat
 
 
 def _beyond(dist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
