@@ -41,7 +41,7 @@ def header(results: dict, md_path: Path, png_path: Path) -> list[str]:
         worse = previous["regressions"]
         add(f"- **Against the previous run** (commit {previous['commit']}, "
             "`benchmarks.regressions`): " +
-            (f"{len(worse)} ratios worse by more than 15 %: " +
+            (f"{len(worse)} {'ratio' if len(worse) == 1 else 'ratios'} worse by more than 15 %: " +
              "; ".join(f"{g['name']} {g['old']:.3g} → {g['new']:.3g}" for g in worse[:8]) +
              (f"; and {len(worse) - 8} more (results.json)" if len(worse) > 8 else "")
              if worse else "no ratio worse by more than 15 %."))
