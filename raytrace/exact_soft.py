@@ -47,7 +47,7 @@ from .regions import ring_measures as _ring_measures
 from .backends import for_each_tile
 from .camera import RayGrid
 from .lightshapes import FramedLight, frame_light, shapely_module
-from .masks import MASK_TILE_RAYS, MaskTracer, _primary_hits, scene_backend, shadow_masks
+from .masks import MaskTracer, _primary_hits, scene_backend, shadow_masks
 from .occluders import CLUSTER, CONVEX_RELATIVE, Objects
 from .occluders import objects as _objects
 from .switches import casting, receiving_objects
@@ -70,6 +70,10 @@ FEW_PIECES = 8
 MANY_PIECES = 16
 # Pixels per chunk (each chunk's candidate arrays are pixels x clusters).
 CHUNK_PIXELS = 2048
+# Pixels per tile (a tile a thread): the masks' 32k of before their 64k
+# (`raytrace.masks.MASK_TILE_RAYS`), since a pixel here costs ~1,000x a masks' ray: bigger
+# tiles would leave a thread idle on frames of 32k-64k pixels.
+EXACT_TILE_PIXELS = 1 << 15
 
 
 class ExactVisibility(NamedTuple):
@@ -132,7 +136,7 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
                                  target=scene.camera.target - origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
-    rows_per_tile = max(1, MASK_TILE_RAYS // W)
+    rows_per_tile = max(1, EXACT_TILE_PIXELS // W)
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
     hard = [i for i, lt in enumerate(lights) if lt is None]
     lit = shadow_masks(scene.replace(lights=tuple(scene.lights[i] for i in hard)), mt)[0] \
