@@ -133,5 +133,6 @@ def main(argv=None) -> None:
         print(f"bunny: {BUNNY} missing")
     print(f"load {os.getloadavg()[0]:.2f}")
 
+
 if __name__ == "__main__":
     main()

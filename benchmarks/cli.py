@@ -13,10 +13,11 @@ from typing import Callable
 
 def bench_main(argv, module: str, doc: str, measure: Callable[[argparse.Namespace], dict],
                report: Callable[[dict, argparse.Namespace], str], quick: bool = False) -> int:
-    """Run the benchmark module `module` as its own command: parse --runs (default 5), --json FILE (every
-    number written there) and, with `quick`, --quick; `measure(args)` gives the result, which
-    gets the load average before and after unless it holds its own ("load"); print
-    `report(result, args)`.  The description is the first paragraph of the module's `doc`."""
+    """Run the benchmark module `module` as its own command: parse --runs (default 5),
+    --json FILE (every number written there) and, with `quick`, --quick; `measure(args)` gives
+    the result, which gets the load average before and after unless it holds its own
+    ("load"); print `report(result, args)`.  The description is the first paragraph of the
+    module's `doc`."""
     ap = argparse.ArgumentParser(prog=f"python -m benchmarks.{module}",
                                  description=doc.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=5)

@@ -38,7 +38,7 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     crossing = np.flatnonzero(~out & ~whole)
     pieces, count, at = [poly[whole]], [np.full(int(whole.sum()), 3)], [np.flatnonzero(whole)]
     if len(crossing):
-        piece, n, _, _ = _clip(light, corners, p, pix[crossing], tri[crossing], base)
+        piece, n = _clip(light, poly[crossing], p, pix[crossing], base)
         keep = n >= 3
         pieces.append(piece[keep])
         count.append(n[keep])
@@ -46,12 +46,12 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     width = max(f.shape[1] for f in pieces)
     pieces = np.concatenate([np.pad(f, ((0, 0), (0, width - f.shape[1]), (0, 0)))
                              for f in pieces])
-    inside = np.zeros(len(pieces), bool)
-    inside[:int(whole.sum())] = True
+    wholly = np.zeros(len(pieces), bool)             # the whole triangles come first
+    wholly[:int(whole.sum())] = True
     count, at = np.concatenate(count), np.concatenate(at)
     order = np.argsort(at, kind="stable")
     at = at[order]
-    return pieces[order], count[order], pix[at], tri[at], inside[order]
+    return pieces[order], count[order], pix[at], tri[at], wholly[order]
 
 
 def carry(light: FramedLight, p: np.ndarray, pieces: np.ndarray, pix: np.ndarray,
@@ -73,17 +73,17 @@ def _beyond(dist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return (a < 0) & (b < 0) & (c < 0), (a >= 0) & (b >= 0) & (c >= 0)
 
 
-def _clip(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
-          tri: np.ndarray, base: np.ndarray):
-    """The clip of `cut`, plane by plane: (poly (q, k, 3), count (q,), pix, tri), every row
-    kept (count 0 where nothing is left)."""
-    poly = corners[tri].copy()
-    count = np.full(len(tri), 3)
+def _clip(light: FramedLight, triangles: np.ndarray, p: np.ndarray, pix: np.ndarray,
+          base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The clip of `cut` of triangles (q, 3, 3) seen from p[pix], plane by plane: (poly (q,
+    k, 3), count (q,)), every row kept (count 0 where nothing is left)."""
+    poly = triangles.copy()
+    count = np.full(len(poly), 3)
     poly, count = polygons.clip(poly, count, (poly - light.center) @ light.normal)
     for m in sides(light, p, base):
         poly, count = polygons.clip(poly, count,
                                     np.einsum("mkj,mj->mk", poly - p[pix][:, None], m[pix]))
-    return poly, count, pix, tri
+    return poly, count
 
 
 def sides(light: FramedLight, p: np.ndarray, base: np.ndarray) -> list:
