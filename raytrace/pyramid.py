@@ -22,36 +22,62 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (k, 3) (the light's
     plane, then each side plane through p), not yet carried onto the light's plane (`carry`
     does that for the rows wanted): (pieces (q', k', 3), count (q',), pix, tri, whole (q',))
-    of those with something left, in the order given; whole where the triangle lies wholly
-    inside (its three corners, zero-padded past them)."""
+    of those with something left, in the order given, zero past each count; whole where the
+    triangle lies wholly inside (its three corners).  In numba where it loads
+    (`raytrace.cutkernels`: the same bytes), else in numpy."""
+    m = sides(light, p, base)
+    kernel = _kernel()
+    if kernel is not None:
+        pieces, count, whole = kernel(corners, tri, pix, p, light.center, light.normal,
+                                      np.stack(m) if m else np.zeros((0,) + p.shape))
+    else:
+        pieces, count, whole = _cut(light, corners, p, pix, tri, m)
+    keep = np.flatnonzero(count >= 3)
+    width = max(3, int(count[keep].max(initial=3)))
+    return pieces[keep, :width], count[keep], pix[keep], tri[keep], whole[keep]
+
+
+def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
+         tri: np.ndarray, m: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`cutkernels.cut` in numpy: (pieces (q, k', 3) zero past each count, count (q,), whole
+    (q,)) of every pair, count 0 where nothing is left."""
     poly = corners[tri]
-    dist = (poly - light.center) @ light.normal                      # (q, 3) per plane
+    dist = _dot(poly - light.center, light.normal)                   # (q, 3) per plane
     out, whole = _beyond(dist)
     # plane by plane, only the triangles no plane has put wholly outside yet
     live = np.flatnonzero(~out)
     rel = poly[live] - p[pix[live]][:, None]
-    for m in sides(light, p, base):
-        beyond, inside = _beyond(np.einsum("mkj,mj->mk", rel, m[pix[live]]))
+    for side in m:
+        beyond, inside = _beyond(_dot(rel, side[pix[live]][:, None]))
         out[live] = beyond
         whole[live] &= inside
         live, rel = live[~beyond], rel[~beyond]
+    whole &= ~out
+    count = np.where(whole, 3, 0)
     crossing = np.flatnonzero(~out & ~whole)
-    pieces, count, at = [poly[whole]], [np.full(int(whole.sum()), 3)], [np.flatnonzero(whole)]
-    if len(crossing):
-        piece, n = _clip(light, poly[crossing], p, pix[crossing], base)
-        keep = n >= 3
-        pieces.append(piece[keep])
-        count.append(n[keep])
-        at.append(crossing[keep])
-    width = max(f.shape[1] for f in pieces)
-    pieces = np.concatenate([np.pad(f, ((0, 0), (0, width - f.shape[1]), (0, 0)))
-                             for f in pieces])
-    wholly = np.zeros(len(pieces), bool)             # the whole triangles come first
-    wholly[:int(whole.sum())] = True
-    count, at = np.concatenate(count), np.concatenate(at)
-    order = np.argsort(at, kind="stable")
-    at = at[order]
-    return pieces[order], count[order], pix[at], tri[at], wholly[order]
+    piece, n = _clip(light, poly[crossing], p, pix[crossing], m)
+    width = max(3, piece.shape[1])
+    pieces = np.zeros((len(tri), width, 3))
+    pieces[whole, :3] = poly[whole]
+    pieces[crossing, :piece.shape[1]] = piece
+    count[crossing] = n
+    pieces[np.arange(width)[None] >= count[:, None]] = 0.0
+    return pieces, count, whole
+
+
+def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """u . v over the last axis (3), as three products summed left to right (numba's kernels
+    sum them alike: the same bits; matmul and einsum may not)."""
+    return u[..., 0] * v[..., 0] + u[..., 1] * v[..., 1] + u[..., 2] * v[..., 2]
+
+
+def _kernel():
+    """`raytrace.cutkernels.cut`, or None where numba is missing."""
+    try:
+        from .cutkernels import cut as kernel
+    except ImportError:
+        return None
+    return kernel
 
 
 def carry(light: FramedLight, p: np.ndarray, pieces: np.ndarray, pix: np.ndarray,
@@ -74,15 +100,16 @@ def _beyond(dist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _clip(light: FramedLight, triangles: np.ndarray, p: np.ndarray, pix: np.ndarray,
-          base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The clip of `cut` of triangles (q, 3, 3) seen from p[pix], plane by plane: (poly (q,
-    k, 3), count (q,)), every row kept (count 0 where nothing is left)."""
+          m: list) -> tuple[np.ndarray, np.ndarray]:
+    """The clip of `cut` of triangles (q, 3, 3) seen from p[pix] by the light's plane, then
+    the side planes m (their inward normals (n, 3) each): (poly (q, k, 3), count (q,)),
+    every row kept (count 0 where nothing is left)."""
     poly = triangles.copy()
     count = np.full(len(poly), 3)
-    poly, count = polygons.clip(poly, count, (poly - light.center) @ light.normal)
-    for m in sides(light, p, base):
+    poly, count = polygons.clip(poly, count, _dot(poly - light.center, light.normal))
+    for side in m:
         poly, count = polygons.clip(poly, count,
-                                    np.einsum("mkj,mj->mk", poly - p[pix][:, None], m[pix]))
+                                    _dot(poly - p[pix][:, None], side[pix][:, None]))
     return poly, count
 
 

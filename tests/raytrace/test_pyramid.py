@@ -1,0 +1,119 @@
+"""`pyramid.cut` in numba (`raytrace.cutkernels`) against its numpy path, byte for byte: the
+decided triangles (wholly outside a plane, wholly inside all) and the clipped ones, on random
+triangles around the pyramid and on ties (corners on the side planes, at p, at the light's
+corners); and the exact visibility of a closed mesh the same bytes with and without it.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from raytrace import pyramid
+from raytrace.lightshapes import FramedLight
+from shadowvol.planes import default_plane_axes
+
+pytest.importorskip("numba")
+
+
+def _light() -> FramedLight:
+    """A rect light tilted off every axis (so no side plane's normal has a zero component and
+    the order of a dot product's sum shows in its bits)."""
+    normal = np.array([0.2, -1.0, 0.3]) / np.linalg.norm([0.2, -1.0, 0.3])
+    u, v = default_plane_axes(normal)
+    hull = np.array([[-0.5, -0.3], [0.5, -0.3], [0.5, 0.3], [-0.5, 0.3]])
+    return FramedLight(np.array([0.1, 2.0, -0.2]), normal, np.stack([u, v]), hull, None, None,
+                       0.6, 2.0 ** -44)
+
+
+def _pairs(seed: int):
+    """Points below the light, triangles around and across their pyramids, and pairs of
+    them: random corners, corners on side planes and at p, corners at the light's."""
+    rng = np.random.default_rng(seed)
+    light = _light()
+    base = light.center + light.hull @ light.axes
+    n, q = 40, 1200
+    p = np.c_[rng.uniform(-1, 1, n), rng.uniform(-0.5, 0.5, n), rng.uniform(-1, 1, n)]
+    pix = rng.integers(0, n, q)
+    tri = rng.permutation(q)                        # a triangle a pair, in no order
+    corners = np.c_[rng.uniform(-1.5, 1.5, (q, 3, 1)), rng.uniform(-0.6, 2.4, (q, 3, 1)),
+                    rng.uniform(-1.5, 1.5, (q, 3, 1))]
+    # small ones about a point of the pyramid: inside, or across a side plane
+    toward = base[rng.integers(0, len(base), q)] * 0.7 + light.center * 0.3
+    at = p[pix] + rng.uniform(0.1, 0.9, (q, 1)) * (toward - p[pix])
+    small = rng.random(q) < 0.5
+    corners[tri[small]] = at[small, None] + rng.normal(0, 0.08, (int(small.sum()), 3, 3))
+    # ties: a corner on the segment from p to a light's corner (two side planes), or at p
+    for r in rng.choice(q, q // 4, replace=False):
+        j, s = rng.integers(0, len(base)), rng.choice([0.0, 0.25, 0.5, 1.0])
+        corners[tri[r], rng.integers(0, 3)] = p[pix[r]] + s * (base[j] - p[pix[r]])
+    return light, base, corners, p, pix, tri
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_kernel_cuts_numpys_bytes(seed, monkeypatch):
+    light, base, corners, p, pix, tri = _pairs(seed)
+    fast = pyramid.cut(light, corners, p, pix, tri, base)
+    monkeypatch.setitem(sys.modules, "raytrace.cutkernels", None)    # import fails: numpy
+    slow = pyramid.cut(light, corners, p, pix, tri, base)
+    whole, count = slow[4], slow[1]
+    assert whole.any() and (~whole).any() and (count > 3).any()      # every kind of row
+    assert len(slow[1]) < len(pix)                                    # and some dropped
+    for got, want in zip(fast, slow):
+        assert got.dtype == want.dtype and got.shape == want.shape
+        assert got.tobytes() == want.tobytes()
+
+
+def test_the_pieces_lie_in_the_pyramid_and_whole_ones_are_their_triangles():
+    """A witness of the clip apart from either path: every kept corner is inside every plane
+    (to the rounding of its interpolation), a whole piece is its triangle, and a pair with a
+    corner strictly inside all planes is kept."""
+    light, base, corners, p, pix, tri = _pairs(7)
+    pieces, count, at_pix, at_tri, whole = pyramid.cut(light, corners, p, pix, tri, base)
+    sides = pyramid.sides(light, p, base)
+    scale = np.abs(corners).max() * 8 * np.finfo(float).eps
+    for r in range(len(count)):
+        poly = pieces[r, :count[r]]
+        assert ((poly - light.center) @ light.normal >= -scale * 4).all()
+        for m in sides:
+            u = m[at_pix[r]]
+            assert ((poly - p[at_pix[r]]) @ u >= -scale * 4 * np.linalg.norm(u)).all()
+        assert not pieces[r, count[r]:].any()
+        if whole[r]:
+            assert np.array_equal(poly, corners[at_tri[r]])
+    dist = [(corners[tri] - light.center) @ light.normal] + \
+        [np.einsum("qkj,qj->qk", corners[tri] - p[pix][:, None], m[pix]) for m in sides]
+    inner = np.logical_and.reduce([d > 1e-9 for d in dist])          # (q, 3) per corner
+    assert inner.any(axis=1).sum() > 20
+    kept = set(zip(at_pix.tolist(), at_tri.tolist()))
+    for r in np.flatnonzero(inner.any(axis=1)):
+        assert (pix[r], tri[r]) in kept
+
+
+def test_exact_visibility_is_the_same_bytes_without_the_kernel(monkeypatch):
+    """A closed non-convex mesh's penumbra (the cut's hot path) with and without numba."""
+    import trimesh
+
+    from builders import FLOOR_Y, LIGHT_Y, MATTE
+    from raytrace.exact_soft import exact_visibility
+    from shadowvol.primitives import mesh, plane
+    from shadowvol.scene import AreaLight, Camera, Scene
+    rng = np.random.default_rng(3)
+    ico = trimesh.creation.icosphere(subdivisions=2, radius=0.4)
+    v = ico.vertices * (1 + 0.15 * rng.standard_normal((len(ico.vertices), 1)))
+    light = AreaLight("rect", [0.0, LIGHT_Y, 0.0], normal=[0.1, -1, 0.2], size=[1.0, 0.7],
+                      samples=4)
+    objects = [plane("floor", point=[0.0, FLOOR_Y, 0.0], size=[8.0, 8.0], material=MATTE),
+               mesh("ball", v + [0.2, -v[:, 1].min() + 0.3, 0.1], ico.faces, MATTE)]
+    camera = Camera(eye=[0.0, 4.5, 5.5], target=[0.0, 0.3, -0.3], fov_y=40.0)
+    scene = Scene(camera=camera, objects=objects, lights=[light], width=32, height=32,
+                  ambient=[0.0, 0.0, 0.0])
+    fast = exact_visibility(scene)
+    monkeypatch.setitem(sys.modules, "raytrace.cutkernels", None)
+    slow = exact_visibility(scene)
+    assert 0 < (fast.visibility[0] > 0).sum() and ((fast.visibility > 0) &
+                                                   (fast.visibility < 1)).sum() > 20
+    for got, want in zip(fast[:2], slow[:2]):
+        assert got.tobytes() == want.tobytes()
