@@ -5,7 +5,7 @@ triangle's plane, as `depth` is), the visible region is the light's shape, cut t
 camera-facing normal n sees it (n . (x - p) > 0), less the union of every triangle's shadow
 on it: the triangle cut to the pyramid from p over the light (its side planes and the light's
 plane) and carried from p onto the light's plane.  Both sides of a triangle occlude; only p's
-own triangle and those coplanar with it (COPLANAR_RELATIVE) are left out.  Then
+own triangle and those coplanar with it (`candidates.COPLANAR_RELATIVE`) are left out.  Then
 
     visibility_exact = area(visible) / area(light)
     irradiance_exact = Lambert's formula over the visible region's rings (unit radiance),
@@ -13,9 +13,9 @@ own triangle and those coplanar with it (COPLANAR_RELATIVE) are left out.  Then
 0 for both where p is not on the light's emitting side.  docs/CONVENTIONS.md ("Area lights:
 exact visibility") says what is exact at a contact and at a tie.
 
-Candidates come from a conservative query, never from sampled rays: clusters of triangles whose
-bounding spheres are inside every plane of the pyramid and whose boxes meet its box, then
-triangles whose boxes do, then the cut itself.  A closed, convex, consistently wound object (a
+Candidates come from a conservative query, never from sampled rays (`raytrace.candidates`):
+clusters of triangles whose bounding spheres are inside every plane of the pyramid and whose
+boxes meet its box, then triangles whose boxes do, then the cut itself.  A closed, convex, consistently wound object (a
 box, a sphere's tessellation) shadows p from outside as one convex polygon (the shadow of a
 convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
 where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
@@ -38,7 +38,7 @@ import numpy as np
 from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
-from . import arrange, polygons, pyramid, windings
+from . import arrange, candidates, polygons, pyramid, windings
 from .arrange import polygonal as _polygonal
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
@@ -48,20 +48,13 @@ from .backends import for_each_tile
 from .camera import RayGrid
 from .lightshapes import FramedLight, frame_light, shapely_module
 from .masks import MaskTracer, _primary_hits, scene_backend, shadow_masks
-from .occluders import CLUSTER, CONVEX_RELATIVE, Objects
+from .occluders import CONVEX_RELATIVE, Objects
 from .occluders import objects as _objects
 from .switches import casting, receiving_objects
 
 __all__ = ["EXACT_OUTPUTS", "ExactVisibility", "check_exact", "exact_visibility",
            "visible_regions"]
 
-# A triangle is coplanar with p's own when its three corners lie within this much of the
-# largest corner coordinate (the frame's, from the eye) of the own triangle's plane: the
-# corners are float64 world positions (each a few roundings of 2^-53 from its transform) less
-# the eye (one more), so two triangles of one world plane lie ~1e-15 of their coordinates
-# apart; 2^-40 (~1e-12) is a thousand times that, and no model places a real occluder so
-# flat and so close.  Left in, such a triangle a rounding above p would cut the whole pyramid.
-COPLANAR_RELATIVE = 2.0 ** -40
 # Pieces of shadow per pixel that are united pairwise over all pixels at once (more: one
 # cascaded union per pixel).
 FEW_PIECES = 8
@@ -290,18 +283,14 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     outline's windings (`raytrace.windings`) where that is certain (the union None there)."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
-    meet = np.ones((len(p), len(objects.lo)), bool)      # (n, C): axis by axis, no (n, C, 3)
-    for a in range(3):
-        meet &= objects.lo[None, :, a] <= hi[:, None, a]
-        meet &= objects.hi[None, :, a] >= lo[:, None, a]
-    meet &= _sphere_meets(light, objects, p, base)
+    meet = candidates.meets(light, objects, p, base, lo, hi)
     shapes, owner = _whole_bodies(shapely, light, objects, p, normal, own, meet)
     # the objects wholly on the light's emitting side (every corner strictly above its plane):
     # the light is outside them
     height = ((corners - light.center) @ light.normal).min(axis=1)
     clear = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
     np.minimum.at(clear, objects.object, height)
-    pix, tri = _candidates(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
+    pix, tri = candidates.pairs(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
     pieces, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base)
     # carried onto the light's plane only where used (not for pixels the windings settle)
     flat = np.zeros(pieces.shape[:2] + (2,))
@@ -380,68 +369,6 @@ def _whole_bodies(shapely, light: FramedLight, objects: Objects, p: np.ndarray, 
         owner.append(at)
         meet[np.ix_(at, clusters)] = False
     return shapes, owner
-
-
-def _sphere_meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.ndarray
-                  ) -> np.ndarray:
-    """(n, C) bool: cluster c's bounding sphere is not wholly outside one of the planes that
-    bound the pyramid from p over `base` (k, 3): its side planes through p, the light's plane
-    and p's parallel plane (a sphere beyond a face of a convex body cannot meet it)."""
-    height = (objects.centre - light.center) @ light.normal              # (C,)
-    ok = (height >= -objects.radius)[None] & \
-        (height[None] <= ((p - light.center) @ light.normal)[:, None] + objects.radius[None])
-    for j in range(len(base)):
-        m = np.cross(base[j] - p, base[(j + 1) % len(base)] - p)      # (n, 3)
-        m *= np.sign(((light.center - p) * m).sum(axis=1))[:, None]
-        m /= np.linalg.norm(m, axis=1, keepdims=True)
-        ok &= m @ objects.centre.T - (m * p).sum(axis=1)[:, None] >= -objects.radius[None]
-    return ok
-
-
-def _candidates(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarray,
-                own: np.ndarray, meet: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                clear: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(pixel, triangle) pairs (q,) int64 each: the triangles of the clusters that `meet`
-    (n, C) says meet p's pyramid box [lo, hi] (n, 3), whose own boxes meet it too, less p's
-    own triangle, those coplanar with it, a convex object's from its own outside, and the
-    triangles of a closed non-convex object that do not turn their back to p where the light
-    is outside that object (`clear` (n_objects,) bool): a segment from p to a point of the
-    light outside a closed surface that meets it leaves it last through a face turned away
-    from p, so those faces' shadows alone make the object's (up to segments grazing an edge:
-    no area)."""
-    pix, clu = np.nonzero(meet)
-    pix = np.repeat(pix, CLUSTER)
-    tri = objects.members[clu].reshape(-1)
-    keep = tri >= 0
-    pix, tri = pix[keep], tri[keep]
-    keep = np.ones(len(tri), bool)
-    for a in range(3):
-        keep &= objects.tri_lo[tri, a] <= hi[pix, a]
-        keep &= objects.tri_hi[tri, a] >= lo[pix, a]
-    keep &= tri != own[pix]
-    pix, tri = pix[keep], tri[keep]
-    # coplanar: every corner within COPLANAR_RELATIVE of p's own triangle's plane.  Only near-
-    # parallel triangles are looked at: one tilted by more than 0.045 rad with its corners that
-    # close to the plane is smaller than 2^-40 / 0.045 of its coordinates.
-    own_n = objects.normal[own[pix]]
-    parallel = np.flatnonzero(np.abs((own_n * objects.normal[tri]).sum(axis=1)) > 1 - 1e-3)
-    keep = np.ones(len(tri), bool)
-    if len(parallel):
-        near, t = own[pix[parallel]], tri[parallel]
-        off = np.abs(corners[t] @ objects.normal[near][..., None]
-                     - objects.offset[near, None, None])
-        scale = np.maximum(objects.scale[near], objects.scale[t])
-        keep[parallel] = off.max(axis=(1, 2)) > COPLANAR_RELATIVE * scale
-    mine = objects.convex[tri] & (objects.object[tri] == objects.object[own[pix]])
-    outside = (objects.outward[own[pix]] * normal[pix]).sum(axis=1) > 0
-    keep &= ~(mine & outside)
-    if clear is not None:
-        shell = objects.shell[tri]
-        closed = (shell != 0).any(axis=1) & ~objects.convex[tri] & clear[objects.object[tri]]
-        at = np.flatnonzero(closed & keep)
-        toward = (shell[at] * (corners[tri[at], 0] - p[pix[at]])).sum(axis=1) <= 0
-        keep[at[toward]] = False
-    return pix[keep], tri[keep]
 
 
 def _unite(shapely, shapes: list, owner: list, n: int, grid: float

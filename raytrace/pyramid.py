@@ -24,7 +24,7 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     does that for the rows wanted): (pieces (q', k', 3), count (q',), pix, tri, whole (q',))
     of those with something left, in the order given, zero past each count; whole where the
     triangle lies wholly inside (its three corners).  In numba where it loads
-    (`raytrace.cutkernels`: the same bytes), else in numpy."""
+    (`raytrace.exactkernels`: the same bytes), else in numpy."""
     m = sides(light, p, base)
     kernel = _kernel()
     if kernel is not None:
@@ -39,7 +39,7 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
 
 def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
          tri: np.ndarray, m: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`cutkernels.cut` in numpy: (pieces (q, k', 3) zero past each count, count (q,), whole
+    """`exactkernels.cut` in numpy: (pieces (q, k', 3) zero past each count, count (q,), whole
     (q,)) of every pair, count 0 where nothing is left."""
     poly = corners[tri]
     dist = _dot(poly - light.center, light.normal)                   # (q, 3) per plane
@@ -72,9 +72,9 @@ def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def _kernel():
-    """`raytrace.cutkernels.cut`, or None where numba is missing."""
+    """`raytrace.exactkernels.cut`, or None where numba is missing."""
     try:
-        from .cutkernels import cut as kernel
+        from .exactkernels import cut as kernel
     except ImportError:
         return None
     return kernel

@@ -1,4 +1,4 @@
-"""`pyramid.cut` in numba (`raytrace.cutkernels`) against its numpy path, byte for byte: the
+"""`pyramid.cut` in numba (`raytrace.exactkernels`) against its numpy path, byte for byte: the
 decided triangles (wholly outside a plane, wholly inside all) and the clipped ones, on random
 triangles around the pyramid and on ties (corners on the side planes, at p, at the light's
 corners); and the exact visibility of a closed mesh the same bytes with and without it.
@@ -56,7 +56,7 @@ def _pairs(seed: int):
 def test_the_kernel_cuts_numpys_bytes(seed, monkeypatch):
     light, base, corners, p, pix, tri = _pairs(seed)
     fast = pyramid.cut(light, corners, p, pix, tri, base)
-    monkeypatch.setitem(sys.modules, "raytrace.cutkernels", None)    # import fails: numpy
+    monkeypatch.setitem(sys.modules, "raytrace.exactkernels", None)    # import fails: numpy
     slow = pyramid.cut(light, corners, p, pix, tri, base)
     whole, count = slow[4], slow[1]
     assert whole.any() and (~whole).any() and (count > 3).any()      # every kind of row
@@ -111,7 +111,7 @@ def test_exact_visibility_is_the_same_bytes_without_the_kernel(monkeypatch):
     scene = Scene(camera=camera, objects=objects, lights=[light], width=32, height=32,
                   ambient=[0.0, 0.0, 0.0])
     fast = exact_visibility(scene)
-    monkeypatch.setitem(sys.modules, "raytrace.cutkernels", None)
+    monkeypatch.setitem(sys.modules, "raytrace.exactkernels", None)
     slow = exact_visibility(scene)
     assert 0 < (fast.visibility[0] > 0).sum() and ((fast.visibility > 0) &
                                                    (fast.visibility < 1)).sum() > 20

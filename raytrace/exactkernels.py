@@ -1,0 +1,155 @@
+"""The exact visibility's per-pixel loops in numba (the `fast` extra), where numpy's passes over
+arrays of every (pixel, cluster) and (pixel, triangle) pair cost ~1 us a pair, most of it
+moving those arrays through memory:
+
+* `meets`: the clusters whose boxes meet a pixel's pyramid box and whose spheres no plane of
+  the pyramid leaves wholly outside (`candidates.meets`);
+* `pairs`: their triangles whose boxes meet it too, less the pixel's own (`candidates.pairs`);
+* `cut`: each (pixel, triangle) pair decided and, where it crosses a plane, clipped in one
+  pass over its corners (`pyramid.cut`).
+
+The same answers and floats as numpy's paths, bit for bit: every signed distance is the same
+three products summed left to right (`pyramid._dot`), every new corner the same interpolation
+(`polygons.clip`), every pair in the same order; tests/raytrace/test_pyramid.py holds the two
+to the same bytes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .packetkernels import _jit
+
+
+@_jit()
+def _clip_plane(src, n, dist, dst):
+    """Sutherland-Hodgman of the polygon src[:n] (k, 3) by the plane of the corners' signed
+    distances dist[:n], into dst: the kept corners and each crossing edge's new one, in
+    `polygons.clip`'s order; returns the count."""
+    m = 0
+    for i in range(n):
+        j = i + 1 if i + 1 < n else 0
+        d0, d1 = dist[i], dist[j]
+        if d0 >= 0:
+            dst[m, 0], dst[m, 1], dst[m, 2] = src[i, 0], src[i, 1], src[i, 2]
+            m += 1
+        if (d0 >= 0) != (d1 >= 0):
+            t = d0 / (d0 - d1)
+            for a in range(3):
+                dst[m, a] = src[i, a] + t * (src[j, a] - src[i, a])
+            m += 1
+    return m
+
+
+@_jit()
+def cut(corners, tri, pix, p, center, normal, sides):
+    """Triangles corners[tri] (q,) against the pyramid from p[pix] (the light's plane through
+    `center` with `normal`, then the side planes' inward normals sides (s, n, 3)): (pieces
+    (q, 4 + s, 3) zero past each count, count (q,), whole (q,)), count 0 where nothing is
+    left, whole where all three corners are inside every plane (the piece is the triangle)."""
+    q, s = tri.shape[0], sides.shape[0]
+    width = 4 + s
+    pieces = np.zeros((q, width, 3))
+    count = np.zeros(q, np.int64)
+    whole = np.zeros(q, np.bool_)
+    a, b = np.empty((width, 3)), np.empty((width, 3))
+    dist = np.empty(width)
+    d = np.empty(3)
+    for r in range(q):
+        c, e = corners[tri[r]], pix[r]
+        out, inside = True, True
+        for k in range(3):
+            d[k] = ((c[k, 0] - center[0]) * normal[0] + (c[k, 1] - center[1]) * normal[1]
+                    + (c[k, 2] - center[2]) * normal[2])
+            out &= d[k] < 0
+            inside &= d[k] >= 0
+        for j in range(s):
+            if out:
+                break
+            m = sides[j, e]
+            beyond, within = True, True
+            for k in range(3):
+                x = ((c[k, 0] - p[e, 0]) * m[0] + (c[k, 1] - p[e, 1]) * m[1]
+                     + (c[k, 2] - p[e, 2]) * m[2])
+                beyond &= x < 0
+                within &= x >= 0
+            out = beyond
+            inside &= within
+        if out:
+            continue
+        if inside:
+            pieces[r, :3] = c
+            count[r], whole[r] = 3, True
+            continue
+        # crossing: clipped plane by plane, the distances taken afresh from each clip
+        n = _clip_plane(c, 3, d, a)
+        for j in range(s):
+            m = sides[j, e]
+            for k in range(n):
+                dist[k] = ((a[k, 0] - p[e, 0]) * m[0] + (a[k, 1] - p[e, 1]) * m[1]
+                           + (a[k, 2] - p[e, 2]) * m[2])
+            n = _clip_plane(a, n, dist, b)
+            a, b = b, a
+        pieces[r, :n] = a[:n]
+        count[r] = n
+    return pieces, count, whole
+
+
+@_jit()
+def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p):
+    """(n, C) bool: cluster c's box c_lo, c_hi (C, 3) meets pixel i's pyramid box lo, hi
+    (n, 3), and its sphere centre (C, 3), radius (C,) is not wholly below the light's plane
+    (height (C,) its centre's over it), above p's parallel plane (top (n,) p's height), or
+    outside a side plane (sides (s, n, 3) unit inward normals through p (n, 3))."""
+    n, c_n, s = lo.shape[0], c_lo.shape[0], sides.shape[0]
+    out = np.zeros((n, c_n), np.bool_)
+    for i in range(n):
+        for c in range(c_n):
+            ok = True
+            for a in range(3):
+                ok &= (c_lo[c, a] <= hi[i, a]) & (c_hi[c, a] >= lo[i, a])
+            if not ok:
+                continue
+            ok = (height[c] >= -radius[c]) & (height[c] <= top[i] + radius[c])
+            for j in range(s):
+                if not ok:
+                    break
+                m = sides[j, i]
+                at = m[0] * centre[c, 0] + m[1] * centre[c, 1] + m[2] * centre[c, 2]
+                ok = at - (m[0] * p[i, 0] + m[1] * p[i, 1] + m[2] * p[i, 2]) >= -radius[c]
+            out[i, c] = ok
+    return out
+
+
+@_jit()
+def _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, pix, tri):
+    """The pairs of `pairs` into pix, tri where given (else only counted): their number."""
+    q = 0
+    for i in range(meet.shape[0]):
+        for c in range(meet.shape[1]):
+            if not meet[i, c]:
+                continue
+            for k in range(members.shape[1]):
+                t = members[c, k]
+                if t < 0 or t == own[i]:
+                    continue
+                ok = True
+                for a in range(3):
+                    ok &= (tri_lo[t, a] <= hi[i, a]) & (tri_hi[t, a] >= lo[i, a])
+                if ok:
+                    if pix.shape[0]:
+                        pix[q], tri[q] = i, t
+                    q += 1
+    return q
+
+
+@_jit()
+def pairs(meet, members, tri_lo, tri_hi, lo, hi, own):
+    """(pix (q,), tri (q,)) int64: for each pixel i and cluster c that meet (n, C), in that
+    order, the members (C, K) (-1 pads) whose boxes tri_lo, tri_hi (M, 3) meet lo, hi (n, 3),
+    bar own (n,)."""
+    none = np.zeros(0, np.int64)
+    q = _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, none, none)
+    pix, tri = np.empty(max(q, 1), np.int64), np.empty(max(q, 1), np.int64)
+    _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, pix, tri)
+    return pix[:q], tri[:q]
