@@ -15,7 +15,7 @@ import numpy as np
 
 from .lightshapes import FramedLight
 from .occluders import CLUSTER, Objects
-from .pyramid import _dot
+from .polygons import dot
 
 # A triangle is coplanar with p's own when its three corners lie within this much of the
 # largest corner coordinate (the frame's, from the eye) of the own triangle's plane: the
@@ -91,7 +91,7 @@ def meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.ndarray,
     ok &= (height >= -objects.radius)[None] & \
         (height[None] <= top[:, None] + objects.radius[None])
     for m in sides:
-        ok &= _dot(m[:, None], objects.centre[None]) - _dot(m, p)[:, None] >= \
+        ok &= dot(m[:, None], objects.centre[None]) - dot(m, p)[:, None] >= \
             -objects.radius[None]
     return ok
 

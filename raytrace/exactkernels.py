@@ -9,7 +9,7 @@ moving those arrays through memory:
   pass over its corners (`pyramid.cut`).
 
 The same answers and floats as numpy's paths, bit for bit: every signed distance is the same
-three products summed left to right (`pyramid._dot`), every new corner the same interpolation
+three products summed left to right (`polygons.dot`), every new corner the same interpolation
 (`polygons.clip`), every pair in the same order; tests/raytrace/test_pyramid.py holds the two
 to the same bytes.
 """
@@ -44,17 +44,20 @@ def _clip_plane(src, n, dist, dst):
 @_jit()
 def cut(corners, tri, pix, p, center, normal, sides):
     """Triangles corners[tri] (q,) against the pyramid from p[pix] (the light's plane through
-    `center` with `normal`, then the side planes' inward normals sides (s, n, 3)): (pieces
-    (q, 4 + s, 3) zero past each count, count (q,), whole (q,)), count 0 where nothing is
-    left, whole where all three corners are inside every plane (the piece is the triangle)."""
+    `center` with `normal`, then the side planes' inward normals sides (s, n, 3)), the pairs
+    with something left, in order: (pieces (q', 4 + s, 3) zero past each count, count (q',),
+    whole (q',), their rows among the pairs (q',)); whole where all three corners are inside
+    every plane (the piece is the triangle)."""
     q, s = tri.shape[0], sides.shape[0]
     width = 4 + s
-    pieces = np.zeros((q, width, 3))
-    count = np.zeros(q, np.int64)
-    whole = np.zeros(q, np.bool_)
+    pieces = np.empty((q, width, 3))
+    count = np.empty(q, np.int64)
+    whole = np.empty(q, np.bool_)
+    rows = np.empty(q, np.int64)
     a, b = np.empty((width, 3)), np.empty((width, 3))
     dist = np.empty(width)
     d = np.empty(3)
+    kept = 0
     for r in range(q):
         c, e = corners[tri[r]], pix[r]
         out, inside = True, True
@@ -78,21 +81,58 @@ def cut(corners, tri, pix, p, center, normal, sides):
         if out:
             continue
         if inside:
-            pieces[r, :3] = c
-            count[r], whole[r] = 3, True
+            n = 3
+            a[:3] = c
+        else:
+            # crossing: clipped plane by plane, the distances taken afresh from each clip
+            n = _clip_plane(c, 3, d, a)
+            for j in range(s):
+                m = sides[j, e]
+                for k in range(n):
+                    dist[k] = ((a[k, 0] - p[e, 0]) * m[0] + (a[k, 1] - p[e, 1]) * m[1]
+                               + (a[k, 2] - p[e, 2]) * m[2])
+                n = _clip_plane(a, n, dist, b)
+                a, b = b, a
+            if n < 3:
+                continue
+        pieces[kept, :n] = a[:n]
+        pieces[kept, n:] = 0.0
+        count[kept], whole[kept], rows[kept] = n, inside, r
+        kept += 1
+    return pieces[:kept], count[:kept], whole[:kept], rows[:kept]
+
+
+@_jit()
+def uncut(corners, tri, pix, p, top, center, normal, axes, reach):
+    """`pyramid.uncut` of the pairs tri, pix (q,), top (n,) p's height over the light's
+    plane: (flat (q, 3, 2), free (q,))."""
+    q = tri.shape[0]
+    flat = np.zeros((q, 3, 2))
+    free = np.zeros(q, np.bool_)
+    ray = np.empty(3)
+    for r in range(q):
+        c, e = corners[tri[r]], pix[r]
+        ok = True
+        for k in range(3):
+            h = ((c[k, 0] - center[0]) * normal[0] + (c[k, 1] - center[1]) * normal[1]
+                 + (c[k, 2] - center[2]) * normal[2])
+            ok &= (h >= 0) & (h < top[e])
+        if not ok:
             continue
-        # crossing: clipped plane by plane, the distances taken afresh from each clip
-        n = _clip_plane(c, 3, d, a)
-        for j in range(s):
-            m = sides[j, e]
-            for k in range(n):
-                dist[k] = ((a[k, 0] - p[e, 0]) * m[0] + (a[k, 1] - p[e, 1]) * m[1]
-                           + (a[k, 2] - p[e, 2]) * m[2])
-            n = _clip_plane(a, n, dist, b)
-            a, b = b, a
-        pieces[r, :n] = a[:n]
-        count[r] = n
-    return pieces, count, whole
+        rel0, rel1, rel2 = p[e, 0] - center[0], p[e, 1] - center[1], p[e, 2] - center[2]
+        height = rel0 * normal[0] + rel1 * normal[1] + rel2 * normal[2]
+        for k in range(3):
+            for a in range(3):
+                ray[a] = c[k, a] - p[e, a]
+            scale = height / -(ray[0] * normal[0] + ray[1] * normal[1] + ray[2] * normal[2])
+            for a in range(2):
+                x = axes[a]
+                at = (rel0 * x[0] + rel1 * x[1] + rel2 * x[2]) + scale * (
+                    ray[0] * x[0] + ray[1] * x[1] + ray[2] * x[2])
+                flat[r, k, a] = at
+                ok &= abs(at) <= reach
+        free[r] = ok
+    return flat, free
 
 
 @_jit()

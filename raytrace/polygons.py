@@ -55,10 +55,18 @@ def project(points: np.ndarray, eye: np.ndarray, center: np.ndarray, normal: np.
     (axes (2, 3), rows u, v).  Each point must lie strictly between the eye's parallel plane
     and beyond-or-on the light's (the cut pyramid guarantees it)."""
     ray = points - eye[:, None]
-    height = (eye - center) @ normal                      # (n,), > 0: the emitting side
+    rel = eye - center
+    height = dot(rel, normal)                            # (n,), > 0: the emitting side
     with np.errstate(divide="ignore", invalid="ignore"):  # unused slots past a polygon's count
-        scale = height[:, None] / -(ray @ normal)          # (n, k)
-        return ((eye - center) @ axes.T)[:, None] + scale[..., None] * (ray @ axes.T)
+        scale = height[:, None] / -dot(ray, normal)       # (n, k)
+        return np.stack([dot(rel, axis)[:, None] + scale * dot(ray, axis) for axis in axes],
+                        axis=-1)
+
+
+def dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """u . v over the last axis (3), as three products summed left to right (numba's kernels,
+    `raytrace.exactkernels`, sum them alike: the same bits; matmul and einsum may not)."""
+    return u[..., 0] * v[..., 0] + u[..., 1] * v[..., 1] + u[..., 2] * v[..., 2]
 
 
 def _edges(coords: np.ndarray, ring: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -11,6 +11,8 @@ light's plane and the point's, for the outline unions of `raytrace.arrange`.
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 
 from . import polygons
@@ -26,15 +28,17 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     triangle lies wholly inside (its three corners).  In numba where it loads
     (`raytrace.exactkernels`: the same bytes), else in numpy."""
     m = sides(light, p, base)
-    kernel = _kernel()
-    if kernel is not None:
-        pieces, count, whole = kernel(corners, tri, pix, p, light.center, light.normal,
-                                      np.stack(m) if m else np.zeros((0,) + p.shape))
+    kernels = _kernels()
+    if kernels is not None:
+        pieces, count, whole, keep = kernels.cut(corners, tri, pix, p, light.center,
+                                                 light.normal,
+                                                 np.stack(m) if m else np.zeros((0,) + p.shape))
     else:
         pieces, count, whole = _cut(light, corners, p, pix, tri, m)
-    keep = np.flatnonzero(count >= 3)
-    width = max(3, int(count[keep].max(initial=3)))
-    return pieces[keep, :width], count[keep], pix[keep], tri[keep], whole[keep]
+        keep = np.flatnonzero(count >= 3)
+        pieces, count, whole = pieces[keep], count[keep], whole[keep]
+    width = max(3, int(count.max(initial=3)))
+    return np.ascontiguousarray(pieces[:, :width]), count, pix[keep], tri[keep], whole
 
 
 def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
@@ -42,13 +46,13 @@ def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray
     """`exactkernels.cut` in numpy: (pieces (q, k', 3) zero past each count, count (q,), whole
     (q,)) of every pair, count 0 where nothing is left."""
     poly = corners[tri]
-    dist = _dot(poly - light.center, light.normal)                   # (q, 3) per plane
+    dist = polygons.dot(poly - light.center, light.normal)                   # (q, 3) per plane
     out, whole = _beyond(dist)
     # plane by plane, only the triangles no plane has put wholly outside yet
     live = np.flatnonzero(~out)
     rel = poly[live] - p[pix[live]][:, None]
     for side in m:
-        beyond, inside = _beyond(_dot(rel, side[pix[live]][:, None]))
+        beyond, inside = _beyond(polygons.dot(rel, side[pix[live]][:, None]))
         out[live] = beyond
         whole[live] &= inside
         live, rel = live[~beyond], rel[~beyond]
@@ -65,19 +69,12 @@ def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray
     return pieces, count, whole
 
 
-def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """u . v over the last axis (3), as three products summed left to right (numba's kernels
-    sum them alike: the same bits; matmul and einsum may not)."""
-    return u[..., 0] * v[..., 0] + u[..., 1] * v[..., 1] + u[..., 2] * v[..., 2]
-
-
-def _kernel():
-    """`raytrace.exactkernels.cut`, or None where numba is missing."""
+def _kernels():
+    """`raytrace.exactkernels`, or None where numba is missing."""
     try:
-        from .exactkernels import cut as kernel
+        return importlib.import_module(f"{__package__}.exactkernels")
     except ImportError:
         return None
-    return kernel
 
 
 def carry(light: FramedLight, p: np.ndarray, pieces: np.ndarray, pix: np.ndarray,
@@ -106,10 +103,10 @@ def _clip(light: FramedLight, triangles: np.ndarray, p: np.ndarray, pix: np.ndar
     every row kept (count 0 where nothing is left)."""
     poly = triangles.copy()
     count = np.full(len(poly), 3)
-    poly, count = polygons.clip(poly, count, _dot(poly - light.center, light.normal))
+    poly, count = polygons.clip(poly, count, polygons.dot(poly - light.center, light.normal))
     for side in m:
         poly, count = polygons.clip(poly, count,
-                                    _dot(poly - p[pix][:, None], side[pix][:, None]))
+                                    polygons.dot(poly - p[pix][:, None], side[pix][:, None]))
     return poly, count
 
 
@@ -138,13 +135,17 @@ def uncut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarra
     p is a projective map of the slab between: straight edges stay straight, the triangle's
     shadow is the triangle of its corners' shadows, and its part in the pyramid is its shadow
     cut to the light's convex outline) and within UNCUT_REACH of the light."""
+    top = polygons.dot(p - light.center, light.normal)
+    reach = UNCUT_REACH * np.abs(light.hull).max()
+    kernels = _kernels()
+    if kernels is not None:
+        return kernels.uncut(corners, tri, pix, p, top, light.center, light.normal,
+                             light.axes, reach)
     poly = corners[tri]
-    height = (poly - light.center) @ light.normal                         # (q, 3)
-    top = ((p - light.center) @ light.normal)[pix]
-    free = (height >= 0).all(axis=1) & (height < top[:, None]).all(axis=1)
+    height = polygons.dot(poly - light.center, light.normal)                      # (q, 3)
+    free = (height >= 0).all(axis=1) & (height < top[pix][:, None]).all(axis=1)
     flat = np.zeros((len(tri), 3, 2))
     flat[free] = polygons.project(poly[free], p[pix[free]], light.center, light.normal,
                                   light.axes)
-    reach = UNCUT_REACH * np.abs(light.hull).max()
     free &= (np.abs(flat) <= reach).all(axis=(1, 2))
     return flat, free

@@ -1,7 +1,8 @@
-"""`pyramid.cut` in numba (`raytrace.exactkernels`) against its numpy path, byte for byte: the
-decided triangles (wholly outside a plane, wholly inside all) and the clipped ones, on random
-triangles around the pyramid and on ties (corners on the side planes, at p, at the light's
-corners); and the exact visibility of a closed mesh the same bytes with and without it.
+"""`pyramid.cut` and `pyramid.uncut` in numba (`raytrace.exactkernels`) against their numpy
+paths, byte for byte: the decided triangles (wholly outside a plane, wholly inside all), the
+clipped ones and the whole shadows, on random triangles around the pyramid and on ties
+(corners on the side planes, at p, at the light's corners); and the exact visibility of a
+closed mesh the same bytes with and without them.
 """
 
 from __future__ import annotations
@@ -64,6 +65,19 @@ def test_the_kernel_cuts_numpys_bytes(seed, monkeypatch):
     for got, want in zip(fast, slow):
         assert got.dtype == want.dtype and got.shape == want.shape
         assert got.tobytes() == want.tobytes()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_kernel_carries_numpys_whole_shadows(seed, monkeypatch):
+    """`uncut`: the whole shadows, and which are free (between the two planes, in reach)."""
+    light, base, corners, p, pix, tri = _pairs(seed)
+    corners = corners * [1.0, 0.5, 1.0] + [0.0, 0.9, 0.0]     # many between the planes
+    fast = pyramid.uncut(light, corners, p, pix, tri)
+    monkeypatch.setitem(sys.modules, "raytrace.exactkernels", None)
+    slow = pyramid.uncut(light, corners, p, pix, tri)
+    assert slow[1].sum() > 100 and (~slow[1]).sum() > 100
+    for got, want in zip(fast, slow):
+        assert got.dtype == want.dtype and got.tobytes() == want.tobytes()
 
 
 def test_the_pieces_lie_in_the_pyramid_and_whole_ones_are_their_triangles():
