@@ -39,32 +39,42 @@ def pairs(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarr
     no area)."""
     kernels = _kernels()
     if kernels is not None:
-        pix, tri = kernels.pairs(meet, objects.members, objects.tri_lo, objects.tri_hi, lo, hi,
-                                 own)
-    else:
-        pix, tri = _box_pairs(objects, own, meet, lo, hi)
+        return kernels.pairs(meet, objects.members, objects.tri_lo, objects.tri_hi, lo, hi, own,
+                             objects.normal, objects.offset, objects.scale, objects.convex,
+                             objects.object, objects.outward, objects.shell,
+                             np.zeros(0, bool) if clear is None else clear, corners, p, normal,
+                             COPLANAR_RELATIVE)
+    pix, tri = _box_pairs(objects, own, meet, lo, hi)
+    keep = _keep(objects, corners, p, normal, own, pix, tri, clear)
+    return pix[keep], tri[keep]
+
+
+def _keep(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarray,
+          own: np.ndarray, pix: np.ndarray, tri: np.ndarray, clear: np.ndarray | None
+          ) -> np.ndarray:
+    """(q,) bool: the pairs `pairs` keeps of the box pairs pix, tri (q,)."""
     # coplanar: every corner within COPLANAR_RELATIVE of p's own triangle's plane.  Only near-
     # parallel triangles are looked at: one tilted by more than 0.045 rad with its corners that
     # close to the plane is smaller than 2^-40 / 0.045 of its coordinates.
     own_n = objects.normal[own[pix]]
-    parallel = np.flatnonzero(np.abs((own_n * objects.normal[tri]).sum(axis=1)) > 1 - 1e-3)
+    parallel = np.flatnonzero(np.abs(dot(own_n, objects.normal[tri])) > 1 - 1e-3)
     keep = np.ones(len(tri), bool)
     if len(parallel):
         near, t = own[pix[parallel]], tri[parallel]
-        off = np.abs(corners[t] @ objects.normal[near][..., None]
-                     - objects.offset[near, None, None])
+        off = np.abs(dot(corners[t], objects.normal[near][:, None])
+                     - objects.offset[near, None])
         scale = np.maximum(objects.scale[near], objects.scale[t])
-        keep[parallel] = off.max(axis=(1, 2)) > COPLANAR_RELATIVE * scale
+        keep[parallel] = off.max(axis=1) > COPLANAR_RELATIVE * scale
     mine = objects.convex[tri] & (objects.object[tri] == objects.object[own[pix]])
-    outside = (objects.outward[own[pix]] * normal[pix]).sum(axis=1) > 0
+    outside = dot(objects.outward[own[pix]], normal[pix]) > 0
     keep &= ~(mine & outside)
     if clear is not None:
         shell = objects.shell[tri]
         closed = (shell != 0).any(axis=1) & ~objects.convex[tri] & clear[objects.object[tri]]
         at = np.flatnonzero(closed & keep)
-        toward = (shell[at] * (corners[tri[at], 0] - p[pix[at]])).sum(axis=1) <= 0
+        toward = dot(shell[at], corners[tri[at], 0] - p[pix[at]]) <= 0
         keep[at[toward]] = False
-    return pix[keep], tri[keep]
+    return keep
 
 
 def meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.ndarray,

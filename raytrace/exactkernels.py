@@ -162,8 +162,36 @@ def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p):
 
 
 @_jit()
-def _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, pix, tri):
-    """The pairs of `pairs` into pix, tri where given (else only counted): their number."""
+def _dot(u, v):
+    """u . v (3,): three products summed left to right (`polygons.dot`)."""
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+@_jit()
+def _kept(i, t, own, tri_normal, offset, scale, convex, obj, outward, shell, clear, corners,
+          p, normal, coplanar):
+    """Whether `pairs` keeps triangle t for pixel i (`candidates._keep`)."""
+    o = own[i]
+    if abs(_dot(tri_normal[o], tri_normal[t])) > 1 - 1e-3:
+        off = 0.0
+        for k in range(3):
+            off = max(off, abs(_dot(corners[t, k], tri_normal[o]) - offset[o]))
+        if not off > coplanar * max(scale[o], scale[t]):
+            return False
+    if convex[t] and obj[t] == obj[o] and _dot(outward[o], normal[i]) > 0:
+        return False
+    if clear.shape[0] and not convex[t] and clear[obj[t]] and (
+            shell[t, 0] != 0 or shell[t, 1] != 0 or shell[t, 2] != 0):
+        rel = corners[t, 0] - p[i]
+        if _dot(shell[t], rel) <= 0:
+            return False
+    return True
+
+
+@_jit()
+def _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, keep, pix, tri):
+    """The pairs of `pairs` into pix, tri where given (else only counted): their number.
+    keep: `_kept`'s arguments after own."""
     q = 0
     for i in range(meet.shape[0]):
         for c in range(meet.shape[1]):
@@ -176,7 +204,7 @@ def _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, pix, tri):
                 ok = True
                 for a in range(3):
                     ok &= (tri_lo[t, a] <= hi[i, a]) & (tri_hi[t, a] >= lo[i, a])
-                if ok:
+                if ok and _kept(i, t, own, *keep):
                     if pix.shape[0]:
                         pix[q], tri[q] = i, t
                     q += 1
@@ -184,12 +212,16 @@ def _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, pix, tri):
 
 
 @_jit()
-def pairs(meet, members, tri_lo, tri_hi, lo, hi, own):
+def pairs(meet, members, tri_lo, tri_hi, lo, hi, own, tri_normal, offset, scale, convex, obj,
+          outward, shell, clear, corners, p, normal, coplanar):
     """(pix (q,), tri (q,)) int64: for each pixel i and cluster c that meet (n, C), in that
     order, the members (C, K) (-1 pads) whose boxes tri_lo, tri_hi (M, 3) meet lo, hi (n, 3),
-    bar own (n,)."""
+    bar own (n,), and that `candidates._keep` keeps (the `Objects` fields, clear (n_objects,)
+    or empty for none, the corners (M, 3, 3), p and its normal (n, 3), COPLANAR_RELATIVE)."""
+    keep = (tri_normal, offset, scale, convex, obj, outward, shell, clear, corners, p, normal,
+            coplanar)
     none = np.zeros(0, np.int64)
-    q = _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, none, none)
+    q = _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, keep, none, none)
     pix, tri = np.empty(max(q, 1), np.int64), np.empty(max(q, 1), np.int64)
-    _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, pix, tri)
+    _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, keep, pix, tri)
     return pix[:q], tri[:q]

@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 import pytest
+import trimesh
 
 from raytrace import candidates, pyramid
 from raytrace.lightshapes import FramedLight
@@ -21,7 +22,8 @@ pytest.importorskip("numba")
 
 def _setup(seed: int):
     """A tilted rect light, points below it, and a soup of small triangles in three objects
-    between and around (so some clusters meet a pyramid only by their boxes)."""
+    between and around (so some clusters meet a pyramid only by their boxes), a closed ball
+    and a convex body with a third of the points on it."""
     rng = np.random.default_rng(seed)
     normal = np.array([0.2, -1.0, 0.3]) / np.linalg.norm([0.2, -1.0, 0.3])
     u, v = default_plane_axes(normal)
@@ -34,39 +36,65 @@ def _setup(seed: int):
     centre = np.c_[rng.uniform(-2, 2, m), rng.uniform(-0.3, 2.3, m), rng.uniform(-2, 2, m)]
     corners = centre[:, None] + rng.normal(0, 0.12, (m, 3, 3))
     ids = rng.integers(0, 3, m)
-    own = rng.integers(-1, m, n)
+    # a closed, not convex, object too: a noisy ball between the points and the light
+    ico = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
+    v = ico.vertices * (1 + 0.15 * rng.standard_normal((len(ico.vertices), 1))) + [0, 1, 0]
+    # and a convex one, some points on its faces (their own object, seen from outside)
+    hull = trimesh.creation.icosphere(subdivisions=1, radius=0.3)
+    shell = hull.vertices[hull.faces] + [0.6, 0.0, 0.6]
+    corners = np.concatenate([corners, v[ico.faces], shell])
+    ids = np.r_[ids, np.full(len(ico.faces), 3), np.full(len(shell), 4)]
+    own = rng.integers(0, len(corners), n)
+    on = rng.choice(n, n // 3, replace=False)
+    own[on] = len(corners) - len(shell) + rng.integers(0, len(shell), len(on))
+    p[on] = corners[own[on]].mean(axis=1)
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
-    return light, base, objects(corners, ids), corners, p, own, lo, hi
+    obj = objects(corners, ids)
+    assert obj.convex[-1] and not obj.convex[-len(shell) - 1]
+    return light, base, obj, corners, p, own, lo, hi
 
 
 @pytest.mark.parametrize("seed", range(4))
 def test_the_kernels_find_numpys_clusters_and_pairs(seed, monkeypatch):
     light, base, obj, corners, p, own, lo, hi = _setup(seed)
     normal = np.tile([0.0, 1.0, 0.0], (len(p), 1))
+    mine = obj.convex[own]
+    normal[mine] = obj.outward[own[mine]]                   # outside the convex object
+    clear = np.array([True, False, True, True, True])      # the light outside the ball
     fast_meet = candidates.meets(light, obj, p, base, lo, hi)
-    fast = candidates.pairs(obj, corners, p, normal, own, fast_meet, lo, hi)
+    fast = [candidates.pairs(obj, corners, p, normal, own, fast_meet, lo, hi, c)
+            for c in (None, clear)]
     monkeypatch.setitem(sys.modules, "raytrace.exactkernels", None)    # import fails: numpy
     slow_meet = candidates.meets(light, obj, p, base, lo, hi)
-    slow = candidates.pairs(obj, corners, p, normal, own, slow_meet, lo, hi)
+    slow = [candidates.pairs(obj, corners, p, normal, own, slow_meet, lo, hi, c)
+            for c in (None, clear)]
     assert slow_meet.any() and not slow_meet.all()
     np.testing.assert_array_equal(fast_meet, slow_meet)
-    assert len(slow[0]) > 100
-    for got, want in zip(fast, slow):
-        assert got.dtype == want.dtype and np.array_equal(got, want)
+    assert len(slow[1][0]) > 100
+    assert len(slow[1][0]) < len(slow[0][0])            # the ball's faces toward p left out
+    for f, w in zip(fast, slow):
+        for got, want in zip(f, w):
+            assert got.dtype == want.dtype and np.array_equal(got, want)
 
 
 @pytest.mark.parametrize("seed", range(4))
 def test_every_triangle_the_cut_keeps_is_a_candidate(seed):
     light, base, obj, corners, p, own, lo, hi = _setup(seed)
     normal = np.tile([0.0, 1.0, 0.0], (len(p), 1))
+    mine = obj.convex[own]
+    normal[mine] = obj.outward[own[mine]]
     meet = candidates.meets(light, obj, p, base, lo, hi)
     pix, tri = candidates.pairs(obj, corners, p, normal, own, meet, lo, hi)
     found = set(zip(pix.tolist(), tri.tolist()))
     every_pix = np.repeat(np.arange(len(p)), len(corners))
     every_tri = np.tile(np.arange(len(corners)), len(p))
     _, _, kept_pix, kept_tri, _ = pyramid.cut(light, corners, p, every_pix, every_tri, base)
-    want = {(i, t) for i, t in zip(kept_pix.tolist(), kept_tri.tolist()) if t != own[i]}
+    # less p's own triangle and, by design, its convex object's from outside (they lie
+    # behind p's tangent plane, whose far side of the light is taken away whole)
+    behind = obj.convex[kept_tri] & (obj.object[kept_tri] == obj.object[own[kept_pix]])
+    want = {(i, t) for i, t, b in zip(kept_pix.tolist(), kept_tri.tolist(), behind)
+            if t != own[i] and not b}
     assert len(want) > 50
     assert want <= found
-    assert len(found) < len(p) * len(corners) / 4          # and the query does cull
+    assert len(found) < len(p) * len(corners) / 2          # and the query does cull
