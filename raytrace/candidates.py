@@ -30,8 +30,8 @@ def pairs(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarr
           own: np.ndarray, meet: np.ndarray, lo: np.ndarray, hi: np.ndarray,
           clear: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(pixel, triangle) pairs (q,) int64 each: the triangles of the clusters that `meet`
-    (n, C) says meet p's pyramid box [lo, hi] (n, 3) (`meets`), whose own boxes meet it too, less p's
-    own triangle, those coplanar with it, a convex object's from its own outside, and the
+    (n, C) says meet p's pyramid box [lo, hi] (n, 3) (`meets`), whose own boxes meet it
+    too, less p's own triangle, those coplanar with it, a convex object's from its own outside, and the
     triangles of a closed non-convex object that do not turn their back to p where the light
     is outside that object (`clear` (n_objects,) bool): a segment from p to a point of the
     light outside a closed surface that meets it leaves it last through a face turned away
@@ -39,11 +39,11 @@ def pairs(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarr
     no area)."""
     kernels = _kernels()
     if kernels is not None:
-        return kernels.pairs(meet, objects.members, objects.tri_lo, objects.tri_hi, lo, hi, own,
-                             objects.normal, objects.offset, objects.scale, objects.convex,
-                             objects.object, objects.outward, objects.shell,
-                             np.zeros(0, bool) if clear is None else clear, corners, p, normal,
-                             COPLANAR_RELATIVE)
+        outside = dot(objects.outward[own], normal) > 0
+        return kernels.pairs(meet, objects.members, objects.packed, objects.kinds, lo, hi, own,
+                             objects.normal, objects.offset, objects.scale, objects.object,
+                             outside, np.zeros(0, bool) if clear is None else clear, corners,
+                             p, COPLANAR_RELATIVE)
     pix, tri = _box_pairs(objects, own, meet, lo, hi)
     keep = _keep(objects, corners, p, normal, own, pix, tri, clear)
     return pix[keep], tri[keep]

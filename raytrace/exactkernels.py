@@ -162,66 +162,65 @@ def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p):
 
 
 @_jit()
-def _dot(u, v):
-    """u . v (3,): three products summed left to right (`polygons.dot`)."""
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-
-
-@_jit()
-def _kept(i, t, own, tri_normal, offset, scale, convex, obj, outward, shell, clear, corners,
-          p, normal, coplanar):
-    """Whether `pairs` keeps triangle t for pixel i (`candidates._keep`)."""
-    o = own[i]
-    if abs(_dot(tri_normal[o], tri_normal[t])) > 1 - 1e-3:
-        off = 0.0
-        for k in range(3):
-            off = max(off, abs(_dot(corners[t, k], tri_normal[o]) - offset[o]))
-        if not off > coplanar * max(scale[o], scale[t]):
-            return False
-    if convex[t] and obj[t] == obj[o] and _dot(outward[o], normal[i]) > 0:
-        return False
-    if clear.shape[0] and not convex[t] and clear[obj[t]] and (
-            shell[t, 0] != 0 or shell[t, 1] != 0 or shell[t, 2] != 0):
-        rel = corners[t, 0] - p[i]
-        if _dot(shell[t], rel) <= 0:
-            return False
-    return True
-
-
-@_jit()
-def _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, keep, pix, tri):
+def _box_pairs(meet, members, packed, kinds, lo, hi, own, tri_normal, offset, scale, obj,
+               outside, clear, corners, p, coplanar, pix, tri):
     """The pairs of `pairs` into pix, tri where given (else only counted): their number.
-    keep: `_kept`'s arguments after own."""
+    Each member's own fields come from packed and kinds (`occluders.Objects`), in order and
+    indexed one by one (a view of a row costs a reference count); only a near-parallel
+    one's corners are read apart."""
     q = 0
     for i in range(meet.shape[0]):
+        o = own[i]
+        n0, n1, n2 = tri_normal[o, 0], tri_normal[o, 1], tri_normal[o, 2]
         for c in range(meet.shape[1]):
             if not meet[i, c]:
                 continue
             for k in range(members.shape[1]):
                 t = members[c, k]
-                if t < 0 or t == own[i]:
+                if t < 0 or t == o:
                     continue
                 ok = True
                 for a in range(3):
-                    ok &= (tri_lo[t, a] <= hi[i, a]) & (tri_hi[t, a] >= lo[i, a])
-                if ok and _kept(i, t, own, *keep):
-                    if pix.shape[0]:
-                        pix[q], tri[q] = i, t
-                    q += 1
+                    ok &= (packed[c, k, a] <= hi[i, a]) & (packed[c, k, 3 + a] >= lo[i, a])
+                if not ok:
+                    continue
+                # coplanar with p's own triangle (`candidates._keep`)
+                if abs(n0 * packed[c, k, 6] + n1 * packed[c, k, 7]
+                       + n2 * packed[c, k, 8]) > 1 - 1e-3:
+                    off = 0.0
+                    for j in range(3):
+                        off = max(off, abs(corners[t, j, 0] * n0 + corners[t, j, 1] * n1
+                                           + corners[t, j, 2] * n2 - offset[o]))
+                    if not off > coplanar * max(scale[o], packed[c, k, 15]):
+                        continue
+                kind = kinds[c, k]
+                # a convex object's own triangles from its outside
+                if kind & 1 and kind // 4 == obj[o] and outside[i]:
+                    continue
+                # a closed object's triangles that face p, where the light is outside it
+                if kind & 2 and clear.shape[0] and clear[kind // 4] and (
+                        packed[c, k, 9] * (packed[c, k, 12] - p[i, 0])
+                        + packed[c, k, 10] * (packed[c, k, 13] - p[i, 1])
+                        + packed[c, k, 11] * (packed[c, k, 14] - p[i, 2])) <= 0:
+                    continue
+                if pix.shape[0]:
+                    pix[q], tri[q] = i, t
+                q += 1
     return q
 
 
 @_jit()
-def pairs(meet, members, tri_lo, tri_hi, lo, hi, own, tri_normal, offset, scale, convex, obj,
-          outward, shell, clear, corners, p, normal, coplanar):
+def pairs(meet, members, packed, kinds, lo, hi, own, tri_normal, offset, scale, obj, outside,
+          clear, corners, p, coplanar):
     """(pix (q,), tri (q,)) int64: for each pixel i and cluster c that meet (n, C), in that
-    order, the members (C, K) (-1 pads) whose boxes tri_lo, tri_hi (M, 3) meet lo, hi (n, 3),
-    bar own (n,), and that `candidates._keep` keeps (the `Objects` fields, clear (n_objects,)
-    or empty for none, the corners (M, 3, 3), p and its normal (n, 3), COPLANAR_RELATIVE)."""
-    keep = (tri_normal, offset, scale, convex, obj, outward, shell, clear, corners, p, normal,
-            coplanar)
+    order, the members (C, K) (-1 pads) whose boxes meet lo, hi (n, 3), bar own (n,), that
+    `candidates._keep` keeps: packed, kinds (`occluders.Objects`), the triangles' normal,
+    offset, scale and object (M,), outside (n,) p outside its own convex object, clear
+    (n_objects,) or empty for none, the corners (M, 3, 3), p (n, 3), COPLANAR_RELATIVE."""
     none = np.zeros(0, np.int64)
-    q = _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, keep, none, none)
+    args = (meet, members, packed, kinds, lo, hi, own, tri_normal, offset, scale, obj,
+            outside, clear, corners, p, coplanar)
+    q = _box_pairs(*args, none, none)
     pix, tri = np.empty(max(q, 1), np.int64), np.empty(max(q, 1), np.int64)
-    _box_pairs(meet, members, tri_lo, tri_hi, lo, hi, own, keep, pix, tri)
+    _box_pairs(*args, pix, tri)
     return pix[:q], tri[:q]

@@ -31,8 +31,13 @@ class Objects(NamedTuple):
     bodies: per object its `Convex`, or None; per triangle its box tri_lo, tri_hi (M, 3), unit
     normal (M, 3) (0 if degenerate), offset (M,) normal . corner and scale (M,) its largest
     corner coordinate; shell (M, 3): for a closed, consistently wound object (convex or not)
-    its triangles' outward unit normals, 0 for the others; corner_ids (M, 3): each corner's index among the
-    scene's distinct corners (welded by their coordinates)."""
+    its triangles' outward unit normals, 0 for the others; corner_ids (M, 3): each corner's
+    index among the scene's distinct corners (welded by their coordinates); packed (C,
+    CLUSTER, 16) float64: each member's tri_lo, tri_hi, normal, shell, first corner and
+    scale side by side, in the members' order (the candidate query reads a cluster's
+    members from one place, not from eight arrays at random: `raytrace.exactkernels.pairs`),
+    kinds (C, CLUSTER) int64: each member's object * 4 + 1 where convex + 2 where it has a
+    shell and is not convex."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -51,6 +56,8 @@ class Objects(NamedTuple):
     scale: np.ndarray
     shell: np.ndarray
     corner_ids: np.ndarray | None = None
+    packed: np.ndarray | None = None
+    kinds: np.ndarray | None = None
 
 
 class Convex(NamedTuple):
@@ -129,10 +136,16 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     centre = (lo + hi) / 2
     # the half diagonal, a little more for its own rounding: the sphere must hold the box
     radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
+    tri_lo, tri_hi = corners.min(axis=1), corners.max(axis=1)
+    scale = np.abs(corners).max(axis=(1, 2))
+    at = np.maximum(members, 0)
+    packed = np.concatenate([tri_lo, tri_hi, normals, shell, corners[:, 0], scale[:, None]],
+                            axis=1)[at] if M else np.zeros(members.shape + (16,))
+    kinds = ids.astype(np.int64) * 4 + convex + 2 * ((shell != 0).any(axis=1) & ~convex)
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
-                   centre, radius, corners.min(axis=1), corners.max(axis=1), normals,
-                   (normals * corners[:, 0]).sum(axis=1), np.abs(corners).max(axis=(1, 2)),
-                   shell, welded)
+                   centre, radius, tri_lo, tri_hi, normals,
+                   (normals * corners[:, 0]).sum(axis=1), scale, shell, welded, packed,
+                   kinds[at] if M else np.zeros(members.shape, np.int64))
 
 
 def _morton(points: np.ndarray) -> np.ndarray:
