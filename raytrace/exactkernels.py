@@ -21,7 +21,7 @@ import numpy as np
 from .packetkernels import _jit
 
 
-@_jit()
+@_jit(inline="always")
 def _clip_plane(src, n, dist, dst):
     """Sutherland-Hodgman of the polygon src[:n] (k, 3) by the plane of the corners' signed
     distances dist[:n], into dst: the kept corners and each crossing edge's new one, in
@@ -59,44 +59,48 @@ def cut(corners, tri, pix, p, center, normal, sides):
     d = np.empty(3)
     kept = 0
     for r in range(q):
-        c, e = corners[tri[r]], pix[r]
+        t, e = tri[r], pix[r]
         out, inside = True, True
         for k in range(3):
-            d[k] = ((c[k, 0] - center[0]) * normal[0] + (c[k, 1] - center[1]) * normal[1]
-                    + (c[k, 2] - center[2]) * normal[2])
+            d[k] = ((corners[t, k, 0] - center[0]) * normal[0]
+                    + (corners[t, k, 1] - center[1]) * normal[1]
+                    + (corners[t, k, 2] - center[2]) * normal[2])
             out &= d[k] < 0
             inside &= d[k] >= 0
         for j in range(s):
             if out:
                 break
-            m = sides[j, e]
             beyond, within = True, True
             for k in range(3):
-                x = ((c[k, 0] - p[e, 0]) * m[0] + (c[k, 1] - p[e, 1]) * m[1]
-                     + (c[k, 2] - p[e, 2]) * m[2])
+                x = ((corners[t, k, 0] - p[e, 0]) * sides[j, e, 0]
+                     + (corners[t, k, 1] - p[e, 1]) * sides[j, e, 1]
+                     + (corners[t, k, 2] - p[e, 2]) * sides[j, e, 2])
                 beyond &= x < 0
                 within &= x >= 0
             out = beyond
             inside &= within
         if out:
             continue
-        if inside:
-            n = 3
-            a[:3] = c
-        else:
+        for k in range(3):
+            for x in range(3):
+                a[k, x] = corners[t, k, x]
+        n = 3
+        if not inside:
             # crossing: clipped plane by plane, the distances taken afresh from each clip
-            n = _clip_plane(c, 3, d, a)
+            n = _clip_plane(a, 3, d, b)
+            a, b = b, a
             for j in range(s):
-                m = sides[j, e]
                 for k in range(n):
-                    dist[k] = ((a[k, 0] - p[e, 0]) * m[0] + (a[k, 1] - p[e, 1]) * m[1]
-                               + (a[k, 2] - p[e, 2]) * m[2])
+                    dist[k] = ((a[k, 0] - p[e, 0]) * sides[j, e, 0]
+                               + (a[k, 1] - p[e, 1]) * sides[j, e, 1]
+                               + (a[k, 2] - p[e, 2]) * sides[j, e, 2])
                 n = _clip_plane(a, n, dist, b)
                 a, b = b, a
             if n < 3:
                 continue
-        pieces[kept, :n] = a[:n]
-        pieces[kept, n:] = 0.0
+        for k in range(width):
+            for x in range(3):
+                pieces[kept, k, x] = a[k, x] if k < n else 0.0
         count[kept], whole[kept], rows[kept] = n, inside, r
         kept += 1
     return pieces[:kept], count[:kept], whole[:kept], rows[:kept]
