@@ -6,7 +6,9 @@ moving those arrays through memory:
   the pyramid leaves wholly outside (`candidates.meets`);
 * `pairs`: their triangles whose boxes meet it too, less the pixel's own (`candidates.pairs`);
 * `cut`: each (pixel, triangle) pair decided and, where it crosses a plane, clipped in one
-  pass over its corners (`pyramid.cut`).
+  pass over its corners (`pyramid.cut`); `uncut`, the whole shadows (`pyramid.uncut`);
+* `inside`: convex polygons in the light's plane clipped by another's edges, one polygon
+  at a time (`regions.inside`).
 
 The same answers and floats as numpy's paths, bit for bit: every signed distance is the same
 three products summed left to right (`polygons.dot`), every new corner the same interpolation
@@ -228,3 +230,42 @@ def pairs(meet, members, packed, kinds, lo, hi, own, tri_normal, offset, scale, 
     pix, tri = np.empty(max(q, 1), np.int64), np.empty(max(q, 1), np.int64)
     _box_pairs(*args, pix, tri)
     return pix[:q], tri[:q]
+
+
+@_jit()
+def inside(cut, count, inner, inner_count):
+    """`regions.inside`: the convex polygons inner (n, m, 2), inner_count (n,) clipped by
+    each edge of the convex counter-clockwise polygons cut (n, k, 2), count (n,): (corners
+    (n, m + k, 2) zero past each count, counts (n,))."""
+    n, m, k = inner.shape[0], inner.shape[1], cut.shape[1]
+    width = m + k
+    out = np.zeros((n, width, 2))
+    got = np.zeros(n, np.int64)
+    a, b = np.empty((width, 2)), np.empty((width, 2))
+    d = np.empty(width)
+    for r in range(n):
+        c = inner_count[r]
+        for j in range(c):
+            a[j, 0], a[j, 1] = inner[r, j, 0], inner[r, j, 1]
+        for e in range(count[r]):
+            f = e + 1 if e + 1 < count[r] else 0
+            s0, s1 = cut[r, e, 0], cut[r, e, 1]
+            e0, e1 = cut[r, f, 0] - s0, cut[r, f, 1] - s1
+            for j in range(c):
+                d[j] = e0 * (a[j, 1] - s1) - e1 * (a[j, 0] - s0)
+            q = 0
+            for i in range(c):
+                j = i + 1 if i + 1 < c else 0
+                if d[i] >= 0:
+                    b[q, 0], b[q, 1] = a[i, 0], a[i, 1]
+                    q += 1
+                if (d[i] >= 0) != (d[j] >= 0):
+                    t = d[i] / (d[i] - d[j])
+                    b[q, 0] = a[i, 0] + t * (a[j, 0] - a[i, 0])
+                    b[q, 1] = a[i, 1] + t * (a[j, 1] - a[i, 1])
+                    q += 1
+            a, b, c = b, a, q
+        for j in range(c):
+            out[r, j, 0], out[r, j, 1] = a[j, 0], a[j, 1]
+        got[r] = c
+    return out, got

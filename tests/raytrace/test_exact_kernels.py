@@ -1,5 +1,6 @@
-"""`pyramid.cut` and `pyramid.uncut` in numba (`raytrace.exactkernels`) against their numpy
-paths, byte for byte: the decided triangles (wholly outside a plane, wholly inside all), the
+"""`pyramid.cut`, `pyramid.uncut` and `regions.inside` in numba (`raytrace.exactkernels`;
+the candidate query's kernels: tests/raytrace/test_candidates.py) against their numpy paths,
+byte for byte: the decided triangles (wholly outside a plane, wholly inside all), the
 clipped ones and the whole shadows, on random triangles around the pyramid and on ties
 (corners on the side planes, at p, at the light's corners); and the exact visibility of a
 closed mesh the same bytes with and without them.
@@ -12,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from raytrace import pyramid
+from raytrace import pyramid, regions
 from raytrace.lightshapes import FramedLight
 from shadowvol.planes import default_plane_axes
 
@@ -131,3 +132,26 @@ def test_exact_visibility_is_the_same_bytes_without_the_kernel(monkeypatch):
                                                    (fast.visibility < 1)).sum() > 20
     for got, want in zip(fast[:2], slow[:2]):
         assert got.tobytes() == want.tobytes()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_kernel_clips_numpys_polygons_inside(seed, monkeypatch):
+    """`regions.inside`: triangles (some of no area) clipped by convex polygons of 3 to 6
+    counter-clockwise corners, some corners on their edges; the corners up to each count."""
+    rng = np.random.default_rng(seed)
+    n = 500
+    count = rng.integers(3, 7, n)
+    angle = np.sort(rng.uniform(0, 2 * np.pi, (n, 6)), axis=1)
+    cut = np.stack([np.cos(angle), np.sin(angle)], axis=-1) * rng.uniform(0.5, 1.5, (n, 1, 1))
+    cut[np.arange(6)[None] >= count[:, None]] = 0.0
+    inner = rng.uniform(-1.6, 1.6, (n, 3, 2))
+    on = rng.random(n) < 0.2            # a corner on the polygon's first edge
+    inner[on, 0] = cut[on, 0] + rng.uniform(0, 1, (int(on.sum()), 1)) * (cut[on, 1] - cut[on, 0])
+    inner_count = np.where(rng.random(n) < 0.1, 0, 3)
+    fast = regions.inside(cut, count, inner, inner_count)
+    monkeypatch.setitem(sys.modules, "raytrace.exactkernels", None)
+    slow = regions.inside(cut, count, inner, inner_count)
+    np.testing.assert_array_equal(fast[1], slow[1])
+    assert (slow[1] > 3).any() and (slow[1] == 0).any() and (slow[1] == 3).any()
+    keep = np.arange(slow[0].shape[1])[None] < slow[1][:, None]
+    assert fast[0][keep].tobytes() == slow[0][keep].tobytes()
