@@ -65,7 +65,9 @@ MANY_PIECES = 16
 CHUNK_PIXELS = 2048
 # Pixels per tile (a tile a thread): the masks' 32k of before their 64k
 # (`raytrace.masks.MASK_TILE_RAYS`), since a pixel here costs ~1,000x a masks' ray: bigger
-# tiles would leave a thread idle on frames of 32k-64k pixels.
+# tiles would leave a thread idle on frames of 32k-64k pixels.  A frame of fewer pixels than
+# a tile a thread is cut into one tile a thread (the blob 48x48 0.81x, the bunny 32x32 0.91x
+# the wall time of one tile, the same CPU time within 4 %; more tiles cost CPU).
 EXACT_TILE_PIXELS = 1 << 15
 
 
@@ -129,7 +131,9 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
                                  target=scene.camera.target - origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
-    rows_per_tile = max(1, EXACT_TILE_PIXELS // W)
+    # a tile a thread at least: a frame of fewer pixels is cut finer, so each core gets some
+    threads = max(1, getattr(tracer, "threads", 1))
+    rows_per_tile = max(1, min(EXACT_TILE_PIXELS // W, -(-H // threads)))
     tiles = [slice(y, min(y + rows_per_tile, H)) for y in range(0, H, rows_per_tile)]
     hard = [i for i, lt in enumerate(lights) if lt is None]
     lit = shadow_masks(scene.replace(lights=tuple(scene.lights[i] for i in hard)), mt)[0] \
