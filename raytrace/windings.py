@@ -30,7 +30,7 @@ __all__ = ["boundaries", "boundary", "found", "measures", "split"]
 # its two vectors' lengths (float64 roundings are ~1e-16 of it) counts as zero.
 DOUBT = 2.0 ** -30
 # Buckets of height an outline edge when its edges are sought that a level line crosses.
-BUCKETS = 1.0
+BUCKETS = 0.125
 # Shadows `split` hands `boundaries` at once: whole pixels, about this many.
 BATCH = 16384
 
@@ -222,7 +222,8 @@ def _near(a: np.ndarray, b: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, 
     k = np.repeat(np.arange(len(a)), many)
     i = order[k]
     j = order[k + 1 + np.arange(len(k)) - np.repeat(np.cumsum(many) - many, many)]
-    keep = (lo[i, 1] <= hi[j, 1]) & (lo[j, 1] <= hi[i, 1])
+    low, high = lo[:, 1].copy(), hi[:, 1].copy()
+    keep = np.flatnonzero((low[i] <= high[j]) & (low[j] <= high[i]))
     return i[keep], j[keep]
 
 
@@ -236,14 +237,16 @@ def _right_cover(sa: np.ndarray, sb: np.ndarray, parent: np.ndarray, a: np.ndarr
     is right of it, -count; the piece's own edge where it runs down); doubt (pixels,) set
     where a crossing is in doubt or a piece is level."""
     mid = (sa + sb) / 2
-    r, f = _level(mid[:, 1], group[parent], np.minimum(a[:, 1], b[:, 1]),
-                  np.maximum(a[:, 1], b[:, 1]), group)
-    ay, by, y = a[f, 1], b[f, 1], mid[r, 1]
-    up = (ay <= y) & (by > y)
-    down = (by <= y) & (ay > y)
+    mx, my = mid[:, 0].copy(), mid[:, 1].copy()
+    ax, ay, bx, by = a[:, 0].copy(), a[:, 1].copy(), b[:, 0].copy(), b[:, 1].copy()
+    r, f = _level(my, group[parent], np.minimum(ay, by), np.maximum(ay, by), group)
+    fy, gy, y = ay[f], by[f], my[r]
+    up = (fy <= y) & (gy > y)
+    down = (gy <= y) & (fy > y)
     keep = np.flatnonzero((up | down) & (parent[r] != f))
     r, f, runs_up = r[keep], f[keep], up[keep]
-    side, sure = _cross(b[f] - a[f], mid[r] - a[f])
+    x, y = ax[f], ay[f]
+    side, sure = _turn((bx - ax)[f], (by - ay)[f], mx[r] - x, my[r] - y)
     doubt[group[f[~sure]]] = True
     rise = sb[:, 1] - sa[:, 1]
     doubt[group[parent[~(np.abs(rise) > DOUBT * np.abs(sb - sa).sum(axis=1))]]] = True
@@ -253,16 +256,16 @@ def _right_cover(sa: np.ndarray, sb: np.ndarray, parent: np.ndarray, a: np.ndarr
 
 
 def _level(y: np.ndarray, at: np.ndarray, low: np.ndarray, high: np.ndarray,
-           group: np.ndarray, per_edge: float = BUCKETS) -> tuple[np.ndarray, np.ndarray]:
+           group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The pairs (r, f) of heights y (m,) of pixels at (m,) and segments of the same pixel
     with heights low-high (e,) of pixels group (e,) (ascending), among them every pair with
-    low <= y < high: each pixel's heights cut into per_edge buckets an edge, a segment in
+    low <= y < high: each pixel's heights cut into BUCKETS buckets an edge, a segment in
     every bucket it meets (the bucket of a height is monotone in it: none is missed)."""
     n = int(max(group.max(initial=-1), at.max(initial=-1))) + 1
     bottom, top = np.full(n, np.inf), np.full(n, -np.inf)
     np.minimum.at(bottom, group, low)
     np.maximum.at(top, group, high)
-    many = np.maximum(np.ceil(np.bincount(group, minlength=n) * per_edge), 1).astype(np.int64)
+    many = np.maximum(np.ceil(np.bincount(group, minlength=n) * BUCKETS), 1).astype(np.int64)
     scale = np.where(top > bottom, many / np.where(top > bottom, top - bottom, 1), 0)
     first = np.cumsum(many) - many
 
