@@ -210,21 +210,23 @@ def _near(a: np.ndarray, b: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, 
     meet (the others lie apart), each once: swept along x, pixel by pixel."""
     lo, hi = np.minimum(a, b), np.maximum(a, b)
     order = np.lexsort((lo[:, 0], group))
-    # where each box's right end falls among its pixel's left ends (after the equal ones):
-    # the left and right ends sorted together, the left first where equal
-    ends = np.r_[lo[order, 0], hi[order, 0]]
-    right = np.repeat([False, True], len(a))
-    merged = np.lexsort((right, ends, np.r_[group[order], group[order]]))
-    is_right = right[merged]
-    end = np.empty(len(a), np.int64)
-    end[merged[is_right] - len(a)] = np.cumsum(~is_right)[is_right]
-    many = np.maximum(end - np.arange(len(a)) - 1, 0)
-    k = np.repeat(np.arange(len(a)), many)
-    i = order[k]
-    j = order[k + 1 + np.arange(len(k)) - np.repeat(np.cumsum(many) - many, many)]
-    low, high = lo[:, 1].copy(), hi[:, 1].copy()
-    keep = np.flatnonzero((low[i] <= high[j]) & (low[j] <= high[i]))
-    return i[keep], j[keep]
+    x, right, y0, y1 = lo[order, 0], hi[order, 0], lo[order, 1], hi[order, 1]
+    # where each box's right end falls among its pixel's left ends after it (after the equal
+    # ones): a binary search of them all at once
+    g = group[order]
+    end, top = np.arange(1, len(a) + 1), np.searchsorted(g, g, side="right")
+    on = np.flatnonzero(end < top)
+    while len(on):
+        mid = (end[on] + top[on]) // 2
+        left = x[mid] <= right[on]
+        end[on] = np.where(left, mid + 1, end[on])
+        top[on] = np.where(left, top[on], mid)
+        on = on[end[on] < top[on]]
+    many = end - np.arange(1, len(a) + 1)
+    m = np.arange(int(many.sum())) + np.repeat(np.arange(1, len(a) + 1) - np.cumsum(many) + many,
+                                               many)
+    keep = np.flatnonzero((np.repeat(y0, many) <= y1[m]) & (y0[m] <= np.repeat(y1, many)))
+    return order[np.searchsorted(np.cumsum(many), keep, side="right")], order[m[keep]]
 
 
 def _right_cover(sa: np.ndarray, sb: np.ndarray, parent: np.ndarray, a: np.ndarray,
