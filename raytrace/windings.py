@@ -56,10 +56,13 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
     start, end, key_a, key_b = arrange.edges(uncut[keep], owner[keep, None] * big + ids[keep],
                                              np.ones(int(keep.sum()), bool))
     lo, hi = np.minimum(key_a, key_b), np.maximum(key_a, key_b)
-    order = np.lexsort((hi, lo))                         # stable: the first of each kept
+    # by pixel, lower id, higher id: one key where it fits in an int64 (ties in any order)
+    order = np.argsort(lo * big + hi % big) if n * big * big < 2 ** 63 else np.lexsort((hi, lo))
     new = (np.diff(lo[order], prepend=-1) != 0) | (np.diff(hi[order], prepend=-1) != 0)
-    first, inv = order[new], np.empty(len(lo), np.int64)
+    inv = np.empty(len(lo), np.int64)
     inv[order] = np.cumsum(new) - 1
+    # each edge's first in the shadows' order
+    first = np.minimum.reduceat(order, np.flatnonzero(new)) if len(order) else order
     net = np.bincount(inv, np.where(key_a < key_b, 1.0, -1.0), len(first))
     use = np.flatnonzero(net != 0)
     if len(use) == 0:
@@ -278,7 +281,7 @@ def _level(y: np.ndarray, at: np.ndarray, low: np.ndarray, high: np.ndarray,
     span = b1 - b0 + 1
     edge = np.repeat(np.arange(len(low)), span)
     key = np.repeat(b0 - np.cumsum(span) + span, span) + np.arange(len(edge))
-    order = np.argsort(key, kind="stable")
+    order = np.argsort(key)                              # the pairs in any order
     key, edge = key[order], edge[order]
     q = bucket(y, at)
     lo, hi = np.searchsorted(key, q), np.searchsorted(key, q, side="right")

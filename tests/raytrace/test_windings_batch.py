@@ -163,3 +163,15 @@ def test_runs_by_pointer_jumping_are_the_walked_runs(seed, pixels):
     root, offset = _runs(ia, ib, count, total, group)
     want_root, want_offset = _walked(ia, ib, count, total)
     assert (root == want_root).all() and (offset == want_offset).all()
+
+
+def test_corner_ids_too_big_for_one_key():
+    """Corner ids near 2 ** 40 (a pixel's edges then sorted by two keys, not one): the same
+    boundaries as the same pixels with small ids."""
+    rng = np.random.default_rng(3)
+    pixels = [_pixel(rng, k) for k in (0, 4, 1, 0, 2)]
+    got = _check(pixels)
+    far = _check([(t, f, i + 2 ** 40) for t, f, i in pixels])
+    for small, big in zip(got, far):
+        assert (small is None and big is None) or small.tobytes() == big.tobytes()
+    assert sum(c is not None for c in got) >= 3
