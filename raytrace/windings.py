@@ -15,6 +15,13 @@ of edges through corners with one edge in and one out, and carried along the run
 count of each edge crossed).  The union's measures (area, Lambert's irradiance) are boundary
 integrals: those of the fan of signed triangles from the light's centre over that boundary,
 each clipped to the light's part seen from p (convex) in numpy (`regions.inside`).
+
+`split` measures a few thousand shadows' pixels in one pass of numpy (`boundaries`; `boundary`
+is one pixel of it): a corner's id leads with its pixel, so every sort keeps a pixel's edges,
+corners and pieces together in the order they take alone (the same floats, in the same
+order, as the pixel alone), the pairs that may cross are sought and the ray's crossings
+counted within a pixel only, the runs are followed by pointer jumping, and a doubt sets its
+pixel's flag alone.
 """
 
 from __future__ import annotations
