@@ -63,13 +63,9 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
     start, end, key_a, key_b = arrange.edges(uncut[keep], owner[keep, None] * big + ids[keep],
                                              np.ones(int(keep.sum()), bool))
     lo, hi = np.minimum(key_a, key_b), np.maximum(key_a, key_b)
-    # by pixel, lower id, higher id: one key where it fits in an int64 (ties in any order)
-    order = np.argsort(lo * big + hi % big) if n * big * big < 2 ** 63 else np.lexsort((hi, lo))
-    new = (np.diff(lo[order], prepend=-1) != 0) | (np.diff(hi[order], prepend=-1) != 0)
-    inv = np.empty(len(lo), np.int64)
-    inv[order] = np.cumsum(new) - 1
-    # each edge's first in the shadows' order
-    first = np.minimum.reduceat(order, np.flatnonzero(new)) if len(order) else order
+    # by pixel, lower id, higher id: one key where it fits in an int64
+    inv, first = _distinct(lo * big + hi % big) if n * big * big < 2 ** 63 else \
+        _distinct(lo, hi)
     net = np.bincount(inv, np.where(key_a < key_b, 1.0, -1.0), len(first))
     use = np.flatnonzero(net != 0)
     if len(use) == 0:
@@ -84,9 +80,10 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
     b = np.where(up[:, None], at_hi, at_lo)
     ia, ib = np.where(up, lo[f], hi[f]), np.where(up, hi[f], lo[f])
     count, group = np.abs(net[use]), lo[f] // big
-    sa, sb, parent, jump = _pieces(a, b, ia, ib, count, group, doubt)
+    corner = _distinct(np.r_[ia, ib])
+    sa, sb, parent, jump = _pieces(a, b, ia, ib, count, group, doubt, corner[1])
     first = np.flatnonzero(np.r_[True, parent[1:] != parent[:-1]])     # one per edge, in order
-    root, offset = _runs(ia, ib, count, jump[np.r_[first[1:], len(parent)] - 1], group)
+    root, offset = _runs(corner[0], count, jump[np.r_[first[1:], len(parent)] - 1], group)
     runs = np.flatnonzero(root == np.arange(len(a)))
     at = first[runs]
     cover = _right_cover(sa[at], sb[at], parent[at], a, b, count, group, doubt)
@@ -106,40 +103,52 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
     return chains
 
 
-def _runs(ia: np.ndarray, ib: np.ndarray, count: np.ndarray, total: np.ndarray,
-          group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The edges ia-ib (e,) (ids leading with the pixel group (e,), ascending) with counts
-    (e,) in runs through corners of one edge in and one out of equal counts (there the right
-    sides of the two meet, so the second's first piece is covered as much as the first's
-    last: by `total` (e,) more than its first piece): (the first edge of each edge's run (e,):
+def _runs(corner: np.ndarray, count: np.ndarray, total: np.ndarray, group: np.ndarray
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """The edges from corner[:e] to corner[e:] (2e,) (numbered; no corner in two pixels) of
+    the pixels group (e,) (ascending) with counts (e,) in runs through corners of one edge in
+    and one out of equal counts (there the right sides of the two meet, so the second's first
+    piece is covered as much as the first's last: by `total` (e,) more than its first piece): (the first edge of each edge's run (e,):
     the one with none before it, or the least of a closed run; how much more its first piece
     is covered than that edge's (e,)).  By pointer jumping: log2 of the most edges a pixel has
     steps over every edge at once."""
-    corner, inv = np.unique(np.r_[ia, ib], return_inverse=True)
-    va, vb = inv[:len(ia)], inv[len(ia):]
-    out_deg = np.bincount(va, minlength=len(corner))
-    in_deg = np.bincount(vb, minlength=len(corner))
-    leaving = np.full(len(corner), -1)
-    leaving[va] = np.arange(len(ia))
+    va, vb = np.split(corner, 2)
+    many = int(corner.max(initial=-1)) + 1
+    out_deg = np.bincount(va, minlength=many)
+    in_deg = np.bincount(vb, minlength=many)
+    leaving = np.full(many, -1)
+    leaving[va] = np.arange(len(va))
     succ = np.where((in_deg[vb] == 1) & (out_deg[vb] == 1), leaving[vb], -1)
     succ[(succ >= 0) & (count[np.maximum(succ, 0)] != count)] = -1
-    pred = np.full(len(ia), -1)
+    pred = np.full(len(va), -1)
     pred[succ[succ >= 0]] = np.flatnonzero(succ >= 0)
     steps = int(np.bincount(group).max(initial=0)).bit_length()    # 2 ** steps > any run
     # the least edge within 2 ** k steps back (up: the edge 2 ** k back, -1 past a run's start)
-    least, up = np.arange(len(ia)), pred.copy()
+    least, up = np.arange(len(va)), pred.copy()
     for _ in range(steps):
         on = np.flatnonzero(up >= 0)
         least[on] = np.minimum(least[on], least[up[on]])
         up[on] = up[up[on]]
     # a closed run (still a step back after 2 ** steps) starts at its least edge
-    first = (pred < 0) | ((up >= 0) & (least == np.arange(len(ia))))
-    back = np.where(first, np.arange(len(ia)), pred)
+    first = (pred < 0) | ((up >= 0) & (least == np.arange(len(va))))
+    back = np.where(first, np.arange(len(va)), pred)
     offset = np.where(first, 0.0, total[np.maximum(pred, 0)])
     for _ in range(steps):
         offset = offset + offset[back]
         back = back[back]
     return back, offset
+
+
+def _distinct(*keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of the non-negative keys (k,) (the first most significant), numbered
+    in their order: (the number of each row (k,), the index of each number's first row)."""
+    order = np.argsort(keys[0]) if len(keys) == 1 else np.lexsort(keys[::-1])
+    new = np.zeros(len(order), bool)
+    for key in keys:
+        new |= np.diff(key[order], prepend=-1) != 0
+    number = np.empty(len(order), np.int64)
+    number[order] = np.cumsum(new) - 1
+    return number, (np.minimum.reduceat(order, np.flatnonzero(new)) if len(order) else order)
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -156,15 +165,14 @@ def _turn(ux: np.ndarray, uy: np.ndarray, vx: np.ndarray, vy: np.ndarray,
 
 
 def _pieces(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray, count: np.ndarray,
-            group: np.ndarray, doubt: np.ndarray):
-    """The segments a-b (e, 2) with corner ids ia, ib and counts (e,) of the pixels group (e,)
-    (ascending) split where two of a pixel cross (float64; one crossing point for both):
+            group: np.ndarray, doubt: np.ndarray, at: np.ndarray):
+    """The segments a-b (e, 2) with corner ids ia, ib (at: where each corner is first among
+    ia then ib) and counts (e,) of the pixels group (e,) (ascending) split where two of a pixel cross (float64; one crossing point for both):
     (starts (s, 2), ends (s, 2), the edge of each (s,), in order along it, and how much more
     each piece's sides are covered than its edge's first piece's (s,): crossing another edge
     from its right to its left adds that edge's count); doubt (pixels,) set for a pixel
     unless every two of its edges certainly cross inside both, lie apart, or share a corner
     only."""
-    ids, at = np.unique(np.r_[ia, ib], return_index=True)
     spots, owner = np.r_[a, b][at], np.r_[group, group][at]
     order = np.lexsort((spots[:, 1], spots[:, 0], owner))
     spots, owner = spots[order], owner[order]
