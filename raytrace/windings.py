@@ -215,12 +215,23 @@ def _pieces(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray, count:
     t = np.r_[np.zeros(e), np.ones(e), t_i, t_j]
     point = np.concatenate([a, b, meet, meet])
     change = np.r_[np.zeros(2 * e), turn * count[jc], -turn * count[ic]]
-    order = np.lexsort((t, edge))
+    order = _along(edge, t)
     edge, point, change = edge[order], point[order], np.cumsum(change[order])
     step = np.flatnonzero(edge[1:] == edge[:-1])
     start = np.flatnonzero(np.r_[True, edge[1:] != edge[:-1]])
     since = change - change[start][np.cumsum(np.r_[True, edge[1:] != edge[:-1]]) - 1]
     return point[step], point[step + 1], edge[step], since[step]
+
+
+def _along(edge: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The order of points by edge (e,), then t (e,), then index (`np.lexsort`'s): a quick sort
+    of t, then a stable one of the edges (a radix sort where their numbers are small), and
+    np.lexsort itself where two points tie (none do but where three edges meet)."""
+    order = np.argsort(t)
+    small = edge[order].astype(np.min_scalar_type(int(edge.max(initial=0))))
+    order = order[np.argsort(small, kind="stable")]
+    e, s = edge[order], t[order]
+    return np.lexsort((t, edge)) if ((e[1:] == e[:-1]) & (s[1:] == s[:-1])).any() else order
 
 
 def _near(a: np.ndarray, b: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
