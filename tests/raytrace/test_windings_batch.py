@@ -95,12 +95,14 @@ def test_a_pixel_in_doubt_leaves_its_neighbours_alone():
 
 
 def test_the_same_pixel_twice_in_a_batch():
-    """One sheet twice over (the same ids, the same spots): each copy is the sheet's own
-    boundary, not the cancelled or doubled outline of both."""
+    """One sheet twice over (the same ids, the same spots), then under other ids: each copy
+    is the sheet's own boundary, not the cancelled or doubled outline of both, nor in doubt
+    for two ids at one spot."""
     tris, ids = _sheet(np.random.default_rng(11), 6, 0.7)
     pixel = (tris, np.ones(len(tris), bool), ids)
-    got = _check([pixel, pixel])
-    assert got[0].tobytes() == got[1].tobytes() and len(got[0]) > 10
+    got = _check([pixel, pixel, (tris, pixel[1], ids + 1000)])
+    assert len(got[0]) > 10
+    assert got[0].tobytes() == got[1].tobytes() == got[2].tobytes()
 
 
 @settings(profile(), max_examples=40 if PROFILE == "ci" else 1000)
