@@ -40,6 +40,8 @@ DOUBT = 2.0 ** -30
 BUCKETS = 0.125
 # Shadows `split` hands `boundaries` at once: whole pixels, about this many.
 BATCH = 16384
+# Outline edges `boundaries` nodes at once: whole pixels, about this many.
+OUTLINE = 3072
 
 
 def boundary(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray) -> np.ndarray | None:
@@ -68,10 +70,6 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
         _distinct(lo, hi)
     net = np.bincount(inv, np.where(key_a < key_b, 1.0, -1.0), len(first))
     use = np.flatnonzero(net != 0)
-    if len(use) == 0:
-        for k in np.flatnonzero(~doubt).tolist():
-            chains[k] = np.zeros((0, 2, 2))
-        return chains
     f, up = first[use], net[use] > 0                   # up: the net runs from lo to hi
     low_first = (key_a[f] < key_b[f])[:, None]
     at_lo = np.where(low_first, start[f], end[f])
@@ -80,6 +78,26 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
     b = np.where(up[:, None], at_hi, at_lo)
     ia, ib = np.where(up, lo[f], hi[f]), np.where(up, hi[f], lo[f])
     count, group = np.abs(net[use]), lo[f] // big
+    # the pixels in parts of about OUTLINE edges (a part's arrays stay in the caches)
+    first = np.searchsorted(group, np.arange(n))
+    parts = np.flatnonzero(np.r_[True, np.diff(first // OUTLINE) != 0]) if n else first
+    for p0, p1 in zip(parts.tolist(), np.r_[parts[1:], n].tolist()):
+        e = slice(first[p0], first[p1] if p1 < n else len(a))
+        _settle(chains[p0:p1], doubt[p0:p1], a[e], b[e], ia[e], ib[e], count[e],
+                group[e] - p0)
+    return chains
+
+
+def _settle(chains: np.ndarray, doubt: np.ndarray, a: np.ndarray, b: np.ndarray,
+            ia: np.ndarray, ib: np.ndarray, count: np.ndarray, group: np.ndarray) -> None:
+    """Fills chains (n,) object with the union's boundary of each pixel not in doubt (n,) (its
+    pieces with no cover on their right) from the edges a-b (e, 2) of its outline with corner
+    ids ia, ib and counts (e,), of the pixels group (e,) (ascending); sets doubt where that
+    is not certain."""
+    if len(a) == 0:
+        for k in np.flatnonzero(~doubt).tolist():
+            chains[k] = np.zeros((0, 2, 2))
+        return
     corner = _distinct(np.r_[ia, ib])
     sa, sb, parent, jump = _pieces(a, b, ia, ib, count, group, doubt, corner[1])
     first = np.flatnonzero(np.r_[True, parent[1:] != parent[:-1]])     # one per edge, in order
@@ -100,7 +118,6 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
     for k, chain in zip(sure.tolist(), np.split(np.stack([sa[edge], sb[edge]], axis=1),
                                                  cuts[1:])):
         chains[k] = chain
-    return chains
 
 
 def _runs(corner: np.ndarray, count: np.ndarray, total: np.ndarray, group: np.ndarray

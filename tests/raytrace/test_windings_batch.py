@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from strategies import PROFILE, profile
 
+from raytrace import windings
 from raytrace.windings import _along, _runs, boundaries, boundary
 
 shapely = pytest.importorskip("shapely")
@@ -107,10 +108,16 @@ def test_the_same_pixel_twice_in_a_batch():
 
 @settings(profile(), max_examples=40 if PROFILE == "ci" else 1000)
 @given(seed=st.integers(0, 2 ** 32 - 1), kinds=st.lists(st.integers(0, 5), min_size=1,
-                                                         max_size=6))
-def test_a_batch_is_its_pixels_one_by_one(seed, kinds):
+                                                         max_size=6),
+       outline=st.sampled_from([1, 9, 40, windings.OUTLINE]))
+def test_a_batch_is_its_pixels_one_by_one(seed, kinds, outline):
+    """Random batches, noded in parts of `outline` edges (whole pixels) or all at once."""
     rng = np.random.default_rng(seed)
-    _check([_pixel(rng, k) for k in kinds])
+    plain, windings.OUTLINE = windings.OUTLINE, outline
+    try:
+        _check([_pixel(rng, k) for k in kinds])
+    finally:
+        windings.OUTLINE = plain
 
 
 def _walked(ia, ib, count, total):
