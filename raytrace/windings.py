@@ -215,19 +215,20 @@ def _pieces(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray, count:
     doubt[group[i[~(apart | cross | shared)]]] = True
     # a shared corner: the two edges leave it in certainly different directions
     s = np.flatnonzero(shared & ~apart)
-    at_i = np.where((ia[i[s]] == ia[j[s]]) | (ia[i[s]] == ib[j[s]]), 0, 1)
-    corner = np.where(at_i[:, None] == 0, a[i[s]], b[i[s]])
-    u = np.where(at_i[:, None] == 0, b[i[s]], a[i[s]]) - corner
-    other_at_a = ia[j[s]] == np.where(at_i == 0, ia[i[s]], ib[i[s]])
-    v = np.where(other_at_a[:, None], b[j[s]], a[j[s]]) - corner
-    _, turn = _cross(u, v)
-    doubt[group[i[s[~(turn | ((u * v).sum(axis=1) < 0))]]]] = True
+    si, sj = i[s], j[s]
+    at_a = (ia[si] == ia[sj]) | (ia[si] == ib[sj])     # the corner is i's start
+    x, y = np.where(at_a, ax[si], bx[si]), np.where(at_a, ay[si], by[si])
+    ux, uy = np.where(at_a, bx[si], ax[si]) - x, np.where(at_a, by[si], ay[si]) - y
+    other_at_a = ia[sj] == np.where(at_a, ia[si], ib[si])
+    vx, vy = np.where(other_at_a, bx[sj], ax[sj]) - x, np.where(other_at_a, by[sj], ay[sj]) - y
+    _, turn = _turn(ux, uy, vx, vy)
+    doubt[group[si[~(turn | (ux * vx + uy * vy < 0))]]] = True
     c = np.flatnonzero(cross)
     t_j = ci[c] / (ci[c] - di[c])                    # along edge j, from line i's side
     t_i = cj[c] / (cj[c] - dj[c])
-    meet = a[j[c]] + t_j[:, None] * (b[j[c]] - a[j[c]])
     e, ic, jc = len(a), i[c], j[c]
-    turn = np.sign(_cross(b[jc] - a[jc], b[ic] - a[ic])[0])    # i runs to j's left: +
+    meet = np.stack([ax[jc] + t_j * dx[jc], ay[jc] + t_j * dy[jc]], axis=1)
+    turn = np.sign(_turn(dx[jc], dy[jc], dx[ic], dy[ic])[0])    # i runs to j's left: +
     edge = np.r_[np.arange(e), np.arange(e), ic, jc]
     t = np.r_[np.zeros(e), np.ones(e), t_i, t_j]
     point = np.concatenate([a, b, meet, meet])
