@@ -125,10 +125,10 @@ def _runs(corner: np.ndarray, count: np.ndarray, total: np.ndarray, group: np.nd
     """The edges from corner[:e] to corner[e:] (2e,) (numbered; no corner in two pixels) of
     the pixels group (e,) (ascending) with counts (e,) in runs through corners of one edge in
     and one out of equal counts (there the right sides of the two meet, so the second's first
-    piece is covered as much as the first's last: by `total` (e,) more than its first piece): (the first edge of each edge's run (e,):
-    the one with none before it, or the least of a closed run; how much more its first piece
-    is covered than that edge's (e,)).  By pointer jumping: log2 of the most edges a pixel has
-    steps over every edge at once."""
+    piece is covered as much as the first's last: by `total` (e,) more than its first piece):
+    (the first edge of each edge's run (e,): the one with none before it, or the least of a
+    closed run; how much more its first piece is covered than that edge's (e,)).  By pointer
+    jumping: log2 of the most edges a pixel has steps over every edge at once."""
     va, vb = np.split(corner, 2)
     many = int(corner.max(initial=-1)) + 1
     out_deg = np.bincount(va, minlength=many)
@@ -184,12 +184,12 @@ def _turn(ux: np.ndarray, uy: np.ndarray, vx: np.ndarray, vy: np.ndarray,
 def _pieces(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray, count: np.ndarray,
             group: np.ndarray, doubt: np.ndarray, at: np.ndarray):
     """The segments a-b (e, 2) with corner ids ia, ib (at: where each corner is first among
-    ia then ib) and counts (e,) of the pixels group (e,) (ascending) split where two of a pixel cross (float64; one crossing point for both):
-    (starts (s, 2), ends (s, 2), the edge of each (s,), in order along it, and how much more
-    each piece's sides are covered than its edge's first piece's (s,): crossing another edge
-    from its right to its left adds that edge's count); doubt (pixels,) set for a pixel
-    unless every two of its edges certainly cross inside both, lie apart, or share a corner
-    only."""
+    ia then ib) and counts (e,) of the pixels group (e,) (ascending) split where two of a
+    pixel cross (float64; one crossing point for both): (starts (s, 2), ends (s, 2), the edge
+    of each (s,), in order along it, and how much more each piece's sides are covered than
+    its edge's first piece's (s,): crossing another edge from its right to its left adds that
+    edge's count); doubt (pixels,) set for a pixel unless every two of its edges certainly
+    cross inside both, lie apart, or share a corner only."""
     spots, owner = np.r_[a, b][at], np.r_[group, group][at]
     order = np.lexsort((spots[:, 1], spots[:, 0], owner))
     spots, owner = spots[order], owner[order]
