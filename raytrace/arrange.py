@@ -113,16 +113,11 @@ def edges(uncut: np.ndarray, ids: np.ndarray, free: np.ndarray
         (tri[:, 1, 1] - tri[:, 0, 1]) * (tri[:, 2, 0] - tri[:, 0, 0])
     at = np.flatnonzero(free & (signed != 0))
     turn = signed[at] < 0
-    start, end, key_a, key_b = [], [], [], []
-    for e in range(3):
-        s0 = np.where(turn, (e + 1) % 3, e)
-        s1 = np.where(turn, e, (e + 1) % 3)
-        start.append(uncut[at, s0])
-        end.append(uncut[at, s1])
-        key_a.append(ids[at, s0])
-        key_b.append(ids[at, s1])
-    return (np.concatenate(start), np.concatenate(end), np.concatenate(key_a),
-            np.concatenate(key_b))
+    # edge e of every shadow, then e + 1: from corner e to e + 1, or back where turned
+    e = np.arange(3)[:, None]
+    s0, s1 = np.where(turn, (e + 1) % 3, e), np.where(turn, e, (e + 1) % 3)
+    return (uncut[at, s0].reshape(-1, 2), uncut[at, s1].reshape(-1, 2), ids[at, s0].reshape(-1),
+            ids[at, s1].reshape(-1))
 
 
 def polygonal(shapely, geoms: np.ndarray) -> np.ndarray:

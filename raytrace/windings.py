@@ -15,6 +15,13 @@ of edges through corners with one edge in and one out, and carried along the run
 count of each edge crossed).  The union's measures (area, Lambert's irradiance) are boundary
 integrals: those of the fan of signed triangles from the light's centre over that boundary,
 each clipped to the light's part seen from p (convex) in numpy (`regions.inside`).
+
+`split` measures a few thousand shadows' pixels in one pass of numpy (`boundaries`; `boundary`
+is one pixel of it): a corner's id leads with its pixel, so every sort keeps a pixel's edges,
+corners and pieces together in the order they take alone (the same floats, in the same
+order, as the pixel alone), the pairs that may cross are sought and the ray's crossings
+counted within a pixel only, the runs are followed by pointer jumping, and a doubt sets its
+pixel's flag alone.
 """
 
 from __future__ import annotations
@@ -24,27 +31,45 @@ import numpy as np
 from . import arrange, pyramid
 from .regions import closed_rings, inside, ring_measures
 
-__all__ = ["boundary", "found", "measures", "split"]
+__all__ = ["boundaries", "boundary", "found", "measures", "split"]
 
 # Doubt in the outline's orientation tests: a cross product within this much of the product of
 # its two vectors' lengths (float64 roundings are ~1e-16 of it) counts as zero.
 DOUBT = 2.0 ** -30
+# Buckets of height an outline edge when its edges are sought that a level line crosses.
+BUCKETS = 0.125
+# Shadows `split` hands `boundaries` at once: whole pixels, about this many.
+BATCH = 16384
+# Outline edges `boundaries` nodes at once: whole pixels, about this many.
+OUTLINE = 3072
 
 
 def boundary(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray) -> np.ndarray | None:
     """The union's boundary (e, 2, 2) (each edge with the union on its left) of the whole
     shadows uncut (q, 3, 2) with welded corner ids (q, 3), or None where some shadow is not
-    free (`pyramid.uncut`) or the outline is not certainly noded."""
-    if not free.all():
-        return None
-    start, end, key_a, key_b = arrange.edges(uncut, ids, np.ones(len(uncut), bool))
+    free (`pyramid.uncut`) or the outline is not certainly noded: `boundaries` of one pixel."""
+    return boundaries(uncut, free, ids, np.zeros(len(uncut), np.int64), 1)[0]
+
+
+def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.ndarray,
+               n: int) -> np.ndarray:
+    """(n,) object: the `boundary` of each of n pixels' shadows, all in one pass: the shadows
+    uncut (q, 3, 2), free (q,), welded corner ids (q, 3) of the pixels owner (q,) (ascending,
+    < n).  A pixel's corners are told apart from another's by an id that leads with the pixel,
+    so its edges, corners and pieces sort together, in the order they take alone; where its
+    outline is in doubt, its boundary alone is None."""
+    chains, doubt = np.full(n, None, object), np.zeros(n, bool)
+    doubt[owner[~free]] = True
+    keep = ~doubt[owner]
+    big = int(ids.max(initial=0)) + 1
+    start, end, key_a, key_b = arrange.edges(uncut[keep], owner[keep, None] * big + ids[keep],
+                                             np.ones(int(keep.sum()), bool))
     lo, hi = np.minimum(key_a, key_b), np.maximum(key_a, key_b)
-    big = int(hi.max(initial=0)) + 1
-    keys, first, inv = np.unique(lo * big + hi, return_index=True, return_inverse=True)
-    net = np.bincount(inv.reshape(-1), np.where(key_a < key_b, 1.0, -1.0), len(keys))
+    # by pixel, lower id, higher id: one key where it fits in an int64
+    inv, first = _distinct(lo * big + hi % big) if n * big * big < 2 ** 63 else \
+        _distinct(lo, hi)
+    net = np.bincount(inv, np.where(key_a < key_b, 1.0, -1.0), len(first))
     use = np.flatnonzero(net != 0)
-    if len(use) == 0:
-        return np.zeros((0, 2, 2))
     f, up = first[use], net[use] > 0                   # up: the net runs from lo to hi
     low_first = (key_a[f] < key_b[f])[:, None]
     at_lo = np.where(low_first, start[f], end[f])
@@ -52,110 +77,163 @@ def boundary(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray) -> np.ndarray
     a = np.where(up[:, None], at_lo, at_hi)
     b = np.where(up[:, None], at_hi, at_lo)
     ia, ib = np.where(up, lo[f], hi[f]), np.where(up, hi[f], lo[f])
-    count = np.abs(net[use])
-    pieces = _pieces(a, b, ia, ib, count)
-    if pieces is None:
-        return None
-    sa, sb, parent, jump = pieces
+    count, group = np.abs(net[use]), lo[f] // big
+    # the pixels in parts of about OUTLINE edges (a part's arrays stay in the caches)
+    first = np.searchsorted(group, np.arange(n))
+    parts = np.flatnonzero(np.r_[True, np.diff(first // OUTLINE) != 0]) if n else first
+    for p0, p1 in zip(parts.tolist(), np.r_[parts[1:], n].tolist()):
+        e = slice(first[p0], first[p1] if p1 < n else len(a))
+        _settle(chains[p0:p1], doubt[p0:p1], a[e], b[e], ia[e], ib[e], count[e],
+                group[e] - p0)
+    return chains
+
+
+def _settle(chains: np.ndarray, doubt: np.ndarray, a: np.ndarray, b: np.ndarray,
+            ia: np.ndarray, ib: np.ndarray, count: np.ndarray, group: np.ndarray) -> None:
+    """Fills chains (n,) object with the union's boundary of each pixel not in doubt (n,) (its
+    pieces with no cover on their right) from the edges a-b (e, 2) of its outline with corner
+    ids ia, ib and counts (e,), of the pixels group (e,) (ascending); sets doubt where that
+    is not certain."""
+    if len(a) == 0:
+        for k in np.flatnonzero(~doubt).tolist():
+            chains[k] = np.zeros((0, 2, 2))
+        return
+    corner = _distinct(np.r_[ia, ib])
+    sa, sb, parent, jump = _pieces(a, b, ia, ib, count, group, doubt, corner[1])
     first = np.flatnonzero(np.r_[True, parent[1:] != parent[:-1]])     # one per edge, in order
-    walk, root, offset = _runs(ia, ib, count, jump[np.r_[first[1:], len(parent)] - 1])
-    at = first[walk[np.r_[True, root[1:] != root[:-1]]]]
-    cover = _right_cover(sa[at], sb[at], parent[at], a, b, count)
-    if cover is None:
-        return None
-    base = np.empty(len(a))
-    base[walk] = cover[root] + offset
+    root, offset = _runs(corner[0], count, jump[np.r_[first[1:], len(parent)] - 1], group)
+    runs = np.flatnonzero(root == np.arange(len(a)))
+    at = first[runs]
+    cover = _right_cover(sa[at], sb[at], parent[at], a, b, count, group, doubt)
+    run = np.empty(len(a), np.int64)
+    run[runs] = np.arange(len(runs))
+    base = cover[run[root]] + offset
     # along an edge the cover changes only where another crosses it
     right = base[parent] + jump
-    if (right < 0).any():
-        return None
-    edge = right == 0
-    return np.stack([sa[edge], sb[edge]], axis=1)
+    doubt[group[parent[right < 0]]] = True
+    edge = np.flatnonzero(right == 0)
+    edge = edge[~doubt[group[parent[edge]]]]
+    sure = np.flatnonzero(~doubt)
+    cuts = np.searchsorted(group[parent[edge]], sure)
+    for k, chain in zip(sure.tolist(), np.split(np.stack([sa[edge], sb[edge]], axis=1),
+                                                 cuts[1:])):
+        chains[k] = chain
 
 
-def _runs(ia: np.ndarray, ib: np.ndarray, count: np.ndarray, total: np.ndarray):
-    """The edges ia-ib (e,) with counts (e,) in runs through corners of one edge in and one
-    out of equal counts (there the right sides of the two meet, so the second's first piece
-    is covered as much as the first's last: by `total` (e,) more than its first piece):
-    (the edges in run order (e,), the run of each (e,), how much more its first piece is
-    covered than its run's first edge's (e,))."""
-    corner, inv = np.unique(np.r_[ia, ib], return_inverse=True)
-    va, vb = inv[:len(ia)], inv[len(ia):]
-    out_deg = np.bincount(va, minlength=len(corner))
-    in_deg = np.bincount(vb, minlength=len(corner))
-    leaving = np.full(len(corner), -1)
-    leaving[va] = np.arange(len(ia))
+def _runs(corner: np.ndarray, count: np.ndarray, total: np.ndarray, group: np.ndarray
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """The edges from corner[:e] to corner[e:] (2e,) (numbered; no corner in two pixels) of
+    the pixels group (e,) (ascending) with counts (e,) in runs through corners of one edge in
+    and one out of equal counts (there the right sides of the two meet, so the second's first
+    piece is covered as much as the first's last: by `total` (e,) more than its first piece):
+    (the first edge of each edge's run (e,): the one with none before it, or the least of a
+    closed run; how much more its first piece is covered than that edge's (e,)).  By pointer
+    jumping: log2 of the most edges a pixel has steps over every edge at once."""
+    va, vb = np.split(corner, 2)
+    many = int(corner.max(initial=-1)) + 1
+    out_deg = np.bincount(va, minlength=many)
+    in_deg = np.bincount(vb, minlength=many)
+    leaving = np.full(many, -1)
+    leaving[va] = np.arange(len(va))
     succ = np.where((in_deg[vb] == 1) & (out_deg[vb] == 1), leaving[vb], -1)
     succ[(succ >= 0) & (count[np.maximum(succ, 0)] != count)] = -1
-    has_pred = np.zeros(len(ia), bool)
-    has_pred[succ[succ >= 0]] = True
-    nxt, seen, walk, root = succ.tolist(), [False] * len(ia), [], []
-    # runs from an edge with none before it, then the closed ones
-    for s in np.flatnonzero(~has_pred).tolist() + list(range(len(ia))):
-        e, r = s, (root[-1] + 1 if root else 0)
-        while e >= 0 and not seen[e]:
-            seen[e] = True
-            walk.append(e)
-            root.append(r)
-            e = nxt[e]
-    walk, root = np.array(walk, np.int64), np.array(root, np.int64)
-    step = np.r_[0.0, total[walk][:-1]]
-    run_start = np.flatnonzero(np.r_[True, root[1:] != root[:-1]])
-    acc = np.cumsum(step)
-    offset = acc - acc[run_start][root]
-    return walk, root, offset
+    pred = np.full(len(va), -1)
+    pred[succ[succ >= 0]] = np.flatnonzero(succ >= 0)
+    steps = int(np.bincount(group).max(initial=0)).bit_length()    # 2 ** steps > any run
+    # the least edge within 2 ** k steps back (up: the edge 2 ** k back, -1 past a run's start)
+    least, up = np.arange(len(va)), pred.copy()
+    for _ in range(steps):
+        on = np.flatnonzero(up >= 0)
+        least[on] = np.minimum(least[on], least[up[on]])
+        up[on] = up[up[on]]
+    # a closed run (still a step back after 2 ** steps) starts at its least edge
+    first = (pred < 0) | ((up >= 0) & (least == np.arange(len(va))))
+    back = np.where(first, np.arange(len(va)), pred)
+    offset = np.where(first, 0.0, total[np.maximum(pred, 0)])
+    for _ in range(steps):
+        offset = offset + offset[back]
+        back = back[back]
+    return back, offset
+
+
+def _distinct(*keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of the non-negative keys (k,) (the first most significant), numbered
+    in their order: (the number of each row (k,), the index of each number's first row)."""
+    order = np.argsort(keys[0]) if len(keys) == 1 else np.lexsort(keys[::-1])
+    new = np.zeros(len(order), bool)
+    for key in keys:
+        new |= np.diff(key[order], prepend=-1) != 0
+    number = np.empty(len(order), np.int64)
+    number[order] = np.cumsum(new) - 1
+    return number, (np.minimum.reduceat(order, np.flatnonzero(new)) if len(order) else order)
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """u x v and whether it is certainly nonzero (beyond DOUBT)."""
-    c = u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
-    scale = (np.abs(u[..., 0]) + np.abs(u[..., 1])) * (np.abs(v[..., 0]) + np.abs(v[..., 1]))
-    return c, np.abs(c) > DOUBT * scale
+    return _turn(u[..., 0], u[..., 1], v[..., 0], v[..., 1])
 
 
-def _pieces(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray, count: np.ndarray):
-    """The segments a-b (e, 2) with corner ids ia, ib and counts (e,) split where two cross
-    (float64; one crossing point for both): (starts (s, 2), ends (s, 2), the edge of each
-    (s,), in order along it, and how much more each piece's sides are covered than its
-    edge's first piece's (s,): crossing another edge from its right to its left adds that
-    edge's count); None unless every two certainly cross inside both, lie apart, or share a
-    corner only."""
-    ids, at = np.unique(np.r_[ia, ib], return_index=True)
-    spots = np.r_[a, b][at]
-    if len(np.unique(spots[:, 0] + 1j * spots[:, 1])) != len(ids):
-        return None                                  # two corners at one point
-    i, j = _near(a, b)
+def _turn(ux: np.ndarray, uy: np.ndarray, vx: np.ndarray, vy: np.ndarray,
+          size: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """`_cross` of u, v given by their x and y (size: |ux| + |uy| where known)."""
+    c = ux * vy - uy * vx
+    size = np.abs(ux) + np.abs(uy) if size is None else size
+    return c, np.abs(c) > DOUBT * (size * (np.abs(vx) + np.abs(vy)))
+
+
+def _pieces(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray, count: np.ndarray,
+            group: np.ndarray, doubt: np.ndarray, at: np.ndarray):
+    """The segments a-b (e, 2) with corner ids ia, ib (at: where each corner is first among
+    ia then ib) and counts (e,) of the pixels group (e,) (ascending) split where two of a
+    pixel cross (float64; one crossing point for both): (starts (s, 2), ends (s, 2), the edge
+    of each (s,), in order along it, and how much more each piece's sides are covered than
+    its edge's first piece's (s,): crossing another edge from its right to its left adds that
+    edge's count); doubt (pixels,) set for a pixel unless every two of its edges certainly
+    cross inside both, lie apart, or share a corner only."""
+    spots, owner = np.r_[a, b][at], np.r_[group, group][at]
+    order = np.lexsort((spots[:, 1], spots[:, 0], owner))
+    spots, owner = spots[order], owner[order]
+    same = (owner[1:] == owner[:-1]) & (spots[1:] == spots[:-1]).all(axis=1)
+    doubt[owner[1:][same]] = True                    # two corners at one point
+    i, j = _near(a, b, group)
+    # seen from i's line first: the pairs whose j lies certainly on one side are apart
+    ax, ay, bx, by = a[:, 0].copy(), a[:, 1].copy(), b[:, 0].copy(), b[:, 1].copy()
+    dx, dy = bx - ax, by - ay
+    size = np.abs(dx) + np.abs(dy)
+    ux, uy, ui, x, y = dx[i], dy[i], size[i], ax[i], ay[i]
+    ci, oi = _turn(ux, uy, ax[j] - x, ay[j] - y, ui)
+    di, pi = _turn(ux, uy, bx[j] - x, by[j] - y, ui)
+    rest = np.flatnonzero(~(oi & pi & (ci * di > 0)))
+    i, j, ci, oi, di, pi = i[rest], j[rest], ci[rest], oi[rest], di[rest], pi[rest]
+    ux, uy, uj, x, y = dx[j], dy[j], size[j], ax[j], ay[j]
+    cj, oj = _turn(ux, uy, ax[i] - x, ay[i] - y, uj)
+    dj, pj = _turn(ux, uy, bx[i] - x, by[i] - y, uj)
     shared = (ia[i] == ia[j]) | (ia[i] == ib[j]) | (ib[i] == ia[j]) | (ib[i] == ib[j])
-    ci, oi = _cross(b[i] - a[i], a[j] - a[i])
-    di, pi = _cross(b[i] - a[i], b[j] - a[i])
-    cj, oj = _cross(b[j] - a[j], a[i] - a[j])
-    dj, pj = _cross(b[j] - a[j], b[i] - a[j])
     sure = oi & pi & oj & pj
-    apart = (oi & pi & (ci * di > 0)) | (oj & pj & (cj * dj > 0))
+    apart = oj & pj & (cj * dj > 0)
     cross = sure & (ci * di < 0) & (cj * dj < 0) & ~shared
-    if not (apart | cross | shared).all():
-        return None
+    doubt[group[i[~(apart | cross | shared)]]] = True
     # a shared corner: the two edges leave it in certainly different directions
     s = np.flatnonzero(shared & ~apart)
-    at_i = np.where((ia[i[s]] == ia[j[s]]) | (ia[i[s]] == ib[j[s]]), 0, 1)
-    corner = np.where(at_i[:, None] == 0, a[i[s]], b[i[s]])
-    u = np.where(at_i[:, None] == 0, b[i[s]], a[i[s]]) - corner
-    other_at_a = ia[j[s]] == np.where(at_i == 0, ia[i[s]], ib[i[s]])
-    v = np.where(other_at_a[:, None], b[j[s]], a[j[s]]) - corner
-    _, turn = _cross(u, v)
-    if not (turn | ((u * v).sum(axis=1) < 0)).all():
-        return None
+    si, sj = i[s], j[s]
+    at_a = (ia[si] == ia[sj]) | (ia[si] == ib[sj])     # the corner is i's start
+    x, y = np.where(at_a, ax[si], bx[si]), np.where(at_a, ay[si], by[si])
+    ux, uy = np.where(at_a, bx[si], ax[si]) - x, np.where(at_a, by[si], ay[si]) - y
+    other_at_a = ia[sj] == np.where(at_a, ia[si], ib[si])
+    vx, vy = np.where(other_at_a, bx[sj], ax[sj]) - x, np.where(other_at_a, by[sj], ay[sj]) - y
+    _, turn = _turn(ux, uy, vx, vy)
+    doubt[group[si[~(turn | (ux * vx + uy * vy < 0))]]] = True
     c = np.flatnonzero(cross)
     t_j = ci[c] / (ci[c] - di[c])                    # along edge j, from line i's side
     t_i = cj[c] / (cj[c] - dj[c])
-    meet = a[j[c]] + t_j[:, None] * (b[j[c]] - a[j[c]])
     e, ic, jc = len(a), i[c], j[c]
-    turn = np.sign(_cross(b[jc] - a[jc], b[ic] - a[ic])[0])    # i runs to j's left: +
+    meet = np.stack([ax[jc] + t_j * dx[jc], ay[jc] + t_j * dy[jc]], axis=1)
+    turn = np.sign(_turn(dx[jc], dy[jc], dx[ic], dy[ic])[0])    # i runs to j's left: +
     edge = np.r_[np.arange(e), np.arange(e), ic, jc]
     t = np.r_[np.zeros(e), np.ones(e), t_i, t_j]
     point = np.concatenate([a, b, meet, meet])
     change = np.r_[np.zeros(2 * e), turn * count[jc], -turn * count[ic]]
-    order = np.lexsort((t, edge))
+    order = _along(edge, t)
     edge, point, change = edge[order], point[order], np.cumsum(change[order])
     step = np.flatnonzero(edge[1:] == edge[:-1])
     start = np.flatnonzero(np.r_[True, edge[1:] != edge[:-1]])
@@ -163,43 +241,97 @@ def _pieces(a: np.ndarray, b: np.ndarray, ia: np.ndarray, ib: np.ndarray, count:
     return point[step], point[step + 1], edge[step], since[step]
 
 
-def _near(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The pairs (i, j) of segments a-b (e, 2) whose boxes meet (the others lie apart), each
-    once: swept along x."""
+def _along(edge: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The order of points by edge (e,), then t (e,), then index (`np.lexsort`'s): a quick sort
+    of t, then a stable one of the edges (a radix sort where their numbers are small), and
+    np.lexsort itself where two points tie (none do but where three edges meet)."""
+    order = np.argsort(t)
+    small = edge[order].astype(np.min_scalar_type(int(edge.max(initial=0))))
+    order = order[np.argsort(small, kind="stable")]
+    e, s = edge[order], t[order]
+    return np.lexsort((t, edge)) if ((e[1:] == e[:-1]) & (s[1:] == s[:-1])).any() else order
+
+
+def _near(a: np.ndarray, b: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs (i, j) of segments a-b (e, 2) of one pixel group (e,) (ascending) whose boxes
+    meet (the others lie apart), each once: swept along x, pixel by pixel."""
     lo, hi = np.minimum(a, b), np.maximum(a, b)
-    order = np.argsort(lo[:, 0], kind="stable")
-    end = np.searchsorted(lo[order, 0], hi[order, 0], side="right")
-    many = np.maximum(end - np.arange(len(a)) - 1, 0)
-    k = np.repeat(np.arange(len(a)), many)
-    i = order[k]
-    j = order[k + 1 + np.arange(len(k)) - np.repeat(np.cumsum(many) - many, many)]
-    keep = (lo[i, 1] <= hi[j, 1]) & (lo[j, 1] <= hi[i, 1])
-    return i[keep], j[keep]
+    order = np.lexsort((lo[:, 0], group))
+    x, right, y0, y1 = lo[order, 0], hi[order, 0], lo[order, 1], hi[order, 1]
+    # where each box's right end falls among its pixel's left ends after it (after the equal
+    # ones): a binary search of them all at once
+    g = group[order]
+    end, top = np.arange(1, len(a) + 1), np.searchsorted(g, g, side="right")
+    on = np.flatnonzero(end < top)
+    while len(on):
+        mid = (end[on] + top[on]) // 2
+        left = x[mid] <= right[on]
+        end[on] = np.where(left, mid + 1, end[on])
+        top[on] = np.where(left, top[on], mid)
+        on = on[end[on] < top[on]]
+    many = end - np.arange(1, len(a) + 1)
+    m = np.arange(int(many.sum())) + np.repeat(np.arange(1, len(a) + 1) - np.cumsum(many) + many,
+                                               many)
+    keep = np.flatnonzero((np.repeat(y0, many) <= y1[m]) & (y0[m] <= np.repeat(y1, many)))
+    return order[np.searchsorted(np.cumsum(many), keep, side="right")], order[m[keep]]
 
 
 def _right_cover(sa: np.ndarray, sb: np.ndarray, parent: np.ndarray, a: np.ndarray,
-                 b: np.ndarray, count: np.ndarray) -> np.ndarray | None:
+                 b: np.ndarray, count: np.ndarray, group: np.ndarray, doubt: np.ndarray
+                 ) -> np.ndarray:
     """(s,) how many shadows cover the right side of each piece sa-sb (s, 2) of edge parent
-    (s,) of the outline a-b (e, 2) with counts (e,): the crossings of a ray in +x from a
-    point just right of its midpoint (the ray meets an edge that runs up where the point is
-    left of it, +count, one that runs down where it is right of it, -count; the piece's own
-    edge where it runs down); None where a crossing is in doubt or a piece is level."""
+    (s,) of the outline a-b (e, 2) with counts (e,), pixels group (e,) (ascending): the
+    crossings of a ray in +x from a point just right of its midpoint (the ray meets an edge of
+    its pixel that runs up where the point is left of it, +count, one that runs down where it
+    is right of it, -count; the piece's own edge where it runs down); doubt (pixels,) set
+    where a crossing is in doubt or a piece is level."""
     mid = (sa + sb) / 2
-    ay, by = a[None, :, 1], b[None, :, 1]
-    y = mid[:, None, 1]
-    up = (ay <= y) & (by > y)
-    down = (by <= y) & (ay > y)
-    r, f = np.nonzero((up | down) & (parent[:, None] != np.arange(len(a))[None]))
-    side, sure = _cross(b[f] - a[f], mid[r] - a[f])
-    if not sure.all():
-        return None
+    mx, my = mid[:, 0].copy(), mid[:, 1].copy()
+    ax, ay, bx, by = a[:, 0].copy(), a[:, 1].copy(), b[:, 0].copy(), b[:, 1].copy()
+    r, f = _level(my, group[parent], np.minimum(ay, by), np.maximum(ay, by), group)
+    fy, gy, y = ay[f], by[f], my[r]
+    up = (fy <= y) & (gy > y)
+    down = (gy <= y) & (fy > y)
+    keep = np.flatnonzero((up | down) & (parent[r] != f))
+    r, f, runs_up = r[keep], f[keep], up[keep]
+    x, y = ax[f], ay[f]
+    side, sure = _turn((bx - ax)[f], (by - ay)[f], mx[r] - x, my[r] - y)
+    doubt[group[f[~sure]]] = True
     rise = sb[:, 1] - sa[:, 1]
-    if not (np.abs(rise) > DOUBT * np.abs(sb - sa).sum(axis=1)).all():
-        return None
-    runs_up = up[r, f]
+    doubt[group[parent[~(np.abs(rise) > DOUBT * np.abs(sb - sa).sum(axis=1))]]] = True
     weight = np.where(runs_up & (side > 0), 1, 0) - np.where(~runs_up & (side < 0), 1, 0)
     wind = np.bincount(r, weight * count[f], len(sa))
     return wind - np.where(rise < 0, count[parent], 0)
+
+
+def _level(y: np.ndarray, at: np.ndarray, low: np.ndarray, high: np.ndarray,
+           group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs (r, f) of heights y (m,) of pixels at (m,) and segments of the same pixel
+    with heights low-high (e,) of pixels group (e,) (ascending), among them every pair with
+    low <= y < high: each pixel's heights cut into BUCKETS buckets an edge, a segment in
+    every bucket it meets (the bucket of a height is monotone in it: none is missed)."""
+    n = int(max(group.max(initial=-1), at.max(initial=-1))) + 1
+    bottom, top = np.full(n, np.inf), np.full(n, -np.inf)
+    np.minimum.at(bottom, group, low)
+    np.maximum.at(top, group, high)
+    many = np.maximum(np.ceil(np.bincount(group, minlength=n) * BUCKETS), 1).astype(np.int64)
+    scale = np.where(top > bottom, many / np.where(top > bottom, top - bottom, 1), 0)
+    first = np.cumsum(many) - many
+
+    def bucket(h, g):
+        return first[g] + np.clip(np.floor((h - bottom[g]) * scale[g]), 0, many[g] - 1
+                                  ).astype(np.int64)
+    b0, b1 = bucket(low, group), bucket(high, group)
+    span = b1 - b0 + 1
+    edge = np.repeat(np.arange(len(low)), span)
+    key = np.repeat(b0 - np.cumsum(span) + span, span) + np.arange(len(edge))
+    order = np.argsort(key)                              # the pairs in any order
+    key, edge = key[order], edge[order]
+    q = bucket(y, at)
+    lo, hi = np.searchsorted(key, q), np.searchsorted(key, q, side="right")
+    r = np.repeat(np.arange(len(y)), hi - lo)
+    f = edge[np.repeat(lo - np.cumsum(hi - lo) + hi - lo, hi - lo) + np.arange(len(r))]
+    return r, f
 
 
 def measures(light, cut: np.ndarray, count: np.ndarray, chains, p: np.ndarray,
@@ -236,9 +368,14 @@ def split(light, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.nd
     if len(mine) == 0:
         return chains, heavy
     loose, free = pyramid.uncut(light, corners, p, pix[mine], tri[mine])
-    starts = np.flatnonzero(np.r_[True, pix[mine][1:] != pix[mine][:-1]])
-    for s, e in zip(starts, np.r_[starts[1:], len(mine)]):
-        chains[pix[mine[s]]] = boundary(loose[s:e], free[s:e], welded[tri[mine[s:e]]])
+    new = np.r_[True, pix[mine][1:] != pix[mine][:-1]]
+    owner, starts = np.cumsum(new) - 1, np.flatnonzero(new)
+    # the pixels in batches of about BATCH shadows (a batch's arrays stay in the caches)
+    batch = np.flatnonzero(np.r_[True, np.diff(starts // BATCH) != 0])
+    for p0, p1 in zip(batch.tolist(), np.r_[batch[1:], len(starts)].tolist()):
+        rows = slice(starts[p0], starts[p1] if p1 < len(starts) else len(mine))
+        chains[pix[mine[starts[p0:p1]]]] = boundaries(
+            loose[rows], free[rows], welded[tri[mine[rows]]], owner[rows] - p0, p1 - p0)
     done = found(chains)
     return chains, heavy[~done[pix[heavy]]]
 

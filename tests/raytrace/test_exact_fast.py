@@ -104,15 +104,15 @@ def test_fast_paths_equal_the_triangle_by_triangle_union(seed, monkeypatch):
     v = slow.visibility[0]
     assert ((v > 0) & (v < 1)).sum() > 40 and (v == 0).sum() > 5
     got = []
-    wound = _counted(monkeypatch, raytrace.windings, "boundary")
+    wound = _counted(monkeypatch, raytrace.windings, "boundaries")
     for many in (raytrace.exact_soft.MANY_PIECES, 4):
         # crowded from 4 pieces: the outline on most shadowed pixels
         monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", many)
         got.append(exact_visibility(scene))
     # its windings on a rect or disk light (a polygon light's outline is not convex)
-    assert sum(c is not None for c in wound) >= (10 if seed % 3 != 2 else 0)
+    assert sum(c is not None for got in wound for c in got) >= (10 if seed % 3 != 2 else 0)
     # the outline's union by GEOS (`raytrace.arrange`), the windings off
-    monkeypatch.setattr(raytrace.windings, "boundary", lambda *args: None)
+    monkeypatch.setattr(raytrace.windings, "boundaries", lambda *args: np.full(args[-1], None))
     arranged = _counted(monkeypatch, raytrace.arrange, "union")
     for many in (raytrace.exact_soft.MANY_PIECES, 4):
         monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", many)
@@ -121,3 +121,20 @@ def test_fast_paths_equal_the_triangle_by_triangle_union(seed, monkeypatch):
     for fast in got:
         assert np.abs(fast.visibility - slow.visibility).max() <= ROUNDING
         assert np.abs(fast.irradiance - slow.irradiance).max() <= ROUNDING
+
+
+@pytest.mark.parametrize("batch", [1, 700])
+def test_split_in_batches_of_any_size(batch, monkeypatch):
+    """`windings.split` hands its pixels to `windings.boundaries` about BATCH shadows at a
+    time (whole pixels): one pixel a batch, or a few, give the same bytes as the default."""
+    scene = _random_scene(0)
+    monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", 4)
+    wound = _counted(monkeypatch, raytrace.windings, "boundaries")
+    want = exact_visibility(scene)
+    settled = sum(c is not None for got in wound for c in got)
+    assert len(wound) == 1 and settled >= 10
+    monkeypatch.setattr(raytrace.windings, "BATCH", batch)
+    got = exact_visibility(scene)
+    assert len(wound) > 2 and sum(c is not None for got in wound[1:] for c in got) == settled
+    assert got.visibility.tobytes() == want.visibility.tobytes()
+    assert got.irradiance.tobytes() == want.irradiance.tobytes()
