@@ -131,10 +131,12 @@ def test_split_in_batches_of_any_size(batch, monkeypatch):
     monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", 4)
     wound = _counted(monkeypatch, raytrace.windings, "boundaries")
     want = exact_visibility(scene)
+    calls = len(wound)                  # one a tile (`exact_soft`: a tile a thread at least)
     settled = sum(c is not None for got in wound for c in got)
-    assert len(wound) == 1 and settled >= 10
+    assert settled >= 10
     monkeypatch.setattr(raytrace.windings, "BATCH", batch)
     got = exact_visibility(scene)
-    assert len(wound) > 2 and sum(c is not None for got in wound[1:] for c in got) == settled
+    assert len(wound) - calls > calls
+    assert sum(c is not None for got in wound[calls:] for c in got) == settled
     assert got.visibility.tobytes() == want.visibility.tobytes()
     assert got.irradiance.tobytes() == want.irradiance.tobytes()
