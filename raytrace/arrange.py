@@ -7,9 +7,10 @@ an edge (the same two welded corners) and lie on its two sides (each ring turned
 clockwise, they run it in opposite directions), every point near that edge's inside is
 covered: the edge is not on the union's boundary.  What is left (the other edges of those
 shadows, and every edge of a cut shadow) holds the whole boundary of the union: GEOS nodes
-it in float64 (its robust overlay: floating noding, checked fully noded, snap-rounding only
-where that fails; the union is snapped to the light's grid, `lightshapes.OVERLAY_GRID`, where
-it is next united or taken away, as every other boolean here), and polygonizes it into faces that the boundary does not cross, so each face is
+it in float64 (floating noding; where its result is not simple, two segments crossing a
+rounding apart, the snap-rounding noder on the light's grid, `lightshapes.OVERLAY_GRID`, to
+which the union is snapped anyway where it is next united or taken away, as every other
+boolean here), and polygonizes it into faces that the boundary does not cross, so each face is
 wholly inside the union or wholly outside: the faces whose interior point meets a piece of
 some area (closed: a point on an edge left out is inside both of its shadows) are the union,
 which GEOS's coverage union joins.  The same region as the pieces' union (up to the roundings

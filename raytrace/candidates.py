@@ -31,12 +31,13 @@ def pairs(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarr
           clear: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(pixel, triangle) pairs (q,) int64 each: the triangles of the clusters that `meet`
     (n, C) says meet p's pyramid box [lo, hi] (n, 3) (`meets`), whose own boxes meet it
-    too, less p's own triangle, those coplanar with it, a convex object's from its own outside, and the
-    triangles of a closed non-convex object that do not turn their back to p where the light
-    is outside that object (`clear` (n_objects,) bool): a segment from p to a point of the
-    light outside a closed surface that meets it leaves it last through a face turned away
-    from p, so those faces' shadows alone make the object's (up to segments grazing an edge:
-    no area)."""
+    too, less p's own triangle, those coplanar with it, a convex object's from its own
+    outside, and the triangles of a closed non-convex object that do not turn their back to p
+    where the light is outside that object (`clear` (n_objects,) bool): a segment from p to a
+    point of the light outside a closed surface that meets it leaves it last through a face
+    turned away from p, so those faces' shadows alone make the object's (up to segments
+    grazing an edge: no area).  In numba where it loads (`exactkernels.pairs`), else `_keep`
+    after the box pairs."""
     kernels = _kernels()
     if kernels is not None:
         outside = dot(objects.outward[own], normal) > 0

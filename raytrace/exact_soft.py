@@ -15,8 +15,8 @@ exact visibility") says what is exact at a contact and at a tie.
 
 Candidates come from a conservative query, never from sampled rays (`raytrace.candidates`):
 clusters of triangles whose bounding spheres are inside every plane of the pyramid and whose
-boxes meet its box, then triangles whose boxes do, then the cut itself.  A closed, convex, consistently wound object (a
-box, a sphere's tessellation) shadows p from outside as one convex polygon (the shadow of a
+boxes meet its box, then triangles whose boxes do, then the cut itself.  A closed, convex,
+consistently wound object (a box, a sphere's tessellation) shadows p from outside as one convex polygon (the shadow of a
 convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
 where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
 not at all from its own outside.  Every other object's triangles are united, a pixel's union of
