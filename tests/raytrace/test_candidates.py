@@ -38,11 +38,11 @@ def _setup(seed: int):
     ids = rng.integers(0, 3, m)
     # a closed, not convex, object too: a noisy ball between the points and the light
     ico = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
-    v = ico.vertices * (1 + 0.15 * rng.standard_normal((len(ico.vertices), 1))) + [0, 1, 0]
+    ball = ico.vertices * (1 + 0.15 * rng.standard_normal((len(ico.vertices), 1))) + [0, 1, 0]
     # and a convex one, some points on its faces (their own object, seen from outside)
-    hull = trimesh.creation.icosphere(subdivisions=1, radius=0.3)
-    shell = hull.vertices[hull.faces] + [0.6, 0.0, 0.6]
-    corners = np.concatenate([corners, v[ico.faces], shell])
+    body = trimesh.creation.icosphere(subdivisions=1, radius=0.3)
+    shell = body.vertices[body.faces] + [0.6, 0.0, 0.6]
+    corners = np.concatenate([corners, ball[ico.faces], shell])
     ids = np.r_[ids, np.full(len(ico.faces), 3), np.full(len(shell), 4)]
     own = rng.integers(0, len(corners), n)
     on = rng.choice(n, n // 3, replace=False)
