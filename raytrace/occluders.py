@@ -129,18 +129,18 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         owner.append(np.full(len(members[-1]), j))
     members = np.concatenate(members) if members else np.zeros((0, CLUSTER), np.int64)
     owner = np.concatenate(owner) if owner else np.zeros(0, np.int64)
-    box = corners[np.maximum(members, 0)]                      # (C, CLUSTER, 3, 3)
-    use = (members >= 0)[..., None, None]
-    lo = np.where(use, box, np.inf).min(axis=(1, 2))
-    hi = np.where(use, box, -np.inf).max(axis=(1, 2))
-    centre = (lo + hi) / 2
-    # the half diagonal, a little more for its own rounding: the sphere must hold the box
-    radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
     tri_lo, tri_hi = corners.min(axis=1), corners.max(axis=1)
     scale = np.abs(corners).max(axis=(1, 2))
     at = np.maximum(members, 0)
     packed = np.concatenate([tri_lo, tri_hi, normals, shell, corners[:, 0], scale[:, None]],
                             axis=1)[at] if M else np.zeros(members.shape + (16,))
+    # a cluster's box: its members' boxes' (the same minima and maxima as their corners')
+    use = (members >= 0)[..., None]
+    lo = np.where(use, packed[..., :3], np.inf).min(axis=1)
+    hi = np.where(use, packed[..., 3:6], -np.inf).max(axis=1)
+    centre = (lo + hi) / 2
+    # the half diagonal, a little more for its own rounding: the sphere must hold the box
+    radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
     kinds = ids.astype(np.int64) * 4 + convex + 2 * ((shell != 0).any(axis=1) & ~convex)
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, tri_lo, tri_hi, normals,
@@ -163,6 +163,8 @@ def _topology(corners: np.ndarray, welded: np.ndarray):
     """For triangles (F, 3, 3) with welded corners (F, 3) (`objects`) that make a closed,
     consistently wound surface (every edge met exactly once each way): (points (V, 3), edges
     (E, 2) corner indices, sides (E, 2) the two faces of each); None for any other."""
+    if not _closed(welded):
+        return None
     _, first, vid = np.unique(welded.reshape(-1), return_index=True, return_inverse=True)
     points = corners.reshape(-1, 3)[first]
     vid = vid.reshape(-1, 3)
@@ -183,3 +185,22 @@ def _topology(corners: np.ndarray, welded: np.ndarray):
     once = a < b
     return (points, np.stack([a[once], b[once]], axis=1),
             np.stack([face[once], twin[once]], axis=1))
+
+
+def _closed(welded: np.ndarray) -> bool:
+    """Whether triangles of welded corners (F, 3) could make a closed, consistently wound
+    surface (`_topology`'s test, on the welded ids themselves: no edge from a corner to
+    itself, each directed edge once and its reverse there too); a sort and a search, no
+    renumbering, so an open mesh (most scanned ones) costs less than half of `_topology`."""
+    V = int(welded.max(initial=-1)) + 1
+    a = welded.reshape(-1)
+    b = welded[:, [1, 2, 0]].reshape(-1)
+    if (a == b).any():
+        return False
+    key = np.sort(a * V + b)
+    if (np.diff(key) == 0).any():
+        return False
+    twin = b * V + a
+    at = np.searchsorted(key, twin)
+    return bool(len(key)) and not (at >= len(key)).any() and \
+        (key[np.minimum(at, len(key) - 1)] == twin).all()
