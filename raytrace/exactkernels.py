@@ -4,7 +4,9 @@ moving those arrays through memory:
 
 * `meets`: the clusters whose boxes meet a pixel's pyramid box and whose spheres no plane of
   the pyramid leaves wholly outside (`candidates.meets`);
-* `pairs`: their triangles whose boxes meet it too, less the pixel's own (`candidates.pairs`);
+* `pairs`: their triangles whose boxes meet it too, less those `candidates._keep` leaves
+  out (the pixel's own, the coplanar, a convex object's own from outside, a closed one's
+  faces toward p) (`candidates.pairs`);
 * `cut`: each (pixel, triangle) pair decided and, where it crosses a plane, clipped in one
   pass over its corners (`pyramid.cut`); `uncut`, the whole shadows (`pyramid.uncut`);
 * `inside`: convex polygons in the light's plane clipped by another's edges, one polygon
