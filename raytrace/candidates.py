@@ -9,13 +9,12 @@ same pairs in the same order), else in numpy.
 
 from __future__ import annotations
 
-import importlib
-
 import numpy as np
 
 from .lightshapes import FramedLight
 from .occluders import CLUSTER, Objects
-from .polygons import dot
+from .polygons import dot, kernels
+from .pyramid import sides as side_normals
 
 # A triangle is coplanar with p's own when its three corners lie within this much of the
 # largest corner coordinate (the frame's, from the eye) of the own triangle's plane: the
@@ -38,10 +37,10 @@ def pairs(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarr
     turned away from p, so those faces' shadows alone make the object's (up to segments
     grazing an edge: no area).  In numba where it loads (`exactkernels.pairs`), else `_keep`
     after the box pairs."""
-    kernels = _kernels()
-    if kernels is not None:
+    loaded = kernels()
+    if loaded is not None:
         outside = dot(objects.outward[own], normal) > 0
-        return kernels.pairs(meet, objects.members, objects.packed, objects.kinds, lo, hi, own,
+        return loaded.pairs(meet, objects.members, objects.packed, objects.kinds, lo, hi, own,
                              objects.normal, objects.offset, objects.scale, objects.object,
                              outside, np.zeros(0, bool) if clear is None else clear, corners,
                              p, COPLANAR_RELATIVE)
@@ -86,14 +85,10 @@ def meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.ndarray,
     (a sphere beyond a face of a convex body cannot meet it)."""
     height = (objects.centre - light.center) @ light.normal              # (C,)
     top = (p - light.center) @ light.normal                               # (n,)
-    sides = []
-    for j in range(len(base)):
-        m = np.cross(base[j] - p, base[(j + 1) % len(base)] - p)      # (n, 3)
-        m *= np.sign(((light.center - p) * m).sum(axis=1))[:, None]
-        sides.append(m / np.linalg.norm(m, axis=1, keepdims=True))
-    kernels = _kernels()
-    if kernels is not None:
-        return kernels.meets(lo, hi, objects.lo, objects.hi, objects.centre, objects.radius,
+    sides = [m / np.linalg.norm(m, axis=1, keepdims=True) for m in side_normals(light, p, base)]
+    loaded = kernels()
+    if loaded is not None:
+        return loaded.meets(lo, hi, objects.lo, objects.hi, objects.centre, objects.radius,
                              height, top, np.stack(sides), p)
     ok = np.ones((len(p), len(objects.lo)), bool)      # (n, C): axis by axis, no (n, C, 3)
     for a in range(3):
@@ -121,11 +116,3 @@ def _box_pairs(objects: Objects, own: np.ndarray, meet: np.ndarray, lo: np.ndarr
         keep &= objects.tri_hi[tri, a] >= lo[pix, a]
     keep &= tri != own[pix]
     return pix[keep], tri[keep]
-
-
-def _kernels():
-    """`raytrace.exactkernels`, or None where numba is missing."""
-    try:
-        return importlib.import_module(f"{__package__}.exactkernels")
-    except ImportError:
-        return None

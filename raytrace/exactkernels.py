@@ -120,11 +120,12 @@ def uncut(corners, tri, pix, p, top, center, normal, axes, reach):
     free = np.zeros(q, np.bool_)
     ray = np.empty(3)
     for r in range(q):
-        c, e = corners[tri[r]], pix[r]
+        t, e = tri[r], pix[r]
         ok = True
         for k in range(3):
-            h = ((c[k, 0] - center[0]) * normal[0] + (c[k, 1] - center[1]) * normal[1]
-                 + (c[k, 2] - center[2]) * normal[2])
+            h = ((corners[t, k, 0] - center[0]) * normal[0]
+                 + (corners[t, k, 1] - center[1]) * normal[1]
+                 + (corners[t, k, 2] - center[2]) * normal[2])
             ok &= (h >= 0) & (h < top[e])
         if not ok:
             continue
@@ -132,12 +133,11 @@ def uncut(corners, tri, pix, p, top, center, normal, axes, reach):
         height = rel0 * normal[0] + rel1 * normal[1] + rel2 * normal[2]
         for k in range(3):
             for a in range(3):
-                ray[a] = c[k, a] - p[e, a]
+                ray[a] = corners[t, k, a] - p[e, a]
             scale = height / -(ray[0] * normal[0] + ray[1] * normal[1] + ray[2] * normal[2])
             for a in range(2):
-                x = axes[a]
-                at = (rel0 * x[0] + rel1 * x[1] + rel2 * x[2]) + scale * (
-                    ray[0] * x[0] + ray[1] * x[1] + ray[2] * x[2])
+                at = (rel0 * axes[a, 0] + rel1 * axes[a, 1] + rel2 * axes[a, 2]) + scale * (
+                    ray[0] * axes[a, 0] + ray[1] * axes[a, 1] + ray[2] * axes[a, 2])
                 flat[r, k, a] = at
                 ok &= abs(at) <= reach
         free[r] = ok
@@ -163,9 +163,9 @@ def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p):
             for j in range(s):
                 if not ok:
                     break
-                m = sides[j, i]
-                at = m[0] * centre[c, 0] + m[1] * centre[c, 1] + m[2] * centre[c, 2]
-                ok = at - (m[0] * p[i, 0] + m[1] * p[i, 1] + m[2] * p[i, 2]) >= -radius[c]
+                m0, m1, m2 = sides[j, i, 0], sides[j, i, 1], sides[j, i, 2]
+                at = m0 * centre[c, 0] + m1 * centre[c, 1] + m2 * centre[c, 2]
+                ok = at - (m0 * p[i, 0] + m1 * p[i, 1] + m2 * p[i, 2]) >= -radius[c]
             out[i, c] = ok
     return out
 

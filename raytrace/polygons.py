@@ -17,6 +17,8 @@ its holes, and an edge shared by two rings with opposite orientations cancels.
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 
 
@@ -61,6 +63,15 @@ def project(points: np.ndarray, eye: np.ndarray, center: np.ndarray, normal: np.
         scale = height[:, None] / -dot(ray, normal)       # (n, k)
         return np.stack([dot(rel, axis)[:, None] + scale * dot(ray, axis) for axis in axes],
                         axis=-1)
+
+
+def kernels():
+    """`raytrace.exactkernels` (the exact visibility's numba loops, the `fast` extra), or None
+    where numba is missing (or a test has set its sys.modules entry to None)."""
+    try:
+        return importlib.import_module(f"{__package__}.exactkernels")
+    except ImportError:
+        return None
 
 
 def dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:

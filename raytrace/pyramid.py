@@ -11,8 +11,6 @@ light's plane and the point's, for the outline unions of `raytrace.arrange`.
 
 from __future__ import annotations
 
-import importlib
-
 import numpy as np
 
 from . import polygons
@@ -28,9 +26,9 @@ def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
     triangle lies wholly inside (its three corners).  In numba where it loads
     (`raytrace.exactkernels`: the same bytes), else in numpy."""
     m = sides(light, p, base)
-    kernels = _kernels()
-    if kernels is not None:
-        pieces, count, whole, keep = kernels.cut(corners, tri, pix, p, light.center,
+    loaded = polygons.kernels()
+    if loaded is not None:
+        pieces, count, whole, keep = loaded.cut(corners, tri, pix, p, light.center,
                                                  light.normal,
                                                  np.stack(m) if m else np.zeros((0,) + p.shape))
     else:
@@ -67,14 +65,6 @@ def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray
     count[crossing] = n
     pieces[np.arange(width)[None] >= count[:, None]] = 0.0
     return pieces, count, whole
-
-
-def _kernels():
-    """`raytrace.exactkernels`, or None where numba is missing."""
-    try:
-        return importlib.import_module(f"{__package__}.exactkernels")
-    except ImportError:
-        return None
 
 
 def carry(light: FramedLight, p: np.ndarray, pieces: np.ndarray, pix: np.ndarray,
@@ -137,9 +127,9 @@ def uncut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarra
     cut to the light's convex outline) and within UNCUT_REACH of the light."""
     top = polygons.dot(p - light.center, light.normal)
     reach = UNCUT_REACH * np.abs(light.hull).max()
-    kernels = _kernels()
-    if kernels is not None:
-        return kernels.uncut(corners, tri, pix, p, top, light.center, light.normal,
+    loaded = polygons.kernels()
+    if loaded is not None:
+        return loaded.uncut(corners, tri, pix, p, top, light.center, light.normal,
                              light.axes, reach)
     poly = corners[tri]
     height = polygons.dot(poly - light.center, light.normal)                      # (q, 3)

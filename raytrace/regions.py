@@ -37,12 +37,9 @@ def inside(cut: np.ndarray, count: np.ndarray, inner: np.ndarray, inner_count: n
     """Convex polygons inner (n, m, 2), inner_count (n,) clipped by each edge of the convex
     counter-clockwise polygons cut (n, k, 2), count (n,): (corners, counts).  In numba where
     it loads (`raytrace.exactkernels.inside`: the same corners, zero past each count)."""
-    try:
-        from .exactkernels import inside as kernel
-    except ImportError:
-        kernel = None
-    if kernel is not None:
-        inner, inner_count = kernel(cut, count, inner, inner_count)
+    loaded = polygons.kernels()
+    if loaded is not None:
+        inner, inner_count = loaded.inside(cut, count, inner, inner_count)
         return inner[:, :max(int(inner_count.max(initial=0)), 1)], inner_count
     for e in range(cut.shape[1]):
         start = cut[:, e]
