@@ -295,15 +295,22 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     clear = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
     np.minimum.at(clear, objects.object, height)
     pix, tri = candidates.pairs(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
-    pieces, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base)
-    # carried onto the light's plane only where used (not for pixels the windings settle)
-    flat = np.zeros(pieces.shape[:2] + (2,))
+    m = pyramid.sides(light, p, base)
+    _, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base, m, store=False)
+    width = max(3, int(count.max(initial=3)))
+
+    def carry(rows):
+        pieces = pyramid.pieces(light, corners, p, pix[rows], tri[rows], m, width)
+        return pyramid.carry(light, p, pieces, pix[rows], whole[rows])
+    # cut out and carried onto the light's plane only where used (not for pixels the
+    # windings settle)
+    flat = np.zeros((len(pix), width, 2))
     # a convex object seen from outside: one hull per (pixel, object)
     obj = objects.object[tri]
     hullable = objects.convex[tri] & _outside(objects, corners, p, pix, tri)
     if hullable.any():
         h = np.flatnonzero(hullable)
-        flat[h] = pyramid.carry(light, p, pieces, pix, whole, h)
+        flat[h] = carry(h)
         key = pix[h] * (objects.object.max() + 1) + obj[h]
         group, which = np.unique(key, return_inverse=True)
         mask = np.arange(flat.shape[1])[None] < count[h, None]
@@ -323,7 +330,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
                                        alone)
         rest = rest[~windings.found(chains)[pix[rest]]]
     used = np.union1d(heavy, rest)
-    flat[used] = pyramid.carry(light, p, pieces, pix, whole, used)
+    flat[used] = carry(used)
     if len(heavy):
         # many pieces: their union from its outline (`raytrace.arrange`)
         rest = rest[~crowd[pix[rest]]]

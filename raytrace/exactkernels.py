@@ -47,15 +47,15 @@ def _clip_plane(src, n, dist, dst):
 
 
 @_jit()
-def cut(corners, tri, pix, p, center, normal, sides):
+def cut(corners, tri, pix, p, center, normal, sides, store):
     """Triangles corners[tri] (q,) against the pyramid from p[pix] (the light's plane through
     `center` with `normal`, then the side planes' inward normals sides (s, n, 3)), the pairs
-    with something left, in order: (pieces (q', 4 + s, 3) zero past each count, count (q',),
-    whole (q',), their rows among the pairs (q',)); whole where all three corners are inside
-    every plane (the piece is the triangle)."""
+    with something left, in order: (pieces (q', 4 + s, 3) zero past each count (with `store`;
+    else (0, 4 + s, 3)), count (q',), whole (q',), their rows among the pairs (q',)); whole
+    where all three corners are inside every plane (the piece is the triangle)."""
     q, s = tri.shape[0], sides.shape[0]
     width = 4 + s
-    pieces = np.empty((q, width, 3))
+    pieces = np.empty((q if store else 0, width, 3))
     count = np.empty(q, np.int64)
     whole = np.empty(q, np.bool_)
     rows = np.empty(q, np.int64)
@@ -86,9 +86,10 @@ def cut(corners, tri, pix, p, center, normal, sides):
             inside &= within
         if out:
             continue
-        for k in range(3):
-            for x in range(3):
-                a[k, x] = corners[t, k, x]
+        if store or not inside:
+            for k in range(3):
+                for x in range(3):
+                    a[k, x] = corners[t, k, x]
         n = 3
         if not inside:
             # crossing: clipped plane by plane, the distances taken afresh from each clip
@@ -103,12 +104,13 @@ def cut(corners, tri, pix, p, center, normal, sides):
                 a, b = b, a
             if n < 3:
                 continue
-        for k in range(width):
-            for x in range(3):
-                pieces[kept, k, x] = a[k, x] if k < n else 0.0
+        if store:
+            for k in range(width):
+                for x in range(3):
+                    pieces[kept, k, x] = a[k, x] if k < n else 0.0
         count[kept], whole[kept], rows[kept] = n, inside, r
         kept += 1
-    return pieces[:kept], count[:kept], whole[:kept], rows[:kept]
+    return pieces[:kept if store else 0], count[:kept], whole[:kept], rows[:kept]
 
 
 @_jit()

@@ -18,25 +18,40 @@ from .lightshapes import FramedLight
 
 
 def cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
-        tri: np.ndarray, base: np.ndarray):
+        tri: np.ndarray, base: np.ndarray, m: list | None = None, store: bool = True):
     """Triangles tri (q,) cut to the pyramid from p[pix] over `base` (k, 3) (the light's
-    plane, then each side plane through p), not yet carried onto the light's plane (`carry`
-    does that for the rows wanted): (pieces (q', k', 3), count (q',), pix, tri, whole (q',))
-    of those with something left, in the order given, zero past each count; whole where the
-    triangle lies wholly inside (its three corners).  In numba where it loads
-    (`raytrace.exactkernels`: the same bytes), else in numpy."""
-    m = sides(light, p, base)
+    plane, then each side plane through p; m: `sides`, computed where not given), not yet
+    carried onto the light's plane (`carry` does that for the rows wanted): (pieces (q', k',
+    3), count (q',), pix, tri, whole (q',)) of those with something left, in the order given,
+    zero past each count; whole where the triangle lies wholly inside (its three corners).
+    Without `store`, pieces is None: which pairs keep something, and how much, without the
+    pieces' memory (`pieces` makes the rows wanted later, the same floats).  In numba where
+    it loads (`raytrace.exactkernels`: the same bytes), else in numpy."""
+    m = sides(light, p, base) if m is None else m
     loaded = polygons.kernels()
     if loaded is not None:
         pieces, count, whole, keep = loaded.cut(corners, tri, pix, p, light.center,
                                                  light.normal,
-                                                 np.stack(m) if m else np.zeros((0,) + p.shape))
+                                                 np.stack(m) if m else np.zeros((0,) + p.shape),
+                                                 store)
     else:
         pieces, count, whole = _cut(light, corners, p, pix, tri, m)
         keep = np.flatnonzero(count >= 3)
         pieces, count, whole = pieces[keep], count[keep], whole[keep]
+    if not store:
+        return None, count, pix[keep], tri[keep], whole
     width = max(3, int(count.max(initial=3)))
     return np.ascontiguousarray(pieces[:, :width]), count, pix[keep], tri[keep], whole
+
+
+def pieces(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
+           tri: np.ndarray, m: list, width: int) -> np.ndarray:
+    """(q, width, 3): `cut`'s pieces of the pairs pix, tri (q,), every one of which keeps
+    something (`cut(store=False)` said so), zero past each count."""
+    got = cut(light, corners, p, pix, tri, None, m)[0]
+    out = np.zeros((len(tri), width, 3))
+    out[:, :got.shape[1]] = got
+    return out
 
 
 def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,
@@ -68,14 +83,12 @@ def _cut(light: FramedLight, corners: np.ndarray, p: np.ndarray, pix: np.ndarray
 
 
 def carry(light: FramedLight, p: np.ndarray, pieces: np.ndarray, pix: np.ndarray,
-          whole: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """(q, k, 2): the rows `rows` of `cut`'s pieces carried onto the light's plane, as one
-    carrying of every piece would give them (row by row the same floats); a whole
-    triangle's slots past its three corners are zero."""
-    rows = np.asarray(rows, np.int64)
-    flat = polygons.project(pieces[rows], p[pix[rows]], light.center, light.normal,
-                            light.axes)
-    flat[whole[rows], 3:] = 0.0
+          whole: np.ndarray) -> np.ndarray:
+    """(q, k, 2): `cut`'s pieces (q, k, 3) of the pairs seen from p[pix] (q,) carried onto the
+    light's plane, as one carrying of every piece would give them (row by row the same
+    floats); a whole triangle's slots past its three corners are zero."""
+    flat = polygons.project(pieces, p[pix], light.center, light.normal, light.axes)
+    flat[whole, 3:] = 0.0
     return flat
 
 

@@ -68,6 +68,28 @@ def test_the_kernel_cuts_numpys_bytes(seed, monkeypatch):
         assert got.tobytes() == want.tobytes()
 
 
+@pytest.mark.parametrize("kernel", [True, False])
+@pytest.mark.parametrize("seed", range(3))
+def test_a_cut_without_pieces_then_some_rows_pieces_is_the_whole_cut(seed, kernel, monkeypatch):
+    """`exact_soft` asks the cut which pairs keep something without storing their pieces
+    (`store=False`), then `pyramid.pieces` for the rows it carries: the same kept pairs, counts
+    and whole flags, and those rows' pieces the same bytes as the one cut's, at its width."""
+    light, base, corners, p, pix, tri = _pairs(seed)
+    if not kernel:
+        monkeypatch.setitem(sys.modules, "raytrace.exactkernels", None)
+    pieces, count, at_pix, at_tri, whole = pyramid.cut(light, corners, p, pix, tri, base)
+    m = pyramid.sides(light, p, base)
+    none, *kept = pyramid.cut(light, corners, p, pix, tri, base, m, store=False)
+    assert none is None
+    for got, want in zip(kept, (count, at_pix, at_tri, whole)):
+        assert got.dtype == want.dtype and got.tobytes() == want.tobytes()
+    rows = np.random.default_rng(seed).permutation(len(count))[:len(count) // 2]
+    rows = np.r_[rows, np.flatnonzero(count == count.max())[:1]]       # the widest too
+    some = pyramid.pieces(light, corners, p, at_pix[rows], at_tri[rows], m, pieces.shape[1])
+    assert some.shape == (len(rows),) + pieces.shape[1:]
+    assert some.tobytes() == pieces[rows].tobytes()
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_the_kernel_carries_numpys_whole_shadows(seed, monkeypatch):
     """`uncut`: the whole shadows, and which are free (between the two planes, in reach)."""
