@@ -21,8 +21,9 @@ convex body from a point outside it is convex): the polygon of its silhouette's 
 where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
 not at all from its own outside.  Every other object's triangles are united, a pixel's union of
 more than MANY_PIECES from its outline alone (`raytrace.arrange`), or, under a rect or disk
-light where those are all its shadows and all uncut, measured from the outline's winding
-numbers with no polygon boolean (`raytrace.windings`).  One
+light where those are all its shadows and all but a few (`windings.LOOSE`, at a contact) are
+free, measured from the outline's winding numbers with no polygon boolean, the few taken away
+by inclusion and exclusion (`raytrace.windings`).  One
 convex shadow on a rect or disk is taken away in numpy (clipped edge by edge); several are
 united, and taken away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
 (`lightshapes.OVERLAY_GRID`); the measures are `raytrace.polygons`'.
@@ -202,10 +203,10 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     p, normal, own = p[front], normal[front], own[front]
     base = light.center + light.hull @ light.axes                 # (k, 3)
     pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
-    chains = np.full(len(p), None, object)
+    chains, loose = np.full(len(p), None, object), np.full(len(p), None, object)
     at = np.arange(len(p)) if shadowed is None else np.flatnonzero(shadowed[front])
     if len(at) and len(objects.members):
-        pieces[at], single[at], chains[at] = _shadows(
+        pieces[at], single[at], chains[at], loose[at] = _shadows(
             shapely, light, objects, corners, p[at], normal[at], own[at], base,
             light.outline is None and regions is None)
     # the light cut to p's side: its hull's box cut by n . (x - p) > 0, then the outline
@@ -240,7 +241,7 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     if len(wound):
         for out, got in zip(measures, windings.measures(light, cut[wound], count[wound],
                                                         chains[wound], p[wound],
-                                                        normal[wound], direct)):
+                                                        normal[wound], direct, loose[wound])):
             out[wound] = got
     rest = np.setdiff1d(np.arange(len(p)), np.r_[plain, lone, wound])
     if len(rest):
@@ -280,11 +281,13 @@ def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
 
 def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
              normal: np.ndarray, own: np.ndarray, base: np.ndarray, outlines: bool = False
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(n,) object array: the union of every triangle's shadow on the light's plane seen from
     each p (None where none falls inside the pyramid over `base` (k, 3)); where that is
     one convex polygon (`_unite`); and, with `outlines`, the union's boundary from its
-    outline's windings (`raytrace.windings`) where that is certain (the union None there)."""
+    outline's windings (`raytrace.windings`) where that is certain (the union None there),
+    and the few shadows that outline leaves out (`windings.measures`' loose; None where
+    none)."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = candidates.meets(light, objects, p, base, lo, hi)
@@ -321,14 +324,23 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     arranged = np.zeros(0, np.int64)
     crowd = np.bincount(pix[rest], minlength=len(p)) > MANY_PIECES
     heavy = rest[crowd[pix[rest]]]
-    chains = np.full(len(p), None, object)
+    chains, loose = np.full(len(p), None, object), np.full(len(p), None, object)
     if len(heavy) and outlines:
         # a pixel whose every shadow is in the crowd: measured from its outline's windings
         alone = crowd.copy()
         alone[np.concatenate(owner + [np.zeros(0, np.int64)]).astype(np.int64)] = False
-        chains, heavy = windings.split(light, corners, p, pix, tri, heavy, objects.corner_ids,
+        chains, apart = windings.split(light, corners, p, pix, tri, heavy, objects.corner_ids,
                                        alone)
-        rest = rest[~windings.found(chains)[pix[rest]]]
+        # the few shadows it leaves out, cut, carried and turned counter-clockwise: a pixel
+        # with one whose corners do not certainly turn one way goes to the arrangement
+        flat[apart] = carry(apart)
+        turned, sure = windings.turned(flat[apart], count[apart])
+        chains[pix[apart[~sure]]] = None
+        keep = np.flatnonzero(windings.found(chains)[pix[apart]])
+        for k, group in zip(*_groups(pix[apart[keep]], keep)):
+            loose[k] = (turned[group], count[apart[group]])
+        done = windings.found(chains)
+        heavy, rest = heavy[~done[pix[heavy]]], rest[~done[pix[rest]]]
     used = np.union1d(heavy, rest)
     flat[used] = carry(used)
     if len(heavy):
@@ -343,7 +355,13 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         owner.append(pix[rest])
     union, single = _unite(shapely, shapes, owner, len(p), light.grid)
     single[arranged] = False       # an outline's union is not one convex polygon
-    return union, single, chains
+    return union, single, chains, loose
+
+
+def _groups(keys: np.ndarray, items: np.ndarray) -> tuple[list, list]:
+    """The distinct keys (ascending, as given) and the items (arrays) of each."""
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if len(keys) else keys
+    return keys[starts].tolist(), np.split(items, starts[1:])
 
 
 def _whole_bodies(shapely, light: FramedLight, objects: Objects, p: np.ndarray, normal: np.ndarray,
