@@ -49,7 +49,7 @@ from .backends import for_each_tile
 from .camera import RayGrid
 from .lightshapes import FramedLight, frame_light, shapely_module
 from .masks import MaskTracer, _primary_hits, scene_backend, shadow_masks
-from .occluders import CONVEX_RELATIVE, Objects
+from .occluders import CONVEX_RELATIVE, Objects, weld
 from .occluders import objects as _objects
 from .switches import casting, receiving_objects
 
@@ -125,7 +125,7 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     corners = tracer.vertices[tracer.faces].astype(np.float64)
     ids = scene.triangles()[2]
     # corners welded by their coordinates: the distinct vertices' indices
-    welded = np.unique(tracer.vertices, axis=0, return_inverse=True)[1].reshape(-1)[tracer.faces]
+    welded = weld(tracer.vertices)[tracer.faces]
     objects = _objects(corners, ids, casting(scene), welded) if any(lights) else None
     # per triangle: its object receives shadows (docs/CONVENTIONS.md, "Shadow switches")
     receives = receiving_objects(scene)[ids] if len(ids) else np.zeros(0, bool)

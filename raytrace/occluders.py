@@ -90,9 +90,7 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     clusters and bodies (the others are met by no query); welded (M, 3): each corner's index
     among the distinct corners (by their coordinates; default: welded here)."""
     M = len(corners)
-    if welded is None:
-        welded = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)[1]
-    welded = welded.reshape(-1, 3)
+    welded = (weld(corners.reshape(-1, 3)) if welded is None else welded).reshape(-1, 3)
     convex = np.zeros(M, bool)
     outward = np.zeros((M, 3))
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
@@ -146,6 +144,19 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
                    centre, radius, tri_lo, tri_hi, normals,
                    (normals * corners[:, 0]).sum(axis=1), scale, shell, welded, packed,
                    kinds[at] if M else np.zeros(members.shape, np.int64))
+
+
+def weld(points: np.ndarray) -> np.ndarray:
+    """(n,) int64: each of points (n, 3) numbered among the distinct ones, in their order by
+    x, then y, then z (np.unique(points, axis=0, return_inverse=True)'s numbers: equal as
+    floats, -0.0 with 0.0; by three stable sorts of the columns, twice as fast)."""
+    order = np.lexsort((points[:, 2], points[:, 1], points[:, 0]))
+    ranked = points[order]
+    new = np.r_[True, (ranked[1:] != ranked[:-1]).any(axis=1)] if len(points) else \
+        np.zeros(0, bool)
+    number = np.empty(len(points), np.int64)
+    number[order] = np.cumsum(new) - 1
+    return number
 
 
 def _morton(points: np.ndarray) -> np.ndarray:

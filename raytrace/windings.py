@@ -476,12 +476,13 @@ def split(light, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.nd
     owner = np.cumsum(new) - 1
     # a few shadows that are not free: left out of the outline, kept apart
     apart = ~free & (np.bincount(owner[~free], minlength=owner[-1] + 1) <= LOOSE)[owner]
-    kept = np.flatnonzero(~apart)
-    flat, free, rows = flat[kept], free[kept], mine[kept]
-    if len(rows) == 0:
-        return chains, np.zeros(0, np.int64)
-    new = np.r_[True, pix[rows][1:] != pix[rows][:-1]]
-    owner, starts = np.cumsum(new) - 1, np.flatnonzero(new)
+    rows = mine
+    if apart.any():
+        kept = np.flatnonzero(~apart)
+        flat, free, rows = flat[kept], free[kept], mine[kept]
+        new = np.r_[True, pix[rows][1:] != pix[rows][:-1]]
+        owner = np.cumsum(new) - 1
+    starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
     # the pixels in batches of about BATCH shadows (a batch's arrays stay in the caches)
     batch = np.flatnonzero(np.r_[True, np.diff(starts // BATCH) != 0])
     for p0, p1 in zip(batch.tolist(), np.r_[batch[1:], len(starts)].tolist()):

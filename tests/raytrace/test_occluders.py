@@ -1,5 +1,6 @@
 """`occluders._topology`: a closed, consistently wound surface found, and every way to miss
-being one refused (the quick test on the welded ids, `_closed`, must agree with the whole)."""
+being one refused (the quick test on the welded ids, `_closed`, must agree with the whole);
+`weld` numbers points as np.unique(axis=0) does."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from raytrace import occluders
 from raytrace.occluders import _closed, _topology
 
 
@@ -39,3 +41,18 @@ def test_every_other_surface_has_none(broken):
         welded[0, 1] = welded[0, 0]
     assert not _closed(welded)
     assert _topology(corners, welded) is None
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_weld_numbers_the_points_as_numpys_unique_rows_does(dtype):
+    """`occluders.weld` against np.unique(axis=0)'s inverse: repeated points, points that
+    differ in one coordinate only, -0.0 beside 0.0, a NaN-free float grid."""
+    rng = np.random.default_rng(5)
+    points = rng.integers(-3, 4, (4000, 3)).astype(dtype) * dtype(0.5)
+    points[::7, 1] = -0.0
+    points[3::11, 2] = dtype(1e-30)
+    got = occluders.weld(points)
+    want = np.unique(points, axis=0, return_inverse=True)[1].reshape(-1)
+    assert len(np.unique(want)) < len(points) // 2          # many repeated
+    assert np.array_equal(got, want)
+    assert occluders.weld(np.zeros((0, 3), dtype)).shape == (0,)
