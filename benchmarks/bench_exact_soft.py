@@ -67,12 +67,13 @@ def bunny_rect_scene(size: int) -> Scene:
 
 
 def reference(scene: Scene) -> None:
-    """`exact_visibility` with its fast path off: no outline unions."""
-    many, exact_soft.MANY_PIECES = exact_soft.MANY_PIECES, 1 << 62
+    """`exact_visibility` with its fast paths off: no outline unions, no windings."""
+    many, wound = exact_soft.MANY_PIECES, exact_soft.WINDING_PIECES
+    exact_soft.MANY_PIECES = exact_soft.WINDING_PIECES = 1 << 62
     try:
         exact_soft.exact_visibility(scene)
     finally:
-        exact_soft.MANY_PIECES = many
+        exact_soft.MANY_PIECES, exact_soft.WINDING_PIECES = many, wound
 
 
 def one_thread(scene: Scene) -> None:

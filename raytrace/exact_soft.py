@@ -20,7 +20,7 @@ consistently wound object (a box, a sphere's tessellation) shadows p from outsid
 convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
 where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
 not at all from its own outside.  Every other object's triangles are united: under a rect or
-disk light, a pixel's more than FEW_PIECES shadows, where those are all its shadows and all but
+disk light, a pixel's more than WINDING_PIECES shadows, where those are all its shadows and all but
 a few (`windings.LOOSE`, at a contact) are free, measured from their outline's winding numbers
 with no polygon boolean, the few taken away by inclusion and exclusion (`raytrace.windings`);
 else a pixel's union of more than MANY_PIECES from its outline alone (`raytrace.arrange`).  One
@@ -56,10 +56,13 @@ from .switches import casting, receiving_objects
 __all__ = ["EXACT_OUTPUTS", "ExactVisibility", "check_exact", "exact_visibility",
            "visible_regions"]
 
-# Pieces of shadow per pixel that are united pairwise over all pixels at once (more: measured
-# from their outline's windings where they can be, else one cascaded union per pixel; the
-# windings from 9 pieces on: the bunny 64x64 0.95x, the blob 48x48 0.88x the CPU of from 17).
+# Pieces of shadow per pixel that are united pairwise over all pixels at once (more: one
+# cascaded union per pixel).
 FEW_PIECES = 8
+# Pieces of shadow of one pixel above which their union is measured from its outline's
+# windings where it can be (`raytrace.windings`): from 9 on, the bunny 64x64 0.95x and the
+# blob 48x48 0.88x the CPU of from 17 (MANY_PIECES + 1).
+WINDING_PIECES = 8
 # Pieces of shadow of one pixel above which their union is taken from its outline
 # (`raytrace.arrange`) rather than by GEOS's cascaded union.
 MANY_PIECES = 16
@@ -328,9 +331,9 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     heavy = rest[crowd[pix[rest]]]
     chains, loose = np.full(len(p), None, object), np.full(len(p), None, object)
     if len(rest) and outlines:
-        # a pixel of more than FEW_PIECES shadows, all of them here (no hull): measured from
-        # its outline's windings
-        alone = many > FEW_PIECES
+        # a pixel of more than WINDING_PIECES shadows, all of them here (no hull): measured
+        # from its outline's windings
+        alone = many > WINDING_PIECES
         alone[np.concatenate(owner + [np.zeros(0, np.int64)]).astype(np.int64)] = False
         chains, apart = windings.split(light, corners, p, pix, tri, rest, objects.corner_ids,
                                        alone)

@@ -81,8 +81,15 @@ def _random_scene(seed: int, size: int = 24) -> Scene:
 
 def _reference(scene, monkeypatch):
     with monkeypatch.context() as m:
-        m.setattr(raytrace.exact_soft, "MANY_PIECES", 1 << 62)
+        _crowded_from(m, 1 << 62)
         return exact_visibility(scene)
+
+
+def _crowded_from(monkeypatch, many: int) -> None:
+    """The outline's union (`raytrace.arrange`) and its windings (`raytrace.windings`) for a
+    pixel of more than `many` shadows (1 << 62: neither, every shadow united one by one)."""
+    monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", many)
+    monkeypatch.setattr(raytrace.exact_soft, "WINDING_PIECES", many)
 
 
 def _counted(monkeypatch, module, name):
@@ -105,17 +112,18 @@ def test_fast_paths_equal_the_triangle_by_triangle_union(seed, monkeypatch):
     assert ((v > 0) & (v < 1)).sum() > 40 and (v == 0).sum() > 5
     got = []
     wound = _counted(monkeypatch, raytrace.windings, "boundaries")
-    for many in (raytrace.exact_soft.MANY_PIECES, 4):
-        # crowded from 4 pieces: the outline on most shadowed pixels
-        monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", many)
+    for many in (None, 4):
+        # the defaults, and crowded from 4 pieces: the outline on most shadowed pixels
+        if many:
+            _crowded_from(monkeypatch, many)
         got.append(exact_visibility(scene))
     # its windings on a rect or disk light (a polygon light's outline is not convex)
     assert sum(c is not None for got in wound for c in got) >= (10 if seed % 3 != 2 else 0)
     # the outline's union by GEOS (`raytrace.arrange`), the windings off
     monkeypatch.setattr(raytrace.windings, "boundaries", lambda *args: np.full(args[-1], None))
     arranged = _counted(monkeypatch, raytrace.arrange, "union")
-    for many in (raytrace.exact_soft.MANY_PIECES, 4):
-        monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", many)
+    for many in (16, 4):
+        _crowded_from(monkeypatch, many)
         got.append(exact_visibility(scene))
     assert len(arranged) >= 10
     for fast in got:
@@ -128,7 +136,7 @@ def test_split_in_batches_of_any_size(batch, monkeypatch):
     """`windings.split` hands its pixels to `windings.boundaries` about BATCH shadows at a
     time (whole pixels): one pixel a batch, or a few, give the same bytes as the default."""
     scene = _random_scene(0)
-    monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", 4)
+    _crowded_from(monkeypatch, 4)
     wound = _counted(monkeypatch, raytrace.windings, "boundaries")
     want = exact_visibility(scene)
     calls = len(wound)                  # one a tile (`exact_soft`: a tile a thread at least)
