@@ -1,0 +1,382 @@
+"""`windings.boundaries` in numba (the `fast` extra): a crowded pixel's union of shadows from
+its outline's winding numbers, one pixel at a time, where numpy's passes over a batch's
+edges, corners, pairs and pieces (sorts, searches, pointer jumping) cost most of the time.
+
+The same chains as numpy's path, bit for bit, and the same doubt: each outline edge is the
+first of its shadows' edges (edge 0 of every shadow, then edge 1, then 2) between its two
+welded corners, the edges in the order of their corners' ids; the pairs of edges whose boxes
+meet are tested as `windings._near` orders them (the one first along x, then by number, is
+i) with the same products; a crossing point is computed along j, and the points along an
+edge are ordered by t, then as `windings._along` ties them (its start, its end, the
+crossings where it is i by j's place along x, then where it is j by i's); the cover right
+of a run's first piece counts every other edge of its pixel that the ray in +x meets
+(`windings._right_cover`).  Counts are small integers, exact in float64 and here in int64.
+tests/raytrace/test_winding_kernels.py holds the two to the same bytes.  A kernel indexes
+scalars, not row views (each view costs a reference count).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .packetkernels import _jit
+
+
+@_jit(inline="always")
+def _turn(ux, uy, vx, vy, size, margin):
+    """`windings._turn` of scalars: u x v and whether it is certainly nonzero."""
+    c = ux * vy - uy * vx
+    return c, abs(c) > margin * (size * (abs(vx) + abs(vy)))
+
+
+@_jit()
+def boundaries(uncut, free, ids, owner, n, margin):
+    """`windings.boundaries` of n pixels' shadows uncut (q, 3, 2), free (q,), welded corner
+    ids (q, 3) of the pixels owner (q,) (ascending): (doubt (n,), where each pixel's chain
+    starts in the pieces (n + 1,), the pieces (s, 2, 2)); margin: `windings.DOUBT`."""
+    doubt = np.zeros(n, np.bool_)
+    at = np.zeros(n + 1, np.int64)
+    out = np.empty((max(64, owner.shape[0]), 2, 2))
+    size, r0, q = 0, 0, owner.shape[0]
+    for k in range(n):
+        r1 = r0
+        while r1 < q and owner[r1] == k:
+            r1 += 1
+        ok, sa, sb = _pixel(uncut, free, ids, r0, r1, margin)
+        r0 = r1
+        if not ok:
+            doubt[k] = True
+        else:
+            if size + sa.shape[0] > out.shape[0]:
+                grown = np.empty((2 * (size + sa.shape[0]), 2, 2))
+                grown[:size] = out[:size]
+                out = grown
+            for s in range(sa.shape[0]):
+                out[size, 0, 0], out[size, 0, 1] = sa[s, 0], sa[s, 1]
+                out[size, 1, 0], out[size, 1, 1] = sb[s, 0], sb[s, 1]
+                size += 1
+        at[k + 1] = size
+    return doubt, at, out[:size]
+
+
+@_jit()
+def _pixel(uncut, free, ids, r0, r1, margin):
+    """One pixel's shadows rows r0..r1: (certain, the chain's starts (c, 2), ends (c, 2))."""
+    none = np.empty((0, 2))
+    for r in range(r0, r1):
+        if not free[r]:
+            return False, none, none
+    ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1)
+    m = ax.shape[0]
+    if m == 0:
+        return True, none, none
+    ok, va, vb = _corners(ax, ay, bx, by, ia, ib)
+    if not ok:
+        return False, none, none
+    ok, ent, pos = _crossings(ax, ay, bx, by, ia, ib, cnt, margin)
+    if not ok:
+        return False, none, none
+    pa, pb, parent, jump, first = _pieces(ent, pos, m)
+    total = np.empty(m, np.int64)
+    for e in range(m):
+        total[e] = jump[first[e + 1] - 1]
+    root, offset = _runs(va, vb, cnt, total)
+    ok, cover = _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin)
+    if not ok:
+        return False, none, none
+    keep = np.zeros(parent.shape[0], np.bool_)
+    c = 0
+    for s in range(parent.shape[0]):
+        e = parent[s]
+        right = cover[root[e]] + offset[e] + jump[s]
+        if right < 0:
+            return False, none, none
+        if right == 0:
+            keep[s] = True
+            c += 1
+    sa, sb = np.empty((c, 2)), np.empty((c, 2))
+    c = 0
+    for s in range(parent.shape[0]):
+        if keep[s]:
+            sa[c, 0], sa[c, 1], sb[c, 0], sb[c, 1] = pa[s, 0], pa[s, 1], pb[s, 0], pb[s, 1]
+            c += 1
+    return True, sa, sb
+
+
+@_jit()
+def _outline(uncut, ids, r0, r1):
+    """The outline of the shadows rows r0..r1 (`arrange.edges`, then each undirected edge's
+    net count, its first edge's corners): (ax, ay, bx, by (m,), corner ids ia, ib (m,),
+    counts (m,)), the edges in the order of (lower id, higher id)."""
+    rows = np.empty(r1 - r0, np.int64)
+    v = 0
+    for r in range(r0, r1):
+        signed = (uncut[r, 1, 0] - uncut[r, 0, 0]) * (uncut[r, 2, 1] - uncut[r, 0, 1]) - \
+            (uncut[r, 1, 1] - uncut[r, 0, 1]) * (uncut[r, 2, 0] - uncut[r, 0, 0])
+        if signed != 0:
+            rows[v] = r if signed > 0 else -1 - r
+            v += 1
+    many = 3 * v
+    row, s0, s1 = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
+    lo, hi = np.empty(many, np.int64), np.empty(many, np.int64)
+    for e in range(3):
+        for w in range(v):
+            i, r = e * v + w, rows[w]
+            turn = r < 0
+            r = -1 - r if turn else r
+            row[i] = r
+            s0[i] = (e + 1) % 3 if turn else e
+            s1[i] = e if turn else (e + 1) % 3
+            ka, kb = ids[r, s0[i]], ids[r, s1[i]]
+            lo[i], hi[i] = min(ka, kb), max(ka, kb)
+    order = np.argsort(hi, kind="mergesort")
+    order = order[np.argsort(lo[order], kind="mergesort")]
+    ax, ay, bx, by = np.empty(many), np.empty(many), np.empty(many), np.empty(many)
+    ia, ib, cnt = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
+    m, g = 0, 0
+    while g < many:
+        f = order[g]                                    # the first edge (least number)
+        net, h = 0, g
+        while h < many and lo[order[h]] == lo[f] and hi[order[h]] == hi[f]:
+            i = order[h]
+            net += 1 if ids[row[i], s0[i]] < ids[row[i], s1[i]] else -1
+            h += 1
+        g = h
+        if net == 0:
+            continue
+        r, low_first = row[f], ids[row[f], s0[f]] < ids[row[f], s1[f]]
+        c_lo, c_hi = (s0[f], s1[f]) if low_first else (s1[f], s0[f])
+        c_a, c_b = (c_lo, c_hi) if net > 0 else (c_hi, c_lo)
+        ax[m], ay[m], bx[m], by[m] = uncut[r, c_a, 0], uncut[r, c_a, 1], uncut[r, c_b, 0], \
+            uncut[r, c_b, 1]
+        ia[m], ib[m] = (lo[f], hi[f]) if net > 0 else (hi[f], lo[f])
+        cnt[m] = abs(net)
+        m += 1
+    return ax[:m], ay[:m], bx[:m], by[:m], ia[:m], ib[:m], cnt[:m]
+
+
+@_jit()
+def _corners(ax, ay, bx, by, ia, ib):
+    """The corners of the outline numbered (va, vb (m,)), and whether no two of them lie at
+    one point (each at its first place among the edges' starts, then ends)."""
+    m = ax.shape[0]
+    both = np.concatenate((ia, ib))
+    order = np.argsort(both, kind="mergesort")
+    number = np.empty(2 * m, np.int64)
+    xs, ys = np.empty(2 * m), np.empty(2 * m)
+    c = -1
+    for g in range(2 * m):
+        i = order[g]
+        if g == 0 or both[i] != both[order[g - 1]]:
+            c += 1
+            xs[c], ys[c] = (ax[i], ay[i]) if i < m else (bx[i - m], by[i - m])
+        number[i] = c
+    c += 1
+    by_x = np.argsort(xs[:c])
+    for g in range(c):
+        h = g + 1
+        while h < c and xs[by_x[h]] == xs[by_x[g]]:
+            if ys[by_x[h]] == ys[by_x[g]]:
+                return False, number[:m], number[m:]
+            h += 1
+    return True, number[:m], number[m:]
+
+
+@_jit()
+def _crossings(ax, ay, bx, by, ia, ib, cnt, margin):
+    """The points along the outline's edges (`windings._pieces`): (certain, entries (k, 2):
+    each point's edge and its place among the ties, points (k, 4): t along the edge, x, y,
+    the cover it adds); every pair whose boxes meet (swept along x, as `windings._near`)
+    certainly crosses inside both, lies apart or shares a corner only."""
+    m = ax.shape[0]
+    ent, pos = np.zeros((4 * m, 2), np.int64), np.zeros((4 * m, 4))
+    for e in range(m):
+        ent[e, 0], ent[m + e, 0], ent[m + e, 1] = e, e, 1
+        pos[e, 0], pos[e, 1], pos[e, 2] = 0.0, ax[e], ay[e]
+        pos[m + e, 0], pos[m + e, 1], pos[m + e, 2] = 1.0, bx[e], by[e]
+    k = 2 * m
+    lox, hix = np.minimum(ax, bx), np.maximum(ax, bx)
+    loy, hiy = np.minimum(ay, by), np.maximum(ay, by)
+    order = np.argsort(lox, kind="mergesort")
+    for p in range(m):
+        i = order[p]
+        for q in range(p + 1, m):
+            j = order[q]
+            if lox[j] > hix[i]:
+                break
+            if not (loy[i] <= hiy[j] and loy[j] <= hiy[i]):
+                continue
+            state, t_i, t_j, x, y, turn = _pair(i, j, ax, ay, bx, by, ia, ib, margin)
+            if state < 0:
+                return False, ent, pos
+            if state == 0:
+                continue
+            if k + 2 > ent.shape[0]:
+                ent, pos = _grown(ent, pos, k)
+            ent[k, 0], ent[k, 1], ent[k + 1, 0], ent[k + 1, 1] = i, 2 + q, j, 2 + m + p
+            pos[k, 0], pos[k, 1], pos[k, 2], pos[k, 3] = t_i, x, y, turn * cnt[j]
+            pos[k + 1, 0], pos[k + 1, 1], pos[k + 1, 2] = t_j, x, y
+            pos[k + 1, 3] = -turn * cnt[i]
+            k += 2
+    return True, ent[:k], pos[:k]
+
+
+@_jit()
+def _grown(ent, pos, k):
+    """ent, pos with twice the room, their first k rows kept."""
+    e, p = np.zeros((2 * ent.shape[0], 2), np.int64), np.zeros((2 * ent.shape[0], 4))
+    e[:k], p[:k] = ent[:k], pos[:k]
+    return e, p
+
+
+@_jit()
+def _pair(i, j, ax, ay, bx, by, ia, ib, margin):
+    """Edges i, j whose boxes meet (i first along x): (1 where they cross, with t along i, t
+    along j, the crossing point x, y and the sign of j x i; 0 where they lie apart or share a
+    corner, certainly; -1 where in doubt), with `windings._pieces`'s products."""
+    dxi, dyi, dxj, dyj = bx[i] - ax[i], by[i] - ay[i], bx[j] - ax[j], by[j] - ay[j]
+    si, sj = abs(dxi) + abs(dyi), abs(dxj) + abs(dyj)
+    ci, oi = _turn(dxi, dyi, ax[j] - ax[i], ay[j] - ay[i], si, margin)
+    di, pi = _turn(dxi, dyi, bx[j] - ax[i], by[j] - ay[i], si, margin)
+    if oi and pi and ci * di > 0:
+        return 0, 0.0, 0.0, 0.0, 0.0, 0.0
+    cj, oj = _turn(dxj, dyj, ax[i] - ax[j], ay[i] - ay[j], sj, margin)
+    dj, pj = _turn(dxj, dyj, bx[i] - ax[j], by[i] - ay[j], sj, margin)
+    shared = ia[i] == ia[j] or ia[i] == ib[j] or ib[i] == ia[j] or ib[i] == ib[j]
+    apart = oj and pj and cj * dj > 0
+    cross = oi and pi and oj and pj and ci * di < 0 and cj * dj < 0 and not shared
+    if not (apart or cross or shared):
+        return -1, 0.0, 0.0, 0.0, 0.0, 0.0
+    if shared and not apart:
+        at_a = ia[i] == ia[j] or ia[i] == ib[j]          # the corner is i's start
+        x, y = (ax[i], ay[i]) if at_a else (bx[i], by[i])
+        ux, uy = ((bx[i], by[i]) if at_a else (ax[i], ay[i]))
+        ux, uy = ux - x, uy - y
+        other_at_a = ia[j] == (ia[i] if at_a else ib[i])
+        vx, vy = ((bx[j], by[j]) if other_at_a else (ax[j], ay[j]))
+        vx, vy = vx - x, vy - y
+        _, sure = _turn(ux, uy, vx, vy, abs(ux) + abs(uy), margin)
+        if not (sure or ux * vx + uy * vy < 0):
+            return -1, 0.0, 0.0, 0.0, 0.0, 0.0
+    if not cross:
+        return 0, 0.0, 0.0, 0.0, 0.0, 0.0
+    t_j, t_i = ci / (ci - di), cj / (cj - dj)
+    x, y = ax[j] + t_j * dxj, ay[j] + t_j * dyj
+    turn = np.sign(dxj * dyi - dyj * dxi)
+    return 1, t_i, t_j, x, y, turn
+
+
+@_jit()
+def _pieces(ent, pos, m):
+    """The edges' points (`_crossings`) in order along each edge (by t, then place) and the
+    pieces between: (starts (s, 2), ends (s, 2), edges (s,), how much more each piece's
+    sides are covered than its edge's first piece's (s,), where each edge's pieces start
+    (m + 1,))."""
+    k = ent.shape[0]
+    start = np.zeros(m + 1, np.int64)
+    for g in range(k):
+        start[ent[g, 0] + 1] += 1
+    for e in range(m):
+        start[e + 1] += start[e]
+    fill, idx = start[:m].copy(), np.empty(k, np.int64)
+    for g in range(k):
+        e = ent[g, 0]
+        idx[fill[e]] = g
+        fill[e] += 1
+    for e in range(m):                                   # insertion sort by (t, place)
+        for h in range(start[e] + 1, start[e + 1]):
+            g, w = idx[h], h
+            while w > start[e] and (pos[idx[w - 1], 0] > pos[g, 0] or (
+                    pos[idx[w - 1], 0] == pos[g, 0] and ent[idx[w - 1], 1] > ent[g, 1])):
+                idx[w] = idx[w - 1]
+                w -= 1
+            idx[w] = g
+    s = k - m
+    pa, pb = np.empty((s, 2)), np.empty((s, 2))
+    parent, jump, first = np.empty(s, np.int64), np.empty(s, np.int64), np.empty(m + 1, np.int64)
+    c = 0
+    for e in range(m):
+        first[e] = c
+        run = 0.0
+        for h in range(start[e], start[e + 1] - 1):
+            g, f = idx[h], idx[h + 1]
+            if h > start[e]:
+                run += pos[g, 3]
+            pa[c, 0], pa[c, 1], pb[c, 0], pb[c, 1] = pos[g, 1], pos[g, 2], pos[f, 1], pos[f, 2]
+            parent[c], jump[c] = e, int(run)
+            c += 1
+    first[m] = c
+    return pa, pb, parent, jump, first
+
+
+@_jit()
+def _runs(va, vb, cnt, total):
+    """`windings._runs` of one pixel: (the first edge of each edge's run (m,), how much more
+    its first piece is covered than that edge's (m,)), by walking each run once."""
+    m = va.shape[0]
+    many = max(va.max(), vb.max()) + 1
+    out_deg, in_deg = np.zeros(many, np.int64), np.zeros(many, np.int64)
+    leaving = np.full(many, -1, np.int64)
+    for e in range(m):
+        out_deg[va[e]] += 1
+        in_deg[vb[e]] += 1
+        leaving[va[e]] = e
+    succ, pred = np.full(m, -1, np.int64), np.full(m, -1, np.int64)
+    for e in range(m):
+        v = vb[e]
+        if in_deg[v] == 1 and out_deg[v] == 1 and cnt[leaving[v]] == cnt[e]:
+            succ[e] = leaving[v]
+            pred[leaving[v]] = e
+    root, offset = np.full(m, -1, np.int64), np.zeros(m, np.int64)
+    for start in range(m):                # the open runs from their first edge, then each
+        if pred[start] < 0:               # closed one from its least
+            _walk(start, succ, total, root, offset)
+    for start in range(m):
+        if root[start] < 0:
+            _walk(start, succ, total, root, offset)
+    return root, offset
+
+
+@_jit()
+def _walk(start, succ, total, root, offset):
+    """Sets root and offset along the run from edge start (`_runs`)."""
+    e, at = start, 0
+    while e >= 0 and root[e] < 0:
+        root[e], offset[e] = start, at
+        at += total[e]
+        e = succ[e]
+
+
+@_jit()
+def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin):
+    """(certain, the cover right of each run's first piece (m,), by its run's first edge) by
+    a ray in +x from its midpoint (`windings._right_cover`): every other edge of the pixel
+    that runs up where the point is left of it adds its count, that runs down where the point
+    is right of it takes it; the piece's own edge where it runs down takes its count; not
+    certain where a side is in doubt or the piece is level."""
+    m = ax.shape[0]
+    cover = np.zeros(m, np.int64)
+    for e in range(m):
+        if root[e] != e:
+            continue
+        s = first[e]
+        mx, my = (pa[s, 0] + pb[s, 0]) / 2, (pa[s, 1] + pb[s, 1]) / 2
+        wind = 0
+        for f in range(m):
+            fy, gy = ay[f], by[f]
+            up, down = fy <= my and gy > my, gy <= my and fy > my
+            if f == e or not (up or down):
+                continue
+            ux, uy = bx[f] - ax[f], by[f] - ay[f]
+            side, sure = _turn(ux, uy, mx - ax[f], my - ay[f], abs(ux) + abs(uy), margin)
+            if not sure:
+                return False, cover
+            if up and side > 0:
+                wind += cnt[f]
+            elif down and side < 0:
+                wind -= cnt[f]
+        rise = pb[s, 1] - pa[s, 1]
+        if not abs(rise) > margin * (abs(pb[s, 0] - pa[s, 0]) + abs(pb[s, 1] - pa[s, 1])):
+            return False, cover
+        cover[e] = wind - (cnt[e] if rise < 0 else 0)
+    return True, cover
