@@ -38,11 +38,12 @@ def boundaries(uncut, free, ids, owner, n, margin):
     at = np.zeros(n + 1, np.int64)
     out = np.empty((max(64, owner.shape[0]), 2, 2))
     size, r0, q = 0, 0, owner.shape[0]
+    big = ids.max() + 1 if q else 1
     for k in range(n):
         r1 = r0
         while r1 < q and owner[r1] == k:
             r1 += 1
-        ok, sa, sb = _pixel(uncut, free, ids, r0, r1, margin)
+        ok, sa, sb = _pixel(uncut, free, ids, r0, r1, big, margin)
         r0 = r1
         if not ok:
             doubt[k] = True
@@ -60,13 +61,13 @@ def boundaries(uncut, free, ids, owner, n, margin):
 
 
 @_jit()
-def _pixel(uncut, free, ids, r0, r1, margin):
+def _pixel(uncut, free, ids, r0, r1, big, margin):
     """One pixel's shadows rows r0..r1: (certain, the chain's starts (c, 2), ends (c, 2))."""
     none = np.empty((0, 2))
     for r in range(r0, r1):
         if not free[r]:
             return False, none, none
-    ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1)
+    ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big)
     m = ax.shape[0]
     if m == 0:
         return True, none, none
@@ -104,10 +105,10 @@ def _pixel(uncut, free, ids, r0, r1, margin):
 
 
 @_jit()
-def _outline(uncut, ids, r0, r1):
+def _outline(uncut, ids, r0, r1, big):
     """The outline of the shadows rows r0..r1 (`arrange.edges`, then each undirected edge's
     net count, its first edge's corners): (ax, ay, bx, by (m,), corner ids ia, ib (m,),
-    counts (m,)), the edges in the order of (lower id, higher id)."""
+    counts (m,)), the edges in the order of (lower id, higher id); big: more than any id."""
     rows = np.empty(r1 - r0, np.int64)
     v = 0
     for r in range(r0, r1):
@@ -129,8 +130,7 @@ def _outline(uncut, ids, r0, r1):
             s1[i] = e if turn else (e + 1) % 3
             ka, kb = ids[r, s0[i]], ids[r, s1[i]]
             lo[i], hi[i] = min(ka, kb), max(ka, kb)
-    order = np.argsort(hi, kind="mergesort")
-    order = order[np.argsort(lo[order], kind="mergesort")]
+    order = _order(lo, hi, big)
     ax, ay, bx, by = np.empty(many), np.empty(many), np.empty(many), np.empty(many)
     ia, ib, cnt = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
     m, g = 0, 0
@@ -153,6 +153,23 @@ def _outline(uncut, ids, r0, r1):
         cnt[m] = abs(net)
         m += 1
     return ax[:m], ay[:m], bx[:m], by[:m], ia[:m], ib[:m], cnt[:m]
+
+
+@_jit()
+def _order(lo, hi, big):
+    """The order of the edges by lower corner id lo (k,), then higher hi (k,) (< big), then
+    number (a stable sort): one sort of a key where it fits in an int64."""
+    many = lo.shape[0]
+    if many == 0:
+        return np.empty(0, np.int64)
+    if float(big) * float(big) * float(max(many, 1)) >= 2.0 ** 62:
+        order = np.argsort(hi, kind="mergesort")
+        return order[np.argsort(lo[order], kind="mergesort")]
+    key = np.empty(many, np.int64)
+    for i in range(many):
+        key[i] = (lo[i] * big + hi[i]) * many + i
+    key.sort()
+    return key % many
 
 
 @_jit()
@@ -189,36 +206,52 @@ def _crossings(ax, ay, bx, by, ia, ib, cnt, margin):
     the cover it adds); every pair whose boxes meet (swept along x, as `windings._near`)
     certainly crosses inside both, lies apart or shares a corner only."""
     m = ax.shape[0]
-    ent, pos = np.zeros((4 * m, 2), np.int64), np.zeros((4 * m, 4))
+    ent, pos = np.empty((4 * m, 2), np.int64), np.zeros((4 * m, 4))
     for e in range(m):
-        ent[e, 0], ent[m + e, 0], ent[m + e, 1] = e, e, 1
+        ent[e, 0], ent[e, 1], ent[m + e, 0], ent[m + e, 1] = e, 0, e, 1
         pos[e, 0], pos[e, 1], pos[e, 2] = 0.0, ax[e], ay[e]
         pos[m + e, 0], pos[m + e, 1], pos[m + e, 2] = 1.0, bx[e], by[e]
-    k = 2 * m
-    lox, hix = np.minimum(ax, bx), np.maximum(ax, bx)
-    loy, hiy = np.minimum(ay, by), np.maximum(ay, by)
-    order = np.argsort(lox, kind="mergesort")
-    for p in range(m):
-        i = order[p]
-        for q in range(p + 1, m):
-            j = order[q]
-            if lox[j] > hix[i]:
+    order = np.argsort(np.minimum(ax, bx), kind="mergesort")
+    box = np.empty((4, m))                               # along the sweep
+    box[0], box[1] = np.minimum(ax, bx)[order], np.maximum(ax, bx)[order]
+    box[2], box[3] = np.minimum(ay, by)[order], np.maximum(ay, by)[order]
+    k, p, q = 2 * m, 0, 1
+    while True:                 # the sweep, resumed where its room ran out (room made here:
+        state, k, p, q = _sweep(order, box, ax, ay, bx, by, ia, ib, cnt, margin, ent, pos,
+                                k, p, q)                 # arrays set anew in its loop cost
+        if state < 0:                                    # a reference count an access)
+            return False, ent, pos
+        if state == 0:
+            return True, ent[:k], pos[:k]
+        ent, pos = _grown(ent, pos, k)
+
+
+@_jit()
+def _sweep(order, box, ax, ay, bx, by, ia, ib, cnt, margin, ent, pos, k, p0, q0):
+    """`_crossings`' sweep from the pair of places p0, q0 along it, its points from row k on:
+    (0 where done, -1 where in doubt, 1 where out of room; the rows filled, the next pair)."""
+    m = ax.shape[0]
+    for p in range(p0, m):
+        right, bottom, top = box[1, p], box[2, p], box[3, p]
+        for q in range(q0 if p == p0 else p + 1, m):
+            if box[0, q] > right:
                 break
-            if not (loy[i] <= hiy[j] and loy[j] <= hiy[i]):
+            if not (bottom <= box[3, q] and box[2, q] <= top):
                 continue
+            i, j = order[p], order[q]
             state, t_i, t_j, x, y, turn = _pair(i, j, ax, ay, bx, by, ia, ib, margin)
             if state < 0:
-                return False, ent, pos
+                return -1, k, p, q
             if state == 0:
                 continue
             if k + 2 > ent.shape[0]:
-                ent, pos = _grown(ent, pos, k)
+                return 1, k, p, q
             ent[k, 0], ent[k, 1], ent[k + 1, 0], ent[k + 1, 1] = i, 2 + q, j, 2 + m + p
             pos[k, 0], pos[k, 1], pos[k, 2], pos[k, 3] = t_i, x, y, turn * cnt[j]
             pos[k + 1, 0], pos[k + 1, 1], pos[k + 1, 2] = t_j, x, y
             pos[k + 1, 3] = -turn * cnt[i]
             k += 2
-    return True, ent[:k], pos[:k]
+    return 0, k, m, m
 
 
 @_jit()
@@ -229,7 +262,7 @@ def _grown(ent, pos, k):
     return e, p
 
 
-@_jit()
+@_jit(inline="always")
 def _pair(i, j, ax, ay, bx, by, ia, ib, margin):
     """Edges i, j whose boxes meet (i first along x): (1 where they cross, with t along i, t
     along j, the crossing point x, y and the sign of j x i; 0 where they lie apart or share a
