@@ -389,13 +389,18 @@ def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin):
     certain where a side is in doubt or the piece is level."""
     m = ax.shape[0]
     cover = np.zeros(m, np.int64)
+    start, edge, bottom, top, scale = _levels(ay, by)
     for e in range(m):
         if root[e] != e:
             continue
         s = first[e]
         mx, my = (pa[s, 0] + pb[s, 0]) / 2, (pa[s, 1] + pb[s, 1]) / 2
-        wind = 0
-        for f in range(m):
+        wind, g0, g1 = 0, 0, 0
+        if bottom <= my <= top:                          # else no edge's span holds it
+            b = _bucket(my, bottom, scale, start.shape[0] - 1)
+            g0, g1 = start[b], start[b + 1]
+        for g in range(g0, g1):
+            f = edge[g]
             fy, gy = ay[f], by[f]
             up, down = fy <= my and gy > my, gy <= my and fy > my
             if f == e or not (up or down):
@@ -413,3 +418,39 @@ def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin):
             return False, cover
         cover[e] = wind - (cnt[e] if rise < 0 else 0)
     return True, cover
+
+
+@_jit(inline="always")
+def _bucket(h, bottom, scale, many):
+    """The bucket of height h (`_levels`)."""
+    return min(max(int(np.floor((h - bottom) * scale)), 0), many - 1) if scale > 0 else 0
+
+
+@_jit()
+def _levels(ay, by):
+    """The edges of heights ay-by (m,) in buckets of height: (where each bucket's edges start
+    (b + 1,), the edges (k,), the least and most height, the buckets a unit of height), each
+    edge in every bucket from its low end's to its high end's: the bucket of a height is
+    monotone in it, so every edge whose span holds a height (in the least to the most) is in
+    that height's bucket."""
+    m = ay.shape[0]
+    bottom, top = min(ay.min(), by.min()), max(ay.max(), by.max())
+    many = max(m // 4, 1)
+    scale = many / (top - bottom) if top > bottom else 0.0
+    if not np.isfinite(scale):
+        scale = 0.0
+    start = np.zeros(many + 1, np.int64)
+    for f in range(m):
+        b0 = _bucket(min(ay[f], by[f]), bottom, scale, many)
+        b1 = _bucket(max(ay[f], by[f]), bottom, scale, many)
+        for b in range(b0, b1 + 1):
+            start[b + 1] += 1
+    for b in range(many):
+        start[b + 1] += start[b]
+    fill, edge = start[:many].copy(), np.empty(start[many], np.int64)
+    for f in range(m):
+        b0 = _bucket(min(ay[f], by[f]), bottom, scale, many)
+        for b in range(b0, _bucket(max(ay[f], by[f]), bottom, scale, many) + 1):
+            edge[fill[b]] = f
+            fill[b] += 1
+    return start, edge, bottom, top, scale
