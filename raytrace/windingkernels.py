@@ -130,29 +130,49 @@ def _outline(uncut, ids, r0, r1, big):
             s1[i] = e if turn else (e + 1) % 3
             ka, kb = ids[r, s0[i]], ids[r, s1[i]]
             lo[i], hi[i] = min(ka, kb), max(ka, kb)
-    order = _order(lo, hi, big)
-    ax, ay, bx, by = np.empty(many), np.empty(many), np.empty(many), np.empty(many)
-    ia, ib, cnt = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
-    m, g = 0, 0
-    while g < many:
-        f = order[g]                                    # the first edge (least number)
-        net, h = 0, g
-        while h < many and lo[order[h]] == lo[f] and hi[order[h]] == hi[f]:
-            i = order[h]
-            net += 1 if ids[row[i], s0[i]] < ids[row[i], s1[i]] else -1
-            h += 1
-        g = h
-        if net == 0:
-            continue
+    rep, net = _tally(lo, hi, (ids, row, s0, s1))
+    order = _order(lo[rep], hi[rep], big)
+    m = order.shape[0]
+    ax, ay, bx, by = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    ia, ib, cnt = np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64)
+    for g in range(m):
+        f, up = rep[order[g]], net[order[g]] > 0         # f: the first of the edge's edges
         r, low_first = row[f], ids[row[f], s0[f]] < ids[row[f], s1[f]]
         c_lo, c_hi = (s0[f], s1[f]) if low_first else (s1[f], s0[f])
-        c_a, c_b = (c_lo, c_hi) if net > 0 else (c_hi, c_lo)
-        ax[m], ay[m], bx[m], by[m] = uncut[r, c_a, 0], uncut[r, c_a, 1], uncut[r, c_b, 0], \
+        c_a, c_b = (c_lo, c_hi) if up else (c_hi, c_lo)
+        ax[g], ay[g], bx[g], by[g] = uncut[r, c_a, 0], uncut[r, c_a, 1], uncut[r, c_b, 0], \
             uncut[r, c_b, 1]
-        ia[m], ib[m] = (lo[f], hi[f]) if net > 0 else (hi[f], lo[f])
-        cnt[m] = abs(net)
-        m += 1
-    return ax[:m], ay[:m], bx[:m], by[:m], ia[:m], ib[:m], cnt[:m]
+        ia[g], ib[g] = (lo[f], hi[f]) if up else (hi[f], lo[f])
+        cnt[g] = abs(net[order[g]])
+    return ax, ay, bx, by, ia, ib, cnt
+
+
+@_jit()
+def _tally(lo, hi, edges):
+    """The undirected edges lo-hi (k,) (corner ids) whose net count is not zero: (the first
+    of each one's edges (u,), its net count (u,)), in the order of those first edges; an edge
+    counts +1 where it runs from its lower id (edges: ids (q, 3) and each edge's row, start
+    and end corner (k,)), by a table of open addressing."""
+    ids, row, s0, s1 = edges
+    k = lo.shape[0]
+    size = 16
+    while size < 2 * k:
+        size *= 2
+    taken = np.zeros(size, np.bool_)
+    slot_lo, slot_hi = np.empty(size, np.int64), np.empty(size, np.int64)
+    first, net = np.empty(k, np.int64), np.zeros(k, np.int64)
+    at, u = np.empty(size, np.int64), 0
+    for i in range(k):
+        h = ((lo[i] * 73856093) ^ (hi[i] * 19349663)) & (size - 1)
+        while taken[h] and (slot_lo[h] != lo[i] or slot_hi[h] != hi[i]):
+            h = (h + 1) & (size - 1)
+        if not taken[h]:
+            taken[h], slot_lo[h], slot_hi[h], at[h] = True, lo[i], hi[i], u
+            first[u] = i
+            u += 1
+        net[at[h]] += 1 if ids[row[i], s0[i]] < ids[row[i], s1[i]] else -1
+    keep = np.flatnonzero(net[:u] != 0)
+    return first[keep], net[keep]
 
 
 @_jit()
