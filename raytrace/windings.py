@@ -21,7 +21,9 @@ is one pixel of it): a corner's id leads with its pixel, so every sort keeps a p
 corners and pieces together in the order they take alone (the same floats, in the same
 order, as the pixel alone), the pairs that may cross are sought and the ray's crossings
 counted within a pixel only, the runs are followed by pointer jumping, and a doubt sets its
-pixel's flag alone.
+pixel's flag alone.  In numba (`raytrace.windingkernels`, the `fast` extra, where it loads)
+`boundaries` takes one pixel at a time instead, the same chains and doubt byte for byte; this
+numpy path stays for installs without it, and as its witness.
 """
 
 from __future__ import annotations
