@@ -3,8 +3,9 @@ byte: every pixel's chain the same edges, floats and order, and the same doubt (
 random batches (folded sheets of shared corner ids, loose crossing triangles, corners on a
 coarse grid: touching, collinear, in doubt; a shadow not free, no area, a pixel with no
 shadows, the same triangle twice: counts of 2, edges crossed at one point by two others: ties
-along an edge, one corner id at two spots: which shadow's edge the outline keeps) and on
-the batches of a noisy ball's exact soft shadow.
+along an edge, one corner id at two spots: which shadow's edge the outline keeps, a T and
+two edges leaving a shared corner along one line: in doubt) and on the batches of a noisy
+ball's exact soft shadow.
 """
 
 from __future__ import annotations
@@ -50,7 +51,8 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     triangles, 2 corners on a coarse grid from a few ids, 3 a sheet with a shadow not free,
     4 no area, 5 a sheet with some triangles twice (counts of 2) and some turned over (they
     cancel), 6 a star (ties along an edge), 7 a sheet whose shadows each see their corners a
-    little apart (one id at several spots), 8 no shadows at all."""
+    little apart (one id at several spots), 8 no shadows at all, 9 a T, 10 two edges from a
+    shared corner along one line (both in doubt)."""
     if kind in (0, 3, 5, 7):
         tris, ids = _sheet(rng, int(rng.integers(3, 7)), float(rng.uniform(0.2, 0.8)))
         if kind == 5:
@@ -71,6 +73,17 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         tris, ids = _star(rng)
     elif kind == 8:
         tris, ids = np.zeros((0, 3, 2)), np.zeros((0, 3), np.int64)
+    elif kind in (9, 10):
+        # a T (a corner inside another's edge) or two edges from a shared corner along one
+        # line, moved and scaled by powers of two (exact), among a few loose triangles
+        tris = np.array([[[0, 0], [2, 0], [1, 1]],
+                         [[1, 0], [1.5, -1], [0.5, -1]] if kind == 9 else
+                         [[0, 0], [1, 0], [0.5, -1]]], float)
+        ids = np.array([[0, 1, 2], [3, 4, 5] if kind == 9 else [0, 4, 5]])
+        tris = tris * 2.0 ** rng.integers(-3, 4) + rng.integers(-8, 8, 2)
+        q = int(rng.integers(0, 4))
+        tris = np.r_[tris, rng.uniform(20, 30, (q, 3, 2))]
+        ids = np.r_[ids, np.arange(3 * q).reshape(q, 3) + 100]
     else:
         tris, ids = np.zeros((2, 3, 2)), np.arange(6).reshape(2, 3)
         tris[:, :, 0] = [[0, 1, 2], [1, 2, 3]]
@@ -104,7 +117,7 @@ def _batch(pixels, monkeypatch) -> np.ndarray:
                  np.concatenate([i for _, _, i in pixels]), owner, len(pixels), monkeypatch)
 
 
-@pytest.mark.parametrize("kind", range(9))
+@pytest.mark.parametrize("kind", range(11))
 def test_each_kind_of_pixel_is_numpys_bytes(kind, monkeypatch):
     """Twelve pixels of one kind in a batch; the kinds meant to settle do, mostly."""
     rng = np.random.default_rng(kind)
@@ -112,7 +125,7 @@ def test_each_kind_of_pixel_is_numpys_bytes(kind, monkeypatch):
     settled = sum(c is not None for c in got)
     if kind in (0, 1, 5, 6, 7):
         assert settled >= 6 and max(len(c) for c in got if c is not None) >= 6
-    if kind == 3:
+    if kind in (3, 9, 10):
         assert settled == 0
     if kind in (4, 8):
         assert all(c is not None and c.shape == (0, 2, 2) for c in got)
@@ -131,7 +144,7 @@ def test_ties_along_an_edge_and_counts_of_two(monkeypatch):
 
 
 @settings(profile(), max_examples=40 if PROFILE == "ci" else 1000)
-@given(seed=st.integers(0, 2 ** 32 - 1), kinds=st.lists(st.integers(0, 8), min_size=1,
+@given(seed=st.integers(0, 2 ** 32 - 1), kinds=st.lists(st.integers(0, 10), min_size=1,
                                                          max_size=8),
        shift=st.sampled_from([0, 1000, 2 ** 40]))
 def test_random_batches_are_numpys_bytes(seed, kinds, shift, monkeypatch):
