@@ -75,12 +75,14 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         tris, ids = np.zeros((0, 3, 2)), np.zeros((0, 3), np.int64)
     elif kind in (9, 10):
         # a T (a corner inside another's edge) or two edges from a shared corner along one
-        # line, moved and scaled by powers of two (exact), among a few loose triangles
-        tris = np.array([[[0, 0], [2, 0], [1, 1]],
-                         [[1, 0], [1.5, -1], [0.5, -1]] if kind == 9 else
-                         [[0, 0], [1, 0], [0.5, -1]]], float)
+        # line, mapped by a random integer matrix (exact: no edge level), moved and scaled by
+        # a power of two, among a few loose triangles
+        tris = np.array([[[0, 0], [4, 0], [2, 2]],
+                         [[2, 0], [3, -2], [1, -2]] if kind == 9 else
+                         [[0, 0], [2, 0], [1, -2]]], float)
         ids = np.array([[0, 1, 2], [3, 4, 5] if kind == 9 else [0, 4, 5]])
-        tris = tris * 2.0 ** rng.integers(-3, 4) + rng.integers(-8, 8, 2)
+        turn = rng.integers(1, 4, (2, 2)) * [[1, -1], [1, 1]]              # det > 0
+        tris = tris @ turn * 2.0 ** rng.integers(-3, 4) + rng.integers(-8, 8, 2)
         q = int(rng.integers(0, 4))
         tris = np.r_[tris, rng.uniform(20, 30, (q, 3, 2))]
         ids = np.r_[ids, np.arange(3 * q).reshape(q, 3) + 100]
