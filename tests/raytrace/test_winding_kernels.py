@@ -3,9 +3,9 @@ byte: every pixel's chain the same edges, floats and order, and the same doubt (
 random batches (folded sheets of shared corner ids, loose crossing triangles, corners on a
 coarse grid: touching, collinear, in doubt; a shadow not free, no area, a pixel with no
 shadows, the same triangle twice: counts of 2, edges crossed at one point by two others: ties
-along an edge, one corner id at two spots: which shadow's edge the outline keeps, a T and
-two edges leaving a shared corner along one line: in doubt) and on the batches of a noisy
-ball's exact soft shadow.
+along an edge, one corner id at two spots: which shadow's edge the outline keeps; a T, two
+edges leaving a shared corner along one line, a level edge: in doubt) and on the batches of
+a noisy ball's exact soft shadow.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     4 no area, 5 a sheet with some triangles twice (counts of 2) and some turned over (they
     cancel), 6 a star (ties along an edge), 7 a sheet whose shadows each see their corners a
     little apart (one id at several spots), 8 no shadows at all, 9 a T, 10 two edges from a
-    shared corner along one line (both in doubt)."""
+    shared corner along one line, 11 a level edge (the three in doubt)."""
     if kind in (0, 3, 5, 7):
         tris, ids = _sheet(rng, int(rng.integers(3, 7)), float(rng.uniform(0.2, 0.8)))
         if kind == 5:
@@ -86,6 +86,11 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         q = int(rng.integers(0, 4))
         tris = np.r_[tris, rng.uniform(20, 30, (q, 3, 2))]
         ids = np.r_[ids, np.arange(3 * q).reshape(q, 3) + 100]
+    elif kind == 11:
+        # a triangle whose edge from its least corner id (its run's first) runs level
+        tris = np.array([[[0, 0], [1, 0], [0, 1]]], float) * rng.integers(1, 9) + \
+            rng.integers(-8, 8, 2)
+        ids = np.array([[0, 1, 2]])
     else:
         tris, ids = np.zeros((2, 3, 2)), np.arange(6).reshape(2, 3)
         tris[:, :, 0] = [[0, 1, 2], [1, 2, 3]]
@@ -119,7 +124,7 @@ def _batch(pixels, monkeypatch) -> np.ndarray:
                  np.concatenate([i for _, _, i in pixels]), owner, len(pixels), monkeypatch)
 
 
-@pytest.mark.parametrize("kind", range(11))
+@pytest.mark.parametrize("kind", range(12))
 def test_each_kind_of_pixel_is_numpys_bytes(kind, monkeypatch):
     """Twelve pixels of one kind in a batch; the kinds meant to settle do, mostly."""
     rng = np.random.default_rng(kind)
@@ -127,7 +132,7 @@ def test_each_kind_of_pixel_is_numpys_bytes(kind, monkeypatch):
     settled = sum(c is not None for c in got)
     if kind in (0, 1, 5, 6, 7):
         assert settled >= 6 and max(len(c) for c in got if c is not None) >= 6
-    if kind in (3, 9, 10):
+    if kind in (3, 9, 10, 11):
         assert settled == 0
     if kind in (4, 8):
         assert all(c is not None and c.shape == (0, 2, 2) for c in got)
@@ -146,7 +151,7 @@ def test_ties_along_an_edge_and_counts_of_two(monkeypatch):
 
 
 @settings(profile(), max_examples=40 if PROFILE == "ci" else 1000)
-@given(seed=st.integers(0, 2 ** 32 - 1), kinds=st.lists(st.integers(0, 10), min_size=1,
+@given(seed=st.integers(0, 2 ** 32 - 1), kinds=st.lists(st.integers(0, 11), min_size=1,
                                                          max_size=8),
        shift=st.sampled_from([0, 1000, 2 ** 40]))
 def test_random_batches_are_numpys_bytes(seed, kinds, shift, monkeypatch):
