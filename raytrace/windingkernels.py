@@ -33,10 +33,11 @@ def _turn(ux, uy, vx, vy, size, margin):
 def boundaries(uncut, free, ids, owner, n, margin):
     """`windings.boundaries` of n pixels' shadows uncut (q, 3, 2), free (q,), welded corner
     ids (q, 3) of the pixels owner (q,) (ascending): (doubt (n,), where each pixel's chain
-    starts in the pieces (n + 1,), the pieces (s, 2, 2)); margin: `windings.DOUBT`."""
+    starts in the pieces (n + 1,), the pieces (4 s,): each start's x, y, end's x, y);
+    margin: `windings.DOUBT`."""
     doubt = np.zeros(n, np.bool_)
     at = np.zeros(n + 1, np.int64)
-    out = np.empty((max(64, owner.shape[0]), 2, 2))
+    out = np.empty(4 * max(64, owner.shape[0]))
     size, r0, q = 0, 0, owner.shape[0]
     big = ids.max() + 1 if q else 1
     for k in range(n):
@@ -48,16 +49,25 @@ def boundaries(uncut, free, ids, owner, n, margin):
         if not ok:
             doubt[k] = True
         else:
-            if size + sa.shape[0] > out.shape[0]:
-                grown = np.empty((2 * (size + sa.shape[0]), 2, 2))
-                grown[:size] = out[:size]
-                out = grown
-            for s in range(sa.shape[0]):
-                out[size, 0, 0], out[size, 0, 1] = sa[s, 0], sa[s, 1]
-                out[size, 1, 0], out[size, 1, 1] = sb[s, 0], sb[s, 1]
-                size += 1
+            out = _put(out, size, sa, sb)
+            size += sa.shape[0]
         at[k + 1] = size
-    return doubt, at, out[:size]
+    return doubt, at, out[:4 * size]
+
+
+@_jit()
+def _put(out, size, sa, sb):
+    """The pieces sa-sb (c, 2) written into out (4 s,) after its first size, with more room
+    where needed: out or its copy."""
+    if 4 * (size + sa.shape[0]) > out.shape[0]:
+        grown = np.empty(8 * (size + sa.shape[0]))
+        for g in range(4 * size):
+            grown[g] = out[g]
+        out = grown
+    for s in range(sa.shape[0]):
+        g = 4 * (size + s)
+        out[g], out[g + 1], out[g + 2], out[g + 3] = sa[s, 0], sa[s, 1], sb[s, 0], sb[s, 1]
+    return out
 
 
 @_jit()
@@ -183,8 +193,8 @@ def _order(lo, hi, big):
     if many == 0:
         return np.empty(0, np.int64)
     if float(big) * float(big) * float(max(many, 1)) >= 2.0 ** 62:
-        order = np.argsort(hi, kind="mergesort")
-        return order[np.argsort(lo[order], kind="mergesort")]
+        order = _stable(hi)
+        return order[_stable(lo[order])]
     key = np.empty(many, np.int64)
     for i in range(many):
         key[i] = (lo[i] * big + hi[i]) * many + i
@@ -193,12 +203,34 @@ def _order(lo, hi, big):
 
 
 @_jit()
+def _stable(key):
+    """The order of key (k,) in a stable sort (np.argsort's, mergesort): a quick sort, then
+    each run of equal keys (NaNs one run) in order of place."""
+    order = np.argsort(key)
+    g = 0
+    while g < key.shape[0]:
+        h = g + 1
+        while h < key.shape[0] and (key[order[h]] == key[order[g]] or (
+                key[order[h]] != key[order[h]] and key[order[g]] != key[order[g]])):
+            h += 1
+        for a in range(g + 1, h):                        # insertion sort of the run
+            i, w = order[a], a
+            while w > g and order[w - 1] > i:
+                order[w] = order[w - 1]
+                w -= 1
+            order[w] = i
+        g = h
+    return order
+
+
+@_jit()
 def _corners(ax, ay, bx, by, ia, ib):
     """The corners of the outline numbered (va, vb (m,)), and whether no two of them lie at
     one point (each at its first place among the edges' starts, then ends)."""
     m = ax.shape[0]
-    both = np.concatenate((ia, ib))
-    order = np.argsort(both, kind="mergesort")
+    both = np.empty(2 * m, np.int64)
+    both[:m], both[m:] = ia, ib
+    order = _stable(both)
     number = np.empty(2 * m, np.int64)
     xs, ys = np.empty(2 * m), np.empty(2 * m)
     c = -1
@@ -231,10 +263,15 @@ def _crossings(ax, ay, bx, by, ia, ib, cnt, margin):
         ent[e, 0], ent[e, 1], ent[m + e, 0], ent[m + e, 1] = e, 0, e, 1
         pos[e, 0], pos[e, 1], pos[e, 2] = 0.0, ax[e], ay[e]
         pos[m + e, 0], pos[m + e, 1], pos[m + e, 2] = 1.0, bx[e], by[e]
-    order = np.argsort(np.minimum(ax, bx), kind="mergesort")
+    left = np.empty(m)
+    for e in range(m):
+        left[e] = min(ax[e], bx[e])
+    order = _stable(left)
     box = np.empty((4, m))                               # along the sweep
-    box[0], box[1] = np.minimum(ax, bx)[order], np.maximum(ax, bx)[order]
-    box[2], box[3] = np.minimum(ay, by)[order], np.maximum(ay, by)[order]
+    for p in range(m):
+        e = order[p]
+        box[0, p], box[1, p] = left[e], max(ax[e], bx[e])
+        box[2, p], box[3, p] = min(ay[e], by[e]), max(ay[e], by[e])
     k, p, q = 2 * m, 0, 1
     while True:                 # the sweep, resumed where its room ran out (room made here:
         state, k, p, q = _sweep(order, box, ax, ay, bx, by, ia, ib, cnt, margin, ent, pos,
@@ -278,7 +315,9 @@ def _sweep(order, box, ax, ay, bx, by, ia, ib, cnt, margin, ent, pos, k, p0, q0)
 def _grown(ent, pos, k):
     """ent, pos with twice the room, their first k rows kept."""
     e, p = np.zeros((2 * ent.shape[0], 2), np.int64), np.zeros((2 * ent.shape[0], 4))
-    e[:k], p[:k] = ent[:k], pos[:k]
+    for g in range(k):
+        e[g, 0], e[g, 1] = ent[g, 0], ent[g, 1]
+        p[g, 0], p[g, 1], p[g, 2], p[g, 3] = pos[g, 0], pos[g, 1], pos[g, 2], pos[g, 3]
     return e, p
 
 

@@ -101,6 +101,7 @@ def _kernel(loaded, uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner:
         np.ascontiguousarray(uncut, np.float64), np.ascontiguousarray(free, bool),
         np.ascontiguousarray(ids, np.int64), np.ascontiguousarray(owner, np.int64), int(n),
         DOUBT)
+    pieces = pieces.reshape(-1, 2, 2)
     chains = np.full(n, None, object)
     for k in np.flatnonzero(~doubt).tolist():
         chains[k] = pieces[at[k]:at[k + 1]]
