@@ -1,16 +1,13 @@
-"""`windings.boundaries` in numba (the `fast` extra): a crowded pixel's union of shadows from
-its outline's winding numbers, one pixel at a time, where numpy's passes over a batch's
-edges, corners, pairs and pieces (sorts, searches, pointer jumping) cost most of the time.
-
-The same chains as numpy's path, bit for bit, and the same doubt: each outline edge is the
-first of its shadows' edges (edge 0 of every shadow, then edge 1, then 2) between its two
-welded corners, the edges in the order of their corners' ids; the pairs of edges whose boxes
-meet are tested as `windings._near` orders them (the one first along x, then by number, is
-i) with the same products; a crossing point is computed along j, and the points along an
-edge are ordered by t, then as `windings._along` ties them (its start, its end, the
-crossings where it is i by j's place along x, then where it is j by i's); the cover right
-of a run's first piece counts every other edge of its pixel that the ray in +x meets
-(`windings._right_cover`).  Counts are small integers, exact in float64 and here in int64.
+"""`windings.boundaries` in numba (the `fast` extra), one pixel at a time, where numpy's
+passes over a batch's edges, corners, pairs and pieces cost most of the time.  The same
+chains and doubt as numpy's path, bit for bit: an outline edge is the first of its shadows'
+edges (edge 0 of every shadow, then 1, then 2) between its two welded corners, the edges in
+the order of their corners' ids; two edges whose boxes meet are tested as `windings._near`
+orders them (i the first along x, then by number), with the same products; a crossing point
+is computed along j; the points along an edge are in order of t, then as `windings._along`
+ties them (its start, its end, the crossings where it is i by j's place along x, then where
+it is j by i's); the ray right of a run's first piece meets every other edge of its pixel
+(`windings._right_cover`); counts are small integers, exact in float64 and in int64 here.
 tests/raytrace/test_winding_kernels.py holds the two to the same bytes.  A kernel indexes
 scalars, not row views (each view costs a reference count).
 """
@@ -95,23 +92,16 @@ def _pixel(uncut, free, ids, r0, r1, big, margin):
     ok, cover = _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin)
     if not ok:
         return False, none, none
-    keep = np.zeros(parent.shape[0], np.bool_)
-    c = 0
-    for s in range(parent.shape[0]):
+    sa, sb, c = np.empty((parent.shape[0], 2)), np.empty((parent.shape[0], 2)), 0
+    for s in range(parent.shape[0]):                     # the pieces with no cover right
         e = parent[s]
         right = cover[root[e]] + offset[e] + jump[s]
         if right < 0:
             return False, none, none
         if right == 0:
-            keep[s] = True
-            c += 1
-    sa, sb = np.empty((c, 2)), np.empty((c, 2))
-    c = 0
-    for s in range(parent.shape[0]):
-        if keep[s]:
             sa[c, 0], sa[c, 1], sb[c, 0], sb[c, 1] = pa[s, 0], pa[s, 1], pb[s, 0], pb[s, 1]
             c += 1
-    return True, sa, sb
+    return True, sa[:c], sb[:c]
 
 
 @_jit()
@@ -420,32 +410,23 @@ def _runs(va, vb, cnt, total):
             succ[e] = leaving[v]
             pred[leaving[v]] = e
     root, offset = np.full(m, -1, np.int64), np.zeros(m, np.int64)
-    for start in range(m):                # the open runs from their first edge, then each
-        if pred[start] < 0:               # closed one from its least
-            _walk(start, succ, total, root, offset)
-    for start in range(m):
-        if root[start] < 0:
-            _walk(start, succ, total, root, offset)
+    for g in range(2 * m):          # the open runs from their first edge, then each closed
+        start = g % m               # one from its least
+        if root[start] >= 0 or (g < m and pred[start] >= 0):
+            continue
+        e, at = start, 0
+        while e >= 0 and root[e] < 0:
+            root[e], offset[e] = start, at
+            at += total[e]
+            e = succ[e]
     return root, offset
-
-
-@_jit()
-def _walk(start, succ, total, root, offset):
-    """Sets root and offset along the run from edge start (`_runs`)."""
-    e, at = start, 0
-    while e >= 0 and root[e] < 0:
-        root[e], offset[e] = start, at
-        at += total[e]
-        e = succ[e]
 
 
 @_jit()
 def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin):
     """(certain, the cover right of each run's first piece (m,), by its run's first edge) by
-    a ray in +x from its midpoint (`windings._right_cover`): every other edge of the pixel
-    that runs up where the point is left of it adds its count, that runs down where the point
-    is right of it takes it; the piece's own edge where it runs down takes its count; not
-    certain where a side is in doubt or the piece is level."""
+    a ray in +x from its midpoint, as `windings._right_cover`; not certain where a side is in
+    doubt or the piece is level."""
     m = ax.shape[0]
     cover = np.zeros(m, np.int64)
     start, edge, bottom, top, scale = _levels(ay, by)
@@ -488,10 +469,9 @@ def _bucket(h, bottom, scale, many):
 @_jit()
 def _levels(ay, by):
     """The edges of heights ay-by (m,) in buckets of height: (where each bucket's edges start
-    (b + 1,), the edges (k,), the least and most height, the buckets a unit of height), each
-    edge in every bucket from its low end's to its high end's: the bucket of a height is
-    monotone in it, so every edge whose span holds a height (in the least to the most) is in
-    that height's bucket."""
+    (b + 1,), the edges (k,), the least and most height, the buckets a unit of height); an
+    edge in every bucket from its low end's to its high end's (a height's bucket is monotone
+    in it: every edge whose span holds a height is in its bucket)."""
     m = ay.shape[0]
     bottom, top = min(ay.min(), by.min()), max(ay.max(), by.max())
     many = max(m // 4, 1)
