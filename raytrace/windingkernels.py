@@ -182,14 +182,13 @@ def _order(lo, hi, big):
     many = lo.shape[0]
     if many == 0:
         return np.empty(0, np.int64)
-    if float(big) * float(big) * float(max(many, 1)) >= 2.0 ** 62:
+    if float(big) * float(big) >= 2.0 ** 62:
         order = _stable(hi)
         return order[_stable(lo[order])]
     key = np.empty(many, np.int64)
     for i in range(many):
-        key[i] = (lo[i] * big + hi[i]) * many + i
-    key.sort()
-    return key % many
+        key[i] = lo[i] * big + hi[i]
+    return _stable(key)
 
 
 @_jit()
@@ -231,7 +230,7 @@ def _corners(ax, ay, bx, by, ia, ib):
             xs[c], ys[c] = (ax[i], ay[i]) if i < m else (bx[i - m], by[i - m])
         number[i] = c
     c += 1
-    by_x = np.argsort(xs[:c])
+    by_x = _stable(xs[:c].copy())
     for g in range(c):
         h = g + 1
         while h < c and xs[by_x[h]] == xs[by_x[g]]:
