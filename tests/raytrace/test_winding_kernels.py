@@ -153,10 +153,13 @@ def test_ties_along_an_edge_and_counts_of_two(monkeypatch):
 @settings(profile(), max_examples=40 if PROFILE == "ci" else 1000)
 @given(seed=st.integers(0, 2 ** 32 - 1), kinds=st.lists(st.integers(0, 11), min_size=1,
                                                          max_size=8),
-       shift=st.sampled_from([0, 1000, 2 ** 40]))
-def test_random_batches_are_numpys_bytes(seed, kinds, shift, monkeypatch):
+       shift=st.sampled_from([0, 1000, 2 ** 40]),
+       outline=st.sampled_from([1, 9, 40, windings.OUTLINE]))
+def test_random_batches_are_numpys_bytes(seed, kinds, shift, outline, monkeypatch):
     """Random batches of every kind, the ids shifted (near 2 ** 40: a key of two ids no longer
-    fits one int64 with the pixel's)."""
+    fits one int64 with the pixel's), numpy's path noded in parts of `outline` edges (whole
+    pixels) or all at once."""
+    monkeypatch.setattr(windings, "OUTLINE", outline)
     rng = np.random.default_rng(seed)
     _batch([(t, f, i + shift) for t, f, i in (_pixel(rng, k) for k in kinds)], monkeypatch)
 
