@@ -65,11 +65,12 @@ def project(points: np.ndarray, eye: np.ndarray, center: np.ndarray, normal: np.
                         axis=-1)
 
 
-def kernels():
-    """`raytrace.exactkernels` (the exact visibility's numba loops, the `fast` extra), or None
-    where numba is missing (or a test has set its sys.modules entry to None)."""
+def kernels(name: str = "exactkernels"):
+    """`raytrace.exactkernels` (the exact visibility's numba loops, the `fast` extra; or
+    another module of them by name, `raytrace.windingkernels`), or None where numba is
+    missing (or a test has set its sys.modules entry to None)."""
     try:
-        return importlib.import_module(f"{__package__}.exactkernels")
+        return importlib.import_module(f"{__package__}.{name}")
     except ImportError:
         return None
 

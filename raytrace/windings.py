@@ -28,14 +28,16 @@ is one pixel of it): a corner's id leads with its pixel, so every sort keeps a p
 corners and pieces together in the order they take alone (the same floats, in the same
 order, as the pixel alone), the pairs that may cross are sought and the ray's crossings
 counted within a pixel only, the runs are followed by pointer jumping, and a doubt sets its
-pixel's flag alone.
+pixel's flag alone.  In numba (`raytrace.windingkernels`, the `fast` extra, where it loads)
+`boundaries` takes one pixel at a time instead, the same chains and doubt byte for byte; this
+numpy path stays for installs without it, and as its witness.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import arrange, pyramid
+from . import arrange, polygons, pyramid
 from .regions import closed_rings, inside, ring_measures
 
 __all__ = ["boundaries", "boundary", "found", "measures", "split"]
@@ -68,7 +70,11 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
     uncut (q, 3, 2), free (q,), welded corner ids (q, 3) of the pixels owner (q,) (ascending,
     < n).  A pixel's corners are told apart from another's by an id that leads with the pixel,
     so its edges, corners and pieces sort together, in the order they take alone; where its
-    outline is in doubt, its boundary alone is None."""
+    outline is in doubt, its boundary alone is None.  In numba, one pixel at a time, where it
+    loads (`raytrace.windingkernels`: the same bytes)."""
+    loaded = polygons.kernels("windingkernels")
+    if loaded is not None:
+        return _kernel(loaded, uncut, free, ids, owner, n)
     chains, doubt = np.full(n, None, object), np.zeros(n, bool)
     doubt[owner[~free]] = True
     keep = ~doubt[owner]
@@ -96,6 +102,20 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
         e = slice(first[p0], first[p1] if p1 < n else len(a))
         _settle(chains[p0:p1], doubt[p0:p1], a[e], b[e], ia[e], ib[e], count[e],
                 group[e] - p0)
+    return chains
+
+
+def _kernel(loaded, uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.ndarray,
+            n: int) -> np.ndarray:
+    """`boundaries` by `raytrace.windingkernels`."""
+    doubt, at, pieces = loaded.boundaries(
+        np.ascontiguousarray(uncut, np.float64), np.ascontiguousarray(free, bool),
+        np.ascontiguousarray(ids, np.int64), np.ascontiguousarray(owner, np.int64), int(n),
+        DOUBT)
+    pieces = pieces.reshape(-1, 2, 2)
+    chains = np.full(n, None, object)
+    for k in np.flatnonzero(~doubt).tolist():
+        chains[k] = pieces[at[k]:at[k + 1]]
     return chains
 
 

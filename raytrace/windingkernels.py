@@ -1,0 +1,494 @@
+"""`windings.boundaries` in numba (the `fast` extra), one pixel at a time, where numpy's
+passes over a batch's edges, corners, pairs and pieces cost most of the time.  The same
+chains and doubt as numpy's path, bit for bit: an outline edge is the first of its shadows'
+edges (edge 0 of every shadow, then 1, then 2) between its two welded corners, the edges in
+the order of their corners' ids; two edges whose boxes meet are tested as `windings._near`
+orders them (i the first along x, then by number), with the same products; a crossing point
+is computed along j; the points along an edge are in order of t, then as `windings._along`
+ties them (its start, its end, the crossings where it is i by j's place along x, then where
+it is j by i's); the ray right of a run's first piece meets every other edge of its pixel
+(`windings._right_cover`); counts are small integers, exact in float64 and in int64 here.
+tests/raytrace/test_winding_kernels.py holds the two to the same bytes.  A kernel indexes
+scalars, not row views (each view costs a reference count).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .packetkernels import _jit
+
+
+@_jit(inline="always")
+def _turn(ux, uy, vx, vy, size, margin):
+    """`windings._turn` of scalars: u x v and whether it is certainly nonzero."""
+    c = ux * vy - uy * vx
+    return c, abs(c) > margin * (size * (abs(vx) + abs(vy)))
+
+
+@_jit()
+def boundaries(uncut, free, ids, owner, n, margin):
+    """`windings.boundaries` of n pixels' shadows uncut (q, 3, 2), free (q,), welded corner
+    ids (q, 3) of the pixels owner (q,) (ascending): (doubt (n,), where each pixel's chain
+    starts in the pieces (n + 1,), the pieces (4 s,): each start's x, y, end's x, y);
+    margin: `windings.DOUBT`."""
+    doubt = np.zeros(n, np.bool_)
+    at = np.zeros(n + 1, np.int64)
+    out = np.empty(4 * max(64, owner.shape[0]))
+    size, r0, q = 0, 0, owner.shape[0]
+    big = ids.max() + 1 if q else 1
+    for k in range(n):
+        r1 = r0
+        while r1 < q and owner[r1] == k:
+            r1 += 1
+        ok, sa, sb = _pixel(uncut, free, ids, r0, r1, big, margin)
+        r0 = r1
+        if not ok:
+            doubt[k] = True
+        else:
+            out = _put(out, size, sa, sb)
+            size += sa.shape[0]
+        at[k + 1] = size
+    return doubt, at, out[:4 * size]
+
+
+@_jit()
+def _put(out, size, sa, sb):
+    """The pieces sa-sb (c, 2) written into out (4 s,) after its first size, with more room
+    where needed: out or its copy."""
+    if 4 * (size + sa.shape[0]) > out.shape[0]:
+        grown = np.empty(8 * (size + sa.shape[0]))
+        for g in range(4 * size):
+            grown[g] = out[g]
+        out = grown
+    for s in range(sa.shape[0]):
+        g = 4 * (size + s)
+        out[g], out[g + 1], out[g + 2], out[g + 3] = sa[s, 0], sa[s, 1], sb[s, 0], sb[s, 1]
+    return out
+
+
+@_jit()
+def _pixel(uncut, free, ids, r0, r1, big, margin):
+    """One pixel's shadows rows r0..r1: (certain, the chain's starts (c, 2), ends (c, 2))."""
+    none = np.empty((0, 2))
+    for r in range(r0, r1):
+        if not free[r]:
+            return False, none, none
+    ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big)
+    m = ax.shape[0]
+    if m == 0:
+        return True, none, none
+    ok, va, vb = _corners(ax, ay, bx, by, ia, ib)
+    if not ok:
+        return False, none, none
+    ok, ent, pos = _crossings(ax, ay, bx, by, ia, ib, cnt, margin)
+    if not ok:
+        return False, none, none
+    pa, pb, parent, jump, first = _pieces(ent, pos, m)
+    total = np.empty(m, np.int64)
+    for e in range(m):
+        total[e] = jump[first[e + 1] - 1]
+    root, offset = _runs(va, vb, cnt, total)
+    ok, cover = _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin)
+    if not ok:
+        return False, none, none
+    sa, sb, c = np.empty((parent.shape[0], 2)), np.empty((parent.shape[0], 2)), 0
+    for s in range(parent.shape[0]):                     # the pieces with no cover right
+        e = parent[s]
+        right = cover[root[e]] + offset[e] + jump[s]
+        if right < 0:
+            return False, none, none
+        if right == 0:
+            sa[c, 0], sa[c, 1], sb[c, 0], sb[c, 1] = pa[s, 0], pa[s, 1], pb[s, 0], pb[s, 1]
+            c += 1
+    return True, sa[:c], sb[:c]
+
+
+@_jit()
+def _outline(uncut, ids, r0, r1, big):
+    """The outline of the shadows rows r0..r1 (`arrange.edges`, then each undirected edge's
+    net count, its first edge's corners): (ax, ay, bx, by (m,), corner ids ia, ib (m,),
+    counts (m,)), the edges in the order of (lower id, higher id); big: more than any id."""
+    rows = np.empty(r1 - r0, np.int64)
+    v = 0
+    for r in range(r0, r1):
+        signed = (uncut[r, 1, 0] - uncut[r, 0, 0]) * (uncut[r, 2, 1] - uncut[r, 0, 1]) - \
+            (uncut[r, 1, 1] - uncut[r, 0, 1]) * (uncut[r, 2, 0] - uncut[r, 0, 0])
+        if signed != 0:
+            rows[v] = r if signed > 0 else -1 - r
+            v += 1
+    many = 3 * v
+    row, s0, s1 = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
+    lo, hi = np.empty(many, np.int64), np.empty(many, np.int64)
+    for e in range(3):
+        for w in range(v):
+            i, r = e * v + w, rows[w]
+            turn = r < 0
+            r = -1 - r if turn else r
+            row[i] = r
+            s0[i] = (e + 1) % 3 if turn else e
+            s1[i] = e if turn else (e + 1) % 3
+            ka, kb = ids[r, s0[i]], ids[r, s1[i]]
+            lo[i], hi[i] = min(ka, kb), max(ka, kb)
+    rep, net = _tally(lo, hi, (ids, row, s0, s1))
+    order = _order(lo[rep], hi[rep], big)
+    m = order.shape[0]
+    ax, ay, bx, by = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    ia, ib, cnt = np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64)
+    for g in range(m):
+        f, up = rep[order[g]], net[order[g]] > 0         # f: the first of the edge's edges
+        r, low_first = row[f], ids[row[f], s0[f]] < ids[row[f], s1[f]]
+        c_lo, c_hi = (s0[f], s1[f]) if low_first else (s1[f], s0[f])
+        c_a, c_b = (c_lo, c_hi) if up else (c_hi, c_lo)
+        ax[g], ay[g], bx[g], by[g] = uncut[r, c_a, 0], uncut[r, c_a, 1], uncut[r, c_b, 0], \
+            uncut[r, c_b, 1]
+        ia[g], ib[g] = (lo[f], hi[f]) if up else (hi[f], lo[f])
+        cnt[g] = abs(net[order[g]])
+    return ax, ay, bx, by, ia, ib, cnt
+
+
+@_jit()
+def _tally(lo, hi, edges):
+    """The undirected edges lo-hi (k,) (corner ids) whose net count is not zero: (the first
+    of each one's edges (u,), its net count (u,)), in the order of those first edges; an edge
+    counts +1 where it runs from its lower id (edges: ids (q, 3) and each edge's row, start
+    and end corner (k,)), by a table of open addressing."""
+    ids, row, s0, s1 = edges
+    k = lo.shape[0]
+    size = 16
+    while size < 2 * k:
+        size *= 2
+    taken = np.zeros(size, np.bool_)
+    slot_lo, slot_hi = np.empty(size, np.int64), np.empty(size, np.int64)
+    first, net = np.empty(k, np.int64), np.zeros(k, np.int64)
+    at, u = np.empty(size, np.int64), 0
+    for i in range(k):
+        h = ((lo[i] * 73856093) ^ (hi[i] * 19349663)) & (size - 1)
+        while taken[h] and (slot_lo[h] != lo[i] or slot_hi[h] != hi[i]):
+            h = (h + 1) & (size - 1)
+        if not taken[h]:
+            taken[h], slot_lo[h], slot_hi[h], at[h] = True, lo[i], hi[i], u
+            first[u] = i
+            u += 1
+        net[at[h]] += 1 if ids[row[i], s0[i]] < ids[row[i], s1[i]] else -1
+    keep = np.flatnonzero(net[:u] != 0)
+    return first[keep], net[keep]
+
+
+@_jit()
+def _order(lo, hi, big):
+    """The order of the edges by lower corner id lo (k,), then higher hi (k,) (< big), then
+    number (a stable sort): one sort of a key where it fits in an int64."""
+    many = lo.shape[0]
+    if many == 0:
+        return np.empty(0, np.int64)
+    if float(big) * float(big) >= 2.0 ** 62:
+        order = _stable(hi)
+        return order[_stable(lo[order])]
+    key = np.empty(many, np.int64)
+    for i in range(many):
+        key[i] = lo[i] * big + hi[i]
+    return _stable(key)
+
+
+@_jit()
+def _stable(key):
+    """The order of key (k,) in a stable sort (np.argsort's, mergesort): a quick sort, then
+    each run of equal keys (NaNs one run) in order of place."""
+    order = np.argsort(key)
+    g = 0
+    while g < key.shape[0]:
+        h = g + 1
+        while h < key.shape[0] and (key[order[h]] == key[order[g]] or (
+                key[order[h]] != key[order[h]] and key[order[g]] != key[order[g]])):
+            h += 1
+        for a in range(g + 1, h):                        # insertion sort of the run
+            i, w = order[a], a
+            while w > g and order[w - 1] > i:
+                order[w] = order[w - 1]
+                w -= 1
+            order[w] = i
+        g = h
+    return order
+
+
+@_jit()
+def _corners(ax, ay, bx, by, ia, ib):
+    """The corners of the outline numbered (va, vb (m,)), and whether no two of them lie at
+    one point (each at its first place among the edges' starts, then ends)."""
+    m = ax.shape[0]
+    both = np.empty(2 * m, np.int64)
+    both[:m], both[m:] = ia, ib
+    order = _stable(both)
+    number = np.empty(2 * m, np.int64)
+    xs, ys = np.empty(2 * m), np.empty(2 * m)
+    c = -1
+    for g in range(2 * m):
+        i = order[g]
+        if g == 0 or both[i] != both[order[g - 1]]:
+            c += 1
+            xs[c], ys[c] = (ax[i], ay[i]) if i < m else (bx[i - m], by[i - m])
+        number[i] = c
+    c += 1
+    by_x = _stable(xs[:c].copy())
+    for g in range(c):
+        h = g + 1
+        while h < c and xs[by_x[h]] == xs[by_x[g]]:
+            if ys[by_x[h]] == ys[by_x[g]]:
+                return False, number[:m], number[m:]
+            h += 1
+    return True, number[:m], number[m:]
+
+
+@_jit()
+def _crossings(ax, ay, bx, by, ia, ib, cnt, margin):
+    """The points along the outline's edges (`windings._pieces`): (certain, entries (k, 2):
+    each point's edge and its place among the ties, points (k, 4): t along the edge, x, y,
+    the cover it adds); every pair whose boxes meet (swept along x, as `windings._near`)
+    certainly crosses inside both, lies apart or shares a corner only."""
+    m = ax.shape[0]
+    ent, pos = np.empty((4 * m, 2), np.int64), np.zeros((4 * m, 4))
+    for e in range(m):
+        ent[e, 0], ent[e, 1], ent[m + e, 0], ent[m + e, 1] = e, 0, e, 1
+        pos[e, 0], pos[e, 1], pos[e, 2] = 0.0, ax[e], ay[e]
+        pos[m + e, 0], pos[m + e, 1], pos[m + e, 2] = 1.0, bx[e], by[e]
+    left = np.empty(m)
+    for e in range(m):
+        left[e] = min(ax[e], bx[e])
+    order = _stable(left)
+    box = np.empty((4, m))                               # along the sweep
+    for p in range(m):
+        e = order[p]
+        box[0, p], box[1, p] = left[e], max(ax[e], bx[e])
+        box[2, p], box[3, p] = min(ay[e], by[e]), max(ay[e], by[e])
+    k, p, q = 2 * m, 0, 1
+    while True:                 # the sweep, resumed where its room ran out (room made here:
+        state, k, p, q = _sweep(order, box, ax, ay, bx, by, ia, ib, cnt, margin, ent, pos,
+                                k, p, q)                 # arrays set anew in its loop cost
+        if state < 0:                                    # a reference count an access)
+            return False, ent, pos
+        if state == 0:
+            return True, ent[:k], pos[:k]
+        ent, pos = _grown(ent, pos, k)
+
+
+@_jit()
+def _sweep(order, box, ax, ay, bx, by, ia, ib, cnt, margin, ent, pos, k, p0, q0):
+    """`_crossings`' sweep from the pair of places p0, q0 along it, its points from row k on:
+    (0 where done, -1 where in doubt, 1 where out of room; the rows filled, the next pair)."""
+    m = ax.shape[0]
+    for p in range(p0, m):
+        right, bottom, top = box[1, p], box[2, p], box[3, p]
+        for q in range(q0 if p == p0 else p + 1, m):
+            if box[0, q] > right:
+                break
+            if not (bottom <= box[3, q] and box[2, q] <= top):
+                continue
+            i, j = order[p], order[q]
+            state, t_i, t_j, x, y, turn = _pair(i, j, ax, ay, bx, by, ia, ib, margin)
+            if state < 0:
+                return -1, k, p, q
+            if state == 0:
+                continue
+            if k + 2 > ent.shape[0]:
+                return 1, k, p, q
+            ent[k, 0], ent[k, 1], ent[k + 1, 0], ent[k + 1, 1] = i, 2 + q, j, 2 + m + p
+            pos[k, 0], pos[k, 1], pos[k, 2], pos[k, 3] = t_i, x, y, turn * cnt[j]
+            pos[k + 1, 0], pos[k + 1, 1], pos[k + 1, 2] = t_j, x, y
+            pos[k + 1, 3] = -turn * cnt[i]
+            k += 2
+    return 0, k, m, m
+
+
+@_jit()
+def _grown(ent, pos, k):
+    """ent, pos with twice the room, their first k rows kept."""
+    e, p = np.zeros((2 * ent.shape[0], 2), np.int64), np.zeros((2 * ent.shape[0], 4))
+    for g in range(k):
+        e[g, 0], e[g, 1] = ent[g, 0], ent[g, 1]
+        p[g, 0], p[g, 1], p[g, 2], p[g, 3] = pos[g, 0], pos[g, 1], pos[g, 2], pos[g, 3]
+    return e, p
+
+
+@_jit(inline="always")
+def _pair(i, j, ax, ay, bx, by, ia, ib, margin):
+    """Edges i, j whose boxes meet (i first along x): (1 where they cross, with t along i, t
+    along j, the crossing point x, y and the sign of j x i; 0 where they lie apart or share a
+    corner, certainly; -1 where in doubt), with `windings._pieces`'s products."""
+    dxi, dyi, dxj, dyj = bx[i] - ax[i], by[i] - ay[i], bx[j] - ax[j], by[j] - ay[j]
+    si, sj = abs(dxi) + abs(dyi), abs(dxj) + abs(dyj)
+    ci, oi = _turn(dxi, dyi, ax[j] - ax[i], ay[j] - ay[i], si, margin)
+    di, pi = _turn(dxi, dyi, bx[j] - ax[i], by[j] - ay[i], si, margin)
+    if oi and pi and ci * di > 0:
+        return 0, 0.0, 0.0, 0.0, 0.0, 0.0
+    cj, oj = _turn(dxj, dyj, ax[i] - ax[j], ay[i] - ay[j], sj, margin)
+    dj, pj = _turn(dxj, dyj, bx[i] - ax[j], by[i] - ay[j], sj, margin)
+    shared = ia[i] == ia[j] or ia[i] == ib[j] or ib[i] == ia[j] or ib[i] == ib[j]
+    apart = oj and pj and cj * dj > 0
+    cross = oi and pi and oj and pj and ci * di < 0 and cj * dj < 0 and not shared
+    if not (apart or cross or shared):
+        return -1, 0.0, 0.0, 0.0, 0.0, 0.0
+    if shared and not apart:
+        at_a = ia[i] == ia[j] or ia[i] == ib[j]          # the corner is i's start
+        x, y = (ax[i], ay[i]) if at_a else (bx[i], by[i])
+        ux, uy = ((bx[i], by[i]) if at_a else (ax[i], ay[i]))
+        ux, uy = ux - x, uy - y
+        other_at_a = ia[j] == (ia[i] if at_a else ib[i])
+        vx, vy = ((bx[j], by[j]) if other_at_a else (ax[j], ay[j]))
+        vx, vy = vx - x, vy - y
+        _, sure = _turn(ux, uy, vx, vy, abs(ux) + abs(uy), margin)
+        if not (sure or ux * vx + uy * vy < 0):
+            return -1, 0.0, 0.0, 0.0, 0.0, 0.0
+    if not cross:
+        return 0, 0.0, 0.0, 0.0, 0.0, 0.0
+    t_j, t_i = ci / (ci - di), cj / (cj - dj)
+    x, y = ax[j] + t_j * dxj, ay[j] + t_j * dyj
+    turn = np.sign(dxj * dyi - dyj * dxi)
+    return 1, t_i, t_j, x, y, turn
+
+
+@_jit()
+def _pieces(ent, pos, m):
+    """The edges' points (`_crossings`) in order along each edge (by t, then place) and the
+    pieces between: (starts (s, 2), ends (s, 2), edges (s,), how much more each piece's
+    sides are covered than its edge's first piece's (s,), where each edge's pieces start
+    (m + 1,))."""
+    k = ent.shape[0]
+    start = np.zeros(m + 1, np.int64)
+    for g in range(k):
+        start[ent[g, 0] + 1] += 1
+    for e in range(m):
+        start[e + 1] += start[e]
+    fill, idx = start[:m].copy(), np.empty(k, np.int64)
+    for g in range(k):
+        e = ent[g, 0]
+        idx[fill[e]] = g
+        fill[e] += 1
+    for e in range(m):                                   # insertion sort by (t, place)
+        for h in range(start[e] + 1, start[e + 1]):
+            g, w = idx[h], h
+            while w > start[e] and (pos[idx[w - 1], 0] > pos[g, 0] or (
+                    pos[idx[w - 1], 0] == pos[g, 0] and ent[idx[w - 1], 1] > ent[g, 1])):
+                idx[w] = idx[w - 1]
+                w -= 1
+            idx[w] = g
+    s = k - m
+    pa, pb = np.empty((s, 2)), np.empty((s, 2))
+    parent, jump, first = np.empty(s, np.int64), np.empty(s, np.int64), np.empty(m + 1, np.int64)
+    c = 0
+    for e in range(m):
+        first[e] = c
+        run = 0.0
+        for h in range(start[e], start[e + 1] - 1):
+            g, f = idx[h], idx[h + 1]
+            if h > start[e]:
+                run += pos[g, 3]
+            pa[c, 0], pa[c, 1], pb[c, 0], pb[c, 1] = pos[g, 1], pos[g, 2], pos[f, 1], pos[f, 2]
+            parent[c], jump[c] = e, int(run)
+            c += 1
+    first[m] = c
+    return pa, pb, parent, jump, first
+
+
+@_jit()
+def _runs(va, vb, cnt, total):
+    """`windings._runs` of one pixel: (the first edge of each edge's run (m,), how much more
+    its first piece is covered than that edge's (m,)), by walking each run once."""
+    m = va.shape[0]
+    many = max(va.max(), vb.max()) + 1
+    out_deg, in_deg = np.zeros(many, np.int64), np.zeros(many, np.int64)
+    leaving = np.full(many, -1, np.int64)
+    for e in range(m):
+        out_deg[va[e]] += 1
+        in_deg[vb[e]] += 1
+        leaving[va[e]] = e
+    succ, pred = np.full(m, -1, np.int64), np.full(m, -1, np.int64)
+    for e in range(m):
+        v = vb[e]
+        if in_deg[v] == 1 and out_deg[v] == 1 and cnt[leaving[v]] == cnt[e]:
+            succ[e] = leaving[v]
+            pred[leaving[v]] = e
+    root, offset = np.full(m, -1, np.int64), np.zeros(m, np.int64)
+    for g in range(2 * m):          # the open runs from their first edge, then each closed
+        start = g % m               # one from its least
+        if root[start] >= 0 or (g < m and pred[start] >= 0):
+            continue
+        e, at = start, 0
+        while e >= 0 and root[e] < 0:
+            root[e], offset[e] = start, at
+            at += total[e]
+            e = succ[e]
+    return root, offset
+
+
+@_jit()
+def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin):
+    """(certain, the cover right of each run's first piece (m,), by its run's first edge) by
+    a ray in +x from its midpoint, as `windings._right_cover`; not certain where a side is in
+    doubt or the piece is level."""
+    m = ax.shape[0]
+    cover = np.zeros(m, np.int64)
+    start, edge, bottom, top, scale = _levels(ay, by)
+    for e in range(m):
+        if root[e] != e:
+            continue
+        s = first[e]
+        mx, my = (pa[s, 0] + pb[s, 0]) / 2, (pa[s, 1] + pb[s, 1]) / 2
+        wind, g0, g1 = 0, 0, 0
+        if bottom <= my <= top:                          # else no edge's span holds it
+            b = _bucket(my, bottom, scale, start.shape[0] - 1)
+            g0, g1 = start[b], start[b + 1]
+        for g in range(g0, g1):
+            f = edge[g]
+            fy, gy = ay[f], by[f]
+            up, down = fy <= my and gy > my, gy <= my and fy > my
+            if f == e or not (up or down):
+                continue
+            ux, uy = bx[f] - ax[f], by[f] - ay[f]
+            side, sure = _turn(ux, uy, mx - ax[f], my - ay[f], abs(ux) + abs(uy), margin)
+            if not sure:
+                return False, cover
+            if up and side > 0:
+                wind += cnt[f]
+            elif down and side < 0:
+                wind -= cnt[f]
+        rise = pb[s, 1] - pa[s, 1]
+        if not abs(rise) > margin * (abs(pb[s, 0] - pa[s, 0]) + abs(pb[s, 1] - pa[s, 1])):
+            return False, cover
+        cover[e] = wind - (cnt[e] if rise < 0 else 0)
+    return True, cover
+
+
+@_jit(inline="always")
+def _bucket(h, bottom, scale, many):
+    """The bucket of height h (`_levels`)."""
+    return min(max(int(np.floor((h - bottom) * scale)), 0), many - 1) if scale > 0 else 0
+
+
+@_jit()
+def _levels(ay, by):
+    """The edges of heights ay-by (m,) in buckets of height: (where each bucket's edges start
+    (b + 1,), the edges (k,), the least and most height, the buckets a unit of height); an
+    edge in every bucket from its low end's to its high end's (a height's bucket is monotone
+    in it: every edge whose span holds a height is in its bucket)."""
+    m = ay.shape[0]
+    bottom, top = min(ay.min(), by.min()), max(ay.max(), by.max())
+    many = max(m // 4, 1)
+    scale = many / (top - bottom) if top > bottom else 0.0
+    if not np.isfinite(scale):
+        scale = 0.0
+    start = np.zeros(many + 1, np.int64)
+    for f in range(m):
+        b0 = _bucket(min(ay[f], by[f]), bottom, scale, many)
+        b1 = _bucket(max(ay[f], by[f]), bottom, scale, many)
+        for b in range(b0, b1 + 1):
+            start[b + 1] += 1
+    for b in range(many):
+        start[b + 1] += start[b]
+    fill, edge = start[:many].copy(), np.empty(start[many], np.int64)
+    for f in range(m):
+        b0 = _bucket(min(ay[f], by[f]), bottom, scale, many)
+        for b in range(b0, _bucket(max(ay[f], by[f]), bottom, scale, many) + 1):
+            edge[fill[b]] = f
+            fill[b] += 1
+    return start, edge, bottom, top, scale

@@ -1,0 +1,196 @@
+"""`windings.boundaries` in numba (`raytrace.windingkernels`) against its numpy path, byte for
+byte: every pixel's chain the same edges, floats and order, and the same doubt (None), on
+random batches (folded sheets of shared corner ids, loose crossing triangles, corners on a
+coarse grid: touching, collinear, in doubt; a shadow not free, no area, a pixel with no
+shadows, the same triangle twice: counts of 2, edges crossed at one point by two others: ties
+along an edge, one corner id at two spots: which shadow's edge the outline keeps; a T, two
+edges leaving a shared corner along one line, a level edge: in doubt) and on the batches of
+a noisy ball's exact soft shadow.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from strategies import PROFILE, profile
+
+from raytrace import polygons, windings
+
+pytest.importorskip("numba")
+
+
+def _sheet(rng, n: int, jitter: float) -> tuple[np.ndarray, np.ndarray]:
+    """A grid of n x n corners jittered so that it folds over itself: (triangles (q, 3, 2),
+    corner ids (q, 3))."""
+    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+    pts = np.c_[x.ravel(), y.ravel()] + rng.normal(0, jitter, (n * n, 2))
+    k = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
+    ids = np.r_[np.c_[k, k + 1, k + n + 1], np.c_[k, k + n + 1, k + n]]
+    return pts[ids], ids
+
+
+def _star(rng) -> tuple[np.ndarray, np.ndarray]:
+    """Thin triangles whose long edges all pass through one point (0.5, 0.5) at a dyadic
+    angle: an edge crossed by two others at one point (the same t twice along it)."""
+    tris, ids = [], []
+    for k, (dx, dy) in enumerate([(1, 2), (2, 1), (1, -1), (2, -3), (3, 1)][:rng.integers(2, 6)]):
+        d = np.array([dx, dy], float) / 4
+        side = np.array([-dy, dx], float) / 64
+        a, b = 0.5 - d, 0.5 + d
+        tris.append([a, b, b + side] if rng.random() < 0.5 else [b, a, a - side])
+        ids.append(10 * k + np.arange(3))
+    return np.array(tris), np.array(ids)
+
+
+def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One pixel's shadows (triangles, free, ids) of a kind: 0 a folded sheet, 1 loose
+    triangles, 2 corners on a coarse grid from a few ids, 3 a sheet with a shadow not free,
+    4 no area, 5 a sheet with some triangles twice (counts of 2) and some turned over (they
+    cancel), 6 a star (ties along an edge), 7 a sheet whose shadows each see their corners a
+    little apart (one id at several spots), 8 no shadows at all, 9 a T, 10 two edges from a
+    shared corner along one line, 11 a level edge (the three in doubt)."""
+    if kind in (0, 3, 5, 7):
+        tris, ids = _sheet(rng, int(rng.integers(3, 7)), float(rng.uniform(0.2, 0.8)))
+        if kind == 5:
+            twice = rng.random(len(tris)) < 0.3
+            over = rng.random(len(tris)) < 0.3
+            tris = np.r_[tris, tris[twice], tris[over][:, ::-1]]
+            ids = np.r_[ids, ids[twice], ids[over][:, ::-1]]
+        if kind == 7:
+            tris = tris + rng.normal(0, 1e-9, tris.shape) * (rng.random(tris.shape) < 0.3)
+    elif kind == 1:
+        q = int(rng.integers(1, 30))
+        tris, ids = rng.uniform(-2, 4, (q, 3, 2)), np.arange(3 * q).reshape(q, 3) + 100
+    elif kind == 2:
+        spots = rng.integers(0, 5, (12, 2)) / 2.0
+        ids = np.array([rng.choice(12, 3, replace=False) for _ in range(rng.integers(1, 9))])
+        tris = spots[ids]
+    elif kind == 6:
+        tris, ids = _star(rng)
+    elif kind == 8:
+        tris, ids = np.zeros((0, 3, 2)), np.zeros((0, 3), np.int64)
+    elif kind in (9, 10):
+        # a T (a corner inside another's edge) or two edges from a shared corner along one
+        # line, mapped by a random integer matrix (exact: no edge level), moved and scaled by
+        # a power of two, among a few loose triangles
+        tris = np.array([[[0, 0], [4, 0], [2, 2]],
+                         [[2, 0], [3, -2], [1, -2]] if kind == 9 else
+                         [[0, 0], [2, 0], [1, -2]]], float)
+        ids = np.array([[0, 1, 2], [3, 4, 5] if kind == 9 else [0, 4, 5]])
+        turn = rng.integers(1, 4, (2, 2)) * [[1, -1], [1, 1]]              # det > 0
+        tris = tris @ turn * 2.0 ** rng.integers(-3, 4) + rng.integers(-8, 8, 2)
+        q = int(rng.integers(0, 4))
+        tris = np.r_[tris, rng.uniform(20, 30, (q, 3, 2))]
+        ids = np.r_[ids, np.arange(3 * q).reshape(q, 3) + 100]
+    elif kind == 11:
+        # a triangle whose edge from its least corner id (its run's first) runs level
+        tris = np.array([[[0, 0], [1, 0], [0, 1]]], float) * rng.integers(1, 9) + \
+            rng.integers(-8, 8, 2)
+        ids = np.array([[0, 1, 2]])
+    else:
+        tris, ids = np.zeros((2, 3, 2)), np.arange(6).reshape(2, 3)
+        tris[:, :, 0] = [[0, 1, 2], [1, 2, 3]]
+    free = np.ones(len(tris), bool)
+    if kind == 3:
+        free[rng.integers(len(free))] = False
+    return tris, free, ids
+
+
+def _same(uncut, free, ids, owner, n, monkeypatch) -> np.ndarray:
+    """boundaries in numba and in numpy (its kernels' module switched off): the same None
+    and the same bytes per pixel; the kernel's chains."""
+    fast = windings.boundaries(uncut, free, ids, owner, n)
+    with monkeypatch.context() as m:
+        m.setitem(sys.modules, "raytrace.windingkernels", None)      # import fails: numpy
+        assert polygons.kernels("windingkernels") is None
+        slow = windings.boundaries(uncut, free, ids, owner, n)
+    assert polygons.kernels("windingkernels") is not None
+    assert fast.shape == slow.shape == (n,)
+    for a, b in zip(fast, slow):
+        assert (a is None) == (b is None)
+        if b is not None:
+            assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+    return fast
+
+
+def _batch(pixels, monkeypatch) -> np.ndarray:
+    owner = np.repeat(np.arange(len(pixels)), [len(t) for t, _, _ in pixels])
+    return _same(np.concatenate([t for t, _, _ in pixels]),
+                 np.concatenate([f for _, f, _ in pixels]),
+                 np.concatenate([i for _, _, i in pixels]), owner, len(pixels), monkeypatch)
+
+
+@pytest.mark.parametrize("kind", range(12))
+def test_each_kind_of_pixel_is_numpys_bytes(kind, monkeypatch):
+    """Twelve pixels of one kind in a batch; the kinds meant to settle do, mostly."""
+    rng = np.random.default_rng(kind)
+    got = _batch([_pixel(rng, kind) for _ in range(12)], monkeypatch)
+    settled = sum(c is not None for c in got)
+    if kind in (0, 1, 5, 6, 7):
+        assert settled >= 6 and max(len(c) for c in got if c is not None) >= 6
+    if kind in (3, 9, 10, 11):
+        assert settled == 0
+    if kind in (4, 8):
+        assert all(c is not None and c.shape == (0, 2, 2) for c in got)
+
+
+def test_ties_along_an_edge_and_counts_of_two(monkeypatch):
+    """A star (two crossings at one t along an edge: a piece of no length between them, its
+    place in the chain set by the order of the ties) and doubled triangles (count 2)."""
+    rng = np.random.default_rng(1)
+    stars = [_pixel(rng, 6) for _ in range(20)]
+    got = _batch(stars, monkeypatch)
+    flat = [c for c in got if c is not None]
+    assert any(((c[:, 0] == c[:, 1]).all(axis=1)).any() for c in flat)      # a tie's piece
+    doubled = _batch([_pixel(rng, 5) for _ in range(12)], monkeypatch)
+    assert sum(c is not None for c in doubled) >= 6
+
+
+@settings(profile(), max_examples=40 if PROFILE == "ci" else 1000)
+@given(seed=st.integers(0, 2 ** 32 - 1), kinds=st.lists(st.integers(0, 11), min_size=1,
+                                                         max_size=8),
+       shift=st.sampled_from([0, 1000, 2 ** 40]),
+       outline=st.sampled_from([1, 9, 40, windings.OUTLINE]))
+def test_random_batches_are_numpys_bytes(seed, kinds, shift, outline, monkeypatch):
+    """Random batches of every kind, the ids shifted (near 2 ** 40: a key of two ids no longer
+    fits one int64 with the pixel's), numpy's path noded in parts of `outline` edges (whole
+    pixels) or all at once."""
+    monkeypatch.setattr(windings, "OUTLINE", outline)
+    rng = np.random.default_rng(seed)
+    _batch([(t, f, i + shift) for t, f, i in (_pixel(rng, k) for k in kinds)], monkeypatch)
+
+
+def test_a_noisy_balls_batches_are_numpys_bytes(monkeypatch):
+    """The batches `windings.split` hands `boundaries` in the exact soft shadow of a noisy
+    ball on a floor under a rect light: each the same bytes both ways."""
+    trimesh = pytest.importorskip("trimesh")
+    from raytrace.exact_soft import exact_visibility
+    from shadowvol.primitives import mesh, plane
+    from shadowvol.scene import AreaLight, Camera, Material, Scene
+    ico = trimesh.creation.icosphere(subdivisions=4, radius=0.5)
+    rng = np.random.default_rng(0)
+    v = ico.vertices * (1 + 0.08 * rng.standard_normal((len(ico.vertices), 1))) + [0.1, 1, -0.1]
+    matte = Material(diffuse=[0.8, 0.8, 0.8])
+    scene = Scene(camera=Camera(eye=[0, 4.5, 5.5], target=[0, 0, -0.5], fov_y=40.0),
+                  objects=[plane("floor", size=[8, 8], material=matte),
+                           mesh("blob", v, np.asarray(ico.faces), material=matte)],
+                  lights=[AreaLight("rect", [0.0, 2.5, 0.0], normal=[0, -1, 0],
+                                    size=[1.2, 1.2], samples=4)],
+                  width=20, height=20, ambient=[0, 0, 0])
+    seen, plain = [], windings.boundaries
+
+    def keep(*args):
+        seen.append(args)
+        return plain(*args)
+    with monkeypatch.context() as m:
+        m.setattr(windings, "boundaries", keep)
+        exact_visibility(scene)
+    assert seen
+    settled = 0
+    for args in seen:
+        settled += sum(c is not None for c in _same(*args, monkeypatch))
+    assert settled >= 10
