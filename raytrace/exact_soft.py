@@ -20,10 +20,11 @@ consistently wound object (a box, a sphere's tessellation) shadows p from outsid
 convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
 where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
 not at all from its own outside.  Every other object's triangles are united: under a rect or
-disk light, a pixel's more than WINDING_PIECES shadows, where those are all its shadows and all but
-a few (`windings.LOOSE`, at a contact) are free, measured from their outline's winding numbers
-with no polygon boolean, the few taken away by inclusion and exclusion (`raytrace.windings`);
-else a pixel's union of more than MANY_PIECES from its outline alone (`raytrace.arrange`).  One
+disk light, a pixel's more than WINDING_PIECES shadows, where those are all its shadows and
+all but a few (`windings.LOOSE`, at a contact) are free, measured from their outline's winding
+numbers with no polygon boolean (`raytrace.windings`), the few taken away by inclusion and
+exclusion (`raytrace.windmeasures`); else a pixel's union of more than MANY_PIECES from its
+outline alone (`raytrace.arrange`).  One
 convex shadow on a rect or disk is taken away in numpy (clipped edge by edge); several are
 united, and taken away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
 (`lightshapes.OVERLAY_GRID`); the measures are `raytrace.polygons`'.
@@ -39,7 +40,7 @@ import numpy as np
 from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
-from . import arrange, candidates, polygons, pyramid, windings
+from . import arrange, candidates, polygons, pyramid, windings, windmeasures
 from .arrange import polygonal as _polygonal
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
@@ -243,7 +244,7 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
             out[lone] = got
     wound = np.flatnonzero(wound & (count >= 3))
     if len(wound):
-        for out, got in zip(measures, windings.measures(light, cut[wound], count[wound],
+        for out, got in zip(measures, windmeasures.measures(light, cut[wound], count[wound],
                                                         chains[wound], p[wound],
                                                         normal[wound], direct, loose[wound])):
             out[wound] = got
@@ -290,8 +291,8 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     each p (None where none falls inside the pyramid over `base` (k, 3)); where that is
     one convex polygon (`_unite`); and, with `outlines`, the union's boundary from its
     outline's windings (`raytrace.windings`) where that is certain (the union None there),
-    and the few shadows that outline leaves out (`windings.measures`' loose; None where
-    none)."""
+    and the few shadows that outline leaves out (`windmeasures.measures`' loose; None
+    where none)."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = candidates.meets(light, objects, p, base, lo, hi)
@@ -340,7 +341,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         # the few shadows it leaves out, cut, carried and turned counter-clockwise: a pixel
         # with one whose corners do not certainly turn one way goes to the arrangement
         flat[apart] = carry(apart)
-        turned, sure = windings.turned(flat[apart], count[apart])
+        turned, sure = windmeasures.turned(flat[apart], count[apart])
         chains[pix[apart[~sure]]] = None
         keep = np.flatnonzero(windings.found(chains)[pix[apart]])
         for k, group in zip(*_groups(pix[apart[keep]], keep)):

@@ -14,14 +14,14 @@ times (counted along a ray in +x from the first piece of one edge per run
 of edges through corners with one edge in and one out, and carried along the run, adding the
 count of each edge crossed).  The union's measures (area, Lambert's irradiance) are boundary
 integrals: those of the fan of signed triangles from the light's centre over that boundary,
-each clipped to the light's part seen from p (convex) in numpy (`regions.inside`).
+each clipped to the light's part seen from p (convex) in numpy (`raytrace.windmeasures`).
 
 A shadow that is not free (a triangle through p's parallel plane: the receiver's contact
 with the occluder, where the whole shadow is unbounded) has no whole shadow to take.  Where a
 pixel has up to LOOSE of them, the outline is its free shadows' alone, and those few are taken
 away apart, cut to the pyramid (convex, `pyramid.cut`), by inclusion and exclusion over their
-intersections (`measures`); a pixel with more, or with one whose corners do not certainly turn
-one way (`turned`), takes `raytrace.arrange`'s union.
+intersections (`raytrace.windmeasures`); a pixel with more, or with one whose corners do not
+certainly turn one way (`windmeasures.turned`), takes `raytrace.arrange`'s union.
 
 `split` measures a few thousand shadows' pixels in one pass of numpy (`boundaries`; `boundary`
 is one pixel of it): a corner's id leads with its pixel, so every sort keeps a pixel's edges,
@@ -38,9 +38,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import arrange, polygons, pyramid
-from .regions import closed_rings, inside, ring_measures
 
-__all__ = ["boundaries", "boundary", "found", "measures", "split"]
+__all__ = ["boundaries", "boundary", "found", "split"]
 
 # Doubt in the outline's orientation tests: a cross product within this much of the product of
 # its two vectors' lengths (float64 roundings are ~1e-16 of it) counts as zero.
@@ -52,7 +51,7 @@ BATCH = 16384
 # Outline edges `boundaries` nodes at once: whole pixels, about this many.
 OUTLINE = 3072
 # Shadows of a pixel that are not free (`split`) taken away apart, by inclusion and exclusion
-# over their 2^LOOSE - 1 intersections (`measures`); a pixel with more is left to
+# over their 2^LOOSE - 1 intersections (`windmeasures.measures`); a pixel with more is left to
 # `raytrace.arrange`.
 LOOSE = 4
 
@@ -365,118 +364,6 @@ def _level(y: np.ndarray, at: np.ndarray, low: np.ndarray, high: np.ndarray,
     return r, f
 
 
-def measures(light, cut: np.ndarray, count: np.ndarray, chains, p: np.ndarray,
-             normal: np.ndarray, direct: bool = False, loose=None) -> tuple[np.ndarray, ...]:
-    """(n,) measures of the convex polygons cut (n, k, 2), count (n,) (counter-clockwise) less
-    the unions bounded by chains (n,) (`boundary`) and, where loose (n,) object holds them
-    (`split`), a few convex shadows B besides ((flat (r, k, 2), count (r,)) each, counter-
-    clockwise and certainly convex: `turned`; None where none), from p (n, 3) with normals
-    (n, 3).  With B: m(cut - A - B) = m(cut - A) + the sum over every non-empty set S of B's
-    pieces of (-1)^|S| m(X_S - A), X_S = cut and the pieces of S (inclusion and exclusion),
-    each m(X - A) a fan over A's boundary clipped by cut and by each piece of S in turn (by
-    the polygons' own edges, never by X_S's, which may have collapsed)."""
-    n = len(cut)
-    at = [k for k in range(n) if loose is not None and loose[k] is not None]
-    if not at:
-        return _less(light, cut, count, [(cut, count)], chains, np.arange(n), p, normal, direct)
-    owner, sets = [], []
-    for k in at:
-        for subset in range(1, 1 << len(loose[k][0])):
-            owner.append(k)
-            sets.append([j for j in range(len(loose[k][0])) if subset >> j & 1])
-    owner = np.r_[np.arange(n), owner]
-    width = max([cut.shape[1]] + [loose[k][0].shape[1] for k in at])
-    clippers = [(_widen(cut, width)[owner], count[owner])]
-    for level in range(max(len(x) for x in sets)):
-        poly, many = np.zeros((len(owner), width, 2)), np.zeros(len(owner), np.int64)
-        for i, (k, chosen) in enumerate(zip(owner[n:].tolist(), sets)):
-            if level < len(chosen):
-                flat, counts = loose[k]
-                poly[n + i, :flat.shape[1]] = flat[chosen[level]]
-                many[n + i] = counts[chosen[level]]
-        clippers.append((poly, many))
-    # X_S: cut clipped by each piece of S (the region measured; empty ones left out)
-    region, size = clippers[0]
-    for poly, many in clippers[1:]:
-        region, size = _clip_rows(poly, many, region, size)
-    sign = np.r_[np.ones(n), [(-1.0) ** len(x) for x in sets]]
-    use = np.flatnonzero((size >= 3) | (np.arange(len(owner)) < n))
-    got = _less(light, region[use], size[use], [(c[use], m[use]) for c, m in clippers], chains,
-                owner[use], p[owner[use]], normal[owner[use]], direct)
-    return tuple(np.bincount(owner[use], sign[use] * m, n) for m in got)
-
-
-def _less(light, region: np.ndarray, size: np.ndarray, clippers: list, chains,
-          owner: np.ndarray, p: np.ndarray, normal: np.ndarray, direct: bool
-          ) -> tuple[np.ndarray, ...]:
-    """(r,) measures of the convex polygons region (r, k, 2), size (r,) less the unions bounded
-    by chains[owner] (r,): the fan of signed triangles from the light's centre over each
-    chain's edges, clipped by each of clippers' convex counter-clockwise polygons ((r, k, 2),
-    (r,) each; count 0: none) in turn, whose common part the region is."""
-    whole = ring_measures(light, *closed_rings(region, size), p, normal, direct)
-    sizes = np.array([len(chains[k]) for k in owner], np.int64)
-    which = np.repeat(np.arange(len(owner)), sizes)
-    if len(which) == 0:
-        return whole
-    edges = np.concatenate([chains[k] for k in owner if len(chains[k])])
-    fan = np.concatenate([np.zeros((len(edges), 1, 2)), edges], axis=1)      # (m, 3, 2)
-    signed, _ = _cross(edges[:, 0], edges[:, 1])
-    fan[signed < 0] = fan[signed < 0][:, ::-1]
-    (cut, count), more = clippers[0], clippers[1:]
-    piece, piece_count = inside(cut[which], count[which], fan, np.where(signed != 0, 3, 0))
-    for poly, many in more:
-        piece, piece_count = _clip_rows(poly[which], many[which], piece, piece_count)
-    got = ring_measures(light, *closed_rings(piece, piece_count), p[which], normal[which],
-                        direct)
-    sign = np.sign(signed)
-    return tuple(w - np.bincount(which, sign * g, len(owner)) for w, g in zip(whole, got))
-
-
-def _clip_rows(poly: np.ndarray, many: np.ndarray, inner: np.ndarray, count: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """`regions.inside` of the rows where many (r,) > 0 (the others as they are): inner (r, k,
-    2), count (r,) clipped by each edge of the convex counter-clockwise polygons poly (r, m,
-    2), many (r,)."""
-    on = np.flatnonzero(many > 0)
-    if len(on) == 0:
-        return inner, count
-    got, got_count = inside(poly[on], many[on], inner[on], count[on])
-    out = _widen(inner, max(inner.shape[1], got.shape[1]))
-    out[on] = _widen(got, out.shape[1])
-    count = count.copy()
-    count[on] = got_count
-    return out, count
-
-
-def turned(flat: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Convex polygons flat (r, k, 2), count (r,) in either orientation: (the same turned
-    counter-clockwise (r, k, 2), zero past each count; (r,) bool: every corner certainly turns
-    the same way (`_turn`'s doubt), so its edges bound it)."""
-    r, k = len(flat), flat.shape[1]
-    at = np.arange(k)[None]
-    valid = at < count[:, None]
-    n = np.maximum(count, 1)[:, None]
-    nxt = np.take_along_axis(flat, ((at + 1) % n)[..., None], 1)
-    after = np.take_along_axis(flat, ((at + 2) % n)[..., None], 1)
-    u, v = nxt - flat, after - nxt
-    turn, sure = _cross(u, v)
-    left = ((turn > 0) & sure) | ~valid
-    right = ((turn < 0) & sure) | ~valid
-    ok = (left.all(axis=1) | right.all(axis=1)) & (count >= 3)
-    back = ~left.all(axis=1)
-    index = np.where(back[:, None] & valid, count[:, None] - 1 - at, at)
-    out = np.take_along_axis(flat, index[..., None], 1)
-    out[~valid] = 0.0
-    return out, ok
-
-
-def _widen(flat: np.ndarray, width: int) -> np.ndarray:
-    """flat (n, k, 2) zero-padded to (n, width, 2) (k <= width)."""
-    out = np.zeros((len(flat), width, 2))
-    out[:, :flat.shape[1]] = flat
-    return out
-
-
 def split(light, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.ndarray,
           heavy: np.ndarray, welded: np.ndarray, only: np.ndarray
           ) -> tuple[np.ndarray, np.ndarray]:
@@ -485,7 +372,7 @@ def split(light, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.nd
     the pixels with a boundary that are not in it: a pixel with up to LOOSE shadows that are
     not free (`pyramid.uncut`: a triangle through p's parallel plane, at a contact) has the
     boundary of its free ones' union, and those few are taken away apart, cut to the pyramid
-    (`measures`))."""
+    (`windmeasures.measures`))."""
     chains = np.full(len(p), None, object)
     mine = heavy[only[pix[heavy]]]
     mine = mine[np.argsort(pix[mine], kind="stable")]

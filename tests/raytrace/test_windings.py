@@ -85,7 +85,7 @@ def test_measures_take_the_loose_shadows_away_by_inclusion_and_exclusion(seed):
     against GEOS's difference of the same polygons (area and Lambert's irradiance, measured
     on GEOS's rings by `regions.measure`)."""
     from raytrace.regions import measure
-    from raytrace.windings import measures, turned
+    from raytrace.windmeasures import measures, turned
     rng = np.random.default_rng(seed)
     light = _rect_light()
     tris, ids = _sheet(rng, 6)
@@ -120,7 +120,7 @@ def test_measures_take_the_loose_shadows_away_by_inclusion_and_exclusion(seed):
 
 
 def test_turned_says_where_the_corners_do_not_certainly_turn_one_way():
-    from raytrace.windings import turned
+    from raytrace.windmeasures import turned
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     flat = np.zeros((4, 5, 2))
     flat[0, :4] = square
