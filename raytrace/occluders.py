@@ -164,13 +164,16 @@ def weld(points: np.ndarray) -> np.ndarray:
 
 
 def _morton(points: np.ndarray) -> np.ndarray:
-    """(n,) int64 Morton codes of points (n, 3) on a 1024^3 grid over their box."""
+    """(n,) int64 Morton codes of points (n, 3) on a 1024^3 grid over their box: bit b of
+    axis a at bit 3 b + a (each axis's ten bits spread two apart by shifts and masks)."""
     lo, span = points.min(axis=0), np.ptp(points, axis=0)
     cell = np.floor((points - lo) / np.where(span > 0, span, 1) * 1023.999).astype(np.int64)
     code = np.zeros(len(points), np.int64)
-    for bit in range(10):
-        for axis in range(3):
-            code |= ((cell[:, axis] >> bit) & 1) << (3 * bit + axis)
+    for axis in range(3):
+        x = cell[:, axis]
+        for shift, mask in ((16, 0x030000FF), (8, 0x0300F00F), (4, 0x030C30C3), (2, 0x09249249)):
+            x = (x | (x << shift)) & mask
+        code |= x << axis
     return code
 
 

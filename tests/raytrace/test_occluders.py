@@ -56,3 +56,17 @@ def test_weld_numbers_the_points_as_numpys_unique_rows_does(dtype):
     assert len(np.unique(want)) < len(points) // 2          # many repeated
     assert np.array_equal(got, want)
     assert occluders.weld(np.zeros((0, 3), dtype)).shape == (0,)
+
+
+def test_morton_codes_put_bit_b_of_axis_a_at_bit_3b_plus_a():
+    """`occluders._morton` (bits spread by shifts and masks) against the codes written bit by
+    bit, on the grid's corners and random points."""
+    rng = np.random.default_rng(2)
+    points = np.r_[rng.normal(size=(3000, 3)), [[-1e3, -1e3, -1e3], [1e3, 1e3, 1e3]]]
+    lo, span = points.min(axis=0), np.ptp(points, axis=0)
+    cell = np.floor((points - lo) / span * 1023.999).astype(np.int64)
+    want = [sum(((int(c[a]) >> b) & 1) << (3 * b + a) for b in range(10) for a in range(3))
+            for c in cell]
+    got = occluders._morton(points)
+    assert got.tolist() == want
+    assert got.max() == (1 << 30) - 1 and got.min() == 0
