@@ -379,25 +379,30 @@ def split(light, corners: np.ndarray, p: np.ndarray, pix: np.ndarray, tri: np.nd
     if len(mine) == 0:
         return chains, np.zeros(0, np.int64)
     flat, free = pyramid.uncut(light, corners, p, pix[mine], tri[mine])
-    new = np.r_[True, pix[mine][1:] != pix[mine][:-1]]
-    owner = np.cumsum(new) - 1
-    # a few shadows that are not free: left out of the outline, kept apart
+    owner = np.cumsum(np.r_[True, pix[mine][1:] != pix[mine][:-1]]) - 1
+    _batches(chains, flat, free, owner, mine, pix, tri, welded)
+    # a few shadows that are not free: left out of the outline, kept apart (their pixels, in
+    # doubt above, again without them)
     apart = ~free & (np.bincount(owner[~free], minlength=owner[-1] + 1) <= LOOSE)[owner]
-    rows = mine
     if apart.any():
-        kept = np.flatnonzero(~apart)
-        flat, free, rows = flat[kept], free[kept], mine[kept]
-        new = np.r_[True, pix[rows][1:] != pix[rows][:-1]]
-        owner = np.cumsum(new) - 1
+        again = np.flatnonzero(np.isin(owner, owner[apart]) & ~apart)
+        redo = np.cumsum(np.r_[True, owner[again][1:] != owner[again][:-1]]) - 1
+        _batches(chains, flat[again], free[again], redo, mine[again], pix, tri, welded)
+    apart = mine[apart]
+    return chains, apart[found(chains)[pix[apart]]]
+
+
+def _batches(chains: np.ndarray, flat: np.ndarray, free: np.ndarray, owner: np.ndarray,
+             rows: np.ndarray, pix: np.ndarray, tri: np.ndarray, welded: np.ndarray) -> None:
+    """chains[pix] = the `boundaries` of the whole shadows flat (q, 3, 2), free (q,) of the
+    pairs rows (q,) of the pixels numbered owner (q,) (0, 1, ... in order), in batches of about
+    BATCH shadows (whole pixels: a batch's arrays stay in the caches)."""
     starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
-    # the pixels in batches of about BATCH shadows (a batch's arrays stay in the caches)
     batch = np.flatnonzero(np.r_[True, np.diff(starts // BATCH) != 0])
     for p0, p1 in zip(batch.tolist(), np.r_[batch[1:], len(starts)].tolist()):
         at = slice(starts[p0], starts[p1] if p1 < len(starts) else len(rows))
         chains[pix[rows[starts[p0:p1]]]] = boundaries(
             flat[at], free[at], welded[tri[rows[at]]], owner[at] - p0, p1 - p0)
-    apart = mine[apart]
-    return chains, apart[found(chains)[pix[apart]]]
 
 
 def found(chains: np.ndarray) -> np.ndarray:
