@@ -103,9 +103,9 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         bodies.append(None)
         if len(tris) == 0 or (casts is not None and not casts[j]):
             continue
-        topology = _topology(corners[tris], welded[tris])
+        c = corners[tris]
+        topology = _topology(c, welded[tris])
         if topology is not None and (length[tris] > 0).all():
-            c = corners[tris]
             sign = 1.0 if np.einsum("ij,ij->i", c[:, 0], np.cross(c[:, 1], c[:, 2])).sum() > 0 \
                 else -1.0
             n = normals[tris] * sign
@@ -121,7 +121,8 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
                 bodies[-1] = Convex(points, n, offset, *topology[1:])
         # clusters of consecutive triangles along a Morton (Z-order) curve of their centres:
         # compact clusters, whose boxes the pyramid's box misses more often
-        order = tris[np.argsort(_morton(corners[tris].mean(axis=1)), kind="stable")]
+        # (their means, summed as numpy's mean sums three: the same floats)
+        order = tris[np.argsort(_morton((c[:, 0] + c[:, 1] + c[:, 2]) / 3), kind="stable")]
         pad = -len(order) % CLUSTER
         members.append(np.concatenate([order, np.full(pad, -1)]).reshape(-1, CLUSTER))
         owner.append(np.full(len(members[-1]), j))
