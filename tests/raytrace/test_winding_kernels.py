@@ -16,21 +16,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from shadowcases import free_but_one, loose, no_area, on_grid, sheet
 from strategies import PROFILE, profile
 
 from raytrace import polygons, windings
 
 pytest.importorskip("numba")
-
-
-def _sheet(rng, n: int, jitter: float) -> tuple[np.ndarray, np.ndarray]:
-    """A grid of n x n corners jittered so that it folds over itself: (triangles (q, 3, 2),
-    corner ids (q, 3))."""
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
-    pts = np.c_[x.ravel(), y.ravel()] + rng.normal(0, jitter, (n * n, 2))
-    k = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
-    ids = np.r_[np.c_[k, k + 1, k + n + 1], np.c_[k, k + n + 1, k + n]]
-    return pts[ids], ids
 
 
 def _star(rng) -> tuple[np.ndarray, np.ndarray]:
@@ -54,7 +45,7 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     little apart (one id at several spots), 8 no shadows at all, 9 a T, 10 two edges from a
     shared corner along one line, 11 a level edge (the three in doubt)."""
     if kind in (0, 3, 5, 7):
-        tris, ids = _sheet(rng, int(rng.integers(3, 7)), float(rng.uniform(0.2, 0.8)))
+        tris, ids = sheet(rng, int(rng.integers(3, 7)), float(rng.uniform(0.2, 0.8)))
         if kind == 5:
             twice = rng.random(len(tris)) < 0.3
             over = rng.random(len(tris)) < 0.3
@@ -63,12 +54,9 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if kind == 7:
             tris = tris + rng.normal(0, 1e-9, tris.shape) * (rng.random(tris.shape) < 0.3)
     elif kind == 1:
-        q = int(rng.integers(1, 30))
-        tris, ids = rng.uniform(-2, 4, (q, 3, 2)), np.arange(3 * q).reshape(q, 3) + 100
+        tris, ids = loose(rng)
     elif kind == 2:
-        spots = rng.integers(0, 5, (12, 2)) / 2.0
-        ids = np.array([rng.choice(12, 3, replace=False) for _ in range(rng.integers(1, 9))])
-        tris = spots[ids]
+        tris, ids = on_grid(rng)
     elif kind == 6:
         tris, ids = _star(rng)
     elif kind == 8:
@@ -92,12 +80,8 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             rng.integers(-8, 8, 2)
         ids = np.array([[0, 1, 2]])
     else:
-        tris, ids = np.zeros((2, 3, 2)), np.arange(6).reshape(2, 3)
-        tris[:, :, 0] = [[0, 1, 2], [1, 2, 3]]
-    free = np.ones(len(tris), bool)
-    if kind == 3:
-        free[rng.integers(len(free))] = False
-    return tris, free, ids
+        tris, ids = no_area()
+    return tris, free_but_one(rng, len(tris), kind == 3), ids
 
 
 def _same(uncut, free, ids, owner, n, monkeypatch) -> np.ndarray:

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from shadowcases import free_but_one, loose, no_area, on_grid, sheet
 from strategies import PROFILE, profile
 
 from raytrace import windings
@@ -20,39 +21,22 @@ from raytrace.windings import _along, _runs, boundaries, boundary
 shapely = pytest.importorskip("shapely")
 
 
-def _sheet(rng, n: int, jitter: float) -> tuple[np.ndarray, np.ndarray]:
-    """A grid of n x n corners (ids 0..n*n-1, the same in every pixel) jittered so that it
-    folds over itself: (triangles (q, 3, 2), their corner ids (q, 3))."""
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
-    pts = np.c_[x.ravel(), y.ravel()] + rng.normal(0, jitter, (n * n, 2))
-    k = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
-    ids = np.r_[np.c_[k, k + 1, k + n + 1], np.c_[k, k + n + 1, k + n]]
-    return pts[ids], ids
-
-
 def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One pixel's shadows (triangles, free, ids) of a kind: 0 a folded sheet, 1 loose
     triangles, 2 triangles with corners on a coarse grid from a few ids (touching, collinear:
     often in doubt), 3 a sheet with one shadow not free (None), 4 a T (in doubt), 5 no area."""
     if kind in (0, 3):
-        tris, ids = _sheet(rng, int(rng.integers(3, 7)), float(rng.uniform(0.2, 0.8)))
+        tris, ids = sheet(rng, int(rng.integers(3, 7)), float(rng.uniform(0.2, 0.8)))
     elif kind == 1:
-        q = int(rng.integers(1, 30))
-        tris, ids = rng.uniform(-2, 4, (q, 3, 2)), np.arange(3 * q).reshape(q, 3) + 100
+        tris, ids = loose(rng)
     elif kind == 2:
-        spots = rng.integers(0, 5, (12, 2)) / 2.0
-        ids = np.array([rng.choice(12, 3, replace=False) for _ in range(rng.integers(1, 9))])
-        tris = spots[ids]
+        tris, ids = on_grid(rng)
     elif kind == 4:
         tris = np.array([[[0, 0], [2, 0], [1, 1]], [[1, 0], [1.5, -1], [0.5, -1]]], float)
         ids = np.arange(6).reshape(2, 3)
     else:
-        tris, ids = np.zeros((2, 3, 2)), np.arange(6).reshape(2, 3)
-        tris[:, :, 0] = [[0, 1, 2], [1, 2, 3]]
-    free = np.ones(len(tris), bool)
-    if kind == 3:
-        free[rng.integers(len(free))] = False
-    return tris, free, ids
+        tris, ids = no_area()
+    return tris, free_but_one(rng, len(tris), kind == 3), ids
 
 
 def _union_area(tris: np.ndarray) -> float:
@@ -99,7 +83,7 @@ def test_the_same_pixel_twice_in_a_batch():
     """One sheet twice over (the same ids, the same spots), then under other ids: each copy
     is the sheet's own boundary, not the cancelled or doubled outline of both, nor in doubt
     for two ids at one spot."""
-    tris, ids = _sheet(np.random.default_rng(11), 6, 0.7)
+    tris, ids = sheet(np.random.default_rng(11), 6, 0.7)
     pixel = (tris, np.ones(len(tris), bool), ids)
     got = _check([pixel, pixel, (tris, pixel[1], ids + 1000)])
     assert len(got[0]) > 10
