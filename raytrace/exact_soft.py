@@ -16,17 +16,17 @@ exact visibility") says what is exact at a contact and at a tie.
 Candidates come from a conservative query, never from sampled rays (`raytrace.candidates`):
 clusters of triangles whose bounding spheres are inside every plane of the pyramid and whose
 boxes meet its box, then triangles whose boxes do, then the cut itself.  A closed, convex,
-consistently wound object (a box, a sphere's tessellation) shadows p from outside as one convex polygon (the shadow of a
-convex body from a point outside it is convex): the polygon of its silhouette's corners' shadows
-where it lies wholly between p and the light, else the hull of its cut triangles' shadows; and
-not at all from its own outside.  Every other object's triangles are united: under a rect or
-disk light, a pixel's more than WINDING_PIECES shadows, where those are all its shadows and
-all but a few (`windings.LOOSE`, at a contact) are free, measured from their outline's winding
-numbers with no polygon boolean (`raytrace.windings`), the few taken away by inclusion and
-exclusion (`raytrace.windmeasures`); else a pixel's union of more than MANY_PIECES from its
-outline alone (`raytrace.arrange`).  One
-convex shadow on a rect or disk is taken away in numpy (clipped edge by edge); several are
-united, and taken away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
+consistently wound object (a box, a sphere's tessellation) shadows p from outside as one
+convex polygon (the shadow of a convex body from a point outside it is convex): the polygon of
+its silhouette's corners' shadows where it lies wholly between p and the light, else the hull
+of its cut triangles' shadows; and not at all from its own outside.  Every other object's
+triangles are united: under a rect or disk light, a pixel's more than WINDING_PIECES shadows,
+where those are all its shadows and all but a few (`windings.LOOSE`, at a contact) are free,
+measured from their outline's winding numbers with no polygon boolean (`raytrace.windings`),
+the few taken away by inclusion and exclusion (`raytrace.windmeasures`); else a pixel's union
+of more than MANY_PIECES from its outline alone (`raytrace.arrange`).  One convex shadow on a
+rect or disk is taken away in numpy (clipped edge by edge); several are united, and taken
+away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
 (`lightshapes.OVERLAY_GRID`); the measures are `raytrace.polygons`'.
 """
 
@@ -343,10 +343,10 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         flat[apart] = carry(apart)
         turned, sure = windmeasures.turned(flat[apart], count[apart])
         chains[pix[apart[~sure]]] = None
-        keep = np.flatnonzero(windings.found(chains)[pix[apart]])
+        done = windings.found(chains)
+        keep = np.flatnonzero(done[pix[apart]])
         for k, group in zip(*_groups(pix[apart[keep]], keep)):
             loose[k] = (turned[group], count[apart[group]])
-        done = windings.found(chains)
         heavy, rest = heavy[~done[pix[heavy]]], rest[~done[pix[rest]]]
     used = np.union1d(heavy, rest)
     flat[used] = carry(used)
