@@ -145,6 +145,10 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     lit = shadow_masks(scene.replace(lights=tuple(scene.lights[i] for i in hard)), mt)[0] \
         if hard else None
 
+    # per area light: the objects wholly on its emitting side (once a frame, not a chunk)
+    clears = [None if lt is None or objects is None else _clear(lt, objects, corners)
+              for lt in lights]
+
     def trace_tile(rows: slice) -> None:
         _, index, hit = _primary_hits(tracer, triangles, grids, rows)
         if hit is None:
@@ -167,7 +171,7 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
                     np.full(len(p[part]), None, object)
                 shadowed = receives[hit.tri[part]] & scene.lights[i].shadows
                 got = _area_light(shapely, light, objects, corners, p[part], normal[part],
-                                  hit.tri[part], keep, shadowed, direct)
+                                  hit.tri[part], keep, shadowed, direct, clears[i])
                 if keep is not None:
                     _regions[1][pixel[part]] = keep
                 vis[i, pixel[part]], irr[i, pixel[part]] = got[:2]
@@ -191,14 +195,15 @@ def _hard_cosine(light, p: np.ndarray, normal: np.ndarray, origin: np.ndarray) -
 
 def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
                 p: np.ndarray, normal: np.ndarray, own: np.ndarray, regions=None,
-                shadowed: np.ndarray | None = None, direct: bool = False
-                ) -> tuple[np.ndarray, ...]:
+                shadowed: np.ndarray | None = None, direct: bool = False,
+                clear: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
     """(n,) visibility and irradiance of `light` at points p (n, 3) with camera-facing unit
     normals (n, 3) on triangles own (n,); `regions` (n,) object array: filled with the
     visible regions (shapely, the light's plane coordinates) where given; `shadowed` (n,)
     bool (default all): the points that receive shadows from this light (the others see the
     light's part on their side whole: the shadow switches); `direct`: the unattenuated
-    measure over the light's area too (`ExactVisibility.direct`)."""
+    measure over the light's area too (`ExactVisibility.direct`); `clear`: `_clear` (made
+    here where not given)."""
     n = len(p)
     height = (p - light.center) @ light.normal
     front = np.flatnonzero(height > 0)
@@ -213,6 +218,7 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     if len(at) and len(objects.members):
         pieces[at], single[at], chains[at], loose[at] = _shadows(
             shapely, light, objects, corners, p[at], normal[at], own[at], base,
+            _clear(light, objects, corners) if clear is None else clear,
             light.outline is None and regions is None)
     # the light cut to p's side: its hull's box cut by n . (x - p) > 0, then the outline
     box = np.array([light.hull.min(axis=0), [light.hull[:, 0].max(), light.hull[:, 1].min()],
@@ -285,24 +291,19 @@ def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
 
 
 def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
-             normal: np.ndarray, own: np.ndarray, base: np.ndarray, outlines: bool = False
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+             normal: np.ndarray, own: np.ndarray, base: np.ndarray, clear: np.ndarray,
+             outlines: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(n,) object array: the union of every triangle's shadow on the light's plane seen from
     each p (None where none falls inside the pyramid over `base` (k, 3)); where that is
     one convex polygon (`_unite`); and, with `outlines`, the union's boundary from its
     outline's windings (`raytrace.windings`) where that is certain (the union None there),
     and the few shadows that outline leaves out (`windmeasures.measures`' loose; None
-    where none)."""
+    where none); clear: `_clear`."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = candidates.meets(light, objects, p, base, lo, hi)
     shapes, owner = _whole_bodies(shapely, light, objects, p, normal, own, meet)
-    # the objects wholly on the light's emitting side (every corner strictly above its plane):
-    # the light is outside them
-    height = ((corners - light.center) @ light.normal).min(axis=1)
-    clear = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
-    np.minimum.at(clear, objects.object, height)
-    pix, tri = candidates.pairs(objects, corners, p, normal, own, meet, lo, hi, clear > 0)
+    pix, tri = candidates.pairs(objects, corners, p, normal, own, meet, lo, hi, clear)
     m = pyramid.sides(light, p, base)
     _, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base, m, store=False)
     width = max(3, int(count.max(initial=3)))
@@ -363,6 +364,15 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     union, single = _unite(shapely, shapes, owner, len(p), light.grid)
     single[arranged] = False       # an outline's union is not one convex polygon
     return union, single, chains, loose
+
+
+def _clear(light: FramedLight, objects: Objects, corners: np.ndarray) -> np.ndarray:
+    """(n_objects,) bool: the objects wholly on the light's emitting side (every corner
+    strictly above its plane): the light is outside them."""
+    height = ((corners - light.center) @ light.normal).min(axis=1)
+    lowest = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
+    np.minimum.at(lowest, objects.object, height)
+    return lowest > 0
 
 
 def _groups(keys: np.ndarray, items: np.ndarray) -> tuple[list, list]:
