@@ -131,19 +131,26 @@ def uncut(corners, tri, pix, p, top, center, normal, axes, reach):
             ok &= (h >= 0) & (h < top[e])
         if not ok:
             continue
-        rel0, rel1, rel2 = p[e, 0] - center[0], p[e, 1] - center[1], p[e, 2] - center[2]
-        height = rel0 * normal[0] + rel1 * normal[1] + rel2 * normal[2]
         for k in range(3):
-            for a in range(3):
-                ray[a] = corners[t, k, a] - p[e, a]
-            scale = height / -(ray[0] * normal[0] + ray[1] * normal[1] + ray[2] * normal[2])
             for a in range(2):
-                at = (rel0 * axes[a, 0] + rel1 * axes[a, 1] + rel2 * axes[a, 2]) + scale * (
-                    ray[0] * axes[a, 0] + ray[1] * axes[a, 1] + ray[2] * axes[a, 2])
+                at = carried(corners, t, k, p, e, center, normal, axes, a, ray)
                 flat[r, k, a] = at
                 ok &= abs(at) <= reach
         free[r] = ok
     return flat, free
+
+
+@_jit(inline="always")
+def carried(corners, t, k, p, e, center, normal, axes, a, ray):
+    """Coordinate a of corner k of triangle t carried from p[e] onto the light's plane
+    (`polygons.project`'s arithmetic); ray (3,): room."""
+    rel0, rel1, rel2 = p[e, 0] - center[0], p[e, 1] - center[1], p[e, 2] - center[2]
+    height = rel0 * normal[0] + rel1 * normal[1] + rel2 * normal[2]
+    for b in range(3):
+        ray[b] = corners[t, k, b] - p[e, b]
+    scale = height / -(ray[0] * normal[0] + ray[1] * normal[1] + ray[2] * normal[2])
+    return (rel0 * axes[a, 0] + rel1 * axes[a, 1] + rel2 * axes[a, 2]) + scale * (
+        ray[0] * axes[a, 0] + ray[1] * axes[a, 1] + ray[2] * axes[a, 2])
 
 
 @_jit()

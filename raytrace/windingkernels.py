@@ -9,13 +9,17 @@ ties them (its start, its end, the crossings where it is i by j's place along x,
 it is j by i's); the ray right of a run's first piece meets every other edge of its pixel
 (`windings._right_cover`); counts are small integers, exact in float64 and in int64 here.
 tests/raytrace/test_winding_kernels.py holds the two to the same bytes.  A kernel indexes
-scalars, not row views (each view costs a reference count).
+scalars, not row views (each view costs a reference count).  Where a box is given (the
+shared outlines of `raytrace.blockwindings`), each outline is cut to it first
+(`raytrace.clipkernels`); the numpy path has no such cut.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .clipkernels import clipped
+from .outlinekernels import _outline, _stable
 from .packetkernels import _jit
 
 
@@ -27,22 +31,28 @@ def _turn(ux, uy, vx, vy, size, margin):
 
 
 @_jit()
-def boundaries(uncut, free, ids, owner, n, margin):
+def boundaries(uncut, free, ids, owner, n, margin, rim, rim_ids, rim_count, rim_owner, box):
     """`windings.boundaries` of n pixels' shadows uncut (q, 3, 2), free (q,), welded corner
-    ids (q, 3) of the pixels owner (q,) (ascending): (doubt (n,), where each pixel's chain
-    starts in the pieces (n + 1,), the pieces (4 s,): each start's x, y, end's x, y);
-    margin: `windings.DOUBT`."""
+    ids (q, 3) of the pixels owner (q,) (ascending), and of their whole clusters' rims (rim
+    (e, 2, 2) each edge's start and end, rim_ids (e, 2), rim_count (e,), rim_owner (e,)
+    ascending: `wholekernels.rim_edges`): (doubt (n,), where each pixel's chain starts in the
+    pieces (n + 1,), the pieces (4 s,): each start's x, y, end's x, y); margin:
+    `windings.DOUBT`; box (4,) x0, y0, x1, y1: each outline cut to it where certain
+    (`clipkernels.clipped`), or (0,): whole."""
     doubt = np.zeros(n, np.bool_)
     at = np.zeros(n + 1, np.int64)
     out = np.empty(4 * max(64, owner.shape[0]))
-    size, r0, q = 0, 0, owner.shape[0]
-    big = ids.max() + 1 if q else 1
+    size, r0, q, e0, m = 0, 0, owner.shape[0], 0, rim_owner.shape[0]
+    big = max(ids.max() + 1 if q else 1, rim_ids.max() + 1 if m else 1)
     for k in range(n):
-        r1 = r0
+        r1, e1 = r0, e0
         while r1 < q and owner[r1] == k:
             r1 += 1
-        ok, sa, sb = _pixel(uncut, free, ids, r0, r1, big, margin)
-        r0 = r1
+        while e1 < m and rim_owner[e1] == k:
+            e1 += 1
+        ok, sa, sb = _pixel(uncut, free, ids, r0, r1, big, margin, (rim, rim_ids, rim_count),
+                            e0, e1, box)
+        r0, e0 = r1, e1
         if not ok:
             doubt[k] = True
         else:
@@ -68,13 +78,20 @@ def _put(out, size, sa, sb):
 
 
 @_jit()
-def _pixel(uncut, free, ids, r0, r1, big, margin):
-    """One pixel's shadows rows r0..r1: (certain, the chain's starts (c, 2), ends (c, 2))."""
+def _pixel(uncut, free, ids, r0, r1, big, margin, rims, e0, e1, box):
+    """One pixel's shadows rows r0..r1 and rims' edges e0..e1: (certain, the chain's starts
+    (c, 2), ends (c, 2))."""
     none = np.empty((0, 2))
     for r in range(r0, r1):
         if not free[r]:
             return False, none, none
-    ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big)
+    ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big, rims, e0, e1)
+    sides = ax.shape[0]                          # the box's sides' edges from here on
+    if box.shape[0] == 4 and ax.shape[0]:
+        ok, cax, cay, cbx, cby, cia, cib, ccnt, cut = clipped(ax, ay, bx, by, ia, ib, cnt,
+                                                               box, big, margin)
+        if ok:
+            ax, ay, bx, by, ia, ib, cnt, sides = cax, cay, cbx, cby, cia, cib, ccnt, cut
     m = ax.shape[0]
     if m == 0:
         return True, none, none
@@ -89,7 +106,7 @@ def _pixel(uncut, free, ids, r0, r1, big, margin):
     for e in range(m):
         total[e] = jump[first[e + 1] - 1]
     root, offset = _runs(va, vb, cnt, total)
-    ok, cover = _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin)
+    ok, cover = _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin, sides)
     if not ok:
         return False, none, none
     sa, sb, c = np.empty((parent.shape[0], 2)), np.empty((parent.shape[0], 2)), 0
@@ -102,114 +119,6 @@ def _pixel(uncut, free, ids, r0, r1, big, margin):
             sa[c, 0], sa[c, 1], sb[c, 0], sb[c, 1] = pa[s, 0], pa[s, 1], pb[s, 0], pb[s, 1]
             c += 1
     return True, sa[:c], sb[:c]
-
-
-@_jit()
-def _outline(uncut, ids, r0, r1, big):
-    """The outline of the shadows rows r0..r1 (`arrange.edges`, then each undirected edge's
-    net count, its first edge's corners): (ax, ay, bx, by (m,), corner ids ia, ib (m,),
-    counts (m,)), the edges in the order of (lower id, higher id); big: more than any id."""
-    rows = np.empty(r1 - r0, np.int64)
-    v = 0
-    for r in range(r0, r1):
-        signed = (uncut[r, 1, 0] - uncut[r, 0, 0]) * (uncut[r, 2, 1] - uncut[r, 0, 1]) - \
-            (uncut[r, 1, 1] - uncut[r, 0, 1]) * (uncut[r, 2, 0] - uncut[r, 0, 0])
-        if signed != 0:
-            rows[v] = r if signed > 0 else -1 - r
-            v += 1
-    many = 3 * v
-    row, s0, s1 = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
-    lo, hi = np.empty(many, np.int64), np.empty(many, np.int64)
-    for e in range(3):
-        for w in range(v):
-            i, r = e * v + w, rows[w]
-            turn = r < 0
-            r = -1 - r if turn else r
-            row[i] = r
-            s0[i] = (e + 1) % 3 if turn else e
-            s1[i] = e if turn else (e + 1) % 3
-            ka, kb = ids[r, s0[i]], ids[r, s1[i]]
-            lo[i], hi[i] = min(ka, kb), max(ka, kb)
-    rep, net = _tally(lo, hi, (ids, row, s0, s1))
-    order = _order(lo[rep], hi[rep], big)
-    m = order.shape[0]
-    ax, ay, bx, by = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
-    ia, ib, cnt = np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64)
-    for g in range(m):
-        f, up = rep[order[g]], net[order[g]] > 0         # f: the first of the edge's edges
-        r, low_first = row[f], ids[row[f], s0[f]] < ids[row[f], s1[f]]
-        c_lo, c_hi = (s0[f], s1[f]) if low_first else (s1[f], s0[f])
-        c_a, c_b = (c_lo, c_hi) if up else (c_hi, c_lo)
-        ax[g], ay[g], bx[g], by[g] = uncut[r, c_a, 0], uncut[r, c_a, 1], uncut[r, c_b, 0], \
-            uncut[r, c_b, 1]
-        ia[g], ib[g] = (lo[f], hi[f]) if up else (hi[f], lo[f])
-        cnt[g] = abs(net[order[g]])
-    return ax, ay, bx, by, ia, ib, cnt
-
-
-@_jit()
-def _tally(lo, hi, edges):
-    """The undirected edges lo-hi (k,) (corner ids) whose net count is not zero: (the first
-    of each one's edges (u,), its net count (u,)), in the order of those first edges; an edge
-    counts +1 where it runs from its lower id (edges: ids (q, 3) and each edge's row, start
-    and end corner (k,)), by a table of open addressing."""
-    ids, row, s0, s1 = edges
-    k = lo.shape[0]
-    size = 16
-    while size < 2 * k:
-        size *= 2
-    taken = np.zeros(size, np.bool_)
-    slot_lo, slot_hi = np.empty(size, np.int64), np.empty(size, np.int64)
-    first, net = np.empty(k, np.int64), np.zeros(k, np.int64)
-    at, u = np.empty(size, np.int64), 0
-    for i in range(k):
-        h = ((lo[i] * 73856093) ^ (hi[i] * 19349663)) & (size - 1)
-        while taken[h] and (slot_lo[h] != lo[i] or slot_hi[h] != hi[i]):
-            h = (h + 1) & (size - 1)
-        if not taken[h]:
-            taken[h], slot_lo[h], slot_hi[h], at[h] = True, lo[i], hi[i], u
-            first[u] = i
-            u += 1
-        net[at[h]] += 1 if ids[row[i], s0[i]] < ids[row[i], s1[i]] else -1
-    keep = np.flatnonzero(net[:u] != 0)
-    return first[keep], net[keep]
-
-
-@_jit()
-def _order(lo, hi, big):
-    """The order of the edges by lower corner id lo (k,), then higher hi (k,) (< big), then
-    number (a stable sort): one sort of a key where it fits in an int64."""
-    many = lo.shape[0]
-    if many == 0:
-        return np.empty(0, np.int64)
-    if float(big) * float(big) >= 2.0 ** 62:
-        order = _stable(hi)
-        return order[_stable(lo[order])]
-    key = np.empty(many, np.int64)
-    for i in range(many):
-        key[i] = lo[i] * big + hi[i]
-    return _stable(key)
-
-
-@_jit()
-def _stable(key):
-    """The order of key (k,) in a stable sort (np.argsort's, mergesort): a quick sort, then
-    each run of equal keys (NaNs one run) in order of place."""
-    order = np.argsort(key)
-    g = 0
-    while g < key.shape[0]:
-        h = g + 1
-        while h < key.shape[0] and (key[order[h]] == key[order[g]] or (
-                key[order[h]] != key[order[h]] and key[order[g]] != key[order[g]])):
-            h += 1
-        for a in range(g + 1, h):                        # insertion sort of the run
-            i, w = order[a], a
-            while w > g and order[w - 1] > i:
-                order[w] = order[w - 1]
-                w -= 1
-            order[w] = i
-        g = h
-    return order
 
 
 @_jit()
@@ -422,15 +331,16 @@ def _runs(va, vb, cnt, total):
 
 
 @_jit()
-def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin):
+def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin, sides):
     """(certain, the cover right of each run's first piece (m,), by its run's first edge) by
     a ray in +x from its midpoint, as `windings._right_cover`; not certain where a side is in
-    doubt or the piece is level."""
+    doubt or the piece is level; 0 right of a box's side (edges from `sides` on: outside the
+    box, `clipkernels.clipped`)."""
     m = ax.shape[0]
     cover = np.zeros(m, np.int64)
     start, edge, bottom, top, scale = _levels(ay, by)
     for e in range(m):
-        if root[e] != e:
+        if root[e] != e or e >= sides:
             continue
         s = first[e]
         mx, my = (pa[s, 0] + pb[s, 0]) / 2, (pa[s, 1] + pb[s, 1]) / 2

@@ -54,6 +54,12 @@ OUTLINE = 3072
 # over their 2^LOOSE - 1 intersections (`windmeasures.measures`); a pixel with more is left to
 # `raytrace.arrange`.
 LOOSE = 4
+# An outline is cut to the light's box grown by this much of its extent each way (`clip_box`):
+# outside the light, yet away from its outline, where a mesh's edges crowd.
+CLIP_MARGIN = 2.0 ** -6
+# No whole clusters: their rims' (flat, ids, count, owner) empty.
+NO_RIMS = (np.zeros((0, 2, 2)), np.zeros((0, 2), np.int64), np.zeros(0, np.int64),
+           np.zeros(0, np.int64))
 
 
 def boundary(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray) -> np.ndarray | None:
@@ -64,16 +70,24 @@ def boundary(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray) -> np.ndarray
 
 
 def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.ndarray,
-               n: int) -> np.ndarray:
+               n: int, rims: tuple | None = None, box: np.ndarray | None = None
+               ) -> np.ndarray:
     """(n,) object: the `boundary` of each of n pixels' shadows, all in one pass: the shadows
     uncut (q, 3, 2), free (q,), welded corner ids (q, 3) of the pixels owner (q,) (ascending,
-    < n).  A pixel's corners are told apart from another's by an id that leads with the pixel,
-    so its edges, corners and pieces sort together, in the order they take alone; where its
-    outline is in doubt, its boundary alone is None.  In numba, one pixel at a time, where it
-    loads (`raytrace.windingkernels`: the same bytes)."""
+    < n), and where given their whole clusters' rims (`wholekernels.rim_edges`: flat (e, 2,
+    2), ids (e, 2), count (e,), owner (e,) ascending; in numba only).  A pixel's corners are
+    told apart from another's by an id that leads with the pixel, so its edges, corners and
+    pieces sort together, in the order they take alone; where its outline is in doubt, its
+    boundary alone is None.  In numba, one pixel at a time, where it loads
+    (`raytrace.windingkernels`: the same bytes); there, with `box` (x0, y0, x1, y1), each
+    pixel's boundary inside that box only, closed along its sides where certain
+    (`raytrace.clipkernels`: the same union inside the box)."""
     loaded = polygons.kernels("windingkernels")
     if loaded is not None:
-        return _kernel(loaded, uncut, free, ids, owner, n)
+        return _kernel(loaded, uncut, free, ids, owner, n, NO_RIMS if rims is None else rims,
+                       box)
+    if rims is not None and len(rims[3]):
+        raise ValueError("whole clusters' rims need raytrace.windingkernels (numba)")
     chains, doubt = np.full(n, None, object), np.zeros(n, bool)
     doubt[owner[~free]] = True
     keep = ~doubt[owner]
@@ -105,12 +119,14 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
 
 
 def _kernel(loaded, uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.ndarray,
-            n: int) -> np.ndarray:
+            n: int, rims: tuple, box: np.ndarray | None = None) -> np.ndarray:
     """`boundaries` by `raytrace.windingkernels`."""
     doubt, at, pieces = loaded.boundaries(
         np.ascontiguousarray(uncut, np.float64), np.ascontiguousarray(free, bool),
         np.ascontiguousarray(ids, np.int64), np.ascontiguousarray(owner, np.int64), int(n),
-        DOUBT)
+        DOUBT, np.ascontiguousarray(rims[0], np.float64), np.ascontiguousarray(rims[1], np.int64),
+        np.ascontiguousarray(rims[2], np.int64), np.ascontiguousarray(rims[3], np.int64),
+        np.zeros(0) if box is None else np.asarray(box, np.float64))
     pieces = pieces.reshape(-1, 2, 2)
     chains = np.full(n, None, object)
     for k in np.flatnonzero(~doubt).tolist():
@@ -403,6 +419,14 @@ def _batches(chains: np.ndarray, flat: np.ndarray, free: np.ndarray, owner: np.n
         at = slice(starts[p0], starts[p1] if p1 < len(starts) else len(rows))
         chains[pix[rows[starts[p0:p1]]]] = boundaries(
             flat[at], free[at], welded[tri[rows[at]]], owner[at] - p0, p1 - p0)
+
+
+def clip_box(light) -> np.ndarray:
+    """(4,) x0, y0, x1, y1: the box `boundaries` cuts an outline to, the light's hull's box
+    in its plane's coordinates grown by CLIP_MARGIN of its extent each way."""
+    lo, hi = light.hull.min(axis=0), light.hull.max(axis=0)
+    grow = CLIP_MARGIN * (hi - lo).max()
+    return np.r_[lo - grow, hi + grow]
 
 
 def found(chains: np.ndarray) -> np.ndarray:

@@ -1,0 +1,130 @@
+"""A pixel's outline in numba (`raytrace.windingkernels`, `raytrace.blockkernels`): its
+shadows' edges and any rims' (edges given with a count: `raytrace.blockwindings`) counted
+by their welded corners, each undirected edge's net count, the edges in the order of their
+corners' ids (`windings.boundaries`' numpy path: the same edges, counts and floats).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .packetkernels import _jit
+
+
+@_jit()
+def _outline(uncut, ids, r0, r1, big, rims, e0, e1):
+    """The outline of the shadows rows r0..r1 and the rims' edges e0..e1 (`arrange.edges`,
+    then each undirected edge's net count, its first edge's corners): (ax, ay, bx, by (m,),
+    corner ids ia, ib (m,), counts (m,)), the edges in the order of (lower id, higher id);
+    big: more than any id."""
+    rim, rim_ids, rim_count = rims
+    rows = np.empty(r1 - r0, np.int64)
+    v = 0
+    for r in range(r0, r1):
+        signed = (uncut[r, 1, 0] - uncut[r, 0, 0]) * (uncut[r, 2, 1] - uncut[r, 0, 1]) - \
+            (uncut[r, 1, 1] - uncut[r, 0, 1]) * (uncut[r, 2, 0] - uncut[r, 0, 0])
+        if signed != 0:
+            rows[v] = r if signed > 0 else -1 - r
+            v += 1
+    many = 3 * v + e1 - e0
+    row, s0, s1 = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
+    lo, hi, way = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
+    for e in range(3):
+        for w in range(v):
+            i, r = e * v + w, rows[w]
+            turn = r < 0
+            r = -1 - r if turn else r
+            row[i] = r
+            s0[i] = (e + 1) % 3 if turn else e
+            s1[i] = e if turn else (e + 1) % 3
+            ka, kb = ids[r, s0[i]], ids[r, s1[i]]
+            lo[i], hi[i], way[i] = min(ka, kb), max(ka, kb), 1 if ka < kb else -1
+    for g in range(e0, e1):                  # a rim's edge: its own count, start to end
+        i = 3 * v + g - e0
+        row[i], s0[i], s1[i] = g, 0, 1
+        ka, kb = rim_ids[g, 0], rim_ids[g, 1]
+        lo[i], hi[i] = min(ka, kb), max(ka, kb)
+        way[i] = rim_count[g] if ka < kb else -rim_count[g]
+    rep, net = _tally(lo, hi, way)
+    order = _order(lo[rep], hi[rep], big)
+    m = order.shape[0]
+    ax, ay, bx, by = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    ia, ib, cnt = np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64)
+    for g in range(m):
+        f, up = rep[order[g]], net[order[g]] > 0         # f: the first of the edge's edges
+        r = row[f]
+        c_lo, c_hi = (s0[f], s1[f]) if way[f] > 0 else (s1[f], s0[f])
+        c_a, c_b = (c_lo, c_hi) if up else (c_hi, c_lo)
+        if f < 3 * v:
+            ax[g], ay[g], bx[g], by[g] = uncut[r, c_a, 0], uncut[r, c_a, 1], \
+                uncut[r, c_b, 0], uncut[r, c_b, 1]
+        else:
+            ax[g], ay[g], bx[g], by[g] = rim[r, c_a, 0], rim[r, c_a, 1], rim[r, c_b, 0], \
+                rim[r, c_b, 1]
+        ia[g], ib[g] = (lo[f], hi[f]) if up else (hi[f], lo[f])
+        cnt[g] = abs(net[order[g]])
+    return ax, ay, bx, by, ia, ib, cnt
+
+
+@_jit()
+def _tally(lo, hi, way):
+    """The undirected edges lo-hi (k,) (corner ids) whose net count is not zero: (the first
+    of each one's edges (u,), its net count (u,)), in the order of those first edges; an edge
+    adds way (k,) (its count, + where it runs from its lower id), by a table of open
+    addressing."""
+    k = lo.shape[0]
+    size = 16
+    while size < 2 * k:
+        size *= 2
+    taken = np.zeros(size, np.bool_)
+    slot_lo, slot_hi = np.empty(size, np.int64), np.empty(size, np.int64)
+    first, net = np.empty(k, np.int64), np.zeros(k, np.int64)
+    at, u = np.empty(size, np.int64), 0
+    for i in range(k):
+        h = ((lo[i] * 73856093) ^ (hi[i] * 19349663)) & (size - 1)
+        while taken[h] and (slot_lo[h] != lo[i] or slot_hi[h] != hi[i]):
+            h = (h + 1) & (size - 1)
+        if not taken[h]:
+            taken[h], slot_lo[h], slot_hi[h], at[h] = True, lo[i], hi[i], u
+            first[u] = i
+            u += 1
+        net[at[h]] += way[i]
+    keep = np.flatnonzero(net[:u] != 0)
+    return first[keep], net[keep]
+
+
+@_jit()
+def _order(lo, hi, big):
+    """The order of the edges by lower corner id lo (k,), then higher hi (k,) (< big), then
+    number (a stable sort): one sort of a key where it fits in an int64."""
+    many = lo.shape[0]
+    if many == 0:
+        return np.empty(0, np.int64)
+    if float(big) * float(big) >= 2.0 ** 62:
+        order = _stable(hi)
+        return order[_stable(lo[order])]
+    key = np.empty(many, np.int64)
+    for i in range(many):
+        key[i] = lo[i] * big + hi[i]
+    return _stable(key)
+
+
+@_jit()
+def _stable(key):
+    """The order of key (k,) in a stable sort (np.argsort's, mergesort): a quick sort, then
+    each run of equal keys (NaNs one run) in order of place."""
+    order = np.argsort(key)
+    g = 0
+    while g < key.shape[0]:
+        h = g + 1
+        while h < key.shape[0] and (key[order[h]] == key[order[g]] or (
+                key[order[h]] != key[order[h]] and key[order[g]] != key[order[g]])):
+            h += 1
+        for a in range(g + 1, h):                        # insertion sort of the run
+            i, w = order[a], a
+            while w > g and order[w - 1] > i:
+                order[w] = order[w - 1]
+                w -= 1
+            order[w] = i
+        g = h
+    return order
