@@ -40,7 +40,7 @@ import numpy as np
 from shadowvol.frame import EXACT_OUTPUTS
 from shadowvol.scene import AreaLight, DirectionalLight, Scene
 
-from . import arrange, candidates, polygons, pyramid, windings, windmeasures
+from . import arrange, blockwindings, candidates, polygons, pyramid, windings, windmeasures
 from .arrange import polygonal as _polygonal
 from .regions import closed_rings as _closed_rings
 from .regions import measure as _measure
@@ -67,6 +67,9 @@ WINDING_PIECES = 8
 # Pieces of shadow of one pixel above which their union is taken from its outline
 # (`raytrace.arrange`) rather than by GEOS's cascaded union.
 MANY_PIECES = 16
+# Pixels a side of the blocks of the image whose pixels share their steady triangles' outline
+# (`raytrace.blockwindings`; 0: none, every pixel its own pairs).
+BLOCK = 2
 # Pixels per chunk (each chunk's candidate arrays are pixels x clusters).
 CHUNK_PIXELS = 2048
 # Pixels per tile (a tile a thread): the masks' 32k of before their 64k
@@ -145,9 +148,9 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     lit = shadow_masks(scene.replace(lights=tuple(scene.lights[i] for i in hard)), mt)[0] \
         if hard else None
 
-    # per area light: the objects wholly on its emitting side (once a frame, not a chunk)
-    clears = [None if lt is None or objects is None else _clear(lt, objects, corners)
-              for lt in lights]
+    # per area light: its corners' heights over its plane (once a frame, not a chunk)
+    sides = [None if lt is None or objects is None else candidates.heights(lt, objects, corners)
+             for lt in lights]
 
     def trace_tile(rows: slice) -> None:
         _, index, hit = _primary_hits(tracer, triangles, grids, rows)
@@ -171,7 +174,8 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
                     np.full(len(p[part]), None, object)
                 shadowed = receives[hit.tri[part]] & scene.lights[i].shadows
                 got = _area_light(shapely, light, objects, corners, p[part], normal[part],
-                                  hit.tri[part], keep, shadowed, direct, clears[i])
+                                  hit.tri[part], keep, shadowed, direct, sides[i],
+                                  (pixel[part], W))
                 if keep is not None:
                     _regions[1][pixel[part]] = keep
                 vis[i, pixel[part]], irr[i, pixel[part]] = got[:2]
@@ -196,14 +200,15 @@ def _hard_cosine(light, p: np.ndarray, normal: np.ndarray, origin: np.ndarray) -
 def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
                 p: np.ndarray, normal: np.ndarray, own: np.ndarray, regions=None,
                 shadowed: np.ndarray | None = None, direct: bool = False,
-                clear: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
+                sides: tuple | None = None, where: tuple | None = None
+                ) -> tuple[np.ndarray, ...]:
     """(n,) visibility and irradiance of `light` at points p (n, 3) with camera-facing unit
     normals (n, 3) on triangles own (n,); `regions` (n,) object array: filled with the
     visible regions (shapely, the light's plane coordinates) where given; `shadowed` (n,)
     bool (default all): the points that receive shadows from this light (the others see the
     light's part on their side whole: the shadow switches); `direct`: the unattenuated
-    measure over the light's area too (`ExactVisibility.direct`); `clear`: `_clear` (made
-    here where not given)."""
+    measure over the light's area too (`ExactVisibility.direct`); `sides`, `where`:
+    `_occluded`'s (sides made here where not given)."""
     n = len(p)
     height = (p - light.center) @ light.normal
     front = np.flatnonzero(height > 0)
@@ -211,15 +216,12 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     if len(front) == 0:
         return (out_v, out_e, out_d) if direct else (out_v, out_e)
     p, normal, own = p[front], normal[front], own[front]
-    base = light.center + light.hull @ light.axes                 # (k, 3)
-    pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
-    chains, loose = np.full(len(p), None, object), np.full(len(p), None, object)
     at = np.arange(len(p)) if shadowed is None else np.flatnonzero(shadowed[front])
-    if len(at) and len(objects.members):
-        pieces[at], single[at], chains[at], loose[at] = _shadows(
-            shapely, light, objects, corners, p[at], normal[at], own[at], base,
-            _clear(light, objects, corners) if clear is None else clear,
-            light.outline is None and regions is None)
+    sides = candidates.heights(light, objects, corners) if sides is None else sides
+    pieces, single, chains, loose = _occluded(
+        shapely, light, objects, corners, p, normal, own, at, sides,
+        None if where is None else (where[0][front], where[1]),
+        light.outline is None and regions is None)
     # the light cut to p's side: its hull's box cut by n . (x - p) > 0, then the outline
     box = np.array([light.hull.min(axis=0), [light.hull[:, 0].max(), light.hull[:, 1].min()],
                     light.hull.max(axis=0), [light.hull[:, 0].min(), light.hull[:, 1].max()]])
@@ -277,6 +279,34 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     return out_v, out_e, out_d
 
 
+def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
+              p: np.ndarray, normal: np.ndarray, own: np.ndarray, at: np.ndarray, sides: tuple,
+              where: tuple | None, outlines: bool) -> tuple[np.ndarray, ...]:
+    """The union of the shadows on the light of the points at (indices into p (n, 3), with
+    normals and own triangles (n,)) as `_shadows` gives it (n,) each (None, False past at),
+    its crowded pixels' windings a block at a time first (`raytrace.blockwindings`) where
+    `where` (each point's pixel (n,), the frame's width) and `outlines`; sides:
+    `candidates.heights`."""
+    base = light.center + light.hull @ light.axes                 # (k, 3)
+    pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
+    chains, loose = np.full(len(p), None, object), np.full(len(p), None, object)
+    if len(at) == 0 or len(objects.members) == 0:
+        return pieces, single, chains, loose
+    if where is not None and outlines and BLOCK > 0:
+        chains[at] = blockwindings.chains(light, objects, corners, sides[0], p[at], normal[at],
+                                          own[at], where[0][at], where[1], BLOCK)
+        done = windings.found(chains[at])
+        # nothing inside the light's box: the light measured whole, as a pixel of no shadow
+        empty = at[done][[len(c) == 0 for c in chains[at[done]]]]
+        chains[empty] = None
+        at = at[~done]
+    if len(at):
+        pieces[at], single[at], chains[at], loose[at] = _shadows(
+            shapely, light, objects, corners, p[at], normal[at], own[at], base, sides[1],
+            outlines)
+    return pieces, single, chains, loose
+
+
 def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
     """(n,) object array of shapely polygons from corners flat (n, k, 2), count (n,) (an empty
     polygon where fewer than 3)."""
@@ -298,7 +328,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     one convex polygon (`_unite`); and, with `outlines`, the union's boundary from its
     outline's windings (`raytrace.windings`) where that is certain (the union None there),
     and the few shadows that outline leaves out (`windmeasures.measures`' loose; None
-    where none); clear: `_clear`."""
+    where none); clear: `candidates.heights`' second."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = candidates.meets(light, objects, p, base, lo, hi)
@@ -364,15 +394,6 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     union, single = _unite(shapely, shapes, owner, len(p), light.grid)
     single[arranged] = False       # an outline's union is not one convex polygon
     return union, single, chains, loose
-
-
-def _clear(light: FramedLight, objects: Objects, corners: np.ndarray) -> np.ndarray:
-    """(n_objects,) bool: the objects wholly on the light's emitting side (every corner
-    strictly above its plane): the light is outside them."""
-    height = ((corners - light.center) @ light.normal).min(axis=1)
-    lowest = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
-    np.minimum.at(lowest, objects.object, height)
-    return lowest > 0
 
 
 def _groups(keys: np.ndarray, items: np.ndarray) -> tuple[list, list]:

@@ -90,6 +90,8 @@ def _crowded_from(monkeypatch, many: int) -> None:
     pixel of more than `many` shadows (1 << 62: neither, every shadow united one by one)."""
     monkeypatch.setattr(raytrace.exact_soft, "MANY_PIECES", many)
     monkeypatch.setattr(raytrace.exact_soft, "WINDING_PIECES", many)
+    if many == 1 << 62:         # nor a block's shared outline (`raytrace.blockwindings`)
+        monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 0)
 
 
 def _counted(monkeypatch, module, name):
@@ -120,7 +122,8 @@ def test_fast_paths_equal_the_triangle_by_triangle_union(seed, monkeypatch):
     # its windings on a rect or disk light (a polygon light's outline is not convex)
     assert sum(c is not None for got in wound for c in got) >= (10 if seed % 3 != 2 else 0)
     # the outline's union by GEOS (`raytrace.arrange`), the windings off
-    monkeypatch.setattr(raytrace.windings, "boundaries", lambda *args: np.full(args[-1], None))
+    monkeypatch.setattr(raytrace.windings, "boundaries",
+                        lambda *args, **kwargs: np.full(args[4], None))
     arranged = _counted(monkeypatch, raytrace.arrange, "union")
     for many in (16, 4):
         _crowded_from(monkeypatch, many)
@@ -134,9 +137,11 @@ def test_fast_paths_equal_the_triangle_by_triangle_union(seed, monkeypatch):
 @pytest.mark.parametrize("batch", [1, 700])
 def test_split_in_batches_of_any_size(batch, monkeypatch):
     """`windings.split` hands its pixels to `windings.boundaries` about BATCH shadows at a
-    time (whole pixels): one pixel a batch, or a few, give the same bytes as the default."""
+    time (whole pixels): one pixel a batch, or a few, give the same bytes as the default
+    (pixel by pixel: no block shares its outline, `raytrace.blockwindings`)."""
     scene = _random_scene(0)
     _crowded_from(monkeypatch, 4)
+    monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 0)
     wound = _counted(monkeypatch, raytrace.windings, "boundaries")
     want = exact_visibility(scene)
     calls = len(wound)                  # one a tile (`exact_soft`: a tile a thread at least)

@@ -150,8 +150,10 @@ def test_random_batches_are_numpys_bytes(seed, kinds, shift, outline, monkeypatc
 
 def test_a_noisy_balls_batches_are_numpys_bytes(monkeypatch):
     """The batches `windings.split` hands `boundaries` in the exact soft shadow of a noisy
-    ball on a floor under a rect light: each the same bytes both ways."""
+    ball on a floor under a rect light (pixel by pixel: no block shares its outline,
+    `raytrace.blockwindings`): each the same bytes both ways."""
     trimesh = pytest.importorskip("trimesh")
+    import raytrace.exact_soft
     from raytrace.exact_soft import exact_visibility
     from shadowvol.primitives import mesh, plane
     from shadowvol.scene import AreaLight, Camera, Material, Scene
@@ -172,6 +174,7 @@ def test_a_noisy_balls_batches_are_numpys_bytes(monkeypatch):
         return plain(*args)
     with monkeypatch.context() as m:
         m.setattr(windings, "boundaries", keep)
+        m.setattr(raytrace.exact_soft, "BLOCK", 0)
         exact_visibility(scene)
     assert seen
     settled = 0

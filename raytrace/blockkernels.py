@@ -1,0 +1,207 @@
+"""A block of pixels' shared outline, in numba (`raytrace.blockwindings`).
+
+Pixels a few apart see most triangles from the same side.  A triangle that every point p of
+a block sees turned the same way, certainly (p off its plane by more than
+`wholekernels.FACING`), and that is free from each (`pyramid.uncut`) casts a shadow that
+turns the same way from each; where two such triangles share an edge and turn the same way
+it cancels from every pixel's outline (`raytrace.windings`).  So the block's steady
+triangles are counted once, edge by edge, and only the edges left (the block's outline: its
+rim, its folds, its borders with the unsteady triangles) are carried from each pixel; the
+unsteady triangles (turned either way within the block, not free, a pixel's own or coplanar
+with it) are the pixels' own pairs, as before.  The steady ones are all the triangles of the
+clusters that meet any of the block's pyramids, also those whose shadows miss a pixel's
+light: what they add lies outside the light, and the outline is cut to a box about it
+(`raytrace.clipkernels`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .exactkernels import carried
+from .packetkernels import _jit
+from .outlinekernels import _tally
+
+# A triangle turns one way from p when p lies off its plane by more than this much of their
+# distance (its unit normal . (p - corner) against |p - corner|): float64 products are good to
+# ~1e-16 of it, and a triangle seen this nearly edge-on is left to the pixel's own pairs.
+FACING = 2.0 ** -20
+
+
+@_jit()
+def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri_normal,
+                offset, scale, corners, rel, reach, coplanar, sides):
+    """For the blocks of pixels start (b + 1,) (each block's pixels, in order): (the blocks'
+    outline edges: tri, from, to (e,) a triangle and its corners (0-2) the edge runs between,
+    the way its net count is positive, count (e,), where each block's start (b + 1,); the
+    unsteady triangles (u,), whether each is free from some of the block's pixels only or
+    is one's own or coplanar with it (u,) (else it is free from each, turned either way),
+    where each block's start (b + 1,); whether a block has a convex object's triangle (b,):
+    then none of it is counted).  A triangle whose box's sphere lies outside a side plane of
+    every pixel's pyramid (sides (s, n, 3) unit inward normals through p) is left out.
+    meet (n, C): the clusters meeting each pixel's pyramid; members, packed, kinds:
+    `occluders.Objects`; welded (M, 3); h (M, 3) the corners' heights over the light's plane
+    (`pyramid.uncut`'s sums); p (n, 3), top (n,) p's height; own (n,); tri_normal, offset,
+    scale (M,); rel (n,) |p - centre|; reach: `pyramid.UNCUT_REACH` of the light; coplanar:
+    `candidates.COPLANAR_RELATIVE`."""
+    n_blocks, width = start.shape[0] - 1, members.shape[1]
+    e_tri, e_from = np.empty(1024, np.int64), np.empty(1024, np.int64)
+    e_to, e_cnt = np.empty(1024, np.int64), np.empty(1024, np.int64)
+    e_at, u_at = np.zeros(n_blocks + 1, np.int64), np.zeros(n_blocks + 1, np.int64)
+    unsteady, loose = np.empty(1024, np.int64), np.empty(1024, np.bool_)
+    convex = np.zeros(n_blocks, np.bool_)
+    # one block's steady edges: lo, hi, way, and the triangle and corners each came from
+    room = 3 * width * meet.shape[1]
+    k_lo, k_hi, k_way = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
+    k_tri, k_s0, k_s1 = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
+    ne, nu = 0, 0
+    for b in range(n_blocks):
+        i0, i1 = start[b], start[b + 1]
+        low_top, high_top, far_rel = np.inf, 0.0, 0.0
+        for i in range(i0, i1):
+            low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
+            far_rel = max(far_rel, rel[i])
+        q = 0
+        for c in range(meet.shape[1]):
+            hit = False
+            for i in range(i0, i1):
+                hit |= meet[i, c]
+            if not hit:
+                continue
+            for k in range(width):
+                t = members[c, k]
+                if t < 0 or not _near(c, k, i0, i1, packed, p, sides):
+                    continue
+                if kinds[c, k] & 1:
+                    convex[b] = True
+                sign = _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset,
+                               scale, corners, low_top, high_top, far_rel, reach, coplanar)
+                if sign == 3:
+                    continue
+                if sign == 0 or sign == 2:
+                    if nu == unsteady.shape[0]:
+                        unsteady, loose = _grow(unsteady, nu), _grow(loose, nu)
+                    unsteady[nu], loose[nu] = t, sign == 0
+                    nu += 1
+                    continue
+                for e in range(3):
+                    a, z = (e, (e + 1) % 3) if sign > 0 else ((e + 1) % 3, e)
+                    ka, kb = welded[t, a], welded[t, z]
+                    k_lo[q], k_hi[q], k_way[q] = min(ka, kb), max(ka, kb), 1 if ka < kb else -1
+                    k_tri[q], k_s0[q], k_s1[q] = t, a, z
+                    q += 1
+        first, net = _tally(k_lo[:q], k_hi[:q], k_way[:q])
+        for g in range(first.shape[0]):
+            f = first[g]
+            if ne == e_tri.shape[0]:
+                e_tri, e_from = _grow(e_tri, ne), _grow(e_from, ne)
+                e_to, e_cnt = _grow(e_to, ne), _grow(e_cnt, ne)
+            # the first edge runs lo -> hi where way > 0; the net where net > 0
+            forward = (k_way[f] > 0) == (net[g] > 0)
+            e_tri[ne] = k_tri[f]
+            e_from[ne], e_to[ne] = (k_s0[f], k_s1[f]) if forward else (k_s1[f], k_s0[f])
+            e_cnt[ne] = abs(net[g])
+            ne += 1
+        e_at[b + 1], u_at[b + 1] = ne, nu
+    return e_tri[:ne], e_from[:ne], e_to[:ne], e_cnt[:ne], e_at, unsteady[:nu], loose[:nu], \
+        u_at, convex
+
+
+@_jit(inline="always")
+def _near(c, k, i0, i1, packed, p, sides):
+    """Whether member k of cluster c has its box's sphere (packed: its box) inside every
+    side plane of some pixel i0..i1's pyramid (or not wholly outside it)."""
+    c0 = (packed[c, k, 0] + packed[c, k, 3]) / 2
+    c1 = (packed[c, k, 1] + packed[c, k, 4]) / 2
+    c2 = (packed[c, k, 2] + packed[c, k, 5]) / 2
+    d0, d1 = packed[c, k, 3] - packed[c, k, 0], packed[c, k, 4] - packed[c, k, 1]
+    d2 = packed[c, k, 5] - packed[c, k, 2]
+    radius = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) / 2 * (1 + 2.0 ** -30) + 1e-300
+    for i in range(i0, i1):
+        inside = True
+        for j in range(sides.shape[0]):
+            m0, m1, m2 = sides[j, i, 0], sides[j, i, 1], sides[j, i, 2]
+            inside &= m0 * (c0 - p[i, 0]) + m1 * (c1 - p[i, 1]) + m2 * (c2 - p[i, 2]) >= -radius
+        if inside:
+            return True
+    return False
+
+
+@_jit()
+def _grow(a, n):
+    """a with twice the room, its first n kept."""
+    out = np.empty(2 * a.shape[0], a.dtype)
+    out[:n] = a[:n]
+    return out
+
+
+@_jit(inline="always")
+def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, corners,
+            low_top, high_top, far_rel, reach, coplanar):
+    """+1 or -1: triangle t (member k of cluster c) is free from every pixel i0..i1 and
+    turned that way from each, certainly; 2: free from each, not turned one way; 3: in no
+    pixel's pyramid (wholly at or beyond every p's parallel plane, or behind the light's); 0
+    for any other (some pixel's own, or coplanar with it, or free from some only)."""
+    low_h = min(h[t, 0], min(h[t, 1], h[t, 2]))
+    high_h = max(h[t, 0], max(h[t, 1], h[t, 2]))
+    if low_h >= high_top or high_h < 0:
+        return 3
+    if not (low_h >= 0 and high_h < low_top):
+        return 0
+    sign, turned = 0, True
+    for i in range(i0, i1):
+        o = own[i]
+        if t == o:
+            return 0
+        n0, n1, n2 = tri_normal[o, 0], tri_normal[o, 1], tri_normal[o, 2]
+        if abs(n0 * packed[c, k, 6] + n1 * packed[c, k, 7] + n2 * packed[c, k, 8]) > 1 - 1e-3:
+            off = 0.0
+            for j in range(3):
+                off = max(off, abs(corners[t, j, 0] * n0 + corners[t, j, 1] * n1
+                                   + corners[t, j, 2] * n2 - offset[o]))
+            if not off > coplanar * max(scale[o], packed[c, k, 15]):
+                return 0
+        r0, r1, r2 = p[i, 0] - packed[c, k, 12], p[i, 1] - packed[c, k, 13], \
+            p[i, 2] - packed[c, k, 14]
+        dist = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+        s = packed[c, k, 6] * r0 + packed[c, k, 7] * r1 + packed[c, k, 8] * r2
+        way = 1 if s > 0 else -1
+        if not abs(s) > FACING * dist or (sign != 0 and way != sign):
+            turned = False
+        sign = way
+        # carried within reach: |rel| + the most any corner is magnified times its distance
+        # (within the triangle's box's half diagonal of its first corner's... its box's)
+        span = 0.0
+        for a in range(3):
+            span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
+        bound = far_rel + high_top / (low_top - high_h) * (dist + np.sqrt(span))
+        if not bound * (1 + 2.0 ** -30) < reach:
+            return 0
+    return sign if turned else 2
+
+
+@_jit()
+def carried_edges(start, e_tri, e_from, e_to, e_cnt, e_at, corners, welded, p, center, normal,
+                  axes):
+    """Each block's outline edges (`block_edges`) carried from each of its pixels (start (b +
+    1,)) onto the light's plane: (flat (q, 2, 2), ids (q, 2), count (q,), pixel (q,)), by
+    pixel."""
+    total = 0
+    for b in range(start.shape[0] - 1):
+        total += (start[b + 1] - start[b]) * (e_at[b + 1] - e_at[b])
+    flat = np.empty((total, 2, 2))
+    ids = np.empty((total, 2), np.int64)
+    count, owner = np.empty(total, np.int64), np.empty(total, np.int64)
+    ray = np.empty(3)
+    g = 0
+    for b in range(start.shape[0] - 1):
+        for i in range(start[b], start[b + 1]):
+            for e in range(e_at[b], e_at[b + 1]):
+                t, a, z = e_tri[e], e_from[e], e_to[e]
+                for x in range(2):
+                    flat[g, 0, x] = carried(corners, t, a, p, i, center, normal, axes, x, ray)
+                    flat[g, 1, x] = carried(corners, t, z, p, i, center, normal, axes, x, ray)
+                ids[g, 0], ids[g, 1] = welded[t, a], welded[t, z]
+                count[g], owner[g] = e_cnt[e], i
+                g += 1
+    return flat, ids, count, owner
