@@ -10,7 +10,8 @@ floor at 48 x 48, and the shared bunny (69,451 triangles, open at its base) on a
 and on one thread (`arrange.THREADS`), with the fast path off (every triangle's shadow
 united one by one: the reference of `tests/raytrace/test_exact_fast.py`), and `soft_masks`
 counting the light's 64, 256 and 1024 stratified samples.  Then the bunny at 16 x 16,
-32 x 32 and 64 x 64: exact against counting 256 samples, and what a pixel more costs each
+32 x 32, 64 x 64 and 128 x 128: exact (and pixel by pixel: no block of pixels sharing its
+outline, `exact_soft.BLOCK` 0) against counting 256 samples, and what a pixel more costs each
 (the slope between the two largest frames), so the fixed cost of a frame (the scene's
 Embree build, the objects' topology) is told apart from the per-pixel one."""
 
@@ -67,13 +68,24 @@ def bunny_rect_scene(size: int) -> Scene:
 
 
 def reference(scene: Scene) -> None:
-    """`exact_visibility` with its fast paths off: no outline unions, no windings."""
-    many, wound = exact_soft.MANY_PIECES, exact_soft.WINDING_PIECES
+    """`exact_visibility` with its fast paths off: no outline unions, no windings, no
+    block's shared outline."""
+    many, wound, block = exact_soft.MANY_PIECES, exact_soft.WINDING_PIECES, exact_soft.BLOCK
     exact_soft.MANY_PIECES = exact_soft.WINDING_PIECES = 1 << 62
+    exact_soft.BLOCK = 0
     try:
         exact_soft.exact_visibility(scene)
     finally:
-        exact_soft.MANY_PIECES, exact_soft.WINDING_PIECES = many, wound
+        exact_soft.MANY_PIECES, exact_soft.WINDING_PIECES, exact_soft.BLOCK = many, wound, block
+
+
+def pixel_by_pixel(scene: Scene) -> None:
+    """`exact_visibility` with no block's shared outline (`exact_soft.BLOCK` 0)."""
+    block, exact_soft.BLOCK = exact_soft.BLOCK, 0
+    try:
+        exact_soft.exact_visibility(scene)
+    finally:
+        exact_soft.BLOCK = block
 
 
 def one_thread(scene: Scene) -> None:
@@ -89,28 +101,31 @@ def frame(name: str, scene: Scene) -> None:
     print(f"{name} ({triangles} triangles) {scene.width}x{scene.height}, ms per frame:")
     print(f"  exact: {timed(lambda: exact_soft.exact_visibility(scene))}", flush=True)
     print(f"  exact, one thread: {timed(lambda: one_thread(scene))}", flush=True)
+    print(f"  exact, pixel by pixel: {timed(lambda: pixel_by_pixel(scene))}", flush=True)
     print(f"  exact, fast path off: {timed(lambda: reference(scene))}", flush=True)
     for n in (64, 256, 1024):
         counted = scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=n)])
         print(f"  counting {n}: {timed(lambda: soft_masks(counted))}", flush=True)
 
 
-def per_pixel(sizes=(16, 32, 64)) -> None:
-    """The bunny's frame cost against its size: exact and counting 256 samples (CPU ms), and
-    the CPU a pixel more costs each between the two largest frames."""
-    print("bunny by frame size, CPU ms a frame (exact / counting 256):")
+def per_pixel(sizes=(16, 32, 64, 128)) -> None:
+    """The bunny's frame cost against its size: exact, exact pixel by pixel and counting 256
+    samples (CPU ms), and the CPU a pixel more costs each between the two largest frames."""
+    print("bunny by frame size, CPU ms a frame (exact / pixel by pixel / counting 256):")
     cost = {}
     for n in sizes:
         scene = bunny_rect_scene(n)
         counted = scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=256)])
         cost[n] = (clocked(lambda: exact_soft.exact_visibility(scene))[1],
+                   clocked(lambda: pixel_by_pixel(scene))[1],
                    clocked(lambda: soft_masks(counted))[1])
-        print(f"  {n}x{n}: {cost[n][0]:.0f} / {cost[n][1]:.0f}", flush=True)
+        print(f"  {n}x{n}: {cost[n][0]:.0f} / {cost[n][1]:.0f} / {cost[n][2]:.0f}", flush=True)
     a, b = sizes[-2:]
     more = b * b - a * a
-    slope = [(cost[b][k] - cost[a][k]) / more for k in (0, 1)]
-    print(f"  a pixel more ({a}x{a} -> {b}x{b}): exact {slope[0]:.3f} ms, counting 256 "
-          f"{slope[1]:.3f} ms ({slope[0] / max(slope[1], 1e-9):.0f}x)")
+    slope = [(cost[b][k] - cost[a][k]) / more for k in (0, 1, 2)]
+    print(f"  a pixel more ({a}x{a} -> {b}x{b}): exact {slope[0]:.3f} ms, pixel by pixel "
+          f"{slope[1]:.3f} ms, counting 256 {slope[2]:.3f} ms "
+          f"({slope[0] / max(slope[2], 1e-9):.1f}x)")
 
 
 def main(argv=None) -> None:

@@ -1,0 +1,138 @@
+"""A block of pixels' shared outline (`raytrace.blockwindings`) and an outline cut to a box
+about the light (`raytrace.clipkernels`), against independent witnesses: the pixel-by-pixel
+path (`exact_soft.BLOCK` 0, itself held to the triangle-by-triangle union by
+test_exact_fast.py), and shapely's union of the triangles measured inside the light."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import raytrace.blockwindings
+import raytrace.exact_soft
+from raytrace import polygons, windings
+from shadowcases import loose, sheet
+
+pytest.importorskip("numba")
+shapely = pytest.importorskip("shapely")
+
+# The block path's outline differs from the pixel's own outside the light (more triangles,
+# cut to a box), so the measures agree to rounding, not to the bit (test_exact_fast's bound).
+ROUNDING = 1e-12
+
+
+def _scene(light_shape: str, size: int = 24):
+    """A wavy open sheet (3,042 triangles) and a noisy closed ball (1,280) over a floor under
+    one area light: dense meshes, so blocks hold many steady triangles."""
+    trimesh = pytest.importorskip("trimesh")
+    from shadowvol.primitives import mesh, plane
+    from shadowvol.scene import AreaLight, Camera, Material, Scene
+    rng = np.random.default_rng(3)
+    n = 40
+    x, z = np.meshgrid(np.linspace(-1.2, 0.2, n), np.linspace(-0.7, 0.7, n))
+    y = 1.1 + 0.06 * np.sin(9 * x) * np.cos(7 * z) + 0.01 * rng.standard_normal((n, n))
+    k = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
+    faces = np.r_[np.c_[k, k + 1, k + n + 1], np.c_[k, k + n + 1, k + n]]
+    ico = trimesh.creation.icosphere(subdivisions=3, radius=0.35)
+    ball = ico.vertices * (1 + 0.08 * rng.standard_normal((len(ico.vertices), 1)))
+    matte = Material(diffuse=[0.8, 0.8, 0.8])
+    light = AreaLight(light_shape, [0.0, 2.6, 0.0], normal=[0.2, -1, 0.1],
+                      **({"size": [1.0, 0.8]} if light_shape == "rect" else {"radius": 0.5}),
+                      samples=4)
+    return Scene(camera=Camera(eye=[0, 4.5, 5.5], target=[0, 0, -0.3], fov_y=40.0),
+                 objects=[plane("floor", size=[8, 8], material=matte),
+                          mesh("sheet", np.c_[x.ravel(), y.ravel(), z.ravel()], faces,
+                               material=matte),
+                          mesh("ball", ball + [0.7, 0.8, 0.2], np.asarray(ico.faces),
+                               material=matte)],
+                 lights=[light], width=size, height=size, ambient=[0, 0, 0])
+
+
+@pytest.mark.parametrize("shape", ["rect", "disk"])
+def test_blocks_give_the_pixel_by_pixel_measures(shape, monkeypatch):
+    from raytrace.exact_soft import exact_visibility
+    scene = _scene(shape)
+    monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 0)
+    want = exact_visibility(scene)
+    v = want.visibility[0]
+    assert ((v > 0) & (v < 1)).sum() > 60 and (v == 0).sum() > 10
+    blocks = polygons.kernels("blockkernels")
+    shared, plain = [], blocks.block_edges
+
+    def counted(*args):
+        got = plain(*args)
+        shared.append((len(got[0]), len(got[5])))
+        return got
+    monkeypatch.setattr(blocks, "block_edges", counted)
+    settled = []
+    plain_chains = raytrace.blockwindings.chains
+
+    def chains(*args):
+        got = plain_chains(*args)
+        settled.append(sum(c is not None for c in got))
+        return got
+    monkeypatch.setattr(raytrace.blockwindings, "chains", chains)
+    for block in (2, 3, 5):
+        monkeypatch.setattr(raytrace.exact_soft, "BLOCK", block)
+        got = exact_visibility(scene)
+        assert np.abs(got.visibility - want.visibility).max() <= ROUNDING
+        assert np.abs(got.irradiance - want.irradiance).max() <= ROUNDING
+    # the blocks shared outlines (steady edges counted once) and settled most pixels
+    assert sum(edges for edges, _ in shared) > 1000
+    assert sum(settled) > 0.8 * 3 * scene.width * scene.height * 0.5
+
+
+def test_carried_in_parts_gives_the_same_bytes(monkeypatch):
+    """`blockwindings.chains` carries its blocks' outlines about CARRIED edges at a time
+    (whole blocks): one block a part gives the same bytes as the default."""
+    from raytrace.exact_soft import exact_visibility
+    scene = _scene("rect", 16)
+    want = exact_visibility(scene)
+    monkeypatch.setattr(raytrace.blockwindings, "CARRIED", 1)
+    got = exact_visibility(scene)
+    assert got.visibility.tobytes() == want.visibility.tobytes()
+    assert got.irradiance.tobytes() == want.irradiance.tobytes()
+
+
+def _measured(chain: np.ndarray, light) -> float:
+    """The area inside the convex polygon `light` of the region a boundary (e, 2, 2) (the
+    region on each piece's left) bounds: its fan of signed triangles from the light's first
+    corner, each cut to the light by shapely."""
+    c = np.asarray(light.exterior.coords)[0]
+    total = 0.0
+    for a, b in chain:
+        signed = (a[0] - c[0]) * (b[1] - c[1]) - (a[1] - c[1]) * (b[0] - c[0])
+        if signed != 0:
+            total += np.sign(signed) * shapely.Polygon([c, a, b]).intersection(light).area
+    return total
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_an_outline_cut_to_a_box_measures_as_shapelys_union(seed):
+    """Folded sheets and loose triangles: each pixel's boundary cut to a box (the windings
+    kernel with `box`) and whole (without) measure inside a light within the box as shapely's
+    union of the triangles does; the cut one has its pieces within the box."""
+    rng = np.random.default_rng(seed)
+    pixels = [sheet(rng, 6, 0.35), loose(rng), sheet(rng, 4, 0.6)]
+    box = np.array([0.9, 0.7, 2.6, 2.9]) + rng.uniform(-0.3, 0.3, 4)
+    light = shapely.Polygon([box[:2] + 0.05, [box[2] - 0.05, box[1] + 0.05],
+                             box[2:] - 0.05, [box[0] + 0.05, box[3] - 0.05]])
+    uncut = np.concatenate([t for t, _ in pixels])
+    ids = np.concatenate([i + 1000 * k for k, (_, i) in enumerate(pixels)])
+    owner = np.repeat(np.arange(len(pixels)), [len(t) for t, _ in pixels])
+    free = np.ones(len(uncut), bool)
+    whole = windings.boundaries(uncut, free, ids, owner, len(pixels))
+    cut = windings.boundaries(uncut, free, ids, owner, len(pixels), box=box)
+    certain = 0
+    for k, (tris, _) in enumerate(pixels):
+        if cut[k] is None or whole[k] is None:
+            continue
+        certain += 1
+        union = shapely.union_all([shapely.Polygon(t) for t in tris
+                                   if shapely.Polygon(t).area > 0])
+        want = union.intersection(light).area
+        assert abs(_measured(cut[k], light) - want) <= 1e-12 * max(1.0, want)
+        assert abs(_measured(whole[k], light) - want) <= 1e-12 * max(1.0, want)
+        ends = cut[k].reshape(-1, 2)
+        assert (ends >= box[:2] - 1e-12).all() and (ends <= box[2:] + 1e-12).all()
+    assert certain >= 2
