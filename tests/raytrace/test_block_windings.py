@@ -77,9 +77,10 @@ def test_blocks_give_the_pixel_by_pixel_measures(shape, monkeypatch):
         got = exact_visibility(scene)
         assert np.abs(got.visibility - want.visibility).max() <= ROUNDING
         assert np.abs(got.irradiance - want.irradiance).max() <= ROUNDING
-    # the blocks shared outlines (steady edges counted once) and settled most pixels
+    # the blocks shared outlines (steady edges counted once) and settled most pixels (each
+    # run ~78 % of the frame: the rest at a contact with the floor, or of no shadow at all)
     assert sum(edges for edges, _ in shared) > 1000
-    assert sum(settled) > 0.8 * 3 * scene.width * scene.height * 0.5
+    assert sum(settled) >= 3 * 0.6 * scene.width * scene.height
 
 
 def test_carried_in_parts_gives_the_same_bytes(monkeypatch):
