@@ -78,7 +78,8 @@ def test_blocks_give_the_pixel_by_pixel_measures(shape, monkeypatch):
         assert np.abs(got.visibility - want.visibility).max() <= ROUNDING
         assert np.abs(got.irradiance - want.irradiance).max() <= ROUNDING
     # the blocks shared outlines (steady edges counted once) and settled most pixels (each
-    # run ~78 % of the frame: the rest at a contact with the floor, or of no shadow at all)
+    # run ~78 % of the frame: the rest on the sheet and the ball, where the triangles about p
+    # cross its parallel plane, a contact)
     assert sum(edges for edges, _ in shared) > 1000
     assert sum(settled) >= 3 * 0.6 * scene.width * scene.height
 
