@@ -39,7 +39,8 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     where each block's start (b + 1,); whether a block has a convex object's triangle (b,):
     then none of it is counted).  A triangle whose box's sphere lies outside a side plane of
     every pixel's pyramid (sides (s, n, 3) unit inward normals through p) is left out.
-    meet (n, C): the clusters meeting each pixel's pyramid; members, packed, kinds:
+    meet (b, C): the clusters meeting some pixel's pyramid of each block; members, packed,
+    kinds:
     `occluders.Objects`; welded (M, 3); h (M, 3) the corners' heights over the light's plane
     (`pyramid.uncut`'s sums); p (n, 3), top (n,) p's height; own (n,); tri_normal, offset,
     scale (M,); rel (n,) |p - centre|; reach: `pyramid.UNCUT_REACH` of the light; coplanar:
@@ -63,10 +64,7 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
             far_rel = max(far_rel, rel[i])
         q = 0
         for c in range(meet.shape[1]):
-            hit = False
-            for i in range(i0, i1):
-                hit |= meet[i, c]
-            if not hit:
+            if not meet[b, c]:
                 continue
             for k in range(width):
                 t = members[c, k]
@@ -125,6 +123,17 @@ def _near(c, k, i0, i1, packed, p, sides):
         if inside:
             return True
     return False
+
+
+@_jit()
+def any_rows(meet, start):
+    """(b, C) bool: each block's (start (b + 1,)) rows of meet (n, C), or'ed."""
+    out = np.zeros((start.shape[0] - 1, meet.shape[1]), np.bool_)
+    for b in range(start.shape[0] - 1):
+        for i in range(start[b], start[b + 1]):
+            for c in range(meet.shape[1]):
+                out[b, c] |= meet[i, c]
+    return out
 
 
 @_jit()

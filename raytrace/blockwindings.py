@@ -49,11 +49,14 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     top = dot(p - light.center, light.normal)
     rel = np.sqrt(dot(p - light.center, p - light.center))
     reach = pyramid.UNCUT_REACH * np.abs(light.hull).max()
+    # the clusters that meet some pixel's pyramid of each block (b, C)
+    near = loaded.any_rows(meet, start)
+    sides = np.stack([m / np.linalg.norm(m, axis=1, keepdims=True)
+                      for m in pyramid.sides(light, p, base)])
     e_tri, e_from, e_to, e_cnt, e_at, unsteady, loose, u_at, convex = loaded.block_edges(
-        start, meet, objects.members, objects.packed, objects.kinds, objects.corner_ids, h, p,
+        start, near, objects.members, objects.packed, objects.kinds, objects.corner_ids, h, p,
         top, own, objects.normal, objects.offset, objects.scale, corners, rel, reach,
-        COPLANAR_RELATIVE, np.stack([m / np.linalg.norm(m, axis=1, keepdims=True)
-                                     for m in pyramid.sides(light, p, base)]))
+        COPLANAR_RELATIVE, sides)
     block = np.repeat(np.arange(len(start) - 1), np.diff(start))
     flat, free, pix, tri = _own_pairs(light, objects, corners, p, normal, own, lo, hi, base,
                                       block, unsteady, loose, u_at)
