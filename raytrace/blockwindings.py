@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import pyramid, windings
+from . import pyramid, windings, windmeasures
 from .candidates import COPLANAR_RELATIVE, _keep, meets
 from .lightshapes import FramedLight
 from .occluders import Objects
@@ -28,16 +28,18 @@ CARRIED = 1 << 16
 
 def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndarray,
            p: np.ndarray, normal: np.ndarray, own: np.ndarray, where: np.ndarray, width: int,
-           block: int) -> np.ndarray:
-    """(n,) object: the boundary of each pixel's shadows' union inside the light's box
+           block: int) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) object each: the boundary of each pixel's shadows' union inside the light's box
     (`windings.boundaries`), None where it is left to the pixel-by-pixel path (module) or
-    the kernels are missing; points p (n, 3) with normals (n, 3) on triangles own (n,) at
-    image pixels where (n,) of a frame `width` wide, in blocks of `block` a side; h (M, 3):
-    the corners' heights (`candidates.heights`)."""
-    out = np.full(len(p), None, object)
+    the kernels are missing; and the few shadows that are not free at a contact, left out of
+    it (`windings.split`'s loose: `windmeasures.measures` takes them away; None where none);
+    points p (n, 3) with normals (n, 3) on triangles own (n,) at image pixels where (n,) of a
+    frame `width` wide, in blocks of `block` a side; h (M, 3): the corners' heights
+    (`candidates.heights`)."""
+    out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
     if loaded is None or kernels("windingkernels") is None or len(p) == 0:
-        return out
+        return out, out_loose
     y, x = np.divmod(where, width)
     key = (y // block) * -(-width // block) + x // block
     order = np.argsort(key, kind="stable")
@@ -45,28 +47,49 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     start = np.r_[np.flatnonzero(np.r_[True, np.diff(key[order]) != 0]), len(p)]
     base = light.center + light.hull @ light.axes
     lo, hi = np.minimum(p, base.min(axis=0)), np.maximum(p, base.max(axis=0))
-    meet = meets(light, objects, p, base, lo, hi)
     top = dot(p - light.center, light.normal)
     rel = np.sqrt(dot(p - light.center, p - light.center))
     reach = pyramid.UNCUT_REACH * np.abs(light.hull).max()
-    # the clusters that meet some pixel's pyramid of each block (b, C)
-    near = loaded.any_rows(meet, start)
-    sides = np.stack([m / np.linalg.norm(m, axis=1, keepdims=True)
-                      for m in pyramid.sides(light, p, base)])
-    e_tri, e_from, e_to, e_cnt, e_at, unsteady, loose, u_at, convex = loaded.block_edges(
-        start, near, objects.members, objects.packed, objects.kinds, objects.corner_ids, h, p,
-        top, own, objects.normal, objects.offset, objects.scale, corners, rel, reach,
-        COPLANAR_RELATIVE, sides)
+    m = pyramid.sides(light, p, base)
+    e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex = loaded.block_edges(
+        start, loaded.any_rows(meets(light, objects, p, base, lo, hi), start), objects.members,
+        objects.packed, objects.kinds, objects.corner_ids, h, p, top, own, objects.normal,
+        objects.offset, objects.scale, corners, rel, reach, COPLANAR_RELATIVE,
+        np.stack([s / np.linalg.norm(s, axis=1, keepdims=True) for s in m]))
     block = np.repeat(np.arange(len(start) - 1), np.diff(start))
-    flat, free, pix, tri = _own_pairs(light, objects, corners, p, normal, own, lo, hi, base,
-                                      block, unsteady, loose, u_at)
-    ok = np.ones(len(p), bool)
-    ok[pix[~free]] = False
-    ok[convex[block]] = False
-    pix, tri, flat = pix[free], tri[free], flat[free]
+    flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, normal, own, lo,
+                                                    hi, base, m, block, unsteady, to_cut, u_at)
+    ok = ~convex[block]
+    # a few shadows that are not free (`windings.split`): cut, carried, turned, apart
+    many = np.bincount(pix[~free], minlength=len(p))
+    ok &= many <= windings.LOOSE
+    apart = np.flatnonzero(~free & ok[pix])
+    turned, sure = windmeasures.turned(
+        pyramid.carry(light, p, pyramid.pieces(light, corners, p, pix[apart], tri[apart], m,
+                                               max(3, int(count[apart].max(initial=3)))),
+                      pix[apart], whole[apart]), count[apart])
+    ok[pix[apart[~sure]]] = False
+    got = _wound(loaded, light, objects, corners, p, start, (e_tri, e_from, e_to, e_cnt, e_at),
+                 flat[free], pix[free], tri[free])
+    got[~ok] = None
+    settled = np.flatnonzero(windings.found(got)[pix[apart]])
+    loose = np.full(len(p), None, object)
+    for k, group in zip(*_groups(pix[apart[settled]], settled)):
+        loose[k] = (turned[group], count[apart[group]])
+    out[order], out_loose[order] = got, loose
+    return out, out_loose
+
+
+def _wound(loaded, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
+           start: np.ndarray, edges: tuple, flat: np.ndarray, pix: np.ndarray, tri: np.ndarray
+           ) -> np.ndarray:
+    """(n,) object: `windings.boundaries` of each pixel's free shadows flat (q, 3, 2) of
+    triangles tri (q,) (pix (q,) ascending) and its block's (start (b + 1,)) outline edges
+    (`blockkernels.block_edges`' five), carried from it, cut to the light's box; whole blocks
+    at a time, about CARRIED carried edges each."""
+    e_tri, e_from, e_to, e_cnt, e_at = edges
     got = np.full(len(p), None, object)
     box = windings.clip_box(light)
-    # whole blocks at a time, about CARRIED carried edges each
     size = np.diff(start) * np.diff(e_at)
     cut = np.flatnonzero(np.r_[True, np.diff(np.cumsum(size) // CARRIED) != 0])
     for b0, b1 in zip(cut.tolist(), np.r_[cut[1:], len(start) - 1].tolist()):
@@ -78,36 +101,41 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
         got[i0:i1] = windings.boundaries(flat[a:b], np.ones(b - a, bool),
                                          objects.corner_ids[tri[a:b]], pix[a:b] - i0, i1 - i0,
                                          rims=rims, box=box)
-    got[~ok] = None
-    out[order] = got
-    return out
+    return got
 
 
 def _own_pairs(light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
                normal: np.ndarray, own: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-               base: np.ndarray, block: np.ndarray, unsteady: np.ndarray, loose: np.ndarray,
-               u_at: np.ndarray) -> tuple[np.ndarray, ...]:
+               base: np.ndarray, m: list, block: np.ndarray, unsteady: np.ndarray,
+               to_cut: np.ndarray, u_at: np.ndarray) -> tuple[np.ndarray, ...]:
     """Each pixel's pairs of its block's unsteady triangles (block (n,), unsteady (u,) from
     u_at (b + 1,)) with their whole shadows: (flat (q, 3, 2), free (q,), pixel (q,)
-    ascending, triangle (q,)): all of those free from every pixel of the block, and of the
-    others (loose (u,)) those `candidates.pairs` would keep and the pyramid's cut keeps."""
+    ascending, triangle (q,), and the cut's count and whole (q,) (3 and True for the
+    uncut)): all of those free from every pixel of the block, and of the others (to_cut
+    (u,)) those `candidates.pairs` would keep and the pyramid's cut (sides m) keeps."""
     many = np.diff(u_at)[block]
     pix = np.repeat(np.arange(len(p)), many)
-    first = np.repeat(u_at[block] - np.r_[0, np.cumsum(many)[:-1]], many)
-    tri = unsteady[first + np.arange(len(pix))] if len(pix) else np.zeros(0, np.int64)
-    free = ~loose[first + np.arange(len(pix))] if len(pix) else np.zeros(0, bool)
-    pix, tri, whole = pix[~free], tri[~free], (pix[free], tri[free])
-    near = np.ones(len(pix), bool)
+    first = np.repeat(u_at[block] - np.r_[0, np.cumsum(many)[:-1]], many) + np.arange(len(pix))
+    tri = unsteady[first] if len(pix) else np.zeros(0, np.int64)
+    free = ~to_cut[first] if len(pix) else np.zeros(0, bool)
+    pix, tri, uncut = pix[~free], tri[~free], (pix[free], tri[free])
+    near = tri != own[pix]
     for a in range(3):
         near &= (objects.tri_lo[tri, a] <= hi[pix, a]) & (objects.tri_hi[tri, a] >= lo[pix, a])
-    near &= tri != own[pix]
     pix, tri = pix[near], tri[near]
     keep = _keep(objects, corners, p, normal, own, pix, tri, None)
-    pix, tri = pix[keep], tri[keep]
-    m = pyramid.sides(light, p, base)
-    _, _, pix, tri, _ = pyramid.cut(light, corners, p, pix, tri, base, m, store=False)
-    pix, tri = np.r_[whole[0], pix], np.r_[whole[1], tri]
+    _, count, pix, tri, whole = pyramid.cut(light, corners, p, pix[keep], tri[keep], base, m,
+                                            store=False)
+    pix, tri = np.r_[uncut[0], pix], np.r_[uncut[1], tri]
+    count = np.r_[np.full(len(uncut[0]), 3), count]
+    whole = np.r_[np.ones(len(uncut[0]), bool), whole]
     order = np.argsort(pix, kind="stable")
-    pix, tri = pix[order], tri[order]
+    pix, tri, count, whole = pix[order], tri[order], count[order], whole[order]
     flat, free = pyramid.uncut(light, corners, p, pix, tri)
-    return flat, free, pix, tri
+    return flat, free, pix, tri, count, whole
+
+
+def _groups(keys: np.ndarray, items: np.ndarray) -> tuple[list, list]:
+    """The distinct keys (ascending, as given) and the items (arrays) of each."""
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if len(keys) else keys
+    return keys[starts].tolist(), np.split(items, starts[1:])

@@ -293,11 +293,14 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
     if len(at) == 0 or len(objects.members) == 0:
         return pieces, single, chains, loose
     if where is not None and outlines and BLOCK > 0:
-        chains[at] = blockwindings.chains(light, objects, corners, sides[0], p[at], normal[at],
-                                          own[at], where[0][at], where[1], BLOCK)
+        chains[at], loose[at] = blockwindings.chains(light, objects, corners, sides[0], p[at],
+                                                     normal[at], own[at], where[0][at],
+                                                     where[1], BLOCK)
         done = windings.found(chains[at])
-        # nothing inside the light's box: the light measured whole, as a pixel of no shadow
-        empty = at[done][[len(c) == 0 for c in chains[at[done]]]]
+        # nothing inside the light's box and no shadow apart: the light measured whole, as a
+        # pixel of no shadow
+        empty = at[done][[len(c) == 0 and k is None for c, k in zip(chains[at[done]],
+                                                                    loose[at[done]])]]
         chains[empty] = None
         at = at[~done]
     if len(at):
