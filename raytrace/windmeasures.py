@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import polygons
 from .regions import closed_rings, inside, ring_measures
 from .windings import _cross
 
@@ -65,7 +66,13 @@ def _less(light, region: np.ndarray, size: np.ndarray, clippers: list, chains,
     """(r,) measures of the convex polygons region (r, k, 2), size (r,) less the unions bounded
     by chains[owner] (r,): the fan of signed triangles from the light's centre over each
     chain's edges, clipped by each of clippers' convex counter-clockwise polygons ((r, k, 2),
-    (r,) each; count 0: none) in turn, whose common part the region is."""
+    (r,) each; count 0: none) in turn, whose common part the region is.  In numba, one
+    row at a time, where it loads (`raytrace.measurekernels`: the areas' bytes; a disk light
+    and `direct` stay in numpy)."""
+    loaded = None if direct or light.radius is not None else \
+        polygons.kernels("measurekernels")
+    if loaded is not None:
+        return _kernel(loaded, light, region, size, clippers, chains, owner, p, normal)
     whole = ring_measures(light, *closed_rings(region, size), p, normal, direct)
     sizes = np.array([len(chains[k]) for k in owner], np.int64)
     which = np.repeat(np.arange(len(owner)), sizes)
@@ -83,6 +90,24 @@ def _less(light, region: np.ndarray, size: np.ndarray, clippers: list, chains,
                         direct)
     sign = np.sign(signed)
     return tuple(w - np.bincount(which, sign * g, len(owner)) for w, g in zip(whole, got))
+
+
+def _kernel(loaded, light, region: np.ndarray, size: np.ndarray, clippers: list, chains,
+            owner: np.ndarray, p: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, ...]:
+    """`_less` by `measurekernels.less`: the clippers stacked, the chains in one array."""
+    width = max(poly.shape[1] for poly, _ in clippers)
+    polys = np.stack([_widen(poly, width) for poly, _ in clippers])
+    counts = np.stack([many for _, many in clippers]).astype(np.int64)
+    sizes = np.array([len(chain) for chain in chains], np.int64)
+    start = np.r_[0, np.cumsum(sizes)]
+    edges = np.concatenate([chain for chain in chains if len(chain)]) if start[-1] else \
+        np.zeros((0, 2, 2))
+    return loaded.less(np.ascontiguousarray(region, np.float64), size.astype(np.int64), polys,
+                       counts, np.ascontiguousarray(edges, np.float64), start,
+                       owner.astype(np.int64), np.ascontiguousarray(p, np.float64),
+                       np.ascontiguousarray(normal, np.float64),
+                       np.ascontiguousarray(light.center, np.float64),
+                       np.ascontiguousarray(light.axes, np.float64))
 
 
 def _clip_rows(poly: np.ndarray, many: np.ndarray, inner: np.ndarray, count: np.ndarray

@@ -1,0 +1,142 @@
+"""`windmeasures`' fans in numba (the `fast` extra), one row at a time, where numpy's passes
+over every boundary edge of a crowded pixel's shadow union (the fan triangle, its clip, its
+closed ring, its area and Lambert term, each an array of all the rows' pieces) cost most of
+the time: `less` measures a row's convex region and takes away its fan, each piece clipped
+and measured as it is made.  Polygon lights without `direct` only (`windmeasures._less`).
+
+The same arithmetic as numpy's path, in the same order: the clip is `exactkernels.inside`'s
+(`regions.inside`), the area `polygons.ring_measures`' shoelace halved, summed from 0.0 edge
+by edge as `np.bincount` sums, each corner carried into space as `center + a @ axes - eye`
+(the matmul as OpenBLAS's dgemm takes two terms here: a fused multiply-add of the second onto
+the first's product), `np.cross`'s three differences, sums of three left to right (numpy's
+`sum(axis=1)` and `linalg.norm` of 3 numbers alike).  So the areas, and the visibility, are
+numpy's bytes.  One call differs: `math.atan2` is the C library's, as numpy's `arctan2` is on
+a CPU without AVX-512; with it numpy takes SVML's, which differs in the last bit on ~1.5% of
+random arguments, so an irradiance may differ from numpy's by a few units of rounding
+(tests/raytrace/test_measure_kernels.py bounds it).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
+
+from .packetkernels import _jit
+
+
+@intrinsic
+def _fma(typingctx, x, y, z):
+    """x * y + z rounded once (LLVM's `llvm.fma`, correctly rounded on every CPU)."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        double = ir.DoubleType()
+        fn = builder.module.declare_intrinsic("llvm.fma", [double],
+                                              ir.FunctionType(double, [double] * 3))
+        return builder.call(fn, args)
+    return sig, codegen
+
+
+@_jit(inline="always")
+def _space(x, y, center, axes, eye, r, out):
+    """The plane point (x, y) seen from eye[r]: out (3,) = center + (x, y) @ axes - eye[r]."""
+    for j in range(3):
+        out[j] = (center[j] + _fma(y, axes[1, j], x * axes[0, j])) - eye[r, j]
+
+
+@_jit(inline="always")
+def _ring(poly, c, center, axes, eye, normal, r, x0, x1):
+    """(|area|, |Lambert's irradiance|) of the closed ring poly[:c] (k, 2) seen from eye[r]
+    with normal[r] (`polygons.ring_measures` of one ring); x0, x1 (3,) scratch."""
+    area, lam = 0.0, 0.0
+    if c == 0:
+        return area, lam
+    _space(poly[0, 0], poly[0, 1], center, axes, eye, r, x0)
+    n0, n1, n2 = normal[r, 0], normal[r, 1], normal[r, 2]
+    for i in range(c):
+        j = i + 1 if i + 1 < c else 0
+        area += (poly[i, 0] * poly[j, 1] - poly[i, 1] * poly[j, 0]) / 2
+        _space(poly[j, 0], poly[j, 1], center, axes, eye, r, x1)
+        c0 = x0[1] * x1[2] - x0[2] * x1[1]
+        c1 = x0[2] * x1[0] - x0[0] * x1[2]
+        c2 = x0[0] * x1[1] - x0[1] * x1[0]
+        sine = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+        if sine > 0:
+            theta = math.atan2(sine, x0[0] * x1[0] + x0[1] * x1[1] + x0[2] * x1[2])
+            lam += 0.5 * theta * (c0 * n0 + c1 * n1 + c2 * n2) / sine
+        else:
+            lam += 0.0
+        x0, x1 = x1, x0
+    return abs(area), abs(lam)
+
+
+@_jit(inline="always")
+def _clip(poly, many, r, a, c, b, d):
+    """a[:c] clipped by each edge of the convex counter-clockwise polygon poly[r, :many[r]]
+    (`exactkernels.inside` of one row) through the scratch b, d: (the corners, their count,
+    the other scratch, d), b and d grown where 2 c (the most a clip of c corners can make,
+    whatever the rounding) would not fit."""
+    for e in range(many[r]):
+        if 2 * c > b.shape[0]:
+            b = np.empty((2 * c, 2))
+        if c > d.shape[0]:
+            d = np.empty(2 * c)
+        f = e + 1 if e + 1 < many[r] else 0
+        s0, s1 = poly[r, e, 0], poly[r, e, 1]
+        e0, e1 = poly[r, f, 0] - s0, poly[r, f, 1] - s1
+        for j in range(c):
+            d[j] = e0 * (a[j, 1] - s1) - e1 * (a[j, 0] - s0)
+        q = 0
+        for i in range(c):
+            j = i + 1 if i + 1 < c else 0
+            if d[i] >= 0:
+                b[q, 0], b[q, 1] = a[i, 0], a[i, 1]
+                q += 1
+            if (d[i] >= 0) != (d[j] >= 0):
+                t = d[i] / (d[i] - d[j])
+                b[q, 0] = a[i, 0] + t * (a[j, 0] - a[i, 0])
+                b[q, 1] = a[i, 1] + t * (a[j, 1] - a[i, 1])
+                q += 1
+        a, b, c = b, a, q
+    return a, c, b, d
+
+
+@_jit()
+def less(region, size, polys, counts, edges, start, owner, eye, normal, center, axes):
+    """`windmeasures._less` of a polygon light: (area (r,), irradiance (r,)) of the convex
+    counter-clockwise regions region (r, k, 2), size (r,) less the unions bounded by the
+    chains edges[start[o]:start[o + 1]] (e, 2, 2) of o = owner[r]: the fan of signed triangles
+    from the light's centre over each chain edge, clipped by each clipper polys[l, r], counts
+    [l, r] ((L, r, m, 2), (L, r): count 0 none) in turn; seen from eye (r, 3) with normals
+    (r, 3), the light's plane through center (3,) with axes (2, 3)."""
+    n = region.shape[0]
+    width = 3 + polys.shape[0] * polys.shape[2]
+    area, irr = np.empty(n), np.empty(n)
+    a, b = np.empty((width, 2)), np.empty((width, 2))
+    d = np.empty(width)
+    x0, x1 = np.empty(3), np.empty(3)
+    for r in range(n):
+        whole_area, whole_irr = _ring(region[r], size[r], center, axes, eye, normal, r, x0, x1)
+        fan_area, fan_irr = 0.0, 0.0
+        o = owner[r]
+        for k in range(start[o], start[o + 1]):
+            ax, ay, bx, by = edges[k, 0, 0], edges[k, 0, 1], edges[k, 1, 0], edges[k, 1, 1]
+            signed = ax * by - ay * bx
+            c = 3 if signed != 0 else 0
+            # (centre, a, b), or (b, a, centre) where it turns clockwise
+            first, last = (0, 2) if not signed < 0 else (2, 0)
+            a[first, 0], a[first, 1] = 0.0, 0.0
+            a[1, 0], a[1, 1] = ax, ay
+            a[last, 0], a[last, 1] = bx, by
+            for l in range(polys.shape[0]):
+                a, c, b, d = _clip(polys[l], counts[l], r, a, c, b, d)
+            got_area, got_irr = _ring(a, c, center, axes, eye, normal, r, x0, x1)
+            sign = 1.0 if signed > 0 else -1.0 if signed < 0 else 0.0 if signed == 0 else signed
+            fan_area += sign * got_area
+            fan_irr += sign * got_irr
+        area[r], irr[r] = whole_area - fan_area, whole_irr - fan_irr
+    return area, irr
