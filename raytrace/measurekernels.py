@@ -1,19 +1,16 @@
-"""`windmeasures`' fans in numba (the `fast` extra), one row at a time, where numpy's passes
-over every boundary edge of a crowded pixel's shadow union (the fan triangle, its clip, its
-closed ring, its area and Lambert term, each an array of all the rows' pieces) cost most of
-the time: `less` measures a row's convex region and takes away its fan, each piece clipped
-and measured as it is made.  Polygon lights without `direct` only (`windmeasures._less`).
+"""`windmeasures._less` in numba (the `fast` extra) for polygon lights without `direct` (a
+disk light and `direct` stay in numpy): `less` measures a row's convex region and takes away
+its fan, each signed triangle clipped and measured as it is made, one row at a time, where
+numpy's passes carry every piece of every row through arrays (clip, closed rings, edges).
 
-The same arithmetic as numpy's path, in the same order: the clip is `exactkernels.inside`'s
-(`regions.inside`), the area `polygons.ring_measures`' shoelace halved, summed from 0.0 edge
-by edge as `np.bincount` sums, each corner carried into space as `center + a @ axes - eye`
-(the matmul as OpenBLAS's dgemm takes two terms here: a fused multiply-add of the second onto
-the first's product), `np.cross`'s three differences, sums of three left to right (numpy's
-`sum(axis=1)` and `linalg.norm` of 3 numbers alike).  So the areas, and the visibility, are
-numpy's bytes.  One call differs: `math.atan2` is the C library's, as numpy's `arctan2` is on
-a CPU without AVX-512; with it numpy takes SVML's, which differs in the last bit on ~1.5% of
-random arguments, so an irradiance may differ from numpy's by a few units of rounding
-(tests/raytrace/test_measure_kernels.py bounds it).
+numpy's arithmetic in numpy's order: the clip `exactkernels.inside`'s, the shoelace and the
+Lambert terms summed from 0.0 edge by edge (`np.bincount`), `np.cross`'s differences, sums of
+three left to right (`sum(axis=1)`, `linalg.norm`), and a corner carried into space as
+`center + a @ axes - eye` with the matmul's two terms as OpenBLAS's dgemm adds them on a CPU
+with FMA (the second fused onto the first's product).  So the areas, V, are numpy's bytes.
+The irradiance is too where numpy's `arctan2` is the C library's atan2, as numba's is; under
+AVX-512 numpy takes SVML's, a last bit apart now and then, and the irradiance moves by a few
+units of rounding (tests/raytrace/test_measure_kernels.py holds both).
 """
 
 from __future__ import annotations
@@ -75,19 +72,20 @@ def _ring(poly, c, center, axes, eye, normal, r, x0, x1):
 
 
 @_jit(inline="always")
-def _clip(poly, many, r, a, c, b, d):
-    """a[:c] clipped by each edge of the convex counter-clockwise polygon poly[r, :many[r]]
-    (`exactkernels.inside` of one row) through the scratch b, d: (the corners, their count,
-    the other scratch, d), b and d grown where 2 c (the most a clip of c corners can make,
-    whatever the rounding) would not fit."""
-    for e in range(many[r]):
+def _clip(poly, many, l, r, a, c, b, d):
+    """a[:c] clipped by each edge of the convex counter-clockwise polygon poly[l, r, :many[l,
+    r]] (`exactkernels.inside` of one row) through the scratch b, d: (the corners, their
+    count, the other scratch, d), b and d grown where 2 c (the most a clip of c corners can
+    make, whatever the rounding) would not fit."""
+    m = many[l, r]
+    for e in range(m):
         if 2 * c > b.shape[0]:
             b = np.empty((2 * c, 2))
         if c > d.shape[0]:
             d = np.empty(2 * c)
-        f = e + 1 if e + 1 < many[r] else 0
-        s0, s1 = poly[r, e, 0], poly[r, e, 1]
-        e0, e1 = poly[r, f, 0] - s0, poly[r, f, 1] - s1
+        f = e + 1 if e + 1 < m else 0
+        s0, s1 = poly[l, r, e, 0], poly[l, r, e, 1]
+        e0, e1 = poly[l, r, f, 0] - s0, poly[l, r, f, 1] - s1
         for j in range(c):
             d[j] = e0 * (a[j, 1] - s1) - e1 * (a[j, 0] - s0)
         q = 0
@@ -114,13 +112,15 @@ def less(region, size, polys, counts, edges, start, owner, eye, normal, center, 
     [l, r] ((L, r, m, 2), (L, r): count 0 none) in turn; seen from eye (r, 3) with normals
     (r, 3), the light's plane through center (3,) with axes (2, 3)."""
     n = region.shape[0]
-    width = 3 + polys.shape[0] * polys.shape[2]
+    width = max(3 + polys.shape[0] * polys.shape[2], region.shape[1])
     area, irr = np.empty(n), np.empty(n)
     a, b = np.empty((width, 2)), np.empty((width, 2))
     d = np.empty(width)
     x0, x1 = np.empty(3), np.empty(3)
     for r in range(n):
-        whole_area, whole_irr = _ring(region[r], size[r], center, axes, eye, normal, r, x0, x1)
+        for j in range(size[r]):
+            a[j, 0], a[j, 1] = region[r, j, 0], region[r, j, 1]
+        whole_area, whole_irr = _ring(a, size[r], center, axes, eye, normal, r, x0, x1)
         fan_area, fan_irr = 0.0, 0.0
         o = owner[r]
         for k in range(start[o], start[o + 1]):
@@ -133,7 +133,7 @@ def less(region, size, polys, counts, edges, start, owner, eye, normal, center, 
             a[1, 0], a[1, 1] = ax, ay
             a[last, 0], a[last, 1] = bx, by
             for l in range(polys.shape[0]):
-                a, c, b, d = _clip(polys[l], counts[l], r, a, c, b, d)
+                a, c, b, d = _clip(polys, counts, l, r, a, c, b, d)
             got_area, got_irr = _ring(a, c, center, axes, eye, normal, r, x0, x1)
             sign = 1.0 if signed > 0 else -1.0 if signed < 0 else 0.0 if signed == 0 else signed
             fan_area += sign * got_area
