@@ -9,6 +9,8 @@ B's pieces: m(cut - A - B) = m(cut - A) + the sum over every non-empty set S of 
 (-1)^|S| m(X_S - A), X_S = cut and the pieces of S; a fan is clipped by cut and by each piece of
 S in turn (by those polygons' own edges, never by X_S's, which may have collapsed to a segment
 or a point where two pieces share an edge), so each piece must be certainly convex (`turned`).
+The fans of a polygon light, without `direct`, are clipped and measured in numba where it
+loads (`raytrace.measurekernels`: the same areas, V, bit for bit).
 """
 
 from __future__ import annotations
@@ -98,9 +100,9 @@ def _kernel(loaded, light, region: np.ndarray, size: np.ndarray, clippers: list,
     width = max(poly.shape[1] for poly, _ in clippers)
     polys = np.stack([_widen(poly, width) for poly, _ in clippers])
     counts = np.stack([many for _, many in clippers]).astype(np.int64)
-    sizes = np.array([len(chain) for chain in chains], np.int64)
+    sizes = np.array([0 if chain is None else len(chain) for chain in chains], np.int64)
     start = np.r_[0, np.cumsum(sizes)]
-    edges = np.concatenate([chain for chain in chains if len(chain)]) if start[-1] else \
+    edges = np.concatenate([chains[k] for k in np.flatnonzero(sizes)]) if start[-1] else \
         np.zeros((0, 2, 2))
     return loaded.less(np.ascontiguousarray(region, np.float64), size.astype(np.int64), polys,
                        counts, np.ascontiguousarray(edges, np.float64), start,
