@@ -1,7 +1,8 @@
-"""`windmeasures._less` in numba (the `fast` extra) for polygon lights without `direct` (a
-disk light and `direct` stay in numpy): `less` measures a row's convex region and takes away
-its fan, each signed triangle clipped and measured as it is made, one row at a time, where
-numpy's passes carry every piece of every row through arrays (clip, closed rings, edges).
+"""`windmeasures._less` in numba (the `fast` extra): `less` measures a row's convex region and
+takes away its fan, each signed triangle clipped and measured as it is made, one row at a
+time, where numpy's passes carry every piece of every row through arrays (clip, closed rings,
+edges).  For a light without a radius (a rect: `exact_soft` winds no `polygon` light's
+pixels) and without `direct`; a disk light and `direct` stay in numpy.
 
 numpy's arithmetic in numpy's order: the clip `exactkernels.inside`'s, the shoelace and the
 Lambert terms summed from 0.0 edge by edge (`np.bincount`), `np.cross`'s differences, sums of

@@ -9,7 +9,7 @@ B's pieces: m(cut - A - B) = m(cut - A) + the sum over every non-empty set S of 
 (-1)^|S| m(X_S - A), X_S = cut and the pieces of S; a fan is clipped by cut and by each piece of
 S in turn (by those polygons' own edges, never by X_S's, which may have collapsed to a segment
 or a point where two pieces share an edge), so each piece must be certainly convex (`turned`).
-The fans of a polygon light, without `direct`, are clipped and measured in numba where it
+The fans of a rect light, without `direct`, are clipped and measured in numba where it
 loads (`raytrace.measurekernels`: the same areas, V, bit for bit).
 """
 

@@ -177,11 +177,21 @@ def test_numpys_own_arctan2_moves_only_the_irradiance_in_rounding(seed, monkeypa
     assert np.abs(irr - want_irr).max(initial=0) <= ATAN2_SLACK
 
 
-def test_a_noisy_balls_exact_visibility_is_the_same(monkeypatch):
-    """The exact soft shadow of a noisy ball on a floor under a rect light (the crowded
-    pixels measured by `windmeasures`): V the same bytes with and without the kernel, the
-    irradiance within ATAN2_SLACK."""
+# The lights over the noisy ball: a rect and a disk (numpy's alone).  (`exact_soft` measures
+# a `polygon` light's pixels with GEOS, never by windings.)
+LIGHTS = {
+    "rect": dict(shape="rect", center=[0.0, 2.5, 0.0], normal=[0, -1, 0], size=[1.2, 1.2]),
+    "disk": dict(shape="disk", center=[0.0, 2.5, 0.0], normal=[0, -1, 0], radius=0.6),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(LIGHTS))
+def test_a_noisy_balls_exact_visibility_is_the_same(kind, monkeypatch):
+    """The exact soft shadow of a noisy ball on a floor (the crowded pixels measured by
+    `windmeasures`): V the same bytes with and without the kernel, the irradiance within
+    ATAN2_SLACK; the kernel called for the rect only."""
     trimesh = pytest.importorskip("trimesh")
+    from raytrace import measurekernels
     from raytrace.exact_soft import exact_visibility
     from shadowvol.primitives import mesh, plane
     from shadowvol.scene import AreaLight, Camera, Material, Scene
@@ -192,18 +202,17 @@ def test_a_noisy_balls_exact_visibility_is_the_same(monkeypatch):
     scene = Scene(camera=Camera(eye=[0, 4.5, 5.5], target=[0, 0, -0.5], fov_y=40.0),
                   objects=[plane("floor", size=[8, 8], material=matte),
                            mesh("blob", v, np.asarray(ico.faces), material=matte)],
-                  lights=[AreaLight("rect", [0.0, 2.5, 0.0], normal=[0, -1, 0],
-                                    size=[1.2, 1.2], samples=4)],
-                  width=20, height=20, ambient=[0, 0, 0])
-    calls, plain = [], windmeasures._less
+                  lights=[AreaLight(samples=4, **LIGHTS[kind])], width=20, height=20,
+                  ambient=[0, 0, 0])
+    rows, plain = [], measurekernels.less
 
     def counted(*args):
-        calls.append(len(args[1]))
+        rows.append(len(args[0]))
         return plain(*args)
     with monkeypatch.context() as m:
-        m.setattr(windmeasures, "_less", counted)
+        m.setattr(measurekernels, "less", counted)
         fast = exact_visibility(scene)
-    assert sum(calls) >= 10
+    assert sum(rows) >= 10 if kind != "disk" else not rows
     with monkeypatch.context() as m:
         m.setitem(sys.modules, "raytrace.measurekernels", None)
         slow = exact_visibility(scene)
