@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from shadowcases import noisy_ball
 from strategies import PROFILE, profile
 
 from raytrace import polygons, windmeasures
@@ -190,20 +191,11 @@ def test_a_noisy_balls_exact_visibility_is_the_same(kind, monkeypatch):
     """The exact soft shadow of a noisy ball on a floor (the crowded pixels measured by
     `windmeasures`): V the same bytes with and without the kernel, the irradiance within
     ATAN2_SLACK; the kernel called for the rect only."""
-    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("trimesh")
     from raytrace import measurekernels
     from raytrace.exact_soft import exact_visibility
-    from shadowvol.primitives import mesh, plane
-    from shadowvol.scene import AreaLight, Camera, Material, Scene
-    ico = trimesh.creation.icosphere(subdivisions=4, radius=0.5)
-    rng = np.random.default_rng(0)
-    v = ico.vertices * (1 + 0.08 * rng.standard_normal((len(ico.vertices), 1))) + [0.1, 1, -0.1]
-    matte = Material(diffuse=[0.8, 0.8, 0.8])
-    scene = Scene(camera=Camera(eye=[0, 4.5, 5.5], target=[0, 0, -0.5], fov_y=40.0),
-                  objects=[plane("floor", size=[8, 8], material=matte),
-                           mesh("blob", v, np.asarray(ico.faces), material=matte)],
-                  lights=[AreaLight(samples=4, **LIGHTS[kind])], width=20, height=20,
-                  ambient=[0, 0, 0])
+    from shadowvol.scene import AreaLight
+    scene = noisy_ball(AreaLight(samples=4, **LIGHTS[kind]))
     rows, plain = [], measurekernels.less
 
     def counted(*args):
