@@ -108,13 +108,14 @@ def _rows(seed: int):
 
 
 def _both(args, monkeypatch, arctan2=None) -> tuple[tuple, tuple]:
-    """`_less` of args by the kernel and by numpy (the kernels' module switched off; its
-    np.arctan2 replaced by `arctan2` where given)."""
+    """`_less` of args by the kernel and by numpy alone (the kernels' modules switched off,
+    `exactkernels.inside` too; np.arctan2 replaced by `arctan2` where given)."""
     light = _light()
     fast = windmeasures._less(light, *args, False)
     with monkeypatch.context() as m:
-        m.setitem(sys.modules, "raytrace.measurekernels", None)       # import fails: numpy
-        assert polygons.kernels("measurekernels") is None
+        for name in ("measurekernels", "exactkernels"):
+            m.setitem(sys.modules, f"raytrace.{name}", None)          # import fails: numpy
+            assert polygons.kernels(name) is None
         if arctan2 is not None:
             m.setattr(np, "arctan2", arctan2)
         slow = windmeasures._less(light, *args, False)
