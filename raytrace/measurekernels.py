@@ -7,8 +7,9 @@ pixels) and without `direct`; a disk light and `direct` stay in numpy.
 numpy's arithmetic in numpy's order: the clip `exactkernels.inside`'s, the shoelace and the
 Lambert terms summed from 0.0 edge by edge (`np.bincount`), `np.cross`'s differences, sums of
 three left to right (`sum(axis=1)`, `linalg.norm`), and a corner carried into space as
-`center + a @ axes - eye` with the matmul's two terms as OpenBLAS's dgemm adds them on a CPU
-with FMA (the second fused onto the first's product).  So the areas, V, are numpy's bytes.
+`center + a @ axes - eye` with the matmul's two terms rounded as numpy's BLAS rounds them
+(`products`' modes; OpenBLAS with FMA fuses the second onto the first's product; where no
+mode matches a probe, `windmeasures` measures in numpy).  So the areas, V, are numpy's bytes.
 The irradiance is too where numpy's `arctan2` is the C library's atan2, as numba's is; under
 AVX-512 numpy takes SVML's, a last bit apart now and then, and the irradiance moves by a few
 units of rounding (tests/raytrace/test_measure_kernels.py holds both).
@@ -40,25 +41,51 @@ def _fma(typingctx, x, y, z):
 
 
 @_jit(inline="always")
-def _space(x, y, center, axes, eye, r, out):
-    """The plane point (x, y) seen from eye[r]: out (3,) = center + (x, y) @ axes - eye[r]."""
-    for j in range(3):
-        out[j] = (center[j] + _fma(y, axes[1, j], x * axes[0, j])) - eye[r, j]
+def _two(x, y, axes, j, mode):
+    """(x, y) @ axes[:, j] rounded as `mode` says numpy's matmul rounds it: 0 two products
+    summed, 1 the second fused onto the first's product, 2 the first onto the second's."""
+    if mode == 1:
+        return _fma(y, axes[1, j], x * axes[0, j])
+    if mode == 2:
+        return _fma(x, axes[0, j], y * axes[1, j])
+    return x * axes[0, j] + y * axes[1, j]
+
+
+@_jit()
+def products(a, axes, mode):
+    """(n, 3): a (n, 2) @ axes (2, 3) rounded as `mode` says (`_two`): the probe of which
+    mode numpy's matmul (its BLAS) takes."""
+    out = np.empty((a.shape[0], 3))
+    for i in range(a.shape[0]):
+        for j in range(3):
+            out[i, j] = _two(a[i, 0], a[i, 1], axes, j, mode)
+    return out
 
 
 @_jit(inline="always")
-def _ring(poly, c, center, axes, eye, normal, r, x0, x1):
+def _space(x, y, center, axes, mode, eye, r, out):
+    """The plane point (x, y) seen from eye[r]: out (3,) = center + (x, y) @ axes - eye[r]."""
+    if mode == 1:
+        for j in range(3):
+            out[j] = (center[j] + _fma(y, axes[1, j], x * axes[0, j])) - eye[r, j]
+    else:
+        for j in range(3):
+            out[j] = (center[j] + _two(x, y, axes, j, mode)) - eye[r, j]
+
+
+@_jit(inline="always")
+def _ring(poly, c, center, axes, mode, eye, normal, r, x0, x1):
     """(|area|, |Lambert's irradiance|) of the closed ring poly[:c] (k, 2) seen from eye[r]
     with normal[r] (`polygons.ring_measures` of one ring); x0, x1 (3,) scratch."""
     area, lam = 0.0, 0.0
     if c == 0:
         return area, lam
-    _space(poly[0, 0], poly[0, 1], center, axes, eye, r, x0)
+    _space(poly[0, 0], poly[0, 1], center, axes, mode, eye, r, x0)
     n0, n1, n2 = normal[r, 0], normal[r, 1], normal[r, 2]
     for i in range(c):
         j = i + 1 if i + 1 < c else 0
         area += (poly[i, 0] * poly[j, 1] - poly[i, 1] * poly[j, 0]) / 2
-        _space(poly[j, 0], poly[j, 1], center, axes, eye, r, x1)
+        _space(poly[j, 0], poly[j, 1], center, axes, mode, eye, r, x1)
         c0 = x0[1] * x1[2] - x0[2] * x1[1]
         c1 = x0[2] * x1[0] - x0[0] * x1[2]
         c2 = x0[0] * x1[1] - x0[1] * x1[0]
@@ -114,13 +141,14 @@ def _clip(poly, many, l, r, a, c, b, d):
 
 
 @_jit()
-def less(region, size, polys, counts, edges, start, owner, eye, normal, center, axes):
+def less(region, size, polys, counts, edges, start, owner, eye, normal, center, axes, mode):
     """`windmeasures._less` of a polygon light: (area (r,), irradiance (r,)) of the convex
     counter-clockwise regions region (r, k, 2), size (r,) less the unions bounded by the
     chains edges[start[o]:start[o + 1]] (e, 2, 2) of o = owner[r]: the fan of signed triangles
     from the light's centre over each chain edge, clipped by each clipper polys[l, r], counts
     [l, r] ((L, r, m, 2), (L, r): count 0 none) in turn; seen from eye (r, 3) with normals
-    (r, 3), the light's plane through center (3,) with axes (2, 3)."""
+    (r, 3), the light's plane through center (3,) with axes (2, 3), carried into space as
+    `mode` says numpy's matmul rounds (`products`)."""
     n = region.shape[0]
     width = max(3 + polys.shape[0] * polys.shape[2], region.shape[1])
     area, irr = np.empty(n), np.empty(n)
@@ -130,7 +158,7 @@ def less(region, size, polys, counts, edges, start, owner, eye, normal, center, 
     for r in range(n):
         for j in range(size[r]):
             a[j, 0], a[j, 1] = region[r, j, 0], region[r, j, 1]
-        whole_area, whole_irr = _ring(a, size[r], center, axes, eye, normal, r, x0, x1)
+        whole_area, whole_irr = _ring(a, size[r], center, axes, mode, eye, normal, r, x0, x1)
         fan_area, fan_irr = 0.0, 0.0
         o = owner[r]
         for k in range(start[o], start[o + 1]):
@@ -144,7 +172,7 @@ def less(region, size, polys, counts, edges, start, owner, eye, normal, center, 
             a[last, 0], a[last, 1] = bx, by
             for l in range(polys.shape[0]):
                 a, c, b, d = _clip(polys, counts, l, r, a, c, b, d)
-            got_area, got_irr = _ring(a, c, center, axes, eye, normal, r, x0, x1)
+            got_area, got_irr = _ring(a, c, center, axes, mode, eye, normal, r, x0, x1)
             sign = 1.0 if signed > 0 else -1.0 if signed < 0 else 0.0 if signed == 0 else signed
             fan_area += sign * got_area
             fan_irr += sign * got_irr

@@ -3,7 +3,8 @@ convex region less the fan of signed triangles over its chain, each triangle cli
 clippers in turn, on random rows (several rows to a chain and up to four clippers, as the
 inclusion and exclusion asks; clippers of no corners, fans that clip to nothing, edges of no
 length, edges through the light's centre (no fan triangle), clockwise edges, corners on a
-grid of sixteenths: ties on a clipper's edge) and through `exact_visibility` of a noisy ball.
+grid of sixteenths: ties on a clipper's edge) and through `exact_visibility` of a noisy ball;
+and the probe of how numpy's matmul rounds (`windmeasures._matmul_mode`).
 
 The areas are numpy's bytes.  The irradiance is numpy's bytes where numpy's `arctan2` is the
 C library's atan2 (a CPU without AVX-512; here the witness's `np.arctan2` is made the C
@@ -211,3 +212,38 @@ def test_a_noisy_balls_exact_visibility_is_the_same(kind, monkeypatch):
         slow = exact_visibility(scene)
     assert fast.visibility.tobytes() == slow.visibility.tobytes()
     assert np.abs(fast.irradiance - slow.irradiance).max() <= ATAN2_SLACK
+
+
+def test_the_matmul_probe_names_how_numpy_rounds(monkeypatch):
+    """`measurekernels.products`' modes round as they say (0: numpy's own two products and
+    sum; 1 and 2: a fused multiply-add, against exact fractions), the probe's mode gives
+    numpy's `a @ axes` bytes on 2,000 other points, and where no mode does, numpy measures."""
+    from fractions import Fraction
+
+    from raytrace import measurekernels
+    rng = np.random.default_rng(7)
+    axes = _light().axes
+    a = rng.normal(size=(2000, 2)) * 10.0 ** rng.integers(-4, 4, (2000, 1))
+    plain = a[:, :1] * axes[0] + a[:, 1:] * axes[1]
+    assert measurekernels.products(a, axes, 0).tobytes() == plain.tobytes()
+    for mode, (x, y) in ((1, (1, 0)), (2, (0, 1))):
+        got = measurekernels.products(a[:50], axes, mode)
+        want = [[float(Fraction(a[i, x]) * Fraction(axes[x, j])
+                       + Fraction(float(a[i, y] * axes[y, j]))) for j in range(3)]
+                for i in range(50)]
+        assert got.tobytes() == np.array(want).tobytes()
+    mode = windmeasures._matmul_mode(measurekernels, axes)
+    assert mode is not None
+    assert measurekernels.products(a, axes, mode).tobytes() == (a @ axes).tobytes()
+
+    class Unlike:
+        def products(self, a, axes, mode):
+            return np.nextafter(a @ axes, np.inf)
+    assert windmeasures._matmul_mode(Unlike(), axes) is None
+    args = _rows(3)
+    want = _both(args, monkeypatch)[1]
+    with monkeypatch.context() as m:
+        m.setattr(windmeasures, "_matmul_mode", lambda loaded, axes: None)
+        m.setattr(measurekernels, "less", None)                       # never called
+        got = windmeasures._less(_light(), *args, False)
+    assert all(g.tobytes() == w.tobytes() for g, w in zip(got, want))
