@@ -20,7 +20,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
@@ -33,6 +32,7 @@ def _fma(typingctx, x, y, z):
     sig = types.float64(types.float64, types.float64, types.float64)
 
     def codegen(context, builder, signature, args):
+        from llvmlite import ir        # numba's own dependency (a missing numba names numba)
         double = ir.DoubleType()
         fn = builder.module.declare_intrinsic("llvm.fma", [double],
                                               ir.FunctionType(double, [double] * 3))
