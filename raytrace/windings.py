@@ -14,7 +14,8 @@ times (counted along a ray in +x from the first piece of one edge per run
 of edges through corners with one edge in and one out, and carried along the run, adding the
 count of each edge crossed).  The union's measures (area, Lambert's irradiance) are boundary
 integrals: those of the fan of signed triangles from the light's centre over that boundary,
-each clipped to the light's part seen from p (convex) in numpy (`raytrace.windmeasures`).
+each clipped to the light's part seen from p (convex) (`raytrace.windmeasures`; in numba,
+`raytrace.measurekernels`, where it loads).
 
 A shadow that is not free (a triangle through p's parallel plane: the receiver's contact
 with the occluder, where the whole shadow is unbounded) has no whole shadow to take.  Where a

@@ -9,12 +9,15 @@ B's pieces: m(cut - A - B) = m(cut - A) + the sum over every non-empty set S of 
 (-1)^|S| m(X_S - A), X_S = cut and the pieces of S; a fan is clipped by cut and by each piece of
 S in turn (by those polygons' own edges, never by X_S's, which may have collapsed to a segment
 or a point where two pieces share an edge), so each piece must be certainly convex (`turned`).
+The fans of a rect light, without `direct`, are clipped and measured in numba where it
+loads (`raytrace.measurekernels`: the same areas, V, bit for bit).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from . import polygons
 from .regions import closed_rings, inside, ring_measures
 from .windings import _cross
 
@@ -65,7 +68,14 @@ def _less(light, region: np.ndarray, size: np.ndarray, clippers: list, chains,
     """(r,) measures of the convex polygons region (r, k, 2), size (r,) less the unions bounded
     by chains[owner] (r,): the fan of signed triangles from the light's centre over each
     chain's edges, clipped by each of clippers' convex counter-clockwise polygons ((r, k, 2),
-    (r,) each; count 0: none) in turn, whose common part the region is."""
+    (r,) each; count 0: none) in turn, whose common part the region is.  In numba, one
+    row at a time, where it loads (`raytrace.measurekernels`: the areas' bytes; a disk light
+    and `direct` stay in numpy)."""
+    loaded = None if direct or light.radius is not None else \
+        polygons.kernels("measurekernels")
+    mode = None if loaded is None else _matmul_mode(loaded, light.axes)
+    if mode is not None:
+        return _kernel(loaded, mode, light, region, size, clippers, chains, owner, p, normal)
     whole = ring_measures(light, *closed_rings(region, size), p, normal, direct)
     sizes = np.array([len(chains[k]) for k in owner], np.int64)
     which = np.repeat(np.arange(len(owner)), sizes)
@@ -83,6 +93,39 @@ def _less(light, region: np.ndarray, size: np.ndarray, clippers: list, chains,
                         direct)
     sign = np.sign(signed)
     return tuple(w - np.bincount(which, sign * g, len(owner)) for w, g in zip(whole, got))
+
+
+def _matmul_mode(loaded, axes: np.ndarray) -> int | None:
+    """How numpy's matmul (its BLAS) rounds plane points (n, 2) @ axes (2, 3) here, as
+    `measurekernels.products` names it (0, 1 or 2: the same bytes on a probe of 4 and of 512
+    random points), or None where it is none of them (then numpy measures)."""
+    axes = np.ascontiguousarray(axes, np.float64)
+    rng = np.random.default_rng(0)
+    probe = rng.normal(size=(516, 2)) * 10.0 ** rng.integers(-3, 3, (516, 1))
+    for mode in (1, 0, 2):
+        if all(np.array_equal(loaded.products(a, axes, mode), a @ axes)
+               for a in (probe[:4].copy(), probe[4:].copy())):
+            return mode
+    return None
+
+
+def _kernel(loaded, mode: int, light, region: np.ndarray, size: np.ndarray, clippers: list,
+            chains, owner: np.ndarray, p: np.ndarray, normal: np.ndarray
+            ) -> tuple[np.ndarray, ...]:
+    """`_less` by `measurekernels.less`: the clippers stacked, the chains in one array."""
+    width = max(poly.shape[1] for poly, _ in clippers)
+    polys = np.stack([_widen(poly, width) for poly, _ in clippers])
+    counts = np.stack([many for _, many in clippers]).astype(np.int64)
+    sizes = np.array([0 if chain is None else len(chain) for chain in chains], np.int64)
+    start = np.r_[0, np.cumsum(sizes)]
+    edges = np.concatenate([chains[k] for k in np.flatnonzero(sizes)]) if start[-1] else \
+        np.zeros((0, 2, 2))
+    return loaded.less(np.ascontiguousarray(region, np.float64), size.astype(np.int64), polys,
+                       counts, np.ascontiguousarray(edges, np.float64), start,
+                       owner.astype(np.int64), np.ascontiguousarray(p, np.float64),
+                       np.ascontiguousarray(normal, np.float64),
+                       np.ascontiguousarray(light.center, np.float64),
+                       np.ascontiguousarray(light.axes, np.float64), mode)
 
 
 def _clip_rows(poly: np.ndarray, many: np.ndarray, inner: np.ndarray, count: np.ndarray

@@ -1,7 +1,8 @@
 """One pixel's shadows on a light's plane for the windings' tests (tests only; imported by the
 tests that use them, as strategies.py is; tests/ is on sys.path): a folded sheet of triangles
 sharing corners, loose triangles, and triangles with corners on a coarse grid (touching,
-collinear: often in doubt)."""
+collinear: often in doubt); and a whole scene whose crowded pixels the windings measure, a
+noisy ball on a floor (`noisy_ball`)."""
 
 from __future__ import annotations
 
@@ -44,3 +45,20 @@ def free_but_one(rng, q: int, one: bool) -> np.ndarray:
     if one:
         free[rng.integers(q)] = False
     return free
+
+
+def noisy_ball(light):
+    """A 20 x 20 scene: a noisy icosphere (trimesh's, 5,120 triangles, radii jittered by a
+    seeded 8%) over a floor, under `light` (an AreaLight about (0, 2.5, 0) facing down)."""
+    import trimesh
+
+    from shadowvol.primitives import mesh, plane
+    from shadowvol.scene import Camera, Material, Scene
+    ico = trimesh.creation.icosphere(subdivisions=4, radius=0.5)
+    rng = np.random.default_rng(0)
+    v = ico.vertices * (1 + 0.08 * rng.standard_normal((len(ico.vertices), 1))) + [0.1, 1, -0.1]
+    matte = Material(diffuse=[0.8, 0.8, 0.8])
+    return Scene(camera=Camera(eye=[0, 4.5, 5.5], target=[0, 0, -0.5], fov_y=40.0),
+                 objects=[plane("floor", size=[8, 8], material=matte),
+                          mesh("blob", v, np.asarray(ico.faces), material=matte)],
+                 lights=[light], width=20, height=20, ambient=[0, 0, 0])

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from shadowcases import free_but_one, loose, no_area, on_grid, sheet
+from shadowcases import free_but_one, loose, no_area, noisy_ball, on_grid, sheet
 from strategies import PROFILE, profile
 
 from raytrace import polygons, windings
@@ -152,21 +152,12 @@ def test_a_noisy_balls_batches_are_numpys_bytes(monkeypatch):
     """The batches `windings.split` hands `boundaries` in the exact soft shadow of a noisy
     ball on a floor under a rect light (pixel by pixel: no block shares its outline,
     `raytrace.blockwindings`): each the same bytes both ways."""
-    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("trimesh")
     import raytrace.exact_soft
     from raytrace.exact_soft import exact_visibility
-    from shadowvol.primitives import mesh, plane
-    from shadowvol.scene import AreaLight, Camera, Material, Scene
-    ico = trimesh.creation.icosphere(subdivisions=4, radius=0.5)
-    rng = np.random.default_rng(0)
-    v = ico.vertices * (1 + 0.08 * rng.standard_normal((len(ico.vertices), 1))) + [0.1, 1, -0.1]
-    matte = Material(diffuse=[0.8, 0.8, 0.8])
-    scene = Scene(camera=Camera(eye=[0, 4.5, 5.5], target=[0, 0, -0.5], fov_y=40.0),
-                  objects=[plane("floor", size=[8, 8], material=matte),
-                           mesh("blob", v, np.asarray(ico.faces), material=matte)],
-                  lights=[AreaLight("rect", [0.0, 2.5, 0.0], normal=[0, -1, 0],
-                                    size=[1.2, 1.2], samples=4)],
-                  width=20, height=20, ambient=[0, 0, 0])
+    from shadowvol.scene import AreaLight
+    scene = noisy_ball(AreaLight("rect", [0.0, 2.5, 0.0], normal=[0, -1, 0], size=[1.2, 1.2],
+                                 samples=4))
     seen, plain = [], windings.boundaries
 
     def keep(*args):

@@ -1,0 +1,180 @@
+"""`windmeasures._less` in numba (the `fast` extra): `less` measures a row's convex region and
+takes away its fan, each signed triangle clipped and measured as it is made, one row at a
+time, where numpy's passes carry every piece of every row through arrays (clip, closed rings,
+edges).  For a light without a radius (a rect: `exact_soft` winds no `polygon` light's
+pixels) and without `direct`; a disk light and `direct` stay in numpy.
+
+numpy's arithmetic in numpy's order: the clip `exactkernels.inside`'s, the shoelace and the
+Lambert terms summed from 0.0 edge by edge (`np.bincount`), `np.cross`'s differences, sums of
+three left to right (`sum(axis=1)`, `linalg.norm`), and a corner carried into space as
+`center + a @ axes - eye` with the matmul's two terms rounded as numpy's BLAS rounds them
+(`products`' modes; OpenBLAS with FMA fuses the second onto the first's product; where no
+mode matches a probe, `windmeasures` measures in numpy).  So the areas, V, are numpy's bytes.
+The irradiance is too where numpy's `arctan2` is the C library's atan2, as numba's is; under
+AVX-512 numpy takes SVML's, a last bit apart now and then, and the irradiance moves by a few
+units of rounding (tests/raytrace/test_measure_kernels.py holds both).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import types
+from numba.extending import intrinsic
+
+from .packetkernels import _jit
+
+
+@intrinsic
+def _fma(typingctx, x, y, z):
+    """x * y + z rounded once (LLVM's `llvm.fma`, correctly rounded on every CPU)."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        from llvmlite import ir        # numba's own dependency (a missing numba names numba)
+        double = ir.DoubleType()
+        fn = builder.module.declare_intrinsic("llvm.fma", [double],
+                                              ir.FunctionType(double, [double] * 3))
+        return builder.call(fn, args)
+    return sig, codegen
+
+
+@_jit(inline="always")
+def _two(x, y, axes, j, mode):
+    """(x, y) @ axes[:, j] rounded as `mode` says numpy's matmul rounds it: 0 two products
+    summed, 1 the second fused onto the first's product, 2 the first onto the second's."""
+    if mode == 1:
+        return _fma(y, axes[1, j], x * axes[0, j])
+    if mode == 2:
+        return _fma(x, axes[0, j], y * axes[1, j])
+    return x * axes[0, j] + y * axes[1, j]
+
+
+@_jit()
+def products(a, axes, mode):
+    """(n, 3): a (n, 2) @ axes (2, 3) rounded as `mode` says (`_two`): the probe of which
+    mode numpy's matmul (its BLAS) takes."""
+    out = np.empty((a.shape[0], 3))
+    for i in range(a.shape[0]):
+        for j in range(3):
+            out[i, j] = _two(a[i, 0], a[i, 1], axes, j, mode)
+    return out
+
+
+@_jit(inline="always")
+def _space(x, y, center, axes, mode, eye, r, out):
+    """The plane point (x, y) seen from eye[r]: out (3,) = center + (x, y) @ axes - eye[r]."""
+    if mode == 1:
+        for j in range(3):
+            out[j] = (center[j] + _fma(y, axes[1, j], x * axes[0, j])) - eye[r, j]
+    else:
+        for j in range(3):
+            out[j] = (center[j] + _two(x, y, axes, j, mode)) - eye[r, j]
+
+
+@_jit(inline="always")
+def _ring(poly, c, center, axes, mode, eye, normal, r, x0, x1):
+    """(|area|, |Lambert's irradiance|) of the closed ring poly[:c] (k, 2) seen from eye[r]
+    with normal[r] (`polygons.ring_measures` of one ring); x0, x1 (3,) scratch."""
+    area, lam = 0.0, 0.0
+    if c == 0:
+        return area, lam
+    _space(poly[0, 0], poly[0, 1], center, axes, mode, eye, r, x0)
+    n0, n1, n2 = normal[r, 0], normal[r, 1], normal[r, 2]
+    for i in range(c):
+        j = i + 1 if i + 1 < c else 0
+        area += (poly[i, 0] * poly[j, 1] - poly[i, 1] * poly[j, 0]) / 2
+        _space(poly[j, 0], poly[j, 1], center, axes, mode, eye, r, x1)
+        c0 = x0[1] * x1[2] - x0[2] * x1[1]
+        c1 = x0[2] * x1[0] - x0[0] * x1[2]
+        c2 = x0[0] * x1[1] - x0[1] * x1[0]
+        sine = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+        if sine > 0:
+            theta = math.atan2(sine, x0[0] * x1[0] + x0[1] * x1[1] + x0[2] * x1[2])
+            lam += 0.5 * theta * (c0 * n0 + c1 * n1 + c2 * n2) / sine
+        else:
+            lam += 0.0
+        x0, x1 = x1, x0
+    return abs(area), abs(lam)
+
+
+@_jit(inline="always")
+def _keep_left(a, c, s0, s1, e0, e1, b, d):
+    """The polygon a[:c] (m, 2) cut to the left of the line through (s0, s1) along (e0, e1)
+    into b, as `exactkernels.inside` cuts it by one edge (written again, not imported: numba's
+    disk cache checks a kernel's own file only, so an edit there would leave this one
+    stale): their count (at most 2 c); d (c,) scratch."""
+    for j in range(c):
+        d[j] = e0 * (a[j, 1] - s1) - e1 * (a[j, 0] - s0)
+    q = 0
+    for i in range(c):
+        j = i + 1 if i + 1 < c else 0
+        if d[i] >= 0:
+            b[q, 0], b[q, 1] = a[i, 0], a[i, 1]
+            q += 1
+        if (d[i] >= 0) != (d[j] >= 0):
+            t = d[i] / (d[i] - d[j])
+            b[q, 0] = a[i, 0] + t * (a[j, 0] - a[i, 0])
+            b[q, 1] = a[i, 1] + t * (a[j, 1] - a[i, 1])
+            q += 1
+    return q
+
+
+@_jit(inline="always")
+def _clip(poly, many, l, r, a, c, b, d):
+    """a[:c] clipped by each edge of the convex counter-clockwise polygon poly[l, r, :many[l,
+    r]] (`exactkernels.inside` of one row) through the scratch b, d: (the corners, their
+    count, the other scratch, d), b and d grown where 2 c (the most a clip of c corners can
+    make, whatever the rounding) would not fit."""
+    m = many[l, r]
+    for e in range(m):
+        if 2 * c > b.shape[0]:
+            b = np.empty((2 * c, 2))
+        if c > d.shape[0]:
+            d = np.empty(2 * c)
+        f = e + 1 if e + 1 < m else 0
+        s0, s1 = poly[l, r, e, 0], poly[l, r, e, 1]
+        q = _keep_left(a, c, s0, s1, poly[l, r, f, 0] - s0, poly[l, r, f, 1] - s1, b, d)
+        a, b, c = b, a, q
+    return a, c, b, d
+
+
+@_jit()
+def less(region, size, polys, counts, edges, start, owner, eye, normal, center, axes, mode):
+    """`windmeasures._less` of a polygon light: (area (r,), irradiance (r,)) of the convex
+    counter-clockwise regions region (r, k, 2), size (r,) less the unions bounded by the
+    chains edges[start[o]:start[o + 1]] (e, 2, 2) of o = owner[r]: the fan of signed triangles
+    from the light's centre over each chain edge, clipped by each clipper polys[l, r], counts
+    [l, r] ((L, r, m, 2), (L, r): count 0 none) in turn; seen from eye (r, 3) with normals
+    (r, 3), the light's plane through center (3,) with axes (2, 3), carried into space as
+    `mode` says numpy's matmul rounds (`products`)."""
+    n = region.shape[0]
+    width = max(3 + polys.shape[0] * polys.shape[2], region.shape[1])
+    area, irr = np.empty(n), np.empty(n)
+    a, b = np.empty((width, 2)), np.empty((width, 2))
+    d = np.empty(width)
+    x0, x1 = np.empty(3), np.empty(3)
+    for r in range(n):
+        for j in range(size[r]):
+            a[j, 0], a[j, 1] = region[r, j, 0], region[r, j, 1]
+        whole_area, whole_irr = _ring(a, size[r], center, axes, mode, eye, normal, r, x0, x1)
+        fan_area, fan_irr = 0.0, 0.0
+        o = owner[r]
+        for k in range(start[o], start[o + 1]):
+            ax, ay, bx, by = edges[k, 0, 0], edges[k, 0, 1], edges[k, 1, 0], edges[k, 1, 1]
+            signed = ax * by - ay * bx
+            c = 3 if signed != 0 else 0
+            # (centre, a, b), or (b, a, centre) where it turns clockwise
+            first, last = (0, 2) if not signed < 0 else (2, 0)
+            a[first, 0], a[first, 1] = 0.0, 0.0
+            a[1, 0], a[1, 1] = ax, ay
+            a[last, 0], a[last, 1] = bx, by
+            for l in range(polys.shape[0]):
+                a, c, b, d = _clip(polys, counts, l, r, a, c, b, d)
+            got_area, got_irr = _ring(a, c, center, axes, mode, eye, normal, r, x0, x1)
+            sign = 1.0 if signed > 0 else -1.0 if signed < 0 else 0.0 if signed == 0 else signed
+            fan_area += sign * got_area
+            fan_irr += sign * got_irr
+        area[r], irr[r] = whole_area - fan_area, whole_irr - fan_irr
+    return area, irr
