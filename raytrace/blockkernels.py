@@ -72,6 +72,7 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                     continue
                 if kinds[c, k] & 1:
                     convex[b] = True
+                    break
                 sign = _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset,
                                scale, corners, low_top, high_top, far_rel, reach, coplanar)
                 if sign == 3:
@@ -88,6 +89,9 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                     k_lo[q], k_hi[q], k_way[q] = min(ka, kb), max(ka, kb), 1 if ka < kb else -1
                     k_tri[q], k_s0[q], k_s1[q] = t, a, z
                     q += 1
+            if convex[b]:                                 # left to the pixels' own path
+                nu, q = u_at[b], 0
+                break
         first, net = _tally(k_lo[:q], k_hi[:q], k_way[:q])
         for g in range(first.shape[0]):
             f = first[g]

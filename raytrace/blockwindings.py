@@ -28,18 +28,20 @@ CARRIED = 1 << 16
 
 def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndarray,
            p: np.ndarray, normal: np.ndarray, own: np.ndarray, where: np.ndarray, width: int,
-           block: int) -> tuple[np.ndarray, np.ndarray]:
+           block: int, crowded: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """(n,) object each: the boundary of each pixel's shadows' union inside the light's box
     (`windings.boundaries`), None where it is left to the pixel-by-pixel path (module) or
     the kernels are missing; and the few shadows that are not free at a contact, left out of
     it (`windings.split`'s loose: `windmeasures.measures` takes them away; None where none);
     points p (n, 3) with normals (n, 3) on triangles own (n,) at image pixels where (n,) of a
     frame `width` wide, in blocks of `block` a side; h (M, 3): the corners' heights
-    (`candidates.heights`)."""
+    (`candidates.heights`); crowded: a block that meets no more triangles is left out.  And
+    the clusters meeting each pixel's pyramid (n, C) (`candidates.meets`; None without the
+    kernels), for the pixels left out."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
     if loaded is None or kernels("windingkernels") is None or len(p) == 0:
-        return out, out_loose
+        return out, out_loose, None
     y, x = np.divmod(where, width)
     key = (y // block) * -(-width // block) + x // block
     order = np.argsort(key, kind="stable")
@@ -47,19 +49,32 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     start = np.r_[np.flatnonzero(np.r_[True, np.diff(key[order]) != 0]), len(p)]
     base = light.center + light.hull @ light.axes
     lo, hi = np.minimum(p, base.min(axis=0)), np.maximum(p, base.max(axis=0))
+    # the clusters that meet some pixel's pyramid of each block (b, C); a block that meets a
+    # convex object's is left to the pixels' own path (its hulls), as is one that meets no
+    # more than `crowded` triangles (a few shadows: cheaper united as they are)
+    meet = meets(light, objects, p, base, lo, hi)
+    back = np.empty_like(meet)
+    back[order] = meet
+    near = loaded.any_rows(meet, start)
+    member = objects.members >= 0
+    convex = (((objects.kinds & 1) != 0) & member).any(axis=1)
+    hull = near[:, convex].any(axis=1) | (near.astype(np.int64) @ member.sum(axis=1) <= crowded)
+    if hull.all():
+        return out, out_loose, back
+    near[hull] = False
     top = dot(p - light.center, light.normal)
     rel = np.sqrt(dot(p - light.center, p - light.center))
     reach = pyramid.UNCUT_REACH * np.abs(light.hull).max()
     m = pyramid.sides(light, p, base)
     e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex = loaded.block_edges(
-        start, loaded.any_rows(meets(light, objects, p, base, lo, hi), start), objects.members,
+        start, near, objects.members,
         objects.packed, objects.kinds, objects.corner_ids, h, p, top, own, objects.normal,
         objects.offset, objects.scale, corners, rel, reach, COPLANAR_RELATIVE,
         np.stack([s / np.linalg.norm(s, axis=1, keepdims=True) for s in m]))
     block = np.repeat(np.arange(len(start) - 1), np.diff(start))
     flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, normal, own, lo,
                                                     hi, base, m, block, unsteady, to_cut, u_at)
-    ok = ~convex[block]
+    ok = ~(convex | hull)[block]
     # a few shadows that are not free (`windings.split`): cut, carried, turned, apart
     many = np.bincount(pix[~free], minlength=len(p))
     ok &= many <= windings.LOOSE
@@ -77,7 +92,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     for k, group in zip(*_groups(pix[apart[settled]], settled)):
         loose[k] = (turned[group], count[apart[group]])
     out[order], out_loose[order] = got, loose
-    return out, out_loose
+    return out, out_loose, back
 
 
 def _wound(loaded, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,

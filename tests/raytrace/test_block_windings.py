@@ -11,6 +11,7 @@ import pytest
 import raytrace.blockwindings
 import raytrace.exact_soft
 from raytrace import polygons, windings
+from builders import SCENES
 from shadowcases import loose, sheet
 
 pytest.importorskip("numba")
@@ -68,10 +69,10 @@ def test_blocks_give_the_pixel_by_pixel_measures(shape, monkeypatch):
     plain_chains = raytrace.blockwindings.chains
 
     def chains(*args):
-        got, loose = plain_chains(*args)
+        got, loose, meet = plain_chains(*args)
         settled.append(sum(c is not None for c in got))
         contacts.append(sum(c is not None for c in loose))
-        return got, loose
+        return got, loose, meet
     monkeypatch.setattr(raytrace.blockwindings, "chains", chains)
     for block in (2, 3, 5):
         monkeypatch.setattr(raytrace.exact_soft, "BLOCK", block)
@@ -80,10 +81,10 @@ def test_blocks_give_the_pixel_by_pixel_measures(shape, monkeypatch):
         assert np.abs(got.irradiance - want.irradiance).max() <= ROUNDING
     # the blocks shared outlines (steady edges counted once) and settled most pixels, a few
     # with shadows apart (on the sheet and the ball, where the triangles about p cross its
-    # parallel plane: a contact; more than `windings.LOOSE` there and the pixel is left to
-    # the pixel-by-pixel path)
+    # parallel plane: a contact; more than `windings.LOOSE` there, or a block that meets a
+    # few triangles only, and the pixel is left to the pixel-by-pixel path)
     assert sum(edges for edges, _ in shared) > 1000
-    assert sum(settled) >= 3 * 0.7 * scene.width * scene.height        # ~79 % each
+    assert sum(settled) >= 3 * 0.5 * scene.width * scene.height        # ~69 % each
     assert sum(contacts) >= 3 * 3                                        # 4 each
 
 
@@ -141,3 +142,16 @@ def test_an_outline_cut_to_a_box_measures_as_shapelys_union(seed):
         ends = cut[k].reshape(-1, 2)
         assert (ends >= box[:2] - 1e-12).all() and (ends <= box[2:] + 1e-12).all()
     assert certain >= 2
+
+
+def test_convex_bodies_and_a_floor_keep_the_pixel_by_pixel_bytes(monkeypatch):
+    """scenes/soft.toml (a sphere, two boxes: convex, their shadows hulls; and a floor of two
+    triangles): no block takes its pixels, so the bytes are the pixel-by-pixel path's."""
+    from raytrace.exact_soft import exact_visibility
+    from shadowvol.scenefile import load_scene
+    scene = load_scene(SCENES / "soft.toml").replace(width=32, height=24)
+    got = exact_visibility(scene)
+    monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 0)
+    want = exact_visibility(scene)
+    assert got.visibility.tobytes() == want.visibility.tobytes()
+    assert got.irradiance.tobytes() == want.irradiance.tobytes()
