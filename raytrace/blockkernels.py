@@ -58,10 +58,7 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     ne, nu = 0, 0
     for b in range(n_blocks):
         i0, i1 = start[b], start[b + 1]
-        low_top, high_top, far_rel = np.inf, 0.0, 0.0
-        for i in range(i0, i1):
-            low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
-            far_rel = max(far_rel, rel[i])
+        sphere = _sphere(p, top, rel, i0, i1, reach, coplanar)
         q = 0
         for c in range(meet.shape[1]):
             if not meet[b, c]:
@@ -73,8 +70,8 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                 if kinds[c, k] & 1:
                     convex[b] = True
                     break
-                sign = _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset,
-                               scale, corners, low_top, high_top, far_rel, reach, coplanar)
+                sign = _steady(t, c, k, i0, i1, packed, h, p, own, tri_normal, offset, scale,
+                               corners, sphere)
                 if sign == 3:
                     continue
                 if sign == 0 or sign == 2:
@@ -130,14 +127,66 @@ def _near(c, k, i0, i1, packed, p, sides):
 
 
 @_jit()
-def any_rows(meet, start):
-    """(b, C) bool: each block's (start (b + 1,)) rows of meet (n, C), or'ed."""
-    out = np.zeros((start.shape[0] - 1, meet.shape[1]), np.bool_)
-    for b in range(start.shape[0] - 1):
-        for i in range(start[b], start[b + 1]):
-            for c in range(meet.shape[1]):
-                out[b, c] |= meet[i, c]
-    return out
+def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height, size, hull):
+    """(b, C) bool: cluster c may meet the pyramid of some pixel of block b (start (b + 1,)),
+    and per block (b,) the triangles of those clusters (size (C,) each's) and whether one of
+    them is a convex object's (hull (C,)):
+    `candidates.meets` of the block, its box meeting the box of the pixels' pyramids' boxes
+    lo, hi (n, 3), its sphere (centre (C, 3), radius (C,), the centre's height (C,) over the
+    light's plane) reaching between that plane and the highest pixel's parallel one (top
+    (n,)), and not outside a side plane of every pixel's pyramid (sides (s, n, 3) unit
+    inward normals through p (n, 3))."""
+    n_blocks, n_c = start.shape[0] - 1, c_lo.shape[0]
+    out = np.zeros((n_blocks, n_c), np.bool_)
+    many, convex = np.zeros(n_blocks, np.int64), np.zeros(n_blocks, np.bool_)
+    low, high = np.empty(3), np.empty(3)
+    for b in range(n_blocks):
+        i0, i1 = start[b], start[b + 1]
+        most = top[i0]
+        for a in range(3):
+            low[a], high[a] = lo[i0, a], hi[i0, a]
+        for i in range(i0 + 1, i1):
+            most = max(most, top[i])
+            for a in range(3):
+                low[a], high[a] = min(low[a], lo[i, a]), max(high[a], hi[i, a])
+        for c in range(n_c):
+            if not (c_lo[c, 0] <= high[0] and c_hi[c, 0] >= low[0]
+                    and c_lo[c, 1] <= high[1] and c_hi[c, 1] >= low[1]
+                    and c_lo[c, 2] <= high[2] and c_hi[c, 2] >= low[2]):
+                continue
+            if not (height[c] >= -radius[c] and height[c] <= most + radius[c]):
+                continue
+            for i in range(i0, i1):
+                inside = True
+                for j in range(sides.shape[0]):
+                    inside &= sides[j, i, 0] * (centre[c, 0] - p[i, 0]) \
+                        + sides[j, i, 1] * (centre[c, 1] - p[i, 1]) \
+                        + sides[j, i, 2] * (centre[c, 2] - p[i, 2]) >= -radius[c]
+                if inside:
+                    out[b, c] = True
+                    many[b] += size[c]
+                    convex[b] |= hull[c]
+                    break
+    return out, many, convex
+
+
+@_jit()
+def _sphere(p, top, rel, i0, i1, reach, coplanar):
+    """`_steady`'s block: the least and most of the pixels i0..i1's heights top, the most
+    of their rel, reach, coplanar, and the centre (3,) and radius of a sphere about their
+    points p."""
+    low_top, high_top, far_rel = np.inf, 0.0, 0.0
+    pc = np.zeros(3)
+    for i in range(i0, i1):
+        low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
+        far_rel = max(far_rel, rel[i])
+        for a in range(3):
+            pc[a] += p[i, a] / (i1 - i0)
+    pr = 0.0
+    for i in range(i0, i1):
+        pr = max(pr, np.sqrt((p[i, 0] - pc[0]) ** 2 + (p[i, 1] - pc[1]) ** 2
+                             + (p[i, 2] - pc[2]) ** 2))
+    return low_top, high_top, far_rel, reach, coplanar, pc, pr * (1 + 2.0 ** -30) + 1e-300
 
 
 @_jit()
@@ -149,20 +198,22 @@ def _grow(a, n):
 
 
 @_jit(inline="always")
-def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, corners,
-            low_top, high_top, far_rel, reach, coplanar):
+def _steady(t, c, k, i0, i1, packed, h, p, own, tri_normal, offset, scale, corners, block):
     """+1 or -1: triangle t (member k of cluster c) is free from every pixel i0..i1 and
     turned that way from each, certainly; 2: free from each, not turned one way; 3: in no
     pixel's pyramid (wholly at or beyond every p's parallel plane, or behind the light's); 0
-    for any other (some pixel's own, or coplanar with it, or free from some only)."""
+    for any other (some pixel's own, or coplanar with it, or free from some only).  block:
+    (the least and most of the pixels' heights over the light's plane, the most |p - the
+    light's centre|, reach (`pyramid.UNCUT_REACH`), coplanar (`candidates.COPLANAR_RELATIVE`),
+    the centre (3,) and radius of a sphere about the pixels' points)."""
+    low_top, high_top, far_rel, reach, coplanar, pc, pr = block
     low_h = min(h[t, 0], min(h[t, 1], h[t, 2]))
     high_h = max(h[t, 0], max(h[t, 1], h[t, 2]))
     if low_h >= high_top or high_h < 0:
         return 3
     if not (low_h >= 0 and high_h < low_top):
         return 0
-    sign, turned = 0, True
-    for i in range(i0, i1):
+    for i in range(i0, i1):                  # a pixel's own, or coplanar with it
         o = own[i]
         if t == o:
             return 0
@@ -174,23 +225,29 @@ def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, 
                                    + corners[t, j, 2] * n2 - offset[o]))
             if not off > coplanar * max(scale[o], packed[c, k, 15]):
                 return 0
+    # the pixels' sphere off the triangle's plane by more than FACING of its farthest point
+    r0, r1, r2 = pc[0] - packed[c, k, 12], pc[1] - packed[c, k, 13], pc[2] - packed[c, k, 14]
+    dist = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2) + pr
+    s = packed[c, k, 6] * r0 + packed[c, k, 7] * r1 + packed[c, k, 8] * r2
+    span = 0.0
+    for a in range(3):
+        span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
+    # carried within reach: |rel| + the most any corner is magnified times its distance
+    bound = far_rel + high_top / (low_top - high_h) * (dist + np.sqrt(span))
+    if not bound * (1 + 2.0 ** -30) < reach:
+        return 0
+    if abs(s) - pr * (1 + 2.0 ** -30) > FACING * dist * (1 + 2.0 ** -30):
+        return 1 if s > 0 else -1
+    sign = 0                                 # else pixel by pixel
+    for i in range(i0, i1):
         r0, r1, r2 = p[i, 0] - packed[c, k, 12], p[i, 1] - packed[c, k, 13], \
             p[i, 2] - packed[c, k, 14]
-        dist = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
         s = packed[c, k, 6] * r0 + packed[c, k, 7] * r1 + packed[c, k, 8] * r2
         way = 1 if s > 0 else -1
-        if not abs(s) > FACING * dist or (sign != 0 and way != sign):
-            turned = False
+        if not abs(s) > FACING * np.sqrt(r0 * r0 + r1 * r1 + r2 * r2) or way == -sign:
+            return 2
         sign = way
-        # carried within reach: |rel| + the most any corner is magnified times its distance
-        # (within the triangle's box's half diagonal of its first corner's... its box's)
-        span = 0.0
-        for a in range(3):
-            span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
-        bound = far_rel + high_top / (low_top - high_h) * (dist + np.sqrt(span))
-        if not bound * (1 + 2.0 ** -30) < reach:
-            return 0
-    return sign if turned else 2
+    return sign
 
 
 @_jit()

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import pyramid, windings, windmeasures
-from .candidates import COPLANAR_RELATIVE, _keep, meets
+from .candidates import COPLANAR_RELATIVE, _keep
 from .lightshapes import FramedLight
 from .occluders import Objects
 from .polygons import dot, kernels
@@ -28,20 +28,18 @@ CARRIED = 1 << 16
 
 def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndarray,
            p: np.ndarray, normal: np.ndarray, own: np.ndarray, where: np.ndarray, width: int,
-           block: int, crowded: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+           block: int, crowded: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """(n,) object each: the boundary of each pixel's shadows' union inside the light's box
     (`windings.boundaries`), None where it is left to the pixel-by-pixel path (module) or
     the kernels are missing; and the few shadows that are not free at a contact, left out of
     it (`windings.split`'s loose: `windmeasures.measures` takes them away; None where none);
     points p (n, 3) with normals (n, 3) on triangles own (n,) at image pixels where (n,) of a
     frame `width` wide, in blocks of `block` a side; h (M, 3): the corners' heights
-    (`candidates.heights`); crowded: a block that meets no more triangles is left out.  And
-    the clusters meeting each pixel's pyramid (n, C) (`candidates.meets`; None without the
-    kernels), for the pixels left out."""
+    (`candidates.heights`); crowded: a block that meets no more triangles is left out."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
     if loaded is None or kernels("windingkernels") is None or len(p) == 0:
-        return out, out_loose, None
+        return out, out_loose
     y, x = np.divmod(where, width)
     key = (y // block) * -(-width // block) + x // block
     order = np.argsort(key, kind="stable")
@@ -52,25 +50,23 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     # the clusters that meet some pixel's pyramid of each block (b, C); a block that meets a
     # convex object's is left to the pixels' own path (its hulls), as is one that meets no
     # more than `crowded` triangles (a few shadows: cheaper united as they are)
-    meet = meets(light, objects, p, base, lo, hi)
-    back = np.empty_like(meet)
-    back[order] = meet
-    near = loaded.any_rows(meet, start)
-    member = objects.members >= 0
-    convex = (((objects.kinds & 1) != 0) & member).any(axis=1)
-    hull = near[:, convex].any(axis=1) | (near.astype(np.int64) @ member.sum(axis=1) <= crowded)
-    if hull.all():
-        return out, out_loose, back
-    near[hull] = False
     top = dot(p - light.center, light.normal)
-    rel = np.sqrt(dot(p - light.center, p - light.center))
-    reach = pyramid.UNCUT_REACH * np.abs(light.hull).max()
     m = pyramid.sides(light, p, base)
+    sides = np.stack([s / np.linalg.norm(s, axis=1, keepdims=True) for s in m])
+    member = objects.members >= 0
+    near, many, hull = loaded.block_meets(
+        start, lo, hi, top, sides, p, objects.lo, objects.hi, objects.centre, objects.radius,
+        (objects.centre - light.center) @ light.normal, member.sum(axis=1),
+        (((objects.kinds & 1) != 0) & member).any(axis=1))
+    hull |= many <= crowded
+    if hull.all():
+        return out, out_loose
+    near[hull] = False
     e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex = loaded.block_edges(
-        start, near, objects.members,
-        objects.packed, objects.kinds, objects.corner_ids, h, p, top, own, objects.normal,
-        objects.offset, objects.scale, corners, rel, reach, COPLANAR_RELATIVE,
-        np.stack([s / np.linalg.norm(s, axis=1, keepdims=True) for s in m]))
+        start, near, objects.members, objects.packed, objects.kinds, objects.corner_ids, h, p,
+        top, own, objects.normal, objects.offset, objects.scale, corners,
+        np.sqrt(dot(p - light.center, p - light.center)),
+        pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides)
     block = np.repeat(np.arange(len(start) - 1), np.diff(start))
     flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, normal, own, lo,
                                                     hi, base, m, block, unsteady, to_cut, u_at)
@@ -92,7 +88,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     for k, group in zip(*_groups(pix[apart[settled]], settled)):
         loose[k] = (turned[group], count[apart[group]])
     out[order], out_loose[order] = got, loose
-    return out, out_loose, back
+    return out, out_loose
 
 
 def _wound(loaded, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
