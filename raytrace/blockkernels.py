@@ -58,7 +58,10 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     ne, nu = 0, 0
     for b in range(n_blocks):
         i0, i1 = start[b], start[b + 1]
-        sphere = _sphere(p, top, rel, i0, i1, reach, coplanar)
+        low_top, high_top, far_rel = np.inf, 0.0, 0.0
+        for i in range(i0, i1):
+            low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
+            far_rel = max(far_rel, rel[i])
         q = 0
         for c in range(meet.shape[1]):
             if not meet[b, c]:
@@ -69,9 +72,8 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                     continue
                 if kinds[c, k] & 1:
                     convex[b] = True
-                    break
-                sign = _steady(t, c, k, i0, i1, packed, h, p, own, tri_normal, offset, scale,
-                               corners, sphere)
+                sign = _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset,
+                               scale, corners, low_top, high_top, far_rel, reach, coplanar)
                 if sign == 3:
                     continue
                 if sign == 0 or sign == 2:
@@ -86,9 +88,6 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                     k_lo[q], k_hi[q], k_way[q] = min(ka, kb), max(ka, kb), 1 if ka < kb else -1
                     k_tri[q], k_s0[q], k_s1[q] = t, a, z
                     q += 1
-            if convex[b]:                                 # left to the pixels' own path
-                nu, q = u_at[b], 0
-                break
         first, net = _tally(k_lo[:q], k_hi[:q], k_way[:q])
         for g in range(first.shape[0]):
             f = first[g]
@@ -171,25 +170,6 @@ def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height
 
 
 @_jit()
-def _sphere(p, top, rel, i0, i1, reach, coplanar):
-    """`_steady`'s block: the least and most of the pixels i0..i1's heights top, the most
-    of their rel, reach, coplanar, and the centre (3,) and radius of a sphere about their
-    points p."""
-    low_top, high_top, far_rel = np.inf, 0.0, 0.0
-    pc = np.zeros(3)
-    for i in range(i0, i1):
-        low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
-        far_rel = max(far_rel, rel[i])
-        for a in range(3):
-            pc[a] += p[i, a] / (i1 - i0)
-    pr = 0.0
-    for i in range(i0, i1):
-        pr = max(pr, np.sqrt((p[i, 0] - pc[0]) ** 2 + (p[i, 1] - pc[1]) ** 2
-                             + (p[i, 2] - pc[2]) ** 2))
-    return low_top, high_top, far_rel, reach, coplanar, pc, pr * (1 + 2.0 ** -30) + 1e-300
-
-
-@_jit()
 def _grow(a, n):
     """a with twice the room, its first n kept."""
     out = np.empty(2 * a.shape[0], a.dtype)
@@ -198,22 +178,20 @@ def _grow(a, n):
 
 
 @_jit(inline="always")
-def _steady(t, c, k, i0, i1, packed, h, p, own, tri_normal, offset, scale, corners, block):
+def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, corners,
+            low_top, high_top, far_rel, reach, coplanar):
     """+1 or -1: triangle t (member k of cluster c) is free from every pixel i0..i1 and
     turned that way from each, certainly; 2: free from each, not turned one way; 3: in no
     pixel's pyramid (wholly at or beyond every p's parallel plane, or behind the light's); 0
-    for any other (some pixel's own, or coplanar with it, or free from some only).  block:
-    (the least and most of the pixels' heights over the light's plane, the most |p - the
-    light's centre|, reach (`pyramid.UNCUT_REACH`), coplanar (`candidates.COPLANAR_RELATIVE`),
-    the centre (3,) and radius of a sphere about the pixels' points)."""
-    low_top, high_top, far_rel, reach, coplanar, pc, pr = block
+    for any other (some pixel's own, or coplanar with it, or free from some only)."""
     low_h = min(h[t, 0], min(h[t, 1], h[t, 2]))
     high_h = max(h[t, 0], max(h[t, 1], h[t, 2]))
     if low_h >= high_top or high_h < 0:
         return 3
     if not (low_h >= 0 and high_h < low_top):
         return 0
-    for i in range(i0, i1):                  # a pixel's own, or coplanar with it
+    sign, turned = 0, True
+    for i in range(i0, i1):
         o = own[i]
         if t == o:
             return 0
@@ -225,29 +203,23 @@ def _steady(t, c, k, i0, i1, packed, h, p, own, tri_normal, offset, scale, corne
                                    + corners[t, j, 2] * n2 - offset[o]))
             if not off > coplanar * max(scale[o], packed[c, k, 15]):
                 return 0
-    # the pixels' sphere off the triangle's plane by more than FACING of its farthest point
-    r0, r1, r2 = pc[0] - packed[c, k, 12], pc[1] - packed[c, k, 13], pc[2] - packed[c, k, 14]
-    dist = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2) + pr
-    s = packed[c, k, 6] * r0 + packed[c, k, 7] * r1 + packed[c, k, 8] * r2
-    span = 0.0
-    for a in range(3):
-        span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
-    # carried within reach: |rel| + the most any corner is magnified times its distance
-    bound = far_rel + high_top / (low_top - high_h) * (dist + np.sqrt(span))
-    if not bound * (1 + 2.0 ** -30) < reach:
-        return 0
-    if abs(s) - pr * (1 + 2.0 ** -30) > FACING * dist * (1 + 2.0 ** -30):
-        return 1 if s > 0 else -1
-    sign = 0                                 # else pixel by pixel
-    for i in range(i0, i1):
         r0, r1, r2 = p[i, 0] - packed[c, k, 12], p[i, 1] - packed[c, k, 13], \
             p[i, 2] - packed[c, k, 14]
+        dist = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
         s = packed[c, k, 6] * r0 + packed[c, k, 7] * r1 + packed[c, k, 8] * r2
         way = 1 if s > 0 else -1
-        if not abs(s) > FACING * np.sqrt(r0 * r0 + r1 * r1 + r2 * r2) or way == -sign:
-            return 2
+        if not abs(s) > FACING * dist or (sign != 0 and way != sign):
+            turned = False
         sign = way
-    return sign
+        # carried within reach: |rel| + the most any corner is magnified times its distance
+        # (within the triangle's box's half diagonal of its first corner's... its box's)
+        span = 0.0
+        for a in range(3):
+            span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
+        bound = far_rel + high_top / (low_top - high_h) * (dist + np.sqrt(span))
+        if not bound * (1 + 2.0 ** -30) < reach:
+            return 0
+    return sign if turned else 2
 
 
 @_jit()
