@@ -38,7 +38,10 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     (`candidates.heights`); crowded: a block that meets no more triangles is left out."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
-    if loaded is None or kernels("windingkernels") is None or len(p) == 0:
+    member = objects.members >= 0
+    plain = ((objects.kinds & 1) == 0) & member
+    if loaded is None or kernels("windingkernels") is None or len(p) == 0 or \
+            plain.sum() <= crowded:     # no more than `crowded` triangles outside convex objects
         return out, out_loose
     y, x = np.divmod(where, width)
     key = (y // block) * -(-width // block) + x // block
@@ -53,7 +56,6 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     top = dot(p - light.center, light.normal)
     m = pyramid.sides(light, p, base)
     sides = np.stack([s / np.linalg.norm(s, axis=1, keepdims=True) for s in m])
-    member = objects.members >= 0
     near, many, hull = loaded.block_meets(
         start, lo, hi, top, sides, p, objects.lo, objects.hi, objects.centre, objects.radius,
         (objects.centre - light.center) @ light.normal, member.sum(axis=1),
