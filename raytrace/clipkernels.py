@@ -98,6 +98,62 @@ def clipped(ax, ay, bx, by, ia, ib, cnt, box, big, margin):
 
 
 @_jit()
+def outside(uncut, r0, r1, rims, e0, e1, box, margin):
+    """Whether the shadows uncut[r0:r1] (3, 2) each and the rims' edges e0..e1 (`rims`:
+    flat (e, 2, 2), ids, count) all lie apart from the box (each edge's box misses it), and
+    then their winding number at its first corner (0 where in doubt: `certain` False) by a
+    ray in +x (the sum of each triangle's and each edge's crossings: the same as the
+    outline's, whose cancelled edges cross it as often each way): (apart and certain, the
+    winding)."""
+    rim, _, count = rims
+    x0, y0, x1, y1 = box[0], box[1], box[2], box[3]
+    for r in range(r0, r1):
+        if not (min(uncut[r, 0, 0], min(uncut[r, 1, 0], uncut[r, 2, 0])) > x1
+                or max(uncut[r, 0, 0], max(uncut[r, 1, 0], uncut[r, 2, 0])) < x0
+                or min(uncut[r, 0, 1], min(uncut[r, 1, 1], uncut[r, 2, 1])) > y1
+                or max(uncut[r, 0, 1], max(uncut[r, 1, 1], uncut[r, 2, 1])) < y0):
+            return False, 0
+    for g in range(e0, e1):
+        if not (min(rim[g, 0, 0], rim[g, 1, 0]) > x1 or max(rim[g, 0, 0], rim[g, 1, 0]) < x0
+                or min(rim[g, 0, 1], rim[g, 1, 1]) > y1 or max(rim[g, 0, 1], rim[g, 1, 1]) < y0):
+            return False, 0
+    wind, ok = 0, True
+    for r in range(r0, r1):
+        signed = (uncut[r, 1, 0] - uncut[r, 0, 0]) * (uncut[r, 2, 1] - uncut[r, 0, 1]) - \
+            (uncut[r, 1, 1] - uncut[r, 0, 1]) * (uncut[r, 2, 0] - uncut[r, 0, 0])
+        if signed == 0:
+            continue
+        for k in range(3):
+            a, b = (k, (k + 1) % 3) if signed > 0 else ((k + 1) % 3, k)
+            sure, w = _crossed(uncut[r, a, 0], uncut[r, a, 1], uncut[r, b, 0], uncut[r, b, 1],
+                               x0, y0, margin)
+            ok &= sure
+            wind += w
+    for g in range(e0, e1):
+        sure, w = _crossed(rim[g, 0, 0], rim[g, 0, 1], rim[g, 1, 0], rim[g, 1, 1], x0, y0,
+                           margin)
+        ok &= sure
+        wind += w * count[g]
+    return ok, wind
+
+
+@_jit(inline="always")
+def _crossed(ax, ay, bx, by, x, y, margin):
+    """(certain, +1, -1 or 0): the edge a -> b crosses the ray in +x from x, y going up, going
+    down, or not (`_winding`'s rule)."""
+    up, down = ay <= y < by, by <= y < ay
+    if not (up or down):
+        return True, 0
+    ux, uy = bx - ax, by - ay
+    side, sure = _turn(ux, uy, x - ax, y - ay, abs(ux) + abs(uy), margin)
+    if up and side > 0:
+        return sure, 1
+    if down and side < 0:
+        return sure, -1
+    return sure, 0
+
+
+@_jit()
 def _winding(ax, ay, bx, by, cnt, x, y, margin):
     """(certain, the winding number of the outline at x, y) by a ray in +x, as
     `windingkernels._cover` counts."""

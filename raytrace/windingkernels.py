@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .clipkernels import clipped
+from .clipkernels import clipped, outside
 from .outlinekernels import _outline, _stable
 from .packetkernels import _jit
 
@@ -84,6 +84,18 @@ def _pixel(uncut, free, ids, r0, r1, big, margin, rims, e0, e1, box):
     none = np.empty((0, 2))
     for r in range(r0, r1):
         if not free[r]:
+            return False, none, none
+    if box.shape[0] == 4:
+        apart, wind = outside(uncut, r0, r1, rims, e0, e1, box, margin)
+        if apart and wind == 0:                  # nothing in the box
+            return True, none, none
+        if apart and wind > 0:                   # the box covered: its sides
+            sa, sb = np.empty((4, 2)), np.empty((4, 2))
+            for k in range(4):
+                sa[k, 0], sa[k, 1] = box[(0, 2, 2, 0)[k]], box[(1, 1, 3, 3)[k]]
+                sb[k, 0], sb[k, 1] = box[(2, 2, 0, 0)[k]], box[(1, 3, 3, 1)[k]]
+            return True, sa, sb
+        if apart:
             return False, none, none
     ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big, rims, e0, e1)
     sides = ax.shape[0]                          # the box's sides' edges from here on
