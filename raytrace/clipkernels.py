@@ -32,17 +32,17 @@ def _turn(ux, uy, vx, vy, size, margin):
 
 
 @_jit()
-def clipped(ax, ay, bx, by, ia, ib, cnt, box, big, margin):
-    """The outline a -> b (m,) with corner ids ia, ib (< big) and counts cnt (m,) cut to the
-    box (x0, y0, x1, y1) and closed along its sides: (certain, ax, ay, bx, by, ia, ib, cnt,
-    where B's stretches start), the cut edges (the same floats where whole) and then B's
-    stretches (counter-clockwise: outside B on their right); new corners' ids from big on
-    (B's corners big .. big + 3)."""
+def clipped(ax, ay, bx, by, ia, ib, cnt, box, big, margin, wind):
+    """The outline a -> b (m,) with corner ids ia, ib (< big) and counts cnt (m,) (those of
+    its edges whose boxes meet the box, at least) cut to the box (x0, y0, x1, y1) and closed
+    along its sides, wind: the whole outline's winding at the box's first corner (`survey`):
+    (certain, ax, ay, bx, by, ia, ib, cnt, where B's stretches start), the cut edges (the
+    same floats where whole) and then B's stretches (counter-clockwise: outside B on their
+    right); new corners' ids from big on (B's corners big .. big + 3)."""
     x0, y0, x1, y1 = box[0], box[1], box[2], box[3]
     w, h = x1 - x0, y1 - y0
     m = ax.shape[0]
-    sure, wind = _winding(ax, ay, bx, by, cnt, x0, y0, margin)
-    ok = sure and _apart(ax, ay, bx, by, box, margin)
+    ok = _apart(ax, ay, bx, by, box, margin)
     size = 3 * m + 8
     oax, oay, obx, oby = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
     oia, oib, ocnt = np.empty(size, np.int64), np.empty(size, np.int64), np.empty(size, np.int64)
@@ -98,27 +98,20 @@ def clipped(ax, ay, bx, by, ia, ib, cnt, box, big, margin):
 
 
 @_jit()
-def outside(uncut, r0, r1, rims, e0, e1, box, margin):
-    """Whether the shadows uncut[r0:r1] (3, 2) each and the rims' edges e0..e1 (`rims`:
-    flat (e, 2, 2), ids, count) all lie apart from the box (each edge's box misses it), and
-    then their winding number at its first corner (0 where in doubt: `certain` False) by a
-    ray in +x (the sum of each triangle's and each edge's crossings: the same as the
-    outline's, whose cancelled edges cross it as often each way): (apart and certain, the
-    winding)."""
+def survey(uncut, r0, r1, rims, e0, e1, box, margin):
+    """The shadows uncut[r0:r1] (3, 2) each and the rims' edges e0..e1 (`rims`: flat (e, 2,
+    2), ids, count) against the box: (whether some edge's box meets it, whether the winding
+    number at its first corner is certain, that winding) by a ray in +x (the sum of each
+    triangle's and each edge's crossings: the same as the outline's, whose cancelled edges
+    cross it as often each way)."""
     rim, _, count = rims
     x0, y0, x1, y1 = box[0], box[1], box[2], box[3]
+    meets, wind, ok = False, 0, True
     for r in range(r0, r1):
-        if not (min(uncut[r, 0, 0], min(uncut[r, 1, 0], uncut[r, 2, 0])) > x1
-                or max(uncut[r, 0, 0], max(uncut[r, 1, 0], uncut[r, 2, 0])) < x0
-                or min(uncut[r, 0, 1], min(uncut[r, 1, 1], uncut[r, 2, 1])) > y1
-                or max(uncut[r, 0, 1], max(uncut[r, 1, 1], uncut[r, 2, 1])) < y0):
-            return False, 0
-    for g in range(e0, e1):
-        if not (min(rim[g, 0, 0], rim[g, 1, 0]) > x1 or max(rim[g, 0, 0], rim[g, 1, 0]) < x0
-                or min(rim[g, 0, 1], rim[g, 1, 1]) > y1 or max(rim[g, 0, 1], rim[g, 1, 1]) < y0):
-            return False, 0
-    wind, ok = 0, True
-    for r in range(r0, r1):
+        meets |= not (min(uncut[r, 0, 0], min(uncut[r, 1, 0], uncut[r, 2, 0])) > x1
+                      or max(uncut[r, 0, 0], max(uncut[r, 1, 0], uncut[r, 2, 0])) < x0
+                      or min(uncut[r, 0, 1], min(uncut[r, 1, 1], uncut[r, 2, 1])) > y1
+                      or max(uncut[r, 0, 1], max(uncut[r, 1, 1], uncut[r, 2, 1])) < y0)
         signed = (uncut[r, 1, 0] - uncut[r, 0, 0]) * (uncut[r, 2, 1] - uncut[r, 0, 1]) - \
             (uncut[r, 1, 1] - uncut[r, 0, 1]) * (uncut[r, 2, 0] - uncut[r, 0, 0])
         if signed == 0:
@@ -130,17 +123,20 @@ def outside(uncut, r0, r1, rims, e0, e1, box, margin):
             ok &= sure
             wind += w
     for g in range(e0, e1):
+        meets |= not (min(rim[g, 0, 0], rim[g, 1, 0]) > x1 or max(rim[g, 0, 0], rim[g, 1, 0]) < x0
+                      or min(rim[g, 0, 1], rim[g, 1, 1]) > y1
+                      or max(rim[g, 0, 1], rim[g, 1, 1]) < y0)
         sure, w = _crossed(rim[g, 0, 0], rim[g, 0, 1], rim[g, 1, 0], rim[g, 1, 1], x0, y0,
                            margin)
         ok &= sure
         wind += w * count[g]
-    return ok, wind
+    return meets, ok, wind
 
 
 @_jit(inline="always")
 def _crossed(ax, ay, bx, by, x, y, margin):
     """(certain, +1, -1 or 0): the edge a -> b crosses the ray in +x from x, y going up, going
-    down, or not (`_winding`'s rule)."""
+    down, or not (`windingkernels._cover`'s rule)."""
     up, down = ay <= y < by, by <= y < ay
     if not (up or down):
         return True, 0
@@ -151,25 +147,6 @@ def _crossed(ax, ay, bx, by, x, y, margin):
     if down and side < 0:
         return sure, -1
     return sure, 0
-
-
-@_jit()
-def _winding(ax, ay, bx, by, cnt, x, y, margin):
-    """(certain, the winding number of the outline at x, y) by a ray in +x, as
-    `windingkernels._cover` counts."""
-    wind, ok = 0, True
-    for f in range(ax.shape[0]):
-        up, down = ay[f] <= y < by[f], by[f] <= y < ay[f]
-        if not (up or down):
-            continue
-        ux, uy = bx[f] - ax[f], by[f] - ay[f]
-        side, sure = _turn(ux, uy, x - ax[f], y - ay[f], abs(ux) + abs(uy), margin)
-        ok &= sure
-        if up and side > 0:
-            wind += cnt[f]
-        elif down and side < 0:
-            wind -= cnt[f]
-    return ok, wind
 
 
 @_jit(inline="always")

@@ -12,11 +12,12 @@ from .packetkernels import _jit
 
 
 @_jit()
-def _outline(uncut, ids, r0, r1, big, rims, e0, e1):
+def _outline(uncut, ids, r0, r1, big, rims, e0, e1, box):
     """The outline of the shadows rows r0..r1 and the rims' edges e0..e1 (`arrange.edges`,
     then each undirected edge's net count, its first edge's corners): (ax, ay, bx, by (m,),
     corner ids ia, ib (m,), counts (m,)), the edges in the order of (lower id, higher id);
-    big: more than any id."""
+    big: more than any id; box (4,) x0, y0, x1, y1: only the edges whose boxes meet it (an
+    edge and the one it cancels have one box), or (0,): all."""
     rim, rim_ids, rim_count = rims
     rows = np.empty(r1 - r0, np.int64)
     v = 0
@@ -29,23 +30,30 @@ def _outline(uncut, ids, r0, r1, big, rims, e0, e1):
     many = 3 * v + e1 - e0
     row, s0, s1 = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
     lo, hi, way = np.empty(many, np.int64), np.empty(many, np.int64), np.empty(many, np.int64)
+    i, boxed = 0, box.shape[0] == 4
     for e in range(3):
         for w in range(v):
-            i, r = e * v + w, rows[w]
+            r = rows[w]
             turn = r < 0
             r = -1 - r if turn else r
-            row[i] = r
-            s0[i] = (e + 1) % 3 if turn else e
-            s1[i] = e if turn else (e + 1) % 3
-            ka, kb = ids[r, s0[i]], ids[r, s1[i]]
+            a, b = ((e + 1) % 3, e) if turn else (e, (e + 1) % 3)
+            if boxed and _apart(uncut[r, a, 0], uncut[r, a, 1], uncut[r, b, 0], uncut[r, b, 1],
+                                box):
+                continue
+            row[i], s0[i], s1[i] = r, a, b
+            ka, kb = ids[r, a], ids[r, b]
             lo[i], hi[i], way[i] = min(ka, kb), max(ka, kb), 1 if ka < kb else -1
+            i += 1
+    t = i
     for g in range(e0, e1):                  # a rim's edge: its own count, start to end
-        i = 3 * v + g - e0
+        if boxed and _apart(rim[g, 0, 0], rim[g, 0, 1], rim[g, 1, 0], rim[g, 1, 1], box):
+            continue
         row[i], s0[i], s1[i] = g, 0, 1
         ka, kb = rim_ids[g, 0], rim_ids[g, 1]
         lo[i], hi[i] = min(ka, kb), max(ka, kb)
         way[i] = rim_count[g] if ka < kb else -rim_count[g]
-    rep, net = _tally(lo, hi, way)
+        i += 1
+    rep, net = _tally(lo[:i], hi[:i], way[:i])
     order = _order(lo[rep], hi[rep], big)
     m = order.shape[0]
     ax, ay, bx, by = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
@@ -55,7 +63,7 @@ def _outline(uncut, ids, r0, r1, big, rims, e0, e1):
         r = row[f]
         c_lo, c_hi = (s0[f], s1[f]) if way[f] > 0 else (s1[f], s0[f])
         c_a, c_b = (c_lo, c_hi) if up else (c_hi, c_lo)
-        if f < 3 * v:
+        if f < t:
             ax[g], ay[g], bx[g], by[g] = uncut[r, c_a, 0], uncut[r, c_a, 1], \
                 uncut[r, c_b, 0], uncut[r, c_b, 1]
         else:
@@ -64,6 +72,13 @@ def _outline(uncut, ids, r0, r1, big, rims, e0, e1):
         ia[g], ib[g] = (lo[f], hi[f]) if up else (hi[f], lo[f])
         cnt[g] = abs(net[order[g]])
     return ax, ay, bx, by, ia, ib, cnt
+
+
+@_jit(inline="always")
+def _apart(ax, ay, bx, by, box):
+    """Whether the box of the segment a-b misses the box x0, y0, x1, y1."""
+    return min(ax, bx) > box[2] or max(ax, bx) < box[0] or min(ay, by) > box[3] or \
+        max(ay, by) < box[1]
 
 
 @_jit()

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .clipkernels import clipped, outside
+from .clipkernels import clipped, survey
 from .outlinekernels import _outline, _stable
 from .packetkernels import _jit
 
@@ -85,25 +85,34 @@ def _pixel(uncut, free, ids, r0, r1, big, margin, rims, e0, e1, box):
     for r in range(r0, r1):
         if not free[r]:
             return False, none, none
+    whole = box[:0]
     if box.shape[0] == 4:
-        apart, wind = outside(uncut, r0, r1, rims, e0, e1, box, margin)
-        if apart and wind == 0:                  # nothing in the box
+        meets, sure, wind = survey(uncut, r0, r1, rims, e0, e1, box, margin)
+        if sure and not meets and wind == 0:     # nothing in the box
             return True, none, none
-        if apart and wind > 0:                   # the box covered: its sides
+        if sure and not meets and wind > 0:      # the box covered: its sides
             sa, sb = np.empty((4, 2)), np.empty((4, 2))
             for k in range(4):
                 sa[k, 0], sa[k, 1] = box[(0, 2, 2, 0)[k]], box[(1, 1, 3, 3)[k]]
                 sb[k, 0], sb[k, 1] = box[(2, 2, 0, 0)[k]], box[(1, 3, 3, 1)[k]]
             return True, sa, sb
-        if apart:
-            return False, none, none
-    ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big, rims, e0, e1)
-    sides = ax.shape[0]                          # the box's sides' edges from here on
-    if box.shape[0] == 4 and ax.shape[0]:
-        ok, cax, cay, cbx, cby, cia, cib, ccnt, cut = clipped(ax, ay, bx, by, ia, ib, cnt,
-                                                               box, big, margin)
-        if ok:
-            ax, ay, bx, by, ia, ib, cnt, sides = cax, cay, cbx, cby, cia, cib, ccnt, cut
+        if sure and meets:                       # the edges that meet the box, cut to it
+            ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big, rims, e0, e1, box)
+            ok, cax, cay, cbx, cby, cia, cib, ccnt, cut = clipped(ax, ay, bx, by, ia, ib, cnt,
+                                                                   box, big, margin, wind)
+            if ok:
+                return _noded(cax, cay, cbx, cby, cia, cib, ccnt, margin, cut)
+    # the whole outline (no box, or in doubt there)
+    ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big, rims, e0, e1, whole)
+    return _noded(ax, ay, bx, by, ia, ib, cnt, margin, ax.shape[0])
+
+
+@_jit()
+def _noded(ax, ay, bx, by, ia, ib, cnt, margin, sides):
+    """The chain of the outline a -> b (m,) with corner ids ia, ib and counts cnt (m,), a
+    box's sides from `sides` on (0 cover right of them): (certain, starts (c, 2), ends (c,
+    2))."""
+    none = np.empty((0, 2))
     m = ax.shape[0]
     if m == 0:
         return True, none, none
