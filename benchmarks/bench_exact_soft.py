@@ -18,6 +18,7 @@ Embree build, the objects' topology) is told apart from the per-pixel one."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import os
 import time
@@ -67,25 +68,30 @@ def bunny_rect_scene(size: int) -> Scene:
     return bunny_scene(size, size).replace(lights=(light,))
 
 
+@contextlib.contextmanager
+def knobs(**values):
+    """`exact_soft`'s module knobs set to values for the block, then back."""
+    before = {name: getattr(exact_soft, name) for name in values}
+    for name, value in values.items():
+        setattr(exact_soft, name, value)
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            setattr(exact_soft, name, value)
+
+
 def reference(scene: Scene) -> None:
     """`exact_visibility` with its fast paths off: no outline unions, no windings, no
     block's shared outline."""
-    many, wound, block = exact_soft.MANY_PIECES, exact_soft.WINDING_PIECES, exact_soft.BLOCK
-    exact_soft.MANY_PIECES = exact_soft.WINDING_PIECES = 1 << 62
-    exact_soft.BLOCK = 0
-    try:
+    with knobs(MANY_PIECES=1 << 62, WINDING_PIECES=1 << 62, BLOCK=0):
         exact_soft.exact_visibility(scene)
-    finally:
-        exact_soft.MANY_PIECES, exact_soft.WINDING_PIECES, exact_soft.BLOCK = many, wound, block
 
 
 def pixel_by_pixel(scene: Scene) -> None:
     """`exact_visibility` with no block's shared outline (`exact_soft.BLOCK` 0)."""
-    block, exact_soft.BLOCK = exact_soft.BLOCK, 0
-    try:
+    with knobs(BLOCK=0):
         exact_soft.exact_visibility(scene)
-    finally:
-        exact_soft.BLOCK = block
 
 
 def one_thread(scene: Scene) -> None:

@@ -21,14 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .outlinekernels import _turn
 from .packetkernels import _jit
-
-
-@_jit(inline="always")
-def _turn(ux, uy, vx, vy, size, margin):
-    """`windings._turn` of scalars: u x v and whether it is certainly nonzero."""
-    c = ux * vy - uy * vx
-    return c, abs(c) > margin * (size * (abs(vx) + abs(vy)))
 
 
 @_jit()

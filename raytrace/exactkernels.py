@@ -262,22 +262,30 @@ def inside(cut, count, inner, inner_count):
         for e in range(count[r]):
             f = e + 1 if e + 1 < count[r] else 0
             s0, s1 = cut[r, e, 0], cut[r, e, 1]
-            e0, e1 = cut[r, f, 0] - s0, cut[r, f, 1] - s1
-            for j in range(c):
-                d[j] = e0 * (a[j, 1] - s1) - e1 * (a[j, 0] - s0)
-            q = 0
-            for i in range(c):
-                j = i + 1 if i + 1 < c else 0
-                if d[i] >= 0:
-                    b[q, 0], b[q, 1] = a[i, 0], a[i, 1]
-                    q += 1
-                if (d[i] >= 0) != (d[j] >= 0):
-                    t = d[i] / (d[i] - d[j])
-                    b[q, 0] = a[i, 0] + t * (a[j, 0] - a[i, 0])
-                    b[q, 1] = a[i, 1] + t * (a[j, 1] - a[i, 1])
-                    q += 1
+            q = keep_left(a, c, s0, s1, cut[r, f, 0] - s0, cut[r, f, 1] - s1, b, d)
             a, b, c = b, a, q
         for j in range(c):
             out[r, j, 0], out[r, j, 1] = a[j, 0], a[j, 1]
         got[r] = c
     return out, got
+
+
+@_jit(inline="always")
+def keep_left(a, c, s0, s1, e0, e1, b, d):
+    """The polygon a[:c] (m, 2) cut to the left of the line through (s0, s1) along (e0, e1)
+    into b (`regions.inside`'s arithmetic for one edge): their count (at most 2 c); d (c,)
+    scratch.  `raytrace.measurekernels` clips its fans by it too."""
+    for j in range(c):
+        d[j] = e0 * (a[j, 1] - s1) - e1 * (a[j, 0] - s0)
+    q = 0
+    for i in range(c):
+        j = i + 1 if i + 1 < c else 0
+        if d[i] >= 0:
+            b[q, 0], b[q, 1] = a[i, 0], a[i, 1]
+            q += 1
+        if (d[i] >= 0) != (d[j] >= 0):
+            t = d[i] / (d[i] - d[j])
+            b[q, 0] = a[i, 0] + t * (a[j, 0] - a[i, 0])
+            b[q, 1] = a[i, 1] + t * (a[j, 1] - a[i, 1])
+            q += 1
+    return q

@@ -23,6 +23,7 @@ import numpy as np
 from numba import types
 from numba.extending import intrinsic
 
+from .exactkernels import keep_left
 from .packetkernels import _jit
 
 
@@ -100,28 +101,6 @@ def _ring(poly, c, center, axes, mode, eye, normal, r, x0, x1):
 
 
 @_jit(inline="always")
-def _keep_left(a, c, s0, s1, e0, e1, b, d):
-    """The polygon a[:c] (m, 2) cut to the left of the line through (s0, s1) along (e0, e1)
-    into b, as `exactkernels.inside` cuts it by one edge (written again, not imported: numba's
-    disk cache checks a kernel's own file only, so an edit there would leave this one
-    stale): their count (at most 2 c); d (c,) scratch."""
-    for j in range(c):
-        d[j] = e0 * (a[j, 1] - s1) - e1 * (a[j, 0] - s0)
-    q = 0
-    for i in range(c):
-        j = i + 1 if i + 1 < c else 0
-        if d[i] >= 0:
-            b[q, 0], b[q, 1] = a[i, 0], a[i, 1]
-            q += 1
-        if (d[i] >= 0) != (d[j] >= 0):
-            t = d[i] / (d[i] - d[j])
-            b[q, 0] = a[i, 0] + t * (a[j, 0] - a[i, 0])
-            b[q, 1] = a[i, 1] + t * (a[j, 1] - a[i, 1])
-            q += 1
-    return q
-
-
-@_jit(inline="always")
 def _clip(poly, many, l, r, a, c, b, d):
     """a[:c] clipped by each edge of the convex counter-clockwise polygon poly[l, r, :many[l,
     r]] (`exactkernels.inside` of one row) through the scratch b, d: (the corners, their
@@ -135,7 +114,7 @@ def _clip(poly, many, l, r, a, c, b, d):
             d = np.empty(2 * c)
         f = e + 1 if e + 1 < m else 0
         s0, s1 = poly[l, r, e, 0], poly[l, r, e, 1]
-        q = _keep_left(a, c, s0, s1, poly[l, r, f, 0] - s0, poly[l, r, f, 1] - s1, b, d)
+        q = keep_left(a, c, s0, s1, poly[l, r, f, 0] - s0, poly[l, r, f, 1] - s1, b, d)
         a, b, c = b, a, q
     return a, c, b, d
 

@@ -11,6 +11,13 @@ import numpy as np
 from .packetkernels import _jit
 
 
+@_jit(inline="always")
+def _turn(ux, uy, vx, vy, size, margin):
+    """`windings._turn` of scalars: u x v and whether it is certainly nonzero."""
+    c = ux * vy - uy * vx
+    return c, abs(c) > margin * (size * (abs(vx) + abs(vy)))
+
+
 @_jit()
 def _outline(uncut, ids, r0, r1, big, rims, e0, e1, box):
     """The outline of the shadows rows r0..r1 and the rims' edges e0..e1 (`arrange.edges`,
