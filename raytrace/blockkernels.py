@@ -30,7 +30,7 @@ FACING = 2.0 ** -20
 
 @_jit()
 def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri_normal,
-                offset, scale, corners, rel, reach, coplanar, sides):
+                offset, scale, corners, rel, reach, coplanar, sides, most):
     """For the blocks of pixels start (b + 1,) (each block's pixels, in order): (the blocks'
     outline edges: tri, from, to (e,) a triangle and its corners (0-2) the edge runs between,
     the way its net count is positive, count (e,), where each block's start (b + 1,); the
@@ -44,7 +44,7 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     `occluders.Objects`; welded (M, 3); h (M, 3) the corners' heights over the light's plane
     (`pyramid.uncut`'s sums); p (n, 3), top (n,) p's height; own (n,); tri_normal, offset,
     scale (M,); rel (n,) |p - centre|; reach: `pyramid.UNCUT_REACH` of the light; coplanar:
-    `candidates.COPLANAR_RELATIVE`."""
+    `candidates.COPLANAR_RELATIVE`; most: the most triangles the clusters of a block hold."""
     n_blocks, width = start.shape[0] - 1, members.shape[1]
     e_tri, e_from = np.empty(1024, np.int64), np.empty(1024, np.int64)
     e_to, e_cnt = np.empty(1024, np.int64), np.empty(1024, np.int64)
@@ -52,7 +52,7 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     unsteady, loose = np.empty(1024, np.int64), np.empty(1024, np.bool_)
     convex = np.zeros(n_blocks, np.bool_)
     # one block's steady edges: lo, hi, way, and the triangle and corners each came from
-    room = 3 * width * meet.shape[1]
+    room = 3 * most
     k_lo, k_hi, k_way = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
     k_tri, k_s0, k_s1 = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
     ne, nu = 0, 0

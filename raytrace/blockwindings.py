@@ -68,7 +68,8 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
         start, near, objects.members, objects.packed, objects.kinds, objects.corner_ids, h, p,
         top, own, objects.normal, objects.offset, objects.scale, corners,
         np.sqrt(dot(p - light.center, p - light.center)),
-        pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides)
+        pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides,
+        int(many[~hull].max()))
     block = np.repeat(np.arange(len(start) - 1), np.diff(start))
     flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, normal, own, lo,
                                                     hi, base, m, block, unsteady, to_cut, u_at)
