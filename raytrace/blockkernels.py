@@ -1,8 +1,8 @@
 """A block of pixels' shared outline, in numba (`raytrace.blockwindings`).
 
 Pixels a few apart see most triangles from the same side.  A triangle that every point p of
-a block sees turned the same way, certainly (p off its plane by more than
-`wholekernels.FACING`), and that is free from each (`pyramid.uncut`) casts a shadow that
+a block sees turned the same way, certainly (p off its plane by more than FACING of their
+distance), and that is free from each (`pyramid.uncut`) casts a shadow that
 turns the same way from each; where two such triangles share an edge and turn the same way
 it cancels from every pixel's outline (`raytrace.windings`).  So the block's steady
 triangles are counted once, edge by edge, and only the edges left (the block's outline: its
@@ -19,8 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from .exactkernels import carried
-from .packetkernels import _jit
 from .outlinekernels import _tally
+from .packetkernels import _jit
 
 # A triangle turns one way from p when p lies off its plane by more than this much of their
 # distance (its unit normal . (p - corner) against |p - corner|): float64 products are good to
@@ -37,11 +37,11 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     unsteady triangles (u,), whether each is free from some of the block's pixels only or
     is one's own or coplanar with it (u,) (else it is free from each, turned either way),
     where each block's start (b + 1,); whether a block has a convex object's triangle (b,):
-    then none of it is counted).  A triangle whose box's sphere lies outside a side plane of
-    every pixel's pyramid (sides (s, n, 3) unit inward normals through p) is left out.
-    meet (b, C): the clusters meeting some pixel's pyramid of each block; members, packed,
-    kinds:
-    `occluders.Objects`; welded (M, 3); h (M, 3) the corners' heights over the light's plane
+    its pixels are left to the pixel-by-pixel path, whose hulls unite such objects).  A
+    triangle whose box's sphere lies outside a side plane of every pixel's pyramid (sides
+    (s, n, 3) unit inward normals through p) is left out.  meet (b, C): the clusters meeting
+    some pixel's pyramid of each block; members, packed, kinds: `occluders.Objects`; welded
+    (M, 3); h (M, 3) the corners' heights over the light's plane
     (`pyramid.uncut`'s sums); p (n, 3), top (n,) p's height; own (n,); tri_normal, offset,
     scale (M,); rel (n,) |p - centre|; reach: `pyramid.UNCUT_REACH` of the light; coplanar:
     `candidates.COPLANAR_RELATIVE`; most: the most triangles the clusters of a block hold."""

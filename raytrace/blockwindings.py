@@ -1,15 +1,16 @@
 """The windings of a rect or disk light's crowded pixels, a block of pixels at a time
 (`raytrace.exact_soft`; numba only: `raytrace.blockkernels`).
 
-The pixels are taken in blocks of the image (`exact_soft.BLOCK` a side).  A block's steady triangles
-(turned one way from each of its points, free from each) are counted once, edge by edge,
-and only the edges left of them are carried from each pixel onto the light's plane; each
+The pixels are taken in blocks of the image (`exact_soft.BLOCK` a side).  A block's steady
+triangles (turned one way from each of its points, free from each) are counted once, edge by
+edge, and only the edges left of them are carried from each pixel onto the light's plane; each
 pixel adds its own pairs of the block's unsteady triangles (the candidate query, the cut and
 the whole shadows of `raytrace.exact_soft`, as before), and its outline, cut to a box about
 the light (`windings.clip_box`), is noded as `raytrace.windings` does.  A pixel is left to
-the pixel-by-pixel path where its block has a convex object's triangle (those are united as
-hulls), where one of its own shadows is not free (a contact), or where its windings are in
-doubt.
+the pixel-by-pixel path where its block meets a convex object's cluster (those are united as
+hulls) or no more than a few triangles, where more than `windings.LOOSE` of its own shadows
+are not free (a contact; up to that many are taken away apart, as `windings.split` does), or
+where its windings are in doubt.
 """
 
 from __future__ import annotations
@@ -75,8 +76,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
                                                     hi, base, m, block, unsteady, to_cut, u_at)
     ok = ~(convex | hull)[block]
     # a few shadows that are not free (`windings.split`): cut, carried, turned, apart
-    many = np.bincount(pix[~free], minlength=len(p))
-    ok &= many <= windings.LOOSE
+    ok &= np.bincount(pix[~free], minlength=len(p)) <= windings.LOOSE
     apart = np.flatnonzero(~free & ok[pix])
     turned, sure = windmeasures.turned(
         pyramid.carry(light, p, pyramid.pieces(light, corners, p, pix[apart], tri[apart], m,
@@ -88,7 +88,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     got[~ok] = None
     settled = np.flatnonzero(windings.found(got)[pix[apart]])
     loose = np.full(len(p), None, object)
-    for k, group in zip(*_groups(pix[apart[settled]], settled)):
+    for k, group in zip(*windings.groups(pix[apart[settled]], settled)):
         loose[k] = (turned[group], count[apart[group]])
     out[order], out_loose[order] = got, loose
     return out, out_loose
@@ -147,9 +147,3 @@ def _own_pairs(light: FramedLight, objects: Objects, corners: np.ndarray, p: np.
     pix, tri, count, whole = pix[order], tri[order], count[order], whole[order]
     flat, free = pyramid.uncut(light, corners, p, pix, tri)
     return flat, free, pix, tri, count, whole
-
-
-def _groups(keys: np.ndarray, items: np.ndarray) -> tuple[list, list]:
-    """The distinct keys (ascending, as given) and the items (arrays) of each."""
-    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if len(keys) else keys
-    return keys[starts].tolist(), np.split(items, starts[1:])

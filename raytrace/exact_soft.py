@@ -379,7 +379,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         chains[pix[apart[~sure]]] = None
         done = windings.found(chains)
         keep = np.flatnonzero(done[pix[apart]])
-        for k, group in zip(*_groups(pix[apart[keep]], keep)):
+        for k, group in zip(*windings.groups(pix[apart[keep]], keep)):
             loose[k] = (turned[group], count[apart[group]])
         heavy, rest = heavy[~done[pix[heavy]]], rest[~done[pix[rest]]]
     used = np.union1d(heavy, rest)
@@ -397,12 +397,6 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     union, single = _unite(shapely, shapes, owner, len(p), light.grid)
     single[arranged] = False       # an outline's union is not one convex polygon
     return union, single, chains, loose
-
-
-def _groups(keys: np.ndarray, items: np.ndarray) -> tuple[list, list]:
-    """The distinct keys (ascending, as given) and the items (arrays) of each."""
-    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if len(keys) else keys
-    return keys[starts].tolist(), np.split(items, starts[1:])
 
 
 def _whole_bodies(shapely, light: FramedLight, objects: Objects, p: np.ndarray, normal: np.ndarray,

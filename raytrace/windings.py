@@ -40,7 +40,7 @@ import numpy as np
 
 from . import arrange, polygons, pyramid
 
-__all__ = ["boundaries", "boundary", "found", "split"]
+__all__ = ["boundaries", "boundary", "found", "groups", "split"]
 
 # Doubt in the outline's orientation tests: a cross product within this much of the product of
 # its two vectors' lengths (float64 roundings are ~1e-16 of it) counts as zero.
@@ -428,6 +428,13 @@ def clip_box(light) -> np.ndarray:
     lo, hi = light.hull.min(axis=0), light.hull.max(axis=0)
     grow = CLIP_MARGIN * (hi - lo).max()
     return np.r_[lo - grow, hi + grow]
+
+
+def groups(keys: np.ndarray, items: np.ndarray) -> tuple[list, list]:
+    """The distinct keys (ascending, as given: the pixels of loose shadows) and the items
+    (arrays) of each."""
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if len(keys) else keys
+    return keys[starts].tolist(), np.split(items, starts[1:])
 
 
 def found(chains: np.ndarray) -> np.ndarray:
