@@ -24,10 +24,13 @@ triangles are united: under a rect or disk light, a pixel's more than WINDING_PI
 where those are all its shadows and all but a few (`windings.LOOSE`, at a contact) are free,
 measured from their outline's winding numbers with no polygon boolean (`raytrace.windings`),
 the few taken away by inclusion and exclusion (`raytrace.windmeasures`); else a pixel's union
-of more than MANY_PIECES from its outline alone (`raytrace.arrange`).  One convex shadow on a
-rect or disk is taken away in numpy (clipped edge by edge); several are united, and taken
-away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
-(`lightshapes.OVERLAY_GRID`); the measures are `raytrace.polygons`'.
+of more than MANY_PIECES from its outline alone (`raytrace.arrange`).  Under a rect or disk
+light, with the `fast` extra's kernels, a block of BLOCK x BLOCK pixels first counts once the
+outline of the triangles each of its points sees turned one way, and each of its pixels adds
+its own pairs of the others (`raytrace.blockwindings`).  One convex shadow on a rect or disk
+is taken away in numpy (clipped edge by edge); several are united, and taken away, by GEOS
+(shapely >= 2, the optional extra `exact`), snap-rounded (`lightshapes.OVERLAY_GRID`); the
+measures are `raytrace.polygons`'.
 """
 
 from __future__ import annotations
