@@ -120,7 +120,6 @@ def uncut(corners, tri, pix, p, top, center, normal, axes, reach):
     q = tri.shape[0]
     flat = np.zeros((q, 3, 2))
     free = np.zeros(q, np.bool_)
-    ray = np.empty(3)
     for r in range(q):
         t, e = tri[r], pix[r]
         ok = True
@@ -131,26 +130,34 @@ def uncut(corners, tri, pix, p, top, center, normal, axes, reach):
             ok &= (h >= 0) & (h < top[e])
         if not ok:
             continue
+        eye = seen_from(p, e, center, normal, axes)
         for k in range(3):
-            for a in range(2):
-                at = carried(corners, t, k, p, e, center, normal, axes, a, ray)
-                flat[r, k, a] = at
-                ok &= abs(at) <= reach
+            flat[r, k, 0], flat[r, k, 1] = carried(corners, t, k, p, e, normal, axes, eye)
+            ok &= (abs(flat[r, k, 0]) <= reach) & (abs(flat[r, k, 1]) <= reach)
         free[r] = ok
     return flat, free
 
 
 @_jit(inline="always")
-def carried(corners, t, k, p, e, center, normal, axes, a, ray):
-    """Coordinate a of corner k of triangle t carried from p[e] onto the light's plane
-    (`polygons.project`'s arithmetic); ray (3,): room."""
+def seen_from(p, e, center, normal, axes):
+    """p[e]'s height over the light's plane and its offset from the light's centre along
+    each of the plane's axes (`polygons.project`'s sums), for `carried`."""
     rel0, rel1, rel2 = p[e, 0] - center[0], p[e, 1] - center[1], p[e, 2] - center[2]
-    height = rel0 * normal[0] + rel1 * normal[1] + rel2 * normal[2]
-    for b in range(3):
-        ray[b] = corners[t, k, b] - p[e, b]
-    scale = height / -(ray[0] * normal[0] + ray[1] * normal[1] + ray[2] * normal[2])
-    return (rel0 * axes[a, 0] + rel1 * axes[a, 1] + rel2 * axes[a, 2]) + scale * (
-        ray[0] * axes[a, 0] + ray[1] * axes[a, 1] + ray[2] * axes[a, 2])
+    return (rel0 * normal[0] + rel1 * normal[1] + rel2 * normal[2],
+            rel0 * axes[0, 0] + rel1 * axes[0, 1] + rel2 * axes[0, 2],
+            rel0 * axes[1, 0] + rel1 * axes[1, 1] + rel2 * axes[1, 2])
+
+
+@_jit(inline="always")
+def carried(corners, t, k, p, e, normal, axes, eye):
+    """Corner k of triangle t carried from p[e] onto the light's plane, in its coordinates
+    (`polygons.project`'s arithmetic); eye: `seen_from` p[e]."""
+    height, u, v = eye
+    r0, r1 = corners[t, k, 0] - p[e, 0], corners[t, k, 1] - p[e, 1]
+    r2 = corners[t, k, 2] - p[e, 2]
+    scale = height / -(r0 * normal[0] + r1 * normal[1] + r2 * normal[2])
+    return (u + scale * (r0 * axes[0, 0] + r1 * axes[0, 1] + r2 * axes[0, 2]),
+            v + scale * (r0 * axes[1, 0] + r1 * axes[1, 1] + r2 * axes[1, 2]))
 
 
 @_jit()
