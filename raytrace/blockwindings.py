@@ -65,8 +65,8 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     if hull.all():
         return out, out_loose
     near[hull] = False
-    e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at = loaded.block_edges(
-        start, near, objects.members, objects.packed, objects.corner_ids, h, p,
+    e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex = loaded.block_edges(
+        start, near, objects.members, objects.packed, objects.kinds, objects.corner_ids, h, p,
         top, own, objects.normal, objects.offset, objects.scale, corners,
         np.sqrt(dot(p - light.center, p - light.center)),
         pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides,
@@ -74,7 +74,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     block = np.repeat(np.arange(len(start) - 1), np.diff(start))
     flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, normal, own, lo,
                                                     hi, base, m, block, unsteady, to_cut, u_at)
-    ok = ~hull[block]
+    ok = ~(convex | hull)[block]
     # a few shadows that are not free (`windings.split`): cut, carried, turned, apart
     ok &= np.bincount(pix[~free], minlength=len(p)) <= windings.LOOSE
     apart = np.flatnonzero(~free & ok[pix])
