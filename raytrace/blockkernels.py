@@ -57,7 +57,7 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     room = 3 * most
     k_lo, k_hi, k_way = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
     k_tri, k_s0, k_s1 = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
-    ne, nu = 0, 0
+    ne = nu = np.int64(0)         # not a literal (`windingkernels.boundaries`)
     for b in range(n_blocks):
         i0, i1 = start[b], start[b + 1]
         low_top, high_top, far_rel = np.inf, 0.0, 0.0

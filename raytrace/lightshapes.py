@@ -48,17 +48,20 @@ def frame_light(light: AreaLight, origin: np.ndarray, key: str) -> FramedLight:
                                         "small-circle arcs; not computed); use rect, disk or "
                                         "polygon, or the sampled lit_count")
     center = light.center - origin
-    u, v = default_plane_axes(light.normal)
+    # a writable copy, as every other array here (and the tests' lights) is: numba compiles a
+    # kernel once per array type, and a read-only array is another type
+    normal = np.array(light.normal)
+    u, v = default_plane_axes(normal)
     axes = np.stack([u, v])
     if light.shape == "rect":
         w, h = light.size / 2
         hull = np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
-        return FramedLight(center, light.normal, axes, hull, None, None,
+        return FramedLight(center, normal, axes, hull, None, None,
                            float(light.size.prod()), _grid(hull))
     if light.shape == "disk":
         r = light.radius
         hull = np.array([[-r, -r], [r, -r], [r, r], [-r, r]])
-        return FramedLight(center, light.normal, axes, hull, None, r, float(np.pi * r * r),
+        return FramedLight(center, normal, axes, hull, None, r, float(np.pi * r * r),
                            _grid(hull))
     shapely = shapely_module()
     outline = (light.vertices - light.center) @ axes.T
@@ -66,7 +69,7 @@ def frame_light(light: AreaLight, origin: np.ndarray, key: str) -> FramedLight:
     hull = np.array(ring.convex_hull.exterior.coords)[:-1]
     if shapely.is_ccw(shapely.LinearRing(hull)) is False:
         hull = hull[::-1]
-    return FramedLight(center, light.normal, axes, hull, outline, None, float(ring.area),
+    return FramedLight(center, normal, axes, hull, outline, None, float(ring.area),
                        _grid(hull))
 
 

@@ -69,7 +69,7 @@ def _trace_blocks(fn, scene, width, block_rows, y0, y1, row32, col32, eye32, nea
     pixel = np.empty(width, np.int64)
     for by in range(y0, y1, bh):
         for bx in range(0, W, bw):
-            k = 0
+            k = np.int64(0)      # not a literal: numba would compile reset_lane for it too
             for y in range(by, min(by + bh, y1)):
                 for x in range(bx, min(bx + bw, W)):
                     pixel[k] = (y - y0) * W + x

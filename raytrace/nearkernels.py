@@ -101,7 +101,8 @@ def candidates(start, step, tmax, reach, part_cells, max_parts, always, n_faces,
     `NearGrid`'s tables (`NearGrid._kernel_grid`), reach its reach, part_cells and max_parts
     `neargrid.NEAR_PART_CELLS` and `NEAR_MAX_PARTS`, always its thin triangles."""
     cell = grid[0]
-    out, n = np.empty(128 + 8 * start.shape[1], np.int64), 0
+    # np.int64(0), not a literal 0, which numba would compile each callee for once more
+    out, n = np.empty(128 + 8 * start.shape[1], np.int64), np.int64(0)
     lo, hi, sv, dv = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     for i in range(start.shape[1]):
         s0, s1, s2 = start[0, i], start[1, i], start[2, i]

@@ -100,7 +100,8 @@ def _parallel(query, fn, scene, width, o, d, tfar, tri, t):
 
 @_jit()
 def _serial(query, fn, scene, width, o, d, tfar, tri, t):
-    _rays(query, fn, scene, width, o, d, tfar, 0, o.shape[0], tri, t)
+    # np.int64(0), not a literal 0, which numba would compile `_rays` for once more
+    _rays(query, fn, scene, width, o, d, tfar, np.int64(0), o.shape[0], tri, t)
 
 
 def trace(lib, scene: int, query: int, origins: np.ndarray, directions: np.ndarray,
@@ -116,5 +117,8 @@ def trace(lib, scene: int, query: int, origins: np.ndarray, directions: np.ndarr
         return tri, t
     fn = lib.intersect if query == INTERSECT else lib.occluded
     run = _parallel if parallel and n > CHUNK else _serial
+    # C order always (the kernels read a ray's three coordinates together), so that numba
+    # compiles each kernel once, not once per layout of its callers' arrays
+    origins, directions = np.ascontiguousarray(origins), np.ascontiguousarray(directions)
     run(query, fn, scene, lib.width, origins, directions, tfar, tri, t)
     return tri, t

@@ -35,7 +35,10 @@ def boundaries(uncut, free, ids, owner, n, margin, rim, rim_ids, rim_count, rim_
     doubt = np.zeros(n, np.bool_)
     at = np.zeros(n + 1, np.int64)
     out = np.empty(4 * max(64, owner.shape[0]))
-    size, r0, q, e0, m = 0, 0, owner.shape[0], 0, rim_owner.shape[0]
+    # np.int64(0), not 0: a literal 0 would have numba compile each callee once more, for
+    # Literal[int](0), while it types the loop
+    size = r0 = e0 = np.int64(0)
+    q, m = owner.shape[0], rim_owner.shape[0]
     big = max(ids.max() + 1 if q else 1, rim_ids.max() + 1 if m else 1)
     for k in range(n):
         r1, e1 = r0, e0
@@ -184,7 +187,7 @@ def _crossings(ax, ay, bx, by, ia, ib, cnt, margin):
         e = order[p]
         box[0, p], box[1, p] = left[e], max(ax[e], bx[e])
         box[2, p], box[3, p] = min(ay[e], by[e]), max(ay[e], by[e])
-    k, p, q = 2 * m, 0, 1
+    k, p, q = 2 * m, np.int64(0), np.int64(1)     # not literals (`boundaries`)
     while True:                 # the sweep, resumed where its room ran out (room made here:
         state, k, p, q = _sweep(order, box, ax, ay, bx, by, ia, ib, cnt, margin, ent, pos,
                                 k, p, q)                 # arrays set anew in its loop cost
