@@ -11,6 +11,9 @@ marked fails instead of passing by luck.  A module of raster/ or compare/ that s
 `FOLDER_GL = False` renders only through `ctx`: its other tests run unmarked, with GL blocked.  Child processes are not covered by that block: run
 `__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json pytest -m "not gl"` (EGL then finds no
 driver anywhere) to check that no unmarked test starts a process that renders.
+
+The `alone` marker (tests/alone.py): under pytest-xdist a test so marked runs with no test of
+another worker beside it.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import re
 from pathlib import Path
 
 import pytest
+from alone import pytest_configure, pytest_runtest_protocol  # noqa: F401 (the hooks)
 from builders import TEST_OUTPUT
 
 # the one definition of a mask edge and of the mismatch report (shared with `compare`)

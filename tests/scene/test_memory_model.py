@@ -103,6 +103,9 @@ def _marks(name):
     return [pytest.mark.gl] if name.startswith("shadowvol") else []
 
 
+# alone: beside another worker's test the threads' tiles are rarely at their peak together,
+# and the measured growth falls below what the command takes on an idle machine
+@pytest.mark.alone
 @pytest.mark.parametrize("name", [pytest.param(n, marks=_marks(n)) for n in sorted(CASES)])
 def test_the_model_bounds_the_measured_peak(name):
     tool, scene_name, argv, model = CASES[name]
