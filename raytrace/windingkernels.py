@@ -141,29 +141,54 @@ def _noded(ax, ay, bx, by, ia, ib, cnt, margin, sides):
 @_jit()
 def _corners(ax, ay, bx, by, ia, ib):
     """The corners of the outline numbered (va, vb (m,)), and whether no two of them lie at
-    one point (each at its first place among the edges' starts, then ends)."""
+    one point (each at its first place among the edges' starts, then ends), by two tables of
+    open addressing (ids, then points: x and y equal as floats); the numbers are the corners'
+    order of first place (any one-to-one numbering serves `_runs`)."""
     m = ax.shape[0]
-    both = np.empty(2 * m, np.int64)
-    both[:m], both[m:] = ia, ib
-    order = _stable(both)
+    size = 16
+    while size < 4 * m:
+        size *= 2
+    mask = size - 1
+    slot = np.full(size, -1, np.int64)                   # the id held (ids are >= 0)
+    at = np.empty(size, np.int64)
     number = np.empty(2 * m, np.int64)
     xs, ys = np.empty(2 * m), np.empty(2 * m)
-    c = -1
-    for g in range(2 * m):
-        i = order[g]
-        if g == 0 or both[i] != both[order[g - 1]]:
+    c = 0
+    for i in range(2 * m):
+        key = ia[i] if i < m else ib[i - m]
+        h = _mixed(key, 0) & mask
+        while slot[h] >= 0 and slot[h] != key:
+            h = (h + 1) & mask
+        if slot[h] < 0:
+            slot[h], at[h] = key, c
+            # + 0.0: -0.0 as 0.0, which == holds equal
+            xs[c], ys[c] = ((ax[i], ay[i]) if i < m else (bx[i - m], by[i - m]))
+            xs[c], ys[c] = xs[c] + 0.0, ys[c] + 0.0
             c += 1
-            xs[c], ys[c] = (ax[i], ay[i]) if i < m else (bx[i - m], by[i - m])
-        number[i] = c
-    c += 1
-    by_x = _stable(xs[:c].copy())
+        number[i] = at[h]
+    bits_x, bits_y = xs[:c].view(np.int64), ys[:c].view(np.int64)
+    slot[:] = -1
     for g in range(c):
-        h = g + 1
-        while h < c and xs[by_x[h]] == xs[by_x[g]]:
-            if ys[by_x[h]] == ys[by_x[g]]:
+        h = _mixed(bits_x[g], bits_y[g]) & mask
+        while slot[h] >= 0:
+            f = slot[h]
+            if xs[f] == xs[g] and ys[f] == ys[g]:
                 return False, number[:m], number[m:]
-            h += 1
+            h = (h + 1) & mask
+        slot[h] = g
     return True, number[:m], number[m:]
+
+
+@_jit(inline="always")
+def _mixed(a, b):
+    """A hash of the int64s a, b: MurmurHash3's finalizer of a line of them (products wrap;
+    every bit of each reaches the low bits)."""
+    v = a * -7046029254386353131 + b
+    v ^= v >> 33
+    v *= -49064778989728563
+    v ^= v >> 33
+    v *= -4265267296055464877
+    return v ^ (v >> 33)
 
 
 @_jit()

@@ -4,7 +4,8 @@ random batches (folded sheets of shared corner ids, loose crossing triangles, co
 coarse grid: touching, collinear, in doubt; a shadow not free, no area, a pixel with no
 shadows, the same triangle twice: counts of 2, edges crossed at one point by two others: ties
 along an edge, one corner id at two spots: which shadow's edge the outline keeps; a T, two
-edges leaving a shared corner along one line, a level edge: in doubt) and on the batches of
+edges leaving a shared corner along one line, a level edge, two corners of different ids at
+one point: in doubt) and on the batches of
 a noisy ball's exact soft shadow.
 """
 
@@ -43,7 +44,8 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     4 no area, 5 a sheet with some triangles twice (counts of 2) and some turned over (they
     cancel), 6 a star (ties along an edge), 7 a sheet whose shadows each see their corners a
     little apart (one id at several spots), 8 no shadows at all, 9 a T, 10 two edges from a
-    shared corner along one line, 11 a level edge (the three in doubt)."""
+    shared corner along one line, 11 a level edge, 12 two corners of different ids at one
+    point (the four in doubt)."""
     if kind in (0, 3, 5, 7):
         tris, ids = sheet(rng, int(rng.integers(3, 7)), float(rng.uniform(0.2, 0.8)))
         if kind == 5:
@@ -61,6 +63,13 @@ def _pixel(rng, kind: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         tris, ids = _star(rng)
     elif kind == 8:
         tris, ids = np.zeros((0, 3, 2)), np.zeros((0, 3), np.int64)
+    elif kind == 12:
+        # two corners of different ids at one point (a triangle touching another's corner
+        # with its own, not welded): in doubt, mapped as the T is
+        tris = np.array([[[0, 0], [2, 0], [1, 1]], [[2, 0], [4, 0], [3, -1]]], float)
+        ids = np.array([[0, 1, 2], [3, 4, 5]])
+        turn = rng.integers(1, 4, (2, 2)) * [[1, -1], [1, 1]]              # det > 0
+        tris = tris @ turn * 2.0 ** rng.integers(-3, 4) + rng.integers(-8, 8, 2)
     elif kind in (9, 10):
         # a T (a corner inside another's edge) or two edges from a shared corner along one
         # line, mapped by a random integer matrix (exact: no edge level), moved and scaled by
@@ -108,7 +117,7 @@ def _batch(pixels, monkeypatch) -> np.ndarray:
                  np.concatenate([i for _, _, i in pixels]), owner, len(pixels), monkeypatch)
 
 
-@pytest.mark.parametrize("kind", range(12))
+@pytest.mark.parametrize("kind", range(13))
 def test_each_kind_of_pixel_is_numpys_bytes(kind, monkeypatch):
     """Twelve pixels of one kind in a batch; the kinds meant to settle do, mostly."""
     rng = np.random.default_rng(kind)
@@ -116,7 +125,7 @@ def test_each_kind_of_pixel_is_numpys_bytes(kind, monkeypatch):
     settled = sum(c is not None for c in got)
     if kind in (0, 1, 5, 6, 7):
         assert settled >= 6 and max(len(c) for c in got if c is not None) >= 6
-    if kind in (3, 9, 10, 11):
+    if kind in (3, 9, 10, 11, 12):
         assert settled == 0
     if kind in (4, 8):
         assert all(c is not None and c.shape == (0, 2, 2) for c in got)
@@ -135,7 +144,7 @@ def test_ties_along_an_edge_and_counts_of_two(monkeypatch):
 
 
 @settings(profile(), max_examples=40 if PROFILE == "ci" else 1000)
-@given(seed=st.integers(0, 2 ** 32 - 1), kinds=st.lists(st.integers(0, 11), min_size=1,
+@given(seed=st.integers(0, 2 ** 32 - 1), kinds=st.lists(st.integers(0, 12), min_size=1,
                                                          max_size=8),
        shift=st.sampled_from([0, 1000, 2 ** 40]),
        outline=st.sampled_from([1, 9, 40, windings.OUTLINE]))
@@ -172,3 +181,37 @@ def test_a_noisy_balls_batches_are_numpys_bytes(monkeypatch):
     for args in seen:
         settled += sum(c is not None for c in _same(*args, monkeypatch))
     assert settled >= 10
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_corners_number_ids_one_to_one_and_find_two_at_one_point(seed):
+    """`windingkernels._corners` against a brute force: one number an id and one id a
+    number, and certain exactly where no two ids (each at its first place among the starts,
+    then the ends) lie at one point, -0.0 and 0.0 as one."""
+    from raytrace import windingkernels
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(1, 60))
+    ia, ib = rng.integers(0, 2 * m, m), rng.integers(0, 2 * m, m)
+    # a point an id on a grid (seeds 3-5: no two ids at one point), some ids at their later
+    # places elsewhere
+    grid = np.stack(np.meshgrid(np.arange(-7, 8), np.arange(-7, 8)), -1).reshape(-1, 2) * 0.5
+    pick = rng.permutation(len(grid)) if seed >= 3 else rng.integers(0, len(grid), len(grid))
+    spot = {}
+    for i in np.r_[ia, ib]:
+        spot.setdefault(int(i), grid[pick[len(spot)]])
+    a = np.array([spot[int(i)] for i in ia])
+    b = np.array([spot[int(i)] if rng.random() < 0.9 else spot[int(i)] + 1e-3 for i in ib])
+    a[a == 0] *= -1.0 if seed % 2 else 1.0    # -0.0 at half the seeds
+    ok, va, vb = windingkernels._corners(a[:, 0].copy(), a[:, 1].copy(), b[:, 0].copy(),
+                                         b[:, 1].copy(), ia, ib)
+    ids, numbers = np.r_[ia, ib], np.r_[va, vb]
+    assert len(set(zip(ids.tolist(), numbers.tolist()))) == len(set(ids.tolist())) == \
+        len(set(numbers.tolist()))
+    first = {}
+    for i, xy in zip(ids.tolist(), np.r_[a, b].tolist()):
+        first.setdefault(i, (xy[0] + 0.0, xy[1] + 0.0))
+    assert bool(ok) == (len(set(first.values())) == len(first)) == (seed >= 3)
+    # -0.0 and 0.0 are one point: two ids there are in doubt
+    signed = np.array([-0.0, 0.0]), np.array([1.0, 1.0]), np.array([2.0, 3.0])
+    assert not windingkernels._corners(*signed, np.array([4.0, 5.0]), np.array([0, 1]),
+                                       np.array([2, 3]))[0]
