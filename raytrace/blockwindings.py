@@ -29,12 +29,14 @@ CARRIED = 1 << 16
 
 def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndarray,
            p: np.ndarray, normal: np.ndarray, own: np.ndarray, where: np.ndarray, width: int,
-           block: int, crowded: int = 0) -> tuple[np.ndarray, np.ndarray]:
+           block: int, crowded: int = 0) -> tuple[np.ndarray, np.ndarray, tuple | None]:
     """(n,) object each: the boundary of each pixel's shadows' union inside the light's box
     (`windings.boundaries`), None where it is left to the pixel-by-pixel path (module) or
     the kernels are missing; and the few shadows that are not free at a contact, left out of
     it (`windings.split`'s loose: `windmeasures.measures` takes them away; None where none);
-    points p (n, 3) with normals (n, 3) on triangles own (n,) at image pixels where (n,) of a
+    and the clusters that meet some pyramid of each pixel's block (no other can meet its own:
+    `candidates.meets`' among for the pixel-by-pixel path) as (the blocks' (b, C) bool, each
+    pixel's block (n,)), None where no blocks were made; points p (n, 3) with normals (n, 3) on triangles own (n,) at image pixels where (n,) of a
     frame `width` wide, in blocks of `block` a side; h (M, 3): the corners' heights
     (`candidates.heights`); crowded: a block that meets no more triangles is left out."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
@@ -43,7 +45,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     plain = ((objects.kinds & 1) == 0) & member
     if loaded is None or kernels("windingkernels") is None or len(p) == 0 or \
             plain.sum() <= crowded:     # no more than `crowded` triangles outside convex objects
-        return out, out_loose
+        return out, out_loose, None
     y, x = np.divmod(where, width)
     key = (y // block) * -(-width // block) + x // block
     order = np.argsort(key, kind="stable")
@@ -61,9 +63,12 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
         start, lo, hi, top, sides, p, objects.lo, objects.hi, objects.centre, objects.radius,
         (objects.centre - light.center) @ light.normal, member.sum(axis=1),
         (((objects.kinds & 1) != 0) & member).any(axis=1))
+    block = np.repeat(np.arange(len(start) - 1), np.diff(start))
+    met = (near.copy(), np.empty(len(p), np.int64))
+    met[1][order] = block
     hull |= many <= crowded
     if hull.all():
-        return out, out_loose
+        return out, out_loose, met
     near[hull] = False
     e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex = loaded.block_edges(
         start, near, objects.members, objects.packed, objects.kinds, objects.corner_ids, h, p,
@@ -71,7 +76,6 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
         np.sqrt(dot(p - light.center, p - light.center)),
         pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides,
         int(many[~hull].max()))
-    block = np.repeat(np.arange(len(start) - 1), np.diff(start))
     flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, normal, own, lo,
                                                     hi, base, m, block, unsteady, to_cut, u_at)
     ok = ~(convex | hull)[block]
@@ -91,7 +95,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     for k, group in zip(*windings.groups(pix[apart[settled]], settled)):
         loose[k] = (turned[group], count[apart[group]])
     out[order], out_loose[order] = got, loose
-    return out, out_loose
+    return out, out_loose, met
 
 
 def _wound(loaded, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,

@@ -78,18 +78,20 @@ def _keep(objects: Objects, corners: np.ndarray, p: np.ndarray, normal: np.ndarr
 
 
 def meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.ndarray,
-          lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+          lo: np.ndarray, hi: np.ndarray, among: np.ndarray | None = None) -> np.ndarray:
     """(n, C) bool: cluster c's box meets the box lo, hi (n, 3) of the pyramid from p (n, 3)
     over `base` (k, 3), and its bounding sphere is not wholly outside one of the planes that
     bound the pyramid: its side planes through p, the light's plane and p's parallel plane
-    (a sphere beyond a face of a convex body cannot meet it)."""
+    (a sphere beyond a face of a convex body cannot meet it); among (n, C) bool: only those
+    clusters (the others known not to meet: `blockwindings.chains`' blocks), None: all."""
     height = (objects.centre - light.center) @ light.normal              # (C,)
     top = (p - light.center) @ light.normal                               # (n,)
     sides = [m / np.linalg.norm(m, axis=1, keepdims=True) for m in side_normals(light, p, base)]
     loaded = kernels()
     if loaded is not None:
         return loaded.meets(lo, hi, objects.lo, objects.hi, objects.centre, objects.radius,
-                             height, top, np.stack(sides), p)
+                             height, top, np.stack(sides), p,
+                             np.zeros((0, 0), bool) if among is None else among)
     ok = np.ones((len(p), len(objects.lo)), bool)      # (n, C): axis by axis, no (n, C, 3)
     for a in range(3):
         ok &= objects.lo[None, :, a] <= hi[:, None, a]
@@ -99,7 +101,7 @@ def meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.ndarray,
     for m in sides:
         ok &= dot(m[:, None], objects.centre[None]) - dot(m, p)[:, None] >= \
             -objects.radius[None]
-    return ok
+    return ok if among is None else ok & among
 
 
 def _box_pairs(objects: Objects, own: np.ndarray, meet: np.ndarray, lo: np.ndarray,

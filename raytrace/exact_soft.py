@@ -295,8 +295,9 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
     chains, loose = np.full(len(p), None, object), np.full(len(p), None, object)
     if len(at) == 0 or len(objects.members) == 0:
         return pieces, single, chains, loose
+    among = None
     if where is not None and outlines and BLOCK > 0:
-        chains[at], loose[at] = blockwindings.chains(
+        chains[at], loose[at], met = blockwindings.chains(
             light, objects, corners, sides[0], p[at], normal[at], own[at], where[0][at],
             where[1], BLOCK, WINDING_PIECES)
         done = windings.found(chains[at])
@@ -305,11 +306,13 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
         empty = at[done][[len(c) == 0 and k is None for c, k in zip(chains[at[done]],
                                                                     loose[at[done]])]]
         chains[empty] = None
+        # the clusters that meet each pixel's block: no other can meet its pyramid
+        among = None if met is None else met[0][met[1][~done]]
         at = at[~done]
     if len(at):
         pieces[at], single[at], chains[at], loose[at] = _shadows(
             shapely, light, objects, corners, p[at], normal[at], own[at], base, sides[1],
-            outlines)
+            outlines, among)
     return pieces, single, chains, loose
 
 
@@ -328,16 +331,17 @@ def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
 
 def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
              normal: np.ndarray, own: np.ndarray, base: np.ndarray, clear: np.ndarray,
-             outlines: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+             outlines: bool = False, among: np.ndarray | None = None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(n,) object array: the union of every triangle's shadow on the light's plane seen from
     each p (None where none falls inside the pyramid over `base` (k, 3)); where that is
     one convex polygon (`_unite`); and, with `outlines`, the union's boundary from its
     outline's windings (`raytrace.windings`) where that is certain (the union None there),
     and the few shadows that outline leaves out (`windmeasures.measures`' loose; None
-    where none); clear: `candidates.heights`' second."""
+    where none); clear: `candidates.heights`' second; among: `candidates.meets`'."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
-    meet = candidates.meets(light, objects, p, base, lo, hi)
+    meet = candidates.meets(light, objects, p, base, lo, hi, among)
     shapes, owner = _whole_bodies(shapely, light, objects, p, normal, own, meet)
     pix, tri = candidates.pairs(objects, corners, p, normal, own, meet, lo, hi, clear)
     m = pyramid.sides(light, p, base)

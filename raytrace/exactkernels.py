@@ -161,15 +161,19 @@ def carried(corners, t, k, p, e, normal, axes, eye):
 
 
 @_jit()
-def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p):
+def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p, among):
     """(n, C) bool: cluster c's box c_lo, c_hi (C, 3) meets pixel i's pyramid box lo, hi
     (n, 3), and its sphere centre (C, 3), radius (C,) is not wholly below the light's plane
     (height (C,) its centre's over it), above p's parallel plane (top (n,) p's height), or
-    outside a side plane (sides (s, n, 3) unit inward normals through p (n, 3))."""
+    outside a side plane (sides (s, n, 3) unit inward normals through p (n, 3)); among (n,
+    C) bool: only those clusters tested (the rest False), or (0, 0): every one."""
     n, c_n, s = lo.shape[0], c_lo.shape[0], sides.shape[0]
     out = np.zeros((n, c_n), np.bool_)
+    every = among.shape[0] == 0
     for i in range(n):
         for c in range(c_n):
+            if not (every or among[i, c]):
+                continue
             ok = True
             for a in range(3):
                 ok &= (c_lo[c, a] <= hi[i, a]) & (c_hi[c, a] >= lo[i, a])

@@ -69,10 +69,10 @@ def test_blocks_give_the_pixel_by_pixel_measures(shape, monkeypatch):
     plain_chains = raytrace.blockwindings.chains
 
     def chains(*args):
-        got, loose = plain_chains(*args)
+        got, loose, met = plain_chains(*args)
         settled.append(sum(c is not None for c in got))
         contacts.append(sum(c is not None for c in loose))
-        return got, loose
+        return got, loose, met
     monkeypatch.setattr(raytrace.blockwindings, "chains", chains)
     for block in (2, 3, 5):
         monkeypatch.setattr(raytrace.exact_soft, "BLOCK", block)

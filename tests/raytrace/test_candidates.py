@@ -65,8 +65,14 @@ def test_the_kernels_find_numpys_clusters_and_pairs(seed, monkeypatch):
     fast_meet = candidates.meets(light, obj, p, base, lo, hi)
     fast = [candidates.pairs(obj, corners, p, normal, own, fast_meet, lo, hi, c)
             for c in (None, clear)]
+    # only the clusters among those asked about (a block's: `blockwindings.chains`)
+    among = np.random.default_rng(seed).random(fast_meet.shape) < 0.5
+    fast_among = candidates.meets(light, obj, p, base, lo, hi, among)
+    np.testing.assert_array_equal(fast_among, fast_meet & among)
     monkeypatch.setitem(sys.modules, "raytrace.exactkernels", None)    # import fails: numpy
     slow_meet = candidates.meets(light, obj, p, base, lo, hi)
+    np.testing.assert_array_equal(candidates.meets(light, obj, p, base, lo, hi, among),
+                                  slow_meet & among)
     slow = [candidates.pairs(obj, corners, p, normal, own, slow_meet, lo, hi, c)
             for c in (None, clear)]
     assert slow_meet.any() and not slow_meet.all()
