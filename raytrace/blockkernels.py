@@ -40,8 +40,9 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     its pixels are left to the pixel-by-pixel path, whose hulls unite such objects; a guard,
     as `blockwindings` gives no such block clusters: dropping it was measured to slow numba's
     loop by ~6 % on the bunny 64x64).  A
-    triangle whose box's sphere lies outside a side plane of every pixel's pyramid (sides
-    (s, n, 3) unit inward normals through p) is left out.  meet (b, C): the clusters meeting
+    triangle whose box's sphere lies outside a side plane of the block's first pixel's
+    pyramid (sides (s, n, 3) unit inward normals through p), lowered by as much as the
+    block's other pixels lie below it, is left out (`_near`: it meets no pixel's pyramid).  meet (b, C): the clusters meeting
     some pixel's pyramid of each block; members, packed, kinds: `occluders.Objects`; welded
     (M, 3); h (M, 3) the corners' heights over the light's plane
     (`pyramid.uncut`'s sums); p (n, 3), top (n,) p's height; own (n,); tri_normal, offset,
@@ -58,6 +59,7 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     k_lo, k_hi, k_way = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
     k_tri, k_s0, k_s1 = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
     ne = nu = np.int64(0)         # not a literal (`windingkernels.boundaries`)
+    slack = np.empty(sides.shape[0])
     for b in range(n_blocks):
         i0, i1 = start[b], start[b + 1]
         low_top, high_top, far_rel = np.inf, 0.0, 0.0
@@ -65,12 +67,13 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
             low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
             far_rel = max(far_rel, rel[i])
         q = 0
+        _slacks(i0, i1, p, sides, slack)
         for c in range(meet.shape[1]):
             if not meet[b, c]:
                 continue
             for k in range(width):
                 t = members[c, k]
-                if t < 0 or not _near(c, k, i0, i1, packed, p, sides):
+                if t < 0 or not _near(c, k, i0, packed, p, sides, slack):
                     continue
                 if kinds[c, k] & 1:
                     convex[b] = True
@@ -108,23 +111,39 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
 
 
 @_jit(inline="always")
-def _near(c, k, i0, i1, packed, p, sides):
-    """Whether member k of cluster c has its box's sphere (packed: its box) inside every
-    side plane of some pixel i0..i1's pyramid (or not wholly outside it)."""
+def _slacks(i0, i1, p, sides, slack):
+    """slack (s,): how far (<= 0) below each side plane of pixel i0's pyramid (sides (s, n, 3)
+    unit inward normals through p (n, 3)) the block's other pixels i0..i1 lie, the least."""
+    for j in range(sides.shape[0]):
+        m0, m1, m2 = sides[j, i0, 0], sides[j, i0, 1], sides[j, i0, 2]
+        least = 0.0
+        for i in range(i0 + 1, i1):
+            least = min(least, m0 * (p[i, 0] - p[i0, 0]) + m1 * (p[i, 1] - p[i0, 1])
+                        + m2 * (p[i, 2] - p[i0, 2]))
+        slack[j] = least
+
+
+@_jit(inline="always")
+def _near(c, k, i0, packed, p, sides, slack):
+    """Whether member k of cluster c may meet the pyramid of some pixel of the block of pixel
+    i0: its box's sphere (packed: its box) not wholly below a side plane of i0's pyramid
+    lowered by its slack (`_slacks`).  A pixel i's pyramid is the hull of p_i and the light's
+    base, which lies on each plane's inner side, so its points are no lower than p_i below
+    each (the plane holds the base's edge); a point of the triangle lies in its sphere; and
+    2^-40 of the centre's distance (L1) from p_i0 covers the products' rounding."""
     c0 = (packed[c, k, 0] + packed[c, k, 3]) / 2
     c1 = (packed[c, k, 1] + packed[c, k, 4]) / 2
     c2 = (packed[c, k, 2] + packed[c, k, 5]) / 2
     d0, d1 = packed[c, k, 3] - packed[c, k, 0], packed[c, k, 4] - packed[c, k, 1]
     d2 = packed[c, k, 5] - packed[c, k, 2]
-    radius = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) / 2 * (1 + 2.0 ** -30) + 1e-300
-    for i in range(i0, i1):
-        inside = True
-        for j in range(sides.shape[0]):
-            m0, m1, m2 = sides[j, i, 0], sides[j, i, 1], sides[j, i, 2]
-            inside &= m0 * (c0 - p[i, 0]) + m1 * (c1 - p[i, 1]) + m2 * (c2 - p[i, 2]) >= -radius
-        if inside:
-            return True
-    return False
+    r0, r1, r2 = c0 - p[i0, 0], c1 - p[i0, 1], c2 - p[i0, 2]
+    radius = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) / 2 * (1 + 2.0 ** -30) + \
+        2.0 ** -40 * (abs(r0) + abs(r1) + abs(r2)) + 1e-300
+    inside = True
+    for j in range(sides.shape[0]):
+        inside &= sides[j, i0, 0] * r0 + sides[j, i0, 1] * r1 + sides[j, i0, 2] * r2 >= \
+            slack[j] - radius
+    return inside
 
 
 @_jit()

@@ -155,3 +155,53 @@ def test_convex_bodies_and_a_floor_keep_the_pixel_by_pixel_bytes(monkeypatch):
     want = exact_visibility(scene)
     assert got.visibility.tobytes() == want.visibility.tobytes()
     assert got.irradiance.tobytes() == want.irradiance.tobytes()
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_a_blocks_near_test_keeps_every_triangle_that_meets_a_pixels_pyramid(seed):
+    """`blockkernels._near` (one pixel's side planes lowered by the block's slack) keeps
+    every triangle that meets some pixel's pyramid, against a float64 witness: a point of the
+    triangle found inside that pyramid (its side planes and the light's plane), the triangles
+    from a metre down to 1e-9 across, some reaching in by a hair over a side; and it leaves
+    out triangles well outside every pyramid (it can fail)."""
+    from raytrace import blockkernels, pyramid
+    from raytrace.lightshapes import frame_light
+    from shadowvol.scene import AreaLight
+    rng = np.random.default_rng(seed)
+    shape = ("rect", "disk")[seed % 2]
+    size = {"size": [1.2, 0.8]} if shape == "rect" else {"radius": 0.6}
+    light = frame_light(AreaLight(shape, [0.0, 3.0, 0.0], normal=rng.normal([0, -1, 0], 0.2),
+                                  samples=4, **size), np.zeros(3), "l")
+    base = light.center + light.hull @ light.axes
+    corner = rng.uniform(-1, 1, 3) * [1, 0.2, 1]
+    p = corner + rng.normal(0, 0.01 * 10.0 ** -rng.integers(0, 4), (4, 3))   # a block
+    sides = np.stack([m / np.linalg.norm(m, axis=1, keepdims=True)
+                      for m in pyramid.sides(light, p, base)])
+    slack = np.empty(len(sides))
+    blockkernels._slacks(0, 4, p, sides, slack)
+
+    def inside(x, k):
+        return (sides[:, k] @ (x - p[k]) >= 0).all() and (x - light.center) @ light.normal >= 0
+
+    def near(tri):
+        packed = np.zeros((1, 1, 16))
+        packed[0, 0, :3], packed[0, 0, 3:6] = tri.min(axis=0), tri.max(axis=0)
+        return blockkernels._near(0, 0, 0, packed, p, sides, slack)
+
+    kept = left = 0
+    weights = np.array([[a, b, 1 - a - b] for a in np.linspace(0, 1, 5)
+                        for b in np.linspace(0, 1 - a, 5)])
+    for _ in range(300):
+        k = int(rng.integers(0, 4))
+        t = rng.uniform(0.05, 0.95)
+        y = base[rng.integers(0, len(base))] * 0.999 + light.center * 0.001
+        x = p[k] + t * (y - p[k])                       # in pixel k's pyramid, near a side
+        size = 10.0 ** rng.uniform(-9, 0)
+        tri = x + rng.normal(0, size, (3, 3))
+        if any(inside(w @ tri, k) for w in weights):
+            kept += 1
+            assert near(tri), (tri, k)
+        far = p[k] + 3 * (x - light.center) + rng.normal(0, 0.01, (3, 3))  # well outside
+        if not any(inside(w @ far, j) for w in weights for j in range(4)):
+            left += not near(far)
+    assert kept > 100 and left > 100
