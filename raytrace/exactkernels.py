@@ -191,19 +191,19 @@ def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p, among):
 
 
 @_jit()
-def _box_pairs(meet, members, packed, kinds, lo, hi, own, tri_normal, offset, scale, obj,
-               outside, clear, corners, p, coplanar, pix, tri):
-    """The pairs of `pairs` into pix, tri where given (else only counted): their number.
+def _box_pairs(met, met_at, members, packed, kinds, lo, hi, own, tri_normal, offset, scale,
+               obj, outside, clear, corners, p, coplanar, pix, tri):
+    """The pairs of `pairs` into pix, tri where given (else only counted): their number;
+    met (k,): the clusters that meet each pixel, pixel i's from met_at[i] to met_at[i + 1].
     Each member's own fields come from packed and kinds (`occluders.Objects`), in order and
     indexed one by one (a view of a row costs a reference count); only a near-parallel
     one's corners are read apart."""
     q = 0
-    for i in range(meet.shape[0]):
+    for i in range(met_at.shape[0] - 1):
         o = own[i]
         n0, n1, n2 = tri_normal[o, 0], tri_normal[o, 1], tri_normal[o, 2]
-        for c in range(meet.shape[1]):
-            if not meet[i, c]:
-                continue
+        for g in range(met_at[i], met_at[i + 1]):
+            c = met[g]
             for k in range(members.shape[1]):
                 t = members[c, k]
                 if t < 0 or t == o:
@@ -247,7 +247,22 @@ def pairs(meet, members, packed, kinds, lo, hi, own, tri_normal, offset, scale, 
     offset, scale and object (M,), outside (n,) p outside its own convex object, clear
     (n_objects,) or empty for none, the corners (M, 3, 3), p (n, 3), COPLANAR_RELATIVE."""
     none = np.zeros(0, np.int64)
-    args = (meet, members, packed, kinds, lo, hi, own, tri_normal, offset, scale, obj,
+    # the meeting clusters listed once, pixel by pixel (both passes read the list, not the
+    # (n, C) matrix: most of a pixel's row is False)
+    met_at = np.zeros(meet.shape[0] + 1, np.int64)
+    for i in range(meet.shape[0]):
+        k = 0
+        for c in range(meet.shape[1]):
+            k += meet[i, c]
+        met_at[i + 1] = met_at[i] + k
+    met = np.empty(met_at[-1], np.int64)
+    for i in range(meet.shape[0]):
+        g = met_at[i]
+        for c in range(meet.shape[1]):
+            if meet[i, c]:
+                met[g] = c
+                g += 1
+    args = (met, met_at, members, packed, kinds, lo, hi, own, tri_normal, offset, scale, obj,
             outside, clear, corners, p, coplanar)
     q = _box_pairs(*args, none, none)
     pix, tri = np.empty(max(q, 1), np.int64), np.empty(max(q, 1), np.int64)
