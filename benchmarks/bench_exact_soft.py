@@ -1,7 +1,7 @@
 """Exact soft shadows against counted samples (BENCHMARKS.md, "Exact soft shadows"): one run,
 milliseconds per frame, wall clock and CPU.
 
-    python -m benchmarks.bench_exact_soft [--width WIDTH]
+    python -m benchmarks.bench_exact_soft [--width WIDTH] [--medians N]
 
 Three frames under one rect light each: scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96;
 closed convex bodies), a closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a
@@ -13,7 +13,10 @@ counting the light's 64, 256 and 1024 stratified samples.  Then the bunny at 16 
 32 x 32, 64 x 64 and 128 x 128: exact (and pixel by pixel: no block of pixels sharing its
 outline, `exact_soft.BLOCK` 0) against counting 256 samples, and what a pixel more costs each
 (the slope between the two largest frames), so the fixed cost of a frame (the scene's
-Embree build, the objects' topology) is told apart from the per-pixel one."""
+Embree build, the objects' topology) is told apart from the per-pixel one.  With --medians N:
+instead, each frame's exact visibility and 256 counted samples called in turn N times in one
+process after a warm-up, the median CPU ms of each (soft.toml, the blob 48 x 48, the bunny at
+32, 64 and 128): steadier on a noisy machine than one call."""
 
 from __future__ import annotations
 
@@ -134,12 +137,40 @@ def per_pixel(sizes=(16, 32, 64, 128)) -> None:
           f"({slope[0] / max(slope[2], 1e-9):.1f}x)")
 
 
+def medians(width: int, n: int, bunny_sizes=(32, 64, 128)) -> None:
+    """`--medians n`: see the module."""
+    print(f"exact / counting 256, median CPU ms of {n} calls each in turn:")
+    frames = [(f"soft.toml {width}x{width * 3 // 4}",
+               load_scene("scenes/soft.toml").replace(width=width, height=width * 3 // 4)),
+              ("blob 48x48", blob_scene(48))]
+    if BUNNY.is_file():
+        frames += [(f"bunny {k}x{k}", bunny_rect_scene(k)) for k in bunny_sizes]
+    for name, scene in frames:
+        counted = scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=256)])
+        exact_soft.exact_visibility(scene)
+        soft_masks(counted)
+        a, b = [], []
+        for _ in range(n):
+            a.append(clocked(lambda: exact_soft.exact_visibility(scene))[1])
+            b.append(clocked(lambda: soft_masks(counted))[1])
+        ma, mb = float(np.median(a)), float(np.median(b))
+        print(f"  {name}: {ma:.0f} / {mb:.0f} = {ma / mb:.2f}x (exact {min(a):.0f}-{max(a):.0f}, "
+              f"counted {min(b):.0f}-{max(b):.0f})", flush=True)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_exact_soft",
                                  description=__doc__.split("\n\n")[0])
     ap.add_argument("--width", type=int, default=96, help="soft.toml's width (default 96)")
-    width = ap.parse_args(argv).width
+    ap.add_argument("--medians", type=int, default=0, metavar="N",
+                    help="each frame's exact and counted-256 CPU ms as the median of N calls")
+    args = ap.parse_args(argv)
+    width = args.width
     print(f"load {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    if args.medians:
+        medians(width, args.medians)
+        print(f"load {os.getloadavg()[0]:.2f}")
+        return
     # warm up first (imports, GEOS, the kernels' compilation), so the first frame's times are
     # its own
     tiny = load_scene("scenes/soft.toml").replace(width=8, height=6)

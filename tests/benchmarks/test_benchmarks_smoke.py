@@ -163,3 +163,15 @@ def test_the_masks_choice_benchmark_runs(tmp_path):
         assert set(row["ms"]) == {"shadowvol", "raytrace"}
     assert set(result["first"]) == {"shadowvol", "raytrace, packets", "raytrace, single rays"}
     assert "auto chose the faster renderer on" in done.stdout
+
+
+def test_the_exact_soft_medians_run(capsys):
+    """`python -m benchmarks.bench_exact_soft --medians N`'s loop (small frames): a line a
+    frame with both medians and their ratio (nothing timed here)."""
+    pytest.importorskip("shapely")
+    from benchmarks import bench_exact_soft
+    bench_exact_soft.medians(16, 2, bunny_sizes=(8,))
+    out = capsys.readouterr().out
+    lines = [line for line in out.splitlines() if " = " in line]
+    assert lines[0].lstrip().startswith("soft.toml 16x12:") and lines[1].lstrip().startswith("blob")
+    assert all(line.split(" = ")[1].split("x")[0].replace(".", "").isdigit() for line in lines)
