@@ -42,8 +42,8 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     loop by ~6 % on the bunny 64x64).  A
     triangle whose box's sphere lies outside a side plane of the block's first pixel's
     pyramid (sides (s, n, 3) unit inward normals through p), lowered by as much as the
-    block's other pixels lie below it, is left out (`_near`: it meets no pixel's pyramid).  meet (b, C): the clusters meeting
-    some pixel's pyramid of each block; members, packed, kinds: `occluders.Objects`; welded
+    block's other pixels lie below it, is left out (`_near`: it meets no pixel's pyramid).
+    meet (b, C): the clusters meeting some pixel's pyramid of each block; members, packed, kinds: `occluders.Objects`; welded
     (M, 3); h (M, 3) the corners' heights over the light's plane
     (`pyramid.uncut`'s sums); p (n, 3), top (n,) p's height; own (n,); tri_normal, offset,
     scale (M,); rel (n,) |p - centre|; reach: `pyramid.UNCUT_REACH` of the light; coplanar:

@@ -173,5 +173,6 @@ def test_the_exact_soft_medians_run(capsys):
     bench_exact_soft.medians(16, 2, bunny_sizes=(8,))
     out = capsys.readouterr().out
     lines = [line for line in out.splitlines() if " = " in line]
-    assert lines[0].lstrip().startswith("soft.toml 16x12:") and lines[1].lstrip().startswith("blob")
+    assert lines[0].lstrip().startswith("soft.toml 16x12:")
+    assert lines[1].lstrip().startswith("blob")
     assert all(line.split(" = ")[1].split("x")[0].replace(".", "").isdigit() for line in lines)
