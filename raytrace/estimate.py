@@ -10,15 +10,22 @@ from shadowvol.scene import Scene, hard_lights
 
 from .masks import MASK_TILE_RAYS
 
-# the bytes one ray's tile arrays take at their peak (the hit records, the shadow-ray arrays of
-# a tile, a few dozen float64 values a ray): a bound from the measured growth less the
-# per-pixel terms (100-400 B a ray), rounded up
-MASK_RAY_BYTES = 512
+# the bytes one ray's tile arrays take at their peak, the masks alone (the hit records, the
+# shadow-ray arrays of a tile): `raytrace masks` on cage.toml 1024 wide, 512 to 2,048 rows,
+# grows 18-21 B a pixel, and what is left at 1024 x 1024 (its tiles on 2 threads) is ~100 B a
+# ray with Embree's packets, ~160 with single rays (tests/scene/test_memory_model.py; the
+# 512 used before left the model 3.3x the measured growth); rounded up
+MASK_RAY_BYTES = 256
+# and with the ground truth's outputs (their per-ray fields too: the model of `--outputs all`
+# at 1024 x 1024 is 250 MiB with 256 B a ray, below the 266 measured; 282 with 512)
+TRUTH_RAY_BYTES = 512
 
 
-def tiles_in_flight(width: int) -> int:
-    """The masks' tiles in flight: one per thread, each at least one row of the image."""
-    return memory.tiles(width, MASK_TILE_RAYS, MASK_RAY_BYTES, memory.threads())
+def tiles_in_flight(width: int, truth: bool = False) -> int:
+    """The masks' tiles in flight (`truth`: with ground-truth outputs): one per thread, each
+    at least one row of the image."""
+    return memory.tiles(width, MASK_TILE_RAYS, TRUTH_RAY_BYTES if truth else MASK_RAY_BYTES,
+                        memory.threads())
 
 
 def masks(scene: Scene, outputs=(), picture: bool = True, exact: int = 0) -> memory.Estimate:
@@ -40,6 +47,6 @@ def masks(scene: Scene, outputs=(), picture: bool = True, exact: int = 0) -> mem
            "picture": ((L + len(truth)) * 3 * 2 + 24 * bool(truth) + memory.PNG)
            if picture else 0}
     per |= memory.written(("masks",), L, truth, float64=False, words=K)
-    fixed = {"tiles in flight": tiles_in_flight(scene.width)}
+    fixed = {"tiles in flight": tiles_in_flight(scene.width, bool(truth))}
     return memory.Estimate("the ray tracer's masks", scene.width, scene.height,
                            memory.terms(scene.width * scene.height, per, fixed))
