@@ -43,8 +43,8 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     triangle whose box's sphere lies outside a side plane of the block's first pixel's
     pyramid (sides (s, n, 3) unit inward normals through p), lowered by as much as the
     block's other pixels lie below it, is left out (`_near`: it meets no pixel's pyramid).
-    meet (b, C): the clusters meeting some pixel's pyramid of each block; members, packed, kinds: `occluders.Objects`; welded
-    (M, 3); h (M, 3) the corners' heights over the light's plane
+    meet (b, C): the clusters meeting some pixel's pyramid of each block; members, packed,
+    kinds: `occluders.Objects`; welded (M, 3); h (M, 3) the corners' heights over the light's plane
     (`pyramid.uncut`'s sums); p (n, 3), top (n,) p's height; own (n,); tri_normal, offset,
     scale (M,); rel (n,) |p - centre|; reach: `pyramid.UNCUT_REACH` of the light; coplanar:
     `candidates.COPLANAR_RELATIVE`; most: the most triangles the clusters of a block hold."""
@@ -136,13 +136,21 @@ def _near(c, k, i0, packed, p, sides, slack):
     c2 = (packed[c, k, 2] + packed[c, k, 5]) / 2
     d0, d1 = packed[c, k, 3] - packed[c, k, 0], packed[c, k, 4] - packed[c, k, 1]
     d2 = packed[c, k, 5] - packed[c, k, 2]
+    radius = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) / 2 * (1 + 2.0 ** -30) + 1e-300
+    return _above(c0, c1, c2, radius, i0, p, sides, slack)
+
+
+@_jit(inline="always")
+def _above(c0, c1, c2, radius, i0, p, sides, slack):
+    """Whether the sphere about c0, c1, c2 of `radius` is not wholly below a side plane of
+    pixel i0's pyramid lowered by its slack (`_near`), 2^-40 of the centre's distance (L1)
+    from p_i0 added to the radius for the products' rounding."""
     r0, r1, r2 = c0 - p[i0, 0], c1 - p[i0, 1], c2 - p[i0, 2]
-    radius = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) / 2 * (1 + 2.0 ** -30) + \
-        2.0 ** -40 * (abs(r0) + abs(r1) + abs(r2)) + 1e-300
+    reach = radius + 2.0 ** -40 * (abs(r0) + abs(r1) + abs(r2))
     inside = True
     for j in range(sides.shape[0]):
         inside &= sides[j, i0, 0] * r0 + sides[j, i0, 1] * r1 + sides[j, i0, 2] * r2 >= \
-            slack[j] - radius
+            slack[j] - reach
     return inside
 
 
@@ -180,16 +188,10 @@ def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height
                 continue
             if not (height[c] >= -radius[c] and height[c] <= most + radius[c]):
                 continue
-            # its sphere not wholly below a side plane of i0's pyramid lowered by the slack
-            # (`_near`: then it meets no pixel's pyramid of the block)
-            r0, r1, r2 = centre[c, 0] - p[i0, 0], centre[c, 1] - p[i0, 1], \
-                centre[c, 2] - p[i0, 2]
-            reach = radius[c] + 2.0 ** -40 * (abs(r0) + abs(r1) + abs(r2))
-            inside = True
-            for j in range(sides.shape[0]):
-                inside &= sides[j, i0, 0] * r0 + sides[j, i0, 1] * r1 + sides[j, i0, 2] * r2 \
-                    >= slack[j] - reach
-            if not inside:
+            # its sphere wholly below a side plane of i0's pyramid lowered by the slack: it
+            # meets no pixel's pyramid of the block (`_near`)
+            if not _above(centre[c, 0], centre[c, 1], centre[c, 2], radius[c], i0, p, sides,
+                          slack):
                 continue
             for i in range(i0, i1):             # then as each pixel sees it
                 inside = True

@@ -37,7 +37,8 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     and the clusters that meet some pyramid of each pixel's block (no other can meet its own:
     `candidates.meets`' among for the pixel-by-pixel path) as (the blocks' (b, C) bool, each
     pixel's block (n,)), None where no blocks were made; points p (n, 3) with normals (n, 3)
-    on triangles own (n,) at image pixels where (n,) of a frame `width` wide, in blocks of `block` a side; h (M, 3): the corners' heights
+    on triangles own (n,) at image pixels where (n,) of a frame `width` wide, in blocks of
+    `block` a side; h (M, 3): the corners' heights
     (`candidates.heights`); crowded: a block that meets no more triangles is left out."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
