@@ -44,10 +44,13 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     pyramid (sides (s, n, 3) unit inward normals through p), lowered by as much as the
     block's other pixels lie below it, is left out (`_near`: it meets no pixel's pyramid).
     meet (b, C): the clusters meeting some pixel's pyramid of each block; members, packed,
-    kinds: `occluders.Objects`; welded (M, 3); h (M, 3) the corners' heights over the light's plane
-    (`pyramid.uncut`'s sums); p (n, 3), top (n,) p's height; own (n,); tri_normal, offset,
-    scale (M,); rel (n,) |p - centre|; reach: `pyramid.UNCUT_REACH` of the light; coplanar:
-    `candidates.COPLANAR_RELATIVE`; most: the most triangles the clusters of a block hold."""
+    kinds, welded (C, CLUSTER, 3) the members' corner ids: `occluders.Objects`; h (C, CLUSTER,
+    3) the members' corners' heights over the light's plane (`candidates.heights`, the sums of
+    `pyramid.uncut`): by member as packed, so a block reads its clusters' from one place, not
+    from (M, 3) at random (10 % of this kernel on the bunny); p (n, 3), top (n,) p's height;
+    own (n,); tri_normal, offset, scale (M,); rel (n,) |p - centre|; reach:
+    `pyramid.UNCUT_REACH` of the light; coplanar: `candidates.COPLANAR_RELATIVE`; most: the
+    most triangles the clusters of a block hold."""
     n_blocks, width = start.shape[0] - 1, members.shape[1]
     e_tri, e_from = np.empty(1024, np.int64), np.empty(1024, np.int64)
     e_to, e_cnt = np.empty(1024, np.int64), np.empty(1024, np.int64)
@@ -89,7 +92,7 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                     continue
                 for e in range(3):
                     a, z = (e, (e + 1) % 3) if sign > 0 else ((e + 1) % 3, e)
-                    ka, kb = welded[t, a], welded[t, z]
+                    ka, kb = welded[c, k, a], welded[c, k, z]
                     k_lo[q], k_hi[q], k_way[q] = min(ka, kb), max(ka, kb), 1 if ka < kb else -1
                     k_tri[q], k_s0[q], k_s1[q] = t, a, z
                     q += 1
@@ -222,8 +225,8 @@ def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, 
     turned that way from each, certainly; 2: free from each, not turned one way; 3: in no
     pixel's pyramid (wholly at or beyond every p's parallel plane, or behind the light's); 0
     for any other (some pixel's own, or coplanar with it, or free from some only)."""
-    low_h = min(h[t, 0], min(h[t, 1], h[t, 2]))
-    high_h = max(h[t, 0], max(h[t, 1], h[t, 2]))
+    low_h = min(h[c, k, 0], min(h[c, k, 1], h[c, k, 2]))
+    high_h = max(h[c, k, 0], max(h[c, k, 1], h[c, k, 2]))
     if low_h >= high_top or high_h < 0:
         return 3
     if not (low_h >= 0 and high_h < low_top):

@@ -38,8 +38,9 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     `candidates.meets`' among for the pixel-by-pixel path) as (the blocks' (b, C) bool, each
     pixel's block (n,)), None where no blocks were made; points p (n, 3) with normals (n, 3)
     on triangles own (n,) at image pixels where (n,) of a frame `width` wide, in blocks of
-    `block` a side; h (M, 3): the corners' heights
-    (`candidates.heights`); crowded: a block that meets no more triangles is left out."""
+    `block` a side; h (C, CLUSTER, 3): the cluster members' corners' heights
+    (`candidates.heights`' third); crowded: a block that meets no more triangles is left
+    out."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
     member = objects.members >= 0
@@ -72,7 +73,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
         return out, out_loose, met
     near[hull] = False
     e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex = loaded.block_edges(
-        start, near, objects.members, objects.packed, objects.kinds, objects.corner_ids, h, p,
+        start, near, objects.members, objects.packed, objects.kinds, objects.member_ids, h, p,
         top, own, objects.normal, objects.offset, objects.scale, corners,
         np.sqrt(dot(p - light.center, p - light.center)),
         pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides,

@@ -121,13 +121,14 @@ def _box_pairs(objects: Objects, own: np.ndarray, meet: np.ndarray, lo: np.ndarr
 
 
 def heights(light: FramedLight, objects: Objects, corners: np.ndarray
-            ) -> tuple[np.ndarray, np.ndarray]:
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The corners' heights over the light's plane (M, 3) (the sums of `pyramid.uncut`, so its
-    verdicts), and (n_objects,) bool: the objects wholly on its emitting side (every corner
-    strictly above: the light is outside them)."""
+    verdicts), (n_objects,) bool: the objects wholly on its emitting side (every corner
+    strictly above: the light is outside them), and the heights by cluster member (C,
+    CLUSTER, 3) in the members' order (`Objects.packed`'s; pads: triangle 0's)."""
     c, n = light.center, light.normal
     h = (corners[..., 0] - c[0]) * n[0] + (corners[..., 1] - c[1]) * n[1] + \
         (corners[..., 2] - c[2]) * n[2]
     lowest = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
     np.minimum.at(lowest, objects.object, h.min(axis=1))
-    return h, lowest > 0
+    return h, lowest > 0, h[np.maximum(objects.members, 0)]

@@ -37,7 +37,8 @@ class Objects(NamedTuple):
     scale side by side, in the members' order (the candidate query reads a cluster's
     members from one place, not from eight arrays at random: `raytrace.exactkernels.pairs`),
     kinds (C, CLUSTER) int64: each member's object * 4 + 1 where convex + 2 where it has a
-    shell and is not convex."""
+    shell and is not convex; member_ids (C, CLUSTER, 3) int64: each member's corner_ids, in
+    the members' order as packed (`raytrace.blockkernels.block_edges` reads them so)."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -58,6 +59,7 @@ class Objects(NamedTuple):
     corner_ids: np.ndarray | None = None
     packed: np.ndarray | None = None
     kinds: np.ndarray | None = None
+    member_ids: np.ndarray | None = None
 
 
 class Convex(NamedTuple):
@@ -148,7 +150,8 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, tri_lo, tri_hi, normals,
                    (normals * corners[:, 0]).sum(axis=1), scale, shell, welded, packed,
-                   kinds[at] if M else np.zeros(members.shape, np.int64))
+                   kinds[at] if M else np.zeros(members.shape, np.int64),
+                   welded[at] if M else np.zeros(members.shape + (3,), np.int64))
 
 
 def weld(points: np.ndarray) -> np.ndarray:
