@@ -219,9 +219,22 @@ def _closed(welded: np.ndarray) -> bool:
     b = welded[:, [1, 2, 0]].reshape(-1)
     if (a == b).any():
         return False
+    # a closed one's edges are their reverses, so sum f(a) g(b) over them is sum f(b) g(a)
+    # (any f, g; uint64 products and sums wrap alike): where they differ it is open, without
+    # the sorts (the bunny's 70k triangles, open: 22 -> 6 ms)
+    fa, fb, ga, gb = _spread(a, 1), _spread(b, 1), _spread(a, 2), _spread(b, 2)
+    if np.sum(fa * gb) != np.sum(fb * ga):
+        return False
     key = np.sort(a * V + b)
     if (np.diff(key) == 0).any():
         return False
     # each directed edge once: every reverse is there where the reverses, sorted, are the
     # edges (a sort of sorted-like keys, not a search of each)
     return bool(len(key)) and np.array_equal(np.sort(b * V + a), key)
+
+
+def _spread(ids: np.ndarray, seed: int) -> np.ndarray:
+    """(n,) uint64: ids (n,) int64 >= 0 mixed (a multiply and shift, as `_closed`'s f and g,
+    a different one per seed; products wrap)."""
+    x = (ids.astype(np.uint64) + np.uint64(seed)) * np.uint64(0x9E3779B97F4A7C15)
+    return x ^ (x >> np.uint64(29))

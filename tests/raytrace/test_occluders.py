@@ -1,5 +1,6 @@
 """`occluders._topology`: a closed, consistently wound surface found, and every way to miss
-being one refused (the quick test on the welded ids, `_closed`, must agree with the whole);
+being one refused (the quick test on the welded ids, `_closed`, must agree with the whole, and
+its first sums never refuse a closed one);
 `weld` numbers points as np.unique(axis=0) does."""
 
 from __future__ import annotations
@@ -41,6 +42,37 @@ def test_every_other_surface_has_none(broken):
         welded[0, 1] = welded[0, 0]
     assert not _closed(welded)
     assert _topology(corners, welded) is None
+
+
+def test_the_quick_sums_refuse_no_closed_surface():
+    """`_closed`'s first test (the sums of f(a) g(b) and f(b) g(a) over the directed edges)
+    holds on every closed, consistently wound surface: closed meshes of several shapes, their
+    corner ids relabelled at random (up to 2^40), the faces shuffled and each one's corners
+    turned, so the sorts after it decide."""
+    rng = np.random.default_rng(7)
+    meshes = [trimesh.creation.icosphere(subdivisions=s) for s in range(4)] + [
+        trimesh.creation.box(), trimesh.creation.cylinder(1.0, 2.0, sections=17),
+        trimesh.creation.capsule(), trimesh.creation.torus(1.0, 0.3)]
+    for mesh in meshes:
+        assert mesh.is_watertight and mesh.is_winding_consistent
+        faces = np.asarray(mesh.faces)
+        for _ in range(5):
+            label = rng.choice(1 << 40, size=len(mesh.vertices), replace=False)
+            turned = rng.integers(0, 3, len(faces))[:, None]
+            welded = label[np.take_along_axis(faces, (np.arange(3) + turned) % 3, axis=1)]
+            assert _closed(welded[rng.permutation(len(faces))])
+
+
+def test_an_open_surface_is_refused_before_the_sorts(monkeypatch):
+    """A scanned mesh is mostly open: `_closed` refuses one by its sums, no sort run."""
+    corners, welded = _ball()
+
+    def no_sort(*args, **kwargs):
+        raise AssertionError("sorted")
+
+    monkeypatch.setattr(occluders.np, "sort", no_sort)
+    for open_one in (welded[1:], welded[:-5], np.r_[welded, welded[:1]]):
+        assert not _closed(open_one)
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
