@@ -139,10 +139,13 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     at = np.maximum(members, 0)
     packed = np.concatenate([tri_lo, tri_hi, normals, shell, corners[:, 0], scale[:, None]],
                             axis=1)[at] if M else np.zeros(members.shape + (16,))
-    # a cluster's box: its members' boxes' (the same minima and maxima as their corners')
-    use = (members >= 0)[..., None]
-    lo = np.where(use, packed[..., :3], np.inf).min(axis=1)
-    hi = np.where(use, packed[..., 3:6], -np.inf).max(axis=1)
+    # a cluster's box: its members' boxes' (the same minima and maxima as their corners'),
+    # member by member (numpy's reduction along the middle axis is the slow one)
+    lo, hi = np.full((len(members), 3), np.inf), np.full((len(members), 3), -np.inf)
+    for k in range(members.shape[1]):
+        use = (members[:, k] >= 0)[:, None]
+        lo = np.minimum(lo, np.where(use, packed[:, k, :3], np.inf))
+        hi = np.maximum(hi, np.where(use, packed[:, k, 3:6], -np.inf))
     centre = (lo + hi) / 2
     # the half diagonal, a little more for its own rounding: the sphere must hold the box
     radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
@@ -167,18 +170,27 @@ def weld(points: np.ndarray) -> np.ndarray:
     return number
 
 
+def _spread_bits() -> np.ndarray:
+    """(1024,) int64: each ten-bit number's bits spread two apart (bit b at bit 3 b), by
+    shifts and masks."""
+    x = np.arange(1024, dtype=np.int64)
+    for shift, mask in ((16, 0x030000FF), (8, 0x0300F00F), (4, 0x030C30C3), (2, 0x09249249)):
+        x = (x | (x << shift)) & mask
+    return x
+
+
+_SPREAD = _spread_bits()
+
+
 def _morton(points: np.ndarray) -> np.ndarray:
     """(n,) int64 Morton codes of points (n, 3) on a 1024^3 grid over their box: bit b of
-    axis a at bit 3 b + a (each axis's ten bits spread two apart by shifts and masks)."""
-    lo, span = points.min(axis=0), np.ptp(points, axis=0)
+    axis a at bit 3 b + a (each axis's ten bits spread two apart, looked up in a table: a
+    third of the shifts' time)."""
+    # column by column: numpy reduces an (n, 3) array along its first axis 20x slower
+    lo = np.array([points[:, a].min() for a in range(3)])
+    span = np.array([points[:, a].max() for a in range(3)]) - lo
     cell = np.floor((points - lo) / np.where(span > 0, span, 1) * 1023.999).astype(np.int64)
-    code = np.zeros(len(points), np.int64)
-    for axis in range(3):
-        x = cell[:, axis]
-        for shift, mask in ((16, 0x030000FF), (8, 0x0300F00F), (4, 0x030C30C3), (2, 0x09249249)):
-            x = (x | (x << shift)) & mask
-        code |= x << axis
-    return code
+    return _SPREAD[cell[:, 0]] | (_SPREAD[cell[:, 1]] << 1) | (_SPREAD[cell[:, 2]] << 2)
 
 
 def _topology(corners: np.ndarray, welded: np.ndarray):
