@@ -158,7 +158,8 @@ def _above(c0, c1, c2, radius, i0, p, sides, slack):
 
 
 @_jit()
-def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height, size, hull):
+def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height, size, hull,
+                run, r_lo, r_hi, r_centre, r_radius):
     """(b, C) bool: cluster c may meet the pyramid of some pixel of block b (start (b + 1,)),
     and per block (b,) the triangles of those clusters (size (C,) each's) and whether one of
     them is a convex object's (hull (C,)):
@@ -168,7 +169,11 @@ def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height
     (n,)), and not outside a side plane of every pixel's pyramid (sides (s, n, 3) unit
     inward normals through p (n, 3)); the last tested first as `_near` tests a triangle (the
     first pixel's planes lowered by the block's slack: four products leave out most
-    clusters), then pixel by pixel."""
+    clusters), then pixel by pixel.  The clusters come in runs of `run`, each run's box r_lo,
+    r_hi (R, 3) and a sphere r_centre (R, 3), r_radius (R,) that holds its clusters' spheres
+    (`occluders.Objects`): a run whose box misses the block's, or whose sphere lies below a
+    lowered side plane, is passed over at once (a block's pyramids meet ~1 % of the bunny's
+    clusters; ~10 % lie in their box)."""
     n_blocks, n_c = start.shape[0] - 1, c_lo.shape[0]
     out = np.zeros((n_blocks, n_c), np.bool_)
     many, convex = np.zeros(n_blocks, np.int64), np.zeros(n_blocks, np.bool_)
@@ -184,29 +189,37 @@ def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height
             most = max(most, top[i])
             for a in range(3):
                 low[a], high[a] = min(low[a], lo[i, a]), max(high[a], hi[i, a])
-        for c in range(n_c):
-            if not (c_lo[c, 0] <= high[0] and c_hi[c, 0] >= low[0]
-                    and c_lo[c, 1] <= high[1] and c_hi[c, 1] >= low[1]
-                    and c_lo[c, 2] <= high[2] and c_hi[c, 2] >= low[2]):
+        for r in range(r_lo.shape[0]):
+            if not (r_lo[r, 0] <= high[0] and r_hi[r, 0] >= low[0]
+                    and r_lo[r, 1] <= high[1] and r_hi[r, 1] >= low[1]
+                    and r_lo[r, 2] <= high[2] and r_hi[r, 2] >= low[2]):
                 continue
-            if not (height[c] >= -radius[c] and height[c] <= most + radius[c]):
+            if not _above(r_centre[r, 0], r_centre[r, 1], r_centre[r, 2], r_radius[r], i0, p,
+                          sides, slack):
                 continue
-            # its sphere wholly below a side plane of i0's pyramid lowered by the slack: it
-            # meets no pixel's pyramid of the block (`_near`)
-            if not _above(centre[c, 0], centre[c, 1], centre[c, 2], radius[c], i0, p, sides,
-                          slack):
-                continue
-            for i in range(i0, i1):             # then as each pixel sees it
-                inside = True
-                for j in range(sides.shape[0]):
-                    inside &= sides[j, i, 0] * (centre[c, 0] - p[i, 0]) \
-                        + sides[j, i, 1] * (centre[c, 1] - p[i, 1]) \
-                        + sides[j, i, 2] * (centre[c, 2] - p[i, 2]) >= -radius[c]
-                if inside:
-                    out[b, c] = True
-                    many[b] += size[c]
-                    convex[b] |= hull[c]
-                    break
+            for c in range(r * run, min(r * run + run, n_c)):
+                if not (c_lo[c, 0] <= high[0] and c_hi[c, 0] >= low[0]
+                        and c_lo[c, 1] <= high[1] and c_hi[c, 1] >= low[1]
+                        and c_lo[c, 2] <= high[2] and c_hi[c, 2] >= low[2]):
+                    continue
+                if not (height[c] >= -radius[c] and height[c] <= most + radius[c]):
+                    continue
+                # its sphere wholly below a side plane of i0's pyramid lowered by the slack:
+                # it meets no pixel's pyramid of the block (`_near`)
+                if not _above(centre[c, 0], centre[c, 1], centre[c, 2], radius[c], i0, p,
+                              sides, slack):
+                    continue
+                for i in range(i0, i1):             # then as each pixel sees it
+                    inside = True
+                    for j in range(sides.shape[0]):
+                        inside &= sides[j, i, 0] * (centre[c, 0] - p[i, 0]) \
+                            + sides[j, i, 1] * (centre[c, 1] - p[i, 1]) \
+                            + sides[j, i, 2] * (centre[c, 2] - p[i, 2]) >= -radius[c]
+                    if inside:
+                        out[b, c] = True
+                        many[b] += size[c]
+                        convex[b] |= hull[c]
+                        break
     return out, many, convex
 
 

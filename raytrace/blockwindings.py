@@ -20,7 +20,7 @@ import numpy as np
 from . import pyramid, windings, windmeasures
 from .candidates import COPLANAR_RELATIVE, _keep
 from .lightshapes import FramedLight
-from .occluders import Objects
+from .occluders import RUN, Objects
 from .polygons import dot, kernels
 
 # Outline edges carried at once (whole blocks: their arrays stay in the caches).
@@ -64,7 +64,8 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     near, many, hull = loaded.block_meets(
         start, lo, hi, top, sides, p, objects.lo, objects.hi, objects.centre, objects.radius,
         (objects.centre - light.center) @ light.normal, member.sum(axis=1),
-        (((objects.kinds & 1) != 0) & member).any(axis=1))
+        (((objects.kinds & 1) != 0) & member).any(axis=1), RUN, objects.run_lo,
+        objects.run_hi, objects.run_centre, objects.run_radius)
     block = np.repeat(np.arange(len(start) - 1), np.diff(start))
     met = (near.copy(), np.empty(len(p), np.int64))
     met[1][order] = block

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .lightshapes import FramedLight
-from .occluders import CLUSTER, Objects
+from .occluders import CLUSTER, RUN, Objects
 from .polygons import dot, kernels
 from .pyramid import sides as side_normals
 
@@ -91,7 +91,9 @@ def meets(light: FramedLight, objects: Objects, p: np.ndarray, base: np.ndarray,
     if loaded is not None:
         return loaded.meets(lo, hi, objects.lo, objects.hi, objects.centre, objects.radius,
                              height, top, np.stack(sides), p,
-                             np.zeros((0, 0), bool) if among is None else among)
+                             np.zeros((0, 0), bool) if among is None else among, RUN,
+                             objects.run_lo, objects.run_hi, objects.run_centre,
+                             objects.run_radius)
     ok = np.ones((len(p), len(objects.lo)), bool)      # (n, C): axis by axis, no (n, C, 3)
     for a in range(3):
         ok &= objects.lo[None, :, a] <= hi[:, None, a]

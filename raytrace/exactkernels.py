@@ -161,32 +161,52 @@ def carried(corners, t, k, p, e, normal, axes, eye):
 
 
 @_jit()
-def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p, among):
+def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p, among, run, r_lo, r_hi,
+          r_centre, r_radius):
     """(n, C) bool: cluster c's box c_lo, c_hi (C, 3) meets pixel i's pyramid box lo, hi
     (n, 3), and its sphere centre (C, 3), radius (C,) is not wholly below the light's plane
     (height (C,) its centre's over it), above p's parallel plane (top (n,) p's height), or
     outside a side plane (sides (s, n, 3) unit inward normals through p (n, 3)); among (n,
-    C) bool: only those clusters tested (the rest False), or (0, 0): every one."""
+    C) bool: only those clusters tested (the rest False), or (0, 0): every one.  The
+    clusters come in runs of `run` with a box r_lo, r_hi (R, 3) and a sphere r_centre (R,
+    3), r_radius (R,) holding theirs (`occluders.Objects`): a run whose box misses the
+    pixel's, or whose sphere lies outside a side plane by more than its products' rounding
+    (2^-40 of the coordinates' sizes, L1), is passed over at once."""
     n, c_n, s = lo.shape[0], c_lo.shape[0], sides.shape[0]
     out = np.zeros((n, c_n), np.bool_)
     every = among.shape[0] == 0
     for i in range(n):
-        for c in range(c_n):
-            if not (every or among[i, c]):
-                continue
+        for r in range(r_lo.shape[0]):
             ok = True
             for a in range(3):
-                ok &= (c_lo[c, a] <= hi[i, a]) & (c_hi[c, a] >= lo[i, a])
-            if not ok:
-                continue
-            ok = (height[c] >= -radius[c]) & (height[c] <= top[i] + radius[c])
+                ok &= (r_lo[r, a] <= hi[i, a]) & (r_hi[r, a] >= lo[i, a])
             for j in range(s):
                 if not ok:
                     break
                 m0, m1, m2 = sides[j, i, 0], sides[j, i, 1], sides[j, i, 2]
-                at = m0 * centre[c, 0] + m1 * centre[c, 1] + m2 * centre[c, 2]
-                ok = at - (m0 * p[i, 0] + m1 * p[i, 1] + m2 * p[i, 2]) >= -radius[c]
-            out[i, c] = ok
+                at = m0 * r_centre[r, 0] + m1 * r_centre[r, 1] + m2 * r_centre[r, 2]
+                size = abs(r_centre[r, 0]) + abs(r_centre[r, 1]) + abs(r_centre[r, 2]) + \
+                    abs(p[i, 0]) + abs(p[i, 1]) + abs(p[i, 2]) + r_radius[r]
+                ok = at - (m0 * p[i, 0] + m1 * p[i, 1] + m2 * p[i, 2]) >= \
+                    -r_radius[r] - 2.0 ** -40 * size
+            if not ok:
+                continue
+            for c in range(r * run, min(r * run + run, c_n)):
+                if not (every or among[i, c]):
+                    continue
+                ok = True
+                for a in range(3):
+                    ok &= (c_lo[c, a] <= hi[i, a]) & (c_hi[c, a] >= lo[i, a])
+                if not ok:
+                    continue
+                ok = (height[c] >= -radius[c]) & (height[c] <= top[i] + radius[c])
+                for j in range(s):
+                    if not ok:
+                        break
+                    m0, m1, m2 = sides[j, i, 0], sides[j, i, 1], sides[j, i, 2]
+                    at = m0 * centre[c, 0] + m1 * centre[c, 1] + m2 * centre[c, 2]
+                    ok = at - (m0 * p[i, 0] + m1 * p[i, 1] + m2 * p[i, 2]) >= -radius[c]
+                out[i, c] = ok
     return out
 
 

@@ -21,6 +21,8 @@ CONVEX_RELATIVE = 2.0 ** -40
 CONVEX_TEST_FACES = 4096
 # Triangles per cluster of the candidate query.
 CLUSTER = 16
+# Clusters per run (consecutive clusters, one box: a query passes over a run at once).
+RUN = 16
 
 
 class Objects(NamedTuple):
@@ -38,7 +40,11 @@ class Objects(NamedTuple):
     members from one place, not from eight arrays at random: `raytrace.exactkernels.pairs`),
     kinds (C, CLUSTER) int64: each member's object * 4 + 1 where convex + 2 where it has a
     shell and is not convex; member_ids (C, CLUSTER, 3) int64: each member's corner_ids, in
-    the members' order as packed (`raytrace.blockkernels.block_edges` reads them so)."""
+    the members' order as packed (`raytrace.blockkernels.block_edges` reads them so);
+    run_lo, run_hi (R, 3), run_centre (R, 3), run_radius (R,): the boxes of the runs of RUN
+    consecutive clusters (the last one shorter; clusters follow a Morton curve within an
+    object, so a run is compact), and a sphere about each that holds its clusters'
+    spheres."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -60,6 +66,10 @@ class Objects(NamedTuple):
     packed: np.ndarray | None = None
     kinds: np.ndarray | None = None
     member_ids: np.ndarray | None = None
+    run_lo: np.ndarray | None = None
+    run_hi: np.ndarray | None = None
+    run_centre: np.ndarray | None = None
+    run_radius: np.ndarray | None = None
 
 
 class Convex(NamedTuple):
@@ -150,11 +160,21 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     # the half diagonal, a little more for its own rounding: the sphere must hold the box
     radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
     kinds = ids.astype(np.int64) * 4 + convex + 2 * ((shell != 0).any(axis=1) & ~convex)
+    runs = np.arange(0, len(members), RUN)
+    run_lo = np.minimum.reduceat(lo, runs, axis=0) if len(runs) else np.zeros((0, 3))
+    run_hi = np.maximum.reduceat(hi, runs, axis=0) if len(runs) else np.zeros((0, 3))
+    run_centre = (run_lo + run_hi) / 2
+    # the farthest of its clusters' spheres from its centre, a little more for the rounding
+    reach = np.linalg.norm(centre - np.repeat(run_centre, RUN, axis=0)[:len(centre)],
+                           axis=1) + radius
+    run_radius = np.maximum.reduceat(reach, runs) * (1 + 2.0 ** -30) if len(runs) else \
+        np.zeros(0)
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, tri_lo, tri_hi, normals,
                    (normals * corners[:, 0]).sum(axis=1), scale, shell, welded, packed,
                    kinds[at] if M else np.zeros(members.shape, np.int64),
-                   welded[at] if M else np.zeros(members.shape + (3,), np.int64))
+                   welded[at] if M else np.zeros(members.shape + (3,), np.int64),
+                   run_lo, run_hi, run_centre, run_radius)
 
 
 def weld(points: np.ndarray) -> np.ndarray:

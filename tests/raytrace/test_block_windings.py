@@ -22,9 +22,10 @@ shapely = pytest.importorskip("shapely")
 ROUNDING = 1e-12
 
 
-def _scene(light_shape: str, size: int = 24):
+def _scene(light_shape: str, size: int = 24, far: float = 0.0):
     """A wavy open sheet (3,042 triangles) and a noisy closed ball (1,280) over a floor under
-    one area light: dense meshes, so blocks hold many steady triangles."""
+    one area light: dense meshes, so blocks hold many steady triangles; all of it moved `far`
+    along x, y and z."""
     trimesh = pytest.importorskip("trimesh")
     from shadowvol.primitives import mesh, plane
     from shadowvol.scene import AreaLight, Camera, Material, Scene
@@ -37,14 +38,15 @@ def _scene(light_shape: str, size: int = 24):
     ico = trimesh.creation.icosphere(subdivisions=3, radius=0.35)
     ball = ico.vertices * (1 + 0.08 * rng.standard_normal((len(ico.vertices), 1)))
     matte = Material(diffuse=[0.8, 0.8, 0.8])
-    light = AreaLight(light_shape, [0.0, 2.6, 0.0], normal=[0.2, -1, 0.1],
+    light = AreaLight(light_shape, np.add([0.0, 2.6, 0.0], far), normal=[0.2, -1, 0.1],
                       **({"size": [1.0, 0.8]} if light_shape == "rect" else {"radius": 0.5}),
                       samples=4)
-    return Scene(camera=Camera(eye=[0, 4.5, 5.5], target=[0, 0, -0.3], fov_y=40.0),
-                 objects=[plane("floor", size=[8, 8], material=matte),
-                          mesh("sheet", np.c_[x.ravel(), y.ravel(), z.ravel()], faces,
+    return Scene(camera=Camera(eye=np.add([0, 4.5, 5.5], far),
+                               target=np.add([0, 0, -0.3], far), fov_y=40.0),
+                 objects=[plane("floor", point=(far, far, far), size=[8, 8], material=matte),
+                          mesh("sheet", np.c_[x.ravel(), y.ravel(), z.ravel()] + far, faces,
                                material=matte),
-                          mesh("ball", ball + [0.7, 0.8, 0.2], np.asarray(ico.faces),
+                          mesh("ball", ball + [0.7, 0.8, 0.2] + far, np.asarray(ico.faces),
                                material=matte)],
                  lights=[light], width=size, height=size, ambient=[0, 0, 0])
 
@@ -98,6 +100,30 @@ def test_carried_in_parts_gives_the_same_bytes(monkeypatch):
     got = exact_visibility(scene)
     assert got.visibility.tobytes() == want.visibility.tobytes()
     assert got.irradiance.tobytes() == want.irradiance.tobytes()
+
+
+@pytest.mark.parametrize("shape, far", [("rect", 0.0), ("disk", 0.0), ("rect", 1e4)])
+def test_the_runs_pass_over_no_cluster_a_block_meets(shape, far, monkeypatch):
+    """`block_meets` passes over a run of clusters by its box and by its sphere
+    (`occluders.Objects.run_*`): against one unbounded run (every cluster tested), the same
+    clusters meet each block, on the sheet and the ball, also moved 1e4 away (the frame's
+    products round at ~1e-12 there)."""
+    from raytrace.exact_soft import exact_visibility
+    blocks = polygons.kernels("blockkernels")
+    plain, met = blocks.block_meets, []
+
+    def both(*args):
+        got = plain(*args)
+        n_c = len(args[6])
+        every = plain(*args[:13], n_c, np.full((1, 3), -np.inf), np.full((1, 3), np.inf),
+                      np.zeros((1, 3)), np.full(1, np.inf))
+        for a, b in zip(got, every):
+            assert np.array_equal(a, b)
+        met.append(got[0].sum())
+        return got
+    monkeypatch.setattr(blocks, "block_meets", both)
+    exact_visibility(_scene(shape, 32, far))
+    assert sum(met) > 1000
 
 
 def _measured(chain: np.ndarray, light) -> float:

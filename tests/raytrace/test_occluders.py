@@ -75,6 +75,27 @@ def test_an_open_surface_is_refused_before_the_sorts(monkeypatch):
         assert not _closed(open_one)
 
 
+@pytest.mark.parametrize("far", [0.0, 1e4])
+def test_a_runs_box_and_sphere_hold_its_clusters(far):
+    """`Objects.run_*`: each run of RUN consecutive clusters has a box that holds theirs and
+    a sphere that holds their spheres (what lets `blockkernels.block_meets` pass over it),
+    on a soup of small and large triangles, also 1e4 away."""
+    rng = np.random.default_rng(11)
+    corners = rng.normal(far, 1.0, (3000, 1, 3)) + rng.normal(0, 0.02, (3000, 3, 3)) * \
+        10.0 ** rng.integers(-3, 2, (3000, 1, 1))
+    ids = rng.integers(0, 3, 3000)
+    o = occluders.objects(corners, ids)
+    C, R = len(o.members), len(o.run_lo)
+    assert R == -(-C // occluders.RUN) and R > 10
+    run = np.arange(C) // occluders.RUN
+    assert (o.run_lo[run] <= o.lo).all() and (o.run_hi[run] >= o.hi).all()
+    reach = np.linalg.norm(o.centre - o.run_centre[run], axis=1) + o.radius
+    assert (reach <= o.run_radius[run]).all()
+    # and not loose: the farthest cluster's sphere touches its run's, but for the margin
+    assert np.allclose(np.maximum.reduceat(reach, np.arange(0, C, occluders.RUN)),
+                       o.run_radius, rtol=1e-8)
+
+
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 def test_weld_numbers_the_points_as_numpys_unique_rows_does(dtype):
     """`occluders.weld` against np.unique(axis=0)'s inverse: repeated points, points that
