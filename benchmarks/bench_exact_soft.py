@@ -6,17 +6,17 @@ milliseconds per frame, wall clock and CPU.
 Three frames under one rect light each: scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96;
 closed convex bodies), a closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a
 floor at 48 x 48, and the shared bunny (69,451 triangles, open at its base) on a floor at
-32 x 32.  Each: `exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on a thread per core
-and on one thread (`arrange.THREADS`), with the fast path off (every triangle's shadow
-united one by one: the reference of `tests/raytrace/test_exact_fast.py`), and `soft_masks`
-counting the light's 64, 256 and 1024 stratified samples.  Then the bunny at 16 x 16,
-32 x 32, 64 x 64 and 128 x 128: exact (and pixel by pixel: no block of pixels sharing its
-outline, `exact_soft.BLOCK` 0) against counting 256 samples, and what a pixel more costs each
-(the slope between the two largest frames), so the fixed cost of a frame (the scene's
-Embree build, the objects' topology) is told apart from the per-pixel one.  With --medians N:
-instead, each frame's exact visibility and 256 counted samples called in turn N times in one
-process after a warm-up, the median CPU ms of each (soft.toml, the blob 48 x 48, the bunny at
-32, 64 and 128): steadier on a noisy machine than one call."""
+32 x 32.  Each: `exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on
+a thread per core and on one thread (`arrange.THREADS`), with the fast path off (every
+triangle's shadow united one by one: the reference of `tests/raytrace/test_exact_fast.py`),
+and `soft_masks` counting the light's 64, 256 and 1024 stratified samples.  Then the bunny
+at 16 x 16, 32 x 32, 64 x 64, 128 x 128 and 256 x 256: exact (and pixel by pixel: no block
+of pixels sharing its outline, `exact_soft.BLOCK` 0) against counting 256 samples, and what
+a pixel more costs each (the slope between the two largest frames), so the fixed cost of a
+frame (the scene's Embree build, the objects' topology) is told apart from the per-pixel
+one.  With --medians N: instead, each frame's exact visibility and 256 counted samples
+called in turn N times in one process after a warm-up, the median CPU ms of each
+(soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256): steadier on a noisy machine than one call."""
 
 from __future__ import annotations
 
@@ -117,7 +117,7 @@ def frame(name: str, scene: Scene) -> None:
         print(f"  counting {n}: {timed(lambda: soft_masks(counted))}", flush=True)
 
 
-def per_pixel(sizes=(16, 32, 64, 128)) -> None:
+def per_pixel(sizes=(16, 32, 64, 128, 256)) -> None:
     """The bunny's frame cost against its size: exact, exact pixel by pixel and counting 256
     samples (CPU ms), and the CPU a pixel more costs each between the two largest frames."""
     print("bunny by frame size, CPU ms a frame (exact / pixel by pixel / counting 256):")
@@ -137,7 +137,7 @@ def per_pixel(sizes=(16, 32, 64, 128)) -> None:
           f"({slope[0] / max(slope[2], 1e-9):.1f}x)")
 
 
-def medians(width: int, n: int, bunny_sizes=(32, 64, 128)) -> None:
+def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256)) -> None:
     """`--medians n`: see the module."""
     print(f"exact / counting 256, median CPU ms of {n} calls each in turn:")
     frames = [(f"soft.toml {width}x{width * 3 // 4}",
