@@ -16,7 +16,8 @@ a pixel more costs each (the slope between the two largest frames), so the fixed
 frame (the scene's Embree build, the objects' topology) is told apart from the per-pixel
 one.  With --medians N: instead, each frame's exact visibility and 256 counted samples
 called in turn N times in one process after a warm-up, the median CPU ms of each
-(soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256): steadier on a noisy machine than one call."""
+(soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256): steadier on a noisy
+machine than one call."""
 
 from __future__ import annotations
 
