@@ -9,13 +9,17 @@ floor at 48 x 48, and the shared bunny (69,451 triangles, open at its base) on a
 32 x 32.  Each: `exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on
 a thread per core and on one thread (`arrange.THREADS`), with the fast path off (every
 triangle's shadow united one by one: the reference of `tests/raytrace/test_exact_fast.py`),
-and `soft_masks` counting the light's 64, 256 and 1024 stratified samples.  Then the bunny
-at 16 x 16, 32 x 32, 64 x 64, 128 x 128 and 256 x 256: exact (and pixel by pixel: no block
-of pixels sharing its outline, `exact_soft.BLOCK` 0) against counting 256 samples, and what
+and counting the light's 64, 256 and 1024 stratified samples: the bare count
+(`raytrace.soft.lit_counts`, what `raytrace.shadow_masks` counts an area light by: the peer
+the ratios are taken against), and at 256 also the count of `raytrace masks --outputs
+lit_count` (`ground_truth`, which counts the facing samples on the same rays) and
+`soft_masks` (the count, then a second pass for its `facing`).  Then the bunny at 16 x 16,
+32 x 32, 64 x 64, 128 x 128 and 256 x 256: exact (and pixel by pixel: no block of pixels
+sharing its outline, `exact_soft.BLOCK` 0) against the bare count of 256 samples, and what
 a pixel more costs each (the slope between the two largest frames), so the fixed cost of a
 frame (the scene's Embree build, the objects' topology) is told apart from the per-pixel
-one.  With --medians N: instead, each frame's exact visibility and 256 counted samples
-called in turn N times in one process after a warm-up, the median CPU ms of each
+one.  With --medians N: instead, each frame's exact visibility and the three counts of 256
+samples called in turn N times in one process after a warm-up, the median CPU ms of each
 (soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256): steadier on a noisy
 machine than one call."""
 
@@ -33,7 +37,8 @@ import trimesh
 import raytrace.arrange as arrange
 import raytrace.exact_soft as exact_soft
 from benchmarks.bench_masks import BUNNY, bunny_scene
-from raytrace.soft import soft_masks
+from raytrace.groundtruth import ground_truth
+from raytrace.soft import lit_counts, soft_masks
 from shadowvol.primitives import mesh, plane
 from shadowvol.scene import AreaLight, Camera, Material, Scene
 from shadowvol.scenefile import load_scene
@@ -115,20 +120,31 @@ def frame(name: str, scene: Scene) -> None:
     print(f"  exact, fast path off: {timed(lambda: reference(scene))}", flush=True)
     for n in (64, 256, 1024):
         counted = scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=n)])
-        print(f"  counting {n}: {timed(lambda: soft_masks(counted))}", flush=True)
+        print(f"  counting {n}: {timed(lambda: lit_counts(counted))}", flush=True)
+    counted = with_samples(scene, 256)
+    print(f"  counting 256, raytrace masks' (ground_truth): "
+          f"{timed(lambda: ground_truth(counted, ()))}", flush=True)
+    print(f"  counting 256, soft_masks (and its facing pass): "
+          f"{timed(lambda: soft_masks(counted))}", flush=True)
+
+
+def with_samples(scene: Scene, n: int) -> Scene:
+    """`scene` with its (first) area light's samples set to n."""
+    return scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=n)])
 
 
 def per_pixel(sizes=(16, 32, 64, 128, 256)) -> None:
-    """The bunny's frame cost against its size: exact, exact pixel by pixel and counting 256
-    samples (CPU ms), and the CPU a pixel more costs each between the two largest frames."""
+    """The bunny's frame cost against its size: exact, exact pixel by pixel and the bare count
+    of 256 samples (CPU ms), and the CPU a pixel more costs each between the two largest
+    frames."""
     print("bunny by frame size, CPU ms a frame (exact / pixel by pixel / counting 256):")
     cost = {}
     for n in sizes:
         scene = bunny_rect_scene(n)
-        counted = scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=256)])
+        counted = with_samples(scene, 256)
         cost[n] = (clocked(lambda: exact_soft.exact_visibility(scene))[1],
                    clocked(lambda: pixel_by_pixel(scene))[1],
-                   clocked(lambda: soft_masks(counted))[1])
+                   clocked(lambda: lit_counts(counted))[1])
         print(f"  {n}x{n}: {cost[n][0]:.0f} / {cost[n][1]:.0f} / {cost[n][2]:.0f}", flush=True)
     a, b = sizes[-2:]
     more = b * b - a * a
@@ -140,23 +156,27 @@ def per_pixel(sizes=(16, 32, 64, 128, 256)) -> None:
 
 def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256)) -> None:
     """`--medians n`: see the module."""
-    print(f"exact / counting 256, median CPU ms of {n} calls each in turn:")
+    print(f"exact / counting 256 (the bare count), median CPU ms of {n} calls each in turn; "
+          "then raytrace masks' count and soft_masks':")
     frames = [(f"soft.toml {width}x{width * 3 // 4}",
                load_scene("scenes/soft.toml").replace(width=width, height=width * 3 // 4)),
               ("blob 48x48", blob_scene(48))]
     if BUNNY.is_file():
         frames += [(f"bunny {k}x{k}", bunny_rect_scene(k)) for k in bunny_sizes]
     for name, scene in frames:
-        counted = scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=256)])
-        exact_soft.exact_visibility(scene)
-        soft_masks(counted)
-        a, b = [], []
+        counted = with_samples(scene, 256)
+        calls = (lambda: exact_soft.exact_visibility(scene), lambda: lit_counts(counted),
+                 lambda: ground_truth(counted, ()), lambda: soft_masks(counted))
+        for call in calls:
+            call()
+        times = [[] for _ in calls]
         for _ in range(n):
-            a.append(clocked(lambda: exact_soft.exact_visibility(scene))[1])
-            b.append(clocked(lambda: soft_masks(counted))[1])
-        ma, mb = float(np.median(a)), float(np.median(b))
+            for call, got in zip(calls, times):
+                got.append(clocked(call)[1])
+        (ma, mb, mg, ms), (a, b) = [float(np.median(t)) for t in times], times[:2]
         print(f"  {name}: {ma:.0f} / {mb:.0f} = {ma / mb:.2f}x (exact {min(a):.0f}-{max(a):.0f}, "
-              f"counted {min(b):.0f}-{max(b):.0f})", flush=True)
+              f"counted {min(b):.0f}-{max(b):.0f}); raytrace masks' {mg:.0f} ({ma / mg:.2f}x), "
+              f"soft_masks' {ms:.0f} ({ma / ms:.2f}x)", flush=True)
 
 
 def main(argv=None) -> None:
@@ -176,6 +196,8 @@ def main(argv=None) -> None:
     # its own
     tiny = load_scene("scenes/soft.toml").replace(width=8, height=6)
     exact_soft.exact_visibility(tiny)
+    lit_counts(tiny)
+    ground_truth(tiny, ())
     soft_masks(tiny)
     frame("soft.toml", load_scene("scenes/soft.toml").replace(width=width,
                                                               height=width * 3 // 4))
