@@ -18,8 +18,9 @@ lit_count` (`ground_truth`, which counts the facing samples on the same rays) an
 sharing its outline, `exact_soft.BLOCK` 0) against the bare count of 256 samples, and what
 a pixel more costs each (the slope between the two largest frames), so the fixed cost of a
 frame (the scene's Embree build, the objects' topology) is told apart from the per-pixel
-one.  With --medians N: instead, each frame's exact visibility and the three counts of 256
-samples called in turn N times in one process after a warm-up, the median CPU ms of each
+one.  With --medians N: instead, each frame's exact visibility (on a thread per core, and
+on one) and the three counts of 256 samples (each on the threads its tiles allow: one at
+these sizes) called in turn N times in one process after a warm-up, the median CPU ms of each
 (soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256): steadier on a noisy
 machine than one call."""
 
@@ -166,16 +167,18 @@ def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256)) -> None:
     for name, scene in frames:
         counted = with_samples(scene, 256)
         calls = (lambda: exact_soft.exact_visibility(scene), lambda: lit_counts(counted),
-                 lambda: ground_truth(counted, ()), lambda: soft_masks(counted))
+                 lambda: one_thread(scene), lambda: ground_truth(counted, ()),
+                 lambda: soft_masks(counted))
         for call in calls:
             call()
         times = [[] for _ in calls]
         for _ in range(n):
             for call, got in zip(calls, times):
                 got.append(clocked(call)[1])
-        (ma, mb, mg, ms), (a, b) = [float(np.median(t)) for t in times], times[:2]
+        (ma, mb, m1, mg, ms), (a, b) = [float(np.median(t)) for t in times], times[:2]
         print(f"  {name}: {ma:.0f} / {mb:.0f} = {ma / mb:.2f}x (exact {min(a):.0f}-{max(a):.0f}, "
-              f"counted {min(b):.0f}-{max(b):.0f}); raytrace masks' {mg:.0f} ({ma / mg:.2f}x), "
+              f"counted {min(b):.0f}-{max(b):.0f}); exact on one thread {m1:.0f} "
+              f"({m1 / mb:.2f}x); raytrace masks' count {mg:.0f} ({ma / mg:.2f}x), "
               f"soft_masks' {ms:.0f} ({ma / ms:.2f}x)", flush=True)
 
 
