@@ -126,6 +126,31 @@ def test_the_runs_pass_over_no_cluster_a_block_meets(shape, far, monkeypatch):
     assert sum(met) > 1000
 
 
+def test_the_tiles_give_the_same_bytes(monkeypatch):
+    """`exact_visibility` cuts a frame into tiles of whole blocks (`exact_soft.BLOCK` rows a
+    block): a tile a thread, and tiles of 2, 3 (rounded up to 4) and 6 rows, give the same
+    bytes, and the tiles asked for are the ones traced."""
+    from raytrace.exact_soft import exact_visibility
+    scene = _scene("rect", 24)
+    traced = []
+    plain = raytrace.exact_soft.for_each_tile
+
+    def recorded(work, tiles, tracer):
+        traced.append([(t.start, t.stop) for t in tiles])
+        return plain(work, tiles, tracer)
+    monkeypatch.setattr(raytrace.exact_soft, "for_each_tile", recorded)
+    monkeypatch.setattr(raytrace.exact_soft, "EXACT_TILE_PIXELS", 1 << 20)
+    monkeypatch.setattr(raytrace.exact_soft, "TILE_PIXELS_LEAST", 1 << 20)
+    want = exact_visibility(scene)
+    for rows in (2, 3, 6):
+        monkeypatch.setattr(raytrace.exact_soft, "EXACT_TILE_PIXELS", rows * scene.width)
+        got = exact_visibility(scene)
+        assert got.visibility.tobytes() == want.visibility.tobytes()
+        assert got.irradiance.tobytes() == want.irradiance.tobytes()
+    step = [stop - start for start, stop in traced[2][:-1]]
+    assert set(step) == {4} and len(traced[1]) == 12 and len(traced[3]) == 4
+
+
 def _measured(chain: np.ndarray, light) -> float:
     """The area inside the convex polygon `light` of the region a boundary (e, 2, 2) (the
     region on each piece's left) bounds: its fan of signed triangles from the light's first
