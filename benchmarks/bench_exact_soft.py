@@ -20,9 +20,9 @@ a pixel more costs each (the slope between the two largest frames), so the fixed
 frame (the scene's Embree build, the objects' topology) is told apart from the per-pixel
 one.  With --medians N: instead, each frame's exact visibility (on a thread per core, and
 on one) and the three counts of 256 samples (each on the threads its tiles allow: one at
-these sizes) called in turn N times in one process after a warm-up, the median CPU ms of each
-(soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256): steadier on a noisy
-machine than one call."""
+these sizes) called in turn N times in one process after a warm-up, the median CPU ms of
+each (soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256) and the wall ms of the
+exact visibility and the bare count: steadier on a noisy machine than one call."""
 
 from __future__ import annotations
 
@@ -171,15 +171,18 @@ def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256)) -> None:
                  lambda: soft_masks(counted))
         for call in calls:
             call()
-        times = [[] for _ in calls]
+        times, walls = [[] for _ in calls], [[] for _ in calls]
         for _ in range(n):
-            for call, got in zip(calls, times):
-                got.append(clocked(call)[1])
+            for call, got, wall in zip(calls, times, walls):
+                w, c = clocked(call)
+                got.append(c)
+                wall.append(w)
         (ma, mb, m1, mg, ms), (a, b) = [float(np.median(t)) for t in times], times[:2]
+        wa, wb = float(np.median(walls[0])), float(np.median(walls[1]))
         print(f"  {name}: {ma:.0f} / {mb:.0f} = {ma / mb:.2f}x (exact {min(a):.0f}-{max(a):.0f}, "
-              f"counted {min(b):.0f}-{max(b):.0f}); exact on one thread {m1:.0f} "
-              f"({m1 / mb:.2f}x); raytrace masks' count {mg:.0f} ({ma / mg:.2f}x), "
-              f"soft_masks' {ms:.0f} ({ma / ms:.2f}x)", flush=True)
+              f"counted {min(b):.0f}-{max(b):.0f}; wall {wa:.0f} / {wb:.0f} = {wa / wb:.2f}x); "
+              f"exact on one thread {m1:.0f} ({m1 / mb:.2f}x); raytrace masks' count {mg:.0f} "
+              f"({ma / mg:.2f}x), soft_masks' {ms:.0f} ({ma / ms:.2f}x)", flush=True)
 
 
 def main(argv=None) -> None:
