@@ -244,6 +244,14 @@ def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, 
         return 3
     if not (low_h >= 0 and high_h < low_top):
         return 0
+    # carried within reach: |rel| + the most any corner is magnified times its distance
+    # (within the triangle's box's diagonal of its first corner); the root and the quotient
+    # once a triangle, not a pixel (numba leaves a root in the loop: 6 % of the kernel)
+    span = 0.0
+    for a in range(3):
+        span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
+    span = np.sqrt(span)
+    grow = high_top / (low_top - high_h)
     sign, turned = 0, True
     for i in range(i0, i1):
         o = own[i]
@@ -265,12 +273,7 @@ def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, 
         if not abs(s) > FACING * dist or (sign != 0 and way != sign):
             turned = False
         sign = way
-        # carried within reach: |rel| + the most any corner is magnified times its distance
-        # (within the triangle's box's half diagonal of its first corner's... its box's)
-        span = 0.0
-        for a in range(3):
-            span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
-        bound = far_rel + high_top / (low_top - high_h) * (dist + np.sqrt(span))
+        bound = far_rel + grow * (dist + span)
         if not bound * (1 + 2.0 ** -30) < reach:
             return 0
     return sign if turned else 2
