@@ -126,6 +126,102 @@ def test_the_runs_pass_over_no_cluster_a_block_meets(shape, far, monkeypatch):
     assert sum(met) > 1000
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_runs_of_tiny_clusters_far_out_pass_over_none_that_meets(seed):
+    """`block_meets` on runs of clusters whose spheres are tiny beside their distance from the
+    block (triangles 1e-9 to 1e-3 across, strewn about the pyramids' side planes by a hair,
+    everything moved up to 1e3 out): the same clusters meet the block as when every cluster
+    is tested (one unbounded run), and some do (the runs' rounding margin is what keeps a
+    cluster that a run's sphere only grazes)."""
+    from raytrace import blockkernels, occluders, pyramid
+    from raytrace.lightshapes import frame_light
+    from shadowvol.scene import AreaLight
+    rng = np.random.default_rng(seed)
+    out = rng.uniform(-1, 1, 3) * 10.0 ** rng.integers(0, 4)
+    light = frame_light(AreaLight("rect", out + [0.0, 3.0, 0.0], size=[1.2, 0.8],
+                                  normal=rng.normal([0, -1, 0], 0.2), samples=4), np.zeros(3),
+                        "l")
+    base = light.center + light.hull @ light.axes
+    p = out + rng.uniform(-1, 1, 3) * [1, 0.2, 1] + rng.normal(0, 1e-3, (4, 3))
+    sides = np.stack([m / np.linalg.norm(m, axis=1, keepdims=True)
+                      for m in pyramid.sides(light, p, base)])
+    # sites on the side planes of the pixels' pyramids, a hair in or out, 16 triangles about
+    # each (a cluster), the site's size across
+    n = 400
+    k, j = rng.integers(0, 4, n), rng.integers(0, len(sides), n)
+    t = rng.uniform(0.05, 0.95, n)[:, None]
+    site = p[k] + t * (base[rng.integers(0, len(base), n)] - p[k])
+    site -= np.einsum("ij,ij->i", sides[j, k], site - p[k])[:, None] * sides[j, k]
+    across = 10.0 ** rng.integers(-9, -2, (n, 1))
+    site += sides[j, k] * across * rng.uniform(-3, 3, (n, 1))
+    corners = (site[:, None, None] + rng.uniform(-0.5, 0.5, (n, 16, 3, 3))
+               * across[:, None, None]).reshape(-1, 3, 3)
+    obj = occluders.objects(corners, np.zeros(len(corners), np.int64))
+    lo, hi = np.minimum(p, base.min(axis=0)), np.maximum(p, base.max(axis=0))
+    args = (np.array([0, 4]), lo, hi, (p - light.center) @ light.normal, sides, p, obj.lo,
+            obj.hi, obj.centre, obj.radius, (obj.centre - light.center) @ light.normal,
+            (obj.members >= 0).sum(axis=1), np.zeros(len(obj.lo), bool))
+    got = blockkernels.block_meets(*args, occluders.RUN, obj.run_lo, obj.run_hi,
+                                   obj.run_centre, obj.run_radius)
+    every = blockkernels.block_meets(*args, len(obj.lo), np.full((1, 3), -np.inf),
+                                     np.full((1, 3), np.inf), np.zeros((1, 3)),
+                                     np.full(1, np.inf))
+    for a, b in zip(got, every):
+        assert np.array_equal(a, b)
+    assert 0 < got[0].sum() < len(obj.lo)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_run_keeps_a_cluster_that_its_sphere_barely_reaches(seed):
+    """`block_meets`' run test at its edge: a run of 16 tiny clusters (1e-9 to 1e-3 across)
+    whose farthest one just meets a pixel's side plane by the cluster test (`_above`, its
+    2^-40 rounding margin included), far from the pixel along the plane (up to 1e3) and
+    out from the origin: the run is never passed over while that cluster meets, nor kept
+    where none does (one plane, every other test open)."""
+    from raytrace import blockkernels, occluders
+    rng = np.random.default_rng(seed)
+    kept = left = 0
+    for _ in range(200):
+        m = rng.normal(size=3)
+        m /= np.linalg.norm(m)
+        p = rng.uniform(-1, 1, (1, 3)) * 10.0 ** rng.integers(0, 4)
+        size = 10.0 ** rng.integers(-9, -2)
+        away = rng.normal(size=3)
+        away -= (away @ m) * m
+        away *= 10.0 ** rng.integers(-3, 4) / np.linalg.norm(away)
+        # sites: the farthest (a) just about at the plane, its mirror b, 14 between
+        spread = size * 10.0 ** rng.integers(0, 3)
+        middle = p[0] + away - m * spread
+        pairs = rng.uniform(-0.5, 0.5, (7, 3)) * spread
+        sites = np.r_[[middle + m * spread, middle - m * spread], middle + pairs, middle - pairs]
+        corners = (sites[:, None, None] + rng.uniform(-0.5, 0.5, (16, 16, 3, 3)) * size
+                   ).reshape(-1, 3, 3)
+        obj = occluders.objects(corners, np.zeros(len(corners), np.int64))
+        if len(obj.lo) != 16 or len(obj.run_lo) != 1:
+            continue
+        # the plane through p lowered (or raised) to a hair of the farthest cluster's test
+        sides = m[None, None]
+        top = np.array([1e300])
+        at = np.argmax(obj.centre @ m)
+        r = obj.centre[at] - p[0]
+        edge = -(obj.radius[at] + 2.0 ** -40 * np.abs(r).sum())
+        slack = (r @ m - edge) * (1 + rng.choice([-1, 1]) * 10.0 ** rng.uniform(-14, -6))
+        q = p + m * slack                              # a pixel at that height
+        args = (np.array([0, 1]), np.full((1, 3), -1e300), np.full((1, 3), 1e300), top, sides,
+                q, obj.lo, obj.hi, obj.centre, obj.radius, np.zeros(16), np.full(16, 16),
+                np.zeros(16, bool))
+        got = blockkernels.block_meets(*args, occluders.RUN, obj.run_lo, obj.run_hi,
+                                       obj.run_centre, obj.run_radius)
+        every = blockkernels.block_meets(*args, 16, np.full((1, 3), -np.inf),
+                                         np.full((1, 3), np.inf), np.zeros((1, 3)),
+                                         np.full(1, np.inf))
+        for a, b in zip(got, every):
+            assert np.array_equal(a, b)
+        kept += every[0].any()
+        left += not every[0].any()
+    assert kept > 20 and left > 20
+
+
 def test_the_tiles_give_the_same_bytes(monkeypatch):
     """`exact_visibility` cuts a frame into tiles of whole blocks (`exact_soft.BLOCK` rows a
     block): a tile a thread, and tiles of 2, 3 (rounded up to 4) and 6 rows, give the same
