@@ -38,16 +38,14 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     is one's own or coplanar with it (u,) (else it is free from each, turned either way),
     where each block's start (b + 1,); whether a block has a convex object's triangle (b,):
     its pixels are left to the pixel-by-pixel path, whose hulls unite such objects; a guard,
-    as `blockwindings` gives no such block clusters: dropping it was measured to slow numba's
-    loop by ~6 % on the bunny 64x64).  A
-    triangle whose box's sphere lies outside a side plane of the block's first pixel's
+    as `blockwindings` gives no such block clusters: dropping it slowed numba's loop ~6 %).
+    A triangle whose box's sphere lies outside a side plane of the block's first pixel's
     pyramid (sides (s, n, 3) unit inward normals through p), lowered by as much as the
     block's other pixels lie below it, is left out (`_near`: it meets no pixel's pyramid).
     meet (b, C): the clusters meeting some pixel's pyramid of each block; members, packed,
     kinds, welded (C, CLUSTER, 3) the members' corner ids: `occluders.Objects`; h (C, CLUSTER,
-    3) the members' corners' heights over the light's plane (`candidates.heights`, the sums of
-    `pyramid.uncut`): by member as packed, so a block reads its clusters' from one place, not
-    from (M, 3) at random (10 % of this kernel on the bunny); p (n, 3), top (n,) p's height;
+    3) the members' corners' heights over the light's plane (`candidates.heights`), by member
+    as packed, not (M, 3) read at random (10 % of this kernel); p (n, 3), top (n,) p's height;
     own (n,); tri_normal, offset, scale (M,); rel (n,) |p - centre|; reach:
     `pyramid.UNCUT_REACH` of the light; coplanar: `candidates.COPLANAR_RELATIVE`; most: the
     most triangles the clusters of a block hold."""

@@ -75,13 +75,11 @@ MANY_PIECES = 16
 BLOCK = 2
 # Pixels per chunk (each chunk's candidate arrays are pixels x clusters).
 CHUNK_PIXELS = 2048
-# Pixels per tile at most (to whole blocks of rows): the masks' 32k of before their 64k
-# (`raytrace.masks.MASK_TILE_RAYS`), since a pixel here costs ~1,000x a masks' ray.  A frame
-# is cut into TILES_PER_THREAD tiles a thread where each keeps TILE_PIXELS_LEAST pixels, and
-# into one a thread at least: a frame's penumbra lies in a few of its rows, so two halves
-# leave a thread idle (the bunny 128x128 on two threads: wall 570 ms in two tiles, 356 in
-# eight, the same CPU within the noise; a tile costs ~2 ms of CPU of its own, so small
-# frames keep fewer: the bunny 32x32 in eight took 10 % more CPU for 9 % less wall).
+# Pixels per tile at most (whole blocks of rows; a pixel costs ~1,000x a masks' ray).  A
+# frame is cut into TILES_PER_THREAD tiles a thread of TILE_PIXELS_LEAST pixels or more, one
+# a thread at least: its penumbra lies in a few rows, so halves left a thread idle (the bunny
+# 128x128: wall 570 -> 356 ms in eight tiles, the CPU the same; a tile costs ~2 ms of CPU,
+# so a small frame keeps fewer: the bunny 32x32 in eight took 10 % more CPU, 9 % less wall).
 EXACT_TILE_PIXELS = 1 << 15
 TILES_PER_THREAD = 4
 TILE_PIXELS_LEAST = 1024
