@@ -120,7 +120,7 @@ def frame(name: str, scene: Scene) -> None:
     print(f"  exact, pixel by pixel: {timed(lambda: pixel_by_pixel(scene))}", flush=True)
     print(f"  exact, fast path off: {timed(lambda: reference(scene))}", flush=True)
     for n in (64, 256, 1024):
-        counted = scene.replace(lights=[dataclasses.replace(scene.lights[0], samples=n)])
+        counted = with_samples(scene, n)
         print(f"  counting {n}: {timed(lambda: lit_counts(counted))}", flush=True)
     counted = with_samples(scene, 256)
     print(f"  counting 256, raytrace masks' (ground_truth): "

@@ -172,42 +172,46 @@ def meets(lo, hi, c_lo, c_hi, centre, radius, height, top, sides, p, among, run,
     3), r_radius (R,) holding theirs (`occluders.Objects`): a run whose box misses the
     pixel's, or whose sphere lies outside a side plane by more than its products' rounding
     (2^-40 of the coordinates' sizes, L1), is passed over at once."""
-    n, c_n, s = lo.shape[0], c_lo.shape[0], sides.shape[0]
+    n, c_n = lo.shape[0], c_lo.shape[0]
     out = np.zeros((n, c_n), np.bool_)
     every = among.shape[0] == 0
     for i in range(n):
         for r in range(r_lo.shape[0]):
-            ok = True
-            for a in range(3):
-                ok &= (r_lo[r, a] <= hi[i, a]) & (r_hi[r, a] >= lo[i, a])
-            for j in range(s):
-                if not ok:
-                    break
-                m0, m1, m2 = sides[j, i, 0], sides[j, i, 1], sides[j, i, 2]
-                at = m0 * r_centre[r, 0] + m1 * r_centre[r, 1] + m2 * r_centre[r, 2]
-                size = abs(r_centre[r, 0]) + abs(r_centre[r, 1]) + abs(r_centre[r, 2]) + \
-                    abs(p[i, 0]) + abs(p[i, 1]) + abs(p[i, 2]) + r_radius[r]
-                ok = at - (m0 * p[i, 0] + m1 * p[i, 1] + m2 * p[i, 2]) >= \
-                    -r_radius[r] - 2.0 ** -40 * size
-            if not ok:
+            if not _boxes_meet(r_lo, r_hi, r, lo, hi, i):
+                continue
+            size = abs(r_centre[r, 0]) + abs(r_centre[r, 1]) + abs(r_centre[r, 2]) + \
+                abs(p[i, 0]) + abs(p[i, 1]) + abs(p[i, 2]) + r_radius[r]
+            if not _inside_sides(r_centre, r, r_radius[r] + 2.0 ** -40 * size, i, p, sides):
                 continue
             for c in range(r * run, min(r * run + run, c_n)):
-                if not (every or among[i, c]):
+                if not (every or among[i, c]) or not _boxes_meet(c_lo, c_hi, c, lo, hi, i):
                     continue
-                ok = True
-                for a in range(3):
-                    ok &= (c_lo[c, a] <= hi[i, a]) & (c_hi[c, a] >= lo[i, a])
-                if not ok:
-                    continue
-                ok = (height[c] >= -radius[c]) & (height[c] <= top[i] + radius[c])
-                for j in range(s):
-                    if not ok:
-                        break
-                    m0, m1, m2 = sides[j, i, 0], sides[j, i, 1], sides[j, i, 2]
-                    at = m0 * centre[c, 0] + m1 * centre[c, 1] + m2 * centre[c, 2]
-                    ok = at - (m0 * p[i, 0] + m1 * p[i, 1] + m2 * p[i, 2]) >= -radius[c]
-                out[i, c] = ok
+                out[i, c] = (height[c] >= -radius[c]) & (height[c] <= top[i] + radius[c]) \
+                    and _inside_sides(centre, c, radius[c], i, p, sides)
     return out
+
+
+@_jit(inline="always")
+def _boxes_meet(a_lo, a_hi, k, b_lo, b_hi, i):
+    """Whether box k of a_lo, a_hi (., 3) meets box i of b_lo, b_hi (., 3)."""
+    ok = True
+    for a in range(3):
+        ok &= (a_lo[k, a] <= b_hi[i, a]) & (a_hi[k, a] >= b_lo[i, a])
+    return ok
+
+
+@_jit(inline="always")
+def _inside_sides(centre, k, reach, i, p, sides):
+    """Whether the sphere about centre[k] of radius `reach` is not wholly outside a side
+    plane of pixel i's pyramid (sides (s, n, 3) unit inward normals through p (n, 3))."""
+    ok = True
+    for j in range(sides.shape[0]):
+        if not ok:
+            break
+        m0, m1, m2 = sides[j, i, 0], sides[j, i, 1], sides[j, i, 2]
+        at = m0 * centre[k, 0] + m1 * centre[k, 1] + m2 * centre[k, 2]
+        ok = at - (m0 * p[i, 0] + m1 * p[i, 1] + m2 * p[i, 2]) >= -reach
+    return ok
 
 
 @_jit()
