@@ -102,6 +102,15 @@ def test_carried_in_parts_gives_the_same_bytes(monkeypatch):
     assert got.irradiance.tobytes() == want.irradiance.tobytes()
 
 
+def _same_as_every_cluster(block_meets, args, got):
+    """`block_meets`' verdicts got (on its runs) against the same call with one unbounded run:
+    every cluster tested; args: its arguments before the runs'."""
+    every = block_meets(*args, len(args[6]), np.full((1, 3), -np.inf), np.full((1, 3), np.inf),
+                        np.zeros((1, 3)), np.full(1, np.inf))
+    for a, b in zip(got, every):
+        assert np.array_equal(a, b)
+
+
 @pytest.mark.parametrize("shape, far", [("rect", 0.0), ("disk", 0.0), ("rect", 1e4)])
 def test_the_runs_pass_over_no_cluster_a_block_meets(shape, far, monkeypatch):
     """`block_meets` passes over a run of clusters by its box and by its sphere
@@ -113,11 +122,7 @@ def test_the_runs_pass_over_no_cluster_a_block_meets(shape, far, monkeypatch):
 
     def both(*args):
         got = plain(*args)
-        n_c = len(args[6])
-        every = plain(*args[:13], n_c, np.full((1, 3), -np.inf), np.full((1, 3), np.inf),
-                      np.zeros((1, 3)), np.full(1, np.inf))
-        for a, b in zip(got, every):
-            assert np.array_equal(a, b)
+        _same_as_every_cluster(plain, args[:13], got)
         met.append(got[0].sum())
         return got
     monkeypatch.setattr(blocks, "block_meets", both)
@@ -161,11 +166,7 @@ def test_runs_of_tiny_clusters_far_out_pass_over_none_that_meets(seed):
             (obj.members >= 0).sum(axis=1), np.zeros(len(obj.lo), bool))
     got = blockkernels.block_meets(*args, occluders.RUN, obj.run_lo, obj.run_hi,
                                    obj.run_centre, obj.run_radius)
-    every = blockkernels.block_meets(*args, len(obj.lo), np.full((1, 3), -np.inf),
-                                     np.full((1, 3), np.inf), np.zeros((1, 3)),
-                                     np.full(1, np.inf))
-    for a, b in zip(got, every):
-        assert np.array_equal(a, b)
+    _same_as_every_cluster(blockkernels.block_meets, args, got)
     assert 0 < got[0].sum() < len(obj.lo)
 
 
@@ -210,13 +211,9 @@ def test_a_run_keeps_a_cluster_that_its_sphere_barely_reaches(seed):
                 np.zeros(16, bool))
         got = blockkernels.block_meets(*args, occluders.RUN, obj.run_lo, obj.run_hi,
                                        obj.run_centre, obj.run_radius)
-        every = blockkernels.block_meets(*args, 16, np.full((1, 3), -np.inf),
-                                         np.full((1, 3), np.inf), np.zeros((1, 3)),
-                                         np.full(1, np.inf))
-        for a, b in zip(got, every):
-            assert np.array_equal(a, b)
-        kept += every[0].any()
-        left += not every[0].any()
+        _same_as_every_cluster(blockkernels.block_meets, args, got)
+        kept += got[0].any()
+        left += not got[0].any()
     assert kept > 20 and left > 20
 
 
