@@ -1,7 +1,7 @@
 """Exact soft shadows against counted samples (BENCHMARKS.md, "Exact soft shadows"): one run,
 milliseconds per frame, wall clock and CPU.
 
-    python -m benchmarks.bench_exact_soft [--width WIDTH] [--medians N]
+    python -m benchmarks.bench_exact_soft [--width WIDTH] [--medians N | --light-sides]
 
 Three frames under one rect light each: scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96;
 closed convex bodies), a closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a
@@ -22,7 +22,9 @@ one.  With --medians N: instead, each frame's exact visibility (on a thread per 
 on one) and the three counts of 256 samples (each on the threads its tiles allow: one at
 these sizes) called in turn N times in one process after a warm-up, the median CPU ms of
 each (soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256) and the wall ms of the
-exact visibility and the bare count: steadier on a noisy machine than one call."""
+exact visibility and the bare count: steadier on a noisy machine than one call.  With
+--light-sides: instead, the bunny 128 x 128 under square rect lights of side 0.125 to 2
+(`light_sides`): where the exact path costs less than the count and where more."""
 
 from __future__ import annotations
 
@@ -185,15 +187,48 @@ def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256)) -> None:
               f"({ma / mg:.2f}x), soft_masks' {ms:.0f} ({ma / ms:.2f}x)", flush=True)
 
 
+def light_sides(size: int = 128, sides=(0.125, 0.25, 0.5, 0.75, 1.0, 2.0), calls: int = 5,
+                make=None) -> None:
+    """`--light-sides`: the bunny at size x size (`make(size)`: another frame) under square
+    rect lights of each side (the frame's light is 1 x 1): the penumbra's share of the frame
+    (pixels with 0 < V < 1), and the median CPU ms of the exact visibility and of the bare
+    count of 256 samples, called in turn `calls` times in one process.  The count costs the
+    same under any light; the exact path pays for each penumbra pixel, more for a larger
+    light (its pyramid holds more triangles, its outline more edges)."""
+    make = make or bunny_rect_scene
+    print(f"{size}x{size} by the light's side, median CPU ms of {calls} calls each in turn "
+          "(exact / counting 256):")
+    for side in sides:
+        base = make(size)
+        scene = base.replace(lights=[dataclasses.replace(base.lights[0], size=[side, side])])
+        counted = with_samples(scene, 256)
+        exact = exact_soft.exact_visibility(scene).visibility[0]
+        lit_counts(counted)
+        penumbra = float(((exact > 0) & (exact < 1)).mean())
+        times = ([], [])
+        for _ in range(calls):
+            times[0].append(clocked(lambda: exact_soft.exact_visibility(scene))[1])
+            times[1].append(clocked(lambda: lit_counts(counted))[1])
+        a, b = (float(np.median(t)) for t in times)
+        print(f"  side {side:g}: penumbra {penumbra:.1%} of the frame, {a:.0f} / {b:.0f} = "
+              f"{a / b:.2f}x", flush=True)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_exact_soft",
                                  description=__doc__.split("\n\n")[0])
     ap.add_argument("--width", type=int, default=96, help="soft.toml's width (default 96)")
     ap.add_argument("--medians", type=int, default=0, metavar="N",
                     help="each frame's exact and counted-256 CPU ms as the median of N calls")
+    ap.add_argument("--light-sides", action="store_true",
+                    help="instead, the bunny 128x128 under rect lights of six sizes")
     args = ap.parse_args(argv)
     width = args.width
     print(f"load {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    if args.light_sides:
+        light_sides() if BUNNY.is_file() else print(f"bunny: {BUNNY} missing")
+        print(f"load {os.getloadavg()[0]:.2f}")
+        return
     if args.medians:
         medians(width, args.medians)
         print(f"load {os.getloadavg()[0]:.2f}")

@@ -176,3 +176,15 @@ def test_the_exact_soft_medians_run(capsys):
     assert lines[0].lstrip().startswith("soft.toml 16x12:")
     assert lines[1].lstrip().startswith("blob")
     assert all(line.split(" = ")[1].split("x")[0].replace(".", "").isdigit() for line in lines)
+
+
+def test_the_exact_soft_light_sides_run(capsys):
+    """`python -m benchmarks.bench_exact_soft --light-sides`' loop (the blob, small): a line a
+    light side with the penumbra's share and both medians (nothing timed here)."""
+    pytest.importorskip("shapely")
+    from benchmarks import bench_exact_soft
+    bench_exact_soft.light_sides(12, sides=(0.25, 2.0), calls=1, make=bench_exact_soft.blob_scene)
+    lines = [line for line in capsys.readouterr().out.splitlines() if "side " in line]
+    assert [line.split(":")[0].strip() for line in lines] == ["side 0.25", "side 2"]
+    shares = [float(line.split("penumbra ")[1].split("%")[0]) for line in lines]
+    assert 0 < shares[0] < shares[1] <= 100     # a larger light: a wider penumbra
