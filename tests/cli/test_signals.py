@@ -15,7 +15,10 @@ from builders import SCENES
 
 pytestmark = pytest.mark.gl
 
-DELAYS = (0.0, 0.05, 0.2, 0.5, 1.0, 2.0)  # imports, loading, GL, writing
+# when the signal comes, as a share of the render's own time on this machine (measured once:
+# `render_seconds`), so every moment is reached however fast the machine: imports, loading,
+# GL, writing.  Fixed delays (up to 2 s) outlived the whole render (1.4 s here) and skipped.
+SHARES = (0.0, 0.03, 0.15, 0.4, 0.6, 0.8)
 ENTRY = ("from shadowvol.cli import shadowvol_entry; import sys; "
          "sys.exit(shadowvol_entry(sys.argv[1:]))")
 
@@ -32,6 +35,24 @@ def _wait_for_handlers(proc: subprocess.Popen, timeout: float = 30.0) -> None:
         time.sleep(0.002)
 
 
+def _render(out) -> subprocess.Popen:
+    """`shadowvol render` of the cage with its masks into out, through the entry point."""
+    return subprocess.Popen([sys.executable, "-c", ENTRY, "render", str(SCENES / "cage.toml"),
+                             "-o", str(out / "x.png"), "--masks", str(out / "x.npz")],
+                            stderr=subprocess.PIPE, text=True)
+
+
+@pytest.fixture(scope="module")
+def render_seconds(tmp_path_factory) -> float:
+    """How long the render runs here after the entry point has caught the signals."""
+    proc = _render(tmp_path_factory.mktemp("timed"))
+    _wait_for_handlers(proc)
+    start = time.monotonic()
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    return time.monotonic() - start
+
+
 def _exited(proc: subprocess.Popen) -> bool:
     """The child has exited but is not yet reaped (a zombie: a signal to it does nothing)."""
     try:
@@ -43,16 +64,16 @@ def _exited(proc: subprocess.Popen) -> bool:
 
 @pytest.mark.parametrize("signum, code, word", [(signal.SIGINT, 130, "interrupted"),
                                                  (signal.SIGTERM, 143, "terminated")])
-@pytest.mark.parametrize("delay", DELAYS)
-def test_a_signal_at_any_moment(tmp_path, signum, code, word, delay):
+@pytest.mark.parametrize("share", SHARES)
+def test_a_signal_at_any_moment(tmp_path, signum, code, word, share, render_seconds):
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-c", ENTRY, "render", str(SCENES / "cage.toml"),
-                             "-o", str(out / "x.png"), "--masks", str(out / "x.npz")],
-                            stderr=subprocess.PIPE, text=True)
+    proc = _render(out)
     _wait_for_handlers(proc)  # from the moment the entry point runs (not Python's own start-up)
+    delay = share * render_seconds
     time.sleep(delay)
     if proc.poll() is not None or _exited(proc):
-        pytest.skip(f"the render finished within {delay} s, before the signal")
+        pytest.skip(f"the render finished within {delay:.2f} s ({share} of the "
+                    f"{render_seconds:.2f} s it took once), before the signal")
     os.kill(proc.pid, signum)
     _, err = proc.communicate(timeout=120)
     left = sorted(p.name for p in out.iterdir()) if out.exists() else []
