@@ -228,6 +228,54 @@ def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height
 
 
 @_jit()
+def own_candidates(block, unsteady, to_cut, u_at, own, tri_lo, tri_hi, lo, hi, tri_normal,
+                   offset, scale, corners, coplanar):
+    """Each pixel's pairs of its block's unsteady triangles (`blockwindings._own_pairs`):
+    (pix, tri (f,): those free from every pixel of the block; pix, tri (k,): of the others
+    (to_cut (u,)), those whose boxes (tri_lo, tri_hi (M, 3)) meet the pixel's pyramid's box
+    lo, hi (n, 3), bar its own triangle and those coplanar with it (`candidates._keep`:
+    its other rules never apply here, as no block that meets a convex object's cluster has
+    unsteady triangles, `blockwindings.chains`, and no closed object's faces are left out),
+    each by pixel, in the order of unsteady; block (n,) each pixel's, u_at (b + 1,);
+    tri_normal, offset, scale (M,): `occluders.Objects`; coplanar: COPLANAR_RELATIVE."""
+    n = block.shape[0]
+    total = 0
+    for i in range(n):
+        total += u_at[block[i] + 1] - u_at[block[i]]
+    f_pix, f_tri = np.empty(total, np.int64), np.empty(total, np.int64)
+    k_pix, k_tri = np.empty(total, np.int64), np.empty(total, np.int64)
+    f = k = 0
+    for i in range(n):
+        o = own[i]
+        n0, n1, n2 = tri_normal[o, 0], tri_normal[o, 1], tri_normal[o, 2]
+        for g in range(u_at[block[i]], u_at[block[i] + 1]):
+            t = unsteady[g]
+            if not to_cut[g]:
+                f_pix[f], f_tri[f] = i, t
+                f += 1
+                continue
+            if t == o:
+                continue
+            met = True
+            for a in range(3):
+                met &= (tri_lo[t, a] <= hi[i, a]) & (tri_hi[t, a] >= lo[i, a])
+            if not met:
+                continue
+            # coplanar with p's own triangle (`candidates._keep`, `exactkernels._box_pairs`)
+            if abs(n0 * tri_normal[t, 0] + n1 * tri_normal[t, 1] + n2 * tri_normal[t, 2]) > \
+                    1 - 1e-3:
+                off = 0.0
+                for j in range(3):
+                    off = max(off, abs(corners[t, j, 0] * n0 + corners[t, j, 1] * n1
+                                       + corners[t, j, 2] * n2 - offset[o]))
+                if not off > coplanar * max(scale[o], scale[t]):
+                    continue
+            k_pix[k], k_tri[k] = i, t
+            k += 1
+    return f_pix[:f], f_tri[:f], k_pix[:k], k_tri[:k]
+
+
+@_jit()
 def _grow(a, n):
     """a with twice the room, its first n kept."""
     out = np.empty(2 * a.shape[0], a.dtype)
@@ -295,7 +343,6 @@ def carried_edges(start, e_tri, e_from, e_to, e_cnt, e_at, corners, welded, p, c
     flat = np.empty((total, 2, 2))
     ids = np.empty((total, 2), np.int64)
     count, owner = np.empty(total, np.int64), np.empty(total, np.int64)
-    ray = np.empty(3)
     g = 0
     for b in range(start.shape[0] - 1):
         for i in range(start[b], start[b + 1]):

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import pyramid, windings, windmeasures
-from .candidates import COPLANAR_RELATIVE, _keep
+from .candidates import COPLANAR_RELATIVE
 from .lightshapes import FramedLight
 from .occluders import RUN, Objects
 from .polygons import dot, kernels
@@ -28,19 +28,18 @@ CARRIED = 1 << 16
 
 
 def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndarray,
-           p: np.ndarray, normal: np.ndarray, own: np.ndarray, where: np.ndarray, width: int,
-           block: int, crowded: int = 0) -> tuple[np.ndarray, np.ndarray, tuple | None]:
+           p: np.ndarray, own: np.ndarray, where: np.ndarray, width: int, block: int,
+           crowded: int = 0) -> tuple[np.ndarray, np.ndarray, tuple | None]:
     """(n,) object each: the boundary of each pixel's shadows' union inside the light's box
     (`windings.boundaries`), None where it is left to the pixel-by-pixel path (module) or
     the kernels are missing; and the few shadows that are not free at a contact, left out of
     it (`windings.split`'s loose: `windmeasures.measures` takes them away; None where none);
     and the clusters that meet some pyramid of each pixel's block (no other can meet its own:
     `candidates.meets`' among for the pixel-by-pixel path) as (the blocks' (b, C) bool, each
-    pixel's block (n,)), None where no blocks were made; points p (n, 3) with normals (n, 3)
-    on triangles own (n,) at image pixels where (n,) of a frame `width` wide, in blocks of
-    `block` a side; h (C, CLUSTER, 3): the cluster members' corners' heights
-    (`candidates.heights`' third); crowded: a block that meets no more triangles is left
-    out."""
+    pixel's block (n,)), None where no blocks were made; points p (n, 3) on triangles own
+    (n,) at image pixels where (n,) of a frame `width` wide, in blocks of `block` a side; h
+    (C, CLUSTER, 3): the cluster members' corners' heights (`candidates.heights`' third);
+    crowded: a block that meets no more triangles is left out."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
     member = objects.members >= 0
@@ -51,7 +50,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     y, x = np.divmod(where, width)
     key = (y // block) * -(-width // block) + x // block
     order = np.argsort(key, kind="stable")
-    p, normal, own = p[order], normal[order], own[order]
+    p, own = p[order], own[order]
     start = np.r_[np.flatnonzero(np.r_[True, np.diff(key[order]) != 0]), len(p)]
     base = light.center + light.hull @ light.axes
     lo, hi = np.minimum(p, base.min(axis=0)), np.maximum(p, base.max(axis=0))
@@ -79,8 +78,8 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
         np.sqrt(dot(p - light.center, p - light.center)),
         pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides,
         int(many[~hull].max()))
-    flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, normal, own, lo,
-                                                    hi, base, m, block, unsteady, to_cut, u_at)
+    flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, own, lo, hi,
+                                                    base, m, block, unsteady, to_cut, u_at)
     ok = ~(convex | hull)[block]
     # a few shadows that are not free (`windings.split`): cut, carried, turned, apart
     ok &= np.bincount(pix[~free], minlength=len(p)) <= windings.LOOSE
@@ -126,27 +125,18 @@ def _wound(loaded, light: FramedLight, objects: Objects, corners: np.ndarray, p:
 
 
 def _own_pairs(light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
-               normal: np.ndarray, own: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-               base: np.ndarray, m: list, block: np.ndarray, unsteady: np.ndarray,
-               to_cut: np.ndarray, u_at: np.ndarray) -> tuple[np.ndarray, ...]:
+               own: np.ndarray, lo: np.ndarray, hi: np.ndarray, base: np.ndarray, m: list,
+               block: np.ndarray, unsteady: np.ndarray, to_cut: np.ndarray, u_at: np.ndarray
+               ) -> tuple[np.ndarray, ...]:
     """Each pixel's pairs of its block's unsteady triangles (block (n,), unsteady (u,) from
     u_at (b + 1,)) with their whole shadows: (flat (q, 3, 2), free (q,), pixel (q,)
     ascending, triangle (q,), and the cut's count and whole (q,) (3 and True for the
     uncut)): all of those free from every pixel of the block, and of the others (to_cut
     (u,)) those `candidates.pairs` would keep and the pyramid's cut (sides m) keeps."""
-    many = np.diff(u_at)[block]
-    pix = np.repeat(np.arange(len(p)), many)
-    first = np.repeat(u_at[block] - np.r_[0, np.cumsum(many)[:-1]], many) + np.arange(len(pix))
-    tri = unsteady[first] if len(pix) else np.zeros(0, np.int64)
-    free = ~to_cut[first] if len(pix) else np.zeros(0, bool)
-    pix, tri, uncut = pix[~free], tri[~free], (pix[free], tri[free])
-    near = tri != own[pix]
-    for a in range(3):
-        near &= (objects.tri_lo[tri, a] <= hi[pix, a]) & (objects.tri_hi[tri, a] >= lo[pix, a])
-    pix, tri = pix[near], tri[near]
-    keep = _keep(objects, corners, p, normal, own, pix, tri, None)
-    _, count, pix, tri, whole = pyramid.cut(light, corners, p, pix[keep], tri[keep], base, m,
-                                            store=False)
+    *uncut, pix, tri = kernels("blockkernels").own_candidates(
+        block, unsteady, to_cut, u_at, own, objects.tri_lo, objects.tri_hi, lo, hi,
+        objects.normal, objects.offset, objects.scale, corners, COPLANAR_RELATIVE)
+    _, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base, m, store=False)
     pix, tri = np.r_[uncut[0], pix], np.r_[uncut[1], tri]
     count = np.r_[np.full(len(uncut[0]), 3), count]
     whole = np.r_[np.ones(len(uncut[0]), bool), whole]

@@ -304,8 +304,8 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
     among = None
     if where is not None and outlines and BLOCK > 0:
         chains[at], loose[at], met = blockwindings.chains(
-            light, objects, corners, sides[2], p[at], normal[at], own[at], where[0][at],
-            where[1], BLOCK, WINDING_PIECES)
+            light, objects, corners, sides[2], p[at], own[at], where[0][at], where[1], BLOCK,
+            WINDING_PIECES)
         done = windings.found(chains[at])
         # nothing inside the light's box and no shadow apart: the light measured whole, as a
         # pixel of no shadow

@@ -347,3 +347,59 @@ def test_a_blocks_near_test_keeps_every_triangle_that_meets_a_pixels_pyramid(see
         if not any(inside(w @ far, j) for w in weights for j in range(4)):
             left += not near(far)
     assert kept > 100 and left > 100
+
+
+def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
+    """`blockkernels.own_candidates` (the pixels' pairs of their blocks' unsteady triangles,
+    in numba) gives the pairs of numpy's composition of `candidates._keep` that it replaced,
+    in the same order, on the sheet, the ball and the floor: among those left out are the
+    floor's other triangle (coplanar with a pixel's own) and triangles whose boxes miss the
+    pixel's pyramid's."""
+    from raytrace import blockkernels
+    from raytrace.candidates import _keep
+    from raytrace.exact_soft import exact_visibility
+    calls = []
+    kernel = blockkernels.own_candidates
+
+    def spy(*args):
+        got = kernel(*args)
+        calls.append((args, got))
+        return got
+
+    monkeypatch.setattr(polygons.kernels("blockkernels"), "own_candidates", spy)
+    objects = []
+    real = raytrace.blockwindings._own_pairs
+
+    def own_pairs(light, objs, corners, p, *rest):
+        objects.append((objs, corners, p))
+        return real(light, objs, corners, p, *rest)
+
+    monkeypatch.setattr(raytrace.blockwindings, "_own_pairs", own_pairs)
+    # the tiles one after another, so the two spies' calls pair up
+    monkeypatch.setattr(raytrace.exact_soft, "for_each_tile",
+                        lambda work, tiles, tracer: [work(tile) for tile in tiles])
+    exact_visibility(_scene("rect", 16))
+    assert calls and len(calls) == len(objects)
+    coplanar = missed = 0
+    for (args, got), (objs, corners, p) in zip(calls, objects):
+        block, unsteady, to_cut, u_at, own, _, _, lo, hi = args[:9]
+        many = np.diff(u_at)[block]
+        pix = np.repeat(np.arange(len(p)), many)
+        first = np.repeat(u_at[block] - np.r_[0, np.cumsum(many)[:-1]], many) + \
+            np.arange(len(pix))
+        tri, free = unsteady[first], ~to_cut[first]
+        assert np.array_equal(got[0], pix[free]) and np.array_equal(got[1], tri[free])
+        pix, tri = pix[~free], tri[~free]
+        near = tri != own[pix]
+        for a in range(3):
+            near &= (objs.tri_lo[tri, a] <= hi[pix, a]) & (objs.tri_hi[tri, a] >= lo[pix, a])
+        missed += int((~near).sum())
+        pix, tri = pix[near], tri[near]
+        # no convex object's triangle comes here (the kernel leaves out `_keep`'s rule for
+        # them): the pixels' normals do not matter
+        assert not objs.convex[tri].any()
+        keep = _keep(objs, corners, p, np.zeros_like(p), own, pix, tri, None)
+        flat = np.abs(polygons.dot(objs.normal[own[pix]], objs.normal[tri])) > 1 - 1e-3
+        coplanar += int((flat & ~keep).sum())
+        assert np.array_equal(got[2], pix[keep]) and np.array_equal(got[3], tri[keep])
+    assert coplanar > 0 and missed > 0
