@@ -1,7 +1,8 @@
 """The scene's triangles as the exact visibility queries them (`raytrace.exact_soft`): per
 object whether it is closed and convex (then its shadow from a point outside is one convex
 polygon), its silhouette from a point, and clusters of triangles with their boxes for the
-conservative candidate query.  float64, numpy, in the masks' frame.
+conservative candidate query.  float64, numpy (the per-triangle and per-member arrays in
+numba where it loads: `raytrace.occluderkernels`, the same bytes), in the masks' frame.
 """
 
 from __future__ import annotations
@@ -9,6 +10,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+
+from .polygons import kernels
 
 # An object is convex when no corner lies farther than this (of its largest coordinate) outside
 # any of its face planes: its corners are float64 (the frame: world less the eye), each a few
@@ -105,9 +108,14 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
     welded = (weld(corners.reshape(-1, 3)) if welded is None else welded).reshape(-1, 3)
     convex = np.zeros(M, bool)
     outward = np.zeros((M, 3))
-    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    loaded = kernels("occluderkernels")
+    if loaded is not None:
+        normals, length = loaded.normals(corners)
+        length = length[:, None]
+    else:
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        length = np.linalg.norm(normals, axis=1, keepdims=True)
+        normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
     members, owner, bodies = [], [], []
     shell = np.zeros((M, 3))
     for j in range(int(ids.max(initial=-1)) + 1):
@@ -140,6 +148,31 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         owner.append(np.full(len(members[-1]), j))
     members = np.concatenate(members) if members else np.zeros((0, CLUSTER), np.int64)
     owner = np.concatenate(owner) if owner else np.zeros(0, np.int64)
+    kinds = ids.astype(np.int64) * 4 + convex + 2 * ((shell != 0).any(axis=1) & ~convex)
+    tri_lo, tri_hi, scale, offset, packed, lo, hi, kinds, member_ids = \
+        loaded.fields(corners, normals, shell, kinds, welded, members) \
+        if loaded is not None and M else _fields(corners, normals, shell, kinds, welded, members)
+    centre = (lo + hi) / 2
+    # the half diagonal, a little more for its own rounding: the sphere must hold the box
+    radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
+    runs = np.arange(0, len(members), RUN)
+    run_lo = np.minimum.reduceat(lo, runs, axis=0) if len(runs) else np.zeros((0, 3))
+    run_hi = np.maximum.reduceat(hi, runs, axis=0) if len(runs) else np.zeros((0, 3))
+    run_centre = (run_lo + run_hi) / 2
+    # the farthest of its clusters' spheres from its centre, a little more for the rounding
+    reach = np.linalg.norm(centre - np.repeat(run_centre, RUN, axis=0)[:len(centre)],
+                           axis=1) + radius
+    run_radius = np.maximum.reduceat(reach, runs) * (1 + 2.0 ** -30) if len(runs) else \
+        np.zeros(0)
+    return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
+                   centre, radius, tri_lo, tri_hi, normals, offset, scale, shell, welded, packed,
+                   kinds, member_ids, run_lo, run_hi, run_centre, run_radius)
+
+
+def _fields(corners: np.ndarray, normals: np.ndarray, shell: np.ndarray, kind: np.ndarray,
+            welded: np.ndarray, members: np.ndarray) -> tuple[np.ndarray, ...]:
+    """`occluderkernels.fields` in numpy (installs without numba; the same bytes)."""
+    M = len(corners)
     # the corners' minima and maxima (elementwise over the three: a reduction along a short
     # axis is numpy's slow one; the same values)
     tri_lo = np.minimum(np.minimum(corners[:, 0], corners[:, 1]), corners[:, 2])
@@ -156,25 +189,9 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         use = (members[:, k] >= 0)[:, None]
         lo = np.minimum(lo, np.where(use, packed[:, k, :3], np.inf))
         hi = np.maximum(hi, np.where(use, packed[:, k, 3:6], -np.inf))
-    centre = (lo + hi) / 2
-    # the half diagonal, a little more for its own rounding: the sphere must hold the box
-    radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
-    kinds = ids.astype(np.int64) * 4 + convex + 2 * ((shell != 0).any(axis=1) & ~convex)
-    runs = np.arange(0, len(members), RUN)
-    run_lo = np.minimum.reduceat(lo, runs, axis=0) if len(runs) else np.zeros((0, 3))
-    run_hi = np.maximum.reduceat(hi, runs, axis=0) if len(runs) else np.zeros((0, 3))
-    run_centre = (run_lo + run_hi) / 2
-    # the farthest of its clusters' spheres from its centre, a little more for the rounding
-    reach = np.linalg.norm(centre - np.repeat(run_centre, RUN, axis=0)[:len(centre)],
-                           axis=1) + radius
-    run_radius = np.maximum.reduceat(reach, runs) * (1 + 2.0 ** -30) if len(runs) else \
-        np.zeros(0)
-    return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
-                   centre, radius, tri_lo, tri_hi, normals,
-                   (normals * corners[:, 0]).sum(axis=1), scale, shell, welded, packed,
-                   kinds[at] if M else np.zeros(members.shape, np.int64),
-                   welded[at] if M else np.zeros(members.shape + (3,), np.int64),
-                   run_lo, run_hi, run_centre, run_radius)
+    return (tri_lo, tri_hi, scale, (normals * corners[:, 0]).sum(axis=1), packed, lo, hi,
+            kind[at] if M else np.zeros(members.shape, np.int64),
+            welded[at] if M else np.zeros(members.shape + (3,), np.int64))
 
 
 def weld(points: np.ndarray) -> np.ndarray:

@@ -123,3 +123,34 @@ def test_morton_codes_put_bit_b_of_axis_a_at_bit_3b_plus_a():
     got = occluders._morton(points)
     assert got.tolist() == want
     assert got.max() == (1 << 30) - 1 and got.min() == 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_kernels_give_numpys_objects_to_the_bit(seed, monkeypatch):
+    """`occluderkernels` (the triangles' normals and the members' packed rows, boxes, kinds
+    and corner ids, in numba) against numpy's path, every array to the bit: two meshes and
+    a flat sheet of triangles with degenerate ones, -0.0 and 0.0 among the coordinates,
+    coordinates from 1e-6 to 1e4 out, and clusters padded."""
+    pytest.importorskip("numba")
+    rng = np.random.default_rng(seed)
+    ball, welded = _ball()
+    far = 10.0 ** rng.uniform(-6, 4)
+    sheet = rng.normal(0, 1, (37, 3, 3)) * far
+    sheet[:5, :, 1] = 0.0
+    sheet[2:5, 1] = sheet[2:5, 0]                    # degenerate: two corners one point
+    sheet[:3, :, 0] *= -0.0                          # signed zeros
+    corners = np.concatenate([ball * far, sheet])
+    ids = np.r_[np.zeros(len(ball), np.int64), np.ones(len(sheet), np.int64)]
+    welded = np.r_[welded, welded.max() + 1 + np.arange(3 * len(sheet)).reshape(-1, 3)]
+    got = occluders.objects(corners, ids, None, welded)
+    monkeypatch.setattr(occluders, "kernels", lambda name: None)
+    want = occluders.objects(corners, ids, None, welded)
+    assert len(got.members) * occluders.CLUSTER > len(corners)        # padded clusters
+    for field in _array_fields(got):
+        a, b = getattr(got, field), getattr(want, field)
+        assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), field
+
+
+def _array_fields(objects) -> list:
+    """The array fields of `occluders.Objects` (bodies is a list)."""
+    return [f for f in objects._fields if isinstance(getattr(objects, f), np.ndarray)]
