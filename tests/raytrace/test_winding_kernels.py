@@ -215,3 +215,20 @@ def test_corners_number_ids_one_to_one_and_find_two_at_one_point(seed):
     signed = np.array([-0.0, 0.0]), np.array([1.0, 1.0]), np.array([2.0, 3.0])
     assert not windingkernels._corners(*signed, np.array([4.0, 5.0]), np.array([0, 1]),
                                        np.array([2, 3]))[0]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_stable_order_is_numpys(seed):
+    """`outlinekernels._stable` (by insertion up to FEW keys, else a quick sort and its runs
+    of ties) gives np.argsort(kind="stable")'s order: floats with many ties, -0.0 beside 0.0,
+    NaNs (the insertion gives way to the sort), int64 keys; 0 to 3 FEW keys."""
+    from raytrace.outlinekernels import FEW, _stable
+    rng = np.random.default_rng(seed)
+    for n in [0, 1, 2, FEW - 1, FEW, FEW + 1, *rng.integers(0, 3 * FEW, 20)]:
+        floats = rng.integers(-4, 5, n) * 0.5
+        floats[rng.random(n) < 0.2] = -0.0
+        with_nan = floats.copy()
+        with_nan[rng.random(n) < 0.1] = np.nan
+        ints = rng.integers(-3, 4, n) * (1 << 40)
+        for key in (floats, with_nan, ints, rng.random(n)):
+            assert np.array_equal(_stable(key), np.argsort(key, kind="stable")), (n, key)
