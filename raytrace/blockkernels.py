@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .exactkernels import carried, seen_from
-from .outlinekernels import _tally
+from .outlinekernels import _apart, _tally
 from .packetkernels import _jit
 
 # A triangle turns one way from p when p lies off its plane by more than this much of their
@@ -333,10 +333,13 @@ def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, 
 
 @_jit()
 def carried_edges(start, e_tri, e_from, e_to, e_cnt, e_at, corners, welded, p, center, normal,
-                  axes):
+                  axes, box):
     """Each block's outline edges (`block_edges`) carried from each of its pixels (start (b +
     1,)) onto the light's plane: (flat (q, 2, 2), ids (q, 2), count (q,), pixel (q,)), by
-    pixel."""
+    pixel; only those that meet the box (4,) x0, y0, x1, y1 or cross the level y0 of its
+    first corner (an edge from y0 up, or down to it, as `clipkernels._crossed` counts): all
+    that `windingkernels.boundaries` reads where it cuts an outline to the box (its edges in
+    the box, its winding at the corner by a ray in +x), a third of them on the bunny."""
     total = 0
     for b in range(start.shape[0] - 1):
         total += (start[b + 1] - start[b]) * (e_at[b + 1] - e_at[b])
@@ -349,9 +352,13 @@ def carried_edges(start, e_tri, e_from, e_to, e_cnt, e_at, corners, welded, p, c
             eye = seen_from(p, i, center, normal, axes)
             for e in range(e_at[b], e_at[b + 1]):
                 t, a, z = e_tri[e], e_from[e], e_to[e]
-                flat[g, 0, 0], flat[g, 0, 1] = carried(corners, t, a, p, i, normal, axes, eye)
-                flat[g, 1, 0], flat[g, 1, 1] = carried(corners, t, z, p, i, normal, axes, eye)
+                ax, ay = carried(corners, t, a, p, i, normal, axes, eye)
+                bx, by = carried(corners, t, z, p, i, normal, axes, eye)
+                if _apart(ax, ay, bx, by, box) and not (ay <= box[1] < by or
+                                                       by <= box[1] < ay):
+                    continue
+                flat[g, 0, 0], flat[g, 0, 1], flat[g, 1, 0], flat[g, 1, 1] = ax, ay, bx, by
                 ids[g, 0], ids[g, 1] = welded[t, a], welded[t, z]
                 count[g], owner[g] = e_cnt[e], i
                 g += 1
-    return flat, ids, count, owner
+    return flat[:g], ids[:g], count[:g], owner[:g]

@@ -116,11 +116,11 @@ def _wound(loaded, light: FramedLight, objects: Objects, corners: np.ndarray, p:
         i0, i1 = start[b0], start[b1]
         rims = loaded.carried_edges(start[b0:b1 + 1] - i0, e_tri, e_from, e_to, e_cnt,
                                     e_at[b0:b1 + 1], corners, objects.corner_ids, p[i0:i1],
-                                    light.center, light.normal, light.axes)
+                                    light.center, light.normal, light.axes, box)
         a, b = np.searchsorted(pix, [i0, i1])
         got[i0:i1] = windings.boundaries(flat[a:b], np.ones(b - a, bool),
                                          objects.corner_ids[tri[a:b]], pix[a:b] - i0, i1 - i0,
-                                         rims=rims, box=box)
+                                         rims=rims, box=box, partial=True)
     return got
 
 

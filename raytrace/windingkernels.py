@@ -24,14 +24,18 @@ from .packetkernels import _jit
 
 
 @_jit()
-def boundaries(uncut, free, ids, owner, n, margin, rim, rim_ids, rim_count, rim_owner, box):
+def boundaries(uncut, free, ids, owner, n, margin, rim, rim_ids, rim_count, rim_owner, box,
+               partial):
     """`windings.boundaries` of n pixels' shadows uncut (q, 3, 2), free (q,), welded corner
     ids (q, 3) of the pixels owner (q,) (ascending), and of their whole clusters' rims (rim
     (e, 2, 2) each edge's start and end, rim_ids (e, 2), rim_count (e,), rim_owner (e,)
     ascending: `wholekernels.rim_edges`): (doubt (n,), where each pixel's chain starts in the
     pieces (n + 1,), the pieces (4 s,): each start's x, y, end's x, y); margin:
     `windings.DOUBT`; box (4,) x0, y0, x1, y1: each outline cut to it where certain
-    (`clipkernels.clipped`), or (0,): whole."""
+    (`clipkernels.clipped`), or (0,): whole; partial: the rims hold only the edges that
+    meet the box or cross the level of its first corner (`blockkernels.carried_edges`:
+    all that the cut reads), so a pixel the cut leaves in doubt is in doubt, not outlined
+    whole."""
     doubt = np.zeros(n, np.bool_)
     at = np.zeros(n + 1, np.int64)
     out = np.empty(4 * max(64, owner.shape[0]))
@@ -47,7 +51,7 @@ def boundaries(uncut, free, ids, owner, n, margin, rim, rim_ids, rim_count, rim_
         while e1 < m and rim_owner[e1] == k:
             e1 += 1
         ok, sa, sb = _pixel(uncut, free, ids, r0, r1, big, margin, (rim, rim_ids, rim_count),
-                            e0, e1, box)
+                            e0, e1, box, partial)
         r0, e0 = r1, e1
         if not ok:
             doubt[k] = True
@@ -74,9 +78,9 @@ def _put(out, size, sa, sb):
 
 
 @_jit()
-def _pixel(uncut, free, ids, r0, r1, big, margin, rims, e0, e1, box):
+def _pixel(uncut, free, ids, r0, r1, big, margin, rims, e0, e1, box, partial):
     """One pixel's shadows rows r0..r1 and rims' edges e0..e1: (certain, the chain's starts
-    (c, 2), ends (c, 2))."""
+    (c, 2), ends (c, 2)); partial: `boundaries`'."""
     none = np.empty((0, 2))
     for r in range(r0, r1):
         if not free[r]:
@@ -98,6 +102,8 @@ def _pixel(uncut, free, ids, r0, r1, big, margin, rims, e0, e1, box):
                                                                    box, big, margin, wind)
             if ok:
                 return _noded(cax, cay, cbx, cby, cia, cib, ccnt, margin, cut)
+    if partial:                                  # in doubt there, with the box's edges only
+        return False, none, none
     # the whole outline (no box, or in doubt there)
     ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big, rims, e0, e1, whole)
     return _noded(ax, ay, bx, by, ia, ib, cnt, margin, ax.shape[0])

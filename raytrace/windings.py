@@ -71,8 +71,8 @@ def boundary(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray) -> np.ndarray
 
 
 def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.ndarray,
-               n: int, rims: tuple | None = None, box: np.ndarray | None = None
-               ) -> np.ndarray:
+               n: int, rims: tuple | None = None, box: np.ndarray | None = None,
+               partial: bool = False) -> np.ndarray:
     """(n,) object: the `boundary` of each of n pixels' shadows, all in one pass: the shadows
     uncut (q, 3, 2), free (q,), welded corner ids (q, 3) of the pixels owner (q,) (ascending,
     < n), and where given their whole clusters' rims (`wholekernels.rim_edges`: flat (e, 2,
@@ -82,11 +82,13 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
     boundary alone is None.  In numba, one pixel at a time, where it loads
     (`raytrace.windingkernels`: the same bytes); there, with `box` (x0, y0, x1, y1), each
     pixel's boundary inside that box only, closed along its sides where certain
-    (`raytrace.clipkernels`: the same union inside the box)."""
+    (`raytrace.clipkernels`: the same union inside the box); `partial`: the rims hold only
+    what the cut to the box reads (`blockkernels.carried_edges`), so a pixel whose cut is in
+    doubt is in doubt (None), not outlined whole."""
     loaded = polygons.kernels("windingkernels")
     if loaded is not None:
         return _kernel(loaded, uncut, free, ids, owner, n, NO_RIMS if rims is None else rims,
-                       box)
+                       box, partial)
     if rims is not None and len(rims[3]):
         raise ValueError("whole clusters' rims need raytrace.windingkernels (numba)")
     chains, doubt = np.full(n, None, object), np.zeros(n, bool)
@@ -120,14 +122,15 @@ def boundaries(uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.n
 
 
 def _kernel(loaded, uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner: np.ndarray,
-            n: int, rims: tuple, box: np.ndarray | None = None) -> np.ndarray:
+            n: int, rims: tuple, box: np.ndarray | None = None, partial: bool = False
+            ) -> np.ndarray:
     """`boundaries` by `raytrace.windingkernels`."""
     doubt, at, pieces = loaded.boundaries(
         np.ascontiguousarray(uncut, np.float64), np.ascontiguousarray(free, bool),
         np.ascontiguousarray(ids, np.int64), np.ascontiguousarray(owner, np.int64), int(n),
         DOUBT, np.ascontiguousarray(rims[0], np.float64), np.ascontiguousarray(rims[1], np.int64),
         np.ascontiguousarray(rims[2], np.int64), np.ascontiguousarray(rims[3], np.int64),
-        np.zeros(0) if box is None else np.asarray(box, np.float64))
+        np.zeros(0) if box is None else np.asarray(box, np.float64), bool(partial))
     pieces = pieces.reshape(-1, 2, 2)
     chains = np.full(n, None, object)
     for k in np.flatnonzero(~doubt).tolist():

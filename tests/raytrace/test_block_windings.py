@@ -403,3 +403,68 @@ def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
         coplanar += int((flat & ~keep).sum())
         assert np.array_equal(got[2], pix[keep]) and np.array_equal(got[3], tri[keep])
     assert coplanar > 0 and missed > 0
+
+
+@pytest.mark.parametrize("shape", ["rect", "disk"])
+def test_the_rims_carried_to_the_box_give_the_whole_rims_chains(shape, monkeypatch):
+    """`blockkernels.carried_edges` carries only the edges that meet the light's box or
+    cross the level of its first corner: `windings.boundaries` cut to the box (partial) gives
+    each pixel the chain it gives with every edge carried, bit for bit, or leaves it in
+    doubt (None) where the cut is (there the whole outline was the way out); and an edge
+    that crosses that level outside the box is needed (the winding at the corner)."""
+    from raytrace import blockkernels
+    from raytrace.exact_soft import exact_visibility
+    kernel, calls = blockkernels.carried_edges, []
+
+    def spy(*args):
+        calls.append(args)
+        return kernel(*args)
+
+    monkeypatch.setattr(polygons.kernels("blockkernels"), "carried_edges", spy)
+    monkeypatch.setattr(raytrace.exact_soft, "for_each_tile",
+                        lambda work, tiles, tracer: [work(tile) for tile in tiles])
+    boundaries, wound = windings.boundaries, []
+
+    def spy_boundaries(*args, **kw):
+        wound.append((args, kw))
+        return boundaries(*args, **kw)
+
+    monkeypatch.setattr(windings, "boundaries", spy_boundaries)
+    exact_visibility(_scene(shape, 20))
+    wound = [w for w in wound if w[1].get("partial")]
+    assert calls and len(calls) == len(wound)
+    same = doubt = crossing = 0
+    for args, (b_args, kw) in zip(calls, wound):
+        box = args[-1]
+        every = kernel(*args[:-1], np.array([-np.inf, -np.inf, np.inf, np.inf]))
+        assert len(every[0]) == sum(len(range(args[5][b], args[5][b + 1])) *
+                                    (args[0][b + 1] - args[0][b])
+                                    for b in range(len(args[0]) - 1))
+        old = boundaries(*b_args, rims=every, box=box)
+        new = boundaries(*b_args, rims=kernel(*args), box=box, partial=True)
+        for o, g in zip(old, new):
+            if g is None:
+                doubt += 1
+            else:
+                assert o is not None and o.tobytes() == g.tobytes()
+                same += 1
+        flat = every[0]
+        apart = (np.minimum(flat[:, 0, 0], flat[:, 1, 0]) > box[2]) | \
+            (np.maximum(flat[:, 0, 0], flat[:, 1, 0]) < box[0]) | \
+            (np.minimum(flat[:, 0, 1], flat[:, 1, 1]) > box[3]) | \
+            (np.maximum(flat[:, 0, 1], flat[:, 1, 1]) < box[1])
+        level = (flat[:, 0, 1] <= box[1]) != (flat[:, 1, 1] <= box[1])
+        crossing += int((apart & level).sum())
+    assert same > 100 and doubt <= same // 50 and crossing > 0
+
+
+def test_a_cut_in_doubt_with_partial_rims_is_in_doubt():
+    """A shadow whose edge runs through the box's first corner (the winding there is not
+    certain): cut to the box with every edge at hand, `boundaries` outlines it whole; with
+    `partial` (the rims carried to the box only) it leaves the pixel in doubt."""
+    box = np.array([0.0, 0.0, 1.0, 1.0])
+    uncut = np.array([[[-0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]])
+    args = (uncut, np.ones(1, bool), np.array([[0, 1, 2]]), np.zeros(1, np.int64), 1)
+    whole = windings.boundaries(*args, box=box)[0]
+    assert whole is not None and len(whole) == 3
+    assert windings.boundaries(*args, box=box, partial=True)[0] is None
