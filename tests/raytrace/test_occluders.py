@@ -128,9 +128,9 @@ def test_morton_codes_put_bit_b_of_axis_a_at_bit_3b_plus_a():
 @pytest.mark.parametrize("seed", range(4))
 def test_the_kernels_give_numpys_objects_to_the_bit(seed, monkeypatch):
     """`occluderkernels` (the triangles' normals and the members' packed rows, boxes, kinds
-    and corner ids, in numba) against numpy's path, every array to the bit: two meshes and
-    a flat sheet of triangles with degenerate ones, -0.0 and 0.0 among the coordinates,
-    coordinates from 1e-6 to 1e4 out, and clusters padded."""
+    and corner ids, in numba) against numpy's path, every array to the bit: a closed ball and
+    an object of random triangles (some level, some degenerate: two corners at one point,
+    -0.0 beside 0.0 among the coordinates), scaled from 1e-6 to 1e4, in padded clusters."""
     pytest.importorskip("numba")
     rng = np.random.default_rng(seed)
     ball, welded = _ball()
