@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .exactkernels import carried, seen_from
-from .outlinekernels import _apart, _tally
+from .exactkernels import _boxes_meet, carried, coplanar_with, seen_from
+from .outlinekernels import _apart, _level, _tally
 from .packetkernels import _jit
 
 # A triangle turns one way from p when p lies off its plane by more than this much of their
@@ -247,29 +247,16 @@ def own_candidates(block, unsteady, to_cut, u_at, own, tri_lo, tri_hi, lo, hi, t
     f = k = 0
     for i in range(n):
         o = own[i]
-        n0, n1, n2 = tri_normal[o, 0], tri_normal[o, 1], tri_normal[o, 2]
         for g in range(u_at[block[i]], u_at[block[i] + 1]):
             t = unsteady[g]
             if not to_cut[g]:
                 f_pix[f], f_tri[f] = i, t
                 f += 1
                 continue
-            if t == o:
+            if t == o or not _boxes_meet(tri_lo, tri_hi, t, lo, hi, i) or coplanar_with(
+                    corners, t, o, tri_normal[t, 0], tri_normal[t, 1], tri_normal[t, 2],
+                    tri_normal, offset, scale[t], scale[o], coplanar):
                 continue
-            met = True
-            for a in range(3):
-                met &= (tri_lo[t, a] <= hi[i, a]) & (tri_hi[t, a] >= lo[i, a])
-            if not met:
-                continue
-            # coplanar with p's own triangle (`candidates._keep`, `exactkernels._box_pairs`)
-            if abs(n0 * tri_normal[t, 0] + n1 * tri_normal[t, 1] + n2 * tri_normal[t, 2]) > \
-                    1 - 1e-3:
-                off = 0.0
-                for j in range(3):
-                    off = max(off, abs(corners[t, j, 0] * n0 + corners[t, j, 1] * n1
-                                       + corners[t, j, 2] * n2 - offset[o]))
-                if not off > coplanar * max(scale[o], scale[t]):
-                    continue
             k_pix[k], k_tri[k] = i, t
             k += 1
     return f_pix[:f], f_tri[:f], k_pix[:k], k_tri[:k]
@@ -309,14 +296,9 @@ def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, 
         o = own[i]
         if t == o:
             return 0
-        n0, n1, n2 = tri_normal[o, 0], tri_normal[o, 1], tri_normal[o, 2]
-        if abs(n0 * packed[c, k, 6] + n1 * packed[c, k, 7] + n2 * packed[c, k, 8]) > 1 - 1e-3:
-            off = 0.0
-            for j in range(3):
-                off = max(off, abs(corners[t, j, 0] * n0 + corners[t, j, 1] * n1
-                                   + corners[t, j, 2] * n2 - offset[o]))
-            if not off > coplanar * max(scale[o], packed[c, k, 15]):
-                return 0
+        if coplanar_with(corners, t, o, packed[c, k, 6], packed[c, k, 7], packed[c, k, 8],
+                         tri_normal, offset, packed[c, k, 15], scale[o], coplanar):
+            return 0
         r0, r1, r2 = p[i, 0] - packed[c, k, 12], p[i, 1] - packed[c, k, 13], \
             p[i, 2] - packed[c, k, 14]
         dist = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
@@ -354,8 +336,8 @@ def carried_edges(start, e_tri, e_from, e_to, e_cnt, e_at, corners, welded, p, c
                 t, a, z = e_tri[e], e_from[e], e_to[e]
                 ax, ay = carried(corners, t, a, p, i, normal, axes, eye)
                 bx, by = carried(corners, t, z, p, i, normal, axes, eye)
-                if _apart(ax, ay, bx, by, box) and not (ay <= box[1] < by or
-                                                       by <= box[1] < ay):
+                up, down = _level(ay, by, box[1])
+                if _apart(ax, ay, bx, by, box) and not (up or down):
                     continue
                 flat[g, 0, 0], flat[g, 0, 1], flat[g, 1, 0], flat[g, 1, 1] = ax, ay, bx, by
                 ids[g, 0], ids[g, 1] = welded[t, a], welded[t, z]

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .outlinekernels import _turn
+from .outlinekernels import _level, _turn
 from .packetkernels import _jit
 
 
@@ -131,7 +131,7 @@ def survey(uncut, r0, r1, rims, e0, e1, box, margin):
 def _crossed(ax, ay, bx, by, x, y, margin):
     """(certain, +1, -1 or 0): the edge a -> b crosses the ray in +x from x, y going up, going
     down, or not (`windingkernels._cover`'s rule)."""
-    up, down = ay <= y < by, by <= y < ay
+    up, down = _level(ay, by, y)
     if not (up or down):
         return True, 0
     ux, uy = bx - ax, by - ay

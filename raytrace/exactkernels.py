@@ -201,6 +201,21 @@ def _boxes_meet(a_lo, a_hi, k, b_lo, b_hi, i):
 
 
 @_jit(inline="always")
+def coplanar_with(corners, t, o, m0, m1, m2, tri_normal, offset, scale_t, scale_o, coplanar):
+    """Whether triangle t (unit normal m0, m1, m2, scale_t) is coplanar with p's own triangle
+    o (`candidates._keep`'s rule: nearly parallel, and every corner within COPLANAR_RELATIVE,
+    `coplanar`, of the larger scale of o's plane; tri_normal, offset (M,): `Objects`)."""
+    n0, n1, n2 = tri_normal[o, 0], tri_normal[o, 1], tri_normal[o, 2]
+    if not abs(n0 * m0 + n1 * m1 + n2 * m2) > 1 - 1e-3:
+        return False
+    off = 0.0
+    for j in range(3):
+        off = max(off, abs(corners[t, j, 0] * n0 + corners[t, j, 1] * n1
+                           + corners[t, j, 2] * n2 - offset[o]))
+    return not off > coplanar * max(scale_o, scale_t)
+
+
+@_jit(inline="always")
 def _inside_sides(centre, k, reach, i, p, sides):
     """Whether the sphere about centre[k] of radius `reach` is not wholly outside a side
     plane of pixel i's pyramid (sides (s, n, 3) unit inward normals through p (n, 3))."""
@@ -225,7 +240,6 @@ def _box_pairs(met, met_at, members, packed, kinds, lo, hi, own, tri_normal, off
     q = 0
     for i in range(met_at.shape[0] - 1):
         o = own[i]
-        n0, n1, n2 = tri_normal[o, 0], tri_normal[o, 1], tri_normal[o, 2]
         for g in range(met_at[i], met_at[i + 1]):
             c = met[g]
             for k in range(members.shape[1]):
@@ -237,15 +251,10 @@ def _box_pairs(met, met_at, members, packed, kinds, lo, hi, own, tri_normal, off
                     ok &= (packed[c, k, a] <= hi[i, a]) & (packed[c, k, 3 + a] >= lo[i, a])
                 if not ok:
                     continue
-                # coplanar with p's own triangle (`candidates._keep`)
-                if abs(n0 * packed[c, k, 6] + n1 * packed[c, k, 7]
-                       + n2 * packed[c, k, 8]) > 1 - 1e-3:
-                    off = 0.0
-                    for j in range(3):
-                        off = max(off, abs(corners[t, j, 0] * n0 + corners[t, j, 1] * n1
-                                           + corners[t, j, 2] * n2 - offset[o]))
-                    if not off > coplanar * max(scale[o], packed[c, k, 15]):
-                        continue
+                if coplanar_with(corners, t, o, packed[c, k, 6], packed[c, k, 7],
+                                 packed[c, k, 8], tri_normal, offset, packed[c, k, 15],
+                                 scale[o], coplanar):
+                    continue
                 kind = kinds[c, k]
                 # a convex object's own triangles from its outside
                 if kind & 1 and kind // 4 == obj[o] and outside[i]:

@@ -85,6 +85,14 @@ def _outline(uncut, ids, r0, r1, big, rims, e0, e1, box):
 
 
 @_jit(inline="always")
+def _level(ay, by, y):
+    """(up, down): the edge from height ay to by crosses the level y going up (from at or
+    below it to above) or going down (from above to at or below): the half-open rule by which
+    a ray along y counts an edge once, however the edges' ends sit on it."""
+    return ay <= y < by, by <= y < ay
+
+
+@_jit(inline="always")
 def _apart(ax, ay, bx, by, box):
     """Whether the box of the segment a-b misses the box x0, y0, x1, y1."""
     return min(ax, bx) > box[2] or max(ax, bx) < box[0] or min(ay, by) > box[3] or \

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .clipkernels import clipped, survey
-from .outlinekernels import _outline, _stable, _turn
+from .outlinekernels import _level, _outline, _stable, _turn
 from .packetkernels import _jit
 
 
@@ -398,8 +398,7 @@ def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin, sides):
             g0, g1 = start[b], start[b + 1]
         for g in range(g0, g1):
             f = edge[g]
-            fy, gy = ay[f], by[f]
-            up, down = fy <= my and gy > my, gy <= my and fy > my
+            up, down = _level(ay[f], by[f], my)
             if f == e or not (up or down):
                 continue
             ux, uy = bx[f] - ax[f], by[f] - ay[f]
