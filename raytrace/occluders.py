@@ -148,10 +148,10 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         owner.append(np.full(len(members[-1]), j))
     members = np.concatenate(members) if members else np.zeros((0, CLUSTER), np.int64)
     owner = np.concatenate(owner) if owner else np.zeros(0, np.int64)
-    kinds = ids.astype(np.int64) * 4 + convex + 2 * ((shell != 0).any(axis=1) & ~convex)
+    kind = ids.astype(np.int64) * 4 + convex + 2 * ((shell != 0).any(axis=1) & ~convex)
     tri_lo, tri_hi, scale, offset, packed, lo, hi, kinds, member_ids = \
-        loaded.fields(corners, normals, shell, kinds, welded, members) \
-        if loaded is not None and M else _fields(corners, normals, shell, kinds, welded, members)
+        loaded.fields(corners, normals, shell, kind, welded, members) \
+        if loaded is not None and M else _fields(corners, normals, shell, kind, welded, members)
     centre = (lo + hi) / 2
     # the half diagonal, a little more for its own rounding: the sphere must hold the box
     radius = np.linalg.norm(hi - lo, axis=1) / 2 * (1 + 1e-12) + 1e-300
