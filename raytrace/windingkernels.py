@@ -242,7 +242,8 @@ def _sweep(order, box, ax, ay, bx, by, ia, ib, cnt, margin, ent, pos, k, p0, q0)
             if not (bottom <= box[3, q] and box[2, q] <= top):
                 continue
             i, j = order[p], order[q]
-            state, t_i, t_j, x, y, turn = _pair(i, j, ax, ay, bx, by, ia, ib, margin)
+            state, t_i, t_j, x, y, turn = _pair(ax[i], ay[i], bx[i], by[i], ia[i], ib[i], ax[j],
+                                                ay[j], bx[j], by[j], ia[j], ib[j], margin)
             if state < 0:
                 return -1, k, p, q
             if state == 0:
@@ -268,30 +269,32 @@ def _grown(ent, pos, k):
 
 
 @_jit(inline="always")
-def _pair(i, j, ax, ay, bx, by, ia, ib, margin):
-    """Edges i, j whose boxes meet (i first along x): (1 where they cross, with t along i, t
-    along j, the crossing point x, y and the sign of j x i; 0 where they lie apart or share a
-    corner, certainly; -1 where in doubt), with `windings._pieces`'s products."""
-    dxi, dyi, dxj, dyj = bx[i] - ax[i], by[i] - ay[i], bx[j] - ax[j], by[j] - ay[j]
+def _pair(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin):
+    """Edges i, j (starts, ends, corner ids) whose boxes meet (i first along x): (1 where they
+    cross, with t along i, t along j, the crossing point x, y and the sign of j x i; 0 where
+    they lie apart or share a corner, certainly; -1 where in doubt), with `windings._pieces`'s
+    products.  Scalars, not the outline's arrays: numba counts references to an array passed
+    to an inlined function with branches, on each call (4x the time of the test itself)."""
+    dxi, dyi, dxj, dyj = bxi - axi, byi - ayi, bxj - axj, byj - ayj
     si, sj = abs(dxi) + abs(dyi), abs(dxj) + abs(dyj)
-    ci, oi = _turn(dxi, dyi, ax[j] - ax[i], ay[j] - ay[i], si, margin)
-    di, pi = _turn(dxi, dyi, bx[j] - ax[i], by[j] - ay[i], si, margin)
+    ci, oi = _turn(dxi, dyi, axj - axi, ayj - ayi, si, margin)
+    di, pi = _turn(dxi, dyi, bxj - axi, byj - ayi, si, margin)
     if oi and pi and ci * di > 0:
         return 0, 0.0, 0.0, 0.0, 0.0, 0.0
-    cj, oj = _turn(dxj, dyj, ax[i] - ax[j], ay[i] - ay[j], sj, margin)
-    dj, pj = _turn(dxj, dyj, bx[i] - ax[j], by[i] - ay[j], sj, margin)
-    shared = ia[i] == ia[j] or ia[i] == ib[j] or ib[i] == ia[j] or ib[i] == ib[j]
+    cj, oj = _turn(dxj, dyj, axi - axj, ayi - ayj, sj, margin)
+    dj, pj = _turn(dxj, dyj, bxi - axj, byi - ayj, sj, margin)
+    shared = iai == iaj or iai == ibj or ibi == iaj or ibi == ibj
     apart = oj and pj and cj * dj > 0
     cross = oi and pi and oj and pj and ci * di < 0 and cj * dj < 0 and not shared
     if not (apart or cross or shared):
         return -1, 0.0, 0.0, 0.0, 0.0, 0.0
     if shared and not apart:
-        at_a = ia[i] == ia[j] or ia[i] == ib[j]          # the corner is i's start
-        x, y = (ax[i], ay[i]) if at_a else (bx[i], by[i])
-        ux, uy = ((bx[i], by[i]) if at_a else (ax[i], ay[i]))
+        at_a = iai == iaj or iai == ibj                  # the corner is i's start
+        x, y = (axi, ayi) if at_a else (bxi, byi)
+        ux, uy = ((bxi, byi) if at_a else (axi, ayi))
         ux, uy = ux - x, uy - y
-        other_at_a = ia[j] == (ia[i] if at_a else ib[i])
-        vx, vy = ((bx[j], by[j]) if other_at_a else (ax[j], ay[j]))
+        other_at_a = iaj == (iai if at_a else ibi)
+        vx, vy = ((bxj, byj) if other_at_a else (axj, ayj))
         vx, vy = vx - x, vy - y
         _, sure = _turn(ux, uy, vx, vy, abs(ux) + abs(uy), margin)
         if not (sure or ux * vx + uy * vy < 0):
@@ -299,7 +302,7 @@ def _pair(i, j, ax, ay, bx, by, ia, ib, margin):
     if not cross:
         return 0, 0.0, 0.0, 0.0, 0.0, 0.0
     t_j, t_i = ci / (ci - di), cj / (cj - dj)
-    x, y = ax[j] + t_j * dxj, ay[j] + t_j * dyj
+    x, y = axj + t_j * dxj, ayj + t_j * dyj
     turn = np.sign(dxj * dyi - dyj * dxi)
     return 1, t_i, t_j, x, y, turn
 
