@@ -339,12 +339,15 @@ def keep_left(a, c, s0, s1, e0, e1, b, d):
     q = 0
     for i in range(c):
         j = i + 1 if i + 1 < c else 0
-        if d[i] >= 0:
-            b[q, 0], b[q, 1] = a[i, 0], a[i, 1]
+        # read before any branch: numba counts references to an inlined function's array
+        # read under a branch, on each call
+        di, dj, ai0, ai1, aj0, aj1 = d[i], d[j], a[i, 0], a[i, 1], a[j, 0], a[j, 1]
+        if di >= 0:
+            b[q, 0], b[q, 1] = ai0, ai1
             q += 1
-        if (d[i] >= 0) != (d[j] >= 0):
-            t = d[i] / (d[i] - d[j])
-            b[q, 0] = a[i, 0] + t * (a[j, 0] - a[i, 0])
-            b[q, 1] = a[i, 1] + t * (a[j, 1] - a[i, 1])
+        if (di >= 0) != (dj >= 0):
+            t = di / (di - dj)
+            b[q, 0] = ai0 + t * (aj0 - ai0)
+            b[q, 1] = ai1 + t * (aj1 - ai1)
             q += 1
     return q
