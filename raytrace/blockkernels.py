@@ -68,6 +68,10 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
             low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
             far_rel = max(far_rel, rel[i])
         q = 0
+        # room for every triangle of the block's clusters, made here, not in the loop: an
+        # array replaced within a loop has numba count references to it on each pass
+        while nu + most > unsteady.shape[0]:
+            unsteady, loose = _grow(unsteady, nu), _grow(loose, nu)
         _slacks(i0, i1, p, sides, slack)
         for c in range(meet.shape[1]):
             if not meet[b, c]:
@@ -83,8 +87,6 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                 if sign == 3:
                     continue
                 if sign == 0 or sign == 2:
-                    if nu == unsteady.shape[0]:
-                        unsteady, loose = _grow(unsteady, nu), _grow(loose, nu)
                     unsteady[nu], loose[nu] = t, sign == 0
                     nu += 1
                     continue
@@ -95,11 +97,12 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                     k_tri[q], k_s0[q], k_s1[q] = t, a, z
                     q += 1
         first, net = _tally(k_lo[:q], k_hi[:q], k_way[:q])
+        # room made before the loop, as for the unsteady
+        while ne + first.shape[0] > e_tri.shape[0]:
+            e_tri, e_from = _grow(e_tri, ne), _grow(e_from, ne)
+            e_to, e_cnt = _grow(e_to, ne), _grow(e_cnt, ne)
         for g in range(first.shape[0]):
             f = first[g]
-            if ne == e_tri.shape[0]:
-                e_tri, e_from = _grow(e_tri, ne), _grow(e_from, ne)
-                e_to, e_cnt = _grow(e_to, ne), _grow(e_cnt, ne)
             # the first edge runs lo -> hi where way > 0; the net where net > 0
             forward = (k_way[f] > 0) == (net[g] > 0)
             e_tri[ne] = k_tri[f]
