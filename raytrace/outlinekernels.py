@@ -10,8 +10,11 @@ import numpy as np
 
 from .packetkernels import _jit
 
-# Keys `_stable` orders by insertion (quadratic: a few only).
-FEW = 64
+# Keys `_stable` orders by insertion (quadratic: a few only).  A pixel's outline cut to the
+# light's box has 43 edges at the median on the bunny 128 x 128, 99 at the 3rd quartile, 164 at
+# the 9th decile: up to 128 keys by insertion the winding kernel takes 0.965x the time it takes
+# up to 64.
+FEW = 128
 
 
 @_jit(inline="always")
