@@ -12,6 +12,10 @@ with it) are the pixels' own pairs, as before.  The steady ones are all the tria
 clusters that meet any of the block's pyramids, also those whose shadows miss a pixel's
 light: what they add lies outside the light, and the outline is cut to a box about it
 (`raytrace.clipkernels`).
+
+`block_edges` makes room for a block's unsteady triangles (as many as its clusters hold) and
+for its outline edges before its loops, never within them: numba counts references to an
+array a loop may replace, on every pass (docs/speed.md, "Reference counts").
 """
 
 from __future__ import annotations
@@ -68,9 +72,7 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
             low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
             far_rel = max(far_rel, rel[i])
         q = 0
-        # room for every triangle of the block's clusters, made here, not in the loop: an
-        # array replaced within a loop has numba count references to it on each pass
-        while nu + most > unsteady.shape[0]:
+        while nu + most > unsteady.shape[0]:             # room: see the module docstring
             unsteady, loose = _grow(unsteady, nu), _grow(loose, nu)
         _slacks(i0, i1, p, sides, slack)
         for c in range(meet.shape[1]):
@@ -97,7 +99,6 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                     k_tri[q], k_s0[q], k_s1[q] = t, a, z
                     q += 1
         first, net = _tally(k_lo[:q], k_hi[:q], k_way[:q])
-        # room made before the loop, as for the unsteady
         while ne + first.shape[0] > e_tri.shape[0]:
             e_tri, e_from = _grow(e_tri, ne), _grow(e_from, ne)
             e_to, e_cnt = _grow(e_to, ne), _grow(e_cnt, ne)
