@@ -312,42 +312,45 @@ def inside(cut, count, inner, inner_count):
     width = m + k
     out = np.zeros((n, width, 2))
     got = np.zeros(n, np.int64)
-    a, b = np.empty((width, 2)), np.empty((width, 2))
+    buf = np.empty((2, width, 2))
     d = np.empty(width)
     for r in range(n):
-        c = inner_count[r]
+        c, s = inner_count[r], 0
         for j in range(c):
-            a[j, 0], a[j, 1] = inner[r, j, 0], inner[r, j, 1]
+            buf[0, j, 0], buf[0, j, 1] = inner[r, j, 0], inner[r, j, 1]
         for e in range(count[r]):
             f = e + 1 if e + 1 < count[r] else 0
             s0, s1 = cut[r, e, 0], cut[r, e, 1]
-            q = keep_left(a, c, s0, s1, cut[r, f, 0] - s0, cut[r, f, 1] - s1, b, d)
-            a, b, c = b, a, q
+            c = keep_left(buf, s, c, s0, s1, cut[r, f, 0] - s0, cut[r, f, 1] - s1, d)
+            s = 1 - s
         for j in range(c):
-            out[r, j, 0], out[r, j, 1] = a[j, 0], a[j, 1]
+            out[r, j, 0], out[r, j, 1] = buf[s, j, 0], buf[s, j, 1]
         got[r] = c
     return out, got
 
 
 @_jit(inline="always")
-def keep_left(a, c, s0, s1, e0, e1, b, d):
-    """The polygon a[:c] (m, 2) cut to the left of the line through (s0, s1) along (e0, e1)
-    into b (`regions.inside`'s arithmetic for one edge): their count (at most 2 c); d (c,)
-    scratch.  `raytrace.measurekernels` clips its fans by it too."""
+def keep_left(buf, s, c, s0, s1, e0, e1, d):
+    """The polygon buf[s, :c] (2, m, 2) cut to the left of the line through (s0, s1) along
+    (e0, e1) into buf[1 - s] (`regions.inside`'s arithmetic for one edge): their count (at
+    most 2 c); d (c,) scratch.  `raytrace.measurekernels` clips its fans by it too.  One
+    buffer and the side it reads, not two arrays swapped at each edge, and every read before
+    a branch: numba counts references to an array an inlined function reads under a branch,
+    or that a loop replaces, on every call (docs/speed.md, "Reference counts")."""
+    t_ = 1 - s
     for j in range(c):
-        d[j] = e0 * (a[j, 1] - s1) - e1 * (a[j, 0] - s0)
+        d[j] = e0 * (buf[s, j, 1] - s1) - e1 * (buf[s, j, 0] - s0)
     q = 0
     for i in range(c):
         j = i + 1 if i + 1 < c else 0
-        # read before any branch: numba counts references to an inlined function's array
-        # read under a branch, on each call
-        di, dj, ai0, ai1, aj0, aj1 = d[i], d[j], a[i, 0], a[i, 1], a[j, 0], a[j, 1]
+        di, dj = d[i], d[j]
+        ai0, ai1, aj0, aj1 = buf[s, i, 0], buf[s, i, 1], buf[s, j, 0], buf[s, j, 1]
         if di >= 0:
-            b[q, 0], b[q, 1] = ai0, ai1
+            buf[t_, q, 0], buf[t_, q, 1] = ai0, ai1
             q += 1
         if (di >= 0) != (dj >= 0):
             t = di / (di - dj)
-            b[q, 0] = ai0 + t * (aj0 - ai0)
-            b[q, 1] = ai1 + t * (aj1 - ai1)
+            buf[t_, q, 0] = ai0 + t * (aj0 - ai0)
+            buf[t_, q, 1] = ai1 + t * (aj1 - ai1)
             q += 1
     return q

@@ -74,20 +74,20 @@ def _space(x, y, frame, mode, eye):
 
 
 @_jit(inline="always")
-def _ring(poly, c, frame, mode, eye, normal):
-    """(|area|, |Lambert's irradiance|) of the closed ring poly[:c] (k, 2) seen from eye with
+def _ring(buf, s, c, frame, mode, eye, normal):
+    """(|area|, |Lambert's irradiance|) of the closed ring buf[s, :c] (k, 2) seen from eye with
     normal (3 floats each) (`polygons.ring_measures` of one ring).  The light's frame, the
     eye and the normal come as floats, not arrays: numba counts references to an array
     passed to an inlined function with branches, on each call (40 % of this kernel)."""
     area, lam = 0.0, 0.0
     if c == 0:
         return area, lam
-    x0 = _space(poly[0, 0], poly[0, 1], frame, mode, eye)
+    x0 = _space(buf[s, 0, 0], buf[s, 0, 1], frame, mode, eye)
     n0, n1, n2 = normal
     for i in range(c):
         j = i + 1 if i + 1 < c else 0
-        area += (poly[i, 0] * poly[j, 1] - poly[i, 1] * poly[j, 0]) / 2
-        x1 = _space(poly[j, 0], poly[j, 1], frame, mode, eye)
+        area += (buf[s, i, 0] * buf[s, j, 1] - buf[s, i, 1] * buf[s, j, 0]) / 2
+        x1 = _space(buf[s, j, 0], buf[s, j, 1], frame, mode, eye)
         c0 = x0[1] * x1[2] - x0[2] * x1[1]
         c1 = x0[2] * x1[0] - x0[0] * x1[2]
         c2 = x0[0] * x1[1] - x0[1] * x1[0]
@@ -102,61 +102,91 @@ def _ring(poly, c, frame, mode, eye, normal):
 
 
 @_jit(inline="always")
-def _clip(poly, many, l, r, a, c, b, d):
-    """a[:c] clipped by each edge of the convex counter-clockwise polygon poly[l, r, :many[l,
-    r]] (`exactkernels.inside` of one row) through the scratch b, d: (the corners, their
-    count, the other scratch, d), b and d grown where 2 c (the most a clip of c corners can
-    make, whatever the rounding) would not fit."""
-    m = many[l, r]
+def _clip(poly, many, l, r, buf, s, c, d):
+    """buf[s, :c] clipped by each edge of the convex counter-clockwise polygon poly[l, r,
+    :many[l, r]] (`exactkernels.inside` of one row), buf's two sides in turn, through the
+    scratch d: (the side holding the corners, their count, whether buf and d had room for
+    each edge's 2 c corners, the most a clip of c corners can make whatever the rounding;
+    where not, nothing is clipped from there on).  It grows no scratch itself: numba counts
+    references to an array a loop may replace, on every pass (docs/speed.md, "Reference
+    counts")."""
+    m, fits = many[l, r], True
     for e in range(m):
-        if 2 * c > b.shape[0]:
-            b = np.empty((2 * c, 2))
-        if c > d.shape[0]:
-            d = np.empty(2 * c)
+        fits &= (2 * c <= buf.shape[1]) & (c <= d.shape[0])
+        c = c if fits else 0
         f = e + 1 if e + 1 < m else 0
         s0, s1 = poly[l, r, e, 0], poly[l, r, e, 1]
-        q = keep_left(a, c, s0, s1, poly[l, r, f, 0] - s0, poly[l, r, f, 1] - s1, b, d)
-        a, b, c = b, a, q
-    return a, c, b, d
+        c = keep_left(buf, s, c, s0, s1, poly[l, r, f, 0] - s0, poly[l, r, f, 1] - s1, d)
+        s = 1 - s
+    return s, c, fits
 
 
 @_jit()
-def less(region, size, polys, counts, edges, start, owner, eye, normal, center, axes, mode):
+def less(region, size, polys, counts, edges, start, owner, eye, normal, center, axes, mode,
+         room=2):
     """`windmeasures._less` of a polygon light: (area (r,), irradiance (r,)) of the convex
     counter-clockwise regions region (r, k, 2), size (r,) less the unions bounded by the
     chains edges[start[o]:start[o + 1]] (e, 2, 2) of o = owner[r]: the fan of signed triangles
     from the light's centre over each chain edge, clipped by each clipper polys[l, r], counts
     [l, r] ((L, r, m, 2), (L, r): count 0 none) in turn; seen from eye (r, 3) with normals
     (r, 3), the light's plane through center (3,) with axes (2, 3), carried into space as
-    `mode` says numpy's matmul rounds (`products`)."""
+    `mode` says numpy's matmul rounds (`products`).  The clips go through scratch of `room`
+    times the corners a convex clip can make (3 and every clipper's edges, or the region's);
+    the rows whose clips find no room there (rounding can make a corner more at each edge)
+    are measured again with four times as much (`_rows`)."""
     n = region.shape[0]
-    width = max(3 + polys.shape[0] * polys.shape[2], region.shape[1])
     area, irr = np.empty(n), np.empty(n)
-    a, b = np.empty((width, 2)), np.empty((width, 2))
-    d = np.empty(width)
+    width = room * max(3 + polys.shape[0] * polys.shape[2], region.shape[1])
     frame = (center[0], center[1], center[2], axes[0, 0], axes[0, 1], axes[0, 2], axes[1, 0],
              axes[1, 1], axes[1, 2])
-    for r in range(n):
-        for j in range(size[r]):
-            a[j, 0], a[j, 1] = region[r, j, 0], region[r, j, 1]
-        seen, turned = (eye[r, 0], eye[r, 1], eye[r, 2]), (normal[r, 0], normal[r, 1], normal[r, 2])
-        whole_area, whole_irr = _ring(a, size[r], frame, mode, seen, turned)
-        fan_area, fan_irr = 0.0, 0.0
-        o = owner[r]
-        for k in range(start[o], start[o + 1]):
-            ax, ay, bx, by = edges[k, 0, 0], edges[k, 0, 1], edges[k, 1, 0], edges[k, 1, 1]
-            signed = ax * by - ay * bx
-            c = 3 if signed != 0 else 0
-            # (centre, a, b), or (b, a, centre) where it turns clockwise
-            first, last = (0, 2) if not signed < 0 else (2, 0)
-            a[first, 0], a[first, 1] = 0.0, 0.0
-            a[1, 0], a[1, 1] = ax, ay
-            a[last, 0], a[last, 1] = bx, by
-            for l in range(polys.shape[0]):
-                a, c, b, d = _clip(polys, counts, l, r, a, c, b, d)
-            got_area, got_irr = _ring(a, c, frame, mode, seen, turned)
-            sign = 1.0 if signed > 0 else -1.0 if signed < 0 else 0.0 if signed == 0 else signed
-            fan_area += sign * got_area
-            fan_irr += sign * got_irr
-        area[r], irr[r] = whole_area - fan_area, whole_irr - fan_irr
+    rows = np.arange(n)
+    while rows.shape[0] > 0:
+        rows = _rows(rows, width, area, irr, region, size, polys, counts, edges, start, owner,
+                     eye, normal, frame, mode)
+        width = max(4 * width, 8)
     return area, irr
+
+
+@_jit()
+def _rows(rows, width, area, irr, region, size, polys, counts, edges, start, owner, eye,
+          normal, frame, mode):
+    """`less` of the rows `rows` through scratch of `width` corners, into area, irr: the rows
+    that found no room there (their measures not written)."""
+    buf, d = np.empty((2, width, 2)), np.empty(width)
+    left, many = np.empty(rows.shape[0], np.int64), 0
+    for r in rows:
+        ok = max(size[r], 3) <= width
+        if ok:
+            for j in range(size[r]):
+                buf[0, j, 0], buf[0, j, 1] = region[r, j, 0], region[r, j, 1]
+            seen = (eye[r, 0], eye[r, 1], eye[r, 2])
+            turned = (normal[r, 0], normal[r, 1], normal[r, 2])
+            whole_area, whole_irr = _ring(buf, 0, size[r], frame, mode, seen, turned)
+            fan_area, fan_irr = 0.0, 0.0
+            o = owner[r]
+            for k in range(start[o], start[o + 1]):
+                ax, ay, bx, by = edges[k, 0, 0], edges[k, 0, 1], edges[k, 1, 0], edges[k, 1, 1]
+                signed = ax * by - ay * bx
+                c = 3 if signed != 0 else 0
+                # (centre, a, b), or (b, a, centre) where it turns clockwise
+                first, last = (0, 2) if not signed < 0 else (2, 0)
+                buf[0, first, 0], buf[0, first, 1] = 0.0, 0.0
+                buf[0, 1, 0], buf[0, 1, 1] = ax, ay
+                buf[0, last, 0], buf[0, last, 1] = bx, by
+                s = 0
+                for l in range(polys.shape[0]):
+                    s, c, fits = _clip(polys, counts, l, r, buf, s, c, d)
+                    ok &= fits
+                if not ok:
+                    break
+                got_area, got_irr = _ring(buf, s, c, frame, mode, seen, turned)
+                sign = 1.0 if signed > 0 else -1.0 if signed < 0 else 0.0 if signed == 0 \
+                    else signed
+                fan_area += sign * got_area
+                fan_irr += sign * got_irr
+            if ok:
+                area[r], irr[r] = whole_area - fan_area, whole_irr - fan_irr
+        if not ok:
+            left[many] = r
+            many += 1
+    return left[:many]

@@ -170,6 +170,40 @@ def test_the_rows_reach_every_case(monkeypatch):
     assert seen == {"clockwise", "through", "no length", "none", "levels", "measured"}
 
 
+_kernels = polygons.kernels
+
+
+class _Tight:
+    """`raytrace.measurekernels` whose `less` starts every row's clips in scratch of `room`
+    times a convex clip's corners (0: none at all), so the rows go round its second pass."""
+
+    def __init__(self, loaded, room: int):
+        self.loaded, self.room = loaded, room
+
+    def less(self, *args):
+        return self.loaded.less(*args, self.room)
+
+    def __getattr__(self, name: str):
+        return getattr(self.loaded, name)
+
+
+@pytest.mark.parametrize("room", [0, 1])
+@pytest.mark.parametrize("seed", range(6))
+def test_rows_with_no_room_are_measured_again_to_the_same_bytes(seed, room, monkeypatch):
+    """A row whose clips find no room in `less`' scratch is measured again in more, to the
+    same bytes as in room enough at once; with no room at all (0) every row is."""
+    args = _rows(seed)
+    light = _light()
+    whole = windmeasures._less(light, *args, False)
+    loaded = polygons.kernels("measurekernels")
+    with monkeypatch.context() as m:
+        m.setattr(polygons, "kernels", lambda name="exactkernels": _Tight(loaded, room)
+                  if name == "measurekernels" else _kernels(name))
+        tight = windmeasures._less(light, *args, False)
+    for a, b in zip(whole, tight):
+        assert a.tobytes() == b.tobytes(), (a - b)
+
+
 @pytest.mark.parametrize("seed", range(8))
 def test_numpys_own_arctan2_moves_only_the_irradiance_in_rounding(seed, monkeypatch):
     """With numpy's own arctan2 (SVML's under AVX-512): the areas still its bytes, the
