@@ -9,7 +9,9 @@ ties them (its start, its end, the crossings where it is i by j's place along x,
 it is j by i's); the ray right of a run's first piece meets every other edge of its pixel
 (`windings._right_cover`); counts are small integers, exact in float64 and in int64 here.
 tests/raytrace/test_winding_kernels.py holds the two to the same bytes.  A kernel indexes
-scalars, not row views (each view costs a reference count).  Where a box is given (the
+scalars, not row views (each view costs a reference count), and hands its inlined tests
+floats, not arrays: numba counts references to an array an inlined function reads under a
+branch, on each call (docs/speed.md, "Reference counts").  Where a box is given (the
 shared outlines of `raytrace.blockwindings`), each outline is cut to it first
 (`raytrace.clipkernels`); the numpy path has no such cut.
 """
