@@ -337,7 +337,7 @@ def keep_left(buf, s, c, s0, s1, e0, e1, d):
     buffer and the side it reads, not two arrays swapped at each edge, and every read before
     a branch: numba counts references to an array an inlined function reads under a branch,
     or that a loop replaces, on every call (docs/speed.md, "Reference counts")."""
-    t_ = 1 - s
+    w = 1 - s                                            # the side written
     for j in range(c):
         d[j] = e0 * (buf[s, j, 1] - s1) - e1 * (buf[s, j, 0] - s0)
     q = 0
@@ -346,11 +346,11 @@ def keep_left(buf, s, c, s0, s1, e0, e1, d):
         di, dj = d[i], d[j]
         ai0, ai1, aj0, aj1 = buf[s, i, 0], buf[s, i, 1], buf[s, j, 0], buf[s, j, 1]
         if di >= 0:
-            buf[t_, q, 0], buf[t_, q, 1] = ai0, ai1
+            buf[w, q, 0], buf[w, q, 1] = ai0, ai1
             q += 1
         if (di >= 0) != (dj >= 0):
             t = di / (di - dj)
-            buf[t_, q, 0] = ai0 + t * (aj0 - ai0)
-            buf[t_, q, 1] = ai1 + t * (aj1 - ai1)
+            buf[w, q, 0] = ai0 + t * (aj0 - ai0)
+            buf[w, q, 1] = ai1 + t * (aj1 - ai1)
             q += 1
     return q

@@ -67,7 +67,7 @@ def products(a, axes, mode):
 @_jit(inline="always")
 def _space(x, y, frame, mode, eye):
     """The plane point (x, y) seen from eye (3 floats): center + (x, y) @ axes - eye, frame
-    the light's center and axes (9 floats: `_frame`)."""
+    the light's center and axes' two rows (9 floats, as `less` makes it)."""
     c0, c1, c2, u0, u1, u2, v0, v1, v2 = frame
     return ((c0 + _two(x, y, u0, v0, mode)) - eye[0], (c1 + _two(x, y, u1, v1, mode)) - eye[1],
             (c2 + _two(x, y, u2, v2, mode)) - eye[2])
