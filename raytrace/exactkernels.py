@@ -304,29 +304,48 @@ def pairs(meet, members, packed, kinds, lo, hi, own, tri_normal, offset, scale, 
 
 
 @_jit()
-def inside(cut, count, inner, inner_count):
+def inside(cut, count, inner, inner_count, room=1):
     """`regions.inside`: the convex polygons inner (n, m, 2), inner_count (n,) clipped by
     each edge of the convex counter-clockwise polygons cut (n, k, 2), count (n,): (corners
-    (n, m + k, 2) zero past each count, counts (n,))."""
-    n, m, k = inner.shape[0], inner.shape[1], cut.shape[1]
-    width = m + k
+    (n, w, 2), w at least room (m + k), zero past each count, counts (n,)).  A convex clip
+    makes m + k corners at most, but rounding can put two where one belongs, so where a
+    row's corners would not fit its scratch (twice w) or w, every row is clipped again in
+    four times as much: numba writes past no array's end unchecked."""
+    width = max(room * (inner.shape[1] + cut.shape[1]), 1)
+    while True:
+        out, got, fits = _inside(cut, count, inner, inner_count, width)
+        if fits:
+            return out, got
+        width *= 4
+
+
+@_jit()
+def _inside(cut, count, inner, inner_count, width):
+    """`inside` with `width` corners a row: (corners, counts, whether each row fit)."""
+    n = inner.shape[0]
     out = np.zeros((n, width, 2))
     got = np.zeros(n, np.int64)
-    buf = np.empty((2, width, 2))
-    d = np.empty(width)
+    buf = np.empty((2, 2 * width, 2))
+    d = np.empty(2 * width)
     for r in range(n):
         c, s = inner_count[r], 0
+        if c > width:
+            return out, got, False
         for j in range(c):
             buf[0, j, 0], buf[0, j, 1] = inner[r, j, 0], inner[r, j, 1]
         for e in range(count[r]):
+            if 2 * c > buf.shape[1]:
+                return out, got, False
             f = e + 1 if e + 1 < count[r] else 0
             s0, s1 = cut[r, e, 0], cut[r, e, 1]
             c = keep_left(buf, s, c, s0, s1, cut[r, f, 0] - s0, cut[r, f, 1] - s1, d)
             s = 1 - s
+        if c > width:
+            return out, got, False
         for j in range(c):
             out[r, j, 0], out[r, j, 1] = buf[s, j, 0], buf[s, j, 1]
         got[r] = c
-    return out, got
+    return out, got, True
 
 
 @_jit(inline="always")

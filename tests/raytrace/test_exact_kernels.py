@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from raytrace import pyramid, regions
+from raytrace import polygons, pyramid, regions
 from raytrace.lightshapes import FramedLight
 from shadowvol.planes import default_plane_axes
 
@@ -156,10 +156,9 @@ def test_exact_visibility_is_the_same_bytes_without_the_kernel(monkeypatch):
         assert got.tobytes() == want.tobytes()
 
 
-@pytest.mark.parametrize("seed", range(4))
-def test_the_kernel_clips_numpys_polygons_inside(seed, monkeypatch):
-    """`regions.inside`: triangles (some of no area) clipped by convex polygons of 3 to 6
-    counter-clockwise corners, some corners on their edges; the corners up to each count."""
+def _polygons_to_clip(seed: int) -> tuple[np.ndarray, ...]:
+    """Triangles (some of no area) and convex polygons of 3 to 6 counter-clockwise corners
+    to clip them by, some of the triangles' corners on the polygons' first edges."""
     rng = np.random.default_rng(seed)
     n = 500
     count = rng.integers(3, 7, n)
@@ -170,6 +169,30 @@ def test_the_kernel_clips_numpys_polygons_inside(seed, monkeypatch):
     on = rng.random(n) < 0.2            # a corner on the polygon's first edge
     inner[on, 0] = cut[on, 0] + rng.uniform(0, 1, (int(on.sum()), 1)) * (cut[on, 1] - cut[on, 0])
     inner_count = np.where(rng.random(n) < 0.1, 0, 3)
+    return cut, count, inner, inner_count
+
+
+@pytest.mark.parametrize("room", [0, 1])
+@pytest.mark.parametrize("seed", range(3))
+def test_a_clip_with_no_room_is_done_again_to_the_same_corners(seed, room):
+    """`exactkernels.inside` started with no room (0: every row goes round again in more)
+    or room for m + k corners gives the same corners and counts as with room to spare."""
+    loaded = polygons.kernels()
+    args = _polygons_to_clip(seed)
+    want = loaded.inside(*args, 4)
+    got = loaded.inside(*args, room)
+    assert got[0].shape[1] >= args[2].shape[1] + args[0].shape[1] or room == 0
+    np.testing.assert_array_equal(got[1], want[1])
+    most = int(want[1].max())
+    keep = np.arange(most)[None] < want[1][:, None]
+    assert got[0][:, :most][keep].tobytes() == want[0][:, :most][keep].tobytes()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_kernel_clips_numpys_polygons_inside(seed, monkeypatch):
+    """`regions.inside`: triangles (some of no area) clipped by convex polygons of 3 to 6
+    counter-clockwise corners, some corners on their edges; the corners up to each count."""
+    cut, count, inner, inner_count = _polygons_to_clip(seed)
     fast = regions.inside(cut, count, inner, inner_count)
     monkeypatch.setitem(sys.modules, "raytrace.exactkernels", None)
     slow = regions.inside(cut, count, inner, inner_count)
