@@ -321,7 +321,8 @@ def inside(cut, count, inner, inner_count, room=1):
 
 @_jit()
 def _inside(cut, count, inner, inner_count, width):
-    """`inside` with `width` corners a row: (corners, counts, whether each row fit)."""
+    """`inside` with `width` corners a row: (corners, counts, whether every row fit: False
+    at the first that did not, the rest left undone)."""
     n = inner.shape[0]
     out = np.zeros((n, width, 2))
     got = np.zeros(n, np.int64)

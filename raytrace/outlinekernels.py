@@ -148,8 +148,8 @@ def _order(lo, hi, big):
 @_jit()
 def _stable(key):
     """The order of key (k,) in a stable sort (np.argsort's, mergesort): up to FEW keys with
-    no NaN by insertion (a winding kernel's outline: ~40 keys, 1.7x faster than the quick
-    sort), else a quick sort, then each run of equal keys (NaNs one run) in order of place."""
+    no NaN by insertion (a winding kernel's outline: FEW's comment), else a quick sort, then
+    each run of equal keys (NaNs one run) in order of place."""
     if key.shape[0] <= FEW:
         order, plain = np.empty(key.shape[0], np.int64), True
         for a in range(key.shape[0]):
