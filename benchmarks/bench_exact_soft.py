@@ -198,8 +198,8 @@ def light_sides(size: int = 128, sides=(0.125, 0.25, 0.5, 0.75, 1.0, 2.0), calls
     make = make or bunny_rect_scene
     print(f"{size}x{size} by the light's side, median CPU ms of {calls} calls each in turn "
           "(exact / counting 256):")
+    base = make(size)
     for side in sides:
-        base = make(size)
         scene = base.replace(lights=[dataclasses.replace(base.lights[0], size=[side, side])])
         counted = with_samples(scene, 256)
         exact = exact_soft.exact_visibility(scene).visibility[0]
