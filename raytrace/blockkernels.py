@@ -13,9 +13,15 @@ clusters that meet any of the block's pyramids, also those whose shadows miss a 
 light: what they add lies outside the light, and the outline is cut to a box about it
 (`raytrace.clipkernels`).
 
+Where an object and its holes' caps wind 0 times about the block's points and the light, its
+triangles turned away from every point of the block are left out, but for those a segment
+through a hole may meet (`raytrace.onewaykernels`, the one-way rule).
+
 `block_edges` makes room for a block's unsteady triangles (as many as its clusters hold) and
 for its outline edges before its loops, never within them: numba counts references to an
-array a loop may replace, on every pass (docs/speed.md, "Reference counts").
+array a loop may replace, on every pass (docs/speed.md, "Reference counts"); and it calls no
+function for a member that is not inlined (a call counts references to each array it is
+handed: the one-way rule's tests wait for `onewaykernels.settle`, once a block).
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from .exactkernels import _boxes_meet, carried, coplanar_with, seen_from
+from .onewaykernels import boxes_touch, clear, push, settle, spot
 from .outlinekernels import _apart, _level, _tally
 from .packetkernels import _jit
 
@@ -34,50 +41,53 @@ FACING = 2.0 ** -20
 
 @_jit()
 def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri_normal,
-                offset, scale, corners, rel, reach, coplanar, sides, most):
+                offset, scale, corners, rel, reach, coplanar, sides, most, ways):
     """For the blocks of pixels start (b + 1,) (each block's pixels, in order): (the blocks'
     outline edges: tri, from, to (e,) a triangle and its corners (0-2) the edge runs between,
     the way its net count is positive, count (e,), where each block's start (b + 1,); the
     unsteady triangles (u,), whether each is free from some of the block's pixels only or
     is one's own or coplanar with it (u,) (else it is free from each, turned either way),
-    where each block's start (b + 1,); whether a block has a convex object's triangle (b,):
-    its pixels are left to the pixel-by-pixel path, whose hulls unite such objects; a guard,
-    as `blockwindings` gives no such block clusters: dropping it slowed numba's loop ~6 %).
-    A triangle whose box's sphere lies outside a side plane of the block's first pixel's
-    pyramid (sides (s, n, 3) unit inward normals through p), lowered by as much as the
-    block's other pixels lie below it, is left out (`_near`: it meets no pixel's pyramid).
-    meet (b, C): the clusters meeting some pixel's pyramid of each block; members, packed,
-    kinds, welded (C, CLUSTER, 3) the members' corner ids: `occluders.Objects`; h (C, CLUSTER,
-    3) the members' corners' heights over the light's plane (`candidates.heights`), by member
-    as packed, not (M, 3) read at random (10 % of this kernel); p (n, 3), top (n,) p's height;
-    own (n,); tri_normal, offset, scale (M,); rel (n,) |p - centre|; reach:
-    `pyramid.UNCUT_REACH` of the light; coplanar: `candidates.COPLANAR_RELATIVE`; most: the
-    most triangles the clusters of a block hold."""
-    n_blocks, width = start.shape[0] - 1, members.shape[1]
+    where each block's start (b + 1,); whether a block has a convex object's triangle (b,),
+    a guard (the pixel-by-pixel path unites those as hulls); whether each unsteady triangle
+    may be left out where it turns away from a pixel (u,): `onewaykernels`), of the
+    triangles `_near` keeps.  meet (b, C): the clusters meeting some pixel's pyramid of each
+    block (sides (s, n, 3) their unit inward normals); members, packed, kinds, welded (C,
+    CLUSTER, 3) the members' corner ids: `occluders.Objects`; h (C, CLUSTER, 3) their
+    corners' heights over the light's plane, by member; p (n, 3), top (n,) its height; own
+    (n,); tri_normal, offset, scale (M,); rel (n,) |p - centre|; reach: UNCUT_REACH of the
+    light; coplanar: COPLANAR_RELATIVE; most: the most triangles a block's clusters hold;
+    ways: each cluster's object (C,), whether each may take the one-way rule
+    (`blockwindings._one_way`), its holes (`Objects.holes`' first three), the clusters'
+    spheres (centre, radius)."""
+    n_blocks, width, owner, one_way = start.shape[0] - 1, members.shape[1], ways[0], ways[1]
     e_tri, e_from = np.empty(1024, np.int64), np.empty(1024, np.int64)
     e_to, e_cnt = np.empty(1024, np.int64), np.empty(1024, np.int64)
     e_at, u_at = np.zeros(n_blocks + 1, np.int64), np.zeros(n_blocks + 1, np.int64)
     unsteady, loose = np.empty(1024, np.int64), np.empty(1024, np.bool_)
+    u_c, u_way = np.empty(1024, np.int64), np.empty(1024, np.bool_)
     convex = np.zeros(n_blocks, np.bool_)
-    # one block's steady edges: lo, hi, way, and the triangle and corners each came from
-    room = 3 * most
-    k_lo, k_hi, k_way = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
-    k_tri, k_s0, k_s1 = np.empty(room, np.int64), np.empty(room, np.int64), np.empty(room, np.int64)
+    # a block's steady edges (lo, hi, way, its triangle and corners), its members turned away,
+    # then those in doubt (cluster, member); per object and cluster the one-way rule's state
+    keys, later = np.empty((6, 3 * most), np.int64), np.empty((2, 2 * most), np.int64)
+    way, seen = np.zeros(one_way.shape[0], np.bool_), np.full(one_way.shape[0], -1, np.int64)
+    cone, axes = np.full(meet.shape[1], -1, np.int64), np.empty((ways[3].shape[0], 6))
     ne = nu = np.int64(0)         # not a literal (`windingkernels.boundaries`)
-    slack = np.empty(sides.shape[0])
+    slack, box = np.empty(sides.shape[0]), np.empty(7)
     for b in range(n_blocks):
         i0, i1 = start[b], start[b + 1]
-        low_top, high_top, far_rel = np.inf, 0.0, 0.0
-        for i in range(i0, i1):
-            low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
-            far_rel = max(far_rel, rel[i])
-        q = 0
+        low_top, high_top, far_rel = _tops(i0, i1, top, rel)
+        q = nd = nt = 0
         while nu + most > unsteady.shape[0]:             # room: see the module docstring
             unsteady, loose = _grow(unsteady, nu), _grow(loose, nu)
+            u_c, u_way = _grow(u_c, nu), _grow(u_way, nu)
         _slacks(i0, i1, p, sides, slack)
+        spot(i0, i1, p, box)
         for c in range(meet.shape[1]):
             if not meet[b, c]:
                 continue
+            o = owner[c]
+            if seen[o] != b:
+                seen[o], way[o] = b, one_way[o] and _ways(o, i0, i1, p, ways, axes, sides, slack)
             for k in range(width):
                 t = members[c, k]
                 if t < 0 or not _near(c, k, i0, packed, p, sides, slack):
@@ -86,33 +96,73 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                     convex[b] = True
                 sign = _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset,
                                scale, corners, low_top, high_top, far_rel, reach, coplanar)
-                if sign == 3:
+                if sign == 1 or sign == -1:
+                    if sign < 0 and way[o]:             # `settle` pushes it or not
+                        later[0, nd], later[1, nd] = c, k
+                        nd += 1
+                    else:
+                        q = push(q, sign, c, k, t, welded, keys)
                     continue
-                if sign == 0 or sign == 2:
-                    unsteady[nu], loose[nu] = t, sign == 0
+                if way[o] and boxes_touch(c, k, packed, box, FACING):    # `settle` tests it
+                    later[0, most + nt], later[1, most + nt] = c, k
+                    nt += 1
+                if sign != 3:
+                    unsteady[nu], loose[nu], u_c[nu] = t, sign == 0, c
                     nu += 1
-                    continue
-                for e in range(3):
-                    a, z = (e, (e + 1) % 3) if sign > 0 else ((e + 1) % 3, e)
-                    ka, kb = welded[c, k, a], welded[c, k, z]
-                    k_lo[q], k_hi[q], k_way[q] = min(ka, kb), max(ka, kb), 1 if ka < kb else -1
-                    k_tri[q], k_s0[q], k_s1[q] = t, a, z
-                    q += 1
-        first, net = _tally(k_lo[:q], k_hi[:q], k_way[:q])
+        q = settle(q, nd, nt, later, most, u_at[b], nu, u_c, u_way, b, i0, i1, p, own, way,
+                   cone, axes, ways, members, welded, keys, (packed, corners, tri_normal,
+                                                             offset, scale, coplanar, FACING))
+        first, net = _tally(keys[0, :q], keys[1, :q], keys[2, :q])
         while ne + first.shape[0] > e_tri.shape[0]:
             e_tri, e_from = _grow(e_tri, ne), _grow(e_from, ne)
             e_to, e_cnt = _grow(e_to, ne), _grow(e_cnt, ne)
-        for g in range(first.shape[0]):
-            f = first[g]
-            # the first edge runs lo -> hi where way > 0; the net where net > 0
-            forward = (k_way[f] > 0) == (net[g] > 0)
-            e_tri[ne] = k_tri[f]
-            e_from[ne], e_to[ne] = (k_s0[f], k_s1[f]) if forward else (k_s1[f], k_s0[f])
-            e_cnt[ne] = abs(net[g])
-            ne += 1
+        ne = _collect(first, net, keys, e_tri, e_from, e_to, e_cnt, ne)
         e_at[b + 1], u_at[b + 1] = ne, nu
     return e_tri[:ne], e_from[:ne], e_to[:ne], e_cnt[:ne], e_at, unsteady[:nu], loose[:nu], \
-        u_at, convex
+        u_at, convex, u_way[:nu]
+
+
+@_jit(inline="always")
+def _tops(i0, i1, top, rel):
+    """The lowest and highest of the block's pixels' heights top i0..i1, and the farthest of
+    their distances rel from the light's centre."""
+    low_top, high_top, far_rel = np.inf, 0.0, 0.0
+    for i in range(i0, i1):
+        low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
+        far_rel = max(far_rel, rel[i])
+    return low_top, high_top, far_rel
+
+
+@_jit()
+def _collect(first, net, keys, e_tri, e_from, e_to, e_cnt, ne):
+    """The block's outline edges from its tally (first, net: `outlinekernels._tally` of
+    keys' (6, q) lo, hi, way) written from ne on, each from its first edge's triangle and
+    corners (keys' last three), run the way its net count is positive: the next ne."""
+    for g in range(first.shape[0]):
+        f = first[g]
+        # the first edge runs lo -> hi where way > 0; the net where net > 0
+        forward = (keys[2, f] > 0) == (net[g] > 0)
+        e_tri[ne] = keys[3, f]
+        e_from[ne], e_to[ne] = (keys[4, f], keys[5, f]) if forward else (keys[5, f], keys[4, f])
+        e_cnt[ne] = abs(net[g])
+        ne += 1
+    return ne
+
+
+@_jit()
+def _ways(o, i0, i1, p, ways, axes, sides, slack):
+    """Whether object o may take the one-way rule in the block of pixels i0..i1
+    (`onewaykernels.clear`), with its holes' axes made; a hole whose ball lies below a
+    lowered side plane of the first p's pyramid meets no pixel's pyramid (`_near`): no
+    segment from a p to the light crosses its cap, and its sine is -1 (none of its cone
+    is kept)."""
+    out = clear(o, i0, i1, p, ways, axes)
+    at, centre, radius = ways[2], ways[3], ways[4]
+    for g in range(at[o], at[o + 1]):
+        if not _above(centre[g, 0], centre[g, 1], centre[g, 2], radius[g] * (1 + 2.0 ** -20),
+                      i0, p, sides, slack):
+            axes[g, 3] = -1.0
+    return out
 
 
 @_jit(inline="always")
@@ -233,7 +283,7 @@ def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height
 
 @_jit()
 def own_candidates(block, unsteady, to_cut, u_at, own, tri_lo, tri_hi, lo, hi, tri_normal,
-                   offset, scale, corners, coplanar):
+                   offset, scale, corners, coplanar, p, u_way):
     """Each pixel's pairs of its block's unsteady triangles (`blockwindings._own_pairs`):
     (pix, tri (f,): those free from every pixel of the block; pix, tri (k,): of the others
     (to_cut (u,)), those whose boxes (tri_lo, tri_hi (M, 3)) meet the pixel's pyramid's box
@@ -241,7 +291,9 @@ def own_candidates(block, unsteady, to_cut, u_at, own, tri_lo, tri_hi, lo, hi, t
     its other rules never apply here, as no block that meets a convex object's cluster has
     unsteady triangles, `blockwindings.chains`, and no closed object's faces are left out),
     each by pixel, in the order of unsteady; block (n,) each pixel's, u_at (b + 1,);
-    tri_normal, offset, scale (M,): `occluders.Objects`; coplanar: COPLANAR_RELATIVE."""
+    tri_normal, offset, scale (M,): `occluders.Objects`; coplanar: COPLANAR_RELATIVE; but
+    none that may be left out (u_way (u,), `block_edges`) and is turned away from the
+    pixel's p (n, 3) (off its plane by more than FACING of their distance, behind it)."""
     n = block.shape[0]
     total = 0
     for i in range(n):
@@ -253,6 +305,8 @@ def own_candidates(block, unsteady, to_cut, u_at, own, tri_lo, tri_hi, lo, hi, t
         o = own[i]
         for g in range(u_at[block[i]], u_at[block[i] + 1]):
             t = unsteady[g]
+            if u_way[g] and _away(t, i, p, tri_normal, corners):
+                continue
             if not to_cut[g]:
                 f_pix[f], f_tri[f] = i, t
                 f += 1
@@ -264,6 +318,16 @@ def own_candidates(block, unsteady, to_cut, u_at, own, tri_lo, tri_hi, lo, hi, t
             k_pix[k], k_tri[k] = i, t
             k += 1
     return f_pix[:f], f_tri[:f], k_pix[:k], k_tri[:k]
+
+
+@_jit(inline="always")
+def _away(t, i, p, tri_normal, corners):
+    """Whether triangle t is turned away from p_i: p_i behind its plane by more than FACING
+    of p_i's distance from its first corner (`_steady`'s test)."""
+    r0, r1, r2 = p[i, 0] - corners[t, 0, 0], p[i, 1] - corners[t, 0, 1], \
+        p[i, 2] - corners[t, 0, 2]
+    s = tri_normal[t, 0] * r0 + tri_normal[t, 1] * r1 + tri_normal[t, 2] * r2
+    return s < -FACING * np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
 
 
 @_jit()

@@ -25,11 +25,15 @@ from .polygons import dot, kernels
 
 # Outline edges carried at once (whole blocks: their arrays stay in the caches).
 CARRIED = 1 << 16
+# The most holes an object may have for the one-way rule (`_one_way`): each is a cone to test.
+HOLES = 64
+_NO_HOLES = (np.zeros(1, np.int64), np.zeros((0, 3)), np.zeros(0))
 
 
 def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndarray,
            p: np.ndarray, own: np.ndarray, where: np.ndarray, width: int, block: int,
-           crowded: int = 0) -> tuple[np.ndarray, np.ndarray, tuple | None]:
+           crowded: int = 0, eye: float = np.inf
+           ) -> tuple[np.ndarray, np.ndarray, tuple | None]:
     """(n,) object each: the boundary of each pixel's shadows' union inside the light's box
     (`windings.boundaries`), None where it is left to the pixel-by-pixel path (module) or
     the kernels are missing; and the few shadows that are not free at a contact, left out of
@@ -39,7 +43,9 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     pixel's block (n,)), None where no blocks were made; points p (n, 3) on triangles own
     (n,) at image pixels where (n,) of a frame `width` wide, in blocks of `block` a side; h
     (C, CLUSTER, 3): the cluster members' corners' heights (`candidates.heights`' third);
-    crowded: a block that meets no more triangles is left out."""
+    crowded: a block that meets no more triangles is left out; eye: how far from the eye (the
+    frame's origin) every primary ray starts (the near plane's farthest corner; the one-way
+    rule, `_one_way`, holds no object nearer; inf: none)."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
     member = objects.members >= 0
@@ -72,14 +78,18 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     if hull.all():
         return out, out_loose, met
     near[hull] = False
-    e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex = loaded.block_edges(
-        start, near, objects.members, objects.packed, objects.kinds, objects.member_ids, h, p,
-        top, own, objects.normal, objects.offset, objects.scale, corners,
-        np.sqrt(dot(p - light.center, p - light.center)),
-        pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides,
-        int(many[~hull].max()))
+    ways = (objects.owner, _one_way(objects, base, eye), *(objects.holes or _NO_HOLES)[:3],
+            objects.centre, objects.radius)
+    e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex, u_way = \
+        loaded.block_edges(
+            start, near, objects.members, objects.packed, objects.kinds, objects.member_ids, h,
+            p, top, own, objects.normal, objects.offset, objects.scale, corners,
+            np.sqrt(dot(p - light.center, p - light.center)),
+            pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides,
+            int(many[~hull].max()), ways)
     flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, own, lo, hi,
-                                                    base, m, block, unsteady, to_cut, u_at)
+                                                    base, m, block, unsteady, to_cut, u_at,
+                                                    u_way)
     ok = ~(convex | hull)[block]
     # a few shadows that are not free (`windings.split`): cut, carried, turned, apart
     ok &= np.bincount(pix[~free], minlength=len(p)) <= windings.LOOSE
@@ -126,8 +136,8 @@ def _wound(loaded, light: FramedLight, objects: Objects, corners: np.ndarray, p:
 
 def _own_pairs(light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
                own: np.ndarray, lo: np.ndarray, hi: np.ndarray, base: np.ndarray, m: list,
-               block: np.ndarray, unsteady: np.ndarray, to_cut: np.ndarray, u_at: np.ndarray
-               ) -> tuple[np.ndarray, ...]:
+               block: np.ndarray, unsteady: np.ndarray, to_cut: np.ndarray, u_at: np.ndarray,
+               u_way: np.ndarray) -> tuple[np.ndarray, ...]:
     """Each pixel's pairs of its block's unsteady triangles (block (n,), unsteady (u,) from
     u_at (b + 1,)) with their whole shadows: (flat (q, 3, 2), free (q,), pixel (q,)
     ascending, triangle (q,), and the cut's count and whole (q,) (3 and True for the
@@ -135,7 +145,7 @@ def _own_pairs(light: FramedLight, objects: Objects, corners: np.ndarray, p: np.
     (u,)) those `candidates.pairs` would keep and the pyramid's cut (sides m) keeps."""
     *uncut, pix, tri = kernels("blockkernels").own_candidates(
         block, unsteady, to_cut, u_at, own, objects.tri_lo, objects.tri_hi, lo, hi,
-        objects.normal, objects.offset, objects.scale, corners, COPLANAR_RELATIVE)
+        objects.normal, objects.offset, objects.scale, corners, COPLANAR_RELATIVE, p, u_way)
     _, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base, m, store=False)
     pix, tri = np.r_[uncut[0], pix], np.r_[uncut[1], tri]
     count = np.r_[np.full(len(uncut[0]), 3), count]
@@ -144,3 +154,21 @@ def _own_pairs(light: FramedLight, objects: Objects, corners: np.ndarray, p: np.
     pix, tri, count, whole = pix[order], tri[order], count[order], whole[order]
     flat, free = pyramid.uncut(light, corners, p, pix, tri)
     return flat, free, pix, tri, count, whole
+
+
+def _one_way(objects: Objects, base: np.ndarray, eye: float) -> np.ndarray:
+    """(n_objects,) bool: the objects the block path may count one way (`raytrace.onewaykernels`):
+    those with `occluders.Objects.holes`, no more than HOLES of them, whose box lies farther
+    from the eye (the frame's origin) than `eye` and apart from the box of the light's corners
+    base (k, 3), by 2^-20 of the coordinates for the roundings (no point of the light, and
+    no primary ray's start, then lies within the object and its holes' caps)."""
+    if objects.holes is None or not np.isfinite(eye):
+        return np.zeros(len(objects.bodies), bool)
+    hole_at, _, _, lo, hi = objects.holes
+    size = np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, initial=0.0)
+    pad = 2.0 ** -20 * (size + np.abs(base).max())
+    gap = np.sqrt((np.maximum(np.maximum(lo, -hi), 0.0) ** 2).sum(axis=1))
+    apart = (base.min(axis=0) > hi + pad[:, None]).any(axis=1) | \
+        (base.max(axis=0) < lo - pad[:, None]).any(axis=1)
+    return np.isfinite(size) & (np.diff(hole_at) <= HOLES) & \
+        (gap > eye * (1 + 2.0 ** -20) + pad) & apart

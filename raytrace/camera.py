@@ -76,6 +76,13 @@ class RayGrid:
         """(3, n) ray starts on the near plane for directions (3, n) of depth 1."""
         return self.eye[:, None] + self.near * directions
 
+    def farthest_start(self) -> float:
+        """How far from the eye a ray starts, the farthest (at an image corner: a direction's
+        col and row parts are orthogonal), a little more for the roundings."""
+        most = (self.col.astype(np.float64) ** 2).sum(axis=0).max() + \
+            (self.row.astype(np.float64) ** 2).sum(axis=0).max()
+        return float(self.near * np.sqrt(most) * (1 + 2.0 ** -20))
+
 
 def primary_rays(camera, width: int, height: int, rows: slice | None = None,
                  dtype=np.float64, unit: bool = True) -> tuple[np.ndarray, np.ndarray]:

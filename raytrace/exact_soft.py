@@ -184,7 +184,7 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
                 shadowed = receives[hit.tri[part]] & scene.lights[i].shadows
                 got = _area_light(shapely, light, objects, corners, p[part], normal[part],
                                   hit.tri[part], keep, shadowed, direct, sides[i],
-                                  (pixel[part], W))
+                                  (pixel[part], W, grids[1].farthest_start()))
                 if keep is not None:
                     _regions[1][pixel[part]] = keep
                 vis[i, pixel[part]], irr[i, pixel[part]] = got[:2]
@@ -229,7 +229,7 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     sides = candidates.heights(light, objects, corners) if sides is None else sides
     pieces, single, chains, loose = _occluded(
         shapely, light, objects, corners, p, normal, own, at, sides,
-        None if where is None else (where[0][front], where[1]),
+        None if where is None else (where[0][front], *where[1:]),
         light.outline is None and regions is None)
     # the light cut to p's side: its hull's box cut by n . (x - p) > 0, then the outline
     box = np.array([light.hull.min(axis=0), [light.hull[:, 0].max(), light.hull[:, 1].min()],
@@ -294,8 +294,8 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
     """The union of the shadows on the light of the points at (indices into p (n, 3), with
     normals and own triangles (n,)) as `_shadows` gives it (n,) each (None, False past at),
     its crowded pixels' windings a block at a time first (`raytrace.blockwindings`) where
-    `where` (each point's pixel (n,), the frame's width) and `outlines`; sides:
-    `candidates.heights`."""
+    `where` (each point's pixel (n,), the frame's width, `RayGrid.farthest_start`) and
+    `outlines`; sides: `candidates.heights`."""
     base = light.center + light.hull @ light.axes                 # (k, 3)
     pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
     chains, loose = np.full(len(p), None, object), np.full(len(p), None, object)
@@ -305,7 +305,7 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
     if where is not None and outlines and BLOCK > 0:
         chains[at], loose[at], met = blockwindings.chains(
             light, objects, corners, sides[2], p[at], own[at], where[0][at], where[1], BLOCK,
-            WINDING_PIECES)
+            WINDING_PIECES, where[2])
         done = windings.found(chains[at])
         # nothing inside the light's box and no shadow apart: the light measured whole, as a
         # pixel of no shadow

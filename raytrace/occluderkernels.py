@@ -83,3 +83,114 @@ def fields(corners, normal, shell, kind, welded, members):
             packed[c, k, 15] = scale[t]
             kinds[c, k] = kind[t]
     return tri_lo, tri_hi, scale, offset, packed, lo, hi, kinds, ids
+
+
+@_jit()
+def holes(welded, corners, owner, n_objects):
+    """Each object's holes, for `raytrace.blockkernels`' one-way rule (numba only, as is the
+    block path): a ball about each connected part of its boundary, the edges of its
+    triangles (welded corner ids (M, 3), corners (M, 3, 3); owner (M,) each one's object,
+    -1 for none) whose net count, lo -> hi against hi -> lo, is not zero (edges from a
+    corner to itself left out: they bound nothing).  A fan from the ball's centre over the
+    part's edges caps it, so the object and its caps are a closed surface whose caps lie in
+    the balls.  (hole_at (n_objects + 1,) each object's first ball, centre (H, 3), radius
+    (H,): the farthest of the part's corners from their mean, a little more; the objects'
+    boxes lo, hi (n_objects, 3), +-inf where none).  Parts that share a corner across two
+    objects' edges are one part of each (a coarser cap, as sound)."""
+    m = welded.shape[0]
+    box_lo, box_hi = np.full((n_objects, 3), np.inf), np.full((n_objects, 3), -np.inf)
+    # each edge (triangle * 3 + edge) under its lower corner id, then those of one lower id
+    # matched by their higher one and object (a few each): one pass, no table at random
+    span = welded.max() + 1 if m else 0
+    first = np.zeros(span + 1, np.int64)
+    for t in range(m):
+        o = owner[t]
+        if o < 0:
+            continue
+        for e in range(3):
+            for a in range(3):
+                box_lo[o, a] = min(box_lo[o, a], corners[t, e, a])
+                box_hi[o, a] = max(box_hi[o, a], corners[t, e, a])
+            a, z = welded[t, e], welded[t, (e + 1) % 3]
+            if a != z:
+                first[min(a, z) + 1] += 1
+    first = np.cumsum(first)
+    under, fill = np.empty(first[-1], np.int64), first[:-1].copy()
+    high, way = np.empty(first[-1], np.int64), np.empty(first[-1], np.int64)
+    for t in range(m):
+        if owner[t] >= 0:
+            for e in range(3):
+                a, z = welded[t, e], welded[t, (e + 1) % 3]
+                if a != z:
+                    g = fill[min(a, z)]
+                    under[g], high[g], way[g] = 3 * t + e, max(a, z), 1 if a < z else -1
+                    fill[min(a, z)] += 1
+    edges = np.empty(first[-1], np.int64)
+    n_edges = 0
+    for v in range(span):
+        for j in range(first[v], first[v + 1]):
+            if under[j] < 0:
+                continue
+            net, o = way[j], owner[under[j] // 3]
+            for i in range(j + 1, first[v + 1]):
+                if under[i] >= 0 and high[i] == high[j] and owner[under[i] // 3] == o:
+                    net += way[i]
+                    under[i] = -1
+            if net != 0:
+                edges[n_edges] = under[j]
+                n_edges += 1
+    edges = edges[:n_edges]
+    # the boundary's parts: union-find over the corner ids of the edges left
+    parent = np.arange(span)
+    for g in edges:
+        t, e = g // 3, g % 3
+        ra, rz = _root(parent, welded[t, e]), _root(parent, welded[t, (e + 1) % 3])
+        parent[max(ra, rz)] = min(ra, rz)
+    key = np.empty(2 * len(edges), np.int64)
+    for j in range(len(edges)):
+        t, e = edges[j] // 3, edges[j] % 3
+        for s in range(2):
+            key[2 * j + s] = owner[t] * span + _root(parent, welded[t, (e + s) % 3])
+    order = np.argsort(key, kind="mergesort")
+    return _balls(key, order, edges, corners, span, n_objects) + (box_lo, box_hi)
+
+
+@_jit()
+def _root(parent, a):
+    """a's root in the union-find parent, its path halved on the way."""
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]
+        a = parent[a]
+    return a
+
+
+@_jit()
+def _balls(key, order, edges, corners, span, n_objects):
+    """`holes`' balls: the corners of each part (key: object * span + root, two an edge,
+    in order) about their mean, per object."""
+    n = key.shape[0]
+    hole_at = np.zeros(n_objects + 1, np.int64)
+    centre, radius = np.empty((n // 2 + 1, 3)), np.empty(n // 2 + 1)
+    h, j = 0, 0
+    while j < n:
+        k = j
+        mean = np.zeros(3)
+        while k < n and key[order[k]] == key[order[j]]:
+            mean += _corner(order[k], edges, corners)
+            k += 1
+        mean /= k - j
+        far = 0.0
+        for i in range(j, k):
+            d = _corner(order[i], edges, corners) - mean
+            far = max(far, np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
+        centre[h], radius[h] = mean, far * (1 + 2.0 ** -20) + 1e-300
+        hole_at[key[order[j]] // span + 1] += 1
+        h, j = h + 1, k
+    return np.cumsum(hole_at), centre[:h], radius[:h]
+
+
+@_jit(inline="always")
+def _corner(i, edges, corners):
+    """The corner (3,) at end i % 2 of boundary edge i // 2."""
+    t, e = edges[i // 2] // 3, edges[i // 2] % 3
+    return corners[t, (e + i % 2) % 3].copy()

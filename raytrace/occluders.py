@@ -47,7 +47,8 @@ class Objects(NamedTuple):
     run_lo, run_hi (R, 3), run_centre (R, 3), run_radius (R,): the boxes of the runs of RUN
     consecutive clusters (the last one shorter; clusters follow a Morton curve within an
     object, so a run is compact), and a sphere about each that holds its clusters'
-    spheres."""
+    spheres; holes: per object its holes' balls and its box (`occluderkernels.holes`: the
+    block path's one-way rule, `raytrace.blockkernels`), None without numba."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -73,6 +74,7 @@ class Objects(NamedTuple):
     run_hi: np.ndarray | None = None
     run_centre: np.ndarray | None = None
     run_radius: np.ndarray | None = None
+    holes: tuple | None = None
 
 
 class Convex(NamedTuple):
@@ -164,9 +166,12 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
                            axis=1) + radius
     run_radius = np.maximum.reduceat(reach, runs) * (1 + 2.0 ** -30) if len(runs) else \
         np.zeros(0)
+    holes = None if loaded is None or not M else loaded.holes(
+        welded, corners, np.where(casts[ids], ids, -1).astype(np.int64) if casts is not None
+        else ids.astype(np.int64), int(ids.max()) + 1)
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, tri_lo, tri_hi, normals, offset, scale, shell, welded, packed,
-                   kinds, member_ids, run_lo, run_hi, run_centre, run_radius)
+                   kinds, member_ids, run_lo, run_hi, run_centre, run_radius, holes)
 
 
 def _fields(corners: np.ndarray, normals: np.ndarray, shell: np.ndarray, kind: np.ndarray,

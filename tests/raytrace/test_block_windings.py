@@ -353,8 +353,8 @@ def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
     """`blockkernels.own_candidates` (the pixels' pairs of their blocks' unsteady triangles,
     in numba) gives the pairs of numpy's composition of `candidates._keep` that it replaced,
     in the same order, on the sheet, the ball and the floor: among those left out are the
-    floor's other triangle (coplanar with a pixel's own) and triangles whose boxes miss the
-    pixel's pyramid's."""
+    floor's other triangle (coplanar with a pixel's own), triangles whose boxes miss the
+    pixel's pyramid's, and those the one-way rule leaves out (turned away from the pixel)."""
     from raytrace import blockkernels
     from raytrace.candidates import _keep
     from raytrace.exact_soft import exact_visibility
@@ -380,13 +380,20 @@ def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
                         lambda work, tiles, tracer: [work(tile) for tile in tiles])
     exact_visibility(_scene("rect", 16))
     assert calls and len(calls) == len(objects)
-    coplanar = missed = 0
+    coplanar = missed = dropped = 0
     for (args, got), (objs, corners, p) in zip(calls, objects):
         block, unsteady, to_cut, u_at, own, _, _, lo, hi = args[:9]
         many = np.diff(u_at)[block]
         pix = np.repeat(np.arange(len(p)), many)
         first = np.repeat(u_at[block] - np.r_[0, np.cumsum(many)[:-1]], many) + \
             np.arange(len(pix))
+        # those the one-way rule leaves out: turned away from the pixel by more than FACING
+        # of the distance (`blockkernels.own_candidates`)
+        rel = p[pix] - corners[unsteady[first], 0]
+        away = polygons.dot(objs.normal[unsteady[first]], rel) < \
+            -blockkernels.FACING * np.linalg.norm(rel, axis=1)
+        dropped += int((args[-1][first] & away).sum())
+        pix, first = pix[~(args[-1][first] & away)], first[~(args[-1][first] & away)]
         tri, free = unsteady[first], ~to_cut[first]
         assert np.array_equal(got[0], pix[free]) and np.array_equal(got[1], tri[free])
         pix, tri = pix[~free], tri[~free]
@@ -402,7 +409,7 @@ def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
         flat = np.abs(polygons.dot(objs.normal[own[pix]], objs.normal[tri])) > 1 - 1e-3
         coplanar += int((flat & ~keep).sum())
         assert np.array_equal(got[2], pix[keep]) and np.array_equal(got[3], tri[keep])
-    assert coplanar > 0 and missed > 0
+    assert coplanar > 0 and missed > 0 and dropped > 0
 
 
 @pytest.mark.parametrize("shape", ["rect", "disk"])
