@@ -387,13 +387,13 @@ def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
         pix = np.repeat(np.arange(len(p)), many)
         first = np.repeat(u_at[block] - np.r_[0, np.cumsum(many)[:-1]], many) + \
             np.arange(len(pix))
-        # those the one-way rule leaves out: turned away from the pixel by more than FACING
-        # of the distance (`blockkernels.own_candidates`)
+        # those the one-way rule leaves out: free from every pixel of the block, turned away
+        # from this one by more than FACING of the distance (`blockkernels.own_candidates`)
         rel = p[pix] - corners[unsteady[first], 0]
-        away = polygons.dot(objs.normal[unsteady[first]], rel) < \
-            -blockkernels.FACING * np.linalg.norm(rel, axis=1)
-        dropped += int((args[-1][first] & away).sum())
-        pix, first = pix[~(args[-1][first] & away)], first[~(args[-1][first] & away)]
+        away = args[-1][first] & ~to_cut[first] & (polygons.dot(
+            objs.normal[unsteady[first]], rel) < -blockkernels.FACING * np.linalg.norm(rel, axis=1))
+        dropped += int(away.sum())
+        pix, first = pix[~away], first[~away]
         tri, free = unsteady[first], ~to_cut[first]
         assert np.array_equal(got[0], pix[free]) and np.array_equal(got[1], tri[free])
         pix, tri = pix[~free], tri[~free]
