@@ -44,8 +44,9 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     (n,) at image pixels where (n,) of a frame `width` wide, in blocks of `block` a side; h
     (C, CLUSTER, 3): the cluster members' corners' heights (`candidates.heights`' third);
     crowded: a block that meets no more triangles is left out; eye: how far from the eye (the
-    frame's origin) every primary ray starts (the near plane's farthest corner; the one-way
-    rule, `_one_way`, holds no object nearer; inf: none)."""
+    frame's origin: inf where the eye is elsewhere) every primary ray starts (the near
+    plane's farthest corner, `RayGrid.farthest_start`; the one-way rule, `_one_way`, holds
+    no object nearer; inf: none)."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
     member = objects.members >= 0

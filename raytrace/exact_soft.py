@@ -145,6 +145,7 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
                                  target=scene.camera.target - origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
+    reach = np.inf if camera.eye.any() else grids[1].farthest_start()   # `blockwindings`
     # a tile a thread at least, TILES_PER_THREAD where each keeps TILE_PIXELS_LEAST pixels;
     # whole blocks of pixels (`BLOCK` rows) in each
     threads = max(1, getattr(tracer, "threads", 1))
@@ -184,7 +185,7 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
                 shadowed = receives[hit.tri[part]] & scene.lights[i].shadows
                 got = _area_light(shapely, light, objects, corners, p[part], normal[part],
                                   hit.tri[part], keep, shadowed, direct, sides[i],
-                                  (pixel[part], W, grids[1].farthest_start()))
+                                  (pixel[part], W, reach))
                 if keep is not None:
                     _regions[1][pixel[part]] = keep
                 vis[i, pixel[part]], irr[i, pixel[part]] = got[:2]
@@ -294,8 +295,7 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
     """The union of the shadows on the light of the points at (indices into p (n, 3), with
     normals and own triangles (n,)) as `_shadows` gives it (n,) each (None, False past at),
     its crowded pixels' windings a block at a time first (`raytrace.blockwindings`) where
-    `where` (each point's pixel (n,), the frame's width, `RayGrid.farthest_start`) and
-    `outlines`; sides: `candidates.heights`."""
+    `where` (pixels (n,), width, `chains`' eye) and `outlines`; sides: `candidates.heights`."""
     base = light.center + light.hull @ light.axes                 # (k, 3)
     pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
     chains, loose = np.full(len(p), None, object), np.full(len(p), None, object)

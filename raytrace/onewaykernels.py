@@ -123,15 +123,15 @@ def clear(o, i0, i1, p, ways, axes):
 @_jit()
 def kept(c, b, i0, p, cone, ways, axes):
     """Whether cluster c's sphere may meet the cone from some pixel's p of block b (i0 its
-    first)
-    tangent to a hole's ball of its object (all of space where p is in the ball):
+    first) tangent to a hole's ball of its object (all of space where p is in the ball):
     the module, its members turned away are kept.  Each of those cones lies within the
     block's spread of the cone from the first p tangent to the ball grown by the spread
     (axes: `clear`'s), so the sphere, grown by the spread, is tested against that one:
-    its centre within its radius of the cone's side by its signed distance in the plane of
-    p, the axis and the centre (its distance from the side's line through p: never less
-    than from the cone), a margin of 2^-20 of the distances for the roundings.  Once a
-    block: cone (C,) holds 2 b + the answer."""
+    kept where its centre's signed distance from the cone's side in the plane of p, the
+    axis and the centre is within its radius (that distance is never more than the
+    centre's distance from the cone: where the nearest point is p, it is less), a margin
+    of 2^-20 of the distances for the roundings.  Once a block: cone (C,) holds 2 b + the
+    answer."""
     at, c_centre, c_radius = ways[2], ways[5], ways[6]
     o = ways[0][c]
     kept = False

@@ -198,3 +198,22 @@ def test_a_triangle_through_a_pixels_point_takes_its_object_off_the_rule():
         got.append(oneway.through(t, c, k, 0, 1, objs.packed, p, own, tris, objs.normal,
                                   objs.offset, objs.scale, COPLANAR_RELATIVE, FACING))
     assert got == [False, True, False]
+
+
+def test_no_block_takes_the_rule_where_the_frame_is_not_the_eyes(monkeypatch):
+    """The rule measures the eye's segments from the frame's origin: with a backend framed
+    at another eye (`scene_backend` of the scene seen from elsewhere), no object takes it,
+    and the measures are the pixel-by-pixel path's all the same."""
+    import dataclasses
+    from raytrace.exact_soft import exact_visibility
+    from raytrace.masks import scene_backend
+    scene = _scene("holed", 24)
+    elsewhere = scene.replace(camera=dataclasses.replace(scene.camera, eye=[0.3, 0.6, 4.2]))
+    backend = scene_backend(elsewhere, "embree")
+    monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 0)
+    want = exact_visibility(scene, backend)
+    monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 2)
+    seen = _ruled(monkeypatch)
+    got = exact_visibility(scene, backend)
+    assert seen["blocks"] > 0 and seen["shell"] == 0
+    assert np.abs(got.visibility - want.visibility).max() <= ROUNDING
