@@ -94,23 +94,18 @@ def holes(welded, corners, owner, n_objects):
     corner to itself left out: they bound nothing).  A fan from the ball's centre over the
     part's edges caps it, so the object and its caps are a closed surface whose caps lie in
     the balls.  (hole_at (n_objects + 1,) each object's first ball, centre (H, 3), radius
-    (H,): the farthest of the part's corners from their mean, a little more; the objects'
-    boxes lo, hi (n_objects, 3), +-inf where none).  Parts that share a corner across two
-    objects' edges are one part of each (a coarser cap, as sound)."""
+    (H,): the farthest of the part's corners from their mean, a little more).  Parts that
+    share a corner across two objects' edges are one part of each (a coarser cap, as
+    sound)."""
     m = welded.shape[0]
-    box_lo, box_hi = np.full((n_objects, 3), np.inf), np.full((n_objects, 3), -np.inf)
     # each edge (triangle * 3 + edge) under its lower corner id, then those of one lower id
     # matched by their higher one and object (a few each): one pass, no table at random
     span = welded.max() + 1 if m else 0
     first = np.zeros(span + 1, np.int64)
     for t in range(m):
-        o = owner[t]
-        if o < 0:
+        if owner[t] < 0:
             continue
         for e in range(3):
-            for a in range(3):
-                box_lo[o, a] = min(box_lo[o, a], corners[t, e, a])
-                box_hi[o, a] = max(box_hi[o, a], corners[t, e, a])
             a, z = welded[t, e], welded[t, (e + 1) % 3]
             if a != z:
                 first[min(a, z) + 1] += 1
@@ -152,7 +147,7 @@ def holes(welded, corners, owner, n_objects):
         for s in range(2):
             key[2 * j + s] = owner[t] * span + _root(parent, welded[t, (e + s) % 3])
     order = np.argsort(key, kind="mergesort")
-    return _balls(key, order, edges, corners, span, n_objects) + (box_lo, box_hi)
+    return _balls(key, order, edges, corners, span, n_objects)
 
 
 @_jit()

@@ -47,8 +47,9 @@ class Objects(NamedTuple):
     run_lo, run_hi (R, 3), run_centre (R, 3), run_radius (R,): the boxes of the runs of RUN
     consecutive clusters (the last one shorter; clusters follow a Morton curve within an
     object, so a run is compact), and a sphere about each that holds its clusters'
-    spheres; holes: per object its holes' balls and its box (`occluderkernels.holes`: the
-    block path's one-way rule, `raytrace.blockkernels`), None without numba."""
+    spheres; holes: per object its holes' balls (`occluderkernels.holes`) and its box (its
+    clusters'), for the block path's one-way rule (`raytrace.onewaykernels`), None without
+    numba."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -119,8 +120,9 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         length = np.linalg.norm(normals, axis=1, keepdims=True)
         normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
     members, owner, bodies = [], [], []
+    n_objects = int(ids.max(initial=-1)) + 1
     shell = np.zeros((M, 3))
-    for j in range(int(ids.max(initial=-1)) + 1):
+    for j in range(n_objects):
         tris = np.flatnonzero(ids == j)
         bodies.append(None)
         if len(tris) == 0 or (casts is not None and not casts[j]):
@@ -168,10 +170,22 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         np.zeros(0)
     holes = None if loaded is None or not M else loaded.holes(
         welded, corners, np.where(casts[ids], ids, -1).astype(np.int64) if casts is not None
-        else ids.astype(np.int64), int(ids.max()) + 1)
+        else ids.astype(np.int64), n_objects) + _boxes(owner, lo, hi, n_objects)
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, tri_lo, tri_hi, normals, offset, scale, shell, welded, packed,
                    kinds, member_ids, run_lo, run_hi, run_centre, run_radius, holes)
+
+
+def _boxes(owner: np.ndarray, lo: np.ndarray, hi: np.ndarray, n: int
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Each of n objects' box (lo, hi (n, 3); +-inf where it has no cluster): its clusters'
+    boxes (lo, hi (C, 3)) reduced, its clusters (owner (C,)) side by side."""
+    box_lo, box_hi = np.full((n, 3), np.inf), np.full((n, 3), -np.inf)
+    if len(owner):
+        first = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+        box_lo[owner[first]] = np.minimum.reduceat(lo, first, axis=0)
+        box_hi[owner[first]] = np.maximum.reduceat(hi, first, axis=0)
+    return box_lo, box_hi
 
 
 def _fields(corners: np.ndarray, normals: np.ndarray, shell: np.ndarray, kind: np.ndarray,

@@ -129,8 +129,9 @@ def test_the_holes_are_the_boundarys_loops():
     """`occluderkernels.holes` on three objects: an icosphere with a cap cut away at each
     pole (two holes), a whole one (none) and a lone triangle (one): each loop's ball holds
     its corners about their mean (each corner is on two of its edges, so the edges' mean
-    is the corners'), and each object's box is its corners'."""
-    from raytrace.occluders import weld
+    is the corners'), and each object's box (`occluders.Objects.holes`' last two, from its
+    clusters) is its corners'."""
+    from raytrace.occluders import objects, weld
     ico = trimesh.creation.icosphere(subdivisions=2)
     v, f = np.asarray(ico.vertices), np.asarray(ico.faces)
     y = v[f].mean(axis=1)[:, 1]
@@ -140,9 +141,10 @@ def test_the_holes_are_the_boundarys_loops():
     corners = np.concatenate([pv[pf] for pv, pf in parts])
     owner = np.concatenate([np.full(len(pf), j) for j, (_, pf) in enumerate(parts)])
     welded = weld(corners.reshape(-1, 3)).reshape(-1, 3)
-    at, centre, radius, lo, hi = polygons.kernels("occluderkernels").holes(
+    at, centre, radius = polygons.kernels("occluderkernels").holes(
         welded, corners, owner.astype(np.int64), 3)
     assert list(np.diff(at)) == [2, 0, 1]
+    lo, hi = objects(corners, owner, None, welded).holes[3:]
     for j, (pv, pf) in enumerate(parts):
         assert np.array_equal(lo[j], pv[pf].reshape(-1, 3).min(axis=0))
         assert np.array_equal(hi[j], pv[pf].reshape(-1, 3).max(axis=0))
