@@ -5,7 +5,7 @@ itself held to the triangle-by-triangle union by test_exact_fast.py) on open she
 holes face the pixels, one seen from outside (a segment to the light through the hole meets
 only triangles turned away: the hole's cone must keep them) and one seen from within (the
 eye's ray reaches its pixels through the hole: the rule must be off there); the holes
-against trimesh's own boundary; the rule's switches against hand-made cases."""
+against a union-find of the edges used once; the rule's switches against hand-made cases."""
 
 from __future__ import annotations
 
@@ -61,14 +61,10 @@ def _scene(kind: str, size: int):
                  lights=[light], width=size, height=size, ambient=[0, 0, 0])
 
 
-def _kernels():
-    return polygons.kernels("blockkernels"), polygons.kernels("onewaykernels")
-
-
 def _ruled(monkeypatch) -> dict:
     """Counts, over the frame's calls: the blocks, the unsteady triangles the rule may leave
     out, and the calls where the shell (object 1) may take the rule (`_one_way`)."""
-    blocks, _ = _kernels()
+    blocks = polygons.kernels("blockkernels")
     seen = {"blocks": 0, "may": 0, "shell": 0}
     plain, one_way = blocks.block_edges, raytrace.blockwindings._one_way
 
