@@ -15,7 +15,11 @@ light: what they add lies outside the light, and the outline is cut to a box abo
 
 Where an object and its holes' caps wind 0 times about the block's points and the light, its
 triangles turned away from every point of the block are left out, but for those a segment
-through a hole may meet (`raytrace.onewaykernels`, the one-way rule).
+through a hole may meet (`raytrace.onewaykernels`, the one-way rule).  A cluster whose sphere, normal cone
+(`occluderkernels.cones`) and heights show every member so (turned away from each point,
+free from each, within reach: `_behind`) is passed over whole, its members untested unless
+the rule turns out off or a hole's cone meets it (a quarter of the clusters met on the bunny
+128 x 128; `block_edges` ~0.95x, the same bytes).
 
 `block_edges` makes room for a block's unsteady triangles (as many as its clusters hold) and
 for its outline edges before its loops, never within them: numba counts references to an
@@ -29,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from .exactkernels import _boxes_meet, carried, coplanar_with, seen_from
-from .onewaykernels import boxes_touch, clear, push, settle, spot
+from .onewaykernels import boxes_touch, clear, kept, push, settle, spot
 from .outlinekernels import _apart, _level, _tally
 from .packetkernels import _jit
 
@@ -56,9 +60,9 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     corners' heights over the light's plane, by member; p (n, 3), top (n,) its height; own
     (n,); tri_normal, offset, scale (M,); rel (n,) |p - centre|; reach: UNCUT_REACH of the
     light; coplanar: COPLANAR_RELATIVE; most: the most triangles a block's clusters hold;
-    ways: each cluster's object (C,), whether each may take the one-way rule
-    (`blockwindings._one_way`), its holes (`Objects.holes`' first three), the clusters'
-    spheres (centre, radius)."""
+    ways: each cluster's object (C,), whether each may take the one-way rule (`blockwindings.
+    _one_way`), its holes (`Objects.holes`' first three), the clusters' spheres (centre,
+    radius), normal cones (`Objects.cones`) and heights' ranges (C, 2): `_behind`'s."""
     n_blocks, width, owner, one_way = start.shape[0] - 1, members.shape[1], ways[0], ways[1]
     e_tri, e_from = np.empty(1024, np.int64), np.empty(1024, np.int64)
     e_to, e_cnt = np.empty(1024, np.int64), np.empty(1024, np.int64)
@@ -88,6 +92,9 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
             o = owner[c]
             if seen[o] != b:
                 seen[o], way[o] = b, one_way[o] and _ways(o, i0, i1, p, ways, axes, sides, slack)
+            if way[o] and _behind(c, i0, i1, p, ways, low_top, high_top, far_rel, reach):
+                later[0, nd], later[1, nd], nd = c, -1, nd + 1     # turned away, whole
+                continue
             for k in range(width):
                 t = members[c, k]
                 if t < 0 or not _near(c, k, i0, packed, p, sides, slack):
@@ -109,17 +116,72 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                 if sign != 3:
                     unsteady[nu], loose[nu], u_c[nu] = t, sign == 0, c
                     nu += 1
-        q = settle(q, nd, nt, later, most, u_at[b], nu, u_c, u_way, b, i0, i1, p, own, way,
-                   cone, axes, ways, members, welded, keys, (packed, corners, tri_normal,
-                                                             offset, scale, coplanar, FACING))
-        first, net = _tally(keys[0, :q], keys[1, :q], keys[2, :q])
-        while ne + first.shape[0] > e_tri.shape[0]:
-            e_tri, e_from = _grow(e_tri, ne), _grow(e_from, ne)
-            e_to, e_cnt = _grow(e_to, ne), _grow(e_cnt, ne)
-        ne = _collect(first, net, keys, e_tri, e_from, e_to, e_cnt, ne)
+        settle(nt, later, most, u_at[b], nu, u_c, u_way, b, i0, i1, p, own, way, cone, axes,
+               ways, members, (packed, corners, tri_normal, offset, scale, coplanar, FACING))
+        q = _turned_away(q, nd, later, b, i0, p, way, cone, axes, ways, members, packed,
+                         welded, keys, sides, slack)
+        e_tri, e_from, e_to, e_cnt, ne = _collect(q, keys, e_tri, e_from, e_to, e_cnt, ne)
         e_at[b + 1], u_at[b + 1] = ne, nu
     return e_tri[:ne], e_from[:ne], e_to[:ne], e_cnt[:ne], e_at, unsteady[:nu], loose[:nu], \
         u_at, convex, u_way[:nu]
+
+
+@_jit()
+def _turned_away(q, nd, later, b, i0, p, way, cone, axes, ways, members, packed, welded, keys,
+                 sides, slack):
+    """Block b's members turned away from each of its points (later[:, :nd]: cluster and
+    member, or -1 for each near member of a cluster `_behind` passed), pushed into keys from
+    q where their object is off the one-way rule or their cluster meets a hole's cone
+    (`onewaykernels.kept`), in their order: the next q."""
+    owner = ways[0]
+    for g in range(nd):
+        c, k = later[0, g], later[1, g]
+        if way[owner[c]]:
+            if not (cone[c] >= 0 and cone[c] >> 1 == b):
+                kept(c, b, i0, p, cone, ways, axes)
+            if cone[c] & 1 == 0:
+                continue
+        if k >= 0:
+            q = push(q, -1, c, k, members[c, k], welded, keys)
+            continue
+        for k in range(members.shape[1]):           # as the member loop would have pushed
+            if members[c, k] >= 0 and _near(c, k, i0, packed, p, sides, slack):
+                q = push(q, -1, c, k, members[c, k], welded, keys)
+    return q
+
+
+@_jit(inline="always")
+def _behind(c, i0, i1, p, ways, low_top, high_top, far_rel, reach):
+    """Whether `_steady` would give every member of cluster c -1 (turned away from each of
+    the block's points i0..i1 by more than FACING of its distance, free from each, carried
+    within reach), from its sphere (ways' fifth and sixth: centre, radius R), normal cone
+    (ways' seventh: `occluderkernels.cones`) and its members' heights' range (ways'
+    eighth): every member's normal n within the cone's half angle t of its axis a, and
+    its corners within R of the centre, n . (p - corner) <= |d| cos(f - t) + R for d =
+    p - centre at the angle f from a; that less than -FACING (|d| + R), the corner's
+    distance at most; and each member's reach bound at most the cluster's (its height
+    at most the range's top, its distance at most |d| + R, its box's diagonal 2 R).  A
+    margin of 2^-30 of the terms covers the roundings, the members' and these."""
+    centre, radius, cones, spans = ways[5], ways[6], ways[7], ways[8]
+    cos, sin = cones[c, 3], cones[c, 4]
+    if not (cos > 0 and spans[c, 0] >= 0 and spans[c, 1] < low_top):
+        return False
+    r = radius[c]
+    grow = high_top / (low_top - spans[c, 1])
+    for i in range(i0, i1):
+        d0, d1, d2 = p[i, 0] - centre[c, 0], p[i, 1] - centre[c, 1], p[i, 2] - centre[c, 2]
+        size = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        along = cones[c, 0] * d0 + cones[c, 1] * d1 + cones[c, 2] * d2
+        x0 = cones[c, 1] * d2 - cones[c, 2] * d1
+        x1 = cones[c, 2] * d0 - cones[c, 0] * d2
+        x2 = cones[c, 0] * d1 - cones[c, 1] * d0
+        across = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+        most = along * cos + across * sin + r + FACING * (size + r)
+        if not most + 2.0 ** -30 * (abs(along) + size + r) < 0:
+            return False
+        if not (far_rel + grow * (size + 3 * r)) * (1 + 2.0 ** -20) < reach:
+            return False
+    return True
 
 
 @_jit(inline="always")
@@ -134,10 +196,15 @@ def _tops(i0, i1, top, rel):
 
 
 @_jit()
-def _collect(first, net, keys, e_tri, e_from, e_to, e_cnt, ne):
-    """The block's outline edges from its tally (first, net: `outlinekernels._tally` of
-    keys' (6, q) lo, hi, way) written from ne on, each from its first edge's triangle and
-    corners (keys' last three), run the way its net count is positive: the next ne."""
+def _collect(q, keys, e_tri, e_from, e_to, e_cnt, ne):
+    """The block's outline edges from the tally (`outlinekernels._tally`) of its pushed
+    edges, keys' (6, q) lo, hi, way, written from ne on, each from its first edge's triangle
+    and corners (keys' last three), run the way its net count is positive: (the edges'
+    arrays, grown where full, the next ne)."""
+    first, net = _tally(keys[0, :q], keys[1, :q], keys[2, :q])
+    while ne + first.shape[0] > e_tri.shape[0]:
+        e_tri, e_from = _grow(e_tri, ne), _grow(e_from, ne)
+        e_to, e_cnt = _grow(e_to, ne), _grow(e_cnt, ne)
     for g in range(first.shape[0]):
         f = first[g]
         # the first edge runs lo -> hi where way > 0; the net where net > 0
@@ -146,7 +213,7 @@ def _collect(first, net, keys, e_tri, e_from, e_to, e_cnt, ne):
         e_from[ne], e_to[ne] = (keys[4, f], keys[5, f]) if forward else (keys[5, f], keys[4, f])
         e_cnt[ne] = abs(net[g])
         ne += 1
-    return ne
+    return e_tri, e_from, e_to, e_cnt, ne
 
 
 @_jit()

@@ -30,7 +30,7 @@ HOLES = 64
 _NO_HOLES = (np.zeros(1, np.int64), np.zeros((0, 3)), np.zeros(0))
 
 
-def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndarray,
+def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: tuple,
            p: np.ndarray, own: np.ndarray, where: np.ndarray, width: int, block: int,
            crowded: int = 0, eye: float = np.inf
            ) -> tuple[np.ndarray, np.ndarray, tuple | None]:
@@ -41,12 +41,13 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
     and the clusters that meet some pyramid of each pixel's block (no other can meet its own:
     `candidates.meets`' among for the pixel-by-pixel path) as (the blocks' (b, C) bool, each
     pixel's block (n,)), None where no blocks were made; points p (n, 3) on triangles own
-    (n,) at image pixels where (n,) of a frame `width` wide, in blocks of `block` a side; h
-    (C, CLUSTER, 3): the cluster members' corners' heights (`candidates.heights`' third);
-    crowded: a block that meets no more triangles is left out; eye: how far from the eye (the
-    frame's origin: inf where the eye is elsewhere) every primary ray starts (the near
-    plane's farthest corner, `RayGrid.farthest_start`; the one-way rule, `_one_way`, holds
-    no object nearer; inf: none)."""
+    (n,) at image pixels where (n,) of a frame `width` wide, in blocks of `block` a side; h:
+    the cluster members' corners' heights (C, CLUSTER, 3) and each cluster's range of them
+    (C, 2) (`candidates.heights`' third and fourth); crowded: a block that meets no more
+    triangles is left out; eye: how far from the eye (the frame's origin: inf where the eye
+    is elsewhere) every primary ray starts (the near plane's farthest corner,
+    `RayGrid.farthest_start`; the one-way rule, `_one_way`, holds no object nearer; inf:
+    none)."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
     member = objects.members >= 0
@@ -80,10 +81,10 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: np.ndar
         return out, out_loose, met
     near[hull] = False
     ways = (objects.owner, _one_way(objects, base, eye), *(objects.holes or _NO_HOLES)[:3],
-            objects.centre, objects.radius)
+            objects.centre, objects.radius, _cones(objects), h[1])
     e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex, u_way = \
         loaded.block_edges(
-            start, near, objects.members, objects.packed, objects.kinds, objects.member_ids, h,
+            start, near, objects.members, objects.packed, objects.kinds, objects.member_ids, h[0],
             p, top, own, objects.normal, objects.offset, objects.scale, corners,
             np.sqrt(dot(p - light.center, p - light.center)),
             pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides,
@@ -155,6 +156,15 @@ def _own_pairs(light: FramedLight, objects: Objects, corners: np.ndarray, p: np.
     pix, tri, count, whole = pix[order], tri[order], count[order], whole[order]
     flat, free = pyramid.uncut(light, corners, p, pix, tri)
     return flat, free, pix, tri, count, whole
+
+
+def _cones(objects: Objects) -> np.ndarray:
+    """`Objects.cones`, or (C, 5) cones no cluster passes (the cosine -2) where it has none."""
+    if objects.cones is not None:
+        return objects.cones
+    out = np.zeros((len(objects.members), 5))
+    out[:, 3] = -2.0
+    return out
 
 
 def _one_way(objects: Objects, base: np.ndarray, eye: float) -> np.ndarray:

@@ -123,14 +123,19 @@ def _box_pairs(objects: Objects, own: np.ndarray, meet: np.ndarray, lo: np.ndarr
 
 
 def heights(light: FramedLight, objects: Objects, corners: np.ndarray
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The corners' heights over the light's plane (M, 3) (the sums of `pyramid.uncut`, so its
     verdicts), (n_objects,) bool: the objects wholly on its emitting side (every corner
-    strictly above: the light is outside them), and the heights by cluster member (C,
-    CLUSTER, 3) in the members' order (`Objects.packed`'s; pads: triangle 0's)."""
+    strictly above: the light is outside them), the heights by cluster member (C,
+    CLUSTER, 3) in the members' order (`Objects.packed`'s; pads: triangle 0's), and the
+    least and most of those of each cluster (C, 2) (its pads' too: a range that holds its
+    members')."""
     c, n = light.center, light.normal
     h = (corners[..., 0] - c[0]) * n[0] + (corners[..., 1] - c[1]) * n[1] + \
         (corners[..., 2] - c[2]) * n[2]
     lowest = np.full(int(objects.object.max(initial=-1)) + 1, np.inf)
     np.minimum.at(lowest, objects.object, h.min(axis=1))
-    return h, lowest > 0, h[np.maximum(objects.members, 0)]
+    by_member = h[np.maximum(objects.members, 0)]
+    flat = by_member.reshape(len(by_member), -1)
+    return h, lowest > 0, by_member, np.stack([flat.min(axis=1, initial=np.inf),
+                                               flat.max(axis=1, initial=-np.inf)], axis=1)

@@ -304,7 +304,7 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
     among = None
     if where is not None and outlines and BLOCK > 0:
         chains[at], loose[at], met = blockwindings.chains(
-            light, objects, corners, sides[2], p[at], own[at], where[0][at], where[1], BLOCK,
+            light, objects, corners, sides[2:], p[at], own[at], where[0][at], where[1], BLOCK,
             WINDING_PIECES, where[2])
         done = windings.found(chains[at])
         # nothing inside the light's box and no shadow apart: the light measured whole, as a

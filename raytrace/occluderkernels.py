@@ -86,6 +86,43 @@ def fields(corners, normal, shell, kind, welded, members):
 
 
 @_jit()
+def cones(packed, members):
+    """Each cluster's normal cone (C, 5), for `raytrace.blockkernels`' test of a cluster
+    turned away from a block whole: its axis (the unit sum of its members' unit normals,
+    packed's), the cosine of its half angle (the least of its members' normals along the
+    axis, less 2^-40: every member's normal lies within it, the roundings too) and its sine
+    (more 2^-40); the cosine -2 (no cluster passes that test) where a member has no normal,
+    the sum is shorter than one member's or the half angle is not under 90 degrees (the
+    test's bound, cos(f - t) at the angle f from the axis, holds for f >= t, which a bound
+    under 0 then implies)."""
+    out = np.empty((members.shape[0], 5))
+    for c in range(members.shape[0]):
+        sx = sy = sz = 0.0
+        ok = True
+        for k in range(members.shape[1]):
+            if members[c, k] >= 0:
+                nx, ny, nz = packed[c, k, 6], packed[c, k, 7], packed[c, k, 8]
+                ok &= nx * nx + ny * ny + nz * nz > 0.5
+                sx, sy, sz = sx + nx, sy + ny, sz + nz
+        size = np.sqrt(sx * sx + sy * sy + sz * sz)
+        out[c, 3] = -2.0
+        if not (ok and size > 1.0):
+            continue
+        sx, sy, sz = sx / size, sy / size, sz / size
+        least = 1.0
+        for k in range(members.shape[1]):
+            if members[c, k] >= 0:
+                least = min(least, sx * packed[c, k, 6] + sy * packed[c, k, 7]
+                            + sz * packed[c, k, 8])
+        least -= 2.0 ** -40
+        if not least > 0:
+            continue
+        out[c, 0], out[c, 1], out[c, 2], out[c, 3] = sx, sy, sz, least
+        out[c, 4] = np.sqrt(max(0.0, 1.0 - least * least)) + 2.0 ** -40
+    return out
+
+
+@_jit()
 def holes(welded, corners, owner, n_objects):
     """Each object's holes, for `raytrace.blockkernels`' one-way rule (numba only, as is the
     block path): a ball about each connected part of its boundary, the edges of its

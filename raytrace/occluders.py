@@ -49,7 +49,8 @@ class Objects(NamedTuple):
     object, so a run is compact), and a sphere about each that holds its clusters'
     spheres; holes: per object its holes' balls (`occluderkernels.holes`) and its box (its
     clusters'), for the block path's one-way rule (`raytrace.onewaykernels`), None without
-    numba."""
+    numba; cones (C, 5): each cluster's normal cone (`occluderkernels.cones`, the block
+    path's test of a cluster turned away whole), None without numba."""
 
     object: np.ndarray
     convex: np.ndarray
@@ -76,6 +77,7 @@ class Objects(NamedTuple):
     run_centre: np.ndarray | None = None
     run_radius: np.ndarray | None = None
     holes: tuple | None = None
+    cones: np.ndarray | None = None
 
 
 class Convex(NamedTuple):
@@ -173,7 +175,8 @@ def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = Non
         else ids.astype(np.int64), n_objects) + _boxes(owner, lo, hi, n_objects)
     return Objects(ids.astype(np.int64), convex, outward, members, lo, hi, owner, bodies,
                    centre, radius, tri_lo, tri_hi, normals, offset, scale, shell, welded, packed,
-                   kinds, member_ids, run_lo, run_hi, run_centre, run_radius, holes)
+                   kinds, member_ids, run_lo, run_hi, run_centre, run_radius, holes,
+                   None if loaded is None or not M else loaded.cones(packed, members))
 
 
 def _boxes(owner: np.ndarray, lo: np.ndarray, hi: np.ndarray, n: int

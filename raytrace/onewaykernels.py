@@ -48,15 +48,15 @@ def push(q, sign, c, k, t, welded, keys):
 
 
 @_jit()
-def settle(q, nd, nt, later, most, u0, nu, u_c, u_way, b, i0, i1, p, own, way, cone, axes,
-           ways, members, welded, keys, tris):
-    """The end of block b's members (`blockkernels.block_edges`), once a block: of its
-    members in doubt (later[:, most:most + nt]: cluster, member) one that may pass through a
-    pixel's p takes its object off the one-way rule (`through`); its members turned away
-    (later[:, :nd]) are pushed into keys from q where their object is off it or their
-    cluster meets a hole's cone (`kept`); its unsteady triangles u0..nu (clusters u_c) are
-    marked in u_way where they may be left out of a pixel's pairs.  tris: packed, corners,
-    tri_normal, offset, scale, coplanar, facing (`through`'s).  The next q."""
+def settle(nt, later, most, u0, nu, u_c, u_way, b, i0, i1, p, own, way, cone, axes, ways,
+           members, tris):
+    """The end of block b's members (`blockkernels.block_edges`), once a block, before its
+    members turned away are pushed (`blockkernels._turned_away`): of its members in doubt
+    (later[:, most:most + nt]: cluster, member) one that may pass through a pixel's p takes
+    its object off the one-way rule (`through`); its unsteady triangles u0..nu (clusters
+    u_c) are marked in u_way where they may be left out of a pixel's pairs (their object on
+    the rule, their cluster meeting no hole's cone: `kept`).  tris: packed, corners,
+    tri_normal, offset, scale, coplanar, facing (`through`'s)."""
     owner = ways[0]
     packed, corners, tri_normal, offset, scale, coplanar, facing = tris
     for g in range(most, most + nt):
@@ -64,20 +64,11 @@ def settle(q, nd, nt, later, most, u0, nu, u_c, u_way, b, i0, i1, p, own, way, c
         if way[owner[c]] and through(members[c, k], c, k, i0, i1, packed, p, own, corners,
                                      tri_normal, offset, scale, coplanar, facing):
             way[owner[c]] = False
-    for g in range(nd):
-        c, k = later[0, g], later[1, g]
-        if way[owner[c]]:
-            if not (cone[c] >= 0 and cone[c] >> 1 == b):
-                kept(c, b, i0, p, cone, ways, axes)
-            if cone[c] & 1 == 0:
-                continue
-        q = push(q, -1, c, k, members[c, k], welded, keys)
     for g in range(u0, nu):
         c = u_c[g]
         if way[owner[c]] and not (cone[c] >= 0 and cone[c] >> 1 == b):
             kept(c, b, i0, p, cone, ways, axes)
         u_way[g] = way[owner[c]] and cone[c] & 1 == 0
-    return q
 
 
 @_jit()

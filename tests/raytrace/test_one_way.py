@@ -215,3 +215,69 @@ def test_no_block_takes_the_rule_where_the_frame_is_not_the_eyes(monkeypatch):
     got = exact_visibility(scene, backend)
     assert seen["blocks"] > 0 and seen["shell"] == 0
     assert np.abs(got.visibility - want.visibility).max() <= ROUNDING
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_a_cluster_passed_whole_as_turned_away_is_so_member_by_member(seed):
+    """`blockkernels._behind` (a cluster left out whole, from its sphere, normal cone and
+    heights' range) against `_steady` member by member: wherever it passes a cluster for a
+    block of points, `_steady` gives each member -1 (turned away from each point, free from
+    each, carried within reach).  Bumpy sheets of small or long triangles (their boxes
+    across their cluster's sphere), their normals within a few degrees to a few tens of
+    one axis, and blocks of points seen at angles about the cone's edge (90 degrees + its
+    half angle), near and far, under reaches about the members' own bounds (half the time
+    just over the most of them): some clusters pass, some only just fail."""
+    from raytrace import occluders
+    blocks = polygons.kernels("blockkernels")
+    rng = np.random.default_rng(seed)
+    passed = 0
+    for trial in range(30):
+        tilt = 10.0 ** rng.uniform(-2.5, -0.3)
+        centres = rng.uniform(-1, 1, (256, 3)) * [1, 1, 0.01]
+        # small triangles, or long ones (their boxes across their cluster's sphere)
+        size = 0.03 if trial % 3 else 0.5
+        corners = centres[:, None] + rng.normal(0, size, (256, 3, 3)) * [1, 1, tilt]
+        up = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])[:, 2] > 0
+        corners[~up] = corners[~up][:, ::-1]                 # every normal toward +z
+        # the points' own triangle: one far off, upright (no member's plane)
+        corners = np.concatenate([corners, [[[50, 0, 0], [50, 1, 0], [50, 0, 1.0]]]])
+        objects = occluders.objects(corners, np.r_[np.zeros(256, np.int64), 1])
+        # the light's plane z = 2, facing -z: the points below the sheet, behind it
+        h = 2.0 - corners[..., 2]
+        by_member = h[np.maximum(objects.members, 0)]
+        flat = by_member.reshape(len(by_member), -1)
+        spans = np.stack([flat.min(axis=1), flat.max(axis=1)], axis=1)
+        ways = (np.zeros(1, np.int64), np.zeros(1, np.bool_), np.zeros(3, np.int64),
+                np.zeros((0, 3)), np.zeros(0), objects.centre, objects.radius, objects.cones,
+                spans)
+        own = np.full(4, 256)
+        for c in np.flatnonzero((objects.cones[:, 3] > 0) & (objects.owner == 0)):
+            axis = objects.cones[c, :3]
+            angle = np.arccos(objects.cones[c, 3]) + np.pi / 2 + rng.uniform(-0.1, 0.6)
+            side = np.cross(axis, rng.normal(size=3))
+            way = np.cos(angle) * axis + np.sin(angle) * side / np.linalg.norm(side)
+            far = 10.0 ** rng.uniform(-1, 1.5)
+            p = objects.centre[c] + far * way + rng.normal(0, 0.002 * far, (4, 3))
+            p[:, 2] = np.minimum(p[:, 2], 2.0 - spans[c, 1] - 1e-3 * far)
+            top = 2.0 - p[:, 2]
+            rel = np.linalg.norm(p - [0, 0, 2.0], axis=1)
+            low_top, high_top, far_rel = blocks._tops(0, 4, top, rel)
+            # the members' own reach bounds (`_steady`'s), the most: a reach just over it
+            # half the time (the cluster's bound must then be over it too to pass)
+            at = objects.members[c][objects.members[c] >= 0]
+            box = corners[at].max(axis=1) - corners[at].min(axis=1)
+            dist = np.linalg.norm(p[:, None] - corners[at, 0][None], axis=2)
+            bound = (far_rel + high_top / (low_top - h[at].max(axis=1)) * (
+                dist + np.linalg.norm(box, axis=1))).max()
+            reach = bound * 10.0 ** (rng.uniform(0, 0.03) if trial % 2 else
+                                     rng.uniform(-0.2, 0.3))
+            if not blocks._behind(c, 0, 4, p, ways, low_top, high_top, far_rel, reach):
+                continue
+            passed += 1
+            for k, t in enumerate(objects.members[c]):
+                if t >= 0:
+                    assert blocks._steady(
+                        t, c, k, 0, 4, objects.packed, by_member, p, top, own, objects.normal,
+                        objects.offset, objects.scale, corners, low_top, high_top, far_rel,
+                        reach, 1e-12) == -1, (trial, c, k)
+    assert passed > 20
