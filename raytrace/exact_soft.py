@@ -135,7 +135,7 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
     vis = np.zeros((L, H * W))
     irr = np.zeros((L, H * W))
     unatt = np.zeros((L, H * W)) if direct else None
-    corners = tracer.vertices[tracer.faces].astype(np.float64)
+    corners = tracer.vertices[tracer.faces].astype(np.float64, copy=False)
     ids = scene.triangles()[2]
     # corners welded by their coordinates: the distinct vertices' indices
     welded = weld(tracer.vertices)[tracer.faces]

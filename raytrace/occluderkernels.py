@@ -86,6 +86,31 @@ def fields(corners, normal, shell, kind, welded, members):
 
 
 @_jit()
+def paired(welded):
+    """`occluders._closed`'s first tests of triangles of welded corners (F, 3) in one pass:
+    False where an edge runs from a corner to itself or sum f(a) g(b) over the edges a -> b
+    differs from sum f(b) g(a) (`occluders._spread`'s mixes, uint64 products and sums
+    wrapping: a closed surface's edges are their reverses, so the two are equal), and so
+    the surface is certainly not closed; else True."""
+    one, two = np.uint64(0), np.uint64(0)
+    for t in range(welded.shape[0]):
+        for e in range(3):
+            a, b = welded[t, e], welded[t, (e + 1) % 3]
+            if a == b:
+                return False
+            one += _mix(a, 1) * _mix(b, 2)
+            two += _mix(b, 1) * _mix(a, 2)
+    return one == two
+
+
+@_jit(inline="always")
+def _mix(i, seed):
+    """`occluders._spread` of one id."""
+    x = (np.uint64(i) + np.uint64(seed)) * np.uint64(0x9E3779B97F4A7C15)
+    return x ^ (x >> np.uint64(29))
+
+
+@_jit()
 def cones(packed, members):
     """Each cluster's normal cone (C, 5), for `raytrace.blockkernels`' test of a cluster
     turned away from a block whole: its axis (the unit sum of its members' unit normals,

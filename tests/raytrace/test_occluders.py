@@ -111,6 +111,20 @@ def test_weld_numbers_the_points_as_numpys_unique_rows_does(dtype):
     assert occluders.weld(np.zeros((0, 3), dtype)).shape == (0,)
 
 
+@pytest.mark.parametrize("n", [0, 1, 2, 17, 5000])
+def test_the_stable_order_of_codes_is_numpys(n):
+    """`occluders._stable_order` (one sort of each code with its place) against
+    np.argsort(kind="stable"): many ties, the largest codes, and codes past its bits (its
+    fallback)."""
+    rng = np.random.default_rng(n)
+    for top in (8, 1 << 30, (1 << 32) - 1, 1 << 40):
+        codes = rng.integers(0, top, n, dtype=np.int64)
+        if n:
+            codes[rng.integers(0, n, n // 2)] = top - 1
+        assert np.array_equal(occluders._stable_order(codes),
+                              np.argsort(codes, kind="stable")), top
+
+
 def test_morton_codes_put_bit_b_of_axis_a_at_bit_3b_plus_a():
     """`occluders._morton` (bits spread by shifts and masks) against the codes written bit by
     bit, on the grid's corners and random points."""
