@@ -24,6 +24,10 @@ from .clipkernels import clipped, survey
 from .outlinekernels import _level, _outline, _stable, _turn
 from .packetkernels import _jit
 
+# Rays (one a run of the outline) up to which `_cover` passes each ray over every edge rather
+# than over the edges in buckets of height (whose making costs more than a few rays).
+FEW_RAYS = 8
+
 
 @_jit()
 def boundaries(uncut, free, ids, owner, n, margin, rim, rim_ids, rim_count, rim_owner, box,
@@ -391,18 +395,29 @@ def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin, sides):
     box, `clipkernels.clipped`)."""
     m = ax.shape[0]
     cover = np.zeros(m, np.int64)
-    start, edge, bottom, top, scale = _levels(ay, by)
+    rays = 0
+    for e in range(min(m, sides)):
+        rays += root[e] == e
+    # a few rays pass every edge; more, the edges in buckets of height first (the same
+    # edges tested: those whose span holds the ray's height)
+    few = rays <= FEW_RAYS
+    if few:
+        start, edge, bottom, top, scale = np.zeros(2, np.int64), cover[:0], 0.0, 0.0, 0.0
+    else:
+        start, edge, bottom, top, scale = _levels(ay, by)
     for e in range(m):
         if root[e] != e or e >= sides:
             continue
         s = first[e]
         mx, my = (pa[s, 0] + pb[s, 0]) / 2, (pa[s, 1] + pb[s, 1]) / 2
         wind, g0, g1 = 0, 0, 0
-        if bottom <= my <= top:                          # else no edge's span holds it
+        if few:
+            g1 = m
+        elif bottom <= my <= top:                        # else no edge's span holds it
             b = _bucket(my, bottom, scale, start.shape[0] - 1)
             g0, g1 = start[b], start[b + 1]
         for g in range(g0, g1):
-            f = edge[g]
+            f = g if few else edge[g]
             up, down = _level(ay[f], by[f], my)
             if f == e or not (up or down):
                 continue
