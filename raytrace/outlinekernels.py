@@ -104,29 +104,36 @@ def _apart(ax, ay, bx, by, box):
 
 @_jit()
 def _tally(lo, hi, way):
-    """The undirected edges lo-hi (k,) (corner ids) whose net count is not zero: (the first
-    of each one's edges (u,), its net count (u,)), in the order of those first edges; an edge
-    adds way (k,) (its count, + where it runs from its lower id), by a table of open
+    """The undirected edges lo-hi (k,) (corner ids, >= 0) whose net count is not zero: (the
+    first of each one's edges (u,), its net count (u,)), in the order of those first edges;
+    an edge adds way (k,) (its count, + where it runs from its lower id), by a table of open
     addressing."""
     k = lo.shape[0]
     size = 16
     while size < 2 * k:
         size *= 2
-    taken = np.zeros(size, np.bool_)
-    slot_lo, slot_hi = np.empty(size, np.int64), np.empty(size, np.int64)
-    first, net = np.empty(k, np.int64), np.zeros(k, np.int64)
-    at, u = np.empty(size, np.int64), 0
+    # one table (the slot's lower id, -1 where free; its higher id; its edge's number) and
+    # one row of (first edge, net count): two allocations a call, not nine (it runs once a
+    # block and once a pixel)
+    table = np.empty((3, size), np.int64)
+    table[0, :] = -1
+    out = np.zeros((2, k), np.int64)
+    u = 0
     for i in range(k):
         h = ((lo[i] * 73856093) ^ (hi[i] * 19349663)) & (size - 1)
-        while taken[h] and (slot_lo[h] != lo[i] or slot_hi[h] != hi[i]):
+        while table[0, h] >= 0 and (table[0, h] != lo[i] or table[1, h] != hi[i]):
             h = (h + 1) & (size - 1)
-        if not taken[h]:
-            taken[h], slot_lo[h], slot_hi[h], at[h] = True, lo[i], hi[i], u
-            first[u] = i
+        if table[0, h] < 0:
+            table[0, h], table[1, h], table[2, h] = lo[i], hi[i], u
+            out[0, u] = i
             u += 1
-        net[at[h]] += way[i]
-    keep = np.flatnonzero(net[:u] != 0)
-    return first[keep], net[keep]
+        out[1, table[2, h]] += way[i]
+    kept = 0
+    for j in range(u):                                   # those whose net is not zero
+        if out[1, j] != 0:
+            out[0, kept], out[1, kept] = out[0, j], out[1, j]
+            kept += 1
+    return out[0, :kept], out[1, :kept]
 
 
 @_jit()
