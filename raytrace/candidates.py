@@ -142,6 +142,6 @@ def heights(light: FramedLight, objects: Objects, corners: np.ndarray
     else:
         np.minimum.at(lowest, ids, least)
     by_member = h[np.maximum(objects.members, 0)]
-    flat = by_member.reshape(len(by_member), -1)
+    flat = by_member.reshape(len(by_member), -1) if len(by_member) else np.zeros((0, 1))
     return h, lowest > 0, by_member, np.stack([flat.min(axis=1, initial=np.inf),
                                                flat.max(axis=1, initial=-np.inf)], axis=1)

@@ -42,9 +42,10 @@ def shadowed():
     return p, floor
 
 
-@pytest.mark.parametrize("switches", [dict(cast=[1]), dict(receive=[0]), dict(lights=[0])],
-                         ids=["occluder casts nothing", "floor receives nothing",
-                              "light casts nothing"])
+@pytest.mark.parametrize("switches", [dict(cast=[1]), dict(cast=[0, 1]), dict(receive=[0]),
+                                      dict(lights=[0])],
+                         ids=["occluder casts nothing", "no object casts (no cluster)",
+                              "floor receives nothing", "light casts nothing"])
 def test_a_switch_leaves_the_floor_the_whole_light(shadowed, switches):
     p, floor = shadowed
     found = exact_visibility(switched(SCENE, **switches))
