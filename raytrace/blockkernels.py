@@ -15,11 +15,11 @@ light: what they add lies outside the light, and the outline is cut to a box abo
 
 Where an object and its holes' caps wind 0 times about the block's points and the light, its
 triangles turned away from every point of the block are left out, but for those a segment
-through a hole may meet (`raytrace.onewaykernels`, the one-way rule).  A cluster whose sphere, normal cone
-(`occluderkernels.cones`) and heights show every member so (turned away from each point,
-free from each, within reach: `_behind`) is passed over whole, its members untested unless
-the rule turns out off or a hole's cone meets it (a quarter of the clusters met on the bunny
-128 x 128; `block_edges` ~0.95x, the same bytes).
+through a hole may meet (`raytrace.onewaykernels`, the one-way rule).  A cluster whose
+sphere, normal cone (`occluderkernels.cones`) and heights show every member so (turned away
+from each point, free from each, within reach: `_behind`) is passed over whole, its members
+untested unless the rule turns out off or a hole's cone meets it (a quarter of the clusters
+met on the bunny 128 x 128; `block_edges` ~0.95x, the same bytes).
 
 `block_edges` makes room for a block's unsteady triangles (as many as its clusters hold) and
 for its outline edges before its loops, never within them: numba counts references to an

@@ -219,9 +219,9 @@ def _fields(corners: np.ndarray, normals: np.ndarray, shell: np.ndarray, kind: n
 
 
 def weld(points: np.ndarray) -> np.ndarray:
-    """(n,) int64: each of points (n, 3) numbered among the distinct ones, in their order by
-    x, then y, then z (np.unique(points, axis=0, return_inverse=True)'s numbers: equal as
-    floats, -0.0 with 0.0).  One sort by x, then the runs of equal x by y and z (equal
+    """(n,) int64: each of points (n, 3) (finite) numbered among the distinct ones, in their
+    order by x, then y, then z (np.unique(points, axis=0, return_inverse=True)'s numbers:
+    equal as floats, -0.0 with 0.0).  One sort by x, then the runs of equal x by y and z (equal
     points take one number in any order, so no sort need be stable): the bunny's 35k
     corners ~4x faster than three stable sorts of the columns, twice as fast as np.unique."""
     order = np.argsort(points[:, 0])
