@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from .exactkernels import _boxes_meet, carried, coplanar_with, seen_from
-from .onewaykernels import boxes_touch, clear, kept, push, settle, spot
+from .onewaykernels import boxes_touch, clear, kept, settle, spot
 from .outlinekernels import _apart, _level, _tally
 from .packetkernels import _jit
 
@@ -104,11 +104,11 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                 sign = _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset,
                                scale, corners, low_top, high_top, far_rel, reach, coplanar)
                 if sign == 1 or sign == -1:
-                    if sign < 0 and way[o]:             # `settle` pushes it or not
+                    if sign < 0 and way[o]:             # `_turned_away` pushes it or not
                         later[0, nd], later[1, nd] = c, k
                         nd += 1
                     else:
-                        q = push(q, sign, c, k, t, welded, keys)
+                        q = _push(q, sign, c, k, t, welded, keys)
                     continue
                 if way[o] and boxes_touch(c, k, packed, box, FACING):    # `settle` tests it
                     later[0, most + nt], later[1, most + nt] = c, k
@@ -142,11 +142,11 @@ def _turned_away(q, nd, later, b, i0, p, way, cone, axes, ways, members, packed,
             if cone[c] & 1 == 0:
                 continue
         if k >= 0:
-            q = push(q, -1, c, k, members[c, k], welded, keys)
+            q = _push(q, -1, c, k, members[c, k], welded, keys)
             continue
         for k in range(members.shape[1]):           # as the member loop would have pushed
             if members[c, k] >= 0 and _near(c, k, i0, packed, p, sides, slack):
-                q = push(q, -1, c, k, members[c, k], welded, keys)
+                q = _push(q, -1, c, k, members[c, k], welded, keys)
     return q
 
 
@@ -182,6 +182,19 @@ def _behind(c, i0, i1, p, ways, low_top, high_top, far_rel, reach):
         if not (far_rel + grow * (size + 3 * r)) * (1 + 2.0 ** -20) < reach:
             return False
     return True
+
+
+@_jit(inline="always")
+def _push(q, sign, c, k, t, welded, keys):
+    """Member k of cluster c (triangle t), turned `sign` from the block, pushed as its three
+    edges (its winding made positive) into keys (6, room) from q: the next q."""
+    for e in range(3):
+        a, z = (e, (e + 1) % 3) if sign > 0 else ((e + 1) % 3, e)
+        ka, kb = welded[c, k, a], welded[c, k, z]
+        keys[0, q], keys[1, q], keys[2, q] = min(ka, kb), max(ka, kb), 1 if ka < kb else -1
+        keys[3, q], keys[4, q], keys[5, q] = t, a, z
+        q += 1
+    return q
 
 
 @_jit(inline="always")

@@ -27,7 +27,6 @@ from .polygons import dot, kernels
 CARRIED = 1 << 16
 # The most holes an object may have for the one-way rule (`_one_way`): each is a cone to test.
 HOLES = 64
-_NO_HOLES = (np.zeros(1, np.int64), np.zeros((0, 3)), np.zeros(0))
 
 
 def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: tuple,
@@ -52,8 +51,8 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: tuple,
     loaded = kernels("blockkernels")
     member = objects.members >= 0
     plain = ((objects.kinds & 1) == 0) & member
-    if loaded is None or kernels("windingkernels") is None or len(p) == 0 or \
-            plain.sum() <= crowded:     # no more than `crowded` triangles outside convex objects
+    if loaded is None or kernels("windingkernels") is None or objects.cones is None or \
+            len(p) == 0 or plain.sum() <= crowded:   # numba's (`Objects.holes`, `.cones`)
         return out, out_loose, None
     y, x = np.divmod(where, width)
     key = (y // block) * -(-width // block) + x // block
@@ -80,8 +79,8 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: tuple,
     if hull.all():
         return out, out_loose, met
     near[hull] = False
-    ways = (objects.owner, _one_way(objects, base, eye), *(objects.holes or _NO_HOLES)[:3],
-            objects.centre, objects.radius, _cones(objects), h[1])
+    ways = (objects.owner, _one_way(objects, base, eye), *objects.holes[:3], objects.centre,
+            objects.radius, objects.cones, h[1])
     e_tri, e_from, e_to, e_cnt, e_at, unsteady, to_cut, u_at, convex, u_way = \
         loaded.block_edges(
             start, near, objects.members, objects.packed, objects.kinds, objects.member_ids, h[0],
@@ -158,22 +157,13 @@ def _own_pairs(light: FramedLight, objects: Objects, corners: np.ndarray, p: np.
     return flat, free, pix, tri, count, whole
 
 
-def _cones(objects: Objects) -> np.ndarray:
-    """`Objects.cones`, or (C, 5) cones no cluster passes (the cosine -2) where it has none."""
-    if objects.cones is not None:
-        return objects.cones
-    out = np.zeros((len(objects.members), 5))
-    out[:, 3] = -2.0
-    return out
-
-
 def _one_way(objects: Objects, base: np.ndarray, eye: float) -> np.ndarray:
     """(n_objects,) bool: the objects the block path may count one way (`raytrace.onewaykernels`):
     those with `occluders.Objects.holes`, no more than HOLES of them, whose box lies farther
     from the eye (the frame's origin) than `eye` and apart from the box of the light's corners
     base (k, 3), by 2^-20 of the coordinates for the roundings (no point of the light, and
     no primary ray's start, then lies within the object and its holes' caps)."""
-    if objects.holes is None or not np.isfinite(eye):
+    if not np.isfinite(eye):
         return np.zeros(len(objects.bodies), bool)
     hole_at, _, _, lo, hi = objects.holes
     size = np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, initial=0.0)

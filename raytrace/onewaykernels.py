@@ -34,19 +34,6 @@ from .exactkernels import coplanar_with
 from .packetkernels import _jit
 
 
-@_jit(inline="always")
-def push(q, sign, c, k, t, welded, keys):
-    """Member k of cluster c (triangle t), turned `sign` from the block, pushed as its three
-    edges (its winding made positive) into keys (6, room) from q: the next q."""
-    for e in range(3):
-        a, z = (e, (e + 1) % 3) if sign > 0 else ((e + 1) % 3, e)
-        ka, kb = welded[c, k, a], welded[c, k, z]
-        keys[0, q], keys[1, q], keys[2, q] = min(ka, kb), max(ka, kb), 1 if ka < kb else -1
-        keys[3, q], keys[4, q], keys[5, q] = t, a, z
-        q += 1
-    return q
-
-
 @_jit()
 def settle(nt, later, most, u0, nu, u_c, u_way, b, i0, i1, p, own, way, cone, axes, ways,
            members, tris):
