@@ -32,15 +32,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .exactkernels import _boxes_meet, carried, coplanar_with, seen_from
+# own_candidates: the pixels' pairs of a block's unsteady triangles, with the pixel path's
+# pair kernels, taken from here with the block's other kernels (`raytrace.blockwindings`)
+from .exactkernels import FACING, carried, coplanar_with, own_candidates, seen_from  # noqa: F401
 from .onewaykernels import boxes_touch, clear, kept, settle, spot
 from .outlinekernels import _apart, _level, _tally
 from .packetkernels import _jit
-
-# A triangle turns one way from p when p lies off its plane by more than this much of their
-# distance (its unit normal . (p - corner) against |p - corner|): float64 products are good to
-# ~1e-16 of it, and a triangle seen this nearly edge-on is left to the pixel's own pairs.
-FACING = 2.0 ** -20
 
 
 @_jit()
@@ -359,57 +356,6 @@ def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height
                         convex[b] |= hull[c]
                         break
     return out, many, convex
-
-
-@_jit()
-def own_candidates(block, unsteady, to_cut, u_at, own, tri_lo, tri_hi, lo, hi, tri_normal,
-                   offset, scale, corners, coplanar, p, u_way):
-    """Each pixel's pairs of its block's unsteady triangles (`blockwindings._own_pairs`):
-    (pix, tri (f,): those free from every pixel of the block; pix, tri (k,): of the others
-    (to_cut (u,)), those whose boxes (tri_lo, tri_hi (M, 3)) meet the pixel's pyramid's box
-    lo, hi (n, 3), bar its own triangle and those coplanar with it (`candidates._keep`:
-    its other rules never apply here, as no block that meets a convex object's cluster has
-    unsteady triangles, `blockwindings.chains`, and no closed object's faces are left out),
-    each by pixel, in the order of unsteady; block (n,) each pixel's, u_at (b + 1,);
-    tri_normal, offset, scale (M,): `occluders.Objects`; coplanar: COPLANAR_RELATIVE; but
-    none free from every pixel that may be left out (u_way (u,), `block_edges`) and is
-    turned away from the pixel's p (n, 3) (off its plane by more than FACING of their
-    distance, behind it).  One not free from some pixel is kept: left out, its cut pieces
-    moved a contact pixel's V by up to 7e-11 against the pixel path (the bunny 128x128)."""
-    n = block.shape[0]
-    total = 0
-    for i in range(n):
-        total += u_at[block[i] + 1] - u_at[block[i]]
-    f_pix, f_tri = np.empty(total, np.int64), np.empty(total, np.int64)
-    k_pix, k_tri = np.empty(total, np.int64), np.empty(total, np.int64)
-    f = k = 0
-    for i in range(n):
-        o = own[i]
-        for g in range(u_at[block[i]], u_at[block[i] + 1]):
-            t = unsteady[g]
-            if u_way[g] and not to_cut[g] and _away(t, i, p, tri_normal, corners):
-                continue
-            if not to_cut[g]:
-                f_pix[f], f_tri[f] = i, t
-                f += 1
-                continue
-            if t == o or not _boxes_meet(tri_lo, tri_hi, t, lo, hi, i) or coplanar_with(
-                    corners, t, o, tri_normal[t, 0], tri_normal[t, 1], tri_normal[t, 2],
-                    tri_normal, offset, scale[t], scale[o], coplanar):
-                continue
-            k_pix[k], k_tri[k] = i, t
-            k += 1
-    return f_pix[:f], f_tri[:f], k_pix[:k], k_tri[:k]
-
-
-@_jit(inline="always")
-def _away(t, i, p, tri_normal, corners):
-    """Whether triangle t is turned away from p_i: p_i behind its plane by more than FACING
-    of p_i's distance from its first corner (`_steady`'s test)."""
-    r0, r1, r2 = p[i, 0] - corners[t, 0, 0], p[i, 1] - corners[t, 0, 1], \
-        p[i, 2] - corners[t, 0, 2]
-    s = tri_normal[t, 0] * r0 + tri_normal[t, 1] * r1 + tri_normal[t, 2] * r2
-    return s < -FACING * np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
 
 
 @_jit()

@@ -89,8 +89,8 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: tuple,
             pyramid.UNCUT_REACH * np.abs(light.hull).max(), COPLANAR_RELATIVE, sides,
             int(many[~hull].max()), ways)
     flat, free, pix, tri, count, whole = _own_pairs(light, objects, corners, p, own, lo, hi,
-                                                    base, m, block, unsteady, to_cut, u_at,
-                                                    u_way)
+                                                    base, (m, sides), block, unsteady, to_cut,
+                                                    u_at, u_way)
     ok = ~(convex | hull)[block]
     # a few shadows that are not free (`windings.split`): cut, carried, turned, apart
     ok &= np.bincount(pix[~free], minlength=len(p)) <= windings.LOOSE
@@ -136,17 +136,21 @@ def _wound(loaded, light: FramedLight, objects: Objects, corners: np.ndarray, p:
 
 
 def _own_pairs(light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
-               own: np.ndarray, lo: np.ndarray, hi: np.ndarray, base: np.ndarray, m: list,
-               block: np.ndarray, unsteady: np.ndarray, to_cut: np.ndarray, u_at: np.ndarray,
-               u_way: np.ndarray) -> tuple[np.ndarray, ...]:
+               own: np.ndarray, lo: np.ndarray, hi: np.ndarray, base: np.ndarray,
+               sides: tuple, block: np.ndarray, unsteady: np.ndarray, to_cut: np.ndarray,
+               u_at: np.ndarray, u_way: np.ndarray) -> tuple[np.ndarray, ...]:
     """Each pixel's pairs of its block's unsteady triangles (block (n,), unsteady (u,) from
     u_at (b + 1,)) with their whole shadows: (flat (q, 3, 2), free (q,), pixel (q,)
     ascending, triangle (q,), and the cut's count and whole (q,) (3 and True for the
-    uncut)): all of those free from every pixel of the block, and of the others (to_cut
-    (u,)) those `candidates.pairs` would keep and the pyramid's cut (sides m) keeps."""
+    uncut)): of those free from every pixel of the block, those not wholly outside a side
+    plane of the pixel's pyramid, and of the others (to_cut (u,)) those `candidates.pairs`
+    would keep and the pyramid's cut keeps; sides: the pyramids' side planes (`pyramid.
+    sides`' list, and those normals made unit (s, n, 3))."""
+    m, unit = sides
     *uncut, pix, tri = kernels("blockkernels").own_candidates(
         block, unsteady, to_cut, u_at, own, objects.tri_lo, objects.tri_hi, lo, hi,
-        objects.normal, objects.offset, objects.scale, corners, COPLANAR_RELATIVE, p, u_way)
+        objects.normal, objects.offset, objects.scale, corners, COPLANAR_RELATIVE, p, u_way,
+        unit)
     _, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base, m, store=False)
     pix, tri = np.r_[uncut[0], pix], np.r_[uncut[1], tri]
     count = np.r_[np.full(len(uncut[0]), 3), count]

@@ -349,17 +349,70 @@ def test_a_blocks_near_test_keeps_every_triangle_that_meets_a_pixels_pyramid(see
     assert kept > 100 and left > 100
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_a_pair_left_out_outside_a_pyramid_is_so_exactly(seed):
+    """`exactkernels._outside` (a block's free unsteady triangle left out of a pixel's pairs)
+    holds only where every corner lies outside one side plane of the pixel's pyramid, by
+    exact rational arithmetic on the floats (the plane through p and two of the light's
+    corners, turned toward its centre), for triangles lying along a side plane a hair (1e-6
+    down to 1e-19 of their distance) either side of it; and it holds for every triangle
+    outside by more than 1e-9 of that (it can fail both ways)."""
+    from fractions import Fraction
+    from raytrace import exactkernels, pyramid
+    from raytrace.lightshapes import frame_light
+    from shadowvol.scene import AreaLight
+    rng = np.random.default_rng(seed)
+    shape = ("rect", "disk")[seed % 2]
+    size = {"size": [1.2, 0.8]} if shape == "rect" else {"radius": 0.6}
+    light = frame_light(AreaLight(shape, [0.0, 3.0, 0.0], normal=rng.normal([0, -1, 0], 0.2),
+                                  samples=4, **size), np.zeros(3), "l")
+    base = light.center + light.hull @ light.axes
+    p = rng.uniform(-1, 1, (1, 3)) * [1, 0.2, 1]
+    sides = np.stack([m / np.linalg.norm(m, axis=1, keepdims=True)
+                      for m in pyramid.sides(light, p, base)])
+    exact = [[Fraction(v) for v in row] for row in (p[0], light.center)]
+
+    def outside_exactly(tri, j):
+        a, b = ([Fraction(v) - exact[0][x] for x, v in enumerate(base[i])]
+                for i in (j, (j + 1) % len(base)))
+        n = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        if sum(n[x] * (exact[1][x] - exact[0][x]) for x in range(3)) < 0:
+            n = [-v for v in n]
+        return all(sum(n[x] * (Fraction(c[x]) - exact[0][x]) for x in range(3)) < 0
+                   for c in tri)
+
+    dropped = far = 0
+    for _ in range(400):
+        j = int(rng.integers(0, len(base)))
+        a, b = base[j] - p[0], base[(j + 1) % len(base)] - p[0]
+        # corners in side plane j (beyond the light or short of it), moved off it
+        w = rng.uniform(-0.5, 1.5, (3, 2)) * rng.uniform(0.1, 2.0, (3, 1))
+        on = p[0] + w[:, :1] * a + w[:, 1:] * b
+        dist = np.linalg.norm(on - p[0], axis=1, keepdims=True)
+        off = 10.0 ** rng.uniform(-19, -6) * rng.choice([-1, 1])
+        tri = on + off * dist * sides[j, 0] * rng.uniform(0.5, 1.0, (3, 1))
+        got = exactkernels._outside(0, 0, p, tri[None], sides)
+        if got:
+            dropped += 1
+            assert any(outside_exactly(tri, k) for k in range(len(base))), (tri, off)
+        if off < -1e-9:
+            far += 1
+            assert got, (tri, off)
+    assert dropped > 50 and far > 20
+
+
 def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
-    """`blockkernels.own_candidates` (the pixels' pairs of their blocks' unsteady triangles,
+    """`exactkernels.own_candidates` (the pixels' pairs of their blocks' unsteady triangles,
     in numba) gives the pairs of numpy's composition of `candidates._keep` that it replaced,
     in the same order, on the sheet, the ball and the floor: among those left out are the
     floor's other triangle (coplanar with a pixel's own), triangles whose boxes miss the
-    pixel's pyramid's, and those the one-way rule leaves out (turned away from the pixel)."""
-    from raytrace import blockkernels
+    pixel's pyramid's, those the one-way rule leaves out (turned away from the pixel) and
+    those wholly outside a side plane of its pyramid."""
+    from raytrace import blockkernels, exactkernels
     from raytrace.candidates import _keep
     from raytrace.exact_soft import exact_visibility
     calls = []
-    kernel = blockkernels.own_candidates
+    kernel = exactkernels.own_candidates
 
     def spy(*args):
         got = kernel(*args)
@@ -380,7 +433,7 @@ def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
                         lambda work, tiles, tracer: [work(tile) for tile in tiles])
     exact_visibility(_scene("rect", 16))
     assert calls and len(calls) == len(objects)
-    coplanar = missed = dropped = 0
+    coplanar = missed = dropped = outside = 0
     for (args, got), (objs, corners, p) in zip(calls, objects):
         block, unsteady, to_cut, u_at, own, _, _, lo, hi = args[:9]
         many = np.diff(u_at)[block]
@@ -388,12 +441,19 @@ def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
         first = np.repeat(u_at[block] - np.r_[0, np.cumsum(many)[:-1]], many) + \
             np.arange(len(pix))
         # those the one-way rule leaves out: free from every pixel of the block, turned away
-        # from this one by more than FACING of the distance (`blockkernels.own_candidates`)
+        # from this one by more than FACING of the distance (`exactkernels.own_candidates`)
         rel = p[pix] - corners[unsteady[first], 0]
-        away = args[-1][first] & ~to_cut[first] & (polygons.dot(
+        away = args[-2][first] & ~to_cut[first] & (polygons.dot(
             objs.normal[unsteady[first]], rel) < -blockkernels.FACING * np.linalg.norm(rel, axis=1))
         dropped += int(away.sum())
-        pix, first = pix[~away], first[~away]
+        # and those wholly outside a side plane of the pixel's pyramid (`_outside`: each
+        # corner below it by more than 2^-40 of its L1 distance from p)
+        r = corners[unsteady[first]] - p[pix][:, None]                    # (q, 3, 3)
+        below = np.einsum("sqa,qka->sqk", args[-1][:, pix], r) < \
+            -2.0 ** -40 * np.abs(r).sum(axis=2)[None]
+        out = ~to_cut[first] & ~away & below.all(axis=2).any(axis=0)
+        outside += int(out.sum())
+        pix, first = pix[~(away | out)], first[~(away | out)]
         tri, free = unsteady[first], ~to_cut[first]
         assert np.array_equal(got[0], pix[free]) and np.array_equal(got[1], tri[free])
         pix, tri = pix[~free], tri[~free]
@@ -409,7 +469,7 @@ def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
         flat = np.abs(polygons.dot(objs.normal[own[pix]], objs.normal[tri])) > 1 - 1e-3
         coplanar += int((flat & ~keep).sum())
         assert np.array_equal(got[2], pix[keep]) and np.array_equal(got[3], tri[keep])
-    assert coplanar > 0 and missed > 0 and dropped > 0
+    assert coplanar > 0 and missed > 0 and dropped > 0 and outside > 0
 
 
 @pytest.mark.parametrize("shape", ["rect", "disk"])
