@@ -299,6 +299,18 @@ def test_convex_bodies_and_a_floor_keep_the_pixel_by_pixel_bytes(monkeypatch):
     assert got.irradiance.tobytes() == want.irradiance.tobytes()
 
 
+def _tilted_light(rng, seed: int):
+    """A rect (even seeds) or disk light 3 above the origin, tilted at random, in its frame,
+    and its corners (k, 3)."""
+    from raytrace.lightshapes import frame_light
+    from shadowvol.scene import AreaLight
+    shape = ("rect", "disk")[seed % 2]
+    size = {"size": [1.2, 0.8]} if shape == "rect" else {"radius": 0.6}
+    light = frame_light(AreaLight(shape, [0.0, 3.0, 0.0], normal=rng.normal([0, -1, 0], 0.2),
+                                  samples=4, **size), np.zeros(3), "l")
+    return light, light.center + light.hull @ light.axes
+
+
 @pytest.mark.parametrize("seed", range(8))
 def test_a_blocks_near_test_keeps_every_triangle_that_meets_a_pixels_pyramid(seed):
     """`blockkernels._near` (one pixel's side planes lowered by the block's slack) keeps
@@ -307,14 +319,8 @@ def test_a_blocks_near_test_keeps_every_triangle_that_meets_a_pixels_pyramid(see
     from a metre down to 1e-9 across, some reaching in by a hair over a side; and it leaves
     out triangles well outside every pyramid (it can fail)."""
     from raytrace import blockkernels, pyramid
-    from raytrace.lightshapes import frame_light
-    from shadowvol.scene import AreaLight
     rng = np.random.default_rng(seed)
-    shape = ("rect", "disk")[seed % 2]
-    size = {"size": [1.2, 0.8]} if shape == "rect" else {"radius": 0.6}
-    light = frame_light(AreaLight(shape, [0.0, 3.0, 0.0], normal=rng.normal([0, -1, 0], 0.2),
-                                  samples=4, **size), np.zeros(3), "l")
-    base = light.center + light.hull @ light.axes
+    light, base = _tilted_light(rng, seed)
     corner = rng.uniform(-1, 1, 3) * [1, 0.2, 1]
     p = corner + rng.normal(0, 0.01 * 10.0 ** -rng.integers(0, 4), (4, 3))   # a block
     sides = np.stack([m / np.linalg.norm(m, axis=1, keepdims=True)
@@ -359,14 +365,8 @@ def test_a_pair_left_out_outside_a_pyramid_is_so_exactly(seed):
     outside by more than 1e-9 of that (it can fail both ways)."""
     from fractions import Fraction
     from raytrace import exactkernels, pyramid
-    from raytrace.lightshapes import frame_light
-    from shadowvol.scene import AreaLight
     rng = np.random.default_rng(seed)
-    shape = ("rect", "disk")[seed % 2]
-    size = {"size": [1.2, 0.8]} if shape == "rect" else {"radius": 0.6}
-    light = frame_light(AreaLight(shape, [0.0, 3.0, 0.0], normal=rng.normal([0, -1, 0], 0.2),
-                                  samples=4, **size), np.zeros(3), "l")
-    base = light.center + light.hull @ light.axes
+    light, base = _tilted_light(rng, seed)
     p = rng.uniform(-1, 1, (1, 3)) * [1, 0.2, 1]
     sides = np.stack([m / np.linalg.norm(m, axis=1, keepdims=True)
                       for m in pyramid.sides(light, p, base)])
