@@ -32,8 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-# own_candidates: the pixels' pairs of a block's unsteady triangles, with the pixel path's
-# pair kernels, taken from here with the block's other kernels (`raytrace.blockwindings`)
+# own_candidates lives with the pixel path's pair kernels; the block path takes it from here
+# with its other kernels (`raytrace.blockwindings`), so it runs wherever they load
 from .exactkernels import FACING, carried, coplanar_with, own_candidates, seen_from  # noqa: F401
 from .onewaykernels import boxes_touch, clear, kept, settle, spot
 from .outlinekernels import _apart, _level, _tally

@@ -386,11 +386,12 @@ def keep_left(buf, s, c, s0, s1, e0, e1, d):
 @_jit()
 def own_candidates(block, unsteady, to_cut, u_at, own, tri_lo, tri_hi, lo, hi, tri_normal,
                    offset, scale, corners, coplanar, p, u_way, sides):
-    """Each pixel's pairs of its block's unsteady triangles (`blockkernels.block_edges`,
-    `blockwindings._own_pairs`):
-    (pix, tri (f,): those free from every pixel of the block; pix, tri (k,): of the others
-    (to_cut (u,)), those whose boxes (tri_lo, tri_hi (M, 3)) meet the pixel's pyramid's box
-    lo, hi (n, 3), bar its own triangle and those coplanar with it (`candidates._keep`:
+    """Each pixel's pairs of its block's unsteady triangles (`blockkernels.block_edges`;
+    `blockwindings._own_pairs`): (pix, tri (f,): those free from every pixel of the block
+    and not wholly outside a side plane of the pixel's pyramid (sides (s, n, 3) their unit
+    inward normals: `_outside`); pix, tri (k,): of the others (to_cut (u,)), those whose
+    boxes (tri_lo, tri_hi (M, 3)) meet the pixel's pyramid's box lo, hi (n, 3), bar its own
+    triangle and those coplanar with it (`candidates._keep`:
     its other rules never apply here, as no block that meets a convex object's cluster has
     unsteady triangles, `blockwindings.chains`, and no closed object's faces are left out),
     each by pixel, in the order of unsteady; block (n,) each pixel's, u_at (b + 1,);
