@@ -449,8 +449,10 @@ def test_a_blocks_own_candidates_are_the_numpy_pairs(monkeypatch):
         # and those wholly outside a side plane of the pixel's pyramid (`_outside`: each
         # corner below it by more than 2^-40 of its L1 distance from p)
         r = corners[unsteady[first]] - p[pix][:, None]                    # (q, 3, 3)
-        below = np.einsum("sqa,qka->sqk", args[-1][:, pix], r) < \
-            -2.0 ** -40 * np.abs(r).sum(axis=2)[None]
+        m = args[-1][:, pix, None]                                          # (s, q, 1, 3)
+        # the kernel's sums, left to right
+        below = m[..., 0] * r[..., 0] + m[..., 1] * r[..., 1] + m[..., 2] * r[..., 2] < \
+            -2.0 ** -40 * (np.abs(r[..., 0]) + np.abs(r[..., 1]) + np.abs(r[..., 2]))
         out = ~to_cut[first] & ~away & below.all(axis=2).any(axis=0)
         outside += int(out.sum())
         pix, first = pix[~(away | out)], first[~(away | out)]
