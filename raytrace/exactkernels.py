@@ -411,12 +411,11 @@ def own_candidates(block, unsteady, to_cut, u_at, own, tri_lo, tri_hi, lo, hi, t
         o = own[i]
         for g in range(u_at[block[i]], u_at[block[i] + 1]):
             t = unsteady[g]
-            if not to_cut[g] and (u_way[g] and _away(t, i, p, tri_normal, corners)
-                                  or _outside(t, i, p, corners, sides)):
-                continue
             if not to_cut[g]:
-                f_pix[f], f_tri[f] = i, t
-                f += 1
+                if not (u_way[g] and _away(t, i, p, tri_normal, corners)
+                        or _outside(t, i, p, corners, sides)):
+                    f_pix[f], f_tri[f] = i, t
+                    f += 1
                 continue
             if t == o or not _boxes_meet(tri_lo, tri_hi, t, lo, hi, i) or coplanar_with(
                     corners, t, o, tri_normal[t, 0], tri_normal[t, 1], tri_normal[t, 2],
