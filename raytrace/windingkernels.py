@@ -280,7 +280,16 @@ def _pair(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin):
     cross, with t along i, t along j, the crossing point x, y and the sign of j x i; 0 where
     they lie apart or share a corner, certainly; -1 where in doubt), with `windings._pieces`'s
     products.  Scalars, not the outline's arrays: numba counts references to an array passed
-    to an inlined function with branches, on each call (4x the time of the test itself)."""
+    to an inlined function with branches, on each call (4x the time of the test itself).
+    Two edges that share a corner at one point (the same floats in both: the outline's two
+    edges at each of its corners, or an edge and a box's side it ends on) turn exactly 0
+    there, so the four turns below decide nothing and only `_corner`'s test does: it is
+    taken first."""
+    shared = iai == iaj or iai == ibj or ibi == iaj or ibi == ibj
+    if shared:
+        state, one = _corner(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin)
+        if one:
+            return state, 0.0, 0.0, 0.0, 0.0, 0.0
     dxi, dyi, dxj, dyj = bxi - axi, byi - ayi, bxj - axj, byj - ayj
     si, sj = abs(dxi) + abs(dyi), abs(dxj) + abs(dyj)
     ci, oi = _turn(dxi, dyi, axj - axi, ayj - ayi, si, margin)
@@ -289,28 +298,36 @@ def _pair(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin):
         return 0, 0.0, 0.0, 0.0, 0.0, 0.0
     cj, oj = _turn(dxj, dyj, axi - axj, ayi - ayj, sj, margin)
     dj, pj = _turn(dxj, dyj, bxi - axj, byi - ayj, sj, margin)
-    shared = iai == iaj or iai == ibj or ibi == iaj or ibi == ibj
     apart = oj and pj and cj * dj > 0
     cross = oi and pi and oj and pj and ci * di < 0 and cj * dj < 0 and not shared
     if not (apart or cross or shared):
         return -1, 0.0, 0.0, 0.0, 0.0, 0.0
-    if shared and not apart:
-        at_a = iai == iaj or iai == ibj                  # the corner is i's start
-        x, y = (axi, ayi) if at_a else (bxi, byi)
-        ux, uy = ((bxi, byi) if at_a else (axi, ayi))
-        ux, uy = ux - x, uy - y
-        other_at_a = iaj == (iai if at_a else ibi)
-        vx, vy = ((bxj, byj) if other_at_a else (axj, ayj))
-        vx, vy = vx - x, vy - y
-        _, sure = _turn(ux, uy, vx, vy, abs(ux) + abs(uy), margin)
-        if not (sure or ux * vx + uy * vy < 0):
-            return -1, 0.0, 0.0, 0.0, 0.0, 0.0
+    if shared and not apart and _corner(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj,
+                                        ibj, margin)[0] < 0:
+        return -1, 0.0, 0.0, 0.0, 0.0, 0.0
     if not cross:
         return 0, 0.0, 0.0, 0.0, 0.0, 0.0
     t_j, t_i = ci / (ci - di), cj / (cj - dj)
     x, y = axj + t_j * dxj, ayj + t_j * dyj
     turn = np.sign(dxj * dyi - dyj * dxi)
     return 1, t_i, t_j, x, y, turn
+
+
+@_jit(inline="always")
+def _corner(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin):
+    """Edges i, j sharing a corner id: (-1 where their other ends turn from it by too little
+    to tell (collinear, the same way: they may overlap), else 0; whether j's copy of the
+    corner is i's, the same floats)."""
+    at_a = iai == iaj or iai == ibj                      # the corner is i's start
+    x, y = (axi, ayi) if at_a else (bxi, byi)
+    ux, uy = ((bxi, byi) if at_a else (axi, ayi))
+    ux, uy = ux - x, uy - y
+    other_at_a = iaj == (iai if at_a else ibi)
+    wx, wy = (axj, ayj) if other_at_a else (bxj, byj)
+    vx, vy = ((bxj, byj) if other_at_a else (axj, ayj))
+    vx, vy = vx - x, vy - y
+    _, sure = _turn(ux, uy, vx, vy, abs(ux) + abs(uy), margin)
+    return (0 if sure or ux * vx + uy * vy < 0 else -1), wx == x and wy == y
 
 
 @_jit()
