@@ -23,9 +23,12 @@ met on the bunny 128 x 128; `block_edges` ~0.95x, the same bytes).
 
 `block_edges` makes room for a block's unsteady triangles (as many as its clusters hold) and
 for its outline edges before its loops, never within them: numba counts references to an
-array a loop may replace, on every pass (docs/speed.md, "Reference counts"); and it calls no
+array a loop may replace, on every pass (docs/speed.md, "Reference counts"); it calls no
 function for a member that is not inlined (a call counts references to each array it is
-handed: the one-way rule's tests wait for `onewaykernels.settle`, once a block).
+handed: the one-way rule's tests wait for `onewaykernels.settle`, once a block); and it
+hands `_behind`, once a cluster and pixel, floats: handed the arrays, with its loop over
+the pixels and its early returns, it counted their references at each call (10 atomic
+adds and subtracts a cluster; ~5 % of `block_edges` on the bunny 128 x 128).
 """
 
 from __future__ import annotations
@@ -43,29 +46,21 @@ from .packetkernels import _jit
 @_jit()
 def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri_normal,
                 offset, scale, corners, rel, reach, coplanar, sides, most, ways):
-    """For the blocks of pixels start (b + 1,) (each block's pixels, in order): (the blocks'
-    outline edges: tri, from, to (e,) a triangle and its corners (0-2) the edge runs between,
-    the way its net count is positive, count (e,), where each block's start (b + 1,); the
-    unsteady triangles (u,), whether each is free from some of the block's pixels only or
-    is one's own or coplanar with it (u,) (else it is free from each, turned either way),
-    where each block's start (b + 1,); whether a block has a convex object's triangle (b,),
-    a guard (the pixel-by-pixel path unites those as hulls); whether each unsteady triangle
-    may be left out where it turns away from a pixel (u,): `onewaykernels`), of the
-    triangles `_near` keeps.  meet (b, C): the clusters meeting some pixel's pyramid of each
-    block (sides (s, n, 3) their unit inward normals); members, packed, kinds, welded (C,
-    CLUSTER, 3) the members' corner ids: `occluders.Objects`; h (C, CLUSTER, 3) their
-    corners' heights over the light's plane, by member; p (n, 3), top (n,) its height; own
-    (n,); tri_normal, offset, scale (M,); rel (n,) |p - centre|; reach: UNCUT_REACH of the
-    light; coplanar: COPLANAR_RELATIVE; most: the most triangles a block's clusters hold;
-    ways: each cluster's object (C,), whether each may take the one-way rule (`blockwindings.
-    _one_way`), its holes (`Objects.holes`' first three), the clusters' spheres (centre,
-    radius), normal cones (`Objects.cones`) and heights' ranges (C, 2): `_behind`'s."""
+    """For the blocks of pixels start (b + 1,), of the triangles `_near` keeps: the outline
+    edges (tri, from, to (e,): a triangle, the corners (0-2) the edge runs between the way its
+    net count (e,) is positive; each block's start (b + 1,)); the unsteady triangles (u,),
+    whether each is free from some pixels only or one's own or coplanar with it (u,), each
+    block's start (b + 1,); whether a block has a convex object's triangle (b,) (a guard:
+    the pixel path unites those as hulls); whether each unsteady triangle may be left out
+    where it turns away from a pixel (u,) (`onewaykernels`).  meet (b, C): the clusters
+    meeting some pixel's pyramid of each block (sides (s, n, 3): their unit inward normals);
+    h (C, CLUSTER, 3): the members' corners' heights over the light's plane; top (n,): p's;
+    rel (n,) |p - centre|; reach: UNCUT_REACH of the light; most: the most triangles a
+    block's clusters hold; ways: `blockwindings.chains`' (`_ways`', `_behind`'s)."""
     n_blocks, width, owner, one_way = start.shape[0] - 1, members.shape[1], ways[0], ways[1]
-    e_tri, e_from = np.empty(1024, np.int64), np.empty(1024, np.int64)
-    e_to, e_cnt = np.empty(1024, np.int64), np.empty(1024, np.int64)
+    centre, radius, cones, spans = ways[5], ways[6], ways[7], ways[8]
+    e_tri, e_from, e_to, e_cnt, unsteady, loose, u_c, u_way = _rooms(1024)
     e_at, u_at = np.zeros(n_blocks + 1, np.int64), np.zeros(n_blocks + 1, np.int64)
-    unsteady, loose = np.empty(1024, np.int64), np.empty(1024, np.bool_)
-    u_c, u_way = np.empty(1024, np.int64), np.empty(1024, np.bool_)
     convex = np.zeros(n_blocks, np.bool_)
     # a block's steady edges (lo, hi, way, its triangle and corners), its members turned away,
     # then those in doubt (cluster, member); per object and cluster the one-way rule's state
@@ -89,7 +84,15 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
             o = owner[c]
             if seen[o] != b:
                 seen[o], way[o] = b, one_way[o] and _ways(o, i0, i1, p, ways, axes, sides, slack)
-            if way[o] and _behind(c, i0, i1, p, ways, low_top, high_top, far_rel, reach):
+            # `_behind` from each p: every member turned away, free, within reach
+            whole = way[o] and cones[c, 3] > 0 and spans[c, 0] >= 0 and spans[c, 1] < low_top
+            grow = high_top / (low_top - spans[c, 1]) if whole else 0.0
+            for i in range(i0, i1):
+                whole = whole and _behind(
+                    p[i, 0] - centre[c, 0], p[i, 1] - centre[c, 1], p[i, 2] - centre[c, 2],
+                    cones[c, 0], cones[c, 1], cones[c, 2], cones[c, 3], cones[c, 4], radius[c],
+                    grow, far_rel, reach)
+            if whole:
                 later[0, nd], later[1, nd], nd = c, -1, nd + 1     # turned away, whole
                 continue
             for k in range(width):
@@ -124,6 +127,15 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
 
 
 @_jit()
+def _rooms(n):
+    """`block_edges`' growing arrays, n long: its outline edges' tri, from, to, count, its
+    unsteady triangles, whether each is loose, its cluster, whether it may be left out."""
+    return np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64), \
+        np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.bool_), \
+        np.empty(n, np.int64), np.empty(n, np.bool_)
+
+
+@_jit()
 def _turned_away(q, nd, later, b, i0, p, way, cone, axes, ways, members, packed, welded, keys,
                  sides, slack):
     """Block b's members turned away from each of its points (later[:, :nd]: cluster and
@@ -148,37 +160,26 @@ def _turned_away(q, nd, later, b, i0, p, way, cone, axes, ways, members, packed,
 
 
 @_jit(inline="always")
-def _behind(c, i0, i1, p, ways, low_top, high_top, far_rel, reach):
-    """Whether `_steady` would give every member of cluster c -1 (turned away from each of
-    the block's points i0..i1 by more than FACING of its distance, free from each, carried
-    within reach), from its sphere (ways' fifth and sixth: centre, radius R), normal cone
-    (ways' seventh: `occluderkernels.cones`) and its members' heights' range (ways'
-    eighth): every member's normal n within the cone's half angle t of its axis a, and
-    its corners within R of the centre, n . (p - corner) <= |d| cos(f - t) + R for d =
-    p - centre at the angle f from a; that less than -FACING (|d| + R), the corner's
-    distance at most; and each member's reach bound at most the cluster's (its height
-    at most the range's top, its distance at most |d| + R, its box's diagonal 2 R).  A
-    margin of 2^-30 of the terms covers the roundings, the members' and these."""
-    centre, radius, cones, spans = ways[5], ways[6], ways[7], ways[8]
-    cos, sin = cones[c, 3], cones[c, 4]
-    if not (cos > 0 and spans[c, 0] >= 0 and spans[c, 1] < low_top):
-        return False
-    r = radius[c]
-    grow = high_top / (low_top - spans[c, 1])
-    for i in range(i0, i1):
-        d0, d1, d2 = p[i, 0] - centre[c, 0], p[i, 1] - centre[c, 1], p[i, 2] - centre[c, 2]
-        size = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        along = cones[c, 0] * d0 + cones[c, 1] * d1 + cones[c, 2] * d2
-        x0 = cones[c, 1] * d2 - cones[c, 2] * d1
-        x1 = cones[c, 2] * d0 - cones[c, 0] * d2
-        x2 = cones[c, 0] * d1 - cones[c, 1] * d0
-        across = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-        most = along * cos + across * sin + r + FACING * (size + r)
-        if not most + 2.0 ** -30 * (abs(along) + size + r) < 0:
-            return False
-        if not (far_rel + grow * (size + 3 * r)) * (1 + 2.0 ** -20) < reach:
-            return False
-    return True
+def _behind(d0, d1, d2, a0, a1, a2, cos, sin, r, grow, far_rel, reach):
+    """Whether `_steady` would give every member of a cluster -1 as seen from p (turned away
+    by more than FACING of its distance, free, carried within reach), d = p - centre (the
+    cluster's sphere: centre, radius r; its normal cone (`occluderkernels.cones`): axis a,
+    half angle t, cos t, sin t; grow: the block's highest height over its lowest less the
+    top of the cluster's heights): every member's normal n within t of a, and its corners
+    within r of the centre, n . (p - corner) <= |d| cos(f - t) + r for d at the angle f
+    from a; that less than -FACING (|d| + r), the corner's distance at most; and each
+    member's reach bound at most the cluster's (its height at most the heights' top, its
+    distance at most |d| + r, its box's diagonal 2 r).  A margin of 2^-30 of the terms
+    covers the roundings, the members' and these.  The caller tests the cone (cos t > 0)
+    and the heights (between the light's plane and the lowest p's parallel plane), and
+    hands floats, not arrays (the module docstring)."""
+    size = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    along = a0 * d0 + a1 * d1 + a2 * d2
+    x0, x1, x2 = a1 * d2 - a2 * d1, a2 * d0 - a0 * d2, a0 * d1 - a1 * d0
+    across = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    most = along * cos + across * sin + r + FACING * (size + r)
+    return most + 2.0 ** -30 * (abs(along) + size + r) < 0 and \
+        (far_rel + grow * (size + 3 * r)) * (1 + 2.0 ** -20) < reach
 
 
 @_jit(inline="always")
