@@ -85,8 +85,8 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
             if seen[o] != b:
                 seen[o], way[o] = b, one_way[o] and _ways(o, i0, i1, p, ways, axes, sides, slack)
             # `_behind` from each p: every member turned away, free, within reach
-            whole = way[o] and cones[c, 3] > 0 and spans[c, 0] >= 0 and spans[c, 1] < low_top
-            grow = high_top / (low_top - spans[c, 1]) if whole else 0.0
+            grow = _ahead(cones[c, 3], spans[c, 0], spans[c, 1], low_top, high_top)
+            whole = way[o] and grow >= 0
             for i in range(i0, i1):
                 whole = whole and _behind(
                     p[i, 0] - centre[c, 0], p[i, 1] - centre[c, 1], p[i, 2] - centre[c, 2],
@@ -160,6 +160,17 @@ def _turned_away(q, nd, later, b, i0, p, way, cone, axes, ways, members, packed,
 
 
 @_jit(inline="always")
+def _ahead(cos, low_h, high_h, low_top, high_top):
+    """`_behind`'s grow for a cluster whose normal cone is narrower than a half space (cos t >
+    0) and whose members' heights low_h..high_h lie between the light's plane and the block's
+    lowest parallel plane (low_top; high_top its highest): high_top / (low_top - high_h),
+    else -1 (the cluster is not passed whole)."""
+    if cos > 0 and low_h >= 0 and high_h < low_top:
+        return high_top / (low_top - high_h)
+    return -1.0
+
+
+@_jit(inline="always")
 def _behind(d0, d1, d2, a0, a1, a2, cos, sin, r, grow, far_rel, reach):
     """Whether `_steady` would give every member of a cluster -1 as seen from p (turned away
     by more than FACING of its distance, free, carried within reach), d = p - centre (the
@@ -170,9 +181,8 @@ def _behind(d0, d1, d2, a0, a1, a2, cos, sin, r, grow, far_rel, reach):
     from a; that less than -FACING (|d| + r), the corner's distance at most; and each
     member's reach bound at most the cluster's (its height at most the heights' top, its
     distance at most |d| + r, its box's diagonal 2 r).  A margin of 2^-30 of the terms
-    covers the roundings, the members' and these.  The caller tests the cone (cos t > 0)
-    and the heights (between the light's plane and the lowest p's parallel plane), and
-    hands floats, not arrays (the module docstring)."""
+    covers the roundings, the members' and these.  The caller tests the cone and the
+    heights first (`_ahead`) and hands floats, not arrays (the module docstring)."""
     size = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
     along = a0 * d0 + a1 * d1 + a2 * d2
     x0, x1, x2 = a1 * d2 - a2 * d1, a2 * d0 - a0 * d2, a0 * d1 - a1 * d0

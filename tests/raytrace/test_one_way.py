@@ -219,23 +219,27 @@ def test_no_block_takes_the_rule_where_the_frame_is_not_the_eyes(monkeypatch):
 
 @pytest.mark.parametrize("seed", range(10))
 def test_a_cluster_passed_whole_as_turned_away_is_so_member_by_member(seed):
-    """`blockkernels._behind` (a cluster left out whole, from its sphere, normal cone and
-    heights' range) against `_steady` member by member: wherever it passes a cluster for a
-    block of points, `_steady` gives each member -1 (turned away from each point, free from
-    each, carried within reach).  Bumpy sheets of small or long triangles (their boxes
-    across their cluster's sphere), their normals within a few degrees to a few tens of
-    one axis, and blocks of points seen at angles about the cone's edge (90 degrees + its
-    half angle), near and far, under reaches about the members' own bounds (half the time
-    just over the most of them): some clusters pass, some only just fail."""
+    """`blockkernels._ahead` and `_behind` (a cluster left out whole, from its sphere,
+    normal cone and heights' range) against `_steady` member by member: wherever they pass
+    a cluster for a block of points, `_steady` gives each member -1 (turned away from each
+    point, free from each, carried within reach).  Bumpy sheets of small or long triangles
+    (their boxes across their cluster's sphere), their normals within a few degrees to a
+    few tens of one axis, and blocks of points seen at angles about the cone's edge (90
+    degrees + its half angle), near and far, under reaches about the members' own bounds
+    (half the time just over the most of them): some clusters pass, some only just fail.
+    One sheet in four is 1/100 as wide, its clusters' spheres small beside the points'
+    distances, so the bound is tight to a few hundredths of them (a facing bound loosened
+    by 0.05 fails here)."""
     from raytrace import occluders
     blocks = polygons.kernels("blockkernels")
     rng = np.random.default_rng(seed)
     passed = 0
     for trial in range(30):
         tilt = 10.0 ** rng.uniform(-2.5, -0.3)
-        centres = rng.uniform(-1, 1, (256, 3)) * [1, 1, 0.01]
+        wide = 1.0 if trial % 4 else 0.01
+        centres = rng.uniform(-1, 1, (256, 3)) * [1, 1, 0.01] * wide
         # small triangles, or long ones (their boxes across their cluster's sphere)
-        size = 0.03 if trial % 3 else 0.5
+        size = (0.03 if trial % 3 else 0.5) * wide
         corners = centres[:, None] + rng.normal(0, size, (256, 3, 3)) * [1, 1, tilt]
         up = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])[:, 2] > 0
         corners[~up] = corners[~up][:, ::-1]                 # every normal toward +z
@@ -247,9 +251,6 @@ def test_a_cluster_passed_whole_as_turned_away_is_so_member_by_member(seed):
         by_member = h[np.maximum(objects.members, 0)]
         flat = by_member.reshape(len(by_member), -1)
         spans = np.stack([flat.min(axis=1), flat.max(axis=1)], axis=1)
-        ways = (np.zeros(1, np.int64), np.zeros(1, np.bool_), np.zeros(3, np.int64),
-                np.zeros((0, 3)), np.zeros(0), objects.centre, objects.radius, objects.cones,
-                spans)
         own = np.full(4, 256)
         for c in np.flatnonzero((objects.cones[:, 3] > 0) & (objects.owner == 0)):
             axis = objects.cones[c, :3]
@@ -271,7 +272,11 @@ def test_a_cluster_passed_whole_as_turned_away_is_so_member_by_member(seed):
                 dist + np.linalg.norm(box, axis=1))).max()
             reach = bound * 10.0 ** (rng.uniform(0, 0.03) if trial % 2 else
                                      rng.uniform(-0.2, 0.3))
-            if not blocks._behind(c, 0, 4, p, ways, low_top, high_top, far_rel, reach):
+            # as `block_edges` asks: the cone and heights, then each point's floats
+            grow = blocks._ahead(objects.cones[c, 3], *spans[c], low_top, high_top)
+            if not (grow >= 0 and all(blocks._behind(
+                    *(p[i] - objects.centre[c]), *objects.cones[c], objects.radius[c], grow,
+                    far_rel, reach) for i in range(4))):
                 continue
             passed += 1
             for k, t in enumerate(objects.members[c]):
