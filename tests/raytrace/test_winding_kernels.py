@@ -217,6 +217,82 @@ def test_corners_number_ids_one_to_one_and_find_two_at_one_point(seed):
                                        np.array([2, 3]))[0]
 
 
+def _pair_by_turns(ai, bi, ia_i, ib_i, aj, bj, ia_j, ib_j, margin):
+    """`windingkernels._pair`'s state (1 cross, 0 apart or a shared corner only, -1 in doubt)
+    as it was before shared corners were taken first: the four turns, then the corner's
+    test where the ids share one (Python floats: the same IEEE products)."""
+    def turn(ux, uy, vx, vy, size):
+        c = ux * vy - uy * vx
+        return c, abs(c) > margin * (size * (abs(vx) + abs(vy)))
+    (axi, ayi), (bxi, byi), (axj, ayj), (bxj, byj) = ai, bi, aj, bj
+    dxi, dyi, dxj, dyj = bxi - axi, byi - ayi, bxj - axj, byj - ayj
+    si, sj = abs(dxi) + abs(dyi), abs(dxj) + abs(dyj)
+    ci, oi = turn(dxi, dyi, axj - axi, ayj - ayi, si)
+    di, pi = turn(dxi, dyi, bxj - axi, byj - ayi, si)
+    if oi and pi and ci * di > 0:
+        return 0
+    cj, oj = turn(dxj, dyj, axi - axj, ayi - ayj, sj)
+    dj, pj = turn(dxj, dyj, bxi - axj, byi - ayj, sj)
+    shared = ia_i in (ia_j, ib_j) or ib_i in (ia_j, ib_j)
+    apart = oj and pj and cj * dj > 0
+    cross = oi and pi and oj and pj and ci * di < 0 and cj * dj < 0 and not shared
+    if not (apart or cross or shared):
+        return -1
+    if shared and not apart:
+        at_a = ia_i in (ia_j, ib_j)
+        x, y = (axi, ayi) if at_a else (bxi, byi)
+        ux, uy = ((bxi - x, byi - y) if at_a else (axi - x, ayi - y))
+        vx, vy = ((bxj - x, byj - y) if ia_j == (ia_i if at_a else ib_i) else
+                  (axj - x, ayj - y))
+        if not (turn(ux, uy, vx, vy, abs(ux) + abs(uy))[1] or ux * vx + uy * vy < 0):
+            return -1
+    return 1 if cross else 0
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_two_edges_at_one_corner_are_in_doubt_only_where_they_may_overlap(seed):
+    """`windingkernels._pair` of two edges sharing a corner id at one point: in doubt (-1)
+    exactly where their other ends leave it along one line the same way (a perpendicular
+    offset of 1e-13 of their length, well within DOUBT), else apart (0: opposite ways, or
+    an angle of 1e-3 and more), never a crossing; either edge first, the corner at either
+    end of each, -0.0 for 0.0 in one copy.  With the corner's two copies a rounding or a
+    thousandth apart (one id at two points) and on pairs that share nothing, the same
+    state as the four turns gave before the corner's shortcut (`_pair_by_turns`)."""
+    from raytrace import windingkernels
+    rng = np.random.default_rng(seed)
+    margin = windings.DOUBT
+
+    def pair(i, j, ids_i, ids_j):
+        return int(windingkernels._pair(*i[0], *i[1], *ids_i, *j[0], *j[1], *ids_j,
+                                        margin)[0])
+    for _ in range(200):
+        corner = rng.normal(0, 10.0 ** rng.integers(-2, 3), 2)
+        u = rng.normal(0, 1, 2) * 10.0 ** rng.uniform(-2, 1)
+        same, near = rng.random() < 0.5, rng.random() < 0.5
+        v = u * rng.uniform(0.2, 3) * (1 if same else -1)
+        v = v + np.array([-v[1], v[0]]) * (1e-13 if near else rng.uniform(1e-3, 1))
+        if rng.random() < 0.2:
+            corner[0] = 0.0
+        i = [tuple(corner), tuple(corner + u)]
+        j = [(-0.0 if corner[0] == 0 else corner[0], corner[1]), tuple(corner + v)]
+        ids_i, ids_j = [7, 3], [7, 11]
+        if rng.random() < 0.5:
+            i, ids_i = i[::-1], ids_i[::-1]
+        if rng.random() < 0.5:
+            j, ids_j = j[::-1], ids_j[::-1]
+        want = -1 if near and same else 0
+        assert pair(i, j, ids_i, ids_j) == pair(j, i, ids_j, ids_i) == want, (i, j)
+        # the corner's copies a rounding or a little apart: the turns decide, as before
+        for off in (None, rng.normal(0, 1e-3 * np.abs(u).sum(), 2)):
+            k = [(tuple(np.nextafter(np.array(q), np.inf)) if off is None else
+                  tuple(np.array(q) + off)) if n == 7 else q for q, n in zip(j, ids_j)]
+            assert pair(i, k, ids_i, ids_j) == _pair_by_turns(*i, *ids_i, *k, *ids_j, margin)
+            assert pair(k, i, ids_j, ids_i) == _pair_by_turns(*k, *ids_j, *i, *ids_i, margin)
+        # and two edges that share no corner
+        w = [tuple(rng.normal(0, 1, 2)), tuple(rng.normal(0, 1, 2))]
+        assert pair(i, w, ids_i, [20, 21]) == _pair_by_turns(*i, *ids_i, *w, 20, 21, margin)
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_the_stable_order_is_numpys(seed):
     """`outlinekernels._stable` (by insertion up to FEW keys, else a quick sort and its runs
