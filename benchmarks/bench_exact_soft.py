@@ -1,7 +1,8 @@
 """Exact soft shadows against counted samples (BENCHMARKS.md, "Exact soft shadows"): one run,
 milliseconds per frame, wall clock and CPU.
 
-    python -m benchmarks.bench_exact_soft [--width WIDTH] [--medians N | --light-sides]
+    python -m benchmarks.bench_exact_soft [--width WIDTH] [--medians N | --light-sides |
+                                           --paired DIR [--rounds N]]
 
 Three frames under one rect light each: scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96;
 closed convex bodies), a closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a
@@ -24,15 +25,26 @@ these sizes) called in turn N times in one process after a warm-up, the median C
 each (soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256) and the wall ms of the
 exact visibility and the bare count: steadier on a noisy machine than one call.  With
 --light-sides: instead, the bunny 128 x 128 under square rect lights of side 0.125 to 2
-(`light_sides`): where the exact path costs less than the count and where more."""
+(`light_sides`): where the exact path costs less than the count and where more.  With
+--paired DIR: instead, this checkout's exact visibility against that of the `raytrace`
+package in DIR (an older one: `git archive REV raytrace | tar -x -C DIR`), both in this
+process (`paired`): a change of a few percent, which the medians of separate runs cannot
+resolve on a shared machine."""
 
 from __future__ import annotations
 
 import argparse
+import atexit
 import contextlib
 import dataclasses
+import importlib
 import os
+import random
+import shutil
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -214,17 +226,82 @@ def light_sides(size: int = 128, sides=(0.125, 0.25, 0.5, 0.75, 1.0, 2.0), calls
               f"{a / b:.2f}x", flush=True)
 
 
+def other_exact_soft(root: str):
+    """The `exact_soft` module of the `raytrace` package in the directory `root`, imported
+    beside this checkout's as `raytrace_paired` (a copy in a temporary directory, removed at
+    exit, its numba kernels compiled afresh on the first call; the package imports its own
+    modules relatively, and this checkout's `shadowvol`)."""
+    source = Path(root) / "raytrace"
+    if not (source / "exact_soft.py").is_file():
+        raise SystemExit(f"--paired {root}: no raytrace/exact_soft.py there")
+    where = tempfile.mkdtemp(prefix="paired-")
+    atexit.register(shutil.rmtree, where, True)
+    shutil.copytree(source, Path(where) / "raytrace_paired",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    sys.path.insert(0, where)
+    for name in [m for m in sys.modules if m.split(".")[0] == "raytrace_paired"]:
+        del sys.modules[name]                    # an earlier DIR's
+    return importlib.import_module("raytrace_paired.exact_soft")
+
+
+def paired(other, rounds: int = 21, bunny_sizes=(64, 128, 256), width: int = 96) -> None:
+    """`--paired DIR`: `other` (`other_exact_soft`'s module, the old) against this checkout's
+    `exact_soft` (the new) on soft.toml, the blob 48x48 and the bunny at `bunny_sizes`: each
+    frame's two calls in a random order each round, then the bare count of 256 samples, after
+    a call each; the median CPU ms of each, the median of the rounds' new / old (and its
+    quartiles: the same code paired with itself gives ~0.98-1.0x over 21 rounds here), each
+    one's median ratio to its round's count, and whether V and the irradiance are the same
+    bytes (else their largest differences)."""
+    print(f"this checkout (new) against {other.__name__} (old), {rounds} rounds, median CPU ms "
+          "(paired: the median of the rounds' ratios):")
+    frames = [(f"soft.toml {width}x{width * 3 // 4}",
+               load_scene("scenes/soft.toml").replace(width=width, height=width * 3 // 4)),
+              ("blob 48x48", blob_scene(48))]
+    if BUNNY.is_file():
+        frames += [(f"bunny {k}x{k}", bunny_rect_scene(k)) for k in bunny_sizes]
+    order = random.Random(1)
+    for name, scene in frames:
+        counted = with_samples(scene, 256)
+        was, now = other.exact_visibility(scene), exact_soft.exact_visibility(scene)
+        lit_counts(counted)
+        dv = float(np.abs(now.visibility - was.visibility).max(initial=0.0))
+        de = float(np.abs(now.irradiance - was.irradiance).max(initial=0.0))
+        calls = {"old": lambda: other.exact_visibility(scene),
+                 "new": lambda: exact_soft.exact_visibility(scene),
+                 "count": lambda: lit_counts(counted)}
+        times = {key: [] for key in calls}
+        for _ in range(rounds):
+            turn = order.sample(["old", "new"], 2) + ["count"]
+            for key in turn:
+                times[key].append(clocked(calls[key])[1])
+        t = {key: np.array(v) for key, v in times.items()}
+        ratio = t["new"] / t["old"]
+        q1, q3 = np.percentile(ratio, [25, 75])
+        same = "the same bytes" if dv == de == 0 else f"|dV| <= {dv:.1e}, |dE| <= {de:.1e}"
+        print(f"  {name}: old {np.median(t['old']):.0f}, new {np.median(t['new']):.0f}, count "
+              f"{np.median(t['count']):.0f}; new / old {np.median(ratio):.3f}x ({q1:.3f}-"
+              f"{q3:.3f}); exact / count, old {np.median(t['old'] / t['count']):.3f}x, new "
+              f"{np.median(t['new'] / t['count']):.3f}x; {same}", flush=True)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_exact_soft",
                                  description=__doc__.split("\n\n")[0])
     ap.add_argument("--width", type=int, default=96, help="soft.toml's width (default 96)")
     ap.add_argument("--medians", type=int, default=0, metavar="N",
                     help="each frame's exact and counted-256 CPU ms as the median of N calls")
+    ap.add_argument("--paired", metavar="DIR",
+                    help="instead, this checkout's exact visibility against DIR's raytrace")
+    ap.add_argument("--rounds", type=int, default=21, help="--paired's rounds (default 21)")
     ap.add_argument("--light-sides", action="store_true",
                     help="instead, the bunny 128x128 under rect lights of six sizes")
     args = ap.parse_args(argv)
     width = args.width
     print(f"load {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    if args.paired:
+        paired(other_exact_soft(args.paired), args.rounds, width=width)
+        print(f"load {os.getloadavg()[0]:.2f}")
+        return
     if args.light_sides:
         light_sides() if BUNNY.is_file() else print(f"bunny: {BUNNY} missing")
         print(f"load {os.getloadavg()[0]:.2f}")

@@ -178,6 +178,38 @@ def test_the_exact_soft_medians_run(capsys):
     assert all(line.split(" = ")[1].split("x")[0].replace(".", "").isdigit() for line in lines)
 
 
+def test_the_exact_soft_paired_run(capsys):
+    """`python -m benchmarks.bench_exact_soft --paired DIR`'s loop (small frames), this
+    checkout paired with itself: a line a frame with both medians, the paired ratio and the
+    same bytes (nothing timed here)."""
+    pytest.importorskip("shapely")
+    from benchmarks import bench_exact_soft
+    bench_exact_soft.paired(bench_exact_soft.exact_soft, rounds=2, bunny_sizes=(8,), width=16)
+    lines = [line for line in capsys.readouterr().out.splitlines() if "new / old" in line]
+    names = [line.split(":")[0].strip() for line in lines]
+    assert names[:2] == ["soft.toml 16x12", "blob 48x48"]
+    assert len(lines) == (3 if bench_exact_soft.BUNNY.is_file() else 2)
+    for line in lines:
+        assert line.endswith("the same bytes"), line
+        ratio = line.split("new / old ")[1].split("x")[0]
+        assert float(ratio) > 0
+
+
+def test_the_paired_package_is_imported_beside_this_one(tmp_path):
+    """`bench_exact_soft.other_exact_soft`: DIR's raytrace imported as `raytrace_paired` (its
+    relative imports its own, not this checkout's); a DIR without one refused, named."""
+    from benchmarks import bench_exact_soft
+    package = tmp_path / "raytrace"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "helper.py").write_text("WHO = 'the old one'\n")
+    (package / "exact_soft.py").write_text("from .helper import WHO\n")
+    module = bench_exact_soft.other_exact_soft(str(tmp_path))
+    assert module.__name__ == "raytrace_paired.exact_soft" and module.WHO == "the old one"
+    with pytest.raises(SystemExit, match="no raytrace/exact_soft.py"):
+        bench_exact_soft.other_exact_soft(str(tmp_path / "nowhere"))
+
+
 def test_the_exact_soft_light_sides_run(capsys):
     """`python -m benchmarks.bench_exact_soft --light-sides`' loop (the blob, small): a line a
     light side with the penumbra's share and both medians (nothing timed here)."""
