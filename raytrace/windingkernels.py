@@ -282,9 +282,8 @@ def _pair(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin):
     products.  Scalars, not the outline's arrays: numba counts references to an array passed
     to an inlined function with branches, on each call (4x the time of the test itself).
     Two edges that share a corner at one point (the same floats in both: the outline's two
-    edges at each of its corners, or an edge and a box's side it ends on) turn exactly 0
-    there, so the four turns below decide nothing and only `_corner`'s test does: it is
-    taken first."""
+    edges at each of its corners) turn exactly 0 there, so the four turns below decide
+    nothing and only `_corner`'s test does: it is taken first."""
     shared = iai == iaj or iai == ibj or ibi == iaj or ibi == ibj
     if shared:
         state, one = _corner(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin)
