@@ -169,15 +169,22 @@ def per_pixel(sizes=(16, 32, 64, 128, 256)) -> None:
           f"({slope[0] / max(slope[2], 1e-9):.1f}x)")
 
 
-def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256)) -> None:
-    """`--medians n`: see the module."""
-    print(f"exact / counting 256 (the bare count), median CPU ms of {n} calls each in turn; "
-          "then raytrace masks' count and soft_masks':")
+def _frames(width: int, bunny_sizes) -> list[tuple[str, Scene]]:
+    """(name, scene): soft.toml `width` wide, the blob 48x48, and the bunny at each of
+    `bunny_sizes` where its mesh is at hand."""
     frames = [(f"soft.toml {width}x{width * 3 // 4}",
                load_scene("scenes/soft.toml").replace(width=width, height=width * 3 // 4)),
               ("blob 48x48", blob_scene(48))]
     if BUNNY.is_file():
         frames += [(f"bunny {k}x{k}", bunny_rect_scene(k)) for k in bunny_sizes]
+    return frames
+
+
+def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256)) -> None:
+    """`--medians n`: see the module."""
+    print(f"exact / counting 256 (the bare count), median CPU ms of {n} calls each in turn; "
+          "then raytrace masks' count and soft_masks':")
+    frames = _frames(width, bunny_sizes)
     for name, scene in frames:
         counted = with_samples(scene, 256)
         calls = (lambda: exact_soft.exact_visibility(scene), lambda: lit_counts(counted),
@@ -254,11 +261,7 @@ def paired(other, rounds: int = 21, bunny_sizes=(64, 128, 256), width: int = 96)
     bytes (else their largest differences)."""
     print(f"this checkout (new) against {other.__name__} (old), {rounds} rounds, median CPU ms "
           "(paired: the median of the rounds' ratios):")
-    frames = [(f"soft.toml {width}x{width * 3 // 4}",
-               load_scene("scenes/soft.toml").replace(width=width, height=width * 3 // 4)),
-              ("blob 48x48", blob_scene(48))]
-    if BUNNY.is_file():
-        frames += [(f"bunny {k}x{k}", bunny_rect_scene(k)) for k in bunny_sizes]
+    frames = _frames(width, bunny_sizes)
     order = random.Random(1)
     for name, scene in frames:
         counted = with_samples(scene, 256)
