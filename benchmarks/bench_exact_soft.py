@@ -23,7 +23,9 @@ one.  With --medians N: instead, each frame's exact visibility (on a thread per 
 on one) and the three counts of 256 samples (each on the threads its tiles allow: one at
 these sizes) called in turn N times in one process after a warm-up, the median CPU ms of
 each (soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256) and the wall ms of the
-exact visibility and the bare count: steadier on a noisy machine than one call.  With
+exact visibility and the bare count: steadier on a noisy machine than one call; "paired",
+the median of each exact call's CPU over the count's called just after it in the same round
+(a slow minute slows both: steadier again than the medians' ratio).  With
 --light-sides: instead, the bunny 128 x 128 under square rect lights of side 0.125 to 2
 (`light_sides`): where the exact path costs less than the count and where more.  With
 --paired DIR: instead, this checkout's exact visibility against that of the `raytrace`
@@ -200,10 +202,12 @@ def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256)) -> None:
                 wall.append(w)
         (ma, mb, m1, mg, ms), (a, b) = [float(np.median(t)) for t in times], times[:2]
         wa, wb = float(np.median(walls[0])), float(np.median(walls[1]))
+        pair = float(np.median(np.array(a) / np.array(b)))    # each call's with its count's
         print(f"  {name}: {ma:.0f} / {mb:.0f} = {ma / mb:.2f}x (exact {min(a):.0f}-{max(a):.0f}, "
-              f"counted {min(b):.0f}-{max(b):.0f}; wall {wa:.0f} / {wb:.0f} = {wa / wb:.2f}x); "
-              f"exact on one thread {m1:.0f} ({m1 / mb:.2f}x); raytrace masks' count {mg:.0f} "
-              f"({ma / mg:.2f}x), soft_masks' {ms:.0f} ({ma / ms:.2f}x)", flush=True)
+              f"counted {min(b):.0f}-{max(b):.0f}; paired {pair:.2f}x; wall {wa:.0f} / {wb:.0f}"
+              f" = {wa / wb:.2f}x); exact on one thread {m1:.0f} ({m1 / mb:.2f}x); raytrace "
+              f"masks' count {mg:.0f} ({ma / mg:.2f}x), soft_masks' {ms:.0f} ({ma / ms:.2f}x)",
+              flush=True)
 
 
 def light_sides(size: int = 128, sides=(0.125, 0.25, 0.5, 0.75, 1.0, 2.0), calls: int = 5,

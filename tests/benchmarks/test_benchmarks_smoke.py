@@ -176,6 +176,8 @@ def test_the_exact_soft_medians_run(capsys):
     assert lines[0].lstrip().startswith("soft.toml 16x12:")
     assert lines[1].lstrip().startswith("blob")
     assert all(line.split(" = ")[1].split("x")[0].replace(".", "").isdigit() for line in lines)
+    assert all(line.split("paired ")[1].split("x")[0].replace(".", "").isdigit()
+               for line in lines)
 
 
 def test_the_exact_soft_paired_run(capsys):
