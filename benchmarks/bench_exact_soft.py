@@ -25,7 +25,7 @@ these sizes) called in turn N times in one process after a warm-up, the median C
 each (soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256) and the wall ms of the
 exact visibility and the bare count: steadier on a noisy machine than one call; "paired",
 the median of each exact call's CPU over the count's called just after it in the same round
-(a slow minute slows both: steadier again than the medians' ratio).  With
+(a slow minute slows both).  With
 --light-sides: instead, the bunny 128 x 128 under square rect lights of side 0.125 to 2
 (`light_sides`): where the exact path costs less than the count and where more.  With
 --paired DIR: instead, this checkout's exact visibility against that of the `raytrace`

@@ -197,17 +197,23 @@ def test_the_exact_soft_paired_run(capsys):
         assert float(ratio) > 0
 
 
-def test_the_paired_package_is_imported_beside_this_one(tmp_path):
+def test_the_paired_package_is_imported_beside_this_one(tmp_path, monkeypatch):
     """`bench_exact_soft.other_exact_soft`: DIR's raytrace imported as `raytrace_paired` (its
     relative imports its own, not this checkout's); a DIR without one refused, named."""
+    import sys
     from benchmarks import bench_exact_soft
+    monkeypatch.setattr(sys, "path", list(sys.path))         # as it was, after
     package = tmp_path / "raytrace"
     package.mkdir()
     (package / "__init__.py").write_text("")
     (package / "helper.py").write_text("WHO = 'the old one'\n")
     (package / "exact_soft.py").write_text("from .helper import WHO\n")
-    module = bench_exact_soft.other_exact_soft(str(tmp_path))
-    assert module.__name__ == "raytrace_paired.exact_soft" and module.WHO == "the old one"
+    try:
+        module = bench_exact_soft.other_exact_soft(str(tmp_path))
+        assert module.__name__ == "raytrace_paired.exact_soft" and module.WHO == "the old one"
+    finally:
+        for name in [m for m in sys.modules if m.split(".")[0] == "raytrace_paired"]:
+            del sys.modules[name]
     with pytest.raises(SystemExit, match="no raytrace/exact_soft.py"):
         bench_exact_soft.other_exact_soft(str(tmp_path / "nowhere"))
 
