@@ -285,10 +285,12 @@ def _pair(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin):
     edges at each of its corners) turn exactly 0 there, so the four turns below decide
     nothing and only `_corner`'s test does: it is taken first."""
     shared = iai == iaj or iai == ibj or ibi == iaj or ibi == ibj
+    corner, one = 0, False
     if shared:
-        state, one = _corner(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin)
+        corner, one = _corner(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj,
+                              margin)
         if one:
-            return state, 0.0, 0.0, 0.0, 0.0, 0.0
+            return corner, 0.0, 0.0, 0.0, 0.0, 0.0
     dxi, dyi, dxj, dyj = bxi - axi, byi - ayi, bxj - axj, byj - ayj
     si, sj = abs(dxi) + abs(dyi), abs(dxj) + abs(dyj)
     ci, oi = _turn(dxi, dyi, axj - axi, ayj - ayi, si, margin)
@@ -301,8 +303,7 @@ def _pair(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj, ibj, margin):
     cross = oi and pi and oj and pj and ci * di < 0 and cj * dj < 0 and not shared
     if not (apart or cross or shared):
         return -1, 0.0, 0.0, 0.0, 0.0, 0.0
-    if shared and not apart and _corner(axi, ayi, bxi, byi, iai, ibi, axj, ayj, bxj, byj, iaj,
-                                        ibj, margin)[0] < 0:
+    if shared and not apart and corner < 0:
         return -1, 0.0, 0.0, 0.0, 0.0, 0.0
     if not cross:
         return 0, 0.0, 0.0, 0.0, 0.0, 0.0
