@@ -28,9 +28,10 @@ of more than MANY_PIECES from its outline alone (`raytrace.arrange`).  Under a r
 light, with the `fast` extra's kernels, a block of BLOCK x BLOCK pixels first counts once the
 outline of the triangles each of its points sees turned one way, and each of its pixels adds
 its own pairs of the others (`raytrace.blockwindings`).  One convex shadow on a rect or disk
-is taken away in numpy (clipped edge by edge); several are united, and taken away, by GEOS
-(shapely >= 2, the optional extra `exact`), snap-rounded (`lightshapes.OVERLAY_GRID`); the
-measures are `raytrace.polygons`'.
+is taken away in numpy (clipped edge by edge), a convex object's whole shadow given by its
+corners alone, no GEOS (in numba where it loads: `occluders.Convex.shadows`); several are
+united, and taken away, by GEOS (shapely >= 2, the optional extra `exact`), snap-rounded
+(`lightshapes.OVERLAY_GRID`; `raytrace.unions`); the measures are `raytrace.polygons`'.
 """
 
 from __future__ import annotations
@@ -56,13 +57,11 @@ from .masks import MaskTracer, _primary_hits, scene_backend, shadow_masks
 from .occluders import CONVEX_RELATIVE, Objects, weld
 from .occluders import objects as _objects
 from .switches import casting, receiving_objects
+from .unions import pixel_unions, shapes_of, whole_bodies
 
 __all__ = ["EXACT_OUTPUTS", "ExactVisibility", "check_exact", "exact_visibility",
            "visible_regions"]
 
-# Pieces of shadow per pixel that are united pairwise over all pixels at once (more: one
-# cascaded union per pixel).
-FEW_PIECES = 8
 # Pieces of shadow of one pixel above which their union is measured from its outline's
 # windings where it can be (`raytrace.windings`): from 9 on, the bunny 64x64 0.95x and the
 # blob 48x48 0.88x the CPU of from 17 (MANY_PIECES + 1).
@@ -228,7 +227,7 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     p, normal, own = p[front], normal[front], own[front]
     at = np.arange(len(p)) if shadowed is None else np.flatnonzero(shadowed[front])
     sides = candidates.heights(light, objects, corners) if sides is None else sides
-    pieces, single, chains, loose = _occluded(
+    pieces, (one, rows, sizes), chains, loose = _occluded(
         shapely, light, objects, corners, p, normal, own, at, sides,
         None if where is None else (where[0][front], *where[1:]),
         light.outline is None and regions is None)
@@ -245,7 +244,7 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     wound = windings.found(chains)
     has = (pieces != None) | wound  # noqa: E711 (an object array)
     # nothing in the way of a rect or disk: its box cut to p's side, measured as it is
-    plain = np.flatnonzero(~has & (count >= 3)) if light.outline is None and regions is None \
+    plain = np.flatnonzero(~has & (one < 0) & (count >= 3)) if light.outline is None and regions is None \
         else np.zeros(0, int)
     if len(plain):
         coords, ring = _closed_rings(cut[plain], count[plain])
@@ -253,12 +252,11 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
                                                      normal[plain], direct)):
             out[plain] = got
     # one convex shadow on a rect or disk: the light less it, in numpy
-    lone = np.flatnonzero(single & (count >= 3)) if light.outline is None and regions is None \
-        else np.zeros(0, int)
+    lone = np.flatnonzero((one >= 0) & (count >= 3))
     if len(lone):
-        for out, got in zip(measures, _minus_convex(shapely, light, cut[lone], count[lone],
-                                                    pieces[lone], p[lone], normal[lone],
-                                                    direct)):
+        for out, got in zip(measures, _minus_convex(light, cut[lone], count[lone],
+                                                    rows[one[lone]], sizes[one[lone]], p[lone],
+                                                    normal[lone], direct)):
             out[lone] = got
     wound = np.flatnonzero(wound & (count >= 3))
     if len(wound):
@@ -268,7 +266,7 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
             out[wound] = got
     rest = np.setdiff1d(np.arange(len(p)), np.r_[plain, lone, wound])
     if len(rest):
-        seen = _polygons(shapely, cut[rest], count[rest])
+        seen = shapes_of(shapely, cut[rest], count[rest])
         if light.outline is not None:  # a polygon light: its own outline
             seen = _polygonal(shapely, shapely.intersection(seen, shapely.Polygon(light.outline),
                                                             grid_size=light.grid))
@@ -293,14 +291,15 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
               p: np.ndarray, normal: np.ndarray, own: np.ndarray, at: np.ndarray, sides: tuple,
               where: tuple | None, outlines: bool) -> tuple[np.ndarray, ...]:
     """The union of the shadows on the light of the points at (indices into p (n, 3), with
-    normals and own triangles (n,)) as `_shadows` gives it (n,) each (None, False past at),
+    normals and own triangles (n,)) as `_shadows` gives it (n,) each (None, -1 past at),
     its crowded pixels' windings a block at a time first (`raytrace.blockwindings`) where
     `where` (pixels (n,), width, `chains`' eye) and `outlines`; sides: `candidates.heights`."""
     base = light.center + light.hull @ light.axes                 # (k, 3)
-    pieces, single = np.full(len(p), None, object), np.zeros(len(p), bool)
+    pieces, one = np.full(len(p), None, object), np.full(len(p), -1)
+    hulls = (one, np.zeros((0, 1, 2)), np.zeros(0, np.int64))
     chains, loose = np.full(len(p), None, object), np.full(len(p), None, object)
     if len(at) == 0 or len(objects.members) == 0:
-        return pieces, single, chains, loose
+        return pieces, hulls, chains, loose
     among = None
     if where is not None and outlines and BLOCK > 0:
         chains[at], loose[at], met = blockwindings.chains(
@@ -316,39 +315,29 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
         among = None if met is None else met[0][met[1][~done]]
         at = at[~done]
     if len(at):
-        pieces[at], single[at], chains[at], loose[at] = _shadows(
+        pieces[at], (one[at], *rows), chains[at], loose[at] = _shadows(
             shapely, light, objects, corners, p[at], normal[at], own[at], base, sides[1],
             outlines, among)
-    return pieces, single, chains, loose
-
-
-def _polygons(shapely, flat: np.ndarray, count: np.ndarray) -> np.ndarray:
-    """(n,) object array of shapely polygons from corners flat (n, k, 2), count (n,) (an empty
-    polygon where fewer than 3)."""
-    out = np.full(len(flat), shapely.Polygon(), object)
-    ok = np.flatnonzero(count >= 3)
-    if len(ok):
-        mask = np.arange(flat.shape[1])[None] < count[ok, None]
-        coords = flat[ok][mask]
-        which = np.repeat(np.arange(len(ok)), count[ok])
-        out[ok] = shapely.polygons(shapely.linearrings(coords, indices=which))
-    return out
+        hulls = (one, *rows)
+    return pieces, hulls, chains, loose
 
 
 def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray, p: np.ndarray,
              normal: np.ndarray, own: np.ndarray, base: np.ndarray, clear: np.ndarray,
              outlines: bool = False, among: np.ndarray | None = None
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+             ) -> tuple[np.ndarray, tuple, np.ndarray, np.ndarray]:
     """(n,) object array: the union of every triangle's shadow on the light's plane seen from
-    each p (None where none falls inside the pyramid over `base` (k, 3)); where that is
-    one convex polygon (`_unite`); and, with `outlines`, the union's boundary from its
-    outline's windings (`raytrace.windings`) where that is certain (the union None there),
-    and the few shadows that outline leaves out (`windmeasures.measures`' loose; None
+    each p (None where none falls inside the pyramid over `base` (k, 3), or where it is
+    given by its corners only); where that is one convex polygon, its corners
+    (`unions.pixel_unions`' second; with `outlines` only); with `outlines`, the union's
+    boundary from its outline's windings (`raytrace.windings`) where that is certain (the
+    union None there), and the few shadows that outline leaves out (`windmeasures.measures`' loose; None
     where none); clear: `candidates.heights`' second; among: `candidates.meets`'."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = candidates.meets(light, objects, p, base, lo, hi, among)
-    shapes, owner = _whole_bodies(shapely, light, objects, p, normal, own, meet)
+    bodies = whole_bodies(light, objects, p, meet)
+    shapes, owner = [], []
     pix, tri = candidates.pairs(objects, corners, p, normal, own, meet, lo, hi, clear)
     m = pyramid.sides(light, p, base)
     _, count, pix, tri, whole = pyramid.cut(light, corners, p, pix, tri, base, m, store=False)
@@ -382,7 +371,7 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         # a pixel of more than WINDING_PIECES shadows, all of them here (no hull): measured
         # from its outline's windings
         alone = many > WINDING_PIECES
-        alone[np.concatenate(owner + [np.zeros(0, np.int64)]).astype(np.int64)] = False
+        alone[np.concatenate([bodies[2]] + owner).astype(np.int64)] = False
         chains, apart = windings.split(light, corners, p, pix, tri, rest, objects.corner_ids,
                                        alone)
         # the few shadows it leaves out, cut, carried and turned counter-clockwise: a pixel
@@ -405,82 +394,10 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
         shapes.append(united)
         owner.append(arranged)
     if len(rest):
-        shapes.append(_polygons(shapely, flat[rest], count[rest]))
+        shapes.append(shapes_of(shapely, flat[rest], count[rest]))
         owner.append(pix[rest])
-    union, single = _unite(shapely, shapes, owner, len(p), light.grid)
-    single[arranged] = False       # an outline's union is not one convex polygon
-    return union, single, chains, loose
-
-
-def _whole_bodies(shapely, light: FramedLight, objects: Objects, p: np.ndarray, normal: np.ndarray,
-                  own: np.ndarray, meet: np.ndarray) -> tuple[list, list]:
-    """The shadows of convex objects wholly between p's parallel plane and the light's
-    (0 <= h < h(p), h the height over the light's plane toward p): p is outside such an
-    object and its whole shadow is the pyramid's part of it, the polygon of its silhouette's
-    corners' shadows.  Returns (shapes, owners) lists of arrays; their clusters are taken out
-    of `meet` (n, C) for those p."""
-    shapes, owner = [], []
-    height = (p - light.center) @ light.normal
-    for j, body in enumerate(objects.bodies):
-        if body is None:
-            continue
-        clusters = objects.owner == j
-        h = (body.points - light.center) @ light.normal
-        whole = meet[:, clusters].any(axis=1) & (h.min() >= 0) & (h.max() < height)
-        at = np.flatnonzero(whole)
-        if len(at) == 0:
-            continue
-        # the silhouette's corners all lie on the shadow's outline: in order around their
-        # mean, they are the convex polygon
-        row, corner = np.nonzero(body.silhouette(p[at]))
-        flat = polygons.project(body.points[corner][:, None], p[at][row], light.center,
-                                light.normal, light.axes)[:, 0]
-        many = np.bincount(row, minlength=len(at))
-        mean = np.stack([np.bincount(row, flat[:, k], len(at)) for k in (0, 1)], 1)
-        rel = flat - mean[row] / np.maximum(many[row, None], 1)
-        order = np.lexsort((np.arctan2(rel[:, 1], rel[:, 0]), row))
-        enough = many[row[order]] >= 3
-        rings = shapely.linearrings(flat[order][enough], indices=row[order][enough],
-                                    out=np.full(len(at), None, object))
-        shapes.append(shapely.polygons(rings))
-        owner.append(at)
-        meet[np.ix_(at, clusters)] = False
-    return shapes, owner
-
-
-def _unite(shapely, shapes: list, owner: list, n: int, grid: float
-           ) -> tuple[np.ndarray, np.ndarray]:
-    """(n,) object array: per pixel the union of the shapes (arrays) whose owners (arrays of
-    pixel indices) name it, snap-rounded to `grid`, None where none; and (n,) bool, the pixels
-    with one shape (convex, as every shape here is)."""
-    out, single = np.full(n, None, object), np.zeros(n, bool)
-    if not shapes:
-        return out, single
-    shapes, owner = np.concatenate(shapes), np.concatenate(owner)
-    order = np.argsort(owner, kind="stable")
-    shapes, owner = shapes[order], owner[order]
-    real = (shapes != None)  # noqa: E711 (an object array)
-    # polygons only: a hull of collinear corners (a body seen edge-on) is a line, no area
-    real[real] = ~shapely.is_empty(shapes[real]) & np.isin(shapely.get_type_id(shapes[real]),
-                                                           (3, 6))
-    shapes, owner = shapes[real], owner[real]
-    if len(owner) == 0:
-        return out, single
-    starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
-    sizes = np.diff(np.r_[starts, len(owner)])
-    # a few pieces: united rank by rank, all pixels at once; many: GEOS's cascaded union
-    few = sizes <= FEW_PIECES
-    acc = shapes[starts]
-    for rank in range(1, int(sizes[few].max(initial=1))):
-        more = np.flatnonzero(few & (sizes > rank))
-        acc[more] = _polygonal(shapely, shapely.union(acc[more], shapes[starts[more] + rank],
-                                                      grid_size=grid))
-    for k in np.flatnonzero(~few):
-        acc[k] = _polygonal(shapely, np.array([shapely.union_all(
-            shapes[starts[k]:starts[k] + sizes[k]], grid_size=grid)], object))[0]
-    out[owner[starts]] = acc
-    single[owner[starts[sizes == 1]]] = True
-    return out, single
+    return (*pixel_unions(shapely, bodies, shapes, owner, len(p), light.grid, outlines, arranged),
+            chains, loose)
 
 
 def _outside(objects: Objects, corners: np.ndarray, p: np.ndarray, pix: np.ndarray,

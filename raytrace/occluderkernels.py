@@ -251,3 +251,72 @@ def _corner(i, edges, corners):
     """The corner (3,) at end i % 2 of boundary edge i // 2."""
     t, e = edges[i // 2] // 3, edges[i // 2] % 3
     return corners[t, (e + i % 2) % 3].copy()
+
+
+@_jit()
+def hull_shadows(points, outward, offset, edges, sides, eye, center, normal, axes):
+    """`occluders.Convex.shadows` in numba, one eye at a time: the same floats (the faces
+    turned toward it and each corner carried as `polygons.dot` and `polygons.project` sum
+    and divide; the mean as np.bincount sums) and the same order (a stable sort by angle)."""
+    n, size = eye.shape[0], points.shape[0]
+    toward, mark = np.empty(outward.shape[0], np.bool_), np.empty(size, np.bool_)
+    xs, ys, angle = np.empty(size), np.empty(size), np.empty(size)
+    order = np.empty(size, np.int64)
+    at = np.zeros(n + 1, np.int64)
+    out = np.empty((max(n * 8, 16), 2))
+    for i in range(n):
+        e0, e1, e2 = eye[i, 0], eye[i, 1], eye[i, 2]
+        for f in range(outward.shape[0]):
+            toward[f] = e0 * outward[f, 0] + e1 * outward[f, 1] + e2 * outward[f, 2] > offset[f]
+        mark[:] = False
+        for g in range(edges.shape[0]):
+            if toward[sides[g, 0]] != toward[sides[g, 1]]:
+                mark[edges[g, 0]], mark[edges[g, 1]] = True, True
+        r0, r1, r2 = e0 - center[0], e1 - center[1], e2 - center[2]
+        height = r0 * normal[0] + r1 * normal[1] + r2 * normal[2]
+        base_u = r0 * axes[0, 0] + r1 * axes[0, 1] + r2 * axes[0, 2]
+        base_v = r0 * axes[1, 0] + r1 * axes[1, 1] + r2 * axes[1, 2]
+        k, sx, sy = 0, 0.0, 0.0
+        for v in range(size):
+            if not mark[v]:
+                continue
+            d0, d1, d2 = points[v, 0] - e0, points[v, 1] - e1, points[v, 2] - e2
+            scale = height / -(d0 * normal[0] + d1 * normal[1] + d2 * normal[2])
+            xs[k] = base_u + scale * (d0 * axes[0, 0] + d1 * axes[0, 1] + d2 * axes[0, 2])
+            ys[k] = base_v + scale * (d0 * axes[1, 0] + d1 * axes[1, 1] + d2 * axes[1, 2])
+            sx, sy, k = sx + xs[k], sy + ys[k], k + 1
+        mx, my = sx / max(k, 1), sy / max(k, 1)
+        for a in range(k):                       # by angle about the mean, stable
+            angle[a] = np.arctan2(ys[a] - my, xs[a] - mx)
+            w = a
+            while w > 0 and angle[order[w - 1]] > angle[a]:
+                order[w] = order[w - 1]
+                w -= 1
+            order[w] = a
+        while at[i] + k > out.shape[0]:
+            grown = np.empty((2 * out.shape[0], 2))
+            grown[:at[i]] = out[:at[i]]
+            out = grown
+        for a in range(k):
+            out[at[i] + a, 0], out[at[i] + a, 1] = xs[order[a]], ys[order[a]]
+        at[i + 1] = at[i] + k
+    return _padded(out, at)
+
+
+@_jit()
+def _padded(out, at):
+    """Rows at (n + 1,) of out (c, 2) as (n, k, 2), each row's last corner repeated to the
+    widest's k, and the counts (n,) (0 where fewer than 3)."""
+    n = at.shape[0] - 1
+    width = 1
+    for i in range(n):
+        width = max(width, at[i + 1] - at[i])
+    flat, count = np.zeros((n, width, 2)), np.zeros(n, np.int64)
+    for i in range(n):
+        k = at[i + 1] - at[i]
+        count[i] = k if k >= 3 else 0
+        for a in range(width):
+            g = at[i] + min(a, k - 1)
+            if k > 0:
+                flat[i, a, 0], flat[i, a, 1] = out[g, 0], out[g, 1]
+    return flat, count

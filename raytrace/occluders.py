@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .polygons import kernels
+from .polygons import dot, kernels, project
 
 # An object is convex when no corner lies farther than this (of its largest coordinate) outside
 # any of its face planes: its corners are float64 (the frame: world less the eye), each a few
@@ -94,13 +94,41 @@ class Convex(NamedTuple):
     def silhouette(self, eye: np.ndarray) -> np.ndarray:
         """(n, V) bool: the corners on an edge between a face turned toward eye (n, 3) and
         one turned away (the hull of their shadows is the object's)."""
-        toward = eye @ self.outward.T > self.offset
+        toward = dot(eye[:, None], self.outward[None]) > self.offset
         cut = toward[:, self.sides[:, 0]] != toward[:, self.sides[:, 1]]
         out = np.zeros((len(eye), len(self.points)), bool)
         rows = np.nonzero(cut)
         out[rows[0], self.edges[rows[1], 0]] = True
         out[rows[0], self.edges[rows[1], 1]] = True
         return out
+
+    def shadows(self, eye: np.ndarray, light) -> tuple[np.ndarray, np.ndarray]:
+        """The object's shadows from eyes (n, 3) on the plane of `light` (a
+        `lightshapes.FramedLight`), each eye beyond the object from the light (every corner
+        strictly between the eye's parallel plane and the light's): (corners (n, k, 2) in the
+        plane's coordinates, count (n,), 0 where fewer than 3), the convex polygon of the
+        silhouette's corners' shadows in order of angle about their mean, counter-clockwise
+        (they all lie on its outline), each row's last corner repeated to k.  In numba where
+        it loads (`occluderkernels.hull_shadows`: the same floats and order)."""
+        loaded = kernels("occluderkernels")
+        args = (light.center, light.normal, light.axes)
+        if loaded is not None:
+            return loaded.hull_shadows(self.points, self.outward, self.offset, self.edges,
+                                       self.sides, np.ascontiguousarray(eye, np.float64),
+                                       *(np.ascontiguousarray(a, np.float64) for a in args))
+        n = len(eye)
+        row, corner = np.nonzero(self.silhouette(eye))
+        flat = project(self.points[corner][:, None], eye[row], *args)[:, 0]
+        many = np.bincount(row, minlength=n)
+        mean = np.stack([np.bincount(row, flat[:, k], n) for k in (0, 1)], 1)
+        rel = flat - mean[row] / np.maximum(many[row, None], 1)
+        flat = flat[np.lexsort((np.arctan2(rel[:, 1], rel[:, 0]), row))]
+        first = np.r_[0, np.cumsum(many)[:-1]]
+        at = first[:, None] + np.minimum(np.arange(max(int(many.max(initial=0)), 1))[None],
+                                         np.maximum(many - 1, 0)[:, None])
+        out = flat[np.minimum(at, len(flat) - 1)] if len(flat) else np.zeros((n, 1, 2))
+        out[many == 0] = 0.0
+        return out, np.where(many >= 3, many, 0)
 
 
 def objects(corners: np.ndarray, ids: np.ndarray, casts: np.ndarray | None = None,

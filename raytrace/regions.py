@@ -10,26 +10,35 @@ import numpy as np
 from . import polygons
 from .lightshapes import FramedLight
 
-__all__ = ["closed_rings", "inside", "measure", "minus_convex", "ring_measures"]
+__all__ = ["closed_rings", "convex_corners", "inside", "measure", "minus_convex",
+           "ring_measures"]
 
 
-def minus_convex(shapely, light: FramedLight, cut: np.ndarray, count: np.ndarray,
-                 pieces: np.ndarray, p: np.ndarray, normal: np.ndarray, direct: bool = False
-                 ) -> tuple[np.ndarray, ...]:
+def minus_convex(light: FramedLight, cut: np.ndarray, count: np.ndarray, inner: np.ndarray,
+                 inner_count: np.ndarray, p: np.ndarray, normal: np.ndarray,
+                 direct: bool = False) -> tuple[np.ndarray, ...]:
     """(n,) area and irradiance of the convex polygons cut (n, k, 2), count (n,) (counter-
-    clockwise, as `exact_soft` cuts the light's box) less one convex polygon each, `pieces`
-    (n,) (shapely): the measure of cut less that of the piece clipped by each of cut's edges
-    (no GEOS)."""
-    coords, which = shapely.get_coordinates(shapely.get_exterior_ring(pieces),
-                                            return_index=True)
-    m = np.bincount(which, minlength=len(pieces)) - 1        # corners (the closing one repeats)
-    first = np.r_[0, np.cumsum(m + 1)[:-1]]
-    inner = coords[first[:, None] + np.minimum(np.arange(m.max())[None], m[:, None] - 1)]
-    inner_count = np.where(m >= 3, m, 0)
+    clockwise, as `exact_soft` cuts the light's box) less one convex polygon each, inner
+    (n, m, 2), inner_count (n,) (`convex_corners`): the measure of cut less that of inner
+    clipped by each of cut's edges (no GEOS)."""
     whole = ring_measures(light, *closed_rings(cut, count), p, normal, direct)
     inner, inner_count = inside(cut, count, inner, inner_count)
     part = ring_measures(light, *closed_rings(inner, inner_count), p, normal, direct)
     return tuple(w - q for w, q in zip(whole, part))
+
+
+def convex_corners(shapely, pieces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The corners of convex polygons `pieces` (n,) (shapely) as their exterior rings hold
+    them, each row's last repeated to the widest's: (corners (n, m, 2), counts (n,), 0 where
+    fewer than 3)."""
+    if len(pieces) == 0:
+        return np.zeros((0, 1, 2)), np.zeros(0, np.int64)
+    coords, which = shapely.get_coordinates(shapely.get_exterior_ring(pieces),
+                                            return_index=True)
+    m = np.bincount(which, minlength=len(pieces)) - 1        # corners (the closing one repeats)
+    first = np.r_[0, np.cumsum(m + 1)[:-1]]
+    inner = coords[first[:, None] + np.minimum(np.arange(m.max()), m[:, None] - 1)]
+    return inner, np.where(m >= 3, m, 0)
 
 
 def inside(cut: np.ndarray, count: np.ndarray, inner: np.ndarray, inner_count: np.ndarray
