@@ -5,7 +5,7 @@ milliseconds per frame, wall clock and CPU.
                                            --paired DIR [--rounds N]]
 
 Three frames under one rect light each: scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96;
-closed convex bodies), a closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a
+closed convex bodies; then by size up to its own 640 x 480, exact against the bare count), a closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a
 floor at 48 x 48, and the shared bunny (69,451 triangles, open at its base) on a floor at
 32 x 32.  Each: `exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on
 a thread per core and on one thread (`arrange.THREADS`), with the fast path off (every
@@ -22,7 +22,8 @@ frame (the scene's Embree build, the objects' topology) is told apart from the p
 one.  With --medians N: instead, each frame's exact visibility (on a thread per core, and
 on one) and the three counts of 256 samples (each on the threads its tiles allow: one at
 these sizes) called in turn N times in one process after a warm-up, the median CPU ms of
-each (soft.toml, the blob 48 x 48, the bunny at 32, 64, 128 and 256) and the wall ms of the
+each (soft.toml at WIDTH and at its own 640 x 480, the blob 48 x 48, the bunny at 32, 64,
+128 and 256) and the wall ms of the
 exact visibility and the bare count: steadier on a noisy machine than one call; "paired",
 the median of each exact call's CPU over the count's called just after it in the same round
 (a slow minute slows both).  With
@@ -171,22 +172,41 @@ def per_pixel(sizes=(16, 32, 64, 128, 256)) -> None:
           f"({slope[0] / max(slope[2], 1e-9):.1f}x)")
 
 
-def _frames(width: int, bunny_sizes) -> list[tuple[str, Scene]]:
-    """(name, scene): soft.toml `width` wide, the blob 48x48, and the bunny at each of
-    `bunny_sizes` where its mesh is at hand."""
-    frames = [(f"soft.toml {width}x{width * 3 // 4}",
-               load_scene("scenes/soft.toml").replace(width=width, height=width * 3 // 4)),
-              ("blob 48x48", blob_scene(48))]
+def soft_by_size(widths=(96, 192, 320, 640)) -> None:
+    """scenes/soft.toml from `width` 96 to its own 640x480: exact and the bare count of 256
+    samples (CPU ms, the median of three calls each in turn): the goal at the size a user
+    renders it."""
+    print("soft.toml by frame size, CPU ms a frame (exact / counting 256, the median of 3):")
+    for w in widths:
+        scene = _soft(w)
+        counted = with_samples(scene, 256)
+        calls = (lambda: exact_soft.exact_visibility(scene), lambda: lit_counts(counted))
+        got = [[clocked(call)[1] for call in calls] for _ in range(3)]
+        a, b = np.median(got, axis=0)
+        print(f"  {w}x{w * 3 // 4}: {a:.0f} / {b:.0f} = {a / b:.2f}x", flush=True)
+
+
+def _soft(width: int) -> Scene:
+    """scenes/soft.toml `width` wide (its own: 640x480)."""
+    return load_scene("scenes/soft.toml").replace(width=width, height=width * 3 // 4)
+
+
+def _frames(width: int, bunny_sizes, own: bool = True) -> list[tuple[str, Scene]]:
+    """(name, scene): soft.toml `width` wide and, with `own`, at its own 640x480, the blob
+    48x48, and the bunny at each of `bunny_sizes` where its mesh is at hand."""
+    frames = [(f"soft.toml {width}x{width * 3 // 4}", _soft(width))]
+    frames += [("soft.toml 640x480 (its own size)", _soft(640))] if own else []
+    frames += [("blob 48x48", blob_scene(48))]
     if BUNNY.is_file():
         frames += [(f"bunny {k}x{k}", bunny_rect_scene(k)) for k in bunny_sizes]
     return frames
 
 
-def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256)) -> None:
+def medians(width: int, n: int, bunny_sizes=(32, 64, 128, 256), own: bool = True) -> None:
     """`--medians n`: see the module."""
     print(f"exact / counting 256 (the bare count), median CPU ms of {n} calls each in turn; "
           "then raytrace masks' count and soft_masks':")
-    frames = _frames(width, bunny_sizes)
+    frames = _frames(width, bunny_sizes, own)
     for name, scene in frames:
         counted = with_samples(scene, 256)
         calls = (lambda: exact_soft.exact_visibility(scene), lambda: lit_counts(counted),
@@ -255,7 +275,8 @@ def other_exact_soft(root: str):
     return importlib.import_module("raytrace_paired.exact_soft")
 
 
-def paired(other, rounds: int = 21, bunny_sizes=(64, 128, 256), width: int = 96) -> None:
+def paired(other, rounds: int = 21, bunny_sizes=(64, 128, 256), width: int = 96,
+           own: bool = True) -> None:
     """`--paired DIR`: `other` (`other_exact_soft`'s module, the old) against this checkout's
     `exact_soft` (the new) on soft.toml, the blob 48x48 and the bunny at `bunny_sizes`: each
     frame's two calls in a random order each round, then the bare count of 256 samples, after
@@ -265,7 +286,7 @@ def paired(other, rounds: int = 21, bunny_sizes=(64, 128, 256), width: int = 96)
     bytes (else their largest differences)."""
     print(f"this checkout (new) against {other.__name__} (old), {rounds} rounds, median CPU ms "
           "(paired: the median of the rounds' ratios):")
-    frames = _frames(width, bunny_sizes)
+    frames = _frames(width, bunny_sizes, own)
     order = random.Random(1)
     for name, scene in frames:
         counted = with_samples(scene, 256)
@@ -324,8 +345,8 @@ def main(argv=None) -> None:
     lit_counts(tiny)
     ground_truth(tiny, ())
     soft_masks(tiny)
-    frame("soft.toml", load_scene("scenes/soft.toml").replace(width=width,
-                                                              height=width * 3 // 4))
+    frame("soft.toml", _soft(width))
+    soft_by_size()
     frame("blob", blob_scene(48))
     if BUNNY.is_file():
         frame("bunny", bunny_rect_scene(32))

@@ -170,7 +170,7 @@ def test_the_exact_soft_medians_run(capsys):
     frame with both medians and their ratio (nothing timed here)."""
     pytest.importorskip("shapely")
     from benchmarks import bench_exact_soft
-    bench_exact_soft.medians(16, 2, bunny_sizes=(8,))
+    bench_exact_soft.medians(16, 2, bunny_sizes=(8,), own=False)
     out = capsys.readouterr().out
     lines = [line for line in out.splitlines() if " = " in line]
     assert lines[0].lstrip().startswith("soft.toml 16x12:")
@@ -186,7 +186,8 @@ def test_the_exact_soft_paired_run(capsys):
     same bytes (nothing timed here)."""
     pytest.importorskip("shapely")
     from benchmarks import bench_exact_soft
-    bench_exact_soft.paired(bench_exact_soft.exact_soft, rounds=2, bunny_sizes=(8,), width=16)
+    bench_exact_soft.paired(bench_exact_soft.exact_soft, rounds=2, bunny_sizes=(8,), width=16,
+                            own=False)
     lines = [line for line in capsys.readouterr().out.splitlines() if "new / old" in line]
     names = [line.split(":")[0].strip() for line in lines]
     assert names[:2] == ["soft.toml 16x12", "blob 48x48"]
@@ -195,6 +196,17 @@ def test_the_exact_soft_paired_run(capsys):
         assert line.endswith("the same bytes"), line
         ratio = line.split("new / old ")[1].split("x")[0]
         assert float(ratio) > 0
+
+
+def test_the_exact_soft_by_size_run(capsys):
+    """`bench_exact_soft.soft_by_size`' loop (small frames): a line a size with both medians
+    and their ratio (nothing timed here)."""
+    pytest.importorskip("shapely")
+    from benchmarks import bench_exact_soft
+    bench_exact_soft.soft_by_size((16, 24))
+    lines = [line for line in capsys.readouterr().out.splitlines() if " = " in line]
+    assert [line.split(":")[0].strip() for line in lines] == ["16x12", "24x18"]
+    assert all(float(line.split(" = ")[1].rstrip("x")) > 0 for line in lines)
 
 
 def test_the_paired_package_is_imported_beside_this_one(tmp_path, monkeypatch):
