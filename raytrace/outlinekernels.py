@@ -28,9 +28,10 @@ def _turn(ux, uy, vx, vy, size, margin):
 def _outline(uncut, ids, r0, r1, big, rims, e0, e1, box):
     """The outline of the shadows rows r0..r1 and the rims' edges e0..e1 (`arrange.edges`,
     then each undirected edge's net count, its first edge's corners): (ax, ay, bx, by (m,),
-    corner ids ia, ib (m,), counts (m,)), the edges in the order of (lower id, higher id);
-    big: more than any id; box (4,) x0, y0, x1, y1: only the edges whose boxes meet it (an
-    edge and the one it cancels have one box), or (0,): all."""
+    corner ids ia, ib (m,), counts (m,)), the edges in the order of (lower id, higher id)
+    (with a box: of their first edges); big: more than any id; box (4,) x0, y0, x1, y1: only
+    the edges whose boxes meet it (an edge and the one it cancels have one box), or (0,):
+    all."""
     rim, rim_ids, rim_count = rims
     rows = np.empty(r1 - r0, np.int64)
     v = 0
@@ -67,7 +68,10 @@ def _outline(uncut, ids, r0, r1, big, rims, e0, e1, box):
         way[i] = rim_count[g] if ka < kb else -rim_count[g]
         i += 1
     rep, net = _tally(lo[:i], hi[:i], way[:i])
-    order = _order(lo[rep], hi[rep], big)
+    # in the order of their corners' ids, as numpy's path (`windings.boundaries`) has them;
+    # cut to a box (the block path, which numpy has not), as they come: the order sets only
+    # which of two edges a crossing is computed along and the chain's order, not the union
+    order = np.arange(rep.shape[0]) if boxed else _order(lo[rep], hi[rep], big)
     m = order.shape[0]
     ax, ay, bx, by = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     ia, ib, cnt = np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64)

@@ -13,7 +13,8 @@ scalars, not row views (each view costs a reference count), and hands its inline
 floats, not arrays: numba counts references to an array an inlined function reads under a
 branch, on each call (docs/speed.md, "Reference counts").  Where a box is given (the
 shared outlines of `raytrace.blockwindings`), each outline is cut to it first
-(`raytrace.clipkernels`); the numpy path has no such cut.
+(`raytrace.clipkernels`), its edges in the order they come, not sorted by ids (the winding
+kernel 0.94x on the bunny 256x256's; the same union); the numpy path has no such cut.
 """
 
 from __future__ import annotations
