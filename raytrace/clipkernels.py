@@ -10,7 +10,7 @@ crossings outside B (most of them on a dense mesh: the rim of the triangles that
 the pyramid lies around the light) are left out of the noding.
 
 The winding just inside B at its first corner is counted along a ray in +x from that corner
-(as `windingkernels._cover` counts), and the count is carried around B, adding each crossing
+(as `coverkernels.covers` counts), and the count is carried around B, adding each crossing
 edge's count where it turns left across B's side.  Any doubt (a corner of the outline, or a
 corner of B, within `windings.DOUBT` of the other's edges or sides; two crossings at one
 point; a count that does not close) and the pixel is not cut: the caller keeps its whole
@@ -130,7 +130,7 @@ def survey(uncut, r0, r1, rims, e0, e1, box, margin):
 @_jit(inline="always")
 def _crossed(ax, ay, bx, by, x, y, margin):
     """(certain, +1, -1 or 0): the edge a -> b crosses the ray in +x from x, y going up, going
-    down, or not (`windingkernels._cover`'s rule)."""
+    down, or not (`coverkernels.covers`'s rule)."""
     up, down = _level(ay, by, y)
     if not (up or down):
         return True, 0

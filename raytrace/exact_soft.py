@@ -244,8 +244,8 @@ def _area_light(shapely, light: FramedLight, objects: Objects, corners: np.ndarr
     wound = windings.found(chains)
     has = (pieces != None) | wound  # noqa: E711 (an object array)
     # nothing in the way of a rect or disk: its box cut to p's side, measured as it is
-    plain = np.flatnonzero(~has & (one < 0) & (count >= 3)) if light.outline is None and regions is None \
-        else np.zeros(0, int)
+    plain = np.flatnonzero(~has & (one < 0) & (count >= 3)) \
+        if light.outline is None and regions is None else np.zeros(0, int)
     if len(plain):
         coords, ring = _closed_rings(cut[plain], count[plain])
         for out, got in zip(measures, _ring_measures(light, coords, ring, p[plain],
@@ -331,8 +331,9 @@ def _shadows(shapely, light: FramedLight, objects: Objects, corners: np.ndarray,
     given by its corners only); where that is one convex polygon, its corners
     (`unions.pixel_unions`' second; with `outlines` only); with `outlines`, the union's
     boundary from its outline's windings (`raytrace.windings`) where that is certain (the
-    union None there), and the few shadows that outline leaves out (`windmeasures.measures`' loose; None
-    where none); clear: `candidates.heights`' second; among: `candidates.meets`'."""
+    union None there), and the few shadows that outline leaves out
+    (`windmeasures.measures`' loose; None where none); clear: `candidates.heights`' second;
+    among: `candidates.meets`'."""
     lo = np.minimum(p, base.min(axis=0))
     hi = np.maximum(p, base.max(axis=0))
     meet = candidates.meets(light, objects, p, base, lo, hi, among)

@@ -7,7 +7,8 @@ orders them (i the first along x, then by number), with the same products; a cro
 is computed along j; the points along an edge are in order of t, then as `windings._along`
 ties them (its start, its end, the crossings where it is i by j's place along x, then where
 it is j by i's); the ray right of a run's first piece meets every other edge of its pixel
-(`windings._right_cover`); counts are small integers, exact in float64 and in int64 here.
+(`windings._right_cover`, `coverkernels.covers`); counts are small integers, exact in
+float64 and in int64 here.
 tests/raytrace/test_winding_kernels.py holds the two to the same bytes.  A kernel indexes
 scalars, not row views (each view costs a reference count), and hands its inlined tests
 floats, not arrays: numba counts references to an array an inlined function reads under a
@@ -22,12 +23,9 @@ from __future__ import annotations
 import numpy as np
 
 from .clipkernels import clipped, survey
-from .outlinekernels import _level, _outline, _stable, _turn
+from .coverkernels import covers, covers_tied
+from .outlinekernels import _outline, _stable, _turn
 from .packetkernels import _jit
-
-# Rays (one a run of the outline) up to which `_cover` passes each ray over every edge rather
-# than over the edges in buckets of height (whose making costs more than a few rays).
-FEW_RAYS = 8
 
 
 @_jit()
@@ -108,16 +106,16 @@ def _pixel(uncut, free, ids, r0, r1, big, margin, rims, e0, e1, box, partial):
             ok, cax, cay, cbx, cby, cia, cib, ccnt, cut = clipped(ax, ay, bx, by, ia, ib, cnt,
                                                                    box, big, margin, wind)
             if ok:
-                return _noded(cax, cay, cbx, cby, cia, cib, ccnt, margin, cut)
+                return _noded(cax, cay, cbx, cby, cia, cib, ccnt, margin, cut, True)
     if partial:                                  # in doubt there, with the box's edges only
         return False, none, none
     # the whole outline (no box, or in doubt there)
     ax, ay, bx, by, ia, ib, cnt = _outline(uncut, ids, r0, r1, big, rims, e0, e1, whole)
-    return _noded(ax, ay, bx, by, ia, ib, cnt, margin, ax.shape[0])
+    return _noded(ax, ay, bx, by, ia, ib, cnt, margin, ax.shape[0], False)
 
 
 @_jit()
-def _noded(ax, ay, bx, by, ia, ib, cnt, margin, sides):
+def _noded(ax, ay, bx, by, ia, ib, cnt, margin, sides, spread):
     """The chain of the outline a -> b (m,) with corner ids ia, ib and counts cnt (m,), a
     box's sides from `sides` on (0 cover right of them): (certain, starts (c, 2), ends (c,
     2))."""
@@ -131,12 +129,16 @@ def _noded(ax, ay, bx, by, ia, ib, cnt, margin, sides):
     ok, ent, pos = _crossings(ax, ay, bx, by, ia, ib, cnt, margin)
     if not ok:
         return False, none, none
-    pa, pb, parent, jump, first = _pieces(ent, pos, m)
+    pa, pb, parent, jump, first, before = _pieces(ent, pos, m)
     total = np.empty(m, np.int64)
     for e in range(m):
         total[e] = jump[first[e + 1] - 1]
     root, offset = _runs(va, vb, cnt, total)
-    ok, cover = _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin, sides)
+    if spread:
+        ok, cover = covers_tied(ent, pos, before, jump, root, offset, pa, pb, first, ax, ay,
+                                bx, by, cnt, margin, sides)
+    else:
+        ok, cover = covers(pa, pb, first, root, ax, ay, bx, by, cnt, margin, sides)
     if not ok:
         return False, none, none
     sa, sb, c = np.empty((parent.shape[0], 2)), np.empty((parent.shape[0], 2)), 0
@@ -359,6 +361,7 @@ def _pieces(ent, pos, m):
     s = k - m
     pa, pb = np.empty((s, 2)), np.empty((s, 2))
     parent, jump, first = np.empty(s, np.int64), np.empty(s, np.int64), np.empty(m + 1, np.int64)
+    before = np.full(k, -1, np.int64)
     c = 0
     for e in range(m):
         first[e] = c
@@ -369,9 +372,12 @@ def _pieces(ent, pos, m):
                 run += pos[g, 3]
             pa[c, 0], pa[c, 1], pb[c, 0], pb[c, 1] = pos[g, 1], pos[g, 2], pos[f, 1], pos[f, 2]
             parent[c], jump[c] = e, int(run)
+            before[f] = c
+            if pos[f, 0] == pos[g, 0]:               # a tie: more than two edges there
+                before[f] = before[g] = -1
             c += 1
     first[m] = c
-    return pa, pb, parent, jump, first
+    return pa, pb, parent, jump, first, before
 
 
 @_jit()
@@ -403,87 +409,3 @@ def _runs(va, vb, cnt, total):
             at += total[e]
             e = succ[e]
     return root, offset
-
-
-@_jit()
-def _cover(pa, pb, first, root, ax, ay, bx, by, cnt, margin, sides):
-    """(certain, the cover right of each run's first piece (m,), by its run's first edge) by
-    a ray in +x from its midpoint, as `windings._right_cover`; not certain where a side is in
-    doubt or the piece is level; 0 right of a box's side (edges from `sides` on: outside the
-    box, `clipkernels.clipped`)."""
-    m = ax.shape[0]
-    cover = np.zeros(m, np.int64)
-    rays = 0
-    for e in range(min(m, sides)):
-        rays += root[e] == e
-    # a few rays pass every edge; more, the edges in buckets of height first (the same
-    # edges tested: those whose span holds the ray's height)
-    few = rays <= FEW_RAYS
-    if few:
-        start, edge, bottom, top, scale = np.zeros(2, np.int64), cover[:0], 0.0, 0.0, 0.0
-    else:
-        start, edge, bottom, top, scale = _levels(ay, by)
-    for e in range(m):
-        if root[e] != e or e >= sides:
-            continue
-        s = first[e]
-        mx, my = (pa[s, 0] + pb[s, 0]) / 2, (pa[s, 1] + pb[s, 1]) / 2
-        wind, g0, g1 = 0, 0, 0
-        if few:
-            g1 = m
-        elif bottom <= my <= top:                        # else no edge's span holds it
-            b = _bucket(my, bottom, scale, start.shape[0] - 1)
-            g0, g1 = start[b], start[b + 1]
-        for g in range(g0, g1):
-            f = g if few else edge[g]
-            up, down = _level(ay[f], by[f], my)
-            if f == e or not (up or down):
-                continue
-            ux, uy = bx[f] - ax[f], by[f] - ay[f]
-            side, sure = _turn(ux, uy, mx - ax[f], my - ay[f], abs(ux) + abs(uy), margin)
-            if not sure:
-                return False, cover
-            if up and side > 0:
-                wind += cnt[f]
-            elif down and side < 0:
-                wind -= cnt[f]
-        rise = pb[s, 1] - pa[s, 1]
-        if not abs(rise) > margin * (abs(pb[s, 0] - pa[s, 0]) + abs(pb[s, 1] - pa[s, 1])):
-            return False, cover
-        cover[e] = wind - (cnt[e] if rise < 0 else 0)
-    return True, cover
-
-
-@_jit(inline="always")
-def _bucket(h, bottom, scale, many):
-    """The bucket of height h (`_levels`)."""
-    return min(max(int(np.floor((h - bottom) * scale)), 0), many - 1) if scale > 0 else 0
-
-
-@_jit()
-def _levels(ay, by):
-    """The edges of heights ay-by (m,) in buckets of height: (where each bucket's edges start
-    (b + 1,), the edges (k,), the least and most height, the buckets a unit of height); an
-    edge in every bucket from its low end's to its high end's (a height's bucket is monotone
-    in it: every edge whose span holds a height is in its bucket)."""
-    m = ay.shape[0]
-    bottom, top = min(ay.min(), by.min()), max(ay.max(), by.max())
-    many = max(m // 4, 1)
-    scale = many / (top - bottom) if top > bottom else 0.0
-    if not np.isfinite(scale):
-        scale = 0.0
-    start = np.zeros(many + 1, np.int64)
-    for f in range(m):
-        b0 = _bucket(min(ay[f], by[f]), bottom, scale, many)
-        b1 = _bucket(max(ay[f], by[f]), bottom, scale, many)
-        for b in range(b0, b1 + 1):
-            start[b + 1] += 1
-    for b in range(many):
-        start[b + 1] += start[b]
-    fill, edge = start[:many].copy(), np.empty(start[many], np.int64)
-    for f in range(m):
-        b0 = _bucket(min(ay[f], by[f]), bottom, scale, many)
-        for b in range(b0, _bucket(max(ay[f], by[f]), bottom, scale, many) + 1):
-            edge[fill[b]] = f
-            fill[b] += 1
-    return start, edge, bottom, top, scale
