@@ -27,6 +27,12 @@ from .coverkernels import covers, covers_tied
 from .outlinekernels import _outline, _stable, _turn
 from .packetkernels import _jit
 
+# Points along an edge nearer than this (in t) may lie there in the other order: a crossing's
+# t is certain within 4e-7 of the float edges' own (its two turns are certain: each within
+# 3 * 2^-53 / DOUBT = 3.6e-7 of itself, t = |c| / (|c| + |d|)), so where two lie this near,
+# or two edges meet another at one point, the piece between them may be misplaced, and no
+# crossing there ties two runs' covers (`coverkernels.covers_tied`).
+APART = 2.0 ** -18
 
 @_jit()
 def boundaries(uncut, free, ids, owner, n, margin, rim, rim_ids, rim_count, rim_owner, box,
@@ -338,7 +344,7 @@ def _pieces(ent, pos, m):
     """The edges' points (`_crossings`) in order along each edge (by t, then place) and the
     pieces between: (starts (s, 2), ends (s, 2), edges (s,), how much more each piece's
     sides are covered than its edge's first piece's (s,), where each edge's pieces start
-    (m + 1,))."""
+    (m + 1,), the piece that ends at each point (k,): -1 where another lies within APART)."""
     k = ent.shape[0]
     start = np.zeros(m + 1, np.int64)
     for g in range(k):
@@ -373,7 +379,7 @@ def _pieces(ent, pos, m):
             pa[c, 0], pa[c, 1], pb[c, 0], pb[c, 1] = pos[g, 1], pos[g, 2], pos[f, 1], pos[f, 2]
             parent[c], jump[c] = e, int(run)
             before[f] = c
-            if pos[f, 0] == pos[g, 0]:               # a tie: more than two edges there
+            if pos[f, 0] - pos[g, 0] <= APART:       # maybe in the other order: not tied
                 before[f] = before[g] = -1
             c += 1
     first[m] = c
