@@ -28,9 +28,10 @@ from .outlinekernels import _outline, _stable, _turn
 from .packetkernels import _jit
 
 # Points along an edge nearer than this (in t) may lie there in the other order: a crossing's
-# t is certain within 4e-7 of the float edges' own (its two turns are certain: each within
-# 3 * 2^-53 / DOUBT = 3.6e-7 of itself, t = |c| / (|c| + |d|)), so where two lie this near,
-# or two edges meet another at one point, the piece between them may be misplaced, and no
+# two turns c, d are certain (each rounded by ~4 ulps of its products, and at least DOUBT =
+# 2^-30 of them: within 2^-21 of itself), so its t = |c| / (|c| + |d|) lies within 2^-22 of
+# the float edges' own, two within 2^-21 of each other's.  Where two lie this near (8x that),
+# or a third edge meets two at their crossing, the piece between may be misplaced, and no
 # crossing there ties two runs' covers (`coverkernels.covers_tied`).
 APART = 2.0 ** -18
 
