@@ -315,10 +315,11 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
         among = None if met is None else met[0][met[1][~done]]
         at = at[~done]
     if len(at):
-        pieces[at], (one[at], *rows), chains[at], loose[at] = _shadows(
+        pieces[at], (mine, rows, sizes), chains[at], loose[at] = _shadows(
             shapely, light, objects, corners, p[at], normal[at], own[at], base, sides[1],
             outlines, among)
-        hulls = (one, *rows)
+        one[at] = mine
+        hulls = (one, rows, sizes)
     return pieces, hulls, chains, loose
 
 

@@ -79,7 +79,7 @@ def whole_bodies(light: FramedLight, objects: Objects, p: np.ndarray, meet: np.n
 
 
 def unite(shapely, shapes: list, owner: list, n: int, grid: float
-           ) -> tuple[np.ndarray, np.ndarray]:
+          ) -> tuple[np.ndarray, np.ndarray]:
     """(n,) object array: per pixel the union of the shapes (arrays) whose owners (arrays of
     pixel indices) name it, snap-rounded to `grid`, None where none; and (n,) bool, the pixels
     with one shape (convex, as every shape here is)."""

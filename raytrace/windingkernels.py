@@ -35,6 +35,7 @@ from .packetkernels import _jit
 # crossing there ties two runs' covers (`coverkernels.covers_tied`).
 APART = 2.0 ** -18
 
+
 @_jit()
 def boundaries(uncut, free, ids, owner, n, margin, rim, rim_ids, rim_count, rim_owner, box,
                partial):
@@ -125,7 +126,8 @@ def _pixel(uncut, free, ids, r0, r1, big, margin, rims, e0, e1, box, partial):
 def _noded(ax, ay, bx, by, ia, ib, cnt, margin, sides, spread):
     """The chain of the outline a -> b (m,) with corner ids ia, ib and counts cnt (m,), a
     box's sides from `sides` on (0 cover right of them): (certain, starts (c, 2), ends (c,
-    2))."""
+    2)); spread: the runs' covers tied by their crossings (`coverkernels.covers_tied`, an
+    outline cut to a box), else a ray each (`coverkernels.covers`, numpy's)."""
     none = np.empty((0, 2))
     m = ax.shape[0]
     if m == 0:
