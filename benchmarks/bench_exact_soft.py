@@ -5,9 +5,9 @@ milliseconds per frame, wall clock and CPU.
                                            --paired DIR [--rounds N]]
 
 Three frames under one rect light each: scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96;
-closed convex bodies; then by size up to its own 640 x 480, exact against the bare count), a closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a
-floor at 48 x 48, and the shared bunny (69,451 triangles, open at its base) on a floor at
-32 x 32.  Each: `exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on
+closed convex bodies; then by size up to its own 640 x 480, exact against the bare count), a
+closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a floor at 48 x 48, and the
+shared bunny (69,451 triangles, open at its base) on a floor at 32 x 32.  Each: `exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on
 a thread per core and on one thread (`arrange.THREADS`), with the fast path off (every
 triangle's shadow united one by one: the reference of `tests/raytrace/test_exact_fast.py`),
 and counting the light's 64, 256 and 1024 stratified samples: the bare count
@@ -173,9 +173,9 @@ def per_pixel(sizes=(16, 32, 64, 128, 256)) -> None:
 
 
 def soft_by_size(widths=(96, 192, 320, 640)) -> None:
-    """scenes/soft.toml from `width` 96 to its own 640x480: exact and the bare count of 256
-    samples (CPU ms, the median of three calls each in turn): the goal at the size a user
-    renders it."""
+    """scenes/soft.toml at each of `widths` (up to its own 640x480): exact and the bare count
+    of 256 samples (CPU ms, the median of three calls each in turn): the goal at the size a
+    user renders it."""
     print("soft.toml by frame size, CPU ms a frame (exact / counting 256, the median of 3):")
     for w in widths:
         scene = _soft(w)
