@@ -7,8 +7,9 @@ milliseconds per frame, wall clock and CPU.
 Three frames under one rect light each: scenes/soft.toml at WIDTH x 3/4 WIDTH (default 96;
 closed convex bodies; then by size up to its own 640 x 480, exact against the bare count), a
 closed non-convex mesh (a noisy icosphere, 5,120 triangles) over a floor at 48 x 48, and the
-shared bunny (69,451 triangles, open at its base) on a floor at 32 x 32.  Each: `exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on
-a thread per core and on one thread (`arrange.THREADS`), with the fast path off (every
+shared bunny (69,451 triangles, open at its base) on a floor at 32 x 32.  Each:
+`exact_visibility` (both outputs) with its fast path (`raytrace.arrange`) on a thread per
+core and on one thread (`arrange.THREADS`), with the fast path off (every
 triangle's shadow united one by one: the reference of `tests/raytrace/test_exact_fast.py`),
 and counting the light's 64, 256 and 1024 stratified samples: the bare count
 (`raytrace.soft.lit_counts`, what `raytrace.shadow_masks` counts an area light by: the peer
