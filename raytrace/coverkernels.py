@@ -32,38 +32,12 @@ def covers(pa, pb, first, root, ax, ay, bx, by, cnt, margin, sides):
     # a few rays pass every edge; more, the edges in buckets of height first (the same
     # edges tested: those whose span holds the ray's height)
     few = rays <= FEW_RAYS
-    if few:
-        start, edge, bottom, top, scale = np.zeros(2, np.int64), cover[:0], 0.0, 0.0, 0.0
-    else:
-        start, edge, bottom, top, scale = _levels(ay, by)
-    for e in range(m):
-        if root[e] != e or e >= sides:
-            continue
-        s = first[e]
-        mx, my = (pa[s, 0] + pb[s, 0]) / 2, (pa[s, 1] + pb[s, 1]) / 2
-        wind, g0, g1 = 0, 0, 0
-        if few:
-            g1 = m
-        elif bottom <= my <= top:                        # else no edge's span holds it
-            b = _bucket(my, bottom, scale, start.shape[0] - 1)
-            g0, g1 = start[b], start[b + 1]
-        for g in range(g0, g1):
-            f = g if few else edge[g]
-            up, down = _level(ay[f], by[f], my)
-            if f == e or not (up or down):
-                continue
-            ux, uy = bx[f] - ax[f], by[f] - ay[f]
-            side, sure = _turn(ux, uy, mx - ax[f], my - ay[f], abs(ux) + abs(uy), margin)
-            if not sure:
+    levels = _every() if few else _levels(ay, by)
+    for e in range(min(m, sides)):
+        if root[e] == e:
+            ok, cover[e] = _ray(e, pa, pb, first, ax, ay, bx, by, cnt, margin, few, levels)
+            if not ok:
                 return False, cover
-            if up and side > 0:
-                wind += cnt[f]
-            elif down and side < 0:
-                wind -= cnt[f]
-        rise = pb[s, 1] - pa[s, 1]
-        if not abs(rise) > margin * (abs(pb[s, 0] - pa[s, 0]) + abs(pb[s, 1] - pa[s, 1])):
-            return False, cover
-        cover[e] = wind - (cnt[e] if rise < 0 else 0)
     return True, cover
 
 
@@ -136,13 +110,13 @@ def covers_tied(ent, pos, before, jump, root, offset, pa, pb, first, ax, ay, bx,
             if base[a] != np.iinfo(np.int64).min and base[a] != -da:
                 return False, less
             base[a] = -da
-    cover = np.zeros(m, np.int64)
+    cover, every = np.zeros(m, np.int64), _every()
     for e in range(min(m, sides)):
         if root[e] != e:
             continue
         a, da = _top(e, up, less)
         if base[a] == np.iinfo(np.int64).min:
-            ok, c = _ray(e, pa, pb, first, ax, ay, bx, by, cnt, margin)
+            ok, c = _ray(e, pa, pb, first, ax, ay, bx, by, cnt, margin, True, every)
             if not ok:
                 return False, cover
             base[a] = c - da
@@ -168,13 +142,21 @@ def _top(r, up, less):
 
 
 @_jit()
-def _ray(e, pa, pb, first, ax, ay, bx, by, cnt, margin):
-    """`covers`' ray for the run whose first edge is e: (certain, its cover)."""
-    m = ax.shape[0]
+def _ray(e, pa, pb, first, ax, ay, bx, by, cnt, margin, few, levels):
+    """The cover right of the first piece of the run whose first edge is e, by a ray in +x
+    from its midpoint (`covers`): (certain, the cover); few: the ray passes every edge, else
+    only those of its height's bucket (levels: `_levels`' five)."""
+    start, edge, bottom, top, scale = levels
     s = first[e]
     mx, my = (pa[s, 0] + pb[s, 0]) / 2, (pa[s, 1] + pb[s, 1]) / 2
-    wind = 0
-    for f in range(m):
+    wind, g0, g1 = 0, 0, 0
+    if few:
+        g1 = ax.shape[0]
+    elif bottom <= my <= top:                            # else no edge's span holds it
+        b = _bucket(my, bottom, scale, start.shape[0] - 1)
+        g0, g1 = start[b], start[b + 1]
+    for g in range(g0, g1):
+        f = g if few else edge[g]
         up, down = _level(ay[f], by[f], my)
         if f == e or not (up or down):
             continue
@@ -190,3 +172,9 @@ def _ray(e, pa, pb, first, ax, ay, bx, by, cnt, margin):
     if not abs(rise) > margin * (abs(pb[s, 0] - pa[s, 0]) + abs(pb[s, 1] - pa[s, 1])):
         return False, 0
     return True, wind - (cnt[e] if rise < 0 else 0)
+
+
+@_jit()
+def _every():
+    """`_levels`' five where a ray passes every edge (none used)."""
+    return np.zeros(2, np.int64), np.zeros(0, np.int64), 0.0, 0.0, 0.0
