@@ -1,7 +1,7 @@
 """The windings of a rect or disk light's crowded pixels, a block of pixels at a time
 (`raytrace.exact_soft`; numba only: `raytrace.blockkernels`).
 
-The pixels are taken in blocks of the image (`exact_soft.BLOCK` a side).  A block's steady
+The pixels are taken in blocks of the image (`exact_soft.block_side` a side).  A block's steady
 triangles (turned one way from each of its points, free from each) are counted once, edge by
 edge, and only the edges left of them are carried from each pixel onto the light's plane; each
 pixel adds its own pairs of the block's unsteady triangles (the candidate query, the cut and

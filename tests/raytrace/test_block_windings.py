@@ -537,3 +537,153 @@ def test_a_cut_in_doubt_with_partial_rims_is_in_doubt():
     whole = windings.boundaries(*args, box=box)[0]
     assert whole is not None and len(whole) == 3
     assert windings.boundaries(*args, box=box, partial=True)[0] is None
+
+
+def _floor(size: int, tilt: float = 1.0):
+    """A floor (y = 0) seen from 4 up and `tilt` back under a 1 x 1 rect light 3 up: every
+    pixel on it."""
+    from shadowvol.primitives import plane
+    from shadowvol.scene import AreaLight, Camera, Material, Scene
+    light = AreaLight("rect", [0.3, 3.0, 0.0], normal=[0, -1, 0], size=[1.0, 1.0], samples=4)
+    return Scene(camera=Camera(eye=[0.0, 4.0, tilt], target=[0.0, 0.0, 0.0], fov_y=40.0),
+                 objects=[plane("floor", point=(0, 0, 0), size=[40, 40],
+                                material=Material(diffuse=[0.8, 0.8, 0.8]))],
+                 lights=[light], width=size, height=size, ambient=[0, 0, 0])
+
+
+def _grids(scene, origin):
+    """The frame's float32 and float64 `RayGrid`s in the backend's frame (as
+    `exact_visibility` makes them)."""
+    import dataclasses
+    from raytrace.camera import RayGrid
+    camera = dataclasses.replace(scene.camera, eye=scene.camera.eye - origin,
+                                 target=scene.camera.target - origin)
+    return tuple(RayGrid(camera, scene.width, scene.height, t) for t in (np.float32, np.float64))
+
+
+def _footprint_of(scene, backend):
+    """`exact_soft.footprint` of the scene's light, and the same median taken over every
+    pair of neighbours in a row, each pixel-centre ray met with the floor's plane in float64
+    by numpy here (the witness)."""
+    from raytrace.camera import RayGrid
+    from raytrace.lightshapes import frame_light
+    tracer, triangles, origin = backend
+    got = raytrace.exact_soft.footprint(frame_light(scene.lights[0], origin, "lights[0]"),
+                                        tracer, triangles, _grids(scene, origin), scene.height)
+    grid = RayGrid(scene.camera, scene.width, scene.height, np.float64)
+    v = grid.directions().T.reshape(scene.height, scene.width, 3)
+    p = grid.eye + v * (-grid.eye[1] / v[..., 1:2])
+    step = np.linalg.norm(np.diff(p, axis=1), axis=2)
+    far = np.linalg.norm(p[:, :-1] - scene.lights[0].center, axis=2)
+    return got, float(np.median(step / far))
+
+
+@pytest.mark.parametrize("size", [32, 96, 256, 512])
+def test_finer_frames_take_larger_blocks(size, monkeypatch):
+    """`exact_soft.block_side`: BLOCK, one more under each of FINE of the frame's footprint
+    (a point's distance from its right neighbour's over its distance from the light's centre,
+    the median over a few rows), here against the median over every pixel of a floor seen
+    from above (numpy's points, `_footprint_of`): within 2 %, and the side the rule gives
+    (the sizes' footprints lie 20 % or more from FINE's); BLOCK 0 stays 0."""
+    from raytrace.lightshapes import frame_light
+    from raytrace.masks import scene_backend
+    scene = _floor(size)
+    backend = scene_backend(scene)
+    got, want = _footprint_of(scene, backend)
+    assert abs(got / want - 1) < 0.02, (got, want)
+    fine = raytrace.exact_soft.FINE
+    assert all(abs(np.log(want / f)) > np.log(1.2) for f in fine)
+    # the rule on the footprint found
+    monkeypatch.setattr(raytrace.exact_soft, "footprint", lambda *args: got)
+    light = frame_light(scene.lights[0], backend.origin, "lights[0]")
+
+    def side():
+        return raytrace.exact_soft.block_side(light, backend.tracer, backend.triangles, None,
+                                              scene.height)
+    assert side() == raytrace.exact_soft.BLOCK + sum(want < f for f in fine)
+    assert side() == {32: 2, 96: 2, 256: 3, 512: 4}[size]
+    monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 0)
+    assert side() == 0
+
+
+@pytest.mark.parametrize("view", ["away", "one column"])
+def test_no_neighbours_no_footprint(view):
+    """No two neighbours in a row covered (the camera turned away from the floor, or a frame
+    one pixel wide: a row's last pixel is no neighbour of the next row's first): the
+    footprint is inf, and the blocks BLOCK a side."""
+    from raytrace.lightshapes import frame_light
+    from raytrace.masks import scene_backend
+    from shadowvol.scene import Camera
+    scene = _floor(32).replace(width=1) if view == "one column" else _floor(32).replace(
+        camera=Camera(eye=[0.0, 4.0, 1.0], target=[0.0, 9.0, 0.0], fov_y=40.0))
+    backend = scene_backend(scene)
+    light = frame_light(scene.lights[0], backend.origin, "lights[0]")
+    args = (light, backend.tracer, backend.triangles, _grids(scene, backend.origin),
+            scene.height)
+    assert raytrace.exact_soft.footprint(*args) == np.inf
+    assert raytrace.exact_soft.block_side(*args) == raytrace.exact_soft.BLOCK
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_chunks_hold_whole_bands_of_blocks(seed, monkeypatch):
+    """`exact_soft._chunks`: the tile's covered pixels in order, each chunk from the start of
+    a band of `block` rows (a band never in two chunks), no more chunks than CHUNK_PIXELS
+    makes and none longer than CHUNK_PIXELS and a band; slices of CHUNK_PIXELS where block
+    is 0."""
+    rng = np.random.default_rng(seed)
+    monkeypatch.setattr(raytrace.exact_soft, "CHUNK_PIXELS", int(rng.integers(5, 300)))
+    chunk = raytrace.exact_soft.CHUNK_PIXELS
+    width = int(rng.integers(1, 90))
+    pixel = np.flatnonzero(rng.random(width * int(rng.integers(1, 60))) < rng.uniform(0.05, 1))
+    for block in (0, 1, 2, 3, 4):
+        parts = raytrace.exact_soft._chunks(pixel, width, block)
+        assert np.array_equal(np.concatenate([np.arange(len(pixel))[s] for s in parts]
+                                             or [np.zeros(0, int)]), np.arange(len(pixel)))
+        sizes = [len(pixel[s]) for s in parts]
+        if block == 0:
+            assert sizes[:-1] == [chunk] * (len(parts) - 1)
+            continue
+        band = pixel // width // block
+        assert all(s.start == 0 or band[s.start] != band[s.start - 1] for s in parts)
+        longest = np.bincount(band).max(initial=0)
+        assert len(parts) <= -(-len(pixel) // chunk) and max(sizes, default=0) <= chunk + longest
+
+
+def test_tiles_of_whole_larger_blocks_give_the_same_bytes(monkeypatch):
+    """Blocks of 3 (FINE made to take one more on any frame): the tiles are whole bands of
+    3 rows (2 and 4 rows asked for make 3 and 6, 6 makes 6), they give the same bytes, and
+    the pixel-by-pixel measures to rounding."""
+    from raytrace.exact_soft import exact_visibility
+    scene = _scene("rect", 24)
+    monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 0)
+    plain = exact_visibility(scene)
+    monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 2)
+    monkeypatch.setattr(raytrace.exact_soft, "FINE", (np.inf,))
+    traced, tiles = [], raytrace.exact_soft.for_each_tile
+    sides = []
+    side = raytrace.exact_soft.block_side
+
+    def recorded(work, parts, tracer):
+        traced.append([(t.start, t.stop) for t in parts])
+        return tiles(work, parts, tracer)
+    monkeypatch.setattr(raytrace.exact_soft, "for_each_tile", recorded)
+    monkeypatch.setattr(raytrace.exact_soft, "block_side",
+                        lambda *args: sides.append(side(*args)) or sides[-1])
+    chains, taken = raytrace.blockwindings.chains, set()
+
+    def blocks(*args):
+        taken.add(args[8])
+        return chains(*args)
+    monkeypatch.setattr(raytrace.blockwindings, "chains", blocks)
+    monkeypatch.setattr(raytrace.exact_soft, "TILE_PIXELS_LEAST", 1 << 20)
+    got = []
+    for rows in (2, 4, 6):
+        monkeypatch.setattr(raytrace.exact_soft, "EXACT_TILE_PIXELS", rows * scene.width)
+        got.append(exact_visibility(scene))
+    assert sides == [3, 3, 3] and taken == {3}
+    assert [{b - a for a, b in t[:-1]} for t in traced] == [{3}, {6}, {6}]
+    for each in got[1:]:
+        assert each.visibility.tobytes() == got[0].visibility.tobytes()
+        assert each.irradiance.tobytes() == got[0].irradiance.tobytes()
+    assert np.abs(got[0].visibility - plain.visibility).max() <= ROUNDING
+    assert np.abs(got[0].irradiance - plain.irradiance).max() <= ROUNDING
