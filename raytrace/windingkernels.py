@@ -135,7 +135,7 @@ def _noded(ax, ay, bx, by, ia, ib, cnt, margin, sides, spread):
     ok, va, vb = _corners(ax, ay, bx, by, ia, ib)
     if not ok:
         return False, none, none
-    ok, ent, pos = _crossings(ax, ay, bx, by, ia, ib, cnt, margin)
+    ok, ent, pos = _crossings(ax, ay, bx, by, ia, ib, cnt, margin, sides)
     if not ok:
         return False, none, none
     pa, pb, parent, jump, first, before = _pieces(ent, pos, m)
@@ -216,23 +216,27 @@ def _mixed(a, b):
 
 
 @_jit()
-def _crossings(ax, ay, bx, by, ia, ib, cnt, margin):
+def _crossings(ax, ay, bx, by, ia, ib, cnt, margin, sides):
     """The points along the outline's edges (`windings._pieces`): (certain, entries (k, 2):
     each point's edge and its place among the ties, points (k, 4): t along the edge, x, y,
     the cover it adds); every pair whose boxes meet (swept along x, as `windings._near`)
-    certainly crosses inside both, lies apart or shares a corner only."""
-    m = ax.shape[0]
+    certainly crosses inside both, lies apart or shares a corner only.  Only the edges before
+    `sides` are swept: from there on a box's sides (`clipkernels.clipped`), which meet no
+    edge but at a corner they share (the cut edges end on them, the others lie inside the
+    box by more than the cut's margin, or the cut was in doubt), 28 % of the sweep's tests
+    on the bunny 256x256; the places of the points the same order."""
+    m, n = ax.shape[0], sides
     ent, pos = np.empty((4 * m, 2), np.int64), np.zeros((4 * m, 4))
     for e in range(m):
         ent[e, 0], ent[e, 1], ent[m + e, 0], ent[m + e, 1] = e, 0, e, 1
         pos[e, 0], pos[e, 1], pos[e, 2] = 0.0, ax[e], ay[e]
         pos[m + e, 0], pos[m + e, 1], pos[m + e, 2] = 1.0, bx[e], by[e]
-    left = np.empty(m)
-    for e in range(m):
+    left = np.empty(n)
+    for e in range(n):
         left[e] = min(ax[e], bx[e])
     order = _stable(left)
-    box = np.empty((4, m))                               # along the sweep
-    for p in range(m):
+    box = np.empty((4, n))                               # along the sweep
+    for p in range(n):
         e = order[p]
         box[0, p], box[1, p] = left[e], max(ax[e], bx[e])
         box[2, p], box[3, p] = min(ay[e], by[e]), max(ay[e], by[e])
@@ -251,7 +255,7 @@ def _crossings(ax, ay, bx, by, ia, ib, cnt, margin):
 def _sweep(order, box, ax, ay, bx, by, ia, ib, cnt, margin, ent, pos, k, p0, q0):
     """`_crossings`' sweep from the pair of places p0, q0 along it, its points from row k on:
     (0 where done, -1 where in doubt, 1 where out of room; the rows filled, the next pair)."""
-    m = ax.shape[0]
+    m = order.shape[0]
     for p in range(p0, m):
         right, bottom, top = box[1, p], box[2, p], box[3, p]
         for q in range(q0 if p == p0 else p + 1, m):

@@ -36,7 +36,7 @@ def _stages(tris: np.ndarray, ids: np.ndarray, box: np.ndarray):
     if not ok or m == 0:
         return None
     ok, va, vb = wk._corners(ax, ay, bx, by, ia, ib)
-    ok2, ent, pos = wk._crossings(ax, ay, bx, by, ia, ib, cnt, windings.DOUBT)
+    ok2, ent, pos = wk._crossings(ax, ay, bx, by, ia, ib, cnt, windings.DOUBT, sides)
     if not (ok and ok2):
         return None
     pa, pb, parent, jump, first, before = wk._pieces(ent, pos, m)
@@ -163,3 +163,50 @@ def test_crossings_that_disagree_leave_the_pixel_in_doubt():
             found += 1
             break
     assert found >= 3
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_the_box_sides_meet_no_edge_but_at_a_shared_corner(seed):
+    """`windingkernels._crossings` sweeps an outline cut to a box without the box's sides
+    (`clipkernels.clipped`'s stretches): sweeping them too (a box's side tested against
+    every edge whose box meets its own) finds no other point, so the pieces are the same
+    bytes, and is certain wherever the sweep without them is; on the shapes above, boxes
+    over part of them (the outline crossing the sides) and boxes about a corner of a
+    triangle (the sides near a corner)."""
+    from raytrace import clipkernels, outlinekernels, windingkernels as wk
+    rng = np.random.default_rng(seed)
+    none = (np.zeros((0, 2, 2)), np.zeros((0, 2), np.int64), np.zeros(0, np.int64))
+    compared = 0
+    for trial in range(60):
+        tris, ids = _shapes(rng, (seed + trial) % 5)
+        tris = np.ascontiguousarray(tris, np.float64)
+        ids = np.ascontiguousarray(ids, np.int64)
+        lo, hi = tris.reshape(-1, 2).min(axis=0), tris.reshape(-1, 2).max(axis=0)
+        if trial % 2:
+            box = np.r_[lo + rng.uniform(0.1, 0.4, 2) * (hi - lo),
+                        hi - rng.uniform(0.1, 0.4, 2) * (hi - lo)]
+        else:
+            at = tris[rng.integers(len(tris)), rng.integers(3)]
+            reach = rng.uniform(1e-3, 0.2) * (hi - lo).max()
+            box = np.r_[at - reach * rng.uniform(0.5, 1, 2), at + reach * rng.uniform(0.5, 1, 2)]
+        big, q = int(ids.max()) + 1, len(tris)
+        meets, sure, wind = clipkernels.survey(tris, 0, q, none, 0, 0, box, windings.DOUBT)
+        if not (sure and meets):
+            continue
+        got = outlinekernels._outline(tris, ids, 0, q, big, none, 0, 0, box)
+        ok, ax, ay, bx, by, ia, ib, cnt, sides = clipkernels.clipped(
+            *got, box, big, windings.DOUBT, wind)
+        m = len(ax)
+        if not ok or sides == m:
+            continue
+        whole = wk._crossings(ax, ay, bx, by, ia, ib, cnt, windings.DOUBT, m)
+        cut = wk._crossings(ax, ay, bx, by, ia, ib, cnt, windings.DOUBT, sides)
+        assert cut[0] or not whole[0]
+        if not whole[0]:
+            continue
+        # the same points (the sides' ends only: rows 0 .. 2m), so the same pieces
+        assert len(whole[1]) == len(cut[1])
+        for x, y in zip(wk._pieces(whole[1], whole[2], m), wk._pieces(cut[1], cut[2], m)):
+            assert x.tobytes() == y.tobytes()
+        compared += len(whole[1]) > 2 * m
+    assert compared > 15
