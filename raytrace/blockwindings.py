@@ -8,7 +8,7 @@ pixel adds its own pairs of the block's unsteady triangles (the candidate query,
 the whole shadows of `raytrace.exact_soft`, as before), and its outline, cut to a box about
 the light (`windings.clip_box`), is noded as `raytrace.windings` does.  A pixel is left to
 the pixel-by-pixel path where its block meets a convex object's cluster (those are united as
-hulls) or no more than a few triangles, where more than `windings.LOOSE` of its own shadows
+hulls) or no triangle (`chains`' crowded), where more than `windings.LOOSE` of its own shadows
 are not free (a contact; up to that many are taken away apart, as `windings.split` does), or
 where its windings are in doubt.
 """
@@ -63,7 +63,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: tuple,
     lo, hi = np.minimum(p, base.min(axis=0)), np.maximum(p, base.max(axis=0))
     # the clusters that meet some pixel's pyramid of each block (b, C); a block that meets a
     # convex object's is left to the pixels' own path (its hulls), as is one that meets no
-    # more than `crowded` triangles (a few shadows: cheaper united as they are)
+    # more than `crowded` triangles (0: left from 9, the bunny at 128 and 256 took 1.06x)
     top = dot(p - light.center, light.normal)
     m = pyramid.sides(light, p, base)
     sides = np.stack([s / np.linalg.norm(s, axis=1, keepdims=True) for s in m])

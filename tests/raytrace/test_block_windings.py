@@ -70,8 +70,8 @@ def test_blocks_give_the_pixel_by_pixel_measures(shape, monkeypatch):
     settled, contacts = [], []
     plain_chains = raytrace.blockwindings.chains
 
-    def chains(*args):
-        got, loose, met = plain_chains(*args)
+    def chains(*args, **kwargs):
+        got, loose, met = plain_chains(*args, **kwargs)
         settled.append(sum(c is not None for c in got))
         contacts.append(sum(c is not None for c in loose))
         return got, loose, met
@@ -671,9 +671,9 @@ def test_tiles_of_whole_larger_blocks_give_the_same_bytes(monkeypatch):
                         lambda *args: sides.append(side(*args)) or sides[-1])
     chains, taken = raytrace.blockwindings.chains, set()
 
-    def blocks(*args):
+    def blocks(*args, **kwargs):
         taken.add(args[8])
-        return chains(*args)
+        return chains(*args, **kwargs)
     monkeypatch.setattr(raytrace.blockwindings, "chains", blocks)
     monkeypatch.setattr(raytrace.exact_soft, "TILE_PIXELS_LEAST", 1 << 20)
     got = []
