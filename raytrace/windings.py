@@ -58,6 +58,11 @@ LOOSE = 4
 # An outline is cut to the light's box grown by this much of its extent each way (`clip_box`):
 # outside the light, yet away from its outline, where a mesh's edges crowd.
 CLIP_MARGIN = 2.0 ** -6
+# One empty chain (read only), held in an object array: `_kernel` sets it where a pixel has
+# no piece.
+_EMPTY = np.empty(1, object)
+_EMPTY[0] = np.zeros((0, 2, 2))
+_EMPTY[0].setflags(write=False)
 # No whole clusters: their rims' (flat, ids, count, owner) empty.
 NO_RIMS = (np.zeros((0, 2, 2)), np.zeros((0, 2), np.int64), np.zeros(0, np.int64),
            np.zeros(0, np.int64))
@@ -133,7 +138,12 @@ def _kernel(loaded, uncut: np.ndarray, free: np.ndarray, ids: np.ndarray, owner:
         np.zeros(0) if box is None else np.asarray(box, np.float64), bool(partial))
     pieces = pieces.reshape(-1, 2, 2)
     chains = np.full(n, None, object)
-    for k in np.flatnonzero(~doubt).tolist():
+    sure = np.flatnonzero(~doubt)
+    some = at[sure + 1] > at[sure]
+    # a pixel with no piece (most of a frame's: nothing in the box) shares one empty chain,
+    # set at once, not sliced pixel by pixel
+    chains[sure[~some]] = _EMPTY[np.zeros(int((~some).sum()), np.intp)]
+    for k in sure[some].tolist():
         chains[k] = pieces[at[k]:at[k + 1]]
     return chains
 
