@@ -8,9 +8,9 @@ pixel adds its own pairs of the block's unsteady triangles (the candidate query,
 the whole shadows of `raytrace.exact_soft`, as before), and its outline, cut to a box about
 the light (`windings.clip_box`), is noded as `raytrace.windings` does.  A pixel is left to
 the pixel-by-pixel path where its block meets a convex object's cluster (those are united as
-hulls) or no triangle (`chains`' crowded), where more than `windings.LOOSE` of its own shadows
-are not free (a contact; up to that many are taken away apart, as `windings.split` does), or
-where its windings are in doubt.
+hulls) or, in a chunk with such a block, no more than a few triangles (`chains`' crowded),
+where more than `windings.LOOSE` of its own shadows are not free (a contact; up to that many
+are taken away apart, as `windings.split` does), or where its windings are in doubt.
 """
 
 from __future__ import annotations
@@ -43,10 +43,11 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: tuple,
     (n,) at image pixels where (n,) of a frame `width` wide, in blocks of `block` a side; h:
     the cluster members' corners' heights (C, CLUSTER, 3) and each cluster's range of them
     (C, 2) (`candidates.heights`' third and fourth); crowded: a block that meets no more
-    triangles is left out; eye: how far from the eye (the frame's origin: inf where the eye
-    is elsewhere) every primary ray starts (the near plane's farthest corner,
-    `RayGrid.farthest_start`; the one-way rule, `_one_way`, holds no object nearer; inf:
-    none)."""
+    triangles is left out where some block is anyway (a convex object's: that path's
+    fixed cost paid), else one that meets none (docs/speed.md); eye: how far from the eye
+    (the frame's origin: inf where the eye is elsewhere) every primary ray starts (the near
+    plane's farthest corner, `RayGrid.farthest_start`; the one-way rule, `_one_way`, holds
+    no object nearer; inf: none)."""
     out, out_loose = np.full(len(p), None, object), np.full(len(p), None, object)
     loaded = kernels("blockkernels")
     member = objects.members >= 0
@@ -62,8 +63,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: tuple,
     base = light.center + light.hull @ light.axes
     lo, hi = np.minimum(p, base.min(axis=0)), np.maximum(p, base.max(axis=0))
     # the clusters that meet some pixel's pyramid of each block (b, C); a block that meets a
-    # convex object's is left to the pixels' own path (its hulls), as is one that meets no
-    # more than `crowded` triangles (0: left from 9, the bunny at 128 and 256 took 1.06x)
+    # convex object's is left to the pixels' own path (its hulls); so are a few (crowded)
     top = dot(p - light.center, light.normal)
     m = pyramid.sides(light, p, base)
     sides = np.stack([s / np.linalg.norm(s, axis=1, keepdims=True) for s in m])
@@ -75,7 +75,7 @@ def chains(light: FramedLight, objects: Objects, corners: np.ndarray, h: tuple,
     block = np.repeat(np.arange(len(start) - 1), np.diff(start))
     met = (near.copy(), np.empty(len(p), np.int64))
     met[1][order] = block
-    hull |= many <= crowded
+    hull |= many <= (crowded if hull.any() else 0)
     if hull.all():
         return out, out_loose, met
     near[hull] = False

@@ -357,7 +357,7 @@ def _occluded(shapely, light: FramedLight, objects: Objects, corners: np.ndarray
     if where is not None and outlines and where[3] > 0:
         chains[at], loose[at], met = blockwindings.chains(
             light, objects, corners, sides[2:], p[at], own[at], where[0][at], where[1],
-            where[3], eye=where[2])
+            where[3], WINDING_PIECES, where[2])
         done = windings.found(chains[at])
         # nothing inside the light's box and no shadow apart: the light measured whole, as a
         # pixel of no shadow

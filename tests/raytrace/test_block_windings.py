@@ -539,13 +539,13 @@ def test_a_cut_in_doubt_with_partial_rims_is_in_doubt():
     assert windings.boundaries(*args, box=box, partial=True)[0] is None
 
 
-def _floor(size: int, tilt: float = 1.0):
-    """A floor (y = 0) seen from 4 up and `tilt` back under a 1 x 1 rect light 3 up: every
-    pixel on it."""
+def _floor(size: int):
+    """A floor (y = 0) seen from 4 up and 1 back under a 1 x 1 rect light 3 up: every pixel
+    on it."""
     from shadowvol.primitives import plane
     from shadowvol.scene import AreaLight, Camera, Material, Scene
     light = AreaLight("rect", [0.3, 3.0, 0.0], normal=[0, -1, 0], size=[1.0, 1.0], samples=4)
-    return Scene(camera=Camera(eye=[0.0, 4.0, tilt], target=[0.0, 0.0, 0.0], fov_y=40.0),
+    return Scene(camera=Camera(eye=[0.0, 4.0, 1.0], target=[0.0, 0.0, 0.0], fov_y=40.0),
                  objects=[plane("floor", point=(0, 0, 0), size=[40, 40],
                                 material=Material(diffuse=[0.8, 0.8, 0.8]))],
                  lights=[light], width=size, height=size, ambient=[0, 0, 0])
