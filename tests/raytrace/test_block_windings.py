@@ -217,19 +217,25 @@ def test_a_run_keeps_a_cluster_that_its_sphere_barely_reaches(seed):
     assert kept > 20 and left > 20
 
 
+def _traced_tiles(monkeypatch) -> list:
+    """The tiles `exact_visibility` hands `for_each_tile` on each call, (start, stop) rows
+    each, recorded into the list returned."""
+    traced, plain = [], raytrace.exact_soft.for_each_tile
+
+    def recorded(work, tiles, tracer):
+        traced.append([(t.start, t.stop) for t in tiles])
+        return plain(work, tiles, tracer)
+    monkeypatch.setattr(raytrace.exact_soft, "for_each_tile", recorded)
+    return traced
+
+
 def test_the_tiles_give_the_same_bytes(monkeypatch):
     """`exact_visibility` cuts a frame into tiles of whole blocks (`exact_soft.BLOCK` rows a
     block): a tile a thread, and tiles of 2, 3 (rounded up to 4) and 6 rows, give the same
     bytes, and the tiles asked for are the ones traced."""
     from raytrace.exact_soft import exact_visibility
     scene = _scene("rect", 24)
-    traced = []
-    plain = raytrace.exact_soft.for_each_tile
-
-    def recorded(work, tiles, tracer):
-        traced.append([(t.start, t.stop) for t in tiles])
-        return plain(work, tiles, tracer)
-    monkeypatch.setattr(raytrace.exact_soft, "for_each_tile", recorded)
+    traced = _traced_tiles(monkeypatch)
     monkeypatch.setattr(raytrace.exact_soft, "EXACT_TILE_PIXELS", 1 << 20)
     monkeypatch.setattr(raytrace.exact_soft, "TILE_PIXELS_LEAST", 1 << 20)
     want = exact_visibility(scene)
@@ -659,14 +665,8 @@ def test_tiles_of_whole_larger_blocks_give_the_same_bytes(monkeypatch):
     plain = exact_visibility(scene)
     monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 2)
     monkeypatch.setattr(raytrace.exact_soft, "FINE", (np.inf,))
-    traced, tiles = [], raytrace.exact_soft.for_each_tile
-    sides = []
+    traced, sides = _traced_tiles(monkeypatch), []
     side = raytrace.exact_soft.block_side
-
-    def recorded(work, parts, tracer):
-        traced.append([(t.start, t.stop) for t in parts])
-        return tiles(work, parts, tracer)
-    monkeypatch.setattr(raytrace.exact_soft, "for_each_tile", recorded)
     monkeypatch.setattr(raytrace.exact_soft, "block_side",
                         lambda *args: sides.append(side(*args)) or sides[-1])
     chains, taken = raytrace.blockwindings.chains, set()
