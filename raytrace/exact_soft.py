@@ -72,11 +72,11 @@ WINDING_PIECES = 8
 MANY_PIECES = 16
 # Pixels a side of the blocks of the image whose pixels share their steady triangles' outline
 # (`raytrace.blockwindings`; 0: none, every pixel its own pairs), one more where a pixel's
-# footprint seen from the light's centre is under each of FINE (`block_side`): a block's
-# shared outline costs more and its pixels' own pairs less the nearer its points lie.  The
-# bunny's CPU with blocks of 3 against 2 (chunks of whole blocks, `_chunks`): 1.10x at 64x64
-# (footprint 0.013), 1.05x at 128x128 (0.0066), 0.92x at 192x192 (0.0044) and 256x256
-# (0.0033); of 4 against 2 at 512x512 (0.0017) 0.81x, of 3 0.86x.
+# footprint seen from the light's centre is under each of FINE (`block_side`): a larger block
+# shares its outline among more pixels, and its pixels' own pairs grow with the distance
+# between its points.  The bunny's CPU with blocks of 3 against 2 (chunks of whole blocks,
+# `_chunks`): 1.10x at 64x64 (footprint 0.013), 1.05x at 128x128 (0.0066), 0.92x at 192x192
+# (0.0044) and 256x256 (0.0033); of 4 against 2 at 512x512 (0.0017) 0.81x, of 3 0.86x.
 BLOCK = 2
 FINE = (1 / 200, 1 / 400)
 # Rows of the frame whose primary hits give the footprint (`block_side`), evenly spaced.
