@@ -155,7 +155,8 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
                                  target=scene.camera.target - origin)
     grids = (RayGrid(camera, W, H, np.float32), RayGrid(camera, W, H, np.float64))
     reach = np.inf if camera.eye.any() else grids[1].farthest_start()   # `blockwindings`
-    blocks = [0 if lt is None else block_side(lt, tracer, triangles, grids, H) for lt in lights]
+    pairs = neighbours(tracer, triangles, grids, H) if BLOCK > 0 and any(lights) else None
+    blocks = [0 if lt is None else block_side(lt, pairs) for lt in lights]
     # a tile a thread at least, TILES_PER_THREAD where each keeps TILE_PIXELS_LEAST pixels;
     # whole blocks of pixels (every light's block's rows) in each
     threads = max(1, getattr(tracer, "threads", 1))
@@ -207,22 +208,21 @@ def exact_visibility(scene: Scene, backend: str | MaskTracer = "embree",
                            None if unatt is None else unatt.reshape(L, H, W))
 
 
-def block_side(light: FramedLight, tracer, triangles, grids: tuple, height: int) -> int:
+def block_side(light: FramedLight, pairs: tuple | None) -> int:
     """The side of the blocks of pixels the block path takes under `light` (`raytrace.
-    blockwindings`): BLOCK, one more under each of FINE of the frame's `footprint`; BLOCK
-    where it is 0 or no two neighbours are covered."""
+    blockwindings`): BLOCK, one more under each of FINE of the frame's `footprint` from its
+    `neighbours` pairs; BLOCK where it is 0 or no two neighbours are covered."""
     if BLOCK <= 0:
         return BLOCK
-    seen = footprint(light, tracer, triangles, grids, height)
+    seen = footprint(light, pairs)
     return BLOCK + sum(int(seen < f) for f in FINE)
 
 
-def footprint(light: FramedLight, tracer, triangles, grids: tuple, height: int) -> float:
-    """The median over FOOTPRINT_ROWS rows of the frame (pairs of rows: whole packets) of a
-    point's distance from its right neighbour's over its distance from the light's centre
-    (inf where no two neighbours are covered).  Once a frame, from its rows, not a tile's:
-    the same blocks on any number of threads."""
-    steps, rows = [], np.linspace(0, height - 1, min(height, FOOTPRINT_ROWS)).astype(int)
+def neighbours(tracer, triangles, grids: tuple, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """The points p (k, 3) and their right neighbours' (k, 3) in FOOTPRINT_ROWS rows of the
+    frame, evenly spaced (pairs of rows: whole packets), where both are covered: traced once
+    a frame, not a tile, so the blocks are the same on any number of threads."""
+    got, rows = [], np.linspace(0, height - 1, min(height, FOOTPRINT_ROWS)).astype(int)
     for y in np.unique(np.minimum(rows - rows % 2, max(height - 2, 0))).tolist():
         _, index, hit = _primary_hits(tracer, triangles, grids, slice(y, min(y + 2, height)))
         if hit is None:
@@ -230,10 +230,20 @@ def footprint(light: FramedLight, tracer, triangles, grids: tuple, height: int) 
         p = hit.point64.T
         pair = np.flatnonzero(np.diff(index) == 1)
         pair = pair[index[pair] // grids[0].width == index[pair + 1] // grids[0].width]
-        steps.append(np.linalg.norm(p[pair + 1] - p[pair], axis=1)
-                     / np.linalg.norm(p[pair] - light.center, axis=1))
-    steps = np.concatenate(steps) if steps else np.zeros(0)
-    return float(np.median(steps)) if len(steps) else np.inf
+        got.append((p[pair], p[pair + 1]))
+    if not got:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    return np.concatenate([a for a, _ in got]), np.concatenate([b for _, b in got])
+
+
+def footprint(light: FramedLight, pairs: tuple | None) -> float:
+    """The median over the `neighbours` pairs of a point's distance from its right
+    neighbour's over its distance from the light's centre (inf where there is none)."""
+    if pairs is None or len(pairs[0]) == 0:
+        return np.inf
+    p, q = pairs
+    return float(np.median(np.linalg.norm(q - p, axis=1)
+                           / np.linalg.norm(p - light.center, axis=1)))
 
 
 def _chunks(pixel: np.ndarray, width: int, block: int) -> list[slice]:

@@ -567,15 +567,21 @@ def _grids(scene, origin):
     return tuple(RayGrid(camera, scene.width, scene.height, t) for t in (np.float32, np.float64))
 
 
+def _pairs(scene, backend):
+    """`exact_soft.neighbours` of the frame (as `exact_visibility` traces them)."""
+    tracer, triangles, origin = backend
+    return raytrace.exact_soft.neighbours(tracer, triangles, _grids(scene, origin),
+                                          scene.height)
+
+
 def _footprint_of(scene, backend):
     """`exact_soft.footprint` of the scene's light, and the same median taken over every
     pair of neighbours in a row, each pixel-centre ray met with the floor's plane in float64
     by numpy here (the witness)."""
     from raytrace.camera import RayGrid
     from raytrace.lightshapes import frame_light
-    tracer, triangles, origin = backend
-    got = raytrace.exact_soft.footprint(frame_light(scene.lights[0], origin, "lights[0]"),
-                                        tracer, triangles, _grids(scene, origin), scene.height)
+    got = raytrace.exact_soft.footprint(
+        frame_light(scene.lights[0], backend.origin, "lights[0]"), _pairs(scene, backend))
     grid = RayGrid(scene.camera, scene.width, scene.height, np.float64)
     v = grid.directions().T.reshape(scene.height, scene.width, 3)
     p = grid.eye + v * (-grid.eye[1] / v[..., 1:2])
@@ -604,8 +610,7 @@ def test_finer_frames_take_larger_blocks(size, monkeypatch):
     light = frame_light(scene.lights[0], backend.origin, "lights[0]")
 
     def side():
-        return raytrace.exact_soft.block_side(light, backend.tracer, backend.triangles, None,
-                                              scene.height)
+        return raytrace.exact_soft.block_side(light, None)
     assert side() == raytrace.exact_soft.BLOCK + sum(want < f for f in fine)
     assert side() == {32: 2, 96: 2, 256: 3, 512: 4}[size]
     monkeypatch.setattr(raytrace.exact_soft, "BLOCK", 0)
@@ -624,10 +629,10 @@ def test_no_neighbours_no_footprint(view):
         camera=Camera(eye=[0.0, 4.0, 1.0], target=[0.0, 9.0, 0.0], fov_y=40.0))
     backend = scene_backend(scene)
     light = frame_light(scene.lights[0], backend.origin, "lights[0]")
-    args = (light, backend.tracer, backend.triangles, _grids(scene, backend.origin),
-            scene.height)
-    assert raytrace.exact_soft.footprint(*args) == np.inf
-    assert raytrace.exact_soft.block_side(*args) == raytrace.exact_soft.BLOCK
+    pairs = _pairs(scene, backend)
+    assert len(pairs[0]) == len(pairs[1]) == 0
+    assert raytrace.exact_soft.footprint(light, pairs) == np.inf
+    assert raytrace.exact_soft.block_side(light, pairs) == raytrace.exact_soft.BLOCK
 
 
 @pytest.mark.parametrize("seed", range(6))
