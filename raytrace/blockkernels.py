@@ -2,9 +2,10 @@
 
 Pixels a few apart see most triangles from the same side.  A triangle that every point p of
 a block sees turned the same way, certainly (p off its plane by more than FACING of their
-distance), and that is free from each (`pyramid.uncut`) casts a shadow that
-turns the same way from each; where two such triangles share an edge and turn the same way
-it cancels from every pixel's outline (`raytrace.windings`).  So the block's steady
+distance), and that is free from each (`pyramid.uncut`; `raytrace.facingkernels`, mostly
+from the block's first point alone) casts a shadow that turns the same way from each;
+where two such triangles share an edge and turn the same way it cancels from every
+pixel's outline (`raytrace.windings`).  So the block's steady
 triangles are counted once, edge by edge, and only the edges left (the block's outline: its
 rim, its folds, its borders with the unsteady triangles) are carried from each pixel; the
 unsteady triangles (turned either way within the block, not free, a pixel's own or coplanar
@@ -37,7 +38,8 @@ import numpy as np
 
 # own_candidates lives with the pixel path's pair kernels; the block path takes it from here
 # with its other kernels (`raytrace.blockwindings`), so it runs wherever they load
-from .exactkernels import FACING, carried, coplanar_with, own_candidates, seen_from  # noqa: F401
+from .exactkernels import FACING, carried, own_candidates, seen_from  # noqa: F401
+from .facingkernels import _ahead, _behind, _distinct, _facing, _mine, _steady, _tops
 from .onewaykernels import boxes_touch, clear, kept, settle, spot
 from .outlinekernels import _apart, _level, _tally
 from .packetkernels import _jit
@@ -68,14 +70,12 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
     way, seen = np.zeros(one_way.shape[0], np.bool_), np.full(one_way.shape[0], -1, np.int64)
     cone, axes = np.full(meet.shape[1], -1, np.int64), np.empty((ways[3].shape[0], 6))
     ne = nu = np.int64(0)         # not a literal (`windingkernels.boundaries`)
-    slack, box = np.empty(sides.shape[0]), np.empty(7)
+    slack, box, owns = np.empty(sides.shape[0]), np.empty(7), np.empty(p.shape[0], np.int64)
     for b in range(n_blocks):
         i0, i1 = start[b], start[b + 1]
-        low_top, high_top, far_rel = _tops(i0, i1, top, rel)
-        q = nd = nt = 0
-        while nu + most > unsteady.shape[0]:             # room: see the module docstring
-            unsteady, loose = _grow(unsteady, nu), _grow(loose, nu)
-            u_c, u_way = _grow(u_c, nu), _grow(u_way, nu)
+        low_top, high_top, far_rel, ball = _tops(i0, i1, top, rel, p)
+        n_own, q, nd, nt = _distinct(i0, i1, own, owns), 0, 0, 0
+        unsteady, loose, u_c, u_way = _room(unsteady, loose, u_c, u_way, nu, most)
         _slacks(i0, i1, p, sides, slack)
         spot(i0, i1, p, box)
         for c in range(meet.shape[1]):
@@ -99,10 +99,12 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                 t = members[c, k]
                 if t < 0 or not _near(c, k, i0, packed, p, sides, slack):
                     continue
-                if kinds[c, k] & 1:
-                    convex[b] = True
-                sign = _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset,
-                               scale, corners, low_top, high_top, far_rel, reach, coplanar)
+                convex[b] |= kinds[c, k] & 1 != 0
+                hint = _facing(c, k, packed, h, ball, low_top, high_top, far_rel, reach)
+                mine = _mine(t, c, k, packed, owns, n_own, corners, tri_normal, offset, scale,
+                             coplanar)
+                sign = (0 if mine else hint) if hint != 0 else _steady(
+                    t, c, k, i0, i1, packed, h, p, low_top, high_top, far_rel, reach, mine)
                 if sign == 1 or sign == -1:
                     if sign < 0 and way[o]:             # `_turned_away` pushes it or not
                         later[0, nd], later[1, nd] = c, k
@@ -160,39 +162,6 @@ def _turned_away(q, nd, later, b, i0, p, way, cone, axes, ways, members, packed,
 
 
 @_jit(inline="always")
-def _ahead(cos, low_h, high_h, low_top, high_top):
-    """`_behind`'s grow for a cluster whose normal cone is narrower than a half space (cos t >
-    0) and whose members' heights low_h..high_h lie between the light's plane and the block's
-    lowest parallel plane (low_top; high_top its highest): high_top / (low_top - high_h),
-    else -1 (the cluster is not passed whole)."""
-    if cos > 0 and low_h >= 0 and high_h < low_top:
-        return high_top / (low_top - high_h)
-    return -1.0
-
-
-@_jit(inline="always")
-def _behind(d0, d1, d2, a0, a1, a2, cos, sin, r, grow, far_rel, reach):
-    """Whether `_steady` would give every member of a cluster -1 as seen from p (turned away
-    by more than FACING of its distance, free, carried within reach), d = p - centre (the
-    cluster's sphere: centre, radius r; its normal cone (`occluderkernels.cones`): axis a,
-    half angle t, cos t, sin t; grow: the block's highest height over its lowest less the
-    top of the cluster's heights): every member's normal n within t of a, and its corners
-    within r of the centre, n . (p - corner) <= |d| cos(f - t) + r for d at the angle f
-    from a; that less than -FACING (|d| + r), the corner's distance at most; and each
-    member's reach bound at most the cluster's (its height at most the heights' top, its
-    distance at most |d| + r, its box's diagonal 2 r).  A margin of 2^-30 of the terms
-    covers the roundings, the members' and these.  The caller tests the cone and the
-    heights first (`_ahead`) and hands floats, not arrays (the module docstring)."""
-    size = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    along = a0 * d0 + a1 * d1 + a2 * d2
-    x0, x1, x2 = a1 * d2 - a2 * d1, a2 * d0 - a0 * d2, a0 * d1 - a1 * d0
-    across = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-    most = along * cos + across * sin + r + FACING * (size + r)
-    return most + 2.0 ** -30 * (abs(along) + size + r) < 0 and \
-        (far_rel + grow * (size + 3 * r)) * (1 + 2.0 ** -20) < reach
-
-
-@_jit(inline="always")
 def _push(q, sign, c, k, t, welded, keys):
     """Member k of cluster c (triangle t), turned `sign` from the block, pushed as its three
     edges (its winding made positive) into keys (6, room) from q: the next q."""
@@ -203,17 +172,6 @@ def _push(q, sign, c, k, t, welded, keys):
         keys[3, q], keys[4, q], keys[5, q] = t, a, z
         q += 1
     return q
-
-
-@_jit(inline="always")
-def _tops(i0, i1, top, rel):
-    """The lowest and highest of the block's pixels' heights top i0..i1, and the farthest of
-    their distances rel from the light's centre."""
-    low_top, high_top, far_rel = np.inf, 0.0, 0.0
-    for i in range(i0, i1):
-        low_top, high_top = min(low_top, top[i]), max(high_top, top[i])
-        far_rel = max(far_rel, rel[i])
-    return low_top, high_top, far_rel
 
 
 @_jit()
@@ -370,54 +328,21 @@ def block_meets(start, lo, hi, top, sides, p, c_lo, c_hi, centre, radius, height
 
 
 @_jit()
+def _room(unsteady, loose, u_c, u_way, nu, most):
+    """`block_edges`' unsteady arrays, their first nu kept, with room for most more (its
+    room is made before its loops: see the module docstring)."""
+    while nu + most > unsteady.shape[0]:
+        unsteady, loose = _grow(unsteady, nu), _grow(loose, nu)
+        u_c, u_way = _grow(u_c, nu), _grow(u_way, nu)
+    return unsteady, loose, u_c, u_way
+
+
+@_jit()
 def _grow(a, n):
     """a with twice the room, its first n kept."""
     out = np.empty(2 * a.shape[0], a.dtype)
     out[:n] = a[:n]
     return out
-
-
-@_jit(inline="always")
-def _steady(t, c, k, i0, i1, packed, h, p, top, own, tri_normal, offset, scale, corners,
-            low_top, high_top, far_rel, reach, coplanar):
-    """+1 or -1: triangle t (member k of cluster c) is free from every pixel i0..i1 and
-    turned that way from each, certainly; 2: free from each, not turned one way; 3: in no
-    pixel's pyramid (wholly at or beyond every p's parallel plane, or behind the light's); 0
-    for any other (some pixel's own, or coplanar with it, or free from some only)."""
-    low_h = min(h[c, k, 0], min(h[c, k, 1], h[c, k, 2]))
-    high_h = max(h[c, k, 0], max(h[c, k, 1], h[c, k, 2]))
-    if low_h >= high_top or high_h < 0:
-        return 3
-    if not (low_h >= 0 and high_h < low_top):
-        return 0
-    # carried within reach: |rel| + the most any corner is magnified times its distance
-    # (within the triangle's box's diagonal of its first corner); the root and the quotient
-    # once a triangle, not a pixel (numba leaves a root in the loop: 6 % of the kernel)
-    span = 0.0
-    for a in range(3):
-        span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
-    span = np.sqrt(span)
-    grow = high_top / (low_top - high_h)
-    sign, turned = 0, True
-    for i in range(i0, i1):
-        o = own[i]
-        if t == o:
-            return 0
-        if coplanar_with(corners, t, o, packed[c, k, 6], packed[c, k, 7], packed[c, k, 8],
-                         tri_normal, offset, packed[c, k, 15], scale[o], coplanar):
-            return 0
-        r0, r1, r2 = p[i, 0] - packed[c, k, 12], p[i, 1] - packed[c, k, 13], \
-            p[i, 2] - packed[c, k, 14]
-        dist = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
-        s = packed[c, k, 6] * r0 + packed[c, k, 7] * r1 + packed[c, k, 8] * r2
-        way = 1 if s > 0 else -1
-        if not abs(s) > FACING * dist or (sign != 0 and way != sign):
-            turned = False
-        sign = way
-        bound = far_rel + grow * (dist + span)
-        if not bound * (1 + 2.0 ** -30) < reach:
-            return 0
-    return sign if turned else 2
 
 
 @_jit()

@@ -446,7 +446,7 @@ def _outside(t, i, p, corners, sides):
 @_jit(inline="always")
 def _away(t, i, p, tri_normal, corners):
     """Whether triangle t is turned away from p_i: p_i behind its plane by more than FACING
-    of p_i's distance from its first corner (`blockkernels._steady`'s test)."""
+    of p_i's distance from its first corner (`facingkernels._steady`'s test)."""
     r0, r1, r2 = p[i, 0] - corners[t, 0, 0], p[i, 1] - corners[t, 0, 1], \
         p[i, 2] - corners[t, 0, 2]
     s = tri_normal[t, 0] * r0 + tri_normal[t, 1] * r1 + tri_normal[t, 2] * r2

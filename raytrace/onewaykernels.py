@@ -163,7 +163,7 @@ def through(t, c, k, i0, i1, packed, p, own, corners, tri_normal, offset, scale,
     """Whether triangle t (member k of cluster c) may pass through some pixel's p i0..i1
     other than its own's or one coplanar with it: p in its box (a margin of `facing` of the
     coordinates) and not off its plane by more than `facing` of their distance, as
-    `blockkernels._steady` tells a triangle turned one way (the module: there the object's
+    `facingkernels._steady` tells a triangle turned one way (the module: there the object's
     winding about p is in doubt)."""
     for i in range(i0, i1):
         pad = facing * (abs(p[i, 0]) + abs(p[i, 1]) + abs(p[i, 2]) + packed[c, k, 15])

@@ -251,7 +251,6 @@ def test_a_cluster_passed_whole_as_turned_away_is_so_member_by_member(seed):
         by_member = h[np.maximum(objects.members, 0)]
         flat = by_member.reshape(len(by_member), -1)
         spans = np.stack([flat.min(axis=1), flat.max(axis=1)], axis=1)
-        own = np.full(4, 256)
         for c in np.flatnonzero((objects.cones[:, 3] > 0) & (objects.owner == 0)):
             axis = objects.cones[c, :3]
             angle = np.arccos(objects.cones[c, 3]) + np.pi / 2 + rng.uniform(-0.1, 0.6)
@@ -262,7 +261,7 @@ def test_a_cluster_passed_whole_as_turned_away_is_so_member_by_member(seed):
             p[:, 2] = np.minimum(p[:, 2], 2.0 - spans[c, 1] - 1e-3 * far)
             top = 2.0 - p[:, 2]
             rel = np.linalg.norm(p - [0, 0, 2.0], axis=1)
-            low_top, high_top, far_rel = blocks._tops(0, 4, top, rel)
+            low_top, high_top, far_rel, _ = blocks._tops(0, 4, top, rel, p)
             # the members' own reach bounds (`_steady`'s), the most: a reach just over it
             # half the time (the cluster's bound must then be over it too to pass)
             at = objects.members[c][objects.members[c] >= 0]
@@ -282,7 +281,6 @@ def test_a_cluster_passed_whole_as_turned_away_is_so_member_by_member(seed):
             for k, t in enumerate(objects.members[c]):
                 if t >= 0:
                     assert blocks._steady(
-                        t, c, k, 0, 4, objects.packed, by_member, p, top, own, objects.normal,
-                        objects.offset, objects.scale, corners, low_top, high_top, far_rel,
-                        reach, 1e-12) == -1, (trial, c, k)
+                        t, c, k, 0, 4, objects.packed, by_member, p, low_top, high_top,
+                        far_rel, reach, False) == -1, (trial, c, k)
     assert passed > 20
