@@ -13,7 +13,8 @@ marked fails instead of passing by luck.  A module of raster/ or compare/ that s
 driver anywhere) to check that no unmarked test starts a process that renders.
 
 The `alone` marker (tests/alone.py): under pytest-xdist a test so marked runs with no test of
-another worker beside it.
+another worker beside it.  Before the workers start, numba's disk cache is made once where
+the checkout has none (tests/warmup.py).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import re
 from pathlib import Path
 
 import pytest
+import warmup
 from alone import pytest_configure, pytest_runtest_protocol  # noqa: F401 (the hooks)
 from builders import TEST_OUTPUT
 
@@ -35,6 +37,15 @@ GL_FOLDERS = ("raster", "compare")
 # The budget of CONVENTIONS-style mask comparisons (issue 3): zero mismatches farther than one
 # pixel from a mask edge, and fewer than this fraction of all pixels mismatched.
 MAX_MISMATCH_FRACTION = 0.001
+
+
+def pytest_sessionstart(session):
+    """Under pytest-xdist, before its workers start (its own hook runs last): numba's disk
+    cache made once where the checkout has none (tests/warmup.py)."""
+    config = session.config
+    if getattr(config, "workerinput", None) is None and \
+            getattr(config.option, "numprocesses", None) and warmup.cold():
+        warmup.warm()
 
 
 def pytest_collection_modifyitems(config, items):
