@@ -6,9 +6,9 @@ raytrace tests alone: 164 s cold against 98 s warm).  Where the suite runs on se
 and the checkout's kernels have no cache yet, two processes first run small frames that call
 them, each its own half (the block path of the exact visibility of area lights; its other
 paths, the masks, counts, ground truth and path tracer), side by side; the workers then load
-what they wrote.  A kernel neither
-calls is compiled where a test calls it, as before, and a warm-up that fails or runs past
-`LIMIT` seconds only leaves that work to the workers: no test depends on it.
+what they wrote.  A kernel neither calls is compiled where a test calls it, as before, and a
+warm-up that fails or runs past `LIMIT` seconds only leaves that work to the workers: no
+test depends on it.
 """
 
 from __future__ import annotations
