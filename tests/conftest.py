@@ -39,12 +39,15 @@ GL_FOLDERS = ("raster", "compare")
 MAX_MISMATCH_FRACTION = 0.001
 
 
-def pytest_sessionstart(session):
-    """Under pytest-xdist, before its workers start (its own hook runs last): numba's disk
-    cache made once where the checkout has none (tests/warmup.py)."""
-    config = session.config
-    if getattr(config, "workerinput", None) is None and \
-            getattr(config.option, "numprocesses", None) and warmup.cold():
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_setupnodes(config, specs):
+    """Before pytest-xdist starts its workers (in the session's time, which it reports):
+    numba's disk cache made once where the checkout has none (tests/warmup.py)."""
+    if warmup.cold():
+        report = config.pluginmanager.get_plugin("terminalreporter")
+        if report is not None:
+            report.write_line("compiling numba's kernels once, before the workers start "
+                              "(tests/warmup.py; about a minute on a fresh checkout)")
         warmup.warm()
 
 
