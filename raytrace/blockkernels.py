@@ -100,11 +100,11 @@ def block_edges(start, meet, members, packed, kinds, welded, h, p, top, own, tri
                 if t < 0 or not _near(c, k, i0, packed, p, sides, slack):
                     continue
                 convex[b] |= kinds[c, k] & 1 != 0
-                hint = _facing(c, k, packed, h, ball, low_top, high_top, far_rel, reach)
+                hint, shape = _facing(c, k, packed, h, ball, low_top, high_top, far_rel, reach)
                 mine = _mine(t, c, k, packed, owns, n_own, corners, tri_normal, offset, scale,
                              coplanar)
                 sign = (0 if mine else hint) if hint != 0 else _steady(
-                    t, c, k, i0, i1, packed, h, p, low_top, high_top, far_rel, reach, mine)
+                    c, k, i0, i1, packed, shape, p, low_top, high_top, far_rel, reach, mine)
                 if sign == 1 or sign == -1:
                     if sign < 0 and way[o]:             # `_turned_away` pushes it or not
                         later[0, nd], later[1, nd] = c, k

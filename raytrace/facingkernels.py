@@ -62,32 +62,43 @@ def _distinct(i0, i1, own, owns):
 
 
 @_jit(inline="always")
+def _member(c, k, packed, h):
+    """Member k of cluster c's lowest and highest corner heights over the light's plane and
+    its box's diagonal (the span `_facing` and `_steady` bound its reach by)."""
+    low_h = min(h[c, k, 0], min(h[c, k, 1], h[c, k, 2]))
+    high_h = max(h[c, k, 0], max(h[c, k, 1], h[c, k, 2]))
+    span = 0.0
+    for a in range(3):
+        span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
+    return low_h, high_h, np.sqrt(span)
+
+
+@_jit(inline="always")
 def _facing(c, k, packed, h, ball, low_top, high_top, far_rel, reach):
     """+1 or -1: what `_steady` gives member k of cluster c where it is no pixel's own nor
-    coplanar with one, from the block's first point p_0 alone; else 0 (`_steady` decides).
-    ball (`_tops`'): the radius R about p_0 that holds the block's points, and p_0.  With d
-    = |p_0 - corner| and s its distance off the member's plane, every point's own s lies
-    within R of s and its distance within d + R, so |s| > R + (FACING + 2^-36) (d + R)
-    turns the member the same way from each by more than FACING of its distance (2^-36
-    covers each test's roundings, ~2^-49 of it), and the reach bound at d + R, 1 + 2^-29
-    over it, holds each point's (1 + 2^-30 over its own, `_steady`'s).  The same heights'
-    tests as `_steady`'s first, the same span and grow."""
+    coplanar with one, from the block's first point p_0 alone; else 0 (`_steady` decides);
+    and the member's `_member` (made once, for `_steady` too).  ball (`_tops`'): the
+    radius R about p_0 that holds the block's points, and p_0.  With d = |p_0 - corner| and
+    s its distance off the member's plane, every point's own s lies within R of s and its
+    distance within d + R, so |s| > R + (FACING + 2^-36) (d + R) turns the member the same
+    way from each by more than FACING of its distance (2^-36 covers each test's roundings,
+    ~2^-49 of it), and the reach bound at d + R, 1 + 2^-29 over it, holds each point's (1
+    + 2^-30 over its own, `_steady`'s).  The same heights' tests as `_steady`'s first, the
+    same span and grow."""
+    shape = _member(c, k, packed, h)
+    low_h, high_h, span = shape
+    if not (low_h >= 0 and high_h < low_top and low_h < high_top):
+        return 0, shape
     m0, m1, m2 = packed[c, k, 6], packed[c, k, 7], packed[c, k, 8]
     r0, r1, r2 = ball[1] - packed[c, k, 12], ball[2] - packed[c, k, 13], \
         ball[3] - packed[c, k, 14]
-    span = np.sqrt((packed[c, k, 3] - packed[c, k, 0]) ** 2 + (packed[c, k, 4] - packed[
-        c, k, 1]) ** 2 + (packed[c, k, 5] - packed[c, k, 2]) ** 2)
-    low_h = min(h[c, k, 0], min(h[c, k, 1], h[c, k, 2]))
-    high_h = max(h[c, k, 0], max(h[c, k, 1], h[c, k, 2]))
-    if not (low_h >= 0 and high_h < low_top and low_h < high_top):
-        return 0
     grow = high_top / (low_top - high_h)
     dist = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
     s = m0 * r0 + m1 * r1 + m2 * r2
     if abs(s) > ball[0] + _SLACK * (dist + ball[0]) and \
             (far_rel + grow * (dist + ball[0] + span)) * _WIDER < reach:
-        return 1 if s > 0 else -1
-    return 0
+        return 1 if s > 0 else -1, shape
+    return 0, shape
 
 
 @_jit(inline="always")
@@ -104,24 +115,19 @@ def _mine(t, c, k, packed, owns, n_own, corners, tri_normal, offset, scale, copl
 
 
 @_jit(inline="always")
-def _steady(t, c, k, i0, i1, packed, h, p, low_top, high_top, far_rel, reach, mine):
-    """+1 or -1: triangle t (member k of cluster c) is free from every pixel i0..i1 and
+def _steady(c, k, i0, i1, packed, shape, p, low_top, high_top, far_rel, reach, mine):
+    """+1 or -1: member k of cluster c (shape: `_member`'s) is free from every pixel i0..i1 and
     turned that way from each, certainly; 2: free from each, not turned one way; 3: in no
     pixel's pyramid (wholly at or beyond every p's parallel plane, or behind the light's); 0
     for any other (mine: some pixel's own, or coplanar with it; or free from some only)."""
-    low_h = min(h[c, k, 0], min(h[c, k, 1], h[c, k, 2]))
-    high_h = max(h[c, k, 0], max(h[c, k, 1], h[c, k, 2]))
+    low_h, high_h, span = shape
     if low_h >= high_top or high_h < 0:
         return 3
     if mine or not (low_h >= 0 and high_h < low_top):
         return 0
     # carried within reach: |rel| + the most any corner is magnified times its distance
-    # (within the triangle's box's diagonal of its first corner); the root and the quotient
-    # once a triangle, not a pixel (numba leaves a root in the loop: 6 % of the kernel)
-    span = 0.0
-    for a in range(3):
-        span += (packed[c, k, 3 + a] - packed[c, k, a]) ** 2
-    span = np.sqrt(span)
+    # (within the triangle's box's diagonal, span, of its first corner); the root and the
+    # quotient once a triangle, not a pixel (numba leaves a root in the loop: 6 % of it)
     grow = high_top / (low_top - high_h)
     sign, turned = 0, True
     for i in range(i0, i1):

@@ -97,11 +97,11 @@ def test_the_first_point_tells_only_what_every_point_tells(seed):
             np.linalg.norm(p - corners[0], axis=1).max() + span)
         reach = most * 10.0 ** (rng.uniform(-1e-3, 1e-2) if trial % 2 else rng.uniform(0, 1))
         want = _each_point(corners, p, low_top, high_top, far_rel, reach)
-        got = kernels._facing(0, 0, packed, h, ball, low_top, high_top, far_rel, reach)
+        got, shape = kernels._facing(0, 0, packed, h, ball, low_top, high_top, far_rel, reach)
         assert got in (0, want), (seed, trial, got, want)
         if want == 0:
             continue
-        assert kernels._steady(0, 0, 0, 0, len(p), packed, h, p, low_top, high_top,
+        assert kernels._steady(0, 0, 0, len(p), packed, shape, p, low_top, high_top,
                                far_rel, reach, False) == want
         # clear of the bound's margins (the plane beyond twice the ball, the reach 1 %
         # over the ball's farthest point's bound): told there

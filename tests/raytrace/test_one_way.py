@@ -231,7 +231,7 @@ def test_a_cluster_passed_whole_as_turned_away_is_so_member_by_member(seed):
     distances, so the bound is tight to a few hundredths of them (a facing bound loosened
     by 0.05 fails here)."""
     from raytrace import occluders
-    blocks = polygons.kernels("blockkernels")
+    blocks, facing = polygons.kernels("blockkernels"), polygons.kernels("facingkernels")
     rng = np.random.default_rng(seed)
     passed = 0
     for trial in range(30):
@@ -281,6 +281,7 @@ def test_a_cluster_passed_whole_as_turned_away_is_so_member_by_member(seed):
             for k, t in enumerate(objects.members[c]):
                 if t >= 0:
                     assert blocks._steady(
-                        t, c, k, 0, 4, objects.packed, by_member, p, low_top, high_top,
-                        far_rel, reach, False) == -1, (trial, c, k)
+                        c, k, 0, 4, objects.packed, facing._member(c, k, objects.packed,
+                                                                   by_member),
+                        p, low_top, high_top, far_rel, reach, False) == -1, (trial, c, k)
     assert passed > 20
